@@ -1,0 +1,138 @@
+#pragma once
+// The syntax tree of an fmpc-language file (docs/language.md): what the source says, spelled as written, with the
+// source range of every token that a diagnostic may point at and the comments that `fmpc fmt` puts back.
+// parse_fmpc builds it (fmpc_parser.cpp), lower_fmpc turns it into the IR (compiler/sema/lower_fmpc.cpp) and
+// print_fmpc lays it out canonically (fmpc_printer.cpp).
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "compiler/ir/fuzzy_system.h"
+#include "compiler/sema/diagnostic.h"
+
+namespace fmpc::ast {
+
+// The comments around one printed line: own-line comments above it, a comment at the end of its line, and
+// whether the source had a blank line above it (kept, at most one, where the layout allows it).
+struct Comments {
+  std::vector<std::string> leading;  // each with its '#'
+  std::string trailing;              // empty when none
+  bool blank_line_before = false;
+};
+
+struct Name {
+  std::string text;  // without the quotes
+  SourceRange range;
+};
+
+struct Number {
+  double value = 0.0;
+  SourceRange range;
+};
+
+enum class SettingKind { Type, And, Or, Implication, Aggregation, Defuzzify, NoFire };
+
+struct Setting {
+  SettingKind kind = SettingKind::Type;
+  Name value;                  // type / operator / defuzzifier name; for NoFire "midrange", "value" or "error"
+  std::optional<Number> samples;  // Defuzzify: `samples N`
+  bool samples_exact = false;     // Defuzzify: `samples exact`
+  std::optional<Number> no_fire_value;  // NoFire: `value X`
+  SourceRange range;  // the whole setting
+  Comments comments;
+};
+
+struct Argument {
+  Name name;
+  Number value;
+  std::optional<Name> unit;
+  SourceRange range;
+};
+
+struct Term {
+  Name name;
+  Name family;  // "gauss", "triangle", ...
+  std::vector<Argument> arguments;
+  SourceRange range;
+  Comments comments;
+};
+
+struct Variable {
+  bool is_output = false;
+  Name name;
+  std::optional<std::string> description;
+  Number min, max;
+  std::optional<Name> unit;
+  std::vector<Term> terms;
+  SourceRange range;  // the header: `input` ... unit
+  Comments comments;
+};
+
+struct Clause {
+  Name variable;
+  bool negated = false;
+  Hedge hedge = Hedge::None;
+  Name term;
+  SourceRange range;
+};
+
+struct ConnectiveToken {
+  Connective connective = Connective::And;
+  SourceRange range;
+};
+
+struct Rule {
+  std::optional<Name> label;
+  std::vector<Clause> antecedent;
+  std::vector<ConnectiveToken> connectives;  // antecedent.size() - 1 of them, between the clauses
+  std::vector<Clause> consequent;
+  std::optional<Number> weight;
+  SourceRange range;
+  Comments comments;
+};
+
+using Item = std::variant<Variable, Rule>;
+
+struct System {
+  Name name;
+  std::optional<std::string> description;
+  std::vector<Setting> settings;  // in source order
+  std::vector<Item> items;        // variables and rules in source order
+  SourceRange range;              // the header: `system` NAME ["description"]
+  Comments comments;
+};
+
+struct File {
+  std::string path;
+  std::vector<System> systems;
+  Comments end_comments;  // own-line comments after the last item (only `leading` and `blank_line_before`)
+};
+
+// Parses `text`; nullopt when it has syntax errors, all of which are in `diagnostics` (sorted by position).
+std::optional<File> parse_fmpc(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
+
+// Resolves names, named MF arguments and units. Systems with errors are left out of the result (their errors are
+// in `diagnostics`), so that check_system never reports consequences of a name that did not resolve.
+RuleFile lower_fmpc(const File& file, DiagnosticList& diagnostics);
+
+// The canonical text of `file` (docs/language.md, "Canonical layout").
+std::string print_fmpc(const File& file);
+
+// Reserved words: names spelled like these are quoted by the printer.
+bool is_reserved_word(const std::string& word);
+
+// The parameter names of an MF family in the language ("gauss" -> mean, sd) and its IR kind; nullopt for unknown
+// families. "linear" has no fixed names (its coefficients are named by input) and reports an empty list.
+struct FamilySignature {
+  const char* name;
+  MfKind kind;
+  std::vector<const char*> parameters;  // in the language's canonical order
+  std::vector<int> matlab_index;        // position of each parameter in MATLAB's params vector
+  std::vector<bool> takes_unit;         // false for slopes
+};
+const FamilySignature* find_family(const std::string& name);
+const FamilySignature& family_of(MfKind kind);
+std::vector<std::string> family_names();
+
+}  // namespace fmpc::ast
