@@ -1,0 +1,57 @@
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "compiler/sema/lint.h"
+#include "tools/fmpc/commands.h"
+#include "tools/fmpc/rule_file_session.h"
+
+namespace fmpc::cli {
+
+namespace {
+
+struct CheckOptions {
+  std::vector<std::string> files;
+  bool werror = false;
+  bool no_lint = false;
+  double coverage_threshold = LintOptions{}.coverage_threshold;
+};
+
+int run_check(const CheckOptions& options) {
+  bool any_error = false;
+  bool any_warning = false;
+  for (const std::string& path : options.files) {
+    LoadedRuleFile file = load_rule_file_from_disk(path);
+    if (file.readable && !file.diagnostics.has_errors() && !options.no_lint) {
+      LintOptions lint_options;
+      lint_options.coverage_threshold = options.coverage_threshold;
+      // MATLAB's format has no units, so asking for them there would only be noise.
+      lint_options.require_units = file.dialect == Dialect::Fmpc;
+      for (const FuzzySystem& system : file.rules.systems) lint_system(system, lint_options, file.diagnostics);
+      file.diagnostics.sort_by_position();
+    }
+    print_diagnostics(file.diagnostics, file.sources, std::cerr);
+    any_error = any_error || file.diagnostics.has_errors();
+    any_warning = any_warning || file.diagnostics.warning_count() > 0;
+  }
+  if (any_error) return kExitErrors;
+  if (any_warning && options.werror) return kExitWarnings;
+  return kExitOk;
+}
+
+}  // namespace
+
+void register_check_command(CLI::App& app, int& exit_code) {
+  auto options = std::make_shared<CheckOptions>();
+  CLI::App* command = app.add_subcommand(
+      "check", "Check rule files (fmpc or MATLAB .fis): every error and lint warning, compiler-style.\n"
+               "Exit status: 0 clean, 1 warnings with --werror, 2 errors.");
+  command->add_option("files", options->files, "Rule files to check")->required();
+  command->add_flag("--werror", options->werror, "Exit with status 1 when there are warnings");
+  command->add_flag("--no-lint", options->no_lint, "Report errors only");
+  command->add_option("--coverage-threshold", options->coverage_threshold,
+                      "Firing strength below which a point counts as a coverage hole")
+      ->check(CLI::Range(0.0, 1.0));
+  command->callback([options, &exit_code] { exit_code = run_check(*options); });
+}
+
+}  // namespace fmpc::cli

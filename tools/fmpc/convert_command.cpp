@@ -1,0 +1,64 @@
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "compiler/frontend/fmpc_language.h"
+#include "compiler/frontend/matlab_fis.h"
+#include "tools/fmpc/commands.h"
+#include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/text_files.h"
+
+namespace fmpc::cli {
+
+namespace {
+
+struct ConvertOptions {
+  std::string file;
+  std::string to;
+  std::string output = "-";
+  std::string system;
+};
+
+int run_convert(const ConvertOptions& options) {
+  LoadedRuleFile file = load_rule_file_from_disk(options.file);
+  if (file.diagnostics.has_errors()) {
+    print_diagnostics(file.diagnostics, file.sources, std::cerr);
+    return kExitErrors;
+  }
+  DiagnosticList diagnostics;
+  std::string text;
+  if (options.to == "fmpc") {
+    RuleFile selected = file.rules;
+    if (!options.system.empty()) {
+      const FuzzySystem* system = select_system(file, options.system, diagnostics);
+      selected.systems.clear();
+      if (system) selected.systems.push_back(*system);
+    }
+    text = write_fmpc(selected);
+  } else if (const FuzzySystem* system = select_system(file, options.system, diagnostics)) {
+    text = write_matlab_fis(*system, diagnostics);
+  }
+  print_diagnostics(diagnostics, file.sources, std::cerr);
+  if (diagnostics.has_errors()) return kExitErrors;
+  std::string error;
+  if (!write_text_file_atomically(options.output, text, error)) {
+    std::cerr << options.output << ": error: " << error << '\n';
+    return kExitErrors;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void register_convert_command(CLI::App& app, int& exit_code) {
+  auto options = std::make_shared<ConvertOptions>();
+  CLI::App* command = app.add_subcommand(
+      "convert", "Convert a rule file between the fmpc language and MATLAB's .fis format (versions 1 and 2 read,\n"
+                 "2.0 written). What the target cannot hold is reported as a warning. Exit status: 0 done, 2 errors.");
+  command->add_option("file", options->file, "Rule file to convert (fmpc or MATLAB .fis)")->required();
+  command->add_option("--to", options->to, "Target format")->required()->check(CLI::IsMember({"fmpc", "matlab"}));
+  command->add_option("-o,--output", options->output, "Output file, written atomically (default stdout)");
+  command->add_option("--system", options->system, "Which system of the file to convert (MATLAB holds one)");
+  command->callback([options, &exit_code] { exit_code = run_convert(*options); });
+}
+
+}  // namespace fmpc::cli

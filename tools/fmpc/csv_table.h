@@ -1,0 +1,27 @@
+#pragma once
+// RFC 4180 CSV as the CLI reads and writes it: a header row, comma separators, double-quoted fields with ""
+// escapes, LF or CRLF line ends. Every cell keeps its position so that errors point at it.
+#include <string>
+#include <vector>
+
+#include "compiler/sema/diagnostic.h"
+
+namespace fmpc::cli {
+
+struct CsvCell {
+  std::string text;  // unquoted, surrounding spaces trimmed
+  SourceRange range;
+};
+
+struct CsvTable {
+  std::string path;
+  std::vector<CsvCell> header;
+  std::vector<std::vector<CsvCell>> rows;  // blank lines skipped
+};
+
+CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
+
+// One CSV line (with its '\n'); fields are quoted only when they need it.
+std::string format_csv_row(const std::vector<std::string>& fields);
+
+}  // namespace fmpc::cli

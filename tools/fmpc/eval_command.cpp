@@ -1,0 +1,330 @@
+#include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+
+#include "compiler/eval/interpreter.h"
+#include "compiler/frontend/fmpc_language.h"
+#include "compiler/ir/number_format.h"
+#include "tools/fmpc/commands.h"
+#include "tools/fmpc/csv_table.h"
+#include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/text_files.h"
+
+namespace fmpc::cli {
+
+namespace {
+
+struct EvalOptions {
+  std::string file;
+  std::vector<std::string> assignments;  // NAME=VALUE
+  std::string csv;                       // points file, "-" for stdin
+  std::string output = "-";
+  std::string system;
+  bool explain = false;
+  double explain_threshold = 1e-3;
+  std::size_t max_warnings = 20;
+};
+
+// One point to evaluate, with where each value came from (for located messages).
+struct EvaluationPoint {
+  std::vector<double> inputs;
+  std::vector<SourceRange> origins;  // per input
+  std::string label;                 // "row 3" or "command line"
+};
+
+std::optional<double> parse_number(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  errno = 0;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size()) return std::nullopt;
+  return value;
+}
+
+std::vector<std::string> variable_names(const std::vector<Variable>& variables) {
+  std::vector<std::string> names;
+  for (const Variable& v : variables) names.push_back(v.name);
+  return names;
+}
+
+void report_unknown_input(const std::string& name, const FuzzySystem& system, const SourceRange& where,
+                          DiagnosticList& diagnostics) {
+  std::vector<std::string> notes;
+  if (auto suggestion = closest_name(name, variable_names(system.inputs)))
+    notes.push_back("did you mean '" + *suggestion + "'?");
+  std::string inputs;
+  for (const Variable& v : system.inputs) inputs += (inputs.empty() ? "" : ", ") + v.name;
+  notes.push_back("the inputs of '" + system.name + "' are: " + inputs);
+  diagnostics.error(where, "'" + name + "' is not an input of system '" + system.name + "'", notes);
+}
+
+// NAME=VALUE arguments -> one point. Every input must be given exactly once.
+std::optional<EvaluationPoint> point_from_assignments(const std::vector<std::string>& assignments,
+                                                      const FuzzySystem& system, DiagnosticList& diagnostics) {
+  EvaluationPoint point;
+  point.label = "command line";
+  point.inputs.assign(system.inputs.size(), std::nan(""));
+  point.origins.assign(system.inputs.size(), SourceRange{});
+  std::vector<bool> given(system.inputs.size(), false);
+  for (const std::string& assignment : assignments) {
+    const SourceRange where{"argument '" + assignment + "'", 0, 0, 0, 0};
+    const std::size_t eq = assignment.find('=');
+    if (eq == std::string::npos) {
+      diagnostics.error(where, "expected NAME=VALUE", {"for example: " + system.inputs.front().name + "=7.5"});
+      continue;
+    }
+    const std::string name = assignment.substr(0, eq);
+    const int index = system.find_input(name);
+    if (index < 0) {
+      report_unknown_input(name, system, where, diagnostics);
+      continue;
+    }
+    const std::optional<double> value = parse_number(assignment.substr(eq + 1));
+    if (!value) {
+      diagnostics.error(where, "'" + assignment.substr(eq + 1) + "' is not a number");
+      continue;
+    }
+    if (given[static_cast<std::size_t>(index)])
+      diagnostics.error(where, "input '" + name + "' is given twice");
+    given[static_cast<std::size_t>(index)] = true;
+    point.inputs[static_cast<std::size_t>(index)] = *value;
+    point.origins[static_cast<std::size_t>(index)] = where;
+  }
+  for (std::size_t i = 0; i < system.inputs.size(); ++i)
+    if (!given[i])
+      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "no value for input '" + system.inputs[i].name + "'",
+                        {"add " + system.inputs[i].name + "=VALUE (range [" + format_number(system.inputs[i].min) +
+                         ", " + format_number(system.inputs[i].max) + "])"});
+  if (diagnostics.has_errors()) return std::nullopt;
+  return point;
+}
+
+// A CSV table with a header row -> points. Columns naming outputs are ignored (so a golden file with inputs and
+// outputs can be fed back in); any other unknown column is an error.
+std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzySystem& system,
+                                             DiagnosticList& diagnostics) {
+  std::vector<EvaluationPoint> points;
+  std::vector<int> column_input(table.header.size(), -1);
+  std::vector<bool> seen(system.inputs.size(), false);
+  for (std::size_t c = 0; c < table.header.size(); ++c) {
+    const CsvCell& cell = table.header[c];
+    const int index = system.find_input(cell.text);
+    if (index >= 0) {
+      if (seen[static_cast<std::size_t>(index)])
+        diagnostics.error(cell.range, "column '" + cell.text + "' appears twice");
+      seen[static_cast<std::size_t>(index)] = true;
+      column_input[c] = index;
+    } else if (system.find_output(cell.text) < 0) {
+      report_unknown_input(cell.text, system, cell.range, diagnostics);
+    }
+  }
+  for (std::size_t i = 0; i < system.inputs.size(); ++i)
+    if (!seen[i])
+      diagnostics.error(SourceRange{table.path, 1, 1, 1, 1}, "the header has no column for input '" +
+                                                                 system.inputs[i].name + "'");
+  if (diagnostics.has_errors()) return points;
+  for (const auto& row : table.rows) {
+    EvaluationPoint point;
+    point.label = "row " + std::to_string(row.front().range.line);
+    point.inputs.assign(system.inputs.size(), 0.0);
+    point.origins.assign(system.inputs.size(), SourceRange{});
+    if (row.size() != table.header.size()) {
+      diagnostics.error(row.front().range, "this row has " + std::to_string(row.size()) + " fields, the header " +
+                                               std::to_string(table.header.size()));
+      continue;
+    }
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      if (column_input[c] < 0) continue;
+      const std::optional<double> value = parse_number(row[c].text);
+      if (!value) {
+        diagnostics.error(row[c].range, "'" + row[c].text + "' is not a number");
+        continue;
+      }
+      point.inputs[static_cast<std::size_t>(column_input[c])] = *value;
+      point.origins[static_cast<std::size_t>(column_input[c])] = row[c].range;
+    }
+    points.push_back(std::move(point));
+  }
+  return points;
+}
+
+std::string with_unit(double value, const Variable& variable) {
+  return format_number(value) + (variable.unit.empty() || variable.unit == "dimensionless" ? "" : " " + variable.unit);
+}
+
+// Turns what the interpreter flagged into located messages. NaN inputs and the `error` policy are errors.
+void report_flags(const FuzzySystem& system, const EvaluationPoint& point, const Evaluation& result,
+                  DiagnosticList& diagnostics) {
+  for (int i : result.flags.inputs_nan)
+    diagnostics.error(point.origins[static_cast<std::size_t>(i)],
+                      "input '" + system.inputs[static_cast<std::size_t>(i)].name + "' is NaN",
+                      {"give a number within [" + format_number(system.inputs[static_cast<std::size_t>(i)].min) +
+                       ", " + format_number(system.inputs[static_cast<std::size_t>(i)].max) + "]"});
+  for (int i : result.flags.inputs_out_of_range) {
+    const Variable& v = system.inputs[static_cast<std::size_t>(i)];
+    diagnostics.warning(point.origins[static_cast<std::size_t>(i)], "input-out-of-range",
+                        "input '" + v.name + "' = " + format_number(point.inputs[static_cast<std::size_t>(i)]) +
+                            " is outside its range [" + format_number(v.min) + ", " + format_number(v.max) +
+                            "]; evaluated as given");
+  }
+  for (int o : result.flags.outputs_no_rule_fired) {
+    const Variable& v = system.outputs[static_cast<std::size_t>(o)];
+    const SourceRange where{point.label, 0, 0, 0, 0};
+    if (result.flags.no_fire_error)
+      diagnostics.error(where, "no rule fired for output '" + v.name + "' (policy: error)",
+                        {"add rules covering this point or choose another 'when no rule fires' policy"});
+    else
+      diagnostics.warning(where, "no-rule-fired",
+                          "no rule fired for output '" + v.name + "'; output set to " +
+                              with_unit(result.outputs[static_cast<std::size_t>(o)], v) +
+                              (system.no_fire == NoFirePolicy::Midrange ? " (mid-range)" : " (policy value)"));
+  }
+}
+
+void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, const Explanation& explanation,
+                       double threshold, std::ostream& out) {
+  out << point.label << ":";
+  for (std::size_t i = 0; i < system.inputs.size(); ++i)
+    out << (i ? ", " : " ") << system.inputs[i].name << " = " << with_unit(point.inputs[i], system.inputs[i]);
+  out << '\n';
+  for (std::size_t o = 0; o < system.outputs.size(); ++o)
+    out << "  " << system.outputs[o].name << " = "
+        << with_unit(explanation.evaluation.outputs[o], system.outputs[o]) << '\n';
+  const auto& strengths = explanation.evaluation.firing_strengths;
+  std::size_t shown = 0;
+  std::ostringstream rules;
+  for (std::size_t r = 0; r < strengths.size(); ++r) {
+    if (!(strengths[r] >= threshold)) continue;
+    ++shown;
+    std::string name = system.rule_display_name(r);
+    name.resize(std::max<std::size_t>(name.size(), 8), ' ');
+    char strength[32];
+    std::snprintf(strength, sizeof strength, "%.6f", strengths[r]);
+    rules << "    " << name << ' ' << strength << "  " << format_rule_body(system, r) << '\n';
+  }
+  out << "  rules fired (firing strength >= " << format_number(threshold) << "): " << shown << " of "
+      << strengths.size() << '\n'
+      << rules.str();
+  for (std::size_t o = 0; o < explanation.outputs.size(); ++o) {
+    const OutputExplanation& set = explanation.outputs[o];
+    if (system.type == SystemType::Mamdani)
+      out << "  aggregated output set '" << system.outputs[o].name << "' (" << set.x.size()
+          << " points, x: membership):\n";
+    else
+      out << "  rule outputs of '" << system.outputs[o].name << "' (" << set.x.size()
+          << " rules, value: weight):\n";
+    for (std::size_t k = 0; k < set.x.size(); ++k) {
+      char cell[64];
+      std::snprintf(cell, sizeof cell, "%s: %.4f", format_number(set.x[k]).c_str(), set.membership[k]);
+      out << (k % 6 == 0 ? "    " : "  ") << cell << (k % 6 == 5 || k + 1 == set.x.size() ? "\n" : "");
+    }
+  }
+}
+
+Explanation explain_or_evaluate(const FuzzySystem& system, const std::vector<double>& inputs, bool with_sets) {
+  if (with_sets) return explain(system, inputs);
+  return Explanation{evaluate(system, inputs), {}};
+}
+
+int run_eval(const EvalOptions& options) {
+  LoadedRuleFile file = load_rule_file_from_disk(options.file);
+  if (file.diagnostics.has_errors()) {
+    print_diagnostics(file.diagnostics, file.sources, std::cerr);
+    return kExitErrors;
+  }
+  // Lint warnings belong to `fmpc check`; eval reports only what concerns the points it evaluates.
+  DiagnosticList diagnostics;
+  SourceFiles& sources = file.sources;
+  const FuzzySystem* system = select_system(file, options.system, diagnostics);
+  std::vector<EvaluationPoint> points;
+  if (system) {
+    if (!options.assignments.empty() && !options.csv.empty()) {
+      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "give NAME=VALUE inputs or --csv, not both");
+    } else if (!options.assignments.empty()) {
+      if (auto point = point_from_assignments(options.assignments, *system, diagnostics))
+        points.push_back(std::move(*point));
+    } else {
+      const std::string csv_path = options.csv.empty() ? "-" : options.csv;
+      std::string error;
+      const std::optional<std::string> text = read_text_file(csv_path, error);
+      const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
+      if (!text) {
+        diagnostics.error(SourceRange{shown_path, 0, 0, 0, 0}, error);
+      } else {
+        sources.add(shown_path, *text);
+        const CsvTable table = parse_csv(shown_path, *text, diagnostics);
+        if (!diagnostics.has_errors()) points = points_from_csv(table, *system, diagnostics);
+      }
+    }
+  }
+  std::ostringstream csv;
+  std::ostringstream explanation_text;
+  if (system && !diagnostics.has_errors()) {
+    std::vector<std::string> header = variable_names(system->inputs);
+    for (const Variable& v : system->outputs) header.push_back(v.name);
+    csv << format_csv_row(header);
+    DiagnosticList point_diagnostics;
+    for (const EvaluationPoint& point : points) {
+      const Explanation explanation = explain_or_evaluate(*system, point.inputs, options.explain);
+      report_flags(*system, point, explanation.evaluation, point_diagnostics);
+      std::vector<std::string> row;
+      for (double v : point.inputs) row.push_back(format_number(v));
+      for (double v : explanation.evaluation.outputs) row.push_back(format_number(v));
+      csv << format_csv_row(row);
+      if (options.explain) write_explanation(*system, point, explanation, options.explain_threshold, explanation_text);
+    }
+    // A large CSV out of range everywhere would bury the terminal: keep the first warnings and count the rest.
+    std::size_t warnings = 0, dropped = 0;
+    for (const Diagnostic& d : point_diagnostics.items()) {
+      if (d.severity == Severity::Warning && ++warnings > options.max_warnings) {
+        ++dropped;
+        continue;
+      }
+      diagnostics.add(d);
+    }
+    if (dropped > 0)
+      diagnostics.add(Diagnostic{Severity::Note, SourceRange{options.file, 0, 0, 0, 0},
+                                 std::to_string(dropped) + " more warnings not shown (--max-warnings)", {}, {}, {}});
+  }
+  print_diagnostics(diagnostics, sources, std::cerr);
+  if (diagnostics.has_errors()) return kExitErrors;
+  std::string error;
+  if (options.explain) {
+    std::cout << explanation_text.str();
+    if (options.output != "-" && !write_text_file_atomically(options.output, csv.str(), error)) {
+      std::cerr << options.output << ": error: " << error << '\n';
+      return kExitErrors;
+    }
+  } else if (!write_text_file_atomically(options.output, csv.str(), error)) {
+    std::cerr << options.output << ": error: " << error << '\n';
+    return kExitErrors;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+void register_eval_command(CLI::App& app, int& exit_code) {
+  auto options = std::make_shared<EvalOptions>();
+  CLI::App* command = app.add_subcommand(
+      "eval", "Evaluate a rule file at points given as NAME=VALUE, or as CSV with a header row (--csv FILE, or on\n"
+              "stdin). Writes CSV (inputs then outputs). Exit status: 0 done, 2 errors.");
+  command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis)")->required();
+  command->add_option("inputs", options->assignments, "Input values, NAME=VALUE (all inputs)");
+  command->add_option("--csv", options->csv, "CSV file of points with a header row naming the inputs; - for stdin");
+  command->add_option("-o,--output", options->output, "Where to write the CSV results (default stdout)");
+  command->add_option("--system", options->system, "Which system of the file to evaluate");
+  command->add_flag("--explain", options->explain,
+                    "Print every point's outputs, the rules that fired with their strengths, and the aggregated "
+                    "output set (the CSV then goes only to -o)");
+  command->add_option("--explain-threshold", options->explain_threshold,
+                      "Smallest firing strength --explain lists (0 lists every rule)")
+      ->check(CLI::Range(0.0, 1.0));
+  command->add_option("--max-warnings", options->max_warnings, "Most per-point warnings to print");
+  command->callback([options, &exit_code] { exit_code = run_eval(*options); });
+}
+
+}  // namespace fmpc::cli

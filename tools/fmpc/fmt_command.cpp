@@ -1,0 +1,74 @@
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "compiler/frontend/fmpc_language.h"
+#include "compiler/frontend/rule_file_loader.h"
+#include "tools/fmpc/commands.h"
+#include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/text_files.h"
+
+namespace fmpc::cli {
+
+namespace {
+
+struct FmtOptions {
+  std::vector<std::string> files;
+  bool check = false;
+  bool to_stdout = false;
+};
+
+int run_fmt(const FmtOptions& options) {
+  int status = kExitOk;
+  for (const std::string& path : options.files) {
+    DiagnosticList diagnostics;
+    SourceFiles sources;
+    std::string error;
+    const std::optional<std::string> text = read_text_file(path, error);
+    if (!text) {
+      diagnostics.error(SourceRange{path, 0, 0, 0, 0}, error);
+    } else if (detect_dialect(*text) == Dialect::Matlab) {
+      diagnostics.error(SourceRange{path, 1, 1, 1, 9},
+                        "this is a MATLAB .fis file; fmt lays out fmpc files only",
+                        {"convert it first: fmpc convert " + path + " --to fmpc -o NEW.fis"});
+    }
+    std::optional<std::string> formatted;
+    if (!diagnostics.has_errors()) {
+      sources.add(path, *text);
+      formatted = format_fmpc(path, *text, diagnostics);
+    }
+    print_diagnostics(diagnostics, sources, std::cerr);
+    if (!formatted) {
+      status = kExitErrors;
+      continue;
+    }
+    if (options.check) {
+      if (*formatted != *text) {
+        std::cout << path << ": not in canonical layout (run: fmpc fmt " << path << ")\n";
+        if (status == kExitOk) status = kExitWarnings;
+      }
+    } else if (options.to_stdout) {
+      std::cout << *formatted;
+    } else if (*formatted != *text && !write_text_file_atomically(path, *formatted, error)) {
+      std::cerr << path << ": error: " << error << '\n';
+      status = kExitErrors;
+    }
+  }
+  return status;
+}
+
+}  // namespace
+
+void register_fmt_command(CLI::App& app, int& exit_code) {
+  auto options = std::make_shared<FmtOptions>();
+  CLI::App* command = app.add_subcommand(
+      "fmt", "Rewrite fmpc rule files in the canonical layout (comments kept; idempotent; atomic writes).\n"
+             "Exit status: 0 done, 1 with --check when a file is not in canonical layout, 2 errors.");
+  command->add_option("files", options->files, "fmpc rule files to lay out in place")->required();
+  auto* check = command->add_flag("--check", options->check,
+                                  "Change nothing; list files that are not in canonical layout and exit 1");
+  command->add_flag("--stdout", options->to_stdout, "Print the canonical text instead of rewriting the file")
+      ->excludes(check);
+  command->callback([options, &exit_code] { exit_code = run_fmt(*options); });
+}
+
+}  // namespace fmpc::cli
