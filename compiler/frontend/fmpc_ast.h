@@ -24,6 +24,7 @@ struct Comments {
 struct Name {
   std::string text;  // without the quotes
   SourceRange range;
+  bool quoted = false;  // only matters in linear(...), where a bare `offset` is the constant term
 };
 
 struct Number {

@@ -1,0 +1,705 @@
+// Text -> ANTLR parse tree -> ast::File. Syntax errors become Diagnostics through FmpcErrorStrategy (ANTLR's
+// console listeners are removed); comments are attached to the printed line they belong to.
+#include <algorithm>
+#include <charconv>
+#include <memory>
+#include <set>
+
+#include "FmpcLexer.h"
+#include "FmpcParser.h"
+#include "antlr4-runtime.h"
+#include "compiler/frontend/fmpc_ast.h"
+
+namespace fmpc::ast {
+
+namespace {
+
+using grammar::FmpcLexer;
+using grammar::FmpcParser;
+
+// Byte offset of the first invalid UTF-8 sequence, or npos.
+std::size_t first_invalid_utf8(const std::string& text) {
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const auto lead = static_cast<unsigned char>(text[i]);
+    std::size_t length = 0;
+    if (lead < 0x80) length = 1;
+    else if ((lead & 0xE0) == 0xC0 && lead >= 0xC2) length = 2;
+    else if ((lead & 0xF0) == 0xE0) length = 3;
+    else if ((lead & 0xF8) == 0xF0 && lead <= 0xF4) length = 4;
+    else return i;
+    if (i + length > text.size()) return i;
+    for (std::size_t k = 1; k < length; ++k)
+      if ((static_cast<unsigned char>(text[i + k]) & 0xC0) != 0x80) return i;
+    i += length;
+  }
+  return std::string::npos;
+}
+
+// ANTLR indexes code points; SourceRange columns count bytes. This maps one to the other.
+class SourceMap {
+ public:
+  SourceMap(std::string path, const std::string& text) : path_(std::move(path)), size_(text.size()) {
+    line_starts_.push_back(0);
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      const auto byte = static_cast<unsigned char>(text[i]);
+      if ((byte & 0xC0) != 0x80) code_point_offsets_.push_back(i);
+      if (byte == '\n') line_starts_.push_back(i + 1);
+    }
+    code_point_offsets_.push_back(text.size());
+    const std::size_t last = text.find_last_not_of(" \t\r\n\f");
+    end_of_text_ = last == std::string::npos ? 0 : last + 1;
+  }
+
+  SourceRange bytes(std::size_t begin, std::size_t end) const {
+    SourceRange range;
+    range.file = path_;
+    position(begin, range.line, range.column);
+    position(end, range.end_line, range.end_column);
+    return range;
+  }
+
+  SourceRange token(const antlr4::Token* token) const {
+    if (token->getType() == antlr4::Token::EOF) return bytes(end_of_text_, end_of_text_);
+    return bytes(byte_of(token->getStartIndex()), byte_of(token->getStopIndex() + 1));
+  }
+
+  SourceRange span(const antlr4::Token* first, const antlr4::Token* last) const {
+    SourceRange range = token(first);
+    const SourceRange end = token(last);
+    range.end_line = end.end_line;
+    range.end_column = end.end_column;
+    return range;
+  }
+
+  SourceRange context(antlr4::ParserRuleContext* context) const {
+    return span(context->getStart(), context->getStop());
+  }
+
+  const std::string& path() const { return path_; }
+
+ private:
+  std::size_t byte_of(std::size_t code_point) const {
+    return code_point < code_point_offsets_.size() ? code_point_offsets_[code_point] : size_;
+  }
+
+  void position(std::size_t byte, int& line, int& column) const {
+    const auto next = std::upper_bound(line_starts_.begin(), line_starts_.end(), byte);
+    const auto index = static_cast<std::size_t>(next - line_starts_.begin()) - 1;
+    line = static_cast<int>(index + 1);
+    column = static_cast<int>(byte - line_starts_[index] + 1);
+  }
+
+  std::string path_;
+  std::size_t size_;
+  std::size_t end_of_text_ = 0;
+  std::vector<std::size_t> code_point_offsets_;
+  std::vector<std::size_t> line_starts_;
+};
+
+bool is_name_token(std::size_t type) {
+  switch (type) {
+    case FmpcLexer::IDENTIFIER:
+    case FmpcLexer::STRING:
+    case FmpcLexer::TYPE:
+    case FmpcLexer::IMPLICATION:
+    case FmpcLexer::AGGREGATION:
+    case FmpcLexer::DEFUZZIFY:
+    case FmpcLexer::SAMPLES:
+    case FmpcLexer::EXACT:
+    case FmpcLexer::WHEN:
+    case FmpcLexer::NO:
+    case FmpcLexer::FIRES:
+    case FmpcLexer::MIDRANGE:
+    case FmpcLexer::VALUE:
+    case FmpcLexer::ERROR:
+    case FmpcLexer::IN: return true;
+    default: return false;
+  }
+}
+
+const antlr4::Token* previous_visible_token(antlr4::TokenStream* tokens, const antlr4::Token* token) {
+  for (std::size_t i = token->getTokenIndex(); i-- > 0;) {
+    const antlr4::Token* candidate = tokens->get(i);
+    if (candidate->getChannel() == antlr4::Token::DEFAULT_CHANNEL) return candidate;
+  }
+  return nullptr;
+}
+
+// Whether the clause being parsed lies after `then` in its rule (an output is expected) or before (an input).
+bool after_then(antlr4::TokenStream* tokens, const antlr4::Token* token) {
+  for (std::size_t i = token->getTokenIndex() + 1; i-- > 0;) {
+    const std::size_t type = tokens->get(i)->getType();
+    if (type == FmpcLexer::THEN) return true;
+    if (type == FmpcLexer::IF || type == FmpcLexer::RULE) return false;
+  }
+  return false;
+}
+
+const char* kTNormChoices = "a t-norm (min, prod or einstein_product)";
+const char* kSNormChoices = "an s-norm (max, probor, sum or einstein_sum)";
+
+// What a name at this point would be, for "expected ... after ..." messages.
+std::string expected_name_noun(antlr4::TokenStream* tokens, const antlr4::Token* previous,
+                               antlr4::RuleContext* context) {
+  const std::size_t file_rule = FmpcParser::RuleFile;
+  std::size_t rule = context ? context->getRuleIndex() : file_rule;
+  while (context && (rule == FmpcParser::RuleName || rule == FmpcParser::RuleUnit)) {
+    context = dynamic_cast<antlr4::RuleContext*>(context->parent);
+    rule = context ? context->getRuleIndex() : file_rule;
+  }
+  if (!previous) return "a name";
+  switch (previous->getType()) {
+    case FmpcLexer::SYSTEM: return "a system name";
+    case FmpcLexer::INPUT:
+    case FmpcLexer::OUTPUT: return "a variable name";
+    case FmpcLexer::IF: return "an input name";
+    case FmpcLexer::THEN: return "an output name";
+    case FmpcLexer::AND:
+      if (rule == FmpcParser::RuleSetting || rule == FmpcParser::RuleItem) return kTNormChoices;
+      return after_then(tokens, previous) ? "an output name" : "an input name";
+    case FmpcLexer::OR:
+      if (rule == FmpcParser::RuleSetting || rule == FmpcParser::RuleItem) return kSNormChoices;
+      return "an input name";
+    case FmpcLexer::IMPLICATION: return kTNormChoices;
+    case FmpcLexer::AGGREGATION: return kSNormChoices;
+    case FmpcLexer::TYPE: return "a system type (mamdani or sugeno)";
+    case FmpcLexer::DEFUZZIFY: return "a defuzzifier (centroid, bisector, mom, som, lom, wtaver or wtsum)";
+    case FmpcLexer::IS:
+      return rule == FmpcParser::RuleTermDecl ? "a membership function such as 'gauss'" : "a term name";
+    case FmpcLexer::NOT:
+    case FmpcLexer::SOMEWHAT:
+    case FmpcLexer::VERY:
+    case FmpcLexer::EXTREMELY: return "a term name";
+    case FmpcLexer::RULE: return "a rule label";
+    case FmpcLexer::NUMBER:
+      if (rule == FmpcParser::RuleArgument || rule == FmpcParser::RuleTermDecl) return "a unit";
+      break;
+    default: break;
+  }
+  if (previous->getText() == "(" || previous->getText() == ",") {
+    if (rule == FmpcParser::RuleTermDecl || rule == FmpcParser::RuleArgument) return "a parameter name";
+  }
+  if (previous->getText() == "]") return "a unit or a term name";
+  if (rule == FmpcParser::RuleVariableDecl || rule == FmpcParser::RuleTermDecl) return "a term name";
+  return "a name";
+}
+
+// Between items: the contextual setting words make the raw token set read badly, so say it in words.
+std::vector<std::string> expected_items(antlr4::TokenStream* tokens, const antlr4::Token* found, bool end_expected) {
+  std::size_t last_item_keyword = 0;
+  for (std::size_t i = found->getTokenIndex(); i-- > 0 && last_item_keyword == 0;) {
+    const std::size_t type = tokens->get(i)->getType();
+    if (type == FmpcLexer::SYSTEM || type == FmpcLexer::INPUT || type == FmpcLexer::OUTPUT || type == FmpcLexer::RULE)
+      last_item_keyword = type;
+  }
+  if (last_item_keyword == 0) return {"'system'"};
+  std::vector<std::string> items;
+  if (last_item_keyword == FmpcLexer::INPUT || last_item_keyword == FmpcLexer::OUTPUT) items.push_back("a term");
+  else if (last_item_keyword == FmpcLexer::SYSTEM) items.push_back("a setting");
+  for (const char* keyword : {"'input'", "'output'", "'rule'", "'system'"}) items.push_back(keyword);
+  if (end_expected) items.push_back("end of file");
+  return items;
+}
+
+std::string describe_found(const antlr4::Token* token) {
+  if (token->getType() == antlr4::Token::EOF) return "end of file";
+  return "'" + token->getText() + "'";
+}
+
+std::string join_alternatives(const std::vector<std::string>& alternatives) {
+  std::string text;
+  for (std::size_t i = 0; i < alternatives.size(); ++i) {
+    if (i > 0) text += i + 1 == alternatives.size() ? " or " : ", ";
+    text += alternatives[i];
+  }
+  return text;
+}
+
+// Reports syntax errors as "expected X after 'P', found 'T'" instead of ANTLR's "mismatched input"; recovery
+// stays ANTLR's (single-token insertion and deletion, then resynchronisation), so every error is reported.
+class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
+ public:
+  FmpcErrorStrategy(const SourceMap& source, DiagnosticList& diagnostics)
+      : source_(source), diagnostics_(diagnostics) {}
+
+ protected:
+  void reportNoViableAlternative(antlr4::Parser* parser, const antlr4::NoViableAltException& e) override {
+    report(parser, e.getOffendingToken(), e.getExpectedTokens(), e.getCtx());
+  }
+
+  void reportInputMismatch(antlr4::Parser* parser, const antlr4::InputMismatchException& e) override {
+    report(parser, e.getOffendingToken(), e.getExpectedTokens(), e.getCtx());
+  }
+
+  void reportFailedPredicate(antlr4::Parser* parser, const antlr4::FailedPredicateException& e) override {
+    report(parser, e.getOffendingToken(), e.getExpectedTokens(), e.getCtx());
+  }
+
+  void reportUnwantedToken(antlr4::Parser* parser) override {
+    if (inErrorRecoveryMode(parser)) return;
+    beginErrorCondition(parser);
+    report(parser, parser->getCurrentToken(), getExpectedTokens(parser), parser->getContext());
+  }
+
+  // Panic mode to the next item: skip to the next `system`, `input`, `output` or `rule`, or to a line that starts
+  // with a term ("NAME is") or a setting word. ANTLR's own resynchronisation stops at the first token that could
+  // follow, which inside a rule is almost anything and produced cascades of errors.
+  void recover(antlr4::Parser* parser, std::exception_ptr) override {
+    antlr4::TokenStream* tokens = parser->getTokenStream();
+    const std::size_t index = tokens->index();
+    if (index != recovered_at_index_) {
+      recovered_at_index_ = index;
+      recovered_in_states_.clear();
+    }
+    // Called again at the same token in the same state: nothing can match it here, so step over it.
+    if (!recovered_in_states_.insert(parser->getState()).second && tokens->LA(1) != antlr4::Token::EOF)
+      parser->consume();
+    while (!starts_item(tokens, tokens->index())) parser->consume();
+  }
+
+  // ANTLR drops one token when the next one fits; dropping a keyword (`then`, `is`, `rule`) makes the rest of the
+  // line mean something else and the errors that follow point at the wrong thing, so only other tokens go.
+  antlr4::Token* singleTokenDeletion(antlr4::Parser* parser) override {
+    const std::size_t type = parser->getCurrentToken()->getType();
+    if (type >= FmpcLexer::SYSTEM && type <= FmpcLexer::EXTREMELY) return nullptr;
+    return DefaultErrorStrategy::singleTokenDeletion(parser);
+  }
+
+  void reportMissingToken(antlr4::Parser* parser) override {
+    if (inErrorRecoveryMode(parser)) return;
+    beginErrorCondition(parser);
+    report(parser, parser->getCurrentToken(), getExpectedTokens(parser), parser->getContext());
+  }
+
+ private:
+  void report(antlr4::Parser* parser, const antlr4::Token* found, const antlr4::misc::IntervalSet& expected,
+              antlr4::RuleContext* context) {
+    if (!found) return;
+    antlr4::TokenStream* tokens = parser->getTokenStream();
+    const antlr4::Token* previous = previous_visible_token(tokens, found);
+    // An error right after a character the lexer rejected is a consequence of it (already reported); so is a
+    // second error on the line of the previous one, which ANTLR's resynchronisation tends to produce.
+    if (found->getType() == FmpcLexer::ERROR_CHARACTER) return;
+    if (previous && previous->getType() == FmpcLexer::ERROR_CHARACTER) return;
+    // What is missing at the end of a line is reported there, not at the first token of the next line.
+    SourceRange range = source_.token(found);
+    if (previous && previous->getLine() != found->getLine()) {
+      range = source_.token(previous);
+      range.line = range.end_line;
+      range.column = range.end_column;
+      range.end_column = range.column + 1;
+    }
+    if (static_cast<std::size_t>(range.line) == last_error_line_) return;
+    last_error_line_ = static_cast<std::size_t>(range.line);
+    std::vector<std::string> alternatives;
+    bool name_expected = false;
+    bool end_expected = false;
+    bool modifiers_expected = false;
+    std::vector<std::string> keywords;
+    for (const ssize_t type : expected.toList()) {
+      if (type == static_cast<ssize_t>(antlr4::Token::EOF)) {
+        end_expected = true;
+      } else if (is_name_token(static_cast<std::size_t>(type))) {
+        name_expected = true;
+      } else if (type == FmpcLexer::NOT || type == FmpcLexer::SOMEWHAT || type == FmpcLexer::VERY ||
+                 type == FmpcLexer::EXTREMELY) {
+        modifiers_expected = true;
+      } else if (type == FmpcLexer::NUMBER) {
+        alternatives.push_back("a number");
+      } else {
+        const std::string literal = parser->getVocabulary().getLiteralName(static_cast<std::size_t>(type));
+        if (literal == "'%'" && name_expected) continue;
+        keywords.push_back(literal.empty() ? parser->getVocabulary().getDisplayName(static_cast<std::size_t>(type))
+                                           : literal);
+      }
+    }
+    // "not" and the hedges are optional before a term name; listing them only lengthens the message.
+    if (modifiers_expected && !name_expected) keywords.insert(keywords.begin(), "'not' or a hedge");
+    if (name_expected) alternatives.insert(alternatives.begin(), expected_name_noun(tokens, previous, context));
+    alternatives.insert(alternatives.end(), keywords.begin(), keywords.end());
+    if (end_expected) alternatives.push_back("end of file");
+    if (expected.contains(static_cast<ssize_t>(FmpcLexer::INPUT)) && expected.contains(static_cast<ssize_t>(FmpcLexer::RULE)))
+      alternatives = expected_items(tokens, found, end_expected);
+
+    std::string message = "expected " + (alternatives.empty() ? std::string("something else")
+                                                              : join_alternatives(alternatives));
+    if (previous) message += " after '" + previous->getText() + "'";
+    message += ", found " + describe_found(found);
+    for (const Diagnostic& existing : diagnostics_.items())
+      if (existing.range.line == range.line && existing.range.column == range.column) return;
+    diagnostics_.error(range, message);
+  }
+
+  static bool starts_item(antlr4::TokenStream* tokens, std::size_t index) {
+    const antlr4::Token* token = tokens->get(index);
+    switch (token->getType()) {
+      case antlr4::Token::EOF:
+      case FmpcLexer::SYSTEM:
+      case FmpcLexer::INPUT:
+      case FmpcLexer::OUTPUT:
+      case FmpcLexer::RULE: return true;
+      default: break;
+    }
+    const antlr4::Token* previous = previous_visible_token(tokens, token);
+    if (previous && previous->getLine() == token->getLine()) return false;
+    switch (token->getType()) {
+      case FmpcLexer::TYPE:
+      case FmpcLexer::AND:
+      case FmpcLexer::OR:
+      case FmpcLexer::IMPLICATION:
+      case FmpcLexer::AGGREGATION:
+      case FmpcLexer::DEFUZZIFY:
+      case FmpcLexer::WHEN: return true;
+      default: break;
+    }
+    return is_name_token(token->getType()) && tokens->get(index + 1)->getType() == FmpcLexer::IS;
+  }
+
+  const SourceMap& source_;
+  DiagnosticList& diagnostics_;
+  std::size_t last_error_line_ = 0;
+  std::size_t recovered_at_index_ = static_cast<std::size_t>(-1);
+  std::set<std::size_t> recovered_in_states_;
+};
+
+// ---------------------------------------------------------------------------------------------------------------
+// Parse tree -> AST.
+
+class AstBuilder {
+ public:
+  AstBuilder(const SourceMap& source, antlr4::CommonTokenStream& tokens, DiagnosticList& diagnostics)
+      : source_(source), tokens_(tokens), diagnostics_(diagnostics) {}
+
+  File build(FmpcParser::FileContext* tree) {
+    File file;
+    file.path = source_.path();
+    bool previous_was_variable = false;  // the item before is a variable line or one of its terms
+    for (FmpcParser::ItemContext* item : tree->item()) {
+      if (FmpcParser::SystemHeaderContext* header = item->systemHeader()) {
+        file.systems.push_back(build_system(header, file.systems.size()));
+        previous_was_variable = false;
+        continue;
+      }
+      if (file.systems.empty()) {
+        const char* what = item->setting()        ? "a setting"
+                           : item->variableDecl() ? "a variable"
+                           : item->termDecl()     ? "a term"
+                                                  : "a rule";
+        diagnostics_.error(source_.token(item->getStart()),
+                           std::string(what) + " before the first 'system' line; start the file with: system NAME");
+        continue;
+      }
+      const std::size_t system_index = file.systems.size() - 1;
+      System& system = file.systems.back();
+      Variable* open_variable = previous_was_variable ? std::get_if<Variable>(&system.items.back()) : nullptr;
+      previous_was_variable = false;
+      if (FmpcParser::SettingContext* setting = item->setting()) {
+        system.settings.push_back(build_setting(setting, LineRef{system_index, system.settings.size(), kNone, kNone}));
+      } else if (FmpcParser::VariableDeclContext* variable = item->variableDecl()) {
+        system.items.emplace_back(build_variable(variable, system_index, system.items.size()));
+        previous_was_variable = true;
+      } else if (FmpcParser::TermDeclContext* term = item->termDecl()) {
+        if (!open_variable) {
+          diagnostics_.error(source_.context(term->name(0)),
+                             "term " + quoted_name(term->name(0)) +
+                                 " is not under an 'input' or 'output' line; a variable's terms follow its line, "
+                                 "before any rule or setting");
+          continue;
+        }
+        open_variable->terms.push_back(
+            build_term(term, LineRef{system_index, kNone, system.items.size() - 1, open_variable->terms.size()}));
+        previous_was_variable = true;
+      } else if (FmpcParser::RuleDeclContext* rule = item->ruleDecl()) {
+        system.items.emplace_back(build_rule(rule, LineRef{system_index, kNone, system.items.size(), kNone}));
+      }
+    }
+    attach_comments(file);
+    return file;
+  }
+
+ private:
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+
+  // Where a printed line's Comments live in the File; resolved once the File's vectors stop growing.
+  struct LineRef {
+    std::size_t system;
+    std::size_t setting;
+    std::size_t item;
+    std::size_t term;
+  };
+
+  struct Line {
+    std::size_t first_token;
+    std::size_t last_token;
+    LineRef ref;
+    Comments* comments = nullptr;
+  };
+
+  Name name(FmpcParser::NameContext* context) const {
+    const antlr4::Token* token = context->getStart();
+    std::string text = token->getText();
+    const bool quoted = token->getType() == FmpcLexer::STRING;
+    if (quoted) text = text.substr(1, text.size() - 2);
+    return Name{text, source_.token(token), quoted};
+  }
+
+  Name unit(FmpcParser::UnitContext* context) const {
+    if (context->name()) return name(context->name());
+    return Name{context->getStart()->getText(), source_.token(context->getStart()), false};
+  }
+
+  static std::string unquote(const antlr4::Token* token) {
+    const std::string text = token->getText();
+    return text.substr(1, text.size() - 2);
+  }
+
+  Number number(const antlr4::Token* token) {
+    Number result;
+    result.range = source_.token(token);
+    const std::string text = token->getText();
+    const auto parsed = std::from_chars(text.data(), text.data() + text.size(), result.value);
+    if (parsed.ec == std::errc::result_out_of_range) {
+      // from_chars leaves the value unchanged on overflow and underflow; tell them apart by the exponent's sign.
+      const std::size_t e = text.find_first_of("eE");
+      const bool tiny = e != std::string::npos && e + 1 < text.size() && text[e + 1] == '-';
+      if (tiny) {
+        result.value = 0.0;
+      } else {
+        diagnostics_.error(result.range, "number " + text + " is too large (a double holds up to about 1.8e308)");
+      }
+    }
+    return result;
+  }
+
+  System build_system(FmpcParser::SystemHeaderContext* context, std::size_t system_index) {
+    System system;
+    system.name = name(context->name());
+    if (context->description) system.description = unquote(context->description);
+    system.range = source_.context(context);
+    add_line(context->getStart(), context->getStop(), LineRef{system_index, kNone, kNone, kNone});
+    return system;
+  }
+
+  Setting build_setting(FmpcParser::SettingContext* context, const LineRef& ref) {
+    Setting setting;
+    setting.range = source_.context(context);
+    if (auto* type = dynamic_cast<FmpcParser::TypeSettingContext*>(context)) {
+      setting.kind = SettingKind::Type;
+      setting.value = name(type->value);
+    } else if (auto* and_setting = dynamic_cast<FmpcParser::AndSettingContext*>(context)) {
+      setting.kind = SettingKind::And;
+      setting.value = name(and_setting->value);
+    } else if (auto* or_setting = dynamic_cast<FmpcParser::OrSettingContext*>(context)) {
+      setting.kind = SettingKind::Or;
+      setting.value = name(or_setting->value);
+    } else if (auto* implication = dynamic_cast<FmpcParser::ImplicationSettingContext*>(context)) {
+      setting.kind = SettingKind::Implication;
+      setting.value = name(implication->value);
+    } else if (auto* aggregation = dynamic_cast<FmpcParser::AggregationSettingContext*>(context)) {
+      setting.kind = SettingKind::Aggregation;
+      setting.value = name(aggregation->value);
+    } else if (auto* defuzzify = dynamic_cast<FmpcParser::DefuzzifySettingContext*>(context)) {
+      setting.kind = SettingKind::Defuzzify;
+      setting.value = name(defuzzify->value);
+      if (defuzzify->count) setting.samples = number(defuzzify->count);
+      setting.samples_exact = defuzzify->EXACT() != nullptr;
+    } else if (auto* no_fire = dynamic_cast<FmpcParser::NoFireSettingContext*>(context)) {
+      setting.kind = SettingKind::NoFire;
+      FmpcParser::NoFireActionContext* action = no_fire->noFireAction();
+      setting.value = Name{action->getStart()->getText(), source_.token(action->getStart()), false};
+      if (action->NUMBER()) setting.no_fire_value = number(action->NUMBER()->getSymbol());
+    }
+    add_line(context->getStart(), context->getStop(), ref);
+    return setting;
+  }
+
+  std::string quoted_name(FmpcParser::NameContext* context) const { return "'" + name(context).text + "'"; }
+
+  Variable build_variable(FmpcParser::VariableDeclContext* context, std::size_t system_index,
+                          std::size_t item_index) {
+    Variable variable;
+    variable.is_output = context->direction->getType() == FmpcLexer::OUTPUT;
+    variable.name = name(context->name());
+    if (context->description) variable.description = unquote(context->description);
+    variable.min = number(context->low);
+    variable.max = number(context->high);
+    if (context->unit()) variable.unit = unit(context->unit());
+    variable.range = source_.context(context);
+    add_line(context->getStart(), context->getStop(), LineRef{system_index, kNone, item_index, kNone});
+    return variable;
+  }
+
+  Term build_term(FmpcParser::TermDeclContext* context, const LineRef& ref) {
+    Term term;
+    term.name = name(context->name(0));
+    term.family = name(context->family);
+    term.range = source_.context(context);
+    for (FmpcParser::ArgumentContext* argument_context : context->argument()) {
+      Argument argument;
+      argument.name = name(argument_context->name());
+      argument.value = number(argument_context->NUMBER()->getSymbol());
+      if (argument_context->unit()) argument.unit = unit(argument_context->unit());
+      argument.range = source_.context(argument_context);
+      term.arguments.push_back(std::move(argument));
+    }
+    add_line(context->getStart(), context->getStop(), ref);
+    return term;
+  }
+
+  Clause build_clause(FmpcParser::ClauseContext* context) const {
+    Clause clause;
+    clause.variable = name(context->variableName);
+    clause.negated = context->NOT() != nullptr;
+    if (FmpcParser::HedgeContext* hedge = context->hedge()) {
+      if (hedge->SOMEWHAT()) clause.hedge = Hedge::Somewhat;
+      else if (hedge->EXTREMELY()) clause.hedge = Hedge::Extremely;
+      else clause.hedge = hedge->VERY().size() == 2 ? Hedge::VeryVery : Hedge::Very;
+    }
+    clause.term = name(context->termName);
+    clause.range = source_.context(context);
+    return clause;
+  }
+
+  Rule build_rule(FmpcParser::RuleDeclContext* context, const LineRef& ref) {
+    Rule rule;
+    if (context->label) rule.label = name(context->label);
+    const std::size_t then_index = context->THEN()->getSymbol()->getTokenIndex();
+    for (FmpcParser::ClauseContext* clause : context->clause()) {
+      if (clause->getStart()->getTokenIndex() < then_index) rule.antecedent.push_back(build_clause(clause));
+      else rule.consequent.push_back(build_clause(clause));
+    }
+    for (FmpcParser::ConnectiveContext* connective : context->connective())
+      rule.connectives.push_back(ConnectiveToken{connective->OR() ? Connective::Or : Connective::And,
+                                                 source_.context(connective)});
+    if (context->weight) rule.weight = number(context->weight);
+    rule.range = source_.context(context);
+    add_line(context->getStart(), context->getStop(), ref);
+    return rule;
+  }
+
+  void add_line(const antlr4::Token* first, const antlr4::Token* last, const LineRef& ref) {
+    lines_.push_back(Line{first->getTokenIndex(), last->getTokenIndex(), ref, nullptr});
+  }
+
+  static Comments& comments_of(File& file, const LineRef& ref) {
+    System& system = file.systems[ref.system];
+    if (ref.setting != kNone) return system.settings[ref.setting].comments;
+    if (ref.item == kNone) return system.comments;
+    Item& item = system.items[ref.item];
+    if (auto* variable = std::get_if<Variable>(&item))
+      return ref.term == kNone ? variable->comments : variable->terms[ref.term].comments;
+    return std::get<Rule>(item).comments;
+  }
+
+  void attach_comments(File& file) {
+    for (Line& line : lines_) line.comments = &comments_of(file, line.ref);
+    // Comments, and the token index where each line's block (its leading comments, then itself) starts.
+    std::vector<std::size_t> block_start(lines_.size());
+    for (std::size_t i = 0; i < lines_.size(); ++i) block_start[i] = lines_[i].first_token;
+    std::size_t end_block_start = std::string::npos;
+    const std::size_t count = tokens_.size();
+    for (std::size_t index = 0; index < count; ++index) {
+      const antlr4::Token* token = tokens_.get(index);
+      if (token->getType() != FmpcLexer::COMMENT) continue;
+      std::string text = token->getText();
+      while (!text.empty() && (text.back() == ' ' || text.back() == '\t' || text.back() == '\r')) text.pop_back();
+      const antlr4::Token* previous = previous_visible_token(&tokens_, token);
+      bool attached = false;
+      if (previous && previous->getLine() == token->getLine()) {
+        for (Line& line : lines_) {
+          if (line.first_token <= previous->getTokenIndex() && previous->getTokenIndex() <= line.last_token) {
+            // A line printed as one may have held several end-of-line comments; the later ones move above it.
+            if (line.comments->trailing.empty()) line.comments->trailing = text;
+            else line.comments->leading.push_back(text);
+            attached = true;
+            break;
+          }
+        }
+      }
+      if (attached) continue;
+      std::size_t owner = 0;
+      while (owner < lines_.size() && lines_[owner].first_token < index) ++owner;
+      std::vector<std::string>& block = owner < lines_.size() ? lines_[owner].comments->leading
+                                                               : file.end_comments.leading;
+      // A blank line between two own-line comments is kept (as an empty entry).
+      if (!block.empty() && blank_line_before(index)) block.emplace_back();
+      block.push_back(text);
+      if (owner < lines_.size()) block_start[owner] = std::min(block_start[owner], index);
+      else end_block_start = std::min(end_block_start, index);
+    }
+    for (std::size_t i = 0; i < lines_.size(); ++i)
+      lines_[i].comments->blank_line_before = blank_line_before(block_start[i]);
+    if (end_block_start != std::string::npos) file.end_comments.blank_line_before = blank_line_before(end_block_start);
+  }
+
+  bool blank_line_before(std::size_t token_index) {
+    if (token_index == 0) return false;
+    const antlr4::Token* previous = tokens_.get(token_index - 1);
+    return tokens_.get(token_index)->getLine() >= previous->getLine() + 2;
+  }
+
+  const SourceMap& source_;
+  antlr4::CommonTokenStream& tokens_;
+  DiagnosticList& diagnostics_;
+  std::vector<Line> lines_;
+};
+
+void report_lexical_errors(const SourceMap& source, antlr4::CommonTokenStream& tokens,
+                           DiagnosticList& diagnostics) {
+  for (std::size_t i = 0; i < tokens.size(); ++i) {
+    const antlr4::Token* token = tokens.get(i);
+    const std::string text = token->getText();
+    if (token->getType() == FmpcLexer::STRING && (text.size() < 2 || text.back() != '"')) {
+      diagnostics.error(source.token(token), "unterminated quoted name: close it with '\"' on the same line");
+    } else if (token->getType() == FmpcLexer::ERROR_CHARACTER) {
+      std::string message = "unexpected character '" + text + "'";
+      const antlr4::Token* previous = i > 0 ? tokens.get(i - 1) : nullptr;
+      const bool glued_to_name = previous && previous->getStopIndex() + 1 == token->getStartIndex() &&
+                                 (previous->getType() == FmpcLexer::IDENTIFIER || previous->getType() == FmpcLexer::NUMBER);
+      if (text == "-" && !glued_to_name) message += "; a negative number is written without a space: -20";
+      else message += "; a name with this character must be quoted: \"F0-F1\"";
+      diagnostics.error(source.token(token), message);
+    }
+  }
+}
+
+}  // namespace
+
+std::optional<File> parse_fmpc(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
+  const std::size_t bad_byte = first_invalid_utf8(text);
+  if (bad_byte != std::string::npos) {
+    const SourceMap source(path, text.substr(0, bad_byte));
+    SourceRange range = source.bytes(bad_byte, bad_byte);
+    range.end_column = range.column + 1;
+    diagnostics.error(range, "the file is not valid UTF-8 (save it as UTF-8)");
+    return std::nullopt;
+  }
+  const SourceMap source(path, text);
+  DiagnosticList syntax;
+
+  antlr4::ANTLRInputStream input(text);
+  FmpcLexer lexer(&input);
+  lexer.removeErrorListeners();
+  antlr4::CommonTokenStream tokens(&lexer);
+  tokens.fill();
+  report_lexical_errors(source, tokens, syntax);
+
+  FmpcParser parser(&tokens);
+  parser.removeErrorListeners();
+  parser.setErrorHandler(std::make_shared<FmpcErrorStrategy>(source, syntax));
+  FmpcParser::FileContext* tree = parser.file();
+
+  if (syntax.has_errors()) {
+    syntax.sort_by_position();
+    diagnostics.append(syntax);
+    return std::nullopt;
+  }
+  AstBuilder builder(source, tokens, syntax);
+  File file = builder.build(tree);
+  diagnostics.append(syntax);
+  if (syntax.has_errors()) return std::nullopt;
+  return file;
+}
+
+}  // namespace fmpc::ast

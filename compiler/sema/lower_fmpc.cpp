@@ -1,0 +1,535 @@
+// ast::File -> RuleFile: settings with MATLAB's defaults, named MF arguments in MATLAB order, unit conversion,
+// and name resolution in rules with "did you mean". Validity of the values themselves is check_system's.
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "compiler/frontend/fmpc_ast.h"
+#include "compiler/frontend/fmpc_language.h"
+#include "compiler/ir/number_format.h"
+
+namespace fmpc {
+
+namespace {
+
+using ast::Argument;
+using ast::ConnectiveToken;
+using ast::FamilySignature;
+using ast::File;
+using ast::Item;
+using ast::Name;
+using ast::Setting;
+using ast::SettingKind;
+using ast::System;
+
+std::string quoted(const std::string& text) { return "'" + text + "'"; }
+
+std::string position_text(const SourceRange& range) {
+  return std::to_string(range.line) + ":" + std::to_string(range.column);
+}
+
+std::string list_text(const std::vector<std::string>& names) {
+  std::string text;
+  for (std::size_t i = 0; i < names.size(); ++i) text += (i ? ", " : "") + names[i];
+  return text;
+}
+
+std::vector<std::string> did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
+  if (auto suggestion = closest_name(name, candidates)) return {"did you mean " + quoted(*suggestion) + "?"};
+  return {};
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Units: SI prefixes of Pa, m, s, N and g, plus % and dimensionless. Every conversion is a power of ten, so a value
+// is scaled by one correctly rounded multiplication or division.
+
+struct UnitMeaning {
+  const char* dimension;
+  int exponent;  // value in the base unit = value * 10^exponent
+};
+
+std::optional<UnitMeaning> unit_meaning(const std::string& unit) {
+  if (unit == "dimensionless") return UnitMeaning{"dimensionless", 0};
+  if (unit == "%") return UnitMeaning{"dimensionless", -2};
+  static const std::vector<std::pair<std::string, const char*>> bases = {
+      {"Pa", "pressure"}, {"m", "length"}, {"s", "time"}, {"N", "force"}, {"g", "mass"}};
+  static const std::vector<std::pair<std::string, int>> prefixes = {
+      {"", 0},   {"da", 1}, {"h", 2},  {"k", 3},  {"M", 6},       {"G", 9},       {"T", 12},  {"d", -1},
+      {"c", -2}, {"m", -3}, {"u", -6}, {"\xC2\xB5", -6} /* micro sign */, {"\xCE\xBC", -6} /* Greek mu */,
+      {"n", -9}, {"p", -12}, {"f", -15}};
+  for (const auto& [base, dimension] : bases) {
+    if (unit.size() < base.size() || unit.compare(unit.size() - base.size(), base.size(), base) != 0) continue;
+    const std::string prefix = unit.substr(0, unit.size() - base.size());
+    for (const auto& [spelling, exponent] : prefixes)
+      if (prefix == spelling) return UnitMeaning{dimension, exponent};
+  }
+  return std::nullopt;
+}
+
+double scale_by_power_of_ten(double value, int exponent) {
+  double power = 1.0;
+  for (int i = 0; i < std::abs(exponent); ++i) power *= 10.0;  // exact up to 1e22
+  return exponent >= 0 ? value * power : value / power;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+
+class SystemLowering {
+ public:
+  SystemLowering(const File& file, std::size_t system_index, DiagnosticList& diagnostics)
+      : file_(file), source_(file.systems[system_index]), diagnostics_(diagnostics) {}
+
+  FuzzySystem lower() {
+    system_.name = source_.name.text;
+    system_.description = source_.description.value_or("");
+    system_.range = source_.range;
+    lower_settings();
+    settings_failed_ = diagnostics_.has_errors();
+    for (const Item& item : source_.items)
+      if (const auto* variable = std::get_if<ast::Variable>(&item)) lower_variable_header(*variable);
+    std::size_t input_index = 0, output_index = 0;
+    std::vector<std::pair<fmpc::Variable*, std::size_t>> failed_terms;
+    for (const Item& item : source_.items) {
+      const auto* variable = std::get_if<ast::Variable>(&item);
+      if (!variable) continue;
+      fmpc::Variable& target = variable->is_output ? system_.outputs[output_index++] : system_.inputs[input_index++];
+      for (const ast::Term& term : variable->terms) {
+        const std::size_t errors_before = diagnostics_.error_count();
+        target.terms.push_back(lower_term(term, target));
+        if (diagnostics_.error_count() > errors_before) failed_terms.emplace_back(&target, target.terms.size() - 1);
+      }
+    }
+    for (const Item& item : source_.items)
+      if (const auto* rule = std::get_if<ast::Rule>(&item)) {
+        const std::size_t errors_before = diagnostics_.error_count();
+        lower_rule(*rule);
+        if (diagnostics_.error_count() > errors_before) failed_rules_.push_back(system_.rules.size() - 1);
+      }
+    // So that check_system can still report every parameter error of the file in the same run (all errors at
+    // once) without echoing the ones reported here: a term that failed gets a harmless shape and a rule that
+    // failed is dropped. A system with errors is never evaluated, so the stand-ins never reach a number.
+    for (auto [variable, term] : failed_terms) {
+      fmpc::MembershipFunction& mf = variable->terms[term].mf;
+      const double mid = 0.5 * (variable->min + variable->max);
+      const bool sugeno_output = system_.type == SystemType::Sugeno &&
+                                 variable >= system_.outputs.data() &&
+                                 variable < system_.outputs.data() + system_.outputs.size();
+      mf = sugeno_output ? fmpc::MembershipFunction{MfKind::Constant, {mid}}
+                         : fmpc::MembershipFunction{MfKind::Triangle, {variable->min, mid, variable->max}};
+    }
+    for (auto it = failed_rules_.rbegin(); it != failed_rules_.rend(); ++it)
+      system_.rules.erase(system_.rules.begin() + static_cast<std::ptrdiff_t>(*it));
+    return system_;
+  }
+
+  // A misspelt type or operator makes every later check suspect (a Sugeno output in what now reads as a Mamdani
+  // system), so such a system is not handed to check_system at all.
+  bool settings_failed() const { return settings_failed_; }
+
+ private:
+  // --- settings ------------------------------------------------------------------------------------------------
+
+  static const char* setting_name(SettingKind kind) {
+    switch (kind) {
+      case SettingKind::Type: return "type";
+      case SettingKind::And: return "and";
+      case SettingKind::Or: return "or";
+      case SettingKind::Implication: return "implication";
+      case SettingKind::Aggregation: return "aggregation";
+      case SettingKind::Defuzzify: return "defuzzify";
+      case SettingKind::NoFire: return "when no rule fires";
+    }
+    return "?";
+  }
+
+  void lower_settings() {
+    std::map<SettingKind, SourceRange> first_set;
+    for (const Setting& setting : source_.settings) {
+      auto [it, inserted] = first_set.emplace(setting.kind, setting.range);
+      if (!inserted)
+        diagnostics_.error(setting.range,
+                           quoted(setting_name(setting.kind)) + " is set twice in system " + quoted(system_.name) +
+                               "; keep one",
+                           {"first set here: " + position_text(it->second)});
+    }
+    for (const Setting& setting : source_.settings)
+      if (setting.kind == SettingKind::Type) lower_type(setting);
+    if (system_.type == SystemType::Sugeno) {
+      // MATLAB's sugfis defaults.
+      system_.and_method = TNorm::Product;
+      system_.or_method = SNorm::ProbabilisticSum;
+      system_.implication = TNorm::Product;
+      system_.aggregation = SNorm::Sum;
+      system_.defuzzifier = Defuzzifier::WeightedAverage;
+    }
+    for (const Setting& setting : source_.settings) {
+      switch (setting.kind) {
+        case SettingKind::Type: break;
+        case SettingKind::And: lower_tnorm(setting, system_.and_method); break;
+        case SettingKind::Implication: lower_tnorm(setting, system_.implication); break;
+        case SettingKind::Or: lower_snorm(setting, system_.or_method); break;
+        case SettingKind::Aggregation: lower_snorm(setting, system_.aggregation); break;
+        case SettingKind::Defuzzify: lower_defuzzify(setting); break;
+        case SettingKind::NoFire: lower_no_fire(setting); break;
+      }
+    }
+  }
+
+  void unknown_choice(const Setting& setting, const std::string& what, const std::vector<std::string>& choices) {
+    std::vector<std::string> notes = did_you_mean(setting.value.text, choices);
+    notes.push_back("choose one of: " + list_text(choices));
+    std::string message = "unknown " + what + " " + quoted(setting.value.text);
+    if (setting.kind != SettingKind::Type && setting.kind != SettingKind::Defuzzify)
+      message += std::string(" for ") + quoted(setting_name(setting.kind));
+    diagnostics_.error(setting.value.range, message, notes);
+  }
+
+  void lower_type(const Setting& setting) {
+    if (setting.value.text == "mamdani") system_.type = SystemType::Mamdani;
+    else if (setting.value.text == "sugeno") system_.type = SystemType::Sugeno;
+    else unknown_choice(setting, "system type", {"mamdani", "sugeno"});
+  }
+
+  void lower_tnorm(const Setting& setting, TNorm& target) {
+    if (auto norm = tnorm_from_string(setting.value.text)) target = *norm;
+    else unknown_choice(setting, "t-norm", {"min", "prod", "einstein_product"});
+  }
+
+  void lower_snorm(const Setting& setting, SNorm& target) {
+    if (auto norm = snorm_from_string(setting.value.text)) target = *norm;
+    else unknown_choice(setting, "s-norm", {"max", "probor", "sum", "einstein_sum"});
+  }
+
+  void lower_defuzzify(const Setting& setting) {
+    if (auto defuzzifier = defuzzifier_from_string(setting.value.text)) system_.defuzzifier = *defuzzifier;
+    else unknown_choice(setting, "defuzzifier", {"centroid", "bisector", "mom", "som", "lom", "wtaver", "wtsum"});
+    if (setting.samples_exact) {
+      system_.samples = 0;
+    } else if (setting.samples) {
+      const double count = setting.samples->value;
+      if (count != std::floor(count) || count < 2.0 || count > 100000000.0) {
+        diagnostics_.error(setting.samples->range,
+                           "samples must be a whole number from 2 to 100000000, or 'exact' for the exact centroid");
+      } else {
+        system_.samples = static_cast<int>(count);
+      }
+    }
+  }
+
+  void lower_no_fire(const Setting& setting) {
+    if (setting.value.text == "midrange") {
+      system_.no_fire = NoFirePolicy::Midrange;
+    } else if (setting.value.text == "error") {
+      system_.no_fire = NoFirePolicy::Error;
+    } else {
+      system_.no_fire = NoFirePolicy::Value;
+      system_.no_fire_value = setting.no_fire_value ? setting.no_fire_value->value : 0.0;
+    }
+  }
+
+  // --- variables and terms ------------------------------------------------------------------------------------
+
+  void lower_variable_header(const ast::Variable& source) {
+    fmpc::Variable variable;
+    variable.name = source.name.text;
+    variable.description = source.description.value_or("");
+    variable.unit = source.unit ? source.unit->text : "";
+    variable.min = source.min.value;
+    variable.max = source.max.value;
+    variable.range = source.range;
+    variable.name_range = source.name.range;
+    (source.is_output ? system_.outputs : system_.inputs).push_back(std::move(variable));
+  }
+
+  // `value` given in `unit` (when present), in the unit of `variable`; nullopt after reporting why not.
+  std::optional<double> in_variable_unit(double value, const std::optional<Name>& unit, const std::string& parameter,
+                                         const fmpc::Variable& variable) {
+    if (!unit || unit->text == variable.unit) return value;
+    const std::string what = quoted(unit->text) + " given for " + quoted(parameter);
+    if (variable.unit.empty()) {
+      diagnostics_.error(unit->range, what + ", but " + quoted(variable.name) + " has no unit",
+                         {"give " + quoted(variable.name) + " a unit after its range (in [" +
+                          format_number(variable.min) + ", " + format_number(variable.max) + "] " + unit->text +
+                          ") or drop this one"});
+      return std::nullopt;
+    }
+    const std::optional<UnitMeaning> from = unit_meaning(unit->text);
+    const std::optional<UnitMeaning> to = unit_meaning(variable.unit);
+    const std::string known = "fmpc converts Pa, m, s, N and g with SI prefixes (kPa, mm, ms, ...), % and "
+                              "dimensionless";
+    if (!from) {
+      diagnostics_.error(unit->range, "unknown unit " + quoted(unit->text) + " for " + quoted(parameter) + "; " +
+                                          quoted(variable.name) + " is in " + quoted(variable.unit),
+                         {known});
+      return std::nullopt;
+    }
+    if (!to) {
+      diagnostics_.error(unit->range,
+                         "unit " + quoted(unit->text) + " of " + quoted(parameter) + " does not convert to " +
+                             quoted(variable.unit) + ", the unit of " + quoted(variable.name),
+                         {known + "; write the value in " + variable.unit});
+      return std::nullopt;
+    }
+    if (std::string(from->dimension) != to->dimension) {
+      diagnostics_.error(unit->range, "unit " + quoted(unit->text) + " (" + from->dimension + ") of " +
+                                          quoted(parameter) + " does not convert to " + quoted(variable.unit) +
+                                          " (" + to->dimension + "), the unit of " + quoted(variable.name));
+      return std::nullopt;
+    }
+    return scale_by_power_of_ten(value, from->exponent - to->exponent);
+  }
+
+  fmpc::Term lower_term(const ast::Term& source, const fmpc::Variable& variable) {
+    fmpc::Term term;
+    term.name = source.name.text;
+    term.range = source.range;
+    term.name_range = source.name.range;
+    const FamilySignature* family = ast::find_family(source.family.text);
+    if (!family) {
+      std::vector<std::string> notes = did_you_mean(source.family.text, ast::family_names());
+      notes.push_back("membership functions: " + list_text(ast::family_names()));
+      diagnostics_.error(source.family.range, "unknown membership function " + quoted(source.family.text), notes);
+      return term;
+    }
+    term.mf.kind = family->kind;
+    if (family->kind == MfKind::Linear) lower_linear(source, variable, term.mf);
+    else lower_named_parameters(source, *family, variable, term.mf);
+    return term;
+  }
+
+  void lower_named_parameters(const ast::Term& source, const FamilySignature& family, const fmpc::Variable& variable,
+                              MembershipFunction& mf) {
+    const std::vector<std::string> names(family.parameters.begin(), family.parameters.end());
+    const std::string takes = std::string(family.name) + " takes: " + list_text(names);
+    mf.params.assign(names.size(), 0.0);
+    std::vector<const Argument*> given(names.size(), nullptr);
+    for (const Argument& argument : source.arguments) {
+      const auto found = std::find(names.begin(), names.end(), argument.name.text);
+      if (found == names.end()) {
+        std::vector<std::string> notes = did_you_mean(argument.name.text, names);
+        notes.push_back(takes);
+        diagnostics_.error(argument.name.range,
+                           quoted(family.name) + " has no parameter " + quoted(argument.name.text), notes);
+        continue;
+      }
+      const auto index = static_cast<std::size_t>(found - names.begin());
+      if (given[index]) {
+        diagnostics_.error(argument.name.range, "parameter " + quoted(argument.name.text) + " is given twice",
+                           {"first given here: " + position_text(given[index]->name.range)});
+        continue;
+      }
+      given[index] = &argument;
+      if (argument.unit && !family.takes_unit[index]) {
+        diagnostics_.error(argument.unit->range,
+                           quoted(argument.name.text) + " of " + family.name + " takes no unit (it is per unit of " +
+                               quoted(variable.name) + "); remove " + quoted(argument.unit->text));
+        continue;
+      }
+      if (auto value = in_variable_unit(argument.value.value, argument.unit, argument.name.text, variable))
+        mf.params[static_cast<std::size_t>(family.matlab_index[index])] = *value;
+    }
+    std::vector<std::string> missing;
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (!given[i]) missing.push_back(quoted(names[i]));
+    if (!missing.empty()) {
+      std::string list;
+      for (std::size_t i = 0; i < missing.size(); ++i)
+        list += (i == 0 ? "" : i + 1 == missing.size() ? " and " : ", ") + missing[i];
+      diagnostics_.error(source.family.range,
+                         std::string(family.name) + "(...) of term " + quoted(source.name.text) + " is missing " +
+                             (missing.size() == 1 ? "parameter " : "parameters ") + list,
+                         {takes});
+    }
+  }
+
+  std::vector<std::string> input_names() const {
+    std::vector<std::string> names;
+    for (const fmpc::Variable& input : system_.inputs) names.push_back(input.name);
+    return names;
+  }
+
+  std::vector<std::string> output_names() const {
+    std::vector<std::string> names;
+    for (const fmpc::Variable& output : system_.outputs) names.push_back(output.name);
+    return names;
+  }
+
+  void lower_linear(const ast::Term& source, const fmpc::Variable& variable, MembershipFunction& mf) {
+    const std::size_t inputs = system_.inputs.size();
+    mf.params.assign(inputs + 1, 0.0);
+    std::vector<const Argument*> given(inputs + 1, nullptr);
+    for (const Argument& argument : source.arguments) {
+      const bool is_offset = argument.name.text == "offset" && !argument.name.quoted;
+      std::size_t index = inputs;
+      if (!is_offset) {
+        const int input = system_.find_input(argument.name.text);
+        if (input < 0) {
+          std::vector<std::string> notes = did_you_mean(argument.name.text, input_names());
+          notes.push_back("linear(...) takes one coefficient per input of " + quoted(system_.name) + " (" +
+                          list_text(input_names()) + ") and an offset");
+          diagnostics_.error(argument.name.range,
+                             quoted(argument.name.text) + " is not an input of system " + quoted(system_.name),
+                             notes);
+          continue;
+        }
+        index = static_cast<std::size_t>(input);
+      }
+      if (given[index]) {
+        diagnostics_.error(argument.name.range,
+                           (is_offset ? std::string("the offset") : "the coefficient of " + quoted(argument.name.text)) +
+                               " is given twice",
+                           {"first given here: " + position_text(given[index]->name.range)});
+        continue;
+      }
+      given[index] = &argument;
+      if (!is_offset) {
+        if (argument.unit)
+          diagnostics_.error(argument.unit->range, "the coefficient of " + quoted(argument.name.text) +
+                                                       " takes no unit; remove " + quoted(argument.unit->text));
+        else mf.params[index] = argument.value.value;
+      } else if (auto value = in_variable_unit(argument.value.value, argument.unit, "offset", variable)) {
+        mf.params[index] = *value;
+      }
+    }
+  }
+
+  // --- rules --------------------------------------------------------------------------------------------------
+
+  // The system of this file, other than this one, that has a variable called `name`, with its role.
+  std::optional<std::string> owner_elsewhere(const std::string& name) const {
+    for (const System& other : file_.systems) {
+      if (&other == &source_ || other.name.text == source_.name.text) continue;
+      for (const Item& item : other.items)
+        if (const auto* variable = std::get_if<ast::Variable>(&item); variable && variable->name.text == name)
+          return quoted(name) + " is an " + (variable->is_output ? "output" : "input") + " of system " +
+                 quoted(other.name.text) + "; a rule of " + quoted(source_.name.text) +
+                 " can only name its own variables";
+    }
+    return std::nullopt;
+  }
+
+  // Resolves one clause; returns false after reporting when it does not resolve.
+  bool lower_clause(const ast::Clause& source, bool consequent, const std::string& rule_name, fmpc::Clause& clause,
+                    std::map<int, SourceRange>& used) {
+    const std::vector<fmpc::Variable>& variables = consequent ? system_.outputs : system_.inputs;
+    const char* role = consequent ? "output" : "input";
+    const int index = consequent ? system_.find_output(source.variable.text) : system_.find_input(source.variable.text);
+    if (index < 0) {
+      const int other_role = consequent ? system_.find_input(source.variable.text)
+                                        : system_.find_output(source.variable.text);
+      if (other_role >= 0) {
+        diagnostics_.error(source.variable.range,
+                           quoted(source.variable.text) + " is an " + (consequent ? "input" : "output") + " of " +
+                               quoted(system_.name) + "; the " +
+                               (consequent ? "conclusions after 'then' name outputs"
+                                           : "conditions after 'if' name inputs"));
+      } else if (auto elsewhere = owner_elsewhere(source.variable.text)) {
+        diagnostics_.error(source.variable.range, *elsewhere);
+      } else {
+        diagnostics_.error(source.variable.range,
+                           std::string("unknown ") + role + " " + quoted(source.variable.text) + " in system " +
+                               quoted(system_.name),
+                           did_you_mean(source.variable.text, consequent ? output_names() : input_names()));
+      }
+      return false;
+    }
+    const fmpc::Variable& variable = variables[static_cast<std::size_t>(index)];
+    const auto [previous, inserted] = used.emplace(index, source.variable.range);
+    if (!inserted) {
+      diagnostics_.error(source.variable.range,
+                         std::string(role) + " " + quoted(variable.name) + " appears twice in " + rule_name +
+                             "; a rule names each " + role + " at most once",
+                         {"first used here: " + position_text(previous->second)});
+      return false;
+    }
+    const int term = variable.find_term(source.term.text);
+    if (term < 0) {
+      std::vector<std::string> term_names;
+      for (const fmpc::Term& candidate : variable.terms) term_names.push_back(candidate.name);
+      std::vector<std::string> notes = did_you_mean(source.term.text, term_names);
+      notes.push_back("terms of " + quoted(variable.name) + ": " + list_text(term_names));
+      diagnostics_.error(source.term.range,
+                         std::string(role) + " " + quoted(variable.name) + " has no term " + quoted(source.term.text),
+                         notes);
+      return false;
+    }
+    clause.variable = index;
+    clause.term = term;
+    clause.negated = source.negated;
+    clause.hedge = source.hedge;
+    clause.range = source.range;
+    return true;
+  }
+
+  void lower_rule(const ast::Rule& source) {
+    fmpc::Rule rule;
+    rule.label = source.label ? source.label->text : "";
+    rule.range = source.range;
+    rule.weight = source.weight ? source.weight->value : 1.0;
+    const std::string rule_name =
+        source.label ? "rule " + quoted(source.label->text) : "rule " + std::to_string(system_.rules.size() + 1);
+    if (!source.connectives.empty()) {
+      rule.connective = source.connectives.front().connective;
+      for (const ConnectiveToken& connective : source.connectives) {
+        if (connective.connective != rule.connective) {
+          diagnostics_.error(connective.range,
+                             rule_name + " mixes 'and' and 'or'; a rule has one connective (as in MATLAB), so split "
+                                         "it into several rules");
+          break;
+        }
+      }
+    }
+    std::map<int, SourceRange> used_inputs, used_outputs;
+    for (const ast::Clause& clause : source.antecedent) {
+      fmpc::Clause lowered;
+      if (lower_clause(clause, false, rule_name, lowered, used_inputs)) rule.antecedent.push_back(lowered);
+    }
+    for (const ast::Clause& clause : source.consequent) {
+      fmpc::Clause lowered;
+      if (lower_clause(clause, true, rule_name, lowered, used_outputs)) rule.consequent.push_back(lowered);
+    }
+    system_.rules.push_back(std::move(rule));
+  }
+
+  const File& file_;
+  const System& source_;
+  DiagnosticList& diagnostics_;
+  FuzzySystem system_;
+  bool settings_failed_ = false;
+  std::vector<std::size_t> failed_rules_;
+};
+
+}  // namespace
+
+RuleFile ast::lower_fmpc(const File& file, DiagnosticList& diagnostics) {
+  RuleFile result;
+  result.path = file.path;
+  std::map<std::string, SourceRange> system_names;
+  for (std::size_t i = 0; i < file.systems.size(); ++i) {
+    const System& system = file.systems[i];
+    DiagnosticList system_diagnostics;
+    const auto [first, inserted] = system_names.emplace(system.name.text, system.name.range);
+    if (!inserted)
+      system_diagnostics.error(system.name.range,
+                               "system " + quoted(system.name.text) + " is defined twice in this file; rename one",
+                               {"first defined here: " + position_text(first->second)});
+    SystemLowering lowering(file, i, system_diagnostics);
+    FuzzySystem lowered = lowering.lower();
+    if (inserted && !lowering.settings_failed()) result.systems.push_back(std::move(lowered));
+    diagnostics.append(system_diagnostics);
+  }
+  return result;
+}
+
+RuleFile read_fmpc(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
+  DiagnosticList local;
+  std::optional<ast::File> file = ast::parse_fmpc(path, text, local);
+  RuleFile result;
+  result.path = path;
+  if (file) result = ast::lower_fmpc(*file, local);
+  local.sort_by_position();
+  diagnostics.append(local);
+  return result;
+}
+
+}  // namespace fmpc
