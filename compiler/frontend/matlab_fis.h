@@ -1,6 +1,6 @@
 #pragma once
 // MATLAB's .fis format, versions 1 and 2 (also Octave's fuzzy-logic-toolkit layout), read with the meaning MATLAB
-// gives it and written so that MATLAB reads it back. docs/language.md lists every key and rule-line feature.
+// gives it and written so that MATLAB reads it back. docs/matlab_fis.md lists every key and rule-line feature.
 #include <string>
 
 #include "compiler/ir/fuzzy_system.h"

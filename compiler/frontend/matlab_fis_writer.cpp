@@ -1,0 +1,176 @@
+// MATLAB .fis writer: the version 2.0 layout of MATLAB's writefis (keys without spaces, MFs as
+// MFk='name':'type',[params], rules as "a b, c (w) : k"), with hedges as Octave's rule fractions.
+// Numbers go through format_number so that reading the file back gives the same bits.
+#include <string>
+#include <vector>
+
+#include "compiler/frontend/matlab_fis.h"
+#include "compiler/ir/number_format.h"
+
+namespace fmpc {
+
+namespace {
+
+// MATLAB strings double a quote inside.
+std::string quoted(const std::string& text) {
+  std::string result = "'";
+  for (char c : text) {
+    result += c;
+    if (c == '\'') result += '\'';
+  }
+  return result + "'";
+}
+
+std::string vector_text(const std::vector<double>& values) {
+  std::string text = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) text += (i > 0 ? " " : "") + format_number(values[i]);
+  return text + "]";
+}
+
+// Octave's rule-entry fractions (get_mf_index_and_hedge: round(100 * fraction) / 10 is the power).
+const char* hedge_fraction(Hedge hedge) {
+  switch (hedge) {
+    case Hedge::None: return "";
+    case Hedge::Somewhat: return ".05";
+    case Hedge::Very: return ".2";
+    case Hedge::Extremely: return ".3";
+    case Hedge::VeryVery: return ".4";
+  }
+  return "";
+}
+
+std::string clause_entry(const Clause& clause) {
+  return std::string(clause.negated ? "-" : "") + std::to_string(clause.term + 1) + hedge_fraction(clause.hedge);
+}
+
+// One column per variable: the clause on it, or 0.
+std::string columns(const std::vector<Clause>& clauses, std::size_t variable_count) {
+  std::vector<std::string> entries(variable_count, "0");
+  for (const Clause& clause : clauses)
+    if (clause.variable >= 0 && static_cast<std::size_t>(clause.variable) < variable_count)
+      entries[static_cast<std::size_t>(clause.variable)] = clause_entry(clause);
+  std::string text;
+  for (std::size_t i = 0; i < entries.size(); ++i) text += (i > 0 ? " " : "") + entries[i];
+  return text;
+}
+
+class Writer {
+ public:
+  Writer(const FuzzySystem& system, DiagnosticList& diagnostics) : system_(system), diagnostics_(diagnostics) {}
+
+  std::string write() {
+    report_what_matlab_cannot_hold();
+    std::string out;
+    out += "[System]\n";
+    out += "Name=" + quoted(system_.name) + "\n";
+    out += "Type=" + quoted(to_string(system_.type)) + "\n";
+    out += "Version=2.0\n";
+    out += "NumInputs=" + std::to_string(system_.inputs.size()) + "\n";
+    out += "NumOutputs=" + std::to_string(system_.outputs.size()) + "\n";
+    out += "NumRules=" + std::to_string(system_.rules.size()) + "\n";
+    out += "AndMethod=" + quoted(to_string(system_.and_method)) + "\n";
+    out += "OrMethod=" + quoted(to_string(system_.or_method)) + "\n";
+    out += "ImpMethod=" + quoted(to_string(system_.implication)) + "\n";
+    out += "AggMethod=" + quoted(to_string(system_.aggregation)) + "\n";
+    out += "DefuzzMethod=" + quoted(to_string(system_.defuzzifier)) + "\n";
+    for (std::size_t i = 0; i < system_.inputs.size(); ++i) out += variable("Input", i + 1, system_.inputs[i]);
+    for (std::size_t i = 0; i < system_.outputs.size(); ++i) out += variable("Output", i + 1, system_.outputs[i]);
+    out += "\n[Rules]\n";
+    for (const Rule& rule : system_.rules) {
+      out += columns(rule.antecedent, system_.inputs.size()) + ", " + columns(rule.consequent, system_.outputs.size());
+      out += " (" + format_number(rule.weight) + ") : " + (rule.connective == Connective::And ? "1" : "2") + "\n";
+    }
+    return out;
+  }
+
+ private:
+  static std::string variable(const char* section, std::size_t index, const Variable& variable) {
+    std::string out = "\n[" + std::string(section) + std::to_string(index) + "]\n";
+    out += "Name=" + quoted(variable.name) + "\n";
+    out += "Range=" + vector_text({variable.min, variable.max}) + "\n";
+    out += "NumMFs=" + std::to_string(variable.terms.size()) + "\n";
+    for (std::size_t k = 0; k < variable.terms.size(); ++k) {
+      const Term& term = variable.terms[k];
+      out += "MF" + std::to_string(k + 1) + "=" + quoted(term.name) + ":" + quoted(matlab_name(term.mf.kind)) + "," +
+             vector_text(term.mf.params) + "\n";
+    }
+    return out;
+  }
+
+  SourceRange where(const SourceRange& range) const {
+    if (range.valid() || !range.file.empty()) return range;
+    return system_.range;
+  }
+
+  void warn(const SourceRange& range, const std::string& message, std::vector<std::string> notes = {}) {
+    diagnostics_.warning(where(range), "matlab-export", message, std::move(notes));
+  }
+
+  void report_what_matlab_cannot_hold() {
+    const std::string system_name = "system '" + system_.name + "'";
+    if (!system_.description.empty())
+      warn(system_.range, "the description of " + system_name + " has no place in a .fis file and is dropped");
+    if (system_.samples != 101)
+      warn(system_.range,
+           std::string("'samples ") + (system_.samples == 0 ? "exact" : std::to_string(system_.samples)) + "' of " +
+               system_name + " is dropped: MATLAB always samples Mamdani outputs at 101 points");
+    if (system_.no_fire == NoFirePolicy::Value)
+      warn(system_.range, "the no-fire value " + format_number(system_.no_fire_value) + " of " + system_name +
+                              " is dropped: MATLAB gives the middle of the output range when no rule fires");
+    if (system_.no_fire == NoFirePolicy::Error)
+      warn(system_.range, "the no-fire policy 'error' of " + system_name +
+                              " is dropped: MATLAB gives the middle of the output range when no rule fires");
+    const bool einstein = system_.and_method == TNorm::EinsteinProduct || system_.implication == TNorm::EinsteinProduct ||
+                          system_.or_method == SNorm::EinsteinSum || system_.aggregation == SNorm::EinsteinSum;
+    if (einstein)
+      warn(system_.range, "Einstein norms of " + system_name +
+                              " are written as Octave's einstein_product/einstein_sum, which MATLAB does not know");
+
+    for (const auto* variables : {&system_.inputs, &system_.outputs}) {
+      const char* role = variables == &system_.inputs ? "input" : "output";
+      for (const Variable& variable : *variables) {
+        if (!variable.unit.empty())
+          warn(variable.range, std::string("the unit '") + variable.unit + "' of " + role + " '" + variable.name +
+                                   "' has no place in a .fis file and is dropped");
+        if (!variable.description.empty())
+          warn(variable.range, std::string("the description of ") + role + " '" + variable.name +
+                                   "' has no place in a .fis file and is dropped");
+      }
+    }
+
+    std::size_t labels = 0;
+    std::size_t hedges = 0;
+    for (std::size_t r = 0; r < system_.rules.size(); ++r) {
+      const Rule& rule = system_.rules[r];
+      if (!rule.label.empty()) ++labels;
+      for (const auto* clauses : {&rule.antecedent, &rule.consequent})
+        for (const Clause& clause : *clauses)
+          if (clause.hedge != Hedge::None) ++hedges;
+      if (rule.antecedent.empty())
+        warn(rule.range, system_.rule_display_name(r) + " has no antecedent; MATLAB rejects a rule whose inputs are "
+                                                        "all 0");
+      if (system_.type == SystemType::Sugeno)
+        for (const Clause& clause : rule.consequent)
+          if (clause.negated)
+            warn(clause.range, system_.rule_display_name(r) + " negates a Sugeno consequent; MATLAB rejects it and "
+                                                              "Octave uses 1 - firing strength");
+    }
+    if (labels > 0)
+      warn(system_.range, "rule labels of " + system_name + " have no place in a .fis file and are dropped",
+           {"MATLAB numbers rules from 1 in the order written"});
+    if (hedges > 0)
+      warn(system_.range, "hedges of " + system_name + " are written as Octave's rule fractions (.05 somewhat, "
+                                                       ".2 very, .3 extremely, .4 very very); MATLAB ignores them");
+  }
+
+  const FuzzySystem& system_;
+  DiagnosticList& diagnostics_;
+};
+
+}  // namespace
+
+std::string write_matlab_fis(const FuzzySystem& system, DiagnosticList& diagnostics) {
+  return Writer(system, diagnostics).write();
+}
+
+}  // namespace fmpc
