@@ -1,6 +1,7 @@
 #pragma once
 // The reference interpreter: type-1 Mamdani and Sugeno in double, with MATLAB's semantics by default
 // (docs/numerics.md). Every faster path in fmpc states its error against this one.
+#include <memory>
 #include <vector>
 
 #include "compiler/ir/fuzzy_system.h"
@@ -34,9 +35,39 @@ struct Explanation {
   std::vector<OutputExplanation> outputs;
 };
 
+// Where MATLAB and GNU Octave's fuzzy-logic-toolkit 0.4.6 compute different numbers from the same .fis file,
+// which one to follow (docs/numerics.md lists every difference). Matlab is fmpc's semantics; Octave exists to
+// reproduce Octave's numbers (the goldens in ../shared/data/matlab-fis/golden were computed by Octave).
+enum class Reference { Matlab, Octave };
+
+struct EvaluationOptions {
+  Reference reference = Reference::Matlab;
+};
+
 // Evaluates `system` at `inputs` (one value per input variable, in declaration order).
 // Precondition: the system passed sema without errors and inputs.size() == system.inputs.size().
 Evaluation evaluate(const FuzzySystem& system, const std::vector<double>& inputs);
 Explanation explain(const FuzzySystem& system, const std::vector<double>& inputs);
+Evaluation evaluate(const FuzzySystem& system, const std::vector<double>& inputs, const EvaluationOptions& options);
+Explanation explain(const FuzzySystem& system, const std::vector<double>& inputs, const EvaluationOptions& options);
+
+// For many evaluations of one system (tables, sweeps, benchmarks): samples the output terms once and reuses its
+// buffers, so an evaluation allocates only its result. Not thread-safe; use one per thread.
+class Interpreter {
+ public:
+  explicit Interpreter(const FuzzySystem& system, EvaluationOptions options = {});
+  ~Interpreter();
+  Interpreter(Interpreter&&) noexcept;
+  Interpreter& operator=(Interpreter&&) noexcept;
+  Interpreter(const Interpreter&) = delete;
+  Interpreter& operator=(const Interpreter&) = delete;
+
+  Evaluation evaluate(const std::vector<double>& inputs);
+  Explanation explain(const std::vector<double>& inputs);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 }  // namespace fmpc
