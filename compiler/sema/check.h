@@ -10,7 +10,13 @@ namespace fmpc {
 
 void check_system(const FuzzySystem& system, DiagnosticList& diagnostics);
 
-// check_system for every system of `file`, plus systems of the same name within the file.
-void check_rule_file(const RuleFile& file, DiagnosticList& diagnostics);
+struct CheckOptions {
+  // MATLAB's rules name terms by index, so a MATLAB file may repeat a term name within a variable (MATLAB's own
+  // juggler.fis does). Set for MATLAB files: a repeated term name is then the warning `duplicate-term` instead of
+  // an error (writing such a system as fmpc text needs new names).
+  bool terms_named_by_index = false;
+};
+
+void check_system(const FuzzySystem& system, const CheckOptions& options, DiagnosticList& diagnostics);
 
 }  // namespace fmpc

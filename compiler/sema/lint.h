@@ -1,6 +1,6 @@
 #pragma once
 // Lint: warnings about systems that are valid but probably wrong. Each warning has a code (the name in brackets)
-// that `fmpc check` prints and that docs/language.md explains.
+// that `fmpc check` prints and that docs/lint.md explains.
 #include "compiler/ir/fuzzy_system.h"
 #include "compiler/sema/diagnostic.h"
 
