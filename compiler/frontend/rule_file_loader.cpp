@@ -23,9 +23,14 @@ Dialect detect_dialect(const std::string& text) {
 }
 
 RuleFile load_rule_file(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
-  RuleFile file = detect_dialect(text) == Dialect::Matlab ? read_matlab_fis(path, text, diagnostics)
-                                                          : read_fmpc(path, text, diagnostics);
-  for (const FuzzySystem& system : file.systems) check_system(system, diagnostics);
+  const Dialect dialect = detect_dialect(text);
+  RuleFile file = dialect == Dialect::Matlab ? read_matlab_fis(path, text, diagnostics)
+                                             : read_fmpc(path, text, diagnostics);
+  // MATLAB rules name terms by number, so two terms of one variable may share a name there (juggler.fis does);
+  // in the fmpc language rules name terms by name, and a duplicate would be ambiguous.
+  CheckOptions options;
+  options.terms_named_by_index = dialect == Dialect::Matlab;
+  for (const FuzzySystem& system : file.systems) check_system(system, options, diagnostics);
   diagnostics.sort_by_position();
   return file;
 }

@@ -42,14 +42,16 @@ int run_check(const CheckOptions& options) {
 
 void register_check_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<CheckOptions>();
-  CLI::App* command = app.add_subcommand(
-      "check", "Check rule files (fmpc or MATLAB .fis): every error and lint warning, compiler-style.\n"
-               "Exit status: 0 clean, 1 warnings with --werror, 2 errors.");
+  CLI::App* command =
+      app.add_subcommand("check",
+                         "Check rule files (fmpc or MATLAB .fis): every error and lint warning, compiler-style.\n"
+                         "Exit status: 0 clean, 1 warnings with --werror, 2 errors.");
   command->add_option("files", options->files, "Rule files to check")->required();
   command->add_flag("--werror", options->werror, "Exit with status 1 when there are warnings");
   command->add_flag("--no-lint", options->no_lint, "Report errors only");
-  command->add_option("--coverage-threshold", options->coverage_threshold,
-                      "Firing strength below which a point counts as a coverage hole")
+  command
+      ->add_option("--coverage-threshold", options->coverage_threshold,
+                   "Firing strength below which a point counts as a coverage hole")
       ->check(CLI::Range(0.0, 1.0));
   command->callback([options, &exit_code] { exit_code = run_check(*options); });
 }

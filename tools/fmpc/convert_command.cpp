@@ -3,6 +3,7 @@
 
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/frontend/matlab_fis.h"
+#include "compiler/passes/rename_duplicate_terms.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
@@ -33,6 +34,14 @@ int run_convert(const ConvertOptions& options) {
       selected.systems.clear();
       if (system) selected.systems.push_back(*system);
     }
+    for (FuzzySystem& system : selected.systems) {
+      const std::vector<std::string> renames = rename_duplicate_terms(system);
+      if (!renames.empty())
+        diagnostics.warning(system.range, "renamed-term",
+                            "system '" + system.name + "' repeats term names, which fmpc rules cannot tell apart; " +
+                                std::to_string(renames.size()) + " terms renamed",
+                            renames);
+    }
     text = write_fmpc(selected);
   } else if (const FuzzySystem* system = select_system(file, options.system, diagnostics)) {
     text = write_matlab_fis(*system, diagnostics);
@@ -52,8 +61,9 @@ int run_convert(const ConvertOptions& options) {
 void register_convert_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App* command = app.add_subcommand(
-      "convert", "Convert a rule file between the fmpc language and MATLAB's .fis format (versions 1 and 2 read,\n"
-                 "2.0 written). What the target cannot hold is reported as a warning. Exit status: 0 done, 2 errors.");
+      "convert",
+      "Convert a rule file between the fmpc language and MATLAB's .fis format (versions 1 and 2 read,\n"
+      "2.0 written). What the target cannot hold is reported as a warning. Exit status: 0 done, 2 errors.");
   command->add_option("file", options->file, "Rule file to convert (fmpc or MATLAB .fis)")->required();
   command->add_option("--to", options->to, "Target format")->required()->check(CLI::IsMember({"fmpc", "matlab"}));
   command->add_option("-o,--output", options->output, "Output file, written atomically (default stdout)");

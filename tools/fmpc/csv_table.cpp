@@ -77,11 +77,13 @@ CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticL
     }
     ++column;
   }
-  if (quoted) diagnostics.error(SourceRange{path, cell_line, cell_column, cell_line, cell_column + 1},
-                                "unterminated quoted field", {"close the field with a double quote"});
+  if (quoted)
+    diagnostics.error(SourceRange{path, cell_line, cell_column, cell_line, cell_column + 1},
+                      "unterminated quoted field", {"close the field with a double quote"});
   finish_row();
-  if (table.header.empty()) diagnostics.error(SourceRange{path, 0, 0, 0, 0}, "no header row: the CSV is empty",
-                                              {"the first row names the inputs, e.g. HCV,HBV,ALD,CLD,NAFLD"});
+  if (table.header.empty())
+    diagnostics.error(SourceRange{path, 0, 0, 0, 0}, "no header row: the CSV is empty",
+                      {"the first row names the inputs, e.g. HCV,HBV,ALD,CLD,NAFLD"});
   return table;
 }
 
@@ -90,8 +92,8 @@ std::string format_csv_row(const std::vector<std::string>& fields) {
   for (std::size_t i = 0; i < fields.size(); ++i) {
     const std::string& f = fields[i];
     if (i) line += ',';
-    const bool needs_quotes = f.find_first_of(",\"\n\r") != std::string::npos ||
-                              (!f.empty() && (f.front() == ' ' || f.back() == ' '));
+    const bool needs_quotes =
+        f.find_first_of(",\"\n\r") != std::string::npos || (!f.empty() && (f.front() == ' ' || f.back() == ' '));
     if (!needs_quotes) {
       line += f;
       continue;

@@ -26,13 +26,15 @@ struct EvalOptions {
   bool explain = false;
   double explain_threshold = 1e-3;
   std::size_t max_warnings = 20;
+  std::string semantics = "matlab";
 };
 
 // One point to evaluate, with where each value came from (for located messages).
 struct EvaluationPoint {
   std::vector<double> inputs;
   std::vector<SourceRange> origins;  // per input
-  std::string label;                 // "row 3" or "command line"
+  SourceRange where;                 // the CSV row, or "command line"
+  std::string label;                 // "point 3 (patients.csv:4)" or "point 1 (command line)"
 };
 
 std::optional<double> parse_number(const std::string& text) {
@@ -41,6 +43,23 @@ std::optional<double> parse_number(const std::string& text) {
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);
   if (end != text.c_str() + text.size()) return std::nullopt;
+  return value;
+}
+
+// A number for `input`, or an error: text that is not a number, or NaN (fmpc never turns NaN into a silent
+// output).
+std::optional<double> parse_input_value(const std::string& text, const Variable& input, const SourceRange& where,
+                                        DiagnosticList& diagnostics) {
+  const std::optional<double> value = parse_number(text);
+  if (!value) {
+    diagnostics.error(where, "'" + text + "' is not a number (input '" + input.name + "')");
+    return std::nullopt;
+  }
+  if (std::isnan(*value)) {
+    diagnostics.error(where, "input '" + input.name + "' is NaN",
+                      {"give a number within [" + format_number(input.min) + ", " + format_number(input.max) + "]"});
+    return std::nullopt;
+  }
   return value;
 }
 
@@ -65,7 +84,8 @@ void report_unknown_input(const std::string& name, const FuzzySystem& system, co
 std::optional<EvaluationPoint> point_from_assignments(const std::vector<std::string>& assignments,
                                                       const FuzzySystem& system, DiagnosticList& diagnostics) {
   EvaluationPoint point;
-  point.label = "command line";
+  point.label = "point 1 (command line)";
+  point.where = SourceRange{"command line", 0, 0, 0, 0};
   point.inputs.assign(system.inputs.size(), std::nan(""));
   point.origins.assign(system.inputs.size(), SourceRange{});
   std::vector<bool> given(system.inputs.size(), false);
@@ -82,14 +102,11 @@ std::optional<EvaluationPoint> point_from_assignments(const std::vector<std::str
       report_unknown_input(name, system, where, diagnostics);
       continue;
     }
-    const std::optional<double> value = parse_number(assignment.substr(eq + 1));
-    if (!value) {
-      diagnostics.error(where, "'" + assignment.substr(eq + 1) + "' is not a number");
-      continue;
-    }
-    if (given[static_cast<std::size_t>(index)])
-      diagnostics.error(where, "input '" + name + "' is given twice");
+    if (given[static_cast<std::size_t>(index)]) diagnostics.error(where, "input '" + name + "' is given twice");
     given[static_cast<std::size_t>(index)] = true;
+    const std::optional<double> value = parse_input_value(
+        assignment.substr(eq + 1), system.inputs[static_cast<std::size_t>(index)], where, diagnostics);
+    if (!value) continue;
     point.inputs[static_cast<std::size_t>(index)] = *value;
     point.origins[static_cast<std::size_t>(index)] = where;
   }
@@ -123,12 +140,16 @@ std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzyS
   }
   for (std::size_t i = 0; i < system.inputs.size(); ++i)
     if (!seen[i])
-      diagnostics.error(SourceRange{table.path, 1, 1, 1, 1}, "the header has no column for input '" +
-                                                                 system.inputs[i].name + "'");
+      diagnostics.error(SourceRange{table.path, 1, 1, 1, 1},
+                        "the header has no column for input '" + system.inputs[i].name + "'");
   if (diagnostics.has_errors()) return points;
   for (const auto& row : table.rows) {
     EvaluationPoint point;
-    point.label = "row " + std::to_string(row.front().range.line);
+    point.label = "point " + std::to_string(points.size() + 1) + " (" + table.path + ":" +
+                  std::to_string(row.front().range.line) + ")";
+    point.where = row.front().range;
+    point.where.end_line = point.where.line;
+    point.where.end_column = row.back().range.end_column;
     point.inputs.assign(system.inputs.size(), 0.0);
     point.origins.assign(system.inputs.size(), SourceRange{});
     if (row.size() != table.header.size()) {
@@ -138,11 +159,9 @@ std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzyS
     }
     for (std::size_t c = 0; c < row.size(); ++c) {
       if (column_input[c] < 0) continue;
-      const std::optional<double> value = parse_number(row[c].text);
-      if (!value) {
-        diagnostics.error(row[c].range, "'" + row[c].text + "' is not a number");
-        continue;
-      }
+      const std::optional<double> value = parse_input_value(
+          row[c].text, system.inputs[static_cast<std::size_t>(column_input[c])], row[c].range, diagnostics);
+      if (!value) continue;
       point.inputs[static_cast<std::size_t>(column_input[c])] = *value;
       point.origins[static_cast<std::size_t>(column_input[c])] = row[c].range;
     }
@@ -161,8 +180,8 @@ void report_flags(const FuzzySystem& system, const EvaluationPoint& point, const
   for (int i : result.flags.inputs_nan)
     diagnostics.error(point.origins[static_cast<std::size_t>(i)],
                       "input '" + system.inputs[static_cast<std::size_t>(i)].name + "' is NaN",
-                      {"give a number within [" + format_number(system.inputs[static_cast<std::size_t>(i)].min) +
-                       ", " + format_number(system.inputs[static_cast<std::size_t>(i)].max) + "]"});
+                      {"give a number within [" + format_number(system.inputs[static_cast<std::size_t>(i)].min) + ", " +
+                       format_number(system.inputs[static_cast<std::size_t>(i)].max) + "]"});
   for (int i : result.flags.inputs_out_of_range) {
     const Variable& v = system.inputs[static_cast<std::size_t>(i)];
     diagnostics.warning(point.origins[static_cast<std::size_t>(i)], "input-out-of-range",
@@ -172,7 +191,7 @@ void report_flags(const FuzzySystem& system, const EvaluationPoint& point, const
   }
   for (int o : result.flags.outputs_no_rule_fired) {
     const Variable& v = system.outputs[static_cast<std::size_t>(o)];
-    const SourceRange where{point.label, 0, 0, 0, 0};
+    const SourceRange& where = point.where;
     if (result.flags.no_fire_error)
       diagnostics.error(where, "no rule fired for output '" + v.name + "' (policy: error)",
                         {"add rules covering this point or choose another 'when no rule fires' policy"});
@@ -191,8 +210,8 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
     out << (i ? ", " : " ") << system.inputs[i].name << " = " << with_unit(point.inputs[i], system.inputs[i]);
   out << '\n';
   for (std::size_t o = 0; o < system.outputs.size(); ++o)
-    out << "  " << system.outputs[o].name << " = "
-        << with_unit(explanation.evaluation.outputs[o], system.outputs[o]) << '\n';
+    out << "  " << system.outputs[o].name << " = " << with_unit(explanation.evaluation.outputs[o], system.outputs[o])
+        << '\n';
   const auto& strengths = explanation.evaluation.firing_strengths;
   std::size_t shown = 0;
   std::ostringstream rules;
@@ -214,19 +233,19 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
       out << "  aggregated output set '" << system.outputs[o].name << "' (" << set.x.size()
           << " points, x: membership):\n";
     else
-      out << "  rule outputs of '" << system.outputs[o].name << "' (" << set.x.size()
-          << " rules, value: weight):\n";
+      out << "  rule outputs of '" << system.outputs[o].name << "' (" << set.x.size() << " rules, value: weight):\n";
     for (std::size_t k = 0; k < set.x.size(); ++k) {
+      // Sample positions are min + k (max - min) / (n - 1) and carry rounding noise; 6 digits show where they are.
       char cell[64];
-      std::snprintf(cell, sizeof cell, "%s: %.4f", format_number(set.x[k]).c_str(), set.membership[k]);
+      std::snprintf(cell, sizeof cell, "%.6g: %.4f", set.x[k], set.membership[k]);
       out << (k % 6 == 0 ? "    " : "  ") << cell << (k % 6 == 5 || k + 1 == set.x.size() ? "\n" : "");
     }
   }
 }
 
-Explanation explain_or_evaluate(const FuzzySystem& system, const std::vector<double>& inputs, bool with_sets) {
-  if (with_sets) return explain(system, inputs);
-  return Explanation{evaluate(system, inputs), {}};
+Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<double>& inputs, bool with_sets) {
+  if (with_sets) return interpreter.explain(inputs);
+  return Explanation{interpreter.evaluate(inputs), {}};
 }
 
 int run_eval(const EvalOptions& options) {
@@ -267,8 +286,11 @@ int run_eval(const EvalOptions& options) {
     for (const Variable& v : system->outputs) header.push_back(v.name);
     csv << format_csv_row(header);
     DiagnosticList point_diagnostics;
+    EvaluationOptions evaluation_options;
+    evaluation_options.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
+    Interpreter interpreter(*system, evaluation_options);
     for (const EvaluationPoint& point : points) {
-      const Explanation explanation = explain_or_evaluate(*system, point.inputs, options.explain);
+      const Explanation explanation = explain_or_evaluate(interpreter, point.inputs, options.explain);
       report_flags(*system, point, explanation.evaluation, point_diagnostics);
       std::vector<std::string> row;
       for (double v : point.inputs) row.push_back(format_number(v));
@@ -286,8 +308,12 @@ int run_eval(const EvalOptions& options) {
       diagnostics.add(d);
     }
     if (dropped > 0)
-      diagnostics.add(Diagnostic{Severity::Note, SourceRange{options.file, 0, 0, 0, 0},
-                                 std::to_string(dropped) + " more warnings not shown (--max-warnings)", {}, {}, {}});
+      diagnostics.add(Diagnostic{Severity::Note,
+                                 SourceRange{options.file, 0, 0, 0, 0},
+                                 std::to_string(dropped) + " more warnings not shown (--max-warnings)",
+                                 {},
+                                 {},
+                                 {}});
   }
   print_diagnostics(diagnostics, sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;
@@ -310,8 +336,9 @@ int run_eval(const EvalOptions& options) {
 void register_eval_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<EvalOptions>();
   CLI::App* command = app.add_subcommand(
-      "eval", "Evaluate a rule file at points given as NAME=VALUE, or as CSV with a header row (--csv FILE, or on\n"
-              "stdin). Writes CSV (inputs then outputs). Exit status: 0 done, 2 errors.");
+      "eval",
+      "Evaluate a rule file at points given as NAME=VALUE, or as CSV with a header row (--csv FILE, or on\n"
+      "stdin). Writes CSV (inputs then outputs). Exit status: 0 done, 2 errors.");
   command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis)")->required();
   command->add_option("inputs", options->assignments, "Input values, NAME=VALUE (all inputs)");
   command->add_option("--csv", options->csv, "CSV file of points with a header row naming the inputs; - for stdin");
@@ -320,10 +347,16 @@ void register_eval_command(CLI::App& app, int& exit_code) {
   command->add_flag("--explain", options->explain,
                     "Print every point's outputs, the rules that fired with their strengths, and the aggregated "
                     "output set (the CSV then goes only to -o)");
-  command->add_option("--explain-threshold", options->explain_threshold,
-                      "Smallest firing strength --explain lists (0 lists every rule)")
+  command
+      ->add_option("--explain-threshold", options->explain_threshold,
+                   "Smallest firing strength --explain lists (0 lists every rule)")
       ->check(CLI::Range(0.0, 1.0));
   command->add_option("--max-warnings", options->max_warnings, "Most per-point warnings to print");
+  command
+      ->add_option("--semantics", options->semantics,
+                   "Whose numbers to reproduce where MATLAB and Octave's fuzzy-logic-toolkit differ "
+                   "(docs/numerics.md)")
+      ->check(CLI::IsMember({"matlab", "octave"}));
   command->callback([options, &exit_code] { exit_code = run_eval(*options); });
 }
 

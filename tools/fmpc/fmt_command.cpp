@@ -27,8 +27,7 @@ int run_fmt(const FmtOptions& options) {
     if (!text) {
       diagnostics.error(SourceRange{path, 0, 0, 0, 0}, error);
     } else if (detect_dialect(*text) == Dialect::Matlab) {
-      diagnostics.error(SourceRange{path, 1, 1, 1, 9},
-                        "this is a MATLAB .fis file; fmt lays out fmpc files only",
+      diagnostics.error(SourceRange{path, 1, 1, 1, 9}, "this is a MATLAB .fis file; fmt lays out fmpc files only",
                         {"convert it first: fmpc convert " + path + " --to fmpc -o NEW.fis"});
     }
     std::optional<std::string> formatted;
@@ -60,9 +59,10 @@ int run_fmt(const FmtOptions& options) {
 
 void register_fmt_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<FmtOptions>();
-  CLI::App* command = app.add_subcommand(
-      "fmt", "Rewrite fmpc rule files in the canonical layout (comments kept; idempotent; atomic writes).\n"
-             "Exit status: 0 done, 1 with --check when a file is not in canonical layout, 2 errors.");
+  CLI::App* command =
+      app.add_subcommand("fmt",
+                         "Rewrite fmpc rule files in the canonical layout (comments kept; idempotent; atomic writes).\n"
+                         "Exit status: 0 done, 1 with --check when a file is not in canonical layout, 2 errors.");
   command->add_option("files", options->files, "fmpc rule files to lay out in place")->required();
   auto* check = command->add_flag("--check", options->check,
                                   "Change nothing; list files that are not in canonical layout and exit 1");

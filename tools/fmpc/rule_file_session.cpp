@@ -27,9 +27,7 @@ void print_diagnostics(const DiagnosticList& diagnostics, const SourceFiles& sou
   err << render_all(diagnostics, sources);
   const std::size_t errors = diagnostics.error_count();
   const std::size_t warnings = diagnostics.warning_count();
-  auto plural = [](std::size_t n, const char* word) {
-    return std::to_string(n) + " " + word + (n == 1 ? "" : "s");
-  };
+  auto plural = [](std::size_t n, const char* word) { return std::to_string(n) + " " + word + (n == 1 ? "" : "s"); };
   if (errors + warnings > 0) err << plural(errors, "error") << ", " << plural(warnings, "warning") << '\n';
 }
 
@@ -43,9 +41,9 @@ const FuzzySystem* select_system(const LoadedRuleFile& file, const std::string& 
     }
     std::string names;
     for (const FuzzySystem& s : systems) names += (names.empty() ? "" : ", ") + s.name;
-    diagnostics.error(SourceRange{file.path, 0, 0, 0, 0},
-                      "the file defines " + std::to_string(systems.size()) + " systems (" + names +
-                          "); choose one with --system NAME");
+    diagnostics.error(SourceRange{file.path, 0, 0, 0, 0}, "the file defines " + std::to_string(systems.size()) +
+                                                              " systems (" + names +
+                                                              "); choose one with --system NAME");
     return nullptr;
   }
   std::vector<std::string> names;
