@@ -1,0 +1,70 @@
+#pragma once
+// N-D stiffness lookup tables (DESIGN section 6) and their file format, .fzt. The table is plain data; the
+// interpolation is kernels/table_math.h, shared with the CUDA kernels and generated code.
+//
+// .fzt layout, version 1, all integers and floats little-endian:
+//   magic "FMPCFZT" 0x1A | u32 version | u32 byte-order mark 0x01020304 | u64 source hash (FNV-1a of the rule file)
+//   u32 value type (1 float32, 2 float64) | u32 interpolation (1 multilinear) | u32 axes | u32 outputs
+//   f64 measured maximum error | str system | str source path
+//   per axis: str input name | u32 input index | u32 breakpoint count | f64 breakpoints[count]
+//   per output: str output name
+//   u32 fixed inputs | per fixed input: str name | f64 value
+//   f64 location of the maximum error[axes]
+//   values[product of counts x outputs] in the value type, layout of kernels/table_math.h
+//   u64 checksum: FNV-1a of every byte before it
+// (str = u32 length + that many bytes, at most kMaxFztString.)
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "compiler/sema/diagnostic.h"
+#include "kernels/table_math.h"
+
+namespace fmpc {
+
+inline constexpr std::uint32_t kFztVersion = 1;
+inline constexpr std::uint32_t kMaxFztString = 4096;
+inline constexpr std::uint32_t kMaxFztOutputs = 64;
+inline constexpr std::uint64_t kMaxFztValues = 1ULL << 31;  // 16 GiB of doubles: beyond any scene's need
+
+enum class TableValueType : std::uint32_t { Float32 = 1, Float64 = 2 };
+
+struct TableAxis {
+  std::string input_name;
+  std::uint32_t input_index = 0;    // in the source system
+  std::vector<double> breakpoints;  // strictly increasing, at least 2
+};
+
+struct LookupTable {
+  std::string system_name;
+  std::string source_path;
+  std::uint64_t source_hash = 0;
+  TableValueType value_type = TableValueType::Float64;
+  std::vector<TableAxis> axes;
+  std::vector<std::string> output_names;
+  std::vector<std::pair<std::string, double>> fixed_inputs;  // inputs folded in at compile time
+  std::vector<double> values;  // layout of kernels/table_math.h; rounded to the value type when serialized
+  double max_error = 0.0;                   // measured against the interpreter, output units
+  std::vector<double> max_error_location;   // one coordinate per axis
+
+  std::uint64_t grid_points() const;
+};
+
+// Views the table for kernels/table_math.h; `breakpoint_pointers` and `counts` must outlive the view.
+TableView<double> view_of(const LookupTable& table, std::vector<const double*>& breakpoint_pointers,
+                          std::vector<int>& counts);
+
+// Checks the invariants a table must hold (also what the loader checks after parsing): axes 1..kMaxTableAxes,
+// counts >= 2, finite strictly increasing breakpoints, values.size() == grid_points() * outputs, finite values.
+// Errors name the field.
+bool validate_table(const LookupTable& table, const std::string& origin, DiagnosticList& diagnostics);
+
+std::string serialize_fzt(const LookupTable& table);
+
+// Parses and validates `bytes` (the contents of `path`). Every read is bounds-checked; a truncated, corrupted,
+// wrong-version, wrong-endian or hostile file gives nullopt and an error naming the field and what to do.
+std::optional<LookupTable> parse_fzt(const std::string& path, const std::string& bytes, DiagnosticList& diagnostics);
+
+}  // namespace fmpc
