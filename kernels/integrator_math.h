@@ -1,0 +1,86 @@
+#pragma once
+// Per-vertex pieces of the integrators, shared by the CPU loops and the CUDA kernels.
+#include "kernels/fmpc_hd.h"
+#include "kernels/spring_math.h"
+
+namespace fmpc::kernels {
+
+// Loads that are the same for every vertex (per-vertex external forces are an optional array).
+template <typename Real>
+struct VertexLoads {
+  const Real* mass;
+  const unsigned char* fixed;  // 1 = the vertex does not move
+  const Real* rest_x;          // reference position x0 for the nodal damping gamma0 + gamma1 |x - x0|
+  const Real* rest_y;
+  const Real* rest_z;
+  const Real* force_x;  // constant external force (N) or null
+  const Real* force_y;
+  const Real* force_z;
+  Real gravity_x, gravity_y, gravity_z;
+  Real gamma0, gamma1;  // nodal damping (Basafa-Farahmand), N s/m and N s/m^2
+};
+
+// Acceleration of vertex v: (sum of spring forces + external force - (gamma0 + gamma1 |x - x0|) v) / m + g;
+// zero for fixed vertices.
+template <typename Real>
+FMPC_HD void vertex_acceleration(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s,
+                                 const VertexLoads<Real>& loads, Real& ax, Real& ay, Real& az) {
+  if (loads.fixed[v]) {
+    ax = ay = az = Real(0);
+    return;
+  }
+  Real fx, fy, fz;
+  gather_spring_force(v, net, s, fx, fy, fz);
+  if (loads.force_x) {
+    fx += loads.force_x[v];
+    fy += loads.force_y[v];
+    fz += loads.force_z[v];
+  }
+  if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
+    const Real dx = s.x[v] - loads.rest_x[v], dy = s.y[v] - loads.rest_y[v], dz = s.z[v] - loads.rest_z[v];
+    const Real gamma = loads.gamma0 + loads.gamma1 * square_root(dx * dx + dy * dy + dz * dz);
+    fx -= gamma * s.vx[v];
+    fy -= gamma * s.vy[v];
+    fz -= gamma * s.vz[v];
+  }
+  const Real inverse_mass = Real(1) / loads.mass[v];
+  ax = fx * inverse_mass + loads.gravity_x;
+  ay = fy * inverse_mass + loads.gravity_y;
+  az = fz * inverse_mass + loads.gravity_z;
+}
+
+// Forward (explicit) Euler, the thesis's scheme: x1 = x0 + h v0, v1 = v0 + h a(x0, v0).
+template <typename Real>
+FMPC_HD void forward_euler_update(Real& x, Real& v, Real a, Real h) {
+  x += h * v;
+  v += h * a;
+}
+
+// Semi-implicit (symplectic) Euler: v1 = v0 + h a(x0, v0), x1 = x0 + h v1.
+template <typename Real>
+FMPC_HD void semi_implicit_euler_update(Real& x, Real& v, Real a, Real h) {
+  v += h * a;
+  x += h * v;
+}
+
+// Velocity Verlet, first half: x1 = x0 + h v0 + h^2/2 a0; the velocity predictor v0 + h a0 feeds a1 = a(x1, .)
+// so that velocity-dependent damping keeps the scheme second order.
+template <typename Real>
+FMPC_HD void verlet_position_update(Real& x, Real v, Real a, Real h, Real& v_predicted) {
+  x += h * v + Real(0.5) * h * h * a;
+  v_predicted = v + h * a;
+}
+
+// Velocity Verlet, second half: v1 = v0 + h/2 (a0 + a1).
+template <typename Real>
+FMPC_HD void verlet_velocity_update(Real& v, Real a0, Real a1, Real h) {
+  v += Real(0.5) * h * (a0 + a1);
+}
+
+// Classical Runge-Kutta: y1 = y0 + h/6 (k1 + 2 k2 + 2 k3 + k4).
+template <typename Real>
+FMPC_HD Real runge_kutta4_combine(Real y0, Real k1, Real k2, Real k3, Real k4, Real h) {
+  return y0 + h / Real(6) * (k1 + Real(2) * k2 + Real(2) * k3 + k4);
+}
+
+}  // namespace fmpc::kernels

@@ -1,0 +1,150 @@
+#pragma once
+// Spring laws and the per-vertex force gather, shared by the CPU loops (runtime/integrate) and the CUDA kernels
+// (kernels/spring_step.cu). Everything is FMPC_HD, templated on the real type (float or double), and sums in the
+// CSR order of the adjacency, so every backend adds the same terms in the same order.
+#include "kernels/fmpc_hd.h"
+
+#if !defined(__CUDACC__)
+#include <cmath>
+#endif
+
+namespace fmpc::kernels {
+
+// sqrt in the argument's own precision on both sides (a float must not be promoted to double).
+FMPC_HD float square_root(float value) {
+#if defined(__CUDACC__)
+  return sqrtf(value);
+#else
+  return std::sqrt(value);
+#endif
+}
+FMPC_HD double square_root(double value) {
+#if defined(__CUDACC__)
+  return sqrt(value);
+#else
+  return std::sqrt(value);
+#endif
+}
+
+enum class SpringLaw : int {
+  LinearDashpot = 0,    // f = k (l - l0), plus dashpot c (dv . u)
+  BasafaFarahmand = 1,  // f = F_s(X), X = (l - l0) / l0, plus dashpot c (dv . u); see basafa_farahmand_force
+};
+
+// Basafa & Farahmand (2011), as summarised in ../shared/data/README.md:
+//   F_s(X) = K1 X + K2 X^3                     for |X| <= Xc
+//          = (A + B (|X| - Xc)) sign(X)        above, A = K1 Xc + K2 Xc^3, B = K1 + 3 K2 Xc^2
+// (continuous with a continuous slope at Xc). Here X is the strain (l - l0) / l0, K1 = k l0 (so that small
+// strains behave like the linear spring of stiffness k) and K2 = ratio K1; the benchmark (K1 0.05 N, K2 10 N,
+// Xc 0.2) is a spring with l0 = 1 m, k = 0.05 N/m, ratio 200.
+template <typename Real>
+FMPC_HD Real basafa_farahmand_force(Real strain, Real k1, Real k2, Real xc) {
+  const Real magnitude = strain < Real(0) ? -strain : strain;
+  if (magnitude <= xc) return k1 * strain + k2 * strain * strain * strain;
+  const Real a = k1 * xc + k2 * xc * xc * xc;
+  const Real b = k1 + Real(3) * k2 * xc * xc;
+  const Real value = a + b * (magnitude - xc);
+  return strain < Real(0) ? -value : value;
+}
+
+// dF_s/dX.
+template <typename Real>
+FMPC_HD Real basafa_farahmand_slope(Real strain, Real k1, Real k2, Real xc) {
+  const Real magnitude = strain < Real(0) ? -strain : strain;
+  if (magnitude <= xc) return k1 + Real(3) * k2 * strain * strain;
+  return k1 + Real(3) * k2 * xc * xc;
+}
+
+template <typename Real>
+struct SpringLawParameters {
+  SpringLaw law = SpringLaw::LinearDashpot;
+  Real k2_over_k1 = Real(200);  // Basafa-Farahmand only
+  Real xc = Real(0.2);          // Basafa-Farahmand only
+};
+
+// Tension (positive when stretched, N) along the spring for its current length.
+template <typename Real>
+FMPC_HD Real spring_tension(Real length, Real rest, Real k, const SpringLawParameters<Real>& p) {
+  if (p.law == SpringLaw::BasafaFarahmand) {
+    const Real k1 = k * rest;
+    return basafa_farahmand_force((length - rest) / rest, k1, p.k2_over_k1 * k1, p.xc);
+  }
+  return k * (length - rest);
+}
+
+// d(tension)/d(length) (N/m).
+template <typename Real>
+FMPC_HD Real spring_tension_slope(Real length, Real rest, Real k, const SpringLawParameters<Real>& p) {
+  if (p.law == SpringLaw::BasafaFarahmand) {
+    const Real k1 = k * rest;
+    return basafa_farahmand_slope((length - rest) / rest, k1, p.k2_over_k1 * k1, p.xc) / rest;
+  }
+  return k;
+}
+
+// Force on the vertex "self" from one spring: d = x_other - x_self, dv = v_other - v_self.
+// A spring shorter than 1e-9 l0 has no direction: it exerts no force (the thesis's code divided by the length
+// unguarded); the nodes around it still move it apart.
+template <typename Real>
+FMPC_HD void spring_force_on_vertex(Real dx, Real dy, Real dz, Real dvx, Real dvy, Real dvz, Real rest, Real k, Real c,
+                                    const SpringLawParameters<Real>& p, Real& fx, Real& fy, Real& fz) {
+  const Real length_squared = dx * dx + dy * dy + dz * dz;
+  const Real minimum = Real(1e-9) * rest;
+  if (!(length_squared > minimum * minimum)) {
+    fx = fy = fz = Real(0);
+    return;
+  }
+  const Real length = square_root(length_squared);
+  const Real ux = dx / length, uy = dy / length, uz = dz / length;
+  const Real along = spring_tension(length, rest, k, p) + c * (dvx * ux + dvy * uy + dvz * uz);
+  fx = along * ux;
+  fy = along * uy;
+  fz = along * uz;
+}
+
+// The spring network and state as raw arrays (structure of arrays), for the gather below.
+template <typename Real>
+struct SpringNetworkView {
+  const int* adjacency_offset;  // vertex_count + 1
+  const int* adjacency_spring;
+  const int* adjacency_neighbour;
+  const Real* rest_length;
+  const Real* stiffness;
+  const Real* damping;
+  SpringLawParameters<Real> law;
+};
+
+template <typename Real>
+struct StateView {
+  const Real* x;
+  const Real* y;
+  const Real* z;
+  const Real* vx;
+  const Real* vy;
+  const Real* vz;
+};
+
+// Sum of the spring forces on vertex v, in CSR order (deterministic; no atomics).
+template <typename Real>
+FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s, Real& fx,
+                                 Real& fy, Real& fz) {
+  Real sx = Real(0), sy = Real(0), sz = Real(0);
+  const Real x = s.x[v], y = s.y[v], z = s.z[v];
+  const Real vx = s.vx[v], vy = s.vy[v], vz = s.vz[v];
+  for (int e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
+    const int spring = net.adjacency_spring[e];
+    const int other = net.adjacency_neighbour[e];
+    Real f0, f1, f2;
+    spring_force_on_vertex(s.x[other] - x, s.y[other] - y, s.z[other] - z, s.vx[other] - vx, s.vy[other] - vy,
+                           s.vz[other] - vz, net.rest_length[spring], net.stiffness[spring], net.damping[spring],
+                           net.law, f0, f1, f2);
+    sx += f0;
+    sy += f1;
+    sz += f2;
+  }
+  fx = sx;
+  fy = sy;
+  fz = sz;
+}
+
+}  // namespace fmpc::kernels

@@ -1,0 +1,515 @@
+// GCC 12 at -O2 reports a null dereference inside Eigen's SparseCompressedBase after inlining (Eigen's code, not
+// ours); the warning is silenced for Eigen's headers only.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/Sparse>
+#pragma GCC diagnostic pop
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "kernels/integrator_math.h"
+#include "kernels/spring_math.h"
+#include "runtime/integrate/simulation.h"
+#include "runtime/integrate/worker_pool.h"
+
+namespace fmpc::sim {
+
+namespace {
+
+template <typename Real>
+struct Vector3Arrays {
+  std::vector<Real> x, y, z;
+  void resize(std::size_t n) {
+    x.assign(n, Real(0));
+    y.assign(n, Real(0));
+    z.assign(n, Real(0));
+  }
+};
+
+template <typename Real>
+class CpuSimulationImpl final : public CpuSimulation {
+ public:
+  CpuSimulationImpl(const SimulationSetup& setup, const StabilityReport& stability)
+      : setup_(setup), stability_(stability), pool_(std::max(1u, setup.threads)), n_(setup.rest_positions.size()) {
+    const SpringNetwork& net = setup_.springs;
+    const auto convert = [](const std::vector<double>& in) {
+      std::vector<Real> out(in.size());
+      for (std::size_t i = 0; i < in.size(); ++i) out[i] = static_cast<Real>(in[i]);
+      return out;
+    };
+    rest_length_ = convert(net.rest_length);
+    stiffness_ = convert(net.stiffness);
+    damping_ = convert(net.damping);
+    mass_ = convert(setup.mass);
+    fixed_.assign(n_, 0);
+    for (const auto v : setup.fixed_vertices) fixed_[static_cast<std::size_t>(v)] = 1;
+    position_.resize(n_);
+    velocity_.resize(n_);
+    rest_.resize(n_);
+    acceleration_.resize(n_);
+    for (std::size_t v = 0; v < n_; ++v) {
+      const Point3& r = setup.rest_positions[v];
+      const Point3& p = setup.initial_positions.empty() ? r : setup.initial_positions[v];
+      rest_.x[v] = static_cast<Real>(r[0]);
+      rest_.y[v] = static_cast<Real>(r[1]);
+      rest_.z[v] = static_cast<Real>(r[2]);
+      position_.x[v] = static_cast<Real>(p[0]);
+      position_.y[v] = static_cast<Real>(p[1]);
+      position_.z[v] = static_cast<Real>(p[2]);
+      if (!setup.initial_velocities.empty() && !fixed_[v]) {
+        velocity_.x[v] = static_cast<Real>(setup.initial_velocities[v][0]);
+        velocity_.y[v] = static_cast<Real>(setup.initial_velocities[v][1]);
+        velocity_.z[v] = static_cast<Real>(setup.initial_velocities[v][2]);
+      }
+    }
+    if (!setup.external_forces.empty()) {
+      force_.resize(n_);
+      for (std::size_t v = 0; v < n_; ++v) {
+        force_.x[v] = static_cast<Real>(setup.external_forces[v][0]);
+        force_.y[v] = static_cast<Real>(setup.external_forces[v][1]);
+        force_.z[v] = static_cast<Real>(setup.external_forces[v][2]);
+      }
+    }
+    network_view_.adjacency_offset = net.adjacency_offset.data();
+    network_view_.adjacency_spring = net.adjacency_spring.data();
+    network_view_.adjacency_neighbour = net.adjacency_neighbour.data();
+    network_view_.rest_length = rest_length_.data();
+    network_view_.stiffness = stiffness_.data();
+    network_view_.damping = damping_.data();
+    network_view_.law.law = setup.law;
+    network_view_.law.k2_over_k1 = static_cast<Real>(setup.basafa_k2_over_k1);
+    network_view_.law.xc = static_cast<Real>(setup.basafa_xc);
+    loads_.mass = mass_.data();
+    loads_.fixed = fixed_.data();
+    loads_.rest_x = rest_.x.data();
+    loads_.rest_y = rest_.y.data();
+    loads_.rest_z = rest_.z.data();
+    loads_.force_x = force_.x.empty() ? nullptr : force_.x.data();
+    loads_.force_y = force_.y.empty() ? nullptr : force_.y.data();
+    loads_.force_z = force_.z.empty() ? nullptr : force_.z.data();
+    loads_.gravity_x = static_cast<Real>(setup.gravity[0]);
+    loads_.gravity_y = static_cast<Real>(setup.gravity[1]);
+    loads_.gravity_z = static_cast<Real>(setup.gravity[2]);
+    loads_.gamma0 = static_cast<Real>(setup.nodal_damping_gamma0);
+    loads_.gamma1 = static_cast<Real>(setup.nodal_damping_gamma1);
+    h_ = static_cast<Real>(stability.time_step);
+    const Integrator scheme = setup.integrator;
+    if (scheme == Integrator::VelocityVerlet || scheme == Integrator::RungeKutta4) {
+      stage_position_.resize(n_);
+      stage_velocity_.resize(n_);
+      next_acceleration_.resize(n_);
+    }
+    if (scheme == Integrator::RungeKutta4) {
+      for (auto& k : rk_velocity_) k.resize(n_);
+      for (auto& k : rk_acceleration_) k.resize(n_);
+    }
+  }
+
+  bool advance(std::size_t steps, DiagnosticList& diagnostics) override {
+    if (non_finite_) return false;
+    for (std::size_t i = 0; i < steps; ++i) {
+      if (!step(diagnostics)) return false;
+      ++steps_taken_;
+      if (!check_finite(diagnostics)) return false;
+    }
+    return true;
+  }
+
+  std::size_t steps_taken() const override { return steps_taken_; }
+  double time() const override { return static_cast<double>(steps_taken_) * stability_.time_step; }
+  std::vector<Point3> positions() const override { return to_points(position_); }
+  std::vector<Point3> velocities() const override { return to_points(velocity_); }
+  const StabilityReport& stability() const override { return stability_; }
+  const std::optional<NonFiniteReport>& non_finite() const override { return non_finite_; }
+  int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
+
+  double kinetic_energy() const override {
+    double energy = 0.0;
+    for (std::size_t v = 0; v < n_; ++v) {
+      const double vx = static_cast<double>(velocity_.x[v]), vy = static_cast<double>(velocity_.y[v]),
+                   vz = static_cast<double>(velocity_.z[v]);
+      energy += 0.5 * setup_.mass[v] * (vx * vx + vy * vy + vz * vz);
+    }
+    return energy;
+  }
+
+  double potential_energy() const override {
+    const SpringNetwork& net = setup_.springs;
+    double energy = 0.0;
+    for (std::size_t s = 0; s < net.size(); ++s) {
+      const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
+      const double dx = static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]);
+      const double dy = static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]);
+      const double dz = static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]);
+      const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const double rest = net.rest_length[s], k = net.stiffness[s];
+      if (setup_.law == kernels::SpringLaw::BasafaFarahmand) {
+        // Integral of F_s over the length: k l0^2 (X^2/2 + r X^4/4) up to Xc, linear growth of F beyond.
+        const double r = setup_.basafa_k2_over_k1, xc = setup_.basafa_xc;
+        const double strain = std::abs(length - rest) / rest;
+        const double scale = k * rest * rest;
+        if (strain <= xc) {
+          energy += scale * (strain * strain / 2.0 + r * strain * strain * strain * strain / 4.0);
+        } else {
+          const double a_coefficient = xc + r * xc * xc * xc, b_coefficient = 1.0 + 3.0 * r * xc * xc;
+          const double beyond = strain - xc;
+          energy += scale * (xc * xc / 2.0 + r * xc * xc * xc * xc / 4.0 + a_coefficient * beyond +
+                             b_coefficient * beyond * beyond / 2.0);
+        }
+      } else {
+        energy += 0.5 * k * (length - rest) * (length - rest);
+      }
+    }
+    for (std::size_t v = 0; v < n_; ++v) {
+      const double p[3] = {static_cast<double>(position_.x[v]), static_cast<double>(position_.y[v]),
+                           static_cast<double>(position_.z[v])};
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        energy -= setup_.mass[v] * setup_.gravity[axis] * p[axis];
+        if (!setup_.external_forces.empty()) energy -= setup_.external_forces[v][axis] * p[axis];
+      }
+    }
+    return energy;
+  }
+
+ private:
+  kernels::StateView<Real> view(const Vector3Arrays<Real>& p, const Vector3Arrays<Real>& v) const {
+    return {p.x.data(), p.y.data(), p.z.data(), v.x.data(), v.y.data(), v.z.data()};
+  }
+
+  void accelerations(const Vector3Arrays<Real>& p, const Vector3Arrays<Real>& v, Vector3Arrays<Real>& a) {
+    const kernels::StateView<Real> state = view(p, v);
+    pool_.run(n_, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        kernels::vertex_acceleration(static_cast<int>(i), network_view_, state, loads_, a.x[i], a.y[i], a.z[i]);
+      }
+    });
+  }
+
+  template <typename Update>
+  void for_each_vertex(Update update) {
+    pool_.run(n_, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) update(i);
+    });
+  }
+
+  bool step(DiagnosticList& diagnostics) {
+    const Real h = h_;
+    switch (setup_.integrator) {
+      case Integrator::ForwardEuler:
+        accelerations(position_, velocity_, acceleration_);
+        for_each_vertex([&](std::size_t i) {
+          kernels::forward_euler_update(position_.x[i], velocity_.x[i], acceleration_.x[i], h);
+          kernels::forward_euler_update(position_.y[i], velocity_.y[i], acceleration_.y[i], h);
+          kernels::forward_euler_update(position_.z[i], velocity_.z[i], acceleration_.z[i], h);
+        });
+        return true;
+      case Integrator::SemiImplicitEuler:
+        accelerations(position_, velocity_, acceleration_);
+        for_each_vertex([&](std::size_t i) {
+          kernels::semi_implicit_euler_update(position_.x[i], velocity_.x[i], acceleration_.x[i], h);
+          kernels::semi_implicit_euler_update(position_.y[i], velocity_.y[i], acceleration_.y[i], h);
+          kernels::semi_implicit_euler_update(position_.z[i], velocity_.z[i], acceleration_.z[i], h);
+        });
+        return true;
+      case Integrator::VelocityVerlet:
+        if (!have_acceleration_) accelerations(position_, velocity_, acceleration_);
+        for_each_vertex([&](std::size_t i) {
+          kernels::verlet_position_update(position_.x[i], velocity_.x[i], acceleration_.x[i], h, stage_velocity_.x[i]);
+          kernels::verlet_position_update(position_.y[i], velocity_.y[i], acceleration_.y[i], h, stage_velocity_.y[i]);
+          kernels::verlet_position_update(position_.z[i], velocity_.z[i], acceleration_.z[i], h, stage_velocity_.z[i]);
+        });
+        accelerations(position_, stage_velocity_, next_acceleration_);
+        for_each_vertex([&](std::size_t i) {
+          kernels::verlet_velocity_update(velocity_.x[i], acceleration_.x[i], next_acceleration_.x[i], h);
+          kernels::verlet_velocity_update(velocity_.y[i], acceleration_.y[i], next_acceleration_.y[i], h);
+          kernels::verlet_velocity_update(velocity_.z[i], acceleration_.z[i], next_acceleration_.z[i], h);
+        });
+        std::swap(acceleration_, next_acceleration_);
+        have_acceleration_ = true;
+        return true;
+      case Integrator::RungeKutta4:
+        runge_kutta4_step(h);
+        return true;
+      case Integrator::ImplicitEuler:
+        return implicit_euler_step(diagnostics);
+    }
+    return false;
+  }
+
+  void runge_kutta4_step(Real h) {
+    // Stage s evaluates the derivative at y0 + c_s h k_{s-1}: c = 0, 1/2, 1/2, 1.
+    const Real offsets[4] = {Real(0), h / Real(2), h / Real(2), h};
+    for (std::size_t s = 0; s < 4; ++s) {
+      if (s == 0) {
+        rk_velocity_[0] = velocity_;
+        accelerations(position_, velocity_, rk_acceleration_[0]);
+        continue;
+      }
+      const Real c = offsets[s];
+      const Vector3Arrays<Real>& kv = rk_velocity_[s - 1];
+      const Vector3Arrays<Real>& ka = rk_acceleration_[s - 1];
+      for_each_vertex([&](std::size_t i) {
+        stage_position_.x[i] = position_.x[i] + c * kv.x[i];
+        stage_position_.y[i] = position_.y[i] + c * kv.y[i];
+        stage_position_.z[i] = position_.z[i] + c * kv.z[i];
+        stage_velocity_.x[i] = velocity_.x[i] + c * ka.x[i];
+        stage_velocity_.y[i] = velocity_.y[i] + c * ka.y[i];
+        stage_velocity_.z[i] = velocity_.z[i] + c * ka.z[i];
+      });
+      rk_velocity_[s] = stage_velocity_;
+      accelerations(stage_position_, stage_velocity_, rk_acceleration_[s]);
+    }
+    const auto& kv = rk_velocity_;
+    const auto& ka = rk_acceleration_;
+    for_each_vertex([&](std::size_t i) {
+      if (fixed_[i]) return;
+      position_.x[i] = kernels::runge_kutta4_combine(position_.x[i], kv[0].x[i], kv[1].x[i], kv[2].x[i], kv[3].x[i], h);
+      position_.y[i] = kernels::runge_kutta4_combine(position_.y[i], kv[0].y[i], kv[1].y[i], kv[2].y[i], kv[3].y[i], h);
+      position_.z[i] = kernels::runge_kutta4_combine(position_.z[i], kv[0].z[i], kv[1].z[i], kv[2].z[i], kv[3].z[i], h);
+      velocity_.x[i] = kernels::runge_kutta4_combine(velocity_.x[i], ka[0].x[i], ka[1].x[i], ka[2].x[i], ka[3].x[i], h);
+      velocity_.y[i] = kernels::runge_kutta4_combine(velocity_.y[i], ka[0].y[i], ka[1].y[i], ka[2].y[i], ka[3].y[i], h);
+      velocity_.z[i] = kernels::runge_kutta4_combine(velocity_.z[i], ka[0].z[i], ka[1].z[i], ka[2].z[i], ka[3].z[i], h);
+    });
+  }
+
+  // Baraff & Witkin (1998), "Large steps in cloth simulation", Eq. (16) linearised backward Euler:
+  //   (M - h df/dv - h^2 df/dx) dv = h (f0 + h df/dx v0),  x1 = x0 + h (v0 + dv)
+  // with the spring Jacobian df_a/dx_a = -K_s, K_s = f'(l) u u^T + max(f/l, 0) (I - u u^T) (the transverse term is
+  // clamped at zero under compression so the matrix stays positive definite), df_a/dv_a = -c u u^T - gamma I.
+  // Solved with Eigen's conjugate gradient and its Jacobi (diagonal) preconditioner; fixed vertices become identity
+  // rows with a zero right-hand side.
+  bool implicit_euler_step(DiagnosticList& diagnostics) {
+    const double h = static_cast<double>(h_);
+    const SpringNetwork& net = setup_.springs;
+    const std::size_t dofs = 3 * n_;
+    accelerations(position_, velocity_, acceleration_);
+    Eigen::VectorXd rhs(static_cast<Eigen::Index>(dofs));
+    Eigen::VectorXd v0(static_cast<Eigen::Index>(dofs));
+    for (std::size_t i = 0; i < n_; ++i) {
+      const double a[3] = {static_cast<double>(acceleration_.x[i]), static_cast<double>(acceleration_.y[i]),
+                           static_cast<double>(acceleration_.z[i])};
+      const double v[3] = {static_cast<double>(velocity_.x[i]), static_cast<double>(velocity_.y[i]),
+                           static_cast<double>(velocity_.z[i])};
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        const auto row = static_cast<Eigen::Index>(3 * i + axis);
+        rhs[row] = h * setup_.mass[i] * a[axis];  // h f0
+        v0[row] = v[axis];
+      }
+    }
+    triplets_.clear();
+    const kernels::SpringLawParameters<double> law{setup_.law, setup_.basafa_k2_over_k1, setup_.basafa_xc};
+    for (std::size_t s = 0; s < net.size(); ++s) {
+      const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
+      const double d[3] = {static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]),
+                           static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]),
+                           static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a])};
+      const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      const double rest = net.rest_length[s];
+      if (!(length > 1e-9 * rest)) continue;
+      const double u[3] = {d[0] / length, d[1] / length, d[2] / length};
+      const double slope = kernels::spring_tension_slope(length, rest, net.stiffness[s], law);
+      const double transverse = std::max(kernels::spring_tension(length, rest, net.stiffness[s], law) / length, 0.0);
+      double block[3][3];
+      double stiffness_block[3][3];
+      for (std::size_t r = 0; r < 3; ++r) {
+        for (std::size_t c = 0; c < 3; ++c) {
+          const double uu = u[r] * u[c];
+          stiffness_block[r][c] = slope * uu + transverse * ((r == c ? 1.0 : 0.0) - uu);
+          block[r][c] = h * h * stiffness_block[r][c] + h * net.damping[s] * uu;
+        }
+      }
+      // rhs += h^2 df/dx v0: for vertex a, -K_s (v_a - v_b); for b, -K_s (v_b - v_a).
+      for (std::size_t r = 0; r < 3; ++r) {
+        double kv = 0.0;
+        for (std::size_t c = 0; c < 3; ++c) {
+          kv += stiffness_block[r][c] *
+                (v0[static_cast<Eigen::Index>(3 * a + c)] - v0[static_cast<Eigen::Index>(3 * b + c)]);
+        }
+        rhs[static_cast<Eigen::Index>(3 * a + r)] -= h * h * kv;
+        rhs[static_cast<Eigen::Index>(3 * b + r)] += h * h * kv;
+      }
+      for (std::size_t r = 0; r < 3; ++r) {
+        for (std::size_t c = 0; c < 3; ++c) {
+          const auto ra = static_cast<int>(3 * a + r), rb = static_cast<int>(3 * b + r);
+          const auto ca = static_cast<int>(3 * a + c), cb = static_cast<int>(3 * b + c);
+          if (!fixed_[a]) triplets_.emplace_back(ra, ca, block[r][c]);
+          if (!fixed_[b]) triplets_.emplace_back(rb, cb, block[r][c]);
+          if (!fixed_[a] && !fixed_[b]) {
+            triplets_.emplace_back(ra, cb, -block[r][c]);
+            triplets_.emplace_back(rb, ca, -block[r][c]);
+          }
+        }
+      }
+    }
+    for (std::size_t i = 0; i < n_; ++i) {
+      double diagonal = setup_.mass[i];
+      if (!fixed_[i]) {
+        const double dx = static_cast<double>(position_.x[i]) - setup_.rest_positions[i][0];
+        const double dy = static_cast<double>(position_.y[i]) - setup_.rest_positions[i][1];
+        const double dz = static_cast<double>(position_.z[i]) - setup_.rest_positions[i][2];
+        diagonal +=
+            h * (setup_.nodal_damping_gamma0 + setup_.nodal_damping_gamma1 * std::sqrt(dx * dx + dy * dy + dz * dz));
+      } else {
+        diagonal = 1.0;
+        for (std::size_t axis = 0; axis < 3; ++axis) rhs[static_cast<Eigen::Index>(3 * i + axis)] = 0.0;
+      }
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        triplets_.emplace_back(static_cast<int>(3 * i + axis), static_cast<int>(3 * i + axis), diagonal);
+      }
+    }
+    Eigen::SparseMatrix<double> system(static_cast<Eigen::Index>(dofs), static_cast<Eigen::Index>(dofs));
+    system.setFromTriplets(triplets_.begin(), triplets_.end());
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
+                             Eigen::DiagonalPreconditioner<double>>
+        solver;
+    solver.setMaxIterations(setup_.implicit.max_iterations);
+    solver.setTolerance(setup_.implicit.tolerance);
+    // A right-hand side this small means the system is at rest to double precision; CG on denormals would only
+    // report a spurious failure.
+    if (rhs.norm() < 1e-150) return true;
+    solver.compute(system);
+    const Eigen::VectorXd dv = solver.solve(rhs);
+    implicit_iterations_max_ = std::max(implicit_iterations_max_, static_cast<int>(solver.iterations()));
+    if (solver.info() != Eigen::Success && !cg_warning_given_) {
+      cg_warning_given_ = true;
+      std::ostringstream message;
+      message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after "
+              << solver.iterations() << " iterations with relative residual " << solver.error() << " (tolerance "
+              << setup_.implicit.tolerance << "); raise max_iterations or use a smaller dt";
+      diagnostics.warning(SourceRange{}, "cg-not-converged", message.str());
+    }
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (fixed_[i]) continue;
+      velocity_.x[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i)]);
+      velocity_.y[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i + 1)]);
+      velocity_.z[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i + 2)]);
+      position_.x[i] += h_ * velocity_.x[i];
+      position_.y[i] += h_ * velocity_.y[i];
+      position_.z[i] += h_ * velocity_.z[i];
+    }
+    return true;
+  }
+
+  bool check_finite(DiagnosticList& diagnostics) {
+    for (std::size_t v = 0; v < n_; ++v) {
+      if (std::isfinite(position_.x[v]) && std::isfinite(position_.y[v]) && std::isfinite(position_.z[v]) &&
+          std::isfinite(velocity_.x[v]) && std::isfinite(velocity_.y[v]) && std::isfinite(velocity_.z[v])) {
+        continue;
+      }
+      NonFiniteReport report;
+      report.step = steps_taken_;
+      report.time = time();
+      report.vertex = static_cast<std::int32_t>(v);
+      report.spring = culprit_spring(v);
+      non_finite_ = report;
+      std::ostringstream message;
+      message << "the simulation became non-finite at step " << report.step << " (t = " << report.time << " s): vertex "
+              << v << " has a NaN or infinite position or velocity";
+      if (report.spring >= 0) {
+        const auto s = static_cast<std::size_t>(report.spring);
+        message << "; its most strained spring is " << report.spring << " (vertices " << setup_.springs.first[s]
+                << " and " << setup_.springs.second[s] << ")";
+      }
+      message << "; lower dt, raise damping, or check the loads";
+      diagnostics.error(SourceRange{}, message.str());
+      return false;
+    }
+    return true;
+  }
+
+  // The spring at v whose length is non-finite, or else the one with the largest |strain|.
+  std::int32_t culprit_spring(std::size_t v) const {
+    const SpringNetwork& net = setup_.springs;
+    std::int32_t best = -1;
+    double worst = -1.0;
+    for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
+      const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
+      const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
+      const double dx = static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]);
+      const double dy = static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]);
+      const double dz = static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]);
+      const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const double strain = std::isfinite(length) ? std::abs(length - net.rest_length[s]) / net.rest_length[s]
+                                                  : std::numeric_limits<double>::infinity();
+      if (strain > worst) {
+        worst = strain;
+        best = static_cast<std::int32_t>(s);
+      }
+      if (!std::isfinite(strain)) break;
+    }
+    return best;
+  }
+
+  static std::vector<Point3> to_points(const Vector3Arrays<Real>& a) {
+    std::vector<Point3> out(a.x.size());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      out[i] = {static_cast<double>(a.x[i]), static_cast<double>(a.y[i]), static_cast<double>(a.z[i])};
+    }
+    return out;
+  }
+
+  const SimulationSetup setup_;  // a copy: the views below point into it
+  StabilityReport stability_;
+  WorkerPool pool_;
+  std::size_t n_;
+  std::vector<Real> rest_length_, stiffness_, damping_, mass_;
+  std::vector<unsigned char> fixed_;
+  Vector3Arrays<Real> position_, velocity_, rest_, acceleration_, force_;
+  Vector3Arrays<Real> stage_position_, stage_velocity_, next_acceleration_;
+  Vector3Arrays<Real> rk_velocity_[4], rk_acceleration_[4];
+  kernels::SpringNetworkView<Real> network_view_{};
+  kernels::VertexLoads<Real> loads_{};
+  Real h_ = Real(0);
+  bool have_acceleration_ = false;
+  std::size_t steps_taken_ = 0;
+  std::optional<NonFiniteReport> non_finite_;
+  std::vector<Eigen::Triplet<double>> triplets_;
+  int implicit_iterations_max_ = 0;
+  bool cg_warning_given_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<CpuSimulation> CpuSimulation::create(const SimulationSetup& setup, DiagnosticList& diagnostics) {
+  const auto stability = check_stability(setup, diagnostics);  // validates the setup first
+  if (!stability) return nullptr;
+  if (setup.precision == Precision::Float) return std::make_unique<CpuSimulationImpl<float>>(setup, *stability);
+  return std::make_unique<CpuSimulationImpl<double>>(setup, *stability);
+}
+
+SimulationResult simulate(const SimulationSetup& setup, DiagnosticList& diagnostics) {
+  SimulationResult result;
+  const auto simulation = CpuSimulation::create(setup, diagnostics);
+  if (!simulation) return result;
+  result.stability = simulation->stability();
+  const auto record = [&] {
+    Sample sample;
+    sample.step = simulation->steps_taken();
+    sample.time = simulation->time();
+    const std::vector<Point3> positions = simulation->positions();
+    for (const auto v : setup.recorded_vertices) sample.positions.push_back(positions[static_cast<std::size_t>(v)]);
+    sample.kinetic_energy = simulation->kinetic_energy();
+    sample.potential_energy = simulation->potential_energy();
+    result.samples.push_back(std::move(sample));
+  };
+  if (setup.record_every > 0) record();
+  bool ok = true;
+  std::size_t remaining = setup.step_count;
+  while (ok && remaining > 0) {
+    const std::size_t chunk = setup.record_every > 0 ? std::min(setup.record_every, remaining) : remaining;
+    ok = simulation->advance(chunk, diagnostics);
+    remaining -= chunk;
+    if (ok && setup.record_every > 0) record();
+  }
+  result.completed = ok;
+  result.steps_taken = simulation->steps_taken();
+  result.positions = simulation->positions();
+  result.velocities = simulation->velocities();
+  result.non_finite = simulation->non_finite();
+  result.implicit_max_iterations_used = simulation->implicit_max_iterations_used();
+  return result;
+}
+
+}  // namespace fmpc::sim

@@ -1,0 +1,130 @@
+#pragma once
+// The simulator's library interface: a plain SimulationSetup in, a SimulationResult out. A scene loader builds the
+// setup from a mesh, a material mapping and its options; nothing here reads files, prints or exits.
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "compiler/sema/diagnostic.h"
+#include "kernels/spring_math.h"
+#include "runtime/mesh/mesh.h"
+#include "runtime/springs/spring_network.h"
+
+namespace fmpc::sim {
+
+enum class Integrator { ForwardEuler, SemiImplicitEuler, VelocityVerlet, RungeKutta4, ImplicitEuler };
+enum class Precision { Float, Double };
+
+const char* to_string(Integrator integrator);
+
+struct ImplicitSolverOptions {
+  int max_iterations = 200;  // conjugate-gradient iterations per step
+  double tolerance = 1e-10;  // relative residual |r| / |b|
+};
+
+struct SimulationSetup {
+  std::vector<Point3> rest_positions;      // also x0 of the nodal damping gamma0 + gamma1 |x - x0|
+  std::vector<Point3> initial_positions;   // empty: the rest positions
+  std::vector<Point3> initial_velocities;  // empty: at rest
+  std::vector<double> mass;                // kg per vertex (lumped_masses)
+  SpringNetwork springs;                   // rest_length, stiffness, damping and adjacency filled in
+  kernels::SpringLaw law = kernels::SpringLaw::LinearDashpot;
+  double basafa_k2_over_k1 = 200.0;   // Basafa-Farahmand K2 / K1
+  double basafa_xc = 0.2;             // Basafa-Farahmand Xc (strain)
+  double nodal_damping_gamma0 = 0.0;  // N s/m
+  double nodal_damping_gamma1 = 0.0;  // N s/m^2
+  std::vector<std::int32_t> fixed_vertices;
+  Point3 gravity{0.0, 0.0, 0.0};        // m/s^2
+  std::vector<Point3> external_forces;  // N per vertex, constant; empty: none
+
+  Integrator integrator = Integrator::SemiImplicitEuler;
+  Precision precision = Precision::Double;
+  std::optional<double> time_step;  // s; nullopt: automatic (stability_margin x the critical step)
+  double stability_margin = 0.8;
+  // A given time_step above the critical step is an error; false turns it into a warning (for studying an
+  // unstable scheme, e.g. the thesis's forward Euler). NaN/Inf detection stays on either way.
+  bool refuse_unstable_time_step = true;
+  std::size_t step_count = 0;
+  unsigned threads = 1;  // CPU worker threads; results do not depend on it
+  ImplicitSolverOptions implicit;
+
+  std::size_t record_every = 0;  // 0: no samples; otherwise every N steps (and step 0)
+  std::vector<std::int32_t> recorded_vertices;
+};
+
+// The critical time step from the Gershgorin bound w_max^2 <= max_i 2 sum_j k_ij / m_i (k_ij: the spring's largest
+// tangent stiffness) and the damping rate beta_max = max_i (2 sum_j c_ij + gamma0) / m_i, through each scheme's
+// stability limit on the test equation x'' + beta x' + w^2 x = 0 (docs/simulator.md derives them).
+struct StabilityReport {
+  double omega_max = 0.0;                                               // rad/s
+  std::int32_t limiting_vertex = -1;                                    // the vertex that sets omega_max
+  double damping_rate_max = 0.0;                                        // 1/s
+  double critical_time_step = std::numeric_limits<double>::infinity();  // s; infinity: unconditionally stable
+  double time_step = 0.0;                                               // s, the step used
+  bool automatic = false;
+  std::string limit;  // the formula applied, e.g. "h <= 2 / (beta/2 + sqrt(w^2 + beta^2/4))"
+};
+
+// Sizes, indices, masses, rest lengths and parameters; appends one error per problem, naming the vertex or spring.
+bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics);
+
+// Validates the setup, then computes the bounds and the critical step; appends an error and returns nullopt when
+// the setup is invalid, the scheme is unstable at any step (forward Euler without damping) or a given step exceeds
+// the critical one.
+std::optional<StabilityReport> check_stability(const SimulationSetup& setup, DiagnosticList& diagnostics);
+
+struct NonFiniteReport {
+  std::size_t step = 0;  // the step that produced the first non-finite value (1-based)
+  double time = 0.0;
+  std::int32_t vertex = -1;  // the first vertex with a non-finite position or velocity
+  std::int32_t spring = -1;  // the spring at that vertex that is non-finite or the most strained
+};
+
+struct Sample {
+  std::size_t step = 0;
+  double time = 0.0;
+  std::vector<Point3> positions;  // of the recorded vertices, in their order
+  double kinetic_energy = 0.0;
+  double potential_energy = 0.0;  // springs + gravity + external forces
+};
+
+struct SimulationResult {
+  bool completed = false;
+  StabilityReport stability;
+  std::size_t steps_taken = 0;
+  std::vector<Point3> positions;
+  std::vector<Point3> velocities;
+  std::vector<Sample> samples;
+  std::optional<NonFiniteReport> non_finite;
+  int implicit_max_iterations_used = 0;
+};
+
+// A running simulation on the CPU (float or double state, multi-threaded, deterministic).
+class CpuSimulation {
+ public:
+  // Checks the setup (sizes, indices, masses, rest lengths, stability); returns null after appending errors.
+  // The simulation keeps its own copy of the setup.
+  static std::unique_ptr<CpuSimulation> create(const SimulationSetup& setup, DiagnosticList& diagnostics);
+  virtual ~CpuSimulation() = default;
+
+  // Advances `steps` steps; stops early (returning false, with an error naming step, vertex and spring) when a
+  // position or velocity becomes NaN or infinite.
+  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics) = 0;
+  virtual std::size_t steps_taken() const = 0;
+  virtual double time() const = 0;
+  virtual std::vector<Point3> positions() const = 0;
+  virtual std::vector<Point3> velocities() const = 0;
+  virtual double kinetic_energy() const = 0;
+  virtual double potential_energy() const = 0;
+  virtual const StabilityReport& stability() const = 0;
+  virtual const std::optional<NonFiniteReport>& non_finite() const = 0;
+  virtual int implicit_max_iterations_used() const = 0;
+};
+
+// create + advance(step_count) with samples every record_every steps.
+SimulationResult simulate(const SimulationSetup& setup, DiagnosticList& diagnostics);
+
+}  // namespace fmpc::sim

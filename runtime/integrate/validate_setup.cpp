@@ -1,0 +1,116 @@
+#include <cmath>
+
+#include "runtime/integrate/simulation.h"
+
+namespace fmpc::sim {
+
+namespace {
+bool finite_point(const Point3& p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
+}  // namespace
+
+bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
+  const std::size_t errors_before = diagnostics.error_count();
+  SourceRange range;
+  const std::size_t n = setup.rest_positions.size();
+  const SpringNetwork& net = setup.springs;
+  const auto size_error = [&](const char* what, std::size_t given) {
+    diagnostics.error(range, std::string(what) + ": " + std::to_string(given) + " given for " + std::to_string(n) +
+                                 " vertices; give one per vertex or none");
+  };
+  if (setup.mass.size() != n) size_error("masses", setup.mass.size());
+  if (!setup.initial_positions.empty() && setup.initial_positions.size() != n) {
+    size_error("initial positions", setup.initial_positions.size());
+  }
+  if (!setup.initial_velocities.empty() && setup.initial_velocities.size() != n) {
+    size_error("initial velocities", setup.initial_velocities.size());
+  }
+  if (!setup.external_forces.empty() && setup.external_forces.size() != n) {
+    size_error("external forces", setup.external_forces.size());
+  }
+  for (std::size_t v = 0; v < setup.mass.size() && v < n; ++v) {
+    if (!(setup.mass[v] > 0.0) || !std::isfinite(setup.mass[v])) {
+      diagnostics.error(range, "vertex " + std::to_string(v) + " has mass " + std::to_string(setup.mass[v]) +
+                                   "; every vertex needs a positive, finite mass");
+      break;
+    }
+  }
+  for (std::size_t v = 0; v < n; ++v) {
+    if (!finite_point(setup.rest_positions[v]) ||
+        (!setup.initial_positions.empty() && !finite_point(setup.initial_positions[v])) ||
+        (!setup.initial_velocities.empty() && !finite_point(setup.initial_velocities[v])) ||
+        (!setup.external_forces.empty() && !finite_point(setup.external_forces[v]))) {
+      diagnostics.error(range, "vertex " + std::to_string(v) +
+                                   " starts with a NaN or infinite position, velocity or "
+                                   "force; fix the initial state");
+      break;
+    }
+  }
+  if (net.vertex_count != n) {
+    diagnostics.error(range, "the spring network has " + std::to_string(net.vertex_count) + " vertices but the setup " +
+                                 std::to_string(n) + "; build the springs from the same mesh");
+  }
+  const std::size_t m = net.size();
+  if (net.second.size() != m || net.rest_length.size() != m || net.stiffness.size() != m || net.damping.size() != m) {
+    diagnostics.error(range,
+                      "the spring network is incomplete (rest lengths, stiffness and damping are needed for "
+                      "every spring); call compute_rest_lengths, assign_stiffness and assign_damping");
+    return false;
+  }
+  if (net.adjacency_offset.size() != net.vertex_count + 1 || net.adjacency_spring.size() != 2 * m ||
+      net.adjacency_neighbour.size() != 2 * m) {
+    diagnostics.error(range, "the spring adjacency is missing; call build_adjacency");
+    return false;
+  }
+  for (std::size_t s = 0; s < m; ++s) {
+    const auto a = net.first[s], b = net.second[s];
+    if (a < 0 || b < 0 || static_cast<std::size_t>(a) >= n || static_cast<std::size_t>(b) >= n || a == b) {
+      diagnostics.error(range, "spring " + std::to_string(s) + " joins vertices " + std::to_string(a) + " and " +
+                                   std::to_string(b) + ", which is not a pair of distinct vertices of the mesh");
+      return false;
+    }
+    if (!(net.rest_length[s] > 0.0) || !std::isfinite(net.rest_length[s])) {
+      diagnostics.error(range, "spring " + std::to_string(s) + " (vertices " + std::to_string(a) + ", " +
+                                   std::to_string(b) + ") has rest length " + std::to_string(net.rest_length[s]) +
+                                   "; rest lengths must be positive: merge duplicate vertices");
+      return false;
+    }
+    if (!(net.stiffness[s] >= 0.0) || !std::isfinite(net.stiffness[s]) || !(net.damping[s] >= 0.0) ||
+        !std::isfinite(net.damping[s])) {
+      diagnostics.error(range, "spring " + std::to_string(s) + " has stiffness " + std::to_string(net.stiffness[s]) +
+                                   " and damping " + std::to_string(net.damping[s]) +
+                                   "; both must be finite and non-negative");
+      return false;
+    }
+  }
+  for (const auto v : setup.fixed_vertices) {
+    if (v < 0 || static_cast<std::size_t>(v) >= n) {
+      diagnostics.error(range, "fixed vertex " + std::to_string(v) + " does not exist (the mesh has " +
+                                   std::to_string(n) + " vertices, numbered from 0)");
+    }
+  }
+  for (const auto v : setup.recorded_vertices) {
+    if (v < 0 || static_cast<std::size_t>(v) >= n) {
+      diagnostics.error(range, "recorded vertex " + std::to_string(v) + " does not exist (the mesh has " +
+                                   std::to_string(n) + " vertices, numbered from 0)");
+    }
+  }
+  if (setup.law == kernels::SpringLaw::BasafaFarahmand &&
+      (!(setup.basafa_k2_over_k1 >= 0.0) || !(setup.basafa_xc > 0.0))) {
+    diagnostics.error(range, "the Basafa-Farahmand law needs K2/K1 >= 0 and Xc > 0");
+  }
+  if (!(setup.nodal_damping_gamma0 >= 0.0) || !(setup.nodal_damping_gamma1 >= 0.0)) {
+    diagnostics.error(range, "nodal damping gamma0 and gamma1 must be non-negative");
+  }
+  if (setup.time_step && (!(*setup.time_step > 0.0) || !std::isfinite(*setup.time_step))) {
+    diagnostics.error(range, "the time step must be a positive, finite number of seconds (or auto)");
+  }
+  if (!(setup.stability_margin > 0.0 && setup.stability_margin <= 1.0)) {
+    diagnostics.error(range, "the stability margin must lie in (0, 1]");
+  }
+  if (setup.implicit.max_iterations < 1 || !(setup.implicit.tolerance > 0.0)) {
+    diagnostics.error(range, "implicit Euler needs at least one CG iteration and a positive tolerance");
+  }
+  return diagnostics.error_count() == errors_before;
+}
+
+}  // namespace fmpc::sim

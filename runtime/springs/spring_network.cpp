@@ -1,0 +1,293 @@
+#include "runtime/springs/spring_network.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <string>
+#include <utility>
+
+namespace fmpc::sim {
+
+namespace {
+
+using Edge = std::pair<std::int32_t, std::int32_t>;
+
+Edge make_edge(std::int32_t a, std::int32_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
+
+SourceRange mesh_range(const Mesh& mesh, int line) {
+  SourceRange range;
+  range.file = mesh.source;
+  range.line = line;
+  range.column = line > 0 ? 1 : 0;
+  return range;
+}
+
+template <std::size_t N>
+bool check_indices(const Mesh& mesh, const std::vector<std::array<std::int32_t, N>>& elements,
+                   const std::vector<int>& lines, const char* what, DiagnosticList& diagnostics) {
+  for (std::size_t e = 0; e < elements.size(); ++e) {
+    for (const std::int32_t v : elements[e]) {
+      if (v < 0 || static_cast<std::size_t>(v) >= mesh.points.size()) {
+        diagnostics.error(mesh_range(mesh, e < lines.size() ? lines[e] : 0),
+                          std::string(what) + " " + std::to_string(e) + " refers to vertex " + std::to_string(v) +
+                              " of " + std::to_string(mesh.points.size()) + "; repair the mesh first (repair_mesh)");
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+void append_springs(SpringNetwork& network, const std::map<Edge, double>& edges, SpringKind kind) {
+  for (const auto& [edge, measure] : edges) {
+    network.first.push_back(edge.first);
+    network.second.push_back(edge.second);
+    network.kind.push_back(kind);
+    network.element_measure.push_back(measure);
+  }
+}
+
+}  // namespace
+
+SpringNetwork springs_from_tetrahedra(const Mesh& mesh, DiagnosticList& diagnostics) {
+  SpringNetwork network;
+  network.vertex_count = mesh.points.size();
+  if (!check_indices(mesh, mesh.tetrahedra, mesh.tetrahedron_lines, "tetrahedron", diagnostics)) return network;
+  std::map<Edge, double> edges;
+  for (const Tetrahedron& t : mesh.tetrahedra) {
+    const double volume = std::abs(signed_volume(mesh, t));
+    for (std::size_t i = 0; i < 4; ++i) {
+      for (std::size_t j = i + 1; j < 4; ++j) {
+        if (t[i] != t[j]) edges[make_edge(t[i], t[j])] += volume;
+      }
+    }
+  }
+  append_springs(network, edges, SpringKind::TetrahedronEdge);
+  build_adjacency(network);
+  return network;
+}
+
+SpringNetwork springs_from_triangles(const Mesh& mesh, const TriangleSpringOptions& options,
+                                     DiagnosticList& diagnostics) {
+  SpringNetwork network;
+  network.vertex_count = mesh.points.size();
+  if (!check_indices(mesh, mesh.triangles, mesh.triangle_lines, "triangle", diagnostics)) return network;
+  std::map<Edge, double> structural;
+  // For each edge, the vertices opposite it in the triangles that contain it.
+  std::map<Edge, std::vector<std::int32_t>> opposite;
+  for (const Triangle& t : mesh.triangles) {
+    const double area = triangle_area(mesh, t);
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::int32_t a = t[i], b = t[(i + 1) % 3], c = t[(i + 2) % 3];
+      if (a == b) continue;
+      structural[make_edge(a, b)] += area;
+      opposite[make_edge(a, b)].push_back(c);
+    }
+  }
+  if (options.structural) append_springs(network, structural, SpringKind::Structural);
+  if (options.flexion) {
+    std::map<Edge, double> flexion;
+    for (const auto& [edge, across] : opposite) {
+      for (std::size_t i = 0; i < across.size(); ++i) {
+        for (std::size_t j = i + 1; j < across.size(); ++j) {
+          if (across[i] == across[j]) continue;
+          const Edge link = make_edge(across[i], across[j]);
+          if (structural.count(link) == 0) flexion.emplace(link, 0.0);
+        }
+      }
+    }
+    append_springs(network, flexion, SpringKind::Flexion);
+  }
+  build_adjacency(network);
+  return network;
+}
+
+bool compute_rest_lengths(SpringNetwork& network, const std::vector<Point3>& points, DiagnosticList& diagnostics,
+                          double min_relative_length) {
+  network.rest_length.resize(network.size());
+  double total = 0.0;
+  for (std::size_t s = 0; s < network.size(); ++s) {
+    network.rest_length[s] = distance(points[static_cast<std::size_t>(network.first[s])],
+                                      points[static_cast<std::size_t>(network.second[s])]);
+    total += network.rest_length[s];
+  }
+  if (network.size() == 0) return true;
+  const double mean = total / static_cast<double>(network.size());
+  for (std::size_t s = 0; s < network.size(); ++s) {
+    const double length = network.rest_length[s];
+    if (!(length > min_relative_length * mean) || !std::isfinite(length)) {
+      SourceRange range;
+      diagnostics.error(range, "spring " + std::to_string(s) + " between vertices " + std::to_string(network.first[s]) +
+                                   " and " + std::to_string(network.second[s]) + " has rest length " +
+                                   std::to_string(length) + " (mean " + std::to_string(mean) +
+                                   "); its direction is undefined: merge the duplicate vertices (repair_mesh)");
+      return false;
+    }
+  }
+  return true;
+}
+
+void build_adjacency(SpringNetwork& network) {
+  const std::size_t n = network.vertex_count;
+  std::vector<std::int32_t> count(n + 1, 0);
+  for (std::size_t s = 0; s < network.size(); ++s) {
+    ++count[static_cast<std::size_t>(network.first[s]) + 1];
+    ++count[static_cast<std::size_t>(network.second[s]) + 1];
+  }
+  for (std::size_t v = 0; v < n; ++v) count[v + 1] += count[v];
+  network.adjacency_offset = count;
+  network.adjacency_spring.assign(2 * network.size(), 0);
+  network.adjacency_neighbour.assign(2 * network.size(), 0);
+  std::vector<std::int32_t> next(count.begin(), count.end() - 1);
+  for (std::size_t s = 0; s < network.size(); ++s) {
+    const auto a = static_cast<std::size_t>(network.first[s]);
+    const auto b = static_cast<std::size_t>(network.second[s]);
+    network.adjacency_spring[static_cast<std::size_t>(next[a])] = static_cast<std::int32_t>(s);
+    network.adjacency_neighbour[static_cast<std::size_t>(next[a]++)] = network.second[s];
+    network.adjacency_spring[static_cast<std::size_t>(next[b])] = static_cast<std::int32_t>(s);
+    network.adjacency_neighbour[static_cast<std::size_t>(next[b]++)] = network.first[s];
+  }
+}
+
+bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, DiagnosticList& diagnostics) {
+  SourceRange range;
+  if (!spec.per_spring.empty() && spec.per_spring.size() != network.size()) {
+    diagnostics.error(range, "per-spring stiffness values: " + std::to_string(spec.per_spring.size()) + " given for " +
+                                 std::to_string(network.size()) + " springs; give one per spring");
+    return false;
+  }
+  if (network.rest_length.size() != network.size()) {
+    diagnostics.error(range, "rest lengths are missing; call compute_rest_lengths first");
+    return false;
+  }
+  if (spec.mapping == StiffnessMapping::VanGelder1998 && !(spec.thickness > 0.0)) {
+    diagnostics.error(range, "the membrane thickness must be positive for the Van Gelder mapping");
+    return false;
+  }
+  network.stiffness.assign(network.size(), 0.0);
+  for (std::size_t s = 0; s < network.size(); ++s) {
+    const double value = spec.per_spring.empty() ? spec.value : spec.per_spring[s];
+    if (!(value >= 0.0) || !std::isfinite(value)) {
+      diagnostics.error(range, "spring " + std::to_string(s) + ": stiffness parameter " + std::to_string(value) +
+                                   " is not a finite, non-negative number; fix the material value");
+      return false;
+    }
+    const double length = network.rest_length[s];
+    switch (spec.mapping) {
+      case StiffnessMapping::Uniform:
+        network.stiffness[s] = value;
+        break;
+      case StiffnessMapping::StiffnessOverLength:
+        network.stiffness[s] = value / length;
+        break;
+      case StiffnessMapping::VanGelder1998: {
+        const double measure = network.kind[s] == SpringKind::Structural ? spec.thickness * network.element_measure[s]
+                                                                         : network.element_measure[s];
+        network.stiffness[s] = value * measure / (length * length);
+        break;
+      }
+    }
+  }
+  if (spec.mapping == StiffnessMapping::VanGelder1998) {
+    // Flexion springs: a fraction of the mean structural stiffness at their two endpoints.
+    for (std::size_t s = 0; s < network.size(); ++s) {
+      if (network.kind[s] != SpringKind::Flexion) continue;
+      double sum = 0.0;
+      int count = 0;
+      for (const std::int32_t v : {network.first[s], network.second[s]}) {
+        const auto vi = static_cast<std::size_t>(v);
+        for (auto e = network.adjacency_offset[vi]; e < network.adjacency_offset[vi + 1]; ++e) {
+          const auto other = static_cast<std::size_t>(network.adjacency_spring[static_cast<std::size_t>(e)]);
+          if (network.kind[other] == SpringKind::Structural) {
+            sum += network.stiffness[other];
+            ++count;
+          }
+        }
+      }
+      network.stiffness[s] = count > 0 ? spec.flexion_fraction * sum / count : 0.0;
+    }
+  }
+  return true;
+}
+
+std::vector<double> lumped_masses(const Mesh& mesh, const MassSpec& spec, DiagnosticList& diagnostics) {
+  SourceRange range;
+  range.file = mesh.source;
+  std::vector<double> mass(mesh.points.size(), 0.0);
+  if (!(spec.value > 0.0) || !std::isfinite(spec.value)) {
+    diagnostics.error(range, "the density or total mass must be a positive, finite number");
+    return {};
+  }
+  const double density = spec.source == MassSpec::Source::Density ? spec.value : 1.0;
+  if (!mesh.tetrahedra.empty()) {
+    for (const Tetrahedron& t : mesh.tetrahedra) {
+      const double share = density * std::abs(signed_volume(mesh, t)) / 4.0;
+      for (const std::int32_t v : t) mass[static_cast<std::size_t>(v)] += share;
+    }
+  } else if (!mesh.triangles.empty()) {
+    for (const Triangle& t : mesh.triangles) {
+      const double share = density * spec.thickness * triangle_area(mesh, t) / 3.0;
+      for (const std::int32_t v : t) mass[static_cast<std::size_t>(v)] += share;
+    }
+  } else if (spec.source == MassSpec::Source::TotalMass) {
+    std::fill(mass.begin(), mass.end(), 1.0);
+  }
+  if (spec.source == MassSpec::Source::TotalMass) {
+    double total = 0.0;
+    for (const double m : mass) total += m;
+    if (total > 0.0) {
+      for (double& m : mass) m *= spec.value / total;
+    }
+  }
+  for (std::size_t v = 0; v < mass.size(); ++v) {
+    if (!(mass[v] > 0.0)) {
+      diagnostics.error(range, "vertex " + std::to_string(v) +
+                                   " gets no mass (no element uses it or its elements are flat); repair the mesh "
+                                   "(repair_mesh removes unreferenced vertices)");
+      return {};
+    }
+  }
+  return mass;
+}
+
+bool assign_damping(SpringNetwork& network, const std::vector<double>& mass, const DampingSpec& spec,
+                    DiagnosticList& diagnostics) {
+  SourceRange range;
+  if (network.stiffness.size() != network.size()) {
+    diagnostics.error(range, "stiffness is missing; call assign_stiffness first");
+    return false;
+  }
+  if (!(spec.ratio >= 0.0) || !std::isfinite(spec.ratio)) {
+    diagnostics.error(range, "the damping ratio must be a finite, non-negative number");
+    return false;
+  }
+  if (spec.rule == DampingSpec::Rule::ThesisNaturalFrequency && !(spec.natural_frequency > 0.0)) {
+    diagnostics.error(range, "the thesis damping rule (gamma = 2 zeta k / w) needs a positive natural frequency w");
+    return false;
+  }
+  if (spec.rule == DampingSpec::Rule::Fixed && !(spec.value >= 0.0)) {
+    diagnostics.error(range, "a fixed damping coefficient must be non-negative");
+    return false;
+  }
+  network.damping.assign(network.size(), 0.0);
+  for (std::size_t s = 0; s < network.size(); ++s) {
+    const double k = network.stiffness[s];
+    switch (spec.rule) {
+      case DampingSpec::Rule::DampingRatio: {
+        const double ma = mass[static_cast<std::size_t>(network.first[s])];
+        const double mb = mass[static_cast<std::size_t>(network.second[s])];
+        network.damping[s] = 2.0 * spec.ratio * std::sqrt(k * ma * mb / (ma + mb));
+        break;
+      }
+      case DampingSpec::Rule::ThesisNaturalFrequency:
+        network.damping[s] = 2.0 * spec.ratio * k / spec.natural_frequency;
+        break;
+      case DampingSpec::Rule::Fixed:
+        network.damping[s] = spec.value;
+        break;
+    }
+  }
+  return true;
+}
+
+}  // namespace fmpc::sim

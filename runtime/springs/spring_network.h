@@ -1,0 +1,112 @@
+#pragma once
+// A spring network as structure-of-arrays plus a CSR adjacency per vertex. The adjacency lets every backend
+// gather the forces on a vertex in one fixed order (no float atomics), so CPU threads and CUDA give the same sums.
+#include <cstdint>
+#include <vector>
+
+#include "compiler/sema/diagnostic.h"
+#include "runtime/mesh/mesh.h"
+
+namespace fmpc::sim {
+
+enum class SpringKind : std::uint8_t {
+  TetrahedronEdge,  // an edge of one or more tetrahedra
+  Structural,       // an edge of one or more triangles (thesis Fig. 3.3)
+  Flexion,          // joins the two vertices opposite a shared triangle edge (thesis Fig. 3.4, "LINK [2][5]")
+};
+
+struct SpringNetwork {
+  std::size_t vertex_count = 0;
+  std::vector<std::int32_t> first;   // endpoint with the smaller index
+  std::vector<std::int32_t> second;  // endpoint with the larger index
+  std::vector<SpringKind> kind;
+  // Sum of the volumes of the tetrahedra that contain the edge (TetrahedronEdge) or of the areas of the triangles
+  // that contain it (Structural); 0 for flexion springs. Used by the Van Gelder mapping.
+  std::vector<double> element_measure;
+  std::vector<double> rest_length;  // m (mesh units)
+  std::vector<double> stiffness;    // N/m
+  std::vector<double> damping;      // N s/m, along the spring (dashpot)
+
+  // CSR: the springs at vertex v are adjacency_spring[adjacency_offset[v] .. adjacency_offset[v+1]), in increasing
+  // spring order; adjacency_neighbour holds the other endpoint of each.
+  std::vector<std::int32_t> adjacency_offset;
+  std::vector<std::int32_t> adjacency_spring;
+  std::vector<std::int32_t> adjacency_neighbour;
+
+  std::size_t size() const { return first.size(); }
+};
+
+// One spring per distinct tetrahedron edge, sorted by (first, second); element_measure = incident volumes.
+// Tetrahedra with out-of-range indices are reported (error) and the network is empty.
+SpringNetwork springs_from_tetrahedra(const Mesh& mesh, DiagnosticList& diagnostics);
+
+struct TriangleSpringOptions {
+  bool structural = true;
+  bool flexion = true;
+};
+// The thesis's springs on a triangle mesh: structural (every triangle edge once) and flexion (for every pair of
+// triangles sharing an edge, the two vertices opposite it, unless a spring already joins them).
+SpringNetwork springs_from_triangles(const Mesh& mesh, const TriangleSpringOptions& options,
+                                     DiagnosticList& diagnostics);
+
+// Rest lengths from the positions. A spring shorter than min_relative_length x the mean length is an error naming
+// the spring and its vertices (a force direction cannot be defined for it): merge the duplicate vertices first.
+bool compute_rest_lengths(SpringNetwork& network, const std::vector<Point3>& points, DiagnosticList& diagnostics,
+                          double min_relative_length = 1e-9);
+
+// Fills adjacency_* from first/second.
+void build_adjacency(SpringNetwork& network);
+
+// ---- material mapping ----------------------------------------------------------------------------------------
+
+enum class StiffnessMapping {
+  Uniform,              // k = value (N/m) for every spring
+  StiffnessOverLength,  // k = value / l0 (value in N): SOFA MeshSpringForceField's convention, as in the SOFA liver
+                        // scene
+  // Van Gelder (1998), "Approximate simulation of elastic membranes by triangulated spring meshes", J. Graphics
+  // Tools 3(2):21-42, in its simplest form (stiffness = Young's modulus x incident element measure / length^2):
+  //   tetrahedron edges: k = E * sum(V_e) / l0^2      (the paper's three-dimensional extension)
+  //   triangle edges:    k = E * h * sum(A_e) / l0^2  (membrane of thickness h; Poisson correction not applied)
+  // Flexion springs have no incident element; they get flexion_fraction x the mean structural k at their vertices.
+  VanGelder1998,
+};
+
+struct StiffnessSpec {
+  StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
+  double value = 0.0;              // N/m (Uniform), N (StiffnessOverLength), Pa = Young's modulus (VanGelder1998)
+  std::vector<double> per_spring;  // optional per-spring value (e.g. a FIS output per spring); overrides `value`
+  double thickness = 1.0;          // m, triangle membranes only
+  double flexion_fraction = 0.1;
+};
+
+bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, DiagnosticList& diagnostics);
+
+struct MassSpec {
+  enum class Source { Density, TotalMass } source = Source::Density;
+  double value = 1000.0;   // kg/m^3 (Density) or kg (TotalMass)
+  double thickness = 1.0;  // m, for triangle meshes
+};
+
+// Lumped masses: each tetrahedron gives rho V / 4 to each vertex, each triangle rho h A / 3 (when the mesh has no
+// tetrahedra). TotalMass scales those shares to the total; a mesh without elements shares it equally.
+// Vertices that get no mass are an error (they would divide by zero), naming the first of them.
+std::vector<double> lumped_masses(const Mesh& mesh, const MassSpec& spec, DiagnosticList& diagnostics);
+
+struct DampingSpec {
+  enum class Rule {
+    // c = 2 zeta sqrt(k mu) with mu = m_a m_b / (m_a + m_b) the reduced mass of the two endpoints: the critical
+    // damping of the spring's own two-body mode, scaled by zeta.
+    DampingRatio,
+    // The thesis's Eq. (3.6): gamma = 2 zeta k / w with a given natural frequency w (rad/s).
+    ThesisNaturalFrequency,
+    Fixed,  // c = value (N s/m)
+  } rule = Rule::DampingRatio;
+  double ratio = 0.9;              // zeta; the thesis uses 0.9
+  double natural_frequency = 0.0;  // rad/s, ThesisNaturalFrequency only
+  double value = 0.0;              // Fixed only
+};
+
+bool assign_damping(SpringNetwork& network, const std::vector<double>& mass, const DampingSpec& spec,
+                    DiagnosticList& diagnostics);
+
+}  // namespace fmpc::sim
