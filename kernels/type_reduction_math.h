@@ -82,6 +82,20 @@ FMPC_HD int switch_point(const T* x, int n, T y) {
   return k;
 }
 
+// Records one endpoint: side 0 is yl, side 1 is yr.
+template <typename T>
+FMPC_HD void store_endpoint(TypeReducedInterval<T>& r, int side, T y, int switch_point, int iterations) {
+  if (side == 0) {
+    r.left = y;
+    r.left_switch = switch_point;
+    r.left_iterations = iterations;
+  } else {
+    r.right = y;
+    r.right_switch = switch_point;
+    r.right_iterations = iterations;
+  }
+}
+
 }  // namespace type_reduction_detail
 
 // Reference: tries every switch point, O(N^2). Used by the tests and for tiny N.
@@ -135,15 +149,7 @@ FMPC_HD TypeReducedInterval<T> karnik_mendel(const T* x, const T* lower, const T
       if (next == k || iterations > n + 1) break;
       k = next;
     }
-    if (side == 0) {
-      r.left = y;
-      r.left_switch = k;
-      r.left_iterations = iterations;
-    } else {
-      r.right = y;
-      r.right_switch = k;
-      r.right_iterations = iterations;
-    }
+    store_endpoint(r, side, y, k, iterations);
   }
   return r;
 }
@@ -173,11 +179,10 @@ FMPC_HD TypeReducedInterval<T> enhanced_karnik_mendel(const T* x, const T* lower
     // All weights on one side of k may be zero (0/0): fall back to the plain KM step from a valid start.
     if (!(b > T(0))) {
       const TypeReducedInterval<T> km = karnik_mendel(x, lower, upper, n);
-      if (side == 0) {
-        r.left = km.left, r.left_switch = km.left_switch, r.left_iterations = km.left_iterations;
-      } else {
-        r.right = km.right, r.right_switch = km.right_switch, r.right_iterations = km.right_iterations;
-      }
+      if (side == 0)
+        store_endpoint(r, 0, km.left, km.left_switch, km.left_iterations);
+      else
+        store_endpoint(r, 1, km.right, km.right_switch, km.right_iterations);
       continue;
     }
     T y = a / b;
@@ -211,15 +216,7 @@ FMPC_HD TypeReducedInterval<T> enhanced_karnik_mendel(const T* x, const T* lower
       }
       y = a / b;
     }
-    if (side == 0) {
-      r.left = y;
-      r.left_switch = k;
-      r.left_iterations = iterations;
-    } else {
-      r.right = y;
-      r.right_switch = k;
-      r.right_iterations = iterations;
-    }
+    store_endpoint(r, side, y, k, iterations);
   }
   return r;
 }
