@@ -15,7 +15,8 @@ item : systemHeader | setting | variableDecl | termDecl | ruleDecl ;
 systemHeader : SYSTEM name description=STRING? ;
 
 setting
-  : TYPE value=name                                            # typeSetting
+  : TYPE INTERVAL_TYPE2? value=name                            # typeSetting
+  | TYPE_REDUCTION value=name                                  # typeReductionSetting
   | AND value=name                                             # andSetting
   | OR value=name                                              # orSetting
   | IMPLICATION value=name                                     # implicationSetting
@@ -30,9 +31,17 @@ variableDecl : direction=(INPUT | OUTPUT) name description=STRING? IN '[' low=NU
 
 unit : name | '%' ;
 
-termDecl : name IS family=name '(' (argument (',' argument)*)? ')' ;
+// An interval type-2 term (docs/language.md): an interval argument `mean [7.1, 8.2]`, an explicit pair
+// `upper gauss(...) lower gauss(...)`, or MATLAB's `lower scale 0.8 lag 0.1` after the MF.
+termDecl : name IS UPPER? mfCall (LOWER (lowerMf=mfCall | lowerScaleLag))? ;
 
-argument : name NUMBER unit? ;
+mfCall : family=name '(' (argument (',' argument)*)? ')' ;
+
+lowerScaleLag : SCALE scale=NUMBER (LAG lag=NUMBER)? | LAG lag=NUMBER ;
+
+argument : name (NUMBER | interval) unit? ;
+
+interval : '[' low=NUMBER ',' high=NUMBER ']' ;
 
 ruleDecl : RULE label=name? ':' IF clause (connective clause)* THEN clause (AND clause)* (WEIGHT weight=NUMBER)? ;
 
@@ -45,7 +54,7 @@ hedge : SOMEWHAT | VERY VERY? | EXTREMELY ;
 // Words that are keywords only where a setting or a variable header expects them; anywhere a name is expected
 // they are ordinary names (a term may be called `value` or `error`). The printer quotes only the reserved words.
 name : IDENTIFIER | STRING | TYPE | IMPLICATION | AGGREGATION | DEFUZZIFY | SAMPLES | EXACT | WHEN | NO | FIRES
-     | MIDRANGE | VALUE | ERROR | IN ;
+     | MIDRANGE | VALUE | ERROR | IN | TYPE_REDUCTION | UPPER | LOWER | SCALE | LAG ;
 
 // Reserved words: a name spelled like one of these must be quoted. Keep them together, SYSTEM first and EXTREMELY
 // last: FmpcErrorStrategy tests "is a reserved word" as a range of token types.
@@ -62,6 +71,7 @@ OR : 'or' ;
 WEIGHT : 'weight' ;
 SOMEWHAT : 'somewhat' ;
 VERY : 'very' ;
+INTERVAL_TYPE2 : 'interval_type2' ;
 EXTREMELY : 'extremely' ;
 
 // Contextual words (see `name`).
@@ -78,6 +88,11 @@ MIDRANGE : 'midrange' ;
 VALUE : 'value' ;
 ERROR : 'error' ;
 IN : 'in' ;
+TYPE_REDUCTION : 'type_reduction' ;
+UPPER : 'upper' ;
+LOWER : 'lower' ;
+SCALE : 'scale' ;
+LAG : 'lag' ;
 
 NUMBER : '-'? DIGITS ('.' DIGITS)? ([eE] [+-]? DIGITS)? ;
 IDENTIFIER : [A-Za-z_] [A-Za-z0-9_]* ;

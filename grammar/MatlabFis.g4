@@ -1,4 +1,6 @@
 // MATLAB's .fis format (versions 1 and 2) and GNU Octave fuzzy-logic-toolkit's variant of it.
+// Interval type-2 files (Type='mamdanitype2' / 'sugenotype2') append MATLAB's LowerScale and LowerLag to an MF
+// line: MF1='low':'trimf',[0 1 2],0.9,[0.1 0.1] (docs/matlab_fis.md says what could not be confirmed).
 // The format is line oriented: section headers, `Key = value` lines, MF lines and, under [Rules], rule lines.
 // The grammar only recognises the shape of each line; compiler/frontend/matlab_fis_reader.cpp checks which keys
 // belong where, counts, indices and values (docs/matlab_fis.md lists every rule).
@@ -8,7 +10,8 @@ file : NEWLINE* (line (NEWLINE+ line)*)? NEWLINE* EOF ;
 
 line
   : SECTION                                                                # sectionLine
-  | key=IDENT '=' name=STRING ':' kind=STRING ',' params=vector            # mfLine
+  | key=IDENT '=' name=STRING ':' kind=STRING ',' params=vector
+      (',' lowerScale=value (',' lowerLag=value)?)?                        # mfLine
   | key=IDENT '=' value                                                    # keyLine
   | antecedent=indexList ',' consequent=indexList
       '(' weight=signedNumber ')' ':' connective=signedNumber              # ruleLine

@@ -16,10 +16,29 @@ struct EvaluationFlags {
   bool no_fire_error = false;             // policy `error` was hit: those outputs are NaN
 };
 
+// The type-reduced interval [yl, yr] of one output of an interval type-2 system and how it was found
+// (kernels/type_reduction_math.h). The crisp output is (yl + yr) / 2. When the no-fire policy applied, both ends
+// are its value (NaN for `error`) and the switch points are -1.
+struct TypeReducedOutput {
+  double lower = 0.0;  // yl
+  double upper = 0.0;  // yr
+  TypeReduction method = TypeReduction::KarnikMendel;
+  int left_switch = -1;        // k for yl: the k smallest points take their upper weight
+  int right_switch = -1;       // k for yr: the k smallest points take their lower weight
+  double left_switch_x = 0.0;  // the k-th smallest point for yl (NaN when k == 0 or no reduction ran)
+  double right_switch_x = 0.0;
+  int left_iterations = 0;
+  int right_iterations = 0;
+};
+
 struct Evaluation {
   std::vector<double> outputs;           // one per output variable
-  std::vector<double> firing_strengths;  // one per rule: antecedent strength times weight
+  std::vector<double> firing_strengths;  // one per rule: antecedent strength times weight (type-2: upper end)
   EvaluationFlags flags;
+  // Interval type-2 systems only (empty for type-1): the lower end of each rule's firing interval, and per output
+  // the type-reduced interval.
+  std::vector<double> firing_lower;
+  std::vector<TypeReducedOutput> intervals;
 };
 
 // Aggregated output fuzzy set of a Mamdani output, sampled where the defuzzifier sampled it (101 points by
@@ -28,6 +47,8 @@ struct Evaluation {
 struct OutputExplanation {
   std::vector<double> x;
   std::vector<double> membership;  // Mamdani: aggregated grade at x; Sugeno: rule weight at rule output x
+  // Interval type-2: `membership` is the upper end, this the lower end (Sugeno: x is each rule's lowest output).
+  std::vector<double> membership_lower;
 };
 
 struct Explanation {
@@ -43,6 +64,9 @@ enum class Reference { Matlab, Octave };
 struct EvaluationOptions {
   Reference reference = Reference::Matlab;
 };
+
+// [lower, upper] grade of x in `term` (kernels/type2_math.h); a term without a footprint gives [mu, mu].
+GradeInterval<double> term_membership(const Term& term, double x);
 
 // Evaluates `system` at `inputs` (one value per input variable, in declaration order).
 // Precondition: the system passed sema without errors and inputs.size() == system.inputs.size().

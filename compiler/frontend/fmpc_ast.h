@@ -32,11 +32,12 @@ struct Number {
   SourceRange range;
 };
 
-enum class SettingKind { Type, And, Or, Implication, Aggregation, Defuzzify, NoFire };
+enum class SettingKind { Type, And, Or, Implication, Aggregation, Defuzzify, NoFire, TypeReduction };
 
 struct Setting {
   SettingKind kind = SettingKind::Type;
-  Name value;                  // type / operator / defuzzifier name; for NoFire "midrange", "value" or "error"
+  Name value;                  // type / operator / defuzzifier / type reduction name; NoFire "midrange", "value", "error"
+  bool interval_type2 = false;  // Type: `type interval_type2 mamdani|sugeno`
   std::optional<Number> samples;  // Defuzzify: `samples N`
   bool samples_exact = false;     // Defuzzify: `samples exact`
   std::optional<Number> no_fire_value;  // NoFire: `value X`
@@ -46,15 +47,28 @@ struct Setting {
 
 struct Argument {
   Name name;
-  Number value;
+  Number value;  // the number, or the low end of an interval `[low, high]`
   std::optional<Name> unit;
+  SourceRange range;
+  std::optional<Number> high = std::nullopt;  // interval type-2: the high end of `mean [7.1, 8.2]`
+};
+
+// The explicit lower MF of `upper gauss(...) lower gauss(...)`.
+struct LowerCall {
+  Name family;
+  std::vector<Argument> arguments;
   SourceRange range;
 };
 
 struct Term {
   Name name;
-  Name family;  // "gauss", "triangle", ...
+  Name family;  // "gauss", "triangle", ... (the upper MF of an explicit pair)
   std::vector<Argument> arguments;
+  bool explicit_upper = false;           // written `is upper FAMILY(...)`
+  std::optional<LowerCall> lower;        // `lower FAMILY(...)`
+  std::optional<Number> lower_scale;     // `lower scale S [lag L]`
+  std::optional<Number> lower_lag;       // `lower [scale S] lag L`
+  SourceRange lower_range;               // the `lower ...` part, when present
   SourceRange range;
   Comments comments;
 };

@@ -113,7 +113,12 @@ bool is_name_token(std::size_t type) {
     case FmpcLexer::MIDRANGE:
     case FmpcLexer::VALUE:
     case FmpcLexer::ERROR:
-    case FmpcLexer::IN: return true;
+    case FmpcLexer::IN:
+    case FmpcLexer::TYPE_REDUCTION:
+    case FmpcLexer::UPPER:
+    case FmpcLexer::LOWER:
+    case FmpcLexer::SCALE:
+    case FmpcLexer::LAG: return true;
     default: return false;
   }
 }
@@ -164,24 +169,33 @@ std::string expected_name_noun(antlr4::TokenStream* tokens, const antlr4::Token*
     case FmpcLexer::IMPLICATION: return kTNormChoices;
     case FmpcLexer::AGGREGATION: return kSNormChoices;
     case FmpcLexer::TYPE: return "a system type (mamdani or sugeno)";
+    case FmpcLexer::INTERVAL_TYPE2: return "a system type (mamdani or sugeno)";
+    case FmpcLexer::TYPE_REDUCTION:
+      return "a type reduction (karnik_mendel, enhanced_karnik_mendel, eiasc or nie_tan)";
+    case FmpcLexer::UPPER: return "a membership function such as 'gauss'";
+    case FmpcLexer::LOWER: return "a membership function such as 'gauss', or 'scale' or 'lag'";
     case FmpcLexer::DEFUZZIFY: return "a defuzzifier (centroid, bisector, mom, som, lom, wtaver or wtsum)";
     case FmpcLexer::IS:
-      return rule == FmpcParser::RuleTermDecl ? "a membership function such as 'gauss'" : "a term name";
+      return rule == FmpcParser::RuleTermDecl || rule == FmpcParser::RuleMfCall ? "a membership function such as 'gauss'"
+                                                                               : "a term name";
     case FmpcLexer::NOT:
     case FmpcLexer::SOMEWHAT:
     case FmpcLexer::VERY:
     case FmpcLexer::EXTREMELY: return "a term name";
     case FmpcLexer::RULE: return "a rule label";
     case FmpcLexer::NUMBER:
-      if (rule == FmpcParser::RuleArgument || rule == FmpcParser::RuleTermDecl) return "a unit";
+      if (rule == FmpcParser::RuleArgument || rule == FmpcParser::RuleTermDecl || rule == FmpcParser::RuleMfCall)
+        return "a unit";
       break;
     default: break;
   }
   if (previous->getText() == "(" || previous->getText() == ",") {
-    if (rule == FmpcParser::RuleTermDecl || rule == FmpcParser::RuleArgument) return "a parameter name";
+    if (rule == FmpcParser::RuleTermDecl || rule == FmpcParser::RuleArgument || rule == FmpcParser::RuleMfCall)
+      return "a parameter name";
   }
   if (previous->getText() == "]") return "a unit or a term name";
-  if (rule == FmpcParser::RuleVariableDecl || rule == FmpcParser::RuleTermDecl) return "a term name";
+  if (rule == FmpcParser::RuleVariableDecl || rule == FmpcParser::RuleTermDecl || rule == FmpcParser::RuleMfCall)
+    return "a term name";
   return "a name";
 }
 
@@ -345,6 +359,7 @@ class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
     if (previous && previous->getLine() == token->getLine()) return false;
     switch (token->getType()) {
       case FmpcLexer::TYPE:
+      case FmpcLexer::TYPE_REDUCTION:
       case FmpcLexer::AND:
       case FmpcLexer::OR:
       case FmpcLexer::IMPLICATION:
@@ -401,8 +416,8 @@ class AstBuilder {
         previous_was_variable = true;
       } else if (FmpcParser::TermDeclContext* term = item->termDecl()) {
         if (!open_variable) {
-          diagnostics_.error(source_.context(term->name(0)),
-                             "term " + quoted_name(term->name(0)) +
+          diagnostics_.error(source_.context(term->name()),
+                             "term " + quoted_name(term->name()) +
                                  " is not under an 'input' or 'output' line; a variable's terms follow its line, "
                                  "before any rule or setting");
           continue;
@@ -487,6 +502,10 @@ class AstBuilder {
     if (auto* type = dynamic_cast<FmpcParser::TypeSettingContext*>(context)) {
       setting.kind = SettingKind::Type;
       setting.value = name(type->value);
+      setting.interval_type2 = type->INTERVAL_TYPE2() != nullptr;
+    } else if (auto* reduction = dynamic_cast<FmpcParser::TypeReductionSettingContext*>(context)) {
+      setting.kind = SettingKind::TypeReduction;
+      setting.value = name(reduction->value);
     } else if (auto* and_setting = dynamic_cast<FmpcParser::AndSettingContext*>(context)) {
       setting.kind = SettingKind::And;
       setting.value = name(and_setting->value);
@@ -530,19 +549,44 @@ class AstBuilder {
     return variable;
   }
 
-  Term build_term(FmpcParser::TermDeclContext* context, const LineRef& ref) {
-    Term term;
-    term.name = name(context->name(0));
-    term.family = name(context->family);
-    term.range = source_.context(context);
-    for (FmpcParser::ArgumentContext* argument_context : context->argument()) {
+  std::vector<Argument> build_arguments(FmpcParser::MfCallContext* call) {
+    std::vector<Argument> arguments;
+    for (FmpcParser::ArgumentContext* argument_context : call->argument()) {
       Argument argument;
       argument.name = name(argument_context->name());
-      argument.value = number(argument_context->NUMBER()->getSymbol());
+      if (FmpcParser::IntervalContext* interval = argument_context->interval()) {
+        argument.value = number(interval->low);
+        argument.high = number(interval->high);
+      } else {
+        argument.value = number(argument_context->NUMBER()->getSymbol());
+      }
       if (argument_context->unit()) argument.unit = unit(argument_context->unit());
       argument.range = source_.context(argument_context);
-      term.arguments.push_back(std::move(argument));
+      arguments.push_back(std::move(argument));
     }
+    return arguments;
+  }
+
+  Term build_term(FmpcParser::TermDeclContext* context, const LineRef& ref) {
+    Term term;
+    term.name = name(context->name());
+    FmpcParser::MfCallContext* upper = context->mfCall(0);
+    term.family = name(upper->family);
+    term.arguments = build_arguments(upper);
+    term.explicit_upper = context->UPPER() != nullptr;
+    if (context->lowerMf) {
+      LowerCall lower;
+      lower.family = name(context->lowerMf->family);
+      lower.arguments = build_arguments(context->lowerMf);
+      lower.range = source_.context(context->lowerMf);
+      term.lower = std::move(lower);
+    } else if (FmpcParser::LowerScaleLagContext* scale_lag = context->lowerScaleLag()) {
+      if (scale_lag->scale) term.lower_scale = number(scale_lag->scale);
+      if (scale_lag->lag) term.lower_lag = number(scale_lag->lag);
+      term.lower_range = source_.span(context->LOWER()->getSymbol(), scale_lag->getStop());
+    }
+    if (context->LOWER() && context->lowerMf) term.lower_range = source_.span(context->LOWER()->getSymbol(), context->getStop());
+    term.range = source_.context(context);
     add_line(context->getStart(), context->getStop(), ref);
     return term;
   }

@@ -86,17 +86,23 @@ class Printer {
 
   void print_settings(const System& system) {
     bool sugeno = false;
-    for (const Setting& setting : system.settings)
+    bool interval_type2 = false;
+    for (const Setting& setting : system.settings) {
       if (setting.kind == SettingKind::Type && setting.value.text == "sugeno") sugeno = true;
-    for (SettingKind kind : {SettingKind::Type, SettingKind::And, SettingKind::Or, SettingKind::Implication,
-                             SettingKind::Aggregation, SettingKind::Defuzzify, SettingKind::NoFire}) {
+      if (setting.kind == SettingKind::Type && setting.interval_type2) interval_type2 = true;
+    }
+    for (SettingKind kind : {SettingKind::Type, SettingKind::TypeReduction, SettingKind::And, SettingKind::Or,
+                             SettingKind::Implication, SettingKind::Aggregation, SettingKind::Defuzzify,
+                             SettingKind::NoFire}) {
       bool present = false;
       for (const Setting& setting : system.settings) {
         if (setting.kind != kind) continue;
         present = true;
         line(setting.comments, "  ", setting_text(setting));
       }
-      if (!present) out_ += "  " + setting_text(default_setting(kind, sugeno)) + '\n';
+      // A type-1 system has no type reduction: its default line would only make it look type-2.
+      if (!present && (kind != SettingKind::TypeReduction || interval_type2))
+        out_ += "  " + setting_text(default_setting(kind, sugeno)) + '\n';
     }
   }
 
@@ -112,13 +118,16 @@ class Printer {
       case SettingKind::Aggregation: setting.value.text = sugeno ? "sum" : "max"; break;
       case SettingKind::Defuzzify: setting.value.text = sugeno ? "wtaver" : "centroid"; break;
       case SettingKind::NoFire: setting.value.text = "midrange"; break;
+      case SettingKind::TypeReduction: setting.value.text = "karnik_mendel"; break;
     }
     return setting;
   }
 
   static std::string setting_text(const Setting& setting) {
     switch (setting.kind) {
-      case SettingKind::Type: return "type " + name_text(setting.value);
+      case SettingKind::Type:
+        return std::string("type ") + (setting.interval_type2 ? "interval_type2 " : "") + name_text(setting.value);
+      case SettingKind::TypeReduction: return "type_reduction " + name_text(setting.value);
       case SettingKind::And: return "and " + name_text(setting.value);
       case SettingKind::Or: return "or " + name_text(setting.value);
       case SettingKind::Implication: return "implication " + name_text(setting.value);
@@ -153,16 +162,17 @@ class Printer {
   }
 
   // Arguments in the family's order (linear: the inputs' order, then the offset); names it does not know last.
-  static std::string term_text(const Term& term, const std::vector<std::string>& inputs) {
-    const bool linear = term.family.text == "linear";
+  static std::string call_text(const Name& family_name, const std::vector<Argument>& source_arguments,
+                               const std::vector<std::string>& inputs) {
+    const bool linear = family_name.text == "linear";
     std::vector<std::string> order;
     if (linear) {
       order = inputs;
-    } else if (const FamilySignature* family = find_family(term.family.text)) {
+    } else if (const FamilySignature* family = find_family(family_name.text)) {
       order.assign(family->parameters.begin(), family->parameters.end());
     }
     std::vector<const Argument*> arguments;
-    for (const Argument& argument : term.arguments) arguments.push_back(&argument);
+    for (const Argument& argument : source_arguments) arguments.push_back(&argument);
     const auto rank = [&](const Argument* argument) {
       if (linear && argument->name.text == "offset" && !argument->name.quoted) return order.size();
       const auto found = std::find(order.begin(), order.end(), argument->name.text);
@@ -170,17 +180,33 @@ class Printer {
     };
     std::stable_sort(arguments.begin(), arguments.end(),
                      [&](const Argument* a, const Argument* b) { return rank(a) < rank(b); });
-    std::string text = name_text(term.name) + " is " + name_text(term.family) + "(";
+    std::string text = name_text(family_name) + "(";
     for (std::size_t i = 0; i < arguments.size(); ++i) {
       const Argument& argument = *arguments[i];
       if (i > 0) text += ", ";
       // In linear(...) a quoted "offset" is an input of that name, a bare one the constant term.
       const bool quote = argument.name.quoted && argument.name.text == "offset";
       text += quote ? "\"offset\"" : name_text(argument.name);
-      text += " " + format_number(argument.value.value);
+      if (argument.high)
+        text += " [" + format_number(argument.value.value) + ", " + format_number(argument.high->value) + "]";
+      else
+        text += " " + format_number(argument.value.value);
       if (argument.unit) text += " " + unit_text(*argument.unit);
     }
     return text + ")";
+  }
+
+  static std::string term_text(const Term& term, const std::vector<std::string>& inputs) {
+    std::string text = name_text(term.name) + " is ";
+    if (term.explicit_upper || term.lower) text += "upper ";
+    text += call_text(term.family, term.arguments, inputs);
+    if (term.lower) text += " lower " + call_text(term.lower->family, term.lower->arguments, inputs);
+    if (term.lower_scale || term.lower_lag) {
+      text += " lower";
+      if (term.lower_scale) text += " scale " + format_number(term.lower_scale->value);
+      if (term.lower_lag) text += " lag " + format_number(term.lower_lag->value);
+    }
+    return text;
   }
 
   static std::string clause_text(const Clause& clause) {
@@ -236,6 +262,29 @@ std::optional<std::string> description_of(const std::string& description) {
   return printable(description);
 }
 
+// The named arguments of a type-1 MF in the family's order (linear: one coefficient per input, then the offset).
+std::vector<Argument> arguments_of(const fmpc::MembershipFunction& mf, const FuzzySystem& system) {
+  std::vector<Argument> arguments;
+  const FamilySignature& family = family_of(mf.kind);
+  const std::vector<double>& params = mf.params;
+  const auto param = [&](std::size_t index) { return index < params.size() ? params[index] : 0.0; };
+  if (mf.kind == MfKind::Linear) {
+    for (std::size_t i = 0; i < system.inputs.size(); ++i) {
+      Argument argument{name_of(system.inputs[i].name), number_of(param(i)), std::nullopt, {}};
+      argument.name.quoted = argument.name.text == "offset";
+      arguments.push_back(argument);
+    }
+    arguments.push_back(Argument{name_of("offset"), number_of(param(system.inputs.size())), std::nullopt, {}});
+  } else {
+    for (std::size_t i = 0; i < family.parameters.size(); ++i)
+      arguments.push_back(Argument{name_of(family.parameters[i]),
+                                   number_of(param(static_cast<std::size_t>(family.matlab_index[i]))),
+                                   std::nullopt,
+                                   {}});
+  }
+  return arguments;
+}
+
 Variable variable_of(const fmpc::Variable& source, bool is_output, const FuzzySystem& system) {
   Variable variable;
   variable.is_output = is_output;
@@ -247,23 +296,35 @@ Variable variable_of(const fmpc::Variable& source, bool is_output, const FuzzySy
   for (const fmpc::Term& source_term : source.terms) {
     Term term;
     term.name = name_of(source_term.name);
-    const FamilySignature& family = family_of(source_term.mf.kind);
-    term.family = name_of(family.name);
-    const std::vector<double>& params = source_term.mf.params;
-    const auto param = [&](std::size_t index) { return index < params.size() ? params[index] : 0.0; };
-    if (source_term.mf.kind == MfKind::Linear) {
-      for (std::size_t i = 0; i < system.inputs.size(); ++i) {
-        Argument argument{name_of(system.inputs[i].name), number_of(param(i)), std::nullopt, {}};
-        argument.name.quoted = argument.name.text == "offset";
-        term.arguments.push_back(argument);
+    term.family = name_of(family_of(source_term.mf.kind).name);
+    term.arguments = arguments_of(source_term.mf, system);
+    if (const std::optional<fmpc::Footprint>& footprint = source_term.footprint) {
+      // The interval replaces the parameter it makes uncertain (docs/language.md, "Interval type-2").
+      const auto widen = [&](const char* parameter) {
+        for (Argument& argument : term.arguments)
+          if (argument.name.text == parameter) {
+            argument.value = number_of(footprint->first);
+            argument.high = number_of(footprint->second);
+          }
+      };
+      switch (footprint->kind) {
+        case FootprintKind::UncertainMean: widen("mean"); break;
+        case FootprintKind::UncertainSd: widen("sd"); break;
+        case FootprintKind::IntervalValue: widen("value"); break;
+        case FootprintKind::ExplicitLower: {
+          LowerCall lower;
+          lower.family = name_of(family_of(footprint->lower.kind).name);
+          lower.arguments = arguments_of(footprint->lower, system);
+          term.lower = std::move(lower);
+          term.explicit_upper = true;
+          break;
+        }
+        case FootprintKind::ScaleLag:
+          if (footprint->first != 1.0) term.lower_scale = number_of(footprint->first);
+          if (footprint->second != 0.0 || footprint->first == 1.0) term.lower_lag = number_of(footprint->second);
+          break;
+        case FootprintKind::None: break;
       }
-      term.arguments.push_back(Argument{name_of("offset"), number_of(param(system.inputs.size())), std::nullopt, {}});
-    } else {
-      for (std::size_t i = 0; i < family.parameters.size(); ++i)
-        term.arguments.push_back(Argument{name_of(family.parameters[i]),
-                                          number_of(param(static_cast<std::size_t>(family.matlab_index[i]))),
-                                          std::nullopt,
-                                          {}});
     }
     variable.terms.push_back(std::move(term));
   }
@@ -303,7 +364,11 @@ System system_of(const FuzzySystem& source) {
     result.value = name_of(value);
     return result;
   };
-  system.settings.push_back(setting(SettingKind::Type, to_string(source.type)));
+  Setting type = setting(SettingKind::Type, to_string(source.type));
+  type.interval_type2 = source.interval_type2;
+  system.settings.push_back(type);
+  if (source.interval_type2)
+    system.settings.push_back(setting(SettingKind::TypeReduction, to_string(source.type_reduction)));
   system.settings.push_back(setting(SettingKind::And, to_string(source.and_method)));
   system.settings.push_back(setting(SettingKind::Or, to_string(source.or_method)));
   system.settings.push_back(setting(SettingKind::Implication, to_string(source.implication)));

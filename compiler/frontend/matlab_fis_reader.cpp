@@ -207,7 +207,8 @@ struct Section {
 
 const std::vector<std::string> kSystemKeys = {"Name",      "Type",      "Version",   "NumInputs",
                                               "NumOutputs", "NumRules", "AndMethod", "OrMethod",
-                                              "ImpMethod", "AggMethod", "DefuzzMethod"};
+                                              "ImpMethod", "AggMethod", "DefuzzMethod",
+                                              "TypeRedMethod", "TypeReductionMethod"};
 const std::vector<std::string> kVariableKeys = {"Name", "Range", "NumMFs"};
 
 class SystemBuilder {
@@ -494,22 +495,27 @@ class SystemBuilder {
     if (auto found = keys.find("Type"); found != keys.end()) {
       SourceRange range;
       if (auto type = string_value(found->second, &range)) {
-        if (*type == "mamdani") {
+        if (*type == "mamdani" || *type == "mamdanitype2") {
           system.type = SystemType::Mamdani;
-        } else if (*type == "sugeno") {
+          system.interval_type2 = *type == "mamdanitype2";
+        } else if (*type == "sugeno" || *type == "sugenotype2") {
           system.type = SystemType::Sugeno;
+          system.interval_type2 = *type == "sugenotype2";
         } else {
           std::vector<std::string> notes;
-          if (type->find("type2") != std::string::npos)
-            notes.push_back("interval type-2 .fis files are not supported; write the system in the fmpc language");
-          else if (auto suggestion = closest_name(*type, {"mamdani", "sugeno"}))
+          if (auto suggestion = closest_name(*type, {"mamdani", "sugeno", "mamdanitype2", "sugenotype2"}))
             notes.push_back("did you mean '" + *suggestion + "'?");
-          diagnostics_.error(range, "unknown system type '" + *type + "': expected 'mamdani' or 'sugeno'", notes);
+          diagnostics_.error(range,
+                             "unknown system type '" + *type +
+                                 "': expected 'mamdani', 'sugeno', 'mamdanitype2' or 'sugenotype2'",
+                             notes);
         }
       }
     }
     if (auto found = keys.find("Version"); found != keys.end()) {
-      if (auto version = number_value(found->second); version && *version != 1.0 && *version != 2.0)
+      // Version 3.0 may be what MATLAB writes for type-2 systems (docs/matlab_fis.md); it is read as 2.0.
+      if (auto version = number_value(found->second); version && *version != 1.0 && *version != 2.0 &&
+                                                      *version != 3.0)
         diagnostics_.warning(positions_.span(found->second->value()), "unknown-version",
                              "version " + format_number(*version) + " is not a known .fis version (1.0 or 2.0); "
                              "reading it as version 2.0");
@@ -526,9 +532,48 @@ class SystemBuilder {
     read_method<Defuzzifier>(keys, "DefuzzMethod", defuzzifier_from_string,
                              {"centroid", "bisector", "mom", "som", "lom", "wtaver", "wtsum"}, system.defuzzifier);
 
+    read_type_reduction(keys, system);
+
     num_inputs_ = declared_count(keys, "NumInputs");
     num_outputs_ = declared_count(keys, "NumOutputs");
     num_rules_ = declared_count(keys, "NumRules");
+  }
+
+  // MATLAB's TypeReductionMethod: karnikmendel (default), ekm, iasc, eiasc. IASC computes the same interval as
+  // EIASC (both are exact), so it is read as EIASC with a note.
+  void read_type_reduction(const std::map<std::string, MatlabFisParser::KeyLineContext*>& keys,
+                           FuzzySystem& system) {
+    for (const char* key : {"TypeRedMethod", "TypeReductionMethod"}) {
+      auto found = keys.find(key);
+      if (found == keys.end()) continue;
+      SourceRange range;
+      const std::optional<std::string> name = string_value(found->second, &range);
+      if (!name) continue;
+      if (!system.interval_type2) {
+        diagnostics_.warning(positions_.token(found->second->key), "type-reduction-ignored",
+                             std::string(key) + " applies to type-2 systems only and is ignored",
+                             {"set Type='mamdanitype2' or 'sugenotype2' to use it"});
+        continue;
+      }
+      if (*name == "karnikmendel") {
+        system.type_reduction = TypeReduction::KarnikMendel;
+      } else if (*name == "ekm") {
+        system.type_reduction = TypeReduction::EnhancedKarnikMendel;
+      } else if (*name == "eiasc") {
+        system.type_reduction = TypeReduction::Eiasc;
+      } else if (*name == "iasc") {
+        system.type_reduction = TypeReduction::Eiasc;
+        diagnostics_.warning(range, "iasc-as-eiasc",
+                             "type reduction 'iasc' is read as 'eiasc': both compute the exact interval, so the "
+                             "outputs agree to rounding");
+      } else {
+        const std::vector<std::string> known = {"karnikmendel", "ekm", "iasc", "eiasc"};
+        std::vector<std::string> notes;
+        if (auto suggestion = closest_name(*name, known)) notes.push_back("did you mean '" + *suggestion + "'?");
+        notes.push_back(std::string(key) + " takes one of: karnikmendel, ekm, iasc, eiasc");
+        diagnostics_.error(range, "unsupported type reduction '" + *name + "'", notes);
+      }
+    }
   }
 
   struct DeclaredCount {
@@ -684,7 +729,70 @@ class SystemBuilder {
       params->resize(static_cast<std::size_t>(needed));
     }
     term.mf.params = std::move(*params);
+    read_lower_scale_lag(line, term, system, role);
     return term;
+  }
+
+  // `,LowerScale,LowerLag` after the parameters of a type-2 MF line. Lenient: a missing pair reads as zero width
+  // (with a warning); a scalar or a 2-vector lag are both accepted, the latter only with equal sides.
+  void read_lower_scale_lag(MatlabFisParser::MfLineContext* line, Term& term, const FuzzySystem& system,
+                            const std::string& role) {
+    const bool sugeno_output = role == "output" && system.type == SystemType::Sugeno;
+    if (!system.interval_type2 || sugeno_output) {
+      if (line->lowerScale != nullptr)
+        diagnostics_.warning(positions_.span(line->lowerScale), "lower-mf-ignored",
+                             std::string("LowerScale and LowerLag belong to type-2 MFs ") +
+                                 (sugeno_output ? "(a sugenotype2 output is type-1)" : "(this system is type-1)") +
+                                 " and are ignored");
+      return;
+    }
+    if (line->lowerScale == nullptr) {
+      diagnostics_.warning(positions_.span(line), "missing-lower-mf",
+                           "this type-2 MF line has no LowerScale and LowerLag; it is read with zero width "
+                           "(lower MF = upper MF)",
+                           {"MATLAB writes them after the parameters: MF1='name':'trimf',[0 1 2],1,[0.2 0.2]"});
+      return;
+    }
+    Footprint footprint;
+    footprint.kind = FootprintKind::ScaleLag;
+    footprint.range = positions_.span(line->lowerScale);
+    const std::optional<std::vector<double>> scale = numbers_of(line->lowerScale);
+    if (!scale) return;
+    if (scale->size() != 1) {
+      diagnostics_.error(positions_.span(line->lowerScale), "LowerScale is one number in (0, 1]");
+      return;
+    }
+    footprint.first = scale->front();
+    if (line->lowerLag != nullptr) {
+      const std::optional<std::vector<double>> lag = numbers_of(line->lowerLag);
+      if (!lag) return;
+      if (lag->empty() || lag->size() > 2) {
+        diagnostics_.error(positions_.span(line->lowerLag), "LowerLag is one number or two in [0, 1)");
+        return;
+      }
+      if (lag->size() == 2 && (*lag)[0] != (*lag)[1]) {
+        diagnostics_.error(positions_.span(line->lowerLag),
+                           "LowerLag [" + format_number((*lag)[0]) + " " + format_number((*lag)[1]) +
+                               "] lags the two sides differently, which fmpc does not support",
+                           {"use one lag for both sides, or write the lower MF explicitly in the fmpc language: "
+                            "upper F(...) lower G(...)"});
+        return;
+      }
+      footprint.second = lag->front();
+    }
+    term.footprint = footprint;
+  }
+
+  // A scalar or a vector value as numbers; nullopt after reporting a string or a bad number.
+  std::optional<std::vector<double>> numbers_of(MatlabFisParser::ValueContext* value) {
+    if (auto* vector = dynamic_cast<MatlabFisParser::VectorValueContext*>(value)) return vector_value(vector->vector());
+    if (auto* number = dynamic_cast<MatlabFisParser::NumberValueContext*>(value)) {
+      const std::optional<double> result = evaluate(number->expression());
+      if (!result) return std::nullopt;
+      return std::vector<double>{*result};
+    }
+    diagnostics_.error(positions_.span(value), "expected a number or a vector such as [0.2 0.2]");
+    return std::nullopt;
   }
 
   // ---- [Rules] ----------------------------------------------------------------------------------------------

@@ -63,7 +63,7 @@ class Writer {
     std::string out;
     out += "[System]\n";
     out += "Name=" + quoted(system_.name) + "\n";
-    out += "Type=" + quoted(to_string(system_.type)) + "\n";
+    out += "Type=" + quoted(std::string(to_string(system_.type)) + (system_.interval_type2 ? "type2" : "")) + "\n";
     out += "Version=2.0\n";
     out += "NumInputs=" + std::to_string(system_.inputs.size()) + "\n";
     out += "NumOutputs=" + std::to_string(system_.outputs.size()) + "\n";
@@ -73,8 +73,12 @@ class Writer {
     out += "ImpMethod=" + quoted(to_string(system_.implication)) + "\n";
     out += "AggMethod=" + quoted(to_string(system_.aggregation)) + "\n";
     out += "DefuzzMethod=" + quoted(to_string(system_.defuzzifier)) + "\n";
-    for (std::size_t i = 0; i < system_.inputs.size(); ++i) out += variable("Input", i + 1, system_.inputs[i]);
-    for (std::size_t i = 0; i < system_.outputs.size(); ++i) out += variable("Output", i + 1, system_.outputs[i]);
+    if (system_.interval_type2) out += "TypeRedMethod=" + quoted(matlab_type_reduction(system_.type_reduction)) + "\n";
+    const bool type2 = system_.interval_type2;
+    const bool sugeno = system_.type == SystemType::Sugeno;
+    for (std::size_t i = 0; i < system_.inputs.size(); ++i) out += variable("Input", i + 1, system_.inputs[i], type2);
+    for (std::size_t i = 0; i < system_.outputs.size(); ++i)
+      out += variable("Output", i + 1, system_.outputs[i], type2 && !sugeno);
     out += "\n[Rules]\n";
     for (const Rule& rule : system_.rules) {
       out += columns(rule.antecedent, system_.inputs.size()) + ", " + columns(rule.consequent, system_.outputs.size());
@@ -84,15 +88,55 @@ class Writer {
   }
 
  private:
-  static std::string variable(const char* section, std::size_t index, const Variable& variable) {
+  // MATLAB's TypeReductionMethod names; Nie-Tan has none (reported by report_what_matlab_cannot_hold).
+  static const char* matlab_type_reduction(TypeReduction method) {
+    switch (method) {
+      case TypeReduction::KarnikMendel: return "karnikmendel";
+      case TypeReduction::EnhancedKarnikMendel: return "ekm";
+      case TypeReduction::Eiasc: return "eiasc";
+      case TypeReduction::NieTan: return "karnikmendel";
+    }
+    return "karnikmendel";
+  }
+
+  // `,LowerScale,[LowerLag LowerLag]` of a type-2 MF line. Footprints MATLAB cannot hold are written with the
+  // upper MF and zero width (reported by report_what_matlab_cannot_hold).
+  static std::string lower_scale_lag(const Term& term) {
+    double scale = 1.0, lag = 0.0;
+    if (term.footprint && term.footprint->kind == FootprintKind::ScaleLag) {
+      scale = term.footprint->first;
+      lag = term.footprint->second;
+    }
+    return "," + format_number(scale) + "," + vector_text({lag, lag});
+  }
+
+  // The MF a type-2 MF line names: MATLAB's upper MF.
+  static MembershipFunction upper_mf(const Term& term) {
+    if (!term.footprint) return term.mf;
+    const Footprint& footprint = *term.footprint;
+    switch (footprint.kind) {
+      case FootprintKind::UncertainMean:
+        return MembershipFunction{MfKind::Gaussian2,
+                                  {term.mf.params[0], footprint.first, term.mf.params[0], footprint.second}};
+      case FootprintKind::UncertainSd: return MembershipFunction{MfKind::Gaussian, {footprint.second, term.mf.params[1]}};
+      case FootprintKind::None:
+      case FootprintKind::ExplicitLower:
+      case FootprintKind::ScaleLag:
+      case FootprintKind::IntervalValue: break;
+    }
+    return term.mf;
+  }
+
+  static std::string variable(const char* section, std::size_t index, const Variable& variable, bool type2) {
     std::string out = "\n[" + std::string(section) + std::to_string(index) + "]\n";
     out += "Name=" + quoted(variable.name) + "\n";
     out += "Range=" + vector_text({variable.min, variable.max}) + "\n";
     out += "NumMFs=" + std::to_string(variable.terms.size()) + "\n";
     for (std::size_t k = 0; k < variable.terms.size(); ++k) {
       const Term& term = variable.terms[k];
-      out += "MF" + std::to_string(k + 1) + "=" + quoted(term.name) + ":" + quoted(matlab_name(term.mf.kind)) + "," +
-             vector_text(term.mf.params) + "\n";
+      const MembershipFunction mf = type2 ? upper_mf(term) : term.mf;
+      out += "MF" + std::to_string(k + 1) + "=" + quoted(term.name) + ":" + quoted(matlab_name(mf.kind)) + "," +
+             vector_text(mf.params) + (type2 ? lower_scale_lag(term) : "") + "\n";
     }
     return out;
   }
@@ -126,9 +170,25 @@ class Writer {
       warn(system_.range, "Einstein norms of " + system_name +
                               " are written as Octave's einstein_product/einstein_sum, which MATLAB does not know");
 
+    if (system_.interval_type2 && system_.type_reduction == TypeReduction::NieTan)
+      warn(system_.range, "type reduction 'nie_tan' of " + system_name +
+                              " has no MATLAB name and is written as 'karnikmendel'",
+           {"MATLAB's TypeReductionMethod is karnikmendel, ekm, iasc or eiasc"});
     for (const auto* variables : {&system_.inputs, &system_.outputs}) {
       const char* role = variables == &system_.inputs ? "input" : "output";
       for (const Variable& variable : *variables) {
+        for (const Term& term : variable.terms) {
+          if (!term.footprint) continue;
+          const FootprintKind kind = term.footprint->kind;
+          const std::string what = "term '" + term.name + "' of " + role + " '" + variable.name + "'";
+          if (kind == FootprintKind::IntervalValue)
+            warn(term.range, "the interval constant of " + what + " has no MATLAB form (sugenotype2 outputs are "
+                                                                  "type-1); its midpoint is written");
+          else if (kind != FootprintKind::ScaleLag)
+            warn(term.range, "the footprint of " + what + " has no MATLAB form (MATLAB's lower MF is the upper one "
+                                                          "scaled and lagged); its upper MF is written with zero "
+                                                          "width (LowerScale 1, LowerLag 0)");
+        }
         if (!variable.unit.empty())
           warn(variable.range, std::string("the unit '") + variable.unit + "' of " + role + " '" + variable.name +
                                    "' has no place in a .fis file and is dropped");

@@ -45,6 +45,12 @@ constexpr std::array<std::pair<const char*, Defuzzifier>, 7> kDefuzzifierNames{{
     {"lom", Defuzzifier::LargestOfMaximum}, {"wtaver", Defuzzifier::WeightedAverage},
     {"wtsum", Defuzzifier::WeightedSum}}};
 
+constexpr std::array<std::pair<const char*, TypeReduction>, 4> kTypeReductionNames{{
+    {"karnik_mendel", TypeReduction::KarnikMendel},
+    {"enhanced_karnik_mendel", TypeReduction::EnhancedKarnikMendel},
+    {"eiasc", TypeReduction::Eiasc},
+    {"nie_tan", TypeReduction::NieTan}}};
+
 }  // namespace
 
 int Variable::find_term(const std::string& term_name) const {
@@ -100,6 +106,11 @@ std::optional<TNorm> tnorm_from_string(const std::string& name) { return lookup(
 std::optional<SNorm> snorm_from_string(const std::string& name) { return lookup(kSNormNames, name); }
 std::optional<Defuzzifier> defuzzifier_from_string(const std::string& name) {
   return lookup(kDefuzzifierNames, name);
+}
+
+const char* to_string(TypeReduction method) { return spelling(kTypeReductionNames, method); }
+std::optional<TypeReduction> type_reduction_from_string(const std::string& name) {
+  return lookup(kTypeReductionNames, name);
 }
 
 int mf_param_count(MfKind kind) {

@@ -7,6 +7,8 @@
 
 #include "compiler/ir/source_range.h"
 #include "kernels/fuzzy_kinds.h"
+#include "kernels/type2_math.h"
+#include "kernels/type_reduction_math.h"
 
 namespace fmpc {
 
@@ -25,11 +27,26 @@ struct MembershipFunction {
   std::vector<double> params;  // MATLAB order, see kernels/fuzzy_kinds.h
 };
 
+// An interval type-2 term's footprint of uncertainty (docs/language.md, "Interval type-2"). The kind and the
+// meaning of `first`/`second` are kernels/type2_math.h's FootprintKind; `lower` is used by ExplicitLower only.
+struct Footprint {
+  FootprintKind kind = FootprintKind::ExplicitLower;
+  double first = 0.0;   // UncertainMean: m1; UncertainSd: sd1; ScaleLag: scale; IntervalValue: low end
+  double second = 0.0;  // UncertainMean: m2; UncertainSd: sd2; ScaleLag: lag;   IntervalValue: high end
+  MembershipFunction lower;  // ExplicitLower: the lower MF (any input family)
+  SourceRange range;         // the interval literal or the `lower ...` part
+};
+
 struct Term {
   std::string name;
+  // Type-1 terms: the MF. Type-2 terms: the type-1 view used where one is needed (lint, plots, MATLAB's type-1
+  // conversions): the upper MF for ExplicitLower and ScaleLag; the Gaussian or constant at the middle of the
+  // interval for UncertainMean, UncertainSd and IntervalValue, whose interval is in the footprint.
   MembershipFunction mf;
   SourceRange range;  // the whole term definition
   SourceRange name_range;
+  // Only in interval type-2 systems; absent = zero width (upper == lower == mf).
+  std::optional<Footprint> footprint = std::nullopt;
 };
 
 struct Variable {
@@ -61,6 +78,10 @@ struct Rule {
   std::vector<Clause> antecedent;  // at most one clause per input, in any order
   std::vector<Clause> consequent;  // at most one clause per output
   double weight = 1.0;
+  // Set only by compiler/passes/specialize.h: the combined grade of the clauses on inputs that a binding fixed
+  // and folded away. It joins the fold of the remaining clauses with the rule's connective (and_method for And,
+  // or_method for Or) before them; with no clauses left it is the rule's strength. Never set by a reader.
+  std::optional<double> folded_grade;
   SourceRange range;
 };
 
@@ -68,6 +89,8 @@ struct FuzzySystem {
   std::string name;
   std::string description;
   SystemType type = SystemType::Mamdani;
+  bool interval_type2 = false;  // `type interval_type2 mamdani|sugeno`, MATLAB mamdanitype2 / sugenotype2
+  TypeReduction type_reduction = TypeReduction::KarnikMendel;  // interval type-2 only
   TNorm and_method = TNorm::Minimum;
   SNorm or_method = SNorm::Maximum;
   TNorm implication = TNorm::Minimum;
@@ -105,6 +128,9 @@ std::optional<TNorm> tnorm_from_string(const std::string& name);
 std::optional<SNorm> snorm_from_string(const std::string& name);
 std::optional<Defuzzifier> defuzzifier_from_string(const std::string& name);
 double hedge_exponent(Hedge hedge);  // 1, 0.5, 2, 3, 4
+// "karnik_mendel", "enhanced_karnik_mendel", "eiasc", "nie_tan" (the fmpc language's spellings).
+const char* to_string(TypeReduction method);
+std::optional<TypeReduction> type_reduction_from_string(const std::string& name);
 
 // Number of MATLAB parameters a kind takes; Linear takes (number of inputs + 1), reported here as -1.
 int mf_param_count(MfKind kind);

@@ -91,6 +91,13 @@ class SystemChecker {
                                             "; use at least 2 output samples, or 'exact'");
     if (system_.outputs.empty())
       diagnostics_.error(system_.range, "system " + quoted(system_.name) + " has no output; add one");
+    if (system_.interval_type2 && !sugeno && system_.defuzzifier != Defuzzifier::Centroid)
+      diagnostics_.error(system_.range, std::string("defuzzifier '") + to_string(system_.defuzzifier) +
+                                            "' has no interval type-2 form; an interval type-2 mamdani system "
+                                            "type-reduces its centroid: use 'defuzzify centroid'");
+    if (system_.interval_type2 && !sugeno && system_.samples == 0)
+      diagnostics_.error(system_.range, "'samples exact' is not available for interval type-2 systems; type "
+                                        "reduction works on sampled sets: give 'samples N' (101 is MATLAB's)");
     if (system_.no_fire == NoFirePolicy::Value) {
       if (!std::isfinite(system_.no_fire_value)) {
         diagnostics_.error(system_.range, "the value used when no rule fires is " +
@@ -230,6 +237,72 @@ class SystemChecker {
       return;
     }
     check_parameter_domain(term, what);
+    if (term.footprint) check_footprint(variable, term, role, what);
+  }
+
+  // docs/language.md, "Interval type-2": which footprint fits where, and its numbers.
+  void check_footprint(const Variable& variable, const Term& term, Role role, const std::string& what) {
+    const Footprint& footprint = *term.footprint;
+    const SourceRange& where = footprint.range.valid() ? footprint.range : term.range;
+    auto error = [&](const std::string& message) { diagnostics_.error(where, message); };
+    if (!system_.interval_type2) {
+      error(what + " has a footprint of uncertainty, but system " + quoted(system_.name) +
+            " is type-1; declare `type interval_type2 " + to_string(system_.type) + "`");
+      return;
+    }
+    const bool sugeno_output = role == Role::Output && system_.type == SystemType::Sugeno;
+    if (sugeno_output != (footprint.kind == FootprintKind::IntervalValue)) {
+      error(sugeno_output ? what + " is a sugeno consequent; its only footprint is an interval constant, "
+                                   "constant(value [c1, c2])"
+                          : what + " has an interval constant, which only a sugeno output term can have");
+      return;
+    }
+    const std::string interval = "[" + format_number(footprint.first) + ", " + format_number(footprint.second) + "]";
+    const bool finite = std::isfinite(footprint.first) && std::isfinite(footprint.second);
+    switch (footprint.kind) {
+      case FootprintKind::UncertainMean:
+      case FootprintKind::UncertainSd:
+      case FootprintKind::IntervalValue: {
+        const bool gaussian = term.mf.kind == MfKind::Gaussian;
+        if (footprint.kind != FootprintKind::IntervalValue && !gaussian) {
+          error(what + " has an uncertain mean or sd, which only a gaussian can have");
+          return;
+        }
+        const char* parameter = footprint.kind == FootprintKind::UncertainMean ? "mean"
+                                : footprint.kind == FootprintKind::UncertainSd ? "sd"
+                                                                              : "value";
+        if (!finite) {
+          error("the " + std::string(parameter) + " interval " + interval + " of " + what +
+                " is not finite; give finite ends");
+        } else if (footprint.first > footprint.second) {
+          error("the " + std::string(parameter) + " interval " + interval + " of " + what +
+                " is reversed; write the smaller end first");
+        } else if (footprint.kind == FootprintKind::UncertainSd && !(footprint.first > 0.0)) {
+          error("the sd interval " + interval + " of " + what + " reaches " + format_number(footprint.first) +
+                "; both sds of a gaussian must be greater than 0");
+        }
+        break;
+      }
+      case FootprintKind::ScaleLag:
+        if (!(footprint.first > 0.0 && footprint.first <= 1.0))
+          error("the lower scale of " + what + " is " + format_number(footprint.first) +
+                "; it is the height of the lower MF and lies in (0, 1]");
+        if (!(footprint.second >= 0.0 && footprint.second < 1.0))
+          error("the lower lag of " + what + " is " + format_number(footprint.second) +
+                "; it is the upper grade where the lower MF starts rising and lies in [0, 1)");
+        break;
+      case FootprintKind::ExplicitLower: {
+        Term lower;
+        lower.name = term.name + " (lower MF)";
+        lower.mf = footprint.lower;
+        lower.range = where;
+        lower.name_range = term.name_range;
+        // The lower MF is a grade of x whatever the role, so it is checked as an input MF.
+        check_term(variable, lower, Role::Input);
+        break;
+      }
+      case FootprintKind::None: break;
+    }
   }
 
   // MATLAB's own checks (fis.c: trimf/trapmf order, gaussmf/gauss2mf sigma != 0, gbellmf a != 0) plus the ones

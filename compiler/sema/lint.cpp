@@ -99,8 +99,44 @@ class SystemLinter {
                                  "; inputs will almost never meet it: widen the term");
         break;
       }
+      lint_lower_exceeds_upper(variable, term, what);
     }
     lint_term_order(variable);
+  }
+
+  // An explicit lower MF above its upper MF somewhere on the range: the footprint there is [upper, lower]
+  // (kernels/type2_math.h swaps the ends), which is rarely what the author meant. Sampled densely, plus every
+  // parameter of both MFs inside the range, where the pieces of the piecewise families meet.
+  void lint_lower_exceeds_upper(const Variable& variable, const Term& term, const std::string& what) {
+    if (!term.footprint || term.footprint->kind != FootprintKind::ExplicitLower) return;
+    const MembershipFunction& upper = term.mf;
+    const MembershipFunction& lower = term.footprint->lower;
+    if (upper.params.size() < static_cast<std::size_t>(std::max(mf_param_count(upper.kind), 0)) ||
+        lower.params.size() < static_cast<std::size_t>(std::max(mf_param_count(lower.kind), 0)))
+      return;
+    std::vector<double> points;
+    constexpr int kSamples = 10001;
+    for (int k = 0; k < kSamples; ++k)
+      points.push_back(variable.min + (variable.max - variable.min) * k / (kSamples - 1));
+    for (const std::vector<double>* params : {&upper.params, &lower.params})
+      for (double p : *params)
+        if (p > variable.min && p < variable.max) points.push_back(p);
+    double worst = 0.0, worst_x = 0.0;
+    for (double x : points) {
+      const double excess = membership(lower.kind, lower.params.data(), x) - membership(upper.kind, upper.params.data(), x);
+      if (excess > worst) {
+        worst = excess;
+        worst_x = x;
+      }
+    }
+    // Grades are compared after rounding: an excess of a few ulps is the same curve written twice.
+    if (!(worst > 1e-12)) return;
+    const SourceRange& where = term.footprint->range.valid() ? term.footprint->range : term.range;
+    diagnostics_.warning(where, "lower-exceeds-upper",
+                         "the lower MF of " + what + " exceeds its upper MF by up to " + format_number(worst) +
+                             " (at " + format_number(worst_x) + "); make the lower MF lie under the upper one "
+                             "everywhere on " + interval_text(variable.min, variable.max),
+                         {"where it does, fmpc uses [upper, lower] as the grade interval"});
   }
 
   // "peak of term 'T' of 'x', at 12" / "core of ..., [11, 12]" / "part of ... above grade 0.5, from 14 up"

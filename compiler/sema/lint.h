@@ -17,7 +17,7 @@ struct LintOptions {
 };
 
 // Codes: unused-term, rule-never-fires, duplicate-rule, conflicting-rules, coverage-hole, term-out-of-range,
-// terms-out-of-order, near-zero-width, no-unit.
+// terms-out-of-order, near-zero-width, no-unit, lower-exceeds-upper (interval type-2 explicit lower MFs).
 void lint_system(const FuzzySystem& system, const LintOptions& options, DiagnosticList& diagnostics);
 
 }  // namespace fmpc

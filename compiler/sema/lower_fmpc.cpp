@@ -138,6 +138,7 @@ class SystemLowering {
       case SettingKind::Aggregation: return "aggregation";
       case SettingKind::Defuzzify: return "defuzzify";
       case SettingKind::NoFire: return "when no rule fires";
+      case SettingKind::TypeReduction: return "type_reduction";
     }
     return "?";
   }
@@ -171,6 +172,7 @@ class SystemLowering {
         case SettingKind::Aggregation: lower_snorm(setting, system_.aggregation); break;
         case SettingKind::Defuzzify: lower_defuzzify(setting); break;
         case SettingKind::NoFire: lower_no_fire(setting); break;
+        case SettingKind::TypeReduction: lower_type_reduction(setting); break;
       }
     }
   }
@@ -185,9 +187,20 @@ class SystemLowering {
   }
 
   void lower_type(const Setting& setting) {
+    system_.interval_type2 = setting.interval_type2;
     if (setting.value.text == "mamdani") system_.type = SystemType::Mamdani;
     else if (setting.value.text == "sugeno") system_.type = SystemType::Sugeno;
     else unknown_choice(setting, "system type", {"mamdani", "sugeno"});
+  }
+
+  void lower_type_reduction(const Setting& setting) {
+    const std::vector<std::string> choices = {"karnik_mendel", "enhanced_karnik_mendel", "eiasc", "nie_tan"};
+    if (auto method = type_reduction_from_string(setting.value.text)) system_.type_reduction = *method;
+    else unknown_choice(setting, "type reduction", choices);
+    if (!system_.interval_type2)
+      diagnostics_.error(setting.range,
+                         "'type_reduction' applies to interval type-2 systems only; declare `type interval_type2 " +
+                             std::string(to_string(system_.type)) + "` or remove this line");
   }
 
   void lower_tnorm(const Setting& setting, TNorm& target) {
@@ -292,18 +305,69 @@ class SystemLowering {
       return term;
     }
     term.mf.kind = family->kind;
-    if (family->kind == MfKind::Linear) lower_linear(source, variable, term.mf);
-    else lower_named_parameters(source, *family, variable, term.mf);
+    if (family->kind == MfKind::Linear) lower_linear(source.arguments, variable, term.mf);
+    else lower_named_parameters(source, source.family, source.arguments, *family, variable, term.mf, &term);
+    lower_footprint(source, variable, term);
     return term;
   }
 
-  void lower_named_parameters(const ast::Term& source, const FamilySignature& family, const fmpc::Variable& variable,
-                              MembershipFunction& mf) {
+  // `upper F(...) lower G(...)` and `lower scale S lag L`; intervals are lowered with the named parameters.
+  void lower_footprint(const ast::Term& source, const fmpc::Variable& variable, fmpc::Term& term) {
+    const bool has_lower = source.lower || source.lower_scale || source.lower_lag;
+    if (!system_.interval_type2) {
+      SourceRange where = source.lower_range;
+      if (!has_lower && source.explicit_upper) where = source.family.range;
+      for (const Argument& argument : source.arguments)
+        if (argument.high && !has_lower) where = argument.range;
+      if (has_lower || source.explicit_upper || term.footprint)
+        diagnostics_.error(where,
+                           "term " + quoted(source.name.text) + " has a footprint of uncertainty, but system " +
+                               quoted(system_.name) + " is type-1; declare `type interval_type2 " +
+                               to_string(system_.type) + "` to use interval type-2 terms");
+      term.footprint.reset();
+      return;
+    }
+    if (!has_lower) return;
+    if (term.footprint) {
+      diagnostics_.error(source.lower_range, "term " + quoted(source.name.text) +
+                                                 " has an interval parameter and a lower MF; give one footprint: "
+                                                 "an interval, or `upper F(...) lower G(...)`, or `lower scale S lag L`");
+      return;
+    }
+    Footprint footprint;
+    footprint.range = source.lower_range;
+    if (source.lower) {
+      footprint.kind = FootprintKind::ExplicitLower;
+      const FamilySignature* family = ast::find_family(source.lower->family.text);
+      if (!family || family->kind == MfKind::Linear || family->kind == MfKind::Constant) {
+        std::vector<std::string> notes = did_you_mean(source.lower->family.text, ast::family_names());
+        notes.push_back("a lower MF is one of the input families: triangle, trapezoid, gauss, ...");
+        diagnostics_.error(source.lower->family.range,
+                           (family ? "'" + source.lower->family.text + "' cannot be a lower MF"
+                                   : "unknown membership function " + quoted(source.lower->family.text)),
+                           notes);
+        return;
+      }
+      footprint.lower.kind = family->kind;
+      lower_named_parameters(source, source.lower->family, source.lower->arguments, *family, variable,
+                             footprint.lower, nullptr);
+    } else {
+      footprint.kind = FootprintKind::ScaleLag;
+      footprint.first = source.lower_scale ? source.lower_scale->value : 1.0;
+      footprint.second = source.lower_lag ? source.lower_lag->value : 0.0;
+    }
+    term.footprint = footprint;
+  }
+
+  // `term` receives the footprint of an interval argument; null where intervals are not allowed (a lower MF).
+  void lower_named_parameters(const ast::Term& source, const Name& family_name,
+                              const std::vector<Argument>& arguments, const FamilySignature& family,
+                              const fmpc::Variable& variable, MembershipFunction& mf, fmpc::Term* term) {
     const std::vector<std::string> names(family.parameters.begin(), family.parameters.end());
     const std::string takes = std::string(family.name) + " takes: " + list_text(names);
     mf.params.assign(names.size(), 0.0);
     std::vector<const Argument*> given(names.size(), nullptr);
-    for (const Argument& argument : source.arguments) {
+    for (const Argument& argument : arguments) {
       const auto found = std::find(names.begin(), names.end(), argument.name.text);
       if (found == names.end()) {
         std::vector<std::string> notes = did_you_mean(argument.name.text, names);
@@ -325,8 +389,15 @@ class SystemLowering {
                                quoted(variable.name) + "); remove " + quoted(argument.unit->text));
         continue;
       }
-      if (auto value = in_variable_unit(argument.value.value, argument.unit, argument.name.text, variable))
-        mf.params[static_cast<std::size_t>(family.matlab_index[index])] = *value;
+      std::optional<double> value = in_variable_unit(argument.value.value, argument.unit, argument.name.text, variable);
+      if (argument.high && value) {
+        const std::optional<double> high =
+            in_variable_unit(argument.high->value, argument.unit, argument.name.text, variable);
+        if (!high) continue;
+        if (lower_interval(argument, family, *value, *high, term)) value = 0.5 * (*value + *high);
+        else continue;
+      }
+      if (value) mf.params[static_cast<std::size_t>(family.matlab_index[index])] = *value;
     }
     std::vector<std::string> missing;
     for (std::size_t i = 0; i < names.size(); ++i)
@@ -335,11 +406,42 @@ class SystemLowering {
       std::string list;
       for (std::size_t i = 0; i < missing.size(); ++i)
         list += (i == 0 ? "" : i + 1 == missing.size() ? " and " : ", ") + missing[i];
-      diagnostics_.error(source.family.range,
+      diagnostics_.error(family_name.range,
                          std::string(family.name) + "(...) of term " + quoted(source.name.text) + " is missing " +
                              (missing.size() == 1 ? "parameter " : "parameters ") + list,
                          {takes});
     }
+  }
+
+  // An interval argument: gauss mean or sd, constant value. Records the footprint; false after reporting.
+  bool lower_interval(const Argument& argument, const FamilySignature& family, double low, double high,
+                      fmpc::Term* term) {
+    const std::string parameter = argument.name.text;
+    FootprintKind kind = FootprintKind::None;
+    if (family.kind == MfKind::Gaussian && parameter == "mean") kind = FootprintKind::UncertainMean;
+    else if (family.kind == MfKind::Gaussian && parameter == "sd") kind = FootprintKind::UncertainSd;
+    else if (family.kind == MfKind::Constant && parameter == "value") kind = FootprintKind::IntervalValue;
+    if (kind == FootprintKind::None || term == nullptr) {
+      diagnostics_.error(argument.range,
+                         quoted(parameter) + " of " + family.name + " takes a number, not an interval",
+                         {"intervals: gauss(mean [m1, m2], sd s), gauss(mean m, sd [s1, s2]) and, for sugeno "
+                          "outputs, constant(value [c1, c2]); other families take `upper F(...) lower G(...)` or "
+                          "`lower scale S lag L`"});
+      return false;
+    }
+    if (term->footprint) {
+      diagnostics_.error(argument.range, "term " + quoted(term->name) +
+                                             " has two intervals; an uncertain gaussian has an uncertain mean or "
+                                             "an uncertain sd, not both (use `upper gauss(...) lower gauss(...)`)");
+      return false;
+    }
+    Footprint footprint;
+    footprint.kind = kind;
+    footprint.first = low;
+    footprint.second = high;
+    footprint.range = argument.range;
+    term->footprint = footprint;
+    return true;
   }
 
   std::vector<std::string> input_names() const {
@@ -354,11 +456,14 @@ class SystemLowering {
     return names;
   }
 
-  void lower_linear(const ast::Term& source, const fmpc::Variable& variable, MembershipFunction& mf) {
+  void lower_linear(const std::vector<Argument>& arguments, const fmpc::Variable& variable, MembershipFunction& mf) {
     const std::size_t inputs = system_.inputs.size();
     mf.params.assign(inputs + 1, 0.0);
     std::vector<const Argument*> given(inputs + 1, nullptr);
-    for (const Argument& argument : source.arguments) {
+    for (const Argument& argument : arguments) {
+      if (argument.high)
+        diagnostics_.error(argument.range, "the coefficients of linear(...) take numbers, not intervals",
+                           {"an interval sugeno consequent is written constant(value [c1, c2])"});
       const bool is_offset = argument.name.text == "offset" && !argument.name.quoted;
       std::size_t index = inputs;
       if (!is_offset) {

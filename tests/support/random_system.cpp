@@ -302,8 +302,73 @@ RandomSystemOptions RandomSystemOptions::fuzzylite() {
   return options;
 }
 
+namespace {
+
+// A footprint for `term` drawn from `draw`, or none (zero width). Explicit lower MFs are the upper MF with a
+// smaller height (the same kind scaled is not a family, so a narrower copy of the triangle/gaussian is used), so
+// that the lower MF never exceeds the upper one.
+void add_footprint(Draw& draw, Term& term, bool sugeno_output) {
+  if (draw.chance(0.2)) return;
+  Footprint footprint;
+  if (sugeno_output) {
+    if (term.mf.kind != MfKind::Constant) return;
+    const double c = term.mf.params[0];
+    const double half = draw.uniform(0.0, 0.2) * (1.0 + std::fabs(c));
+    footprint.kind = FootprintKind::IntervalValue;
+    footprint.first = c - half;
+    footprint.second = c + half;
+    term.mf.params[0] = 0.5 * (footprint.first + footprint.second);  // as lowering computes the type-1 view
+    term.footprint = footprint;
+    return;
+  }
+  const double pick = draw.unit();
+  if (term.mf.kind == MfKind::Gaussian && pick < 0.35) {
+    const double sd = term.mf.params[0], mean = term.mf.params[1];
+    footprint.kind = FootprintKind::UncertainMean;
+    footprint.first = mean - draw.uniform(0.0, 0.5) * sd;
+    footprint.second = mean + draw.uniform(0.0, 0.5) * sd;
+    term.mf.params[1] = 0.5 * (footprint.first + footprint.second);
+  } else if (term.mf.kind == MfKind::Gaussian && pick < 0.7) {
+    const double sd = term.mf.params[0];
+    footprint.kind = FootprintKind::UncertainSd;
+    footprint.first = sd * draw.uniform(0.4, 1.0);
+    footprint.second = sd;
+    term.mf.params[0] = 0.5 * (footprint.first + footprint.second);
+  } else if (term.mf.kind == MfKind::Triangle && pick < 0.5) {
+    // A triangle inside the upper one, with the same peak: lower <= upper everywhere.
+    const double a = term.mf.params[0], b = term.mf.params[1], c = term.mf.params[2];
+    footprint.kind = FootprintKind::ExplicitLower;
+    footprint.lower.kind = MfKind::Triangle;
+    footprint.lower.params = {b - (b - a) * draw.uniform(0.3, 1.0), b, b + (c - b) * draw.uniform(0.3, 1.0)};
+  } else {
+    footprint.kind = FootprintKind::ScaleLag;
+    footprint.first = draw.uniform(0.3, 1.0);
+    footprint.second = draw.chance(0.3) ? 0.0 : draw.uniform(0.0, 0.6);
+  }
+  term.footprint = footprint;
+}
+
+}  // namespace
+
 FuzzySystem random_system(std::uint64_t seed, const RandomSystemOptions& options) {
-  return Generator(seed, options).system();
+  FuzzySystem system = Generator(seed, options).system();
+  if (!options.interval_type2) return system;
+  // A separate stream, so that the type-1 part of the system is the one the same seed gives without type-2.
+  Draw draw(seed ^ 0x9E3779B97F4A7C15ULL);
+  system.interval_type2 = true;
+  const std::vector<TypeReduction> all = {TypeReduction::KarnikMendel, TypeReduction::EnhancedKarnikMendel,
+                                          TypeReduction::Eiasc, TypeReduction::NieTan};
+  system.type_reduction = draw.pick(options.type_reductions.empty() ? all : options.type_reductions);
+  const bool sugeno = system.type == SystemType::Sugeno;
+  if (!sugeno) {
+    system.defuzzifier = Defuzzifier::Centroid;
+    if (system.samples == 0) system.samples = 101;
+  }
+  for (Variable& input : system.inputs)
+    for (Term& term : input.terms) add_footprint(draw, term, false);
+  for (Variable& output : system.outputs)
+    for (Term& term : output.terms) add_footprint(draw, term, sugeno);
+  return system;
 }
 
 std::vector<std::vector<double>> random_inputs(const FuzzySystem& system, std::uint64_t seed, std::size_t count) {

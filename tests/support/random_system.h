@@ -52,6 +52,12 @@ struct RandomSystemOptions {
   // Names with '-' and spaces ("F0-F1", "very low") as MATLAB files have; fuzzylite wants identifiers.
   bool names_with_dashes_and_spaces = true;
 
+  // Interval type-2 (default off): `type interval_type2 ...`, a drawn type reduction, and footprints on most terms
+  // (uncertain mean / sd on Gaussians, MATLAB scale and lag, explicit lower MFs lying under the upper ones,
+  // interval constants on Sugeno outputs). Mamdani systems then defuzzify by centroid on 101 samples.
+  bool interval_type2 = false;
+  std::vector<TypeReduction> type_reductions;  // empty = every method
+
   // Decimal places of every generated number; negative = full double precision (tests bit-exact writers).
   int decimals = -1;
 

@@ -69,6 +69,26 @@ std::string compare_variables(const char* role, const std::vector<Variable>& exp
       for (std::size_t p = 0; p < x.mf.params.size(); ++p)
         if (!same_number(x.mf.params[p], y.mf.params[p]))
           return term + " parameter " + std::to_string(p + 1) + ": " + numbers(x.mf.params[p], y.mf.params[p]);
+      if (x.footprint.has_value() != y.footprint.has_value())
+        return term + " footprint: " + (x.footprint ? "present" : "absent") + " vs " +
+               (y.footprint ? "present" : "absent");
+      if (x.footprint) {
+        const Footprint& f = *x.footprint;
+        const Footprint& g = *y.footprint;
+        if (f.kind != g.kind)
+          return term + " footprint kind: " + std::to_string(static_cast<int>(f.kind)) + " vs " +
+                 std::to_string(static_cast<int>(g.kind));
+        if (!same_number(f.first, g.first)) return term + " footprint first: " + numbers(f.first, g.first);
+        if (!same_number(f.second, g.second)) return term + " footprint second: " + numbers(f.second, g.second);
+        if (f.kind == FootprintKind::ExplicitLower) {
+          if (f.lower.kind != g.lower.kind || f.lower.params.size() != g.lower.params.size())
+            return term + " lower MF kind or parameter count";
+          for (std::size_t p = 0; p < f.lower.params.size(); ++p)
+            if (!same_number(f.lower.params[p], g.lower.params[p]))
+              return term + " lower MF parameter " + std::to_string(p + 1) + ": " +
+                     numbers(f.lower.params[p], g.lower.params[p]);
+        }
+      }
     }
   }
   return "";
@@ -91,6 +111,11 @@ std::string first_difference(const FuzzySystem& expected, const FuzzySystem& act
     return std::string("aggregation: ") + to_string(a.aggregation) + " vs " + to_string(b.aggregation);
   if (a.defuzzifier != b.defuzzifier)
     return std::string("defuzzifier: ") + to_string(a.defuzzifier) + " vs " + to_string(b.defuzzifier);
+  if (a.interval_type2 != b.interval_type2)
+    return std::string("interval type-2: ") + (a.interval_type2 ? "yes" : "no") + " vs " +
+           (b.interval_type2 ? "yes" : "no");
+  if (a.interval_type2 && a.type_reduction != b.type_reduction)
+    return std::string("type reduction: ") + to_string(a.type_reduction) + " vs " + to_string(b.type_reduction);
   if (a.samples != b.samples) return "samples: " + std::to_string(a.samples) + " vs " + std::to_string(b.samples);
   if (a.no_fire != b.no_fire) return "no-fire policy";
   if (a.no_fire == NoFirePolicy::Value && !same_number(a.no_fire_value, b.no_fire_value))

@@ -119,6 +119,18 @@ std::optional<EvaluationPoint> point_from_assignments(const std::vector<std::str
   return point;
 }
 
+// OUTPUT.lower / OUTPUT.upper: the type-reduced interval columns `fmpc eval` writes for interval type-2 systems.
+bool is_output_interval_column(const std::string& name, const FuzzySystem& system) {
+  if (!system.interval_type2) return false;
+  for (const char* suffix : {".lower", ".upper"}) {
+    const std::string end = suffix;
+    if (name.size() > end.size() && name.compare(name.size() - end.size(), end.size(), end) == 0 &&
+        system.find_output(name.substr(0, name.size() - end.size())) >= 0)
+      return true;
+  }
+  return false;
+}
+
 // A CSV table with a header row -> points. Columns naming outputs are ignored (so a golden file with inputs and
 // outputs can be fed back in); any other unknown column is an error.
 std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzySystem& system,
@@ -134,7 +146,7 @@ std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzyS
         diagnostics.error(cell.range, "column '" + cell.text + "' appears twice");
       seen[static_cast<std::size_t>(index)] = true;
       column_input[c] = index;
-    } else if (system.find_output(cell.text) < 0) {
+    } else if (system.find_output(cell.text) < 0 && !is_output_interval_column(cell.text, system)) {
       report_unknown_input(cell.text, system, cell.range, diagnostics);
     }
   }
@@ -209,10 +221,17 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
   for (std::size_t i = 0; i < system.inputs.size(); ++i)
     out << (i ? ", " : " ") << system.inputs[i].name << " = " << with_unit(point.inputs[i], system.inputs[i]);
   out << '\n';
-  for (std::size_t o = 0; o < system.outputs.size(); ++o)
-    out << "  " << system.outputs[o].name << " = " << with_unit(explanation.evaluation.outputs[o], system.outputs[o])
-        << '\n';
-  const auto& strengths = explanation.evaluation.firing_strengths;
+  const Evaluation& evaluation = explanation.evaluation;
+  for (std::size_t o = 0; o < system.outputs.size(); ++o) {
+    out << "  " << system.outputs[o].name << " = " << with_unit(evaluation.outputs[o], system.outputs[o]);
+    if (o < evaluation.intervals.size()) {
+      const TypeReducedOutput& interval = evaluation.intervals[o];
+      out << "  [yl, yr] = [" << format_number(interval.lower) << ", " << format_number(interval.upper) << "]";
+    }
+    out << '\n';
+  }
+  const auto& strengths = evaluation.firing_strengths;
+  const bool type2 = !evaluation.firing_lower.empty();
   std::size_t shown = 0;
   std::ostringstream rules;
   for (std::size_t r = 0; r < strengths.size(); ++r) {
@@ -220,25 +239,53 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
     ++shown;
     std::string name = system.rule_display_name(r);
     name.resize(std::max<std::size_t>(name.size(), 8), ' ');
-    char strength[32];
-    std::snprintf(strength, sizeof strength, "%.6f", strengths[r]);
+    char strength[64];
+    if (type2)
+      std::snprintf(strength, sizeof strength, "[%.6f, %.6f]", evaluation.firing_lower[r], strengths[r]);
+    else
+      std::snprintf(strength, sizeof strength, "%.6f", strengths[r]);
     rules << "    " << name << ' ' << strength << "  " << format_rule_body(system, r) << '\n';
   }
-  out << "  rules fired (firing strength >= " << format_number(threshold) << "): " << shown << " of "
-      << strengths.size() << '\n'
+  out << "  rules fired (firing strength " << (type2 ? "[lower, upper], upper " : "") << ">= "
+      << format_number(threshold) << "): " << shown << " of " << strengths.size() << '\n'
       << rules.str();
+  for (std::size_t o = 0; o < evaluation.intervals.size(); ++o) {
+    const TypeReducedOutput& interval = evaluation.intervals[o];
+    out << "  type reduction of '" << system.outputs[o].name << "' (" << to_string(interval.method) << "): ";
+    if (interval.left_switch < 0) {
+      out << "none (" << (evaluation.flags.outputs_no_rule_fired.empty() ? "every weight exact" : "no rule fired")
+          << ")\n";
+      continue;
+    }
+    const auto side = [&](const char* end, int k, double x, int iterations) {
+      out << end << " switch k = " << k;
+      if (k > 0) out << " (after x = " << format_number(x) << ")";
+      out << ", " << iterations << (iterations == 1 ? " iteration" : " iterations");
+    };
+    side("yl", interval.left_switch, interval.left_switch_x, interval.left_iterations);
+    out << "; ";
+    side("yr", interval.right_switch, interval.right_switch_x, interval.right_iterations);
+    out << '\n';
+  }
   for (std::size_t o = 0; o < explanation.outputs.size(); ++o) {
     const OutputExplanation& set = explanation.outputs[o];
+    const bool intervals = set.membership_lower.size() == set.x.size() && !set.x.empty();
     if (system.type == SystemType::Mamdani)
       out << "  aggregated output set '" << system.outputs[o].name << "' (" << set.x.size()
-          << " points, x: membership):\n";
+          << (intervals ? " points, x: [lower, upper]):\n" : " points, x: membership):\n");
     else
-      out << "  rule outputs of '" << system.outputs[o].name << "' (" << set.x.size() << " rules, value: weight):\n";
+      out << "  rule outputs of '" << system.outputs[o].name << "' (" << set.x.size()
+          << (intervals ? " rules, value: [lower, upper] weight):\n" : " rules, value: weight):\n");
+    const std::size_t per_line = intervals ? 4 : 6;
     for (std::size_t k = 0; k < set.x.size(); ++k) {
       // Sample positions are min + k (max - min) / (n - 1) and carry rounding noise; 6 digits show where they are.
-      char cell[64];
-      std::snprintf(cell, sizeof cell, "%.6g: %.4f", set.x[k], set.membership[k]);
-      out << (k % 6 == 0 ? "    " : "  ") << cell << (k % 6 == 5 || k + 1 == set.x.size() ? "\n" : "");
+      char cell[96];
+      if (intervals)
+        std::snprintf(cell, sizeof cell, "%.6g: [%.4f, %.4f]", set.x[k], set.membership_lower[k], set.membership[k]);
+      else
+        std::snprintf(cell, sizeof cell, "%.6g: %.4f", set.x[k], set.membership[k]);
+      out << (k % per_line == 0 ? "    " : "  ") << cell
+          << (k % per_line == per_line - 1 || k + 1 == set.x.size() ? "\n" : "");
     }
   }
 }
@@ -283,7 +330,13 @@ int run_eval(const EvalOptions& options) {
   std::ostringstream explanation_text;
   if (system && !diagnostics.has_errors()) {
     std::vector<std::string> header = variable_names(system->inputs);
-    for (const Variable& v : system->outputs) header.push_back(v.name);
+    for (const Variable& v : system->outputs) {
+      header.push_back(v.name);
+      if (system->interval_type2) {
+        header.push_back(v.name + ".lower");
+        header.push_back(v.name + ".upper");
+      }
+    }
     csv << format_csv_row(header);
     DiagnosticList point_diagnostics;
     EvaluationOptions evaluation_options;
@@ -294,7 +347,14 @@ int run_eval(const EvalOptions& options) {
       report_flags(*system, point, explanation.evaluation, point_diagnostics);
       std::vector<std::string> row;
       for (double v : point.inputs) row.push_back(format_number(v));
-      for (double v : explanation.evaluation.outputs) row.push_back(format_number(v));
+      const Evaluation& evaluation = explanation.evaluation;
+      for (std::size_t o = 0; o < evaluation.outputs.size(); ++o) {
+        row.push_back(format_number(evaluation.outputs[o]));
+        if (o < evaluation.intervals.size()) {
+          row.push_back(format_number(evaluation.intervals[o].lower));
+          row.push_back(format_number(evaluation.intervals[o].upper));
+        }
+      }
       csv << format_csv_row(row);
       if (options.explain) write_explanation(*system, point, explanation, options.explain_threshold, explanation_text);
     }
@@ -338,7 +398,8 @@ void register_eval_command(CLI::App& app, int& exit_code) {
   CLI::App* command = app.add_subcommand(
       "eval",
       "Evaluate a rule file at points given as NAME=VALUE, or as CSV with a header row (--csv FILE, or on\n"
-      "stdin). Writes CSV (inputs then outputs). Exit status: 0 done, 2 errors.");
+      "stdin). Writes CSV (inputs then outputs; interval type-2 outputs add OUTPUT.lower and OUTPUT.upper,\n"
+      "the type-reduced interval). Exit status: 0 done, 2 errors.");
   command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis)")->required();
   command->add_option("inputs", options->assignments, "Input values, NAME=VALUE (all inputs)");
   command->add_option("--csv", options->csv, "CSV file of points with a header row naming the inputs; - for stdin");
