@@ -15,3 +15,7 @@ endif()
 
 # antlr4-runtime's config exports no include directory for its targets.
 find_path(FMPC_ANTLR4_INCLUDE_DIR antlr4-runtime.h PATH_SUFFIXES antlr4-runtime REQUIRED)
+
+# zlib deflates the PNG figures of `fmpc plot` (tools/plot/png_image.cpp); static, like the rest.
+set(ZLIB_USE_STATIC_LIBS ON)
+find_package(ZLIB REQUIRED)

@@ -3,6 +3,7 @@
 
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/frontend/matlab_fis.h"
+#include "compiler/passes/mamdani_to_sugeno.h"
 #include "compiler/passes/rename_duplicate_terms.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
@@ -43,6 +44,24 @@ int run_convert(const ConvertOptions& options) {
                             renames);
     }
     text = write_fmpc(selected);
+  } else if (options.to == "sugeno") {
+    // The converted system is written in the dialect the file was read in (fmpc text or MATLAB .fis).
+    if (const FuzzySystem* system = select_system(file, options.system, diagnostics)) {
+      FuzzySystem sugeno = *system;
+      convert_mamdani_to_sugeno(sugeno, diagnostics);
+      if (!diagnostics.has_errors()) {
+        if (file.dialect == Dialect::Matlab) {
+          text = write_matlab_fis(sugeno, diagnostics);
+        } else {
+          RuleFile converted;
+          converted.path = file.rules.path;
+          converted.systems.push_back(std::move(sugeno));
+          text = "# Converted from " + options.file + " by `fmpc convert --to sugeno` (MATLAB convertToSugeno):\n" +
+                 "# each output term is the constant at its centroid; weighted-average defuzzification.\n\n" +
+                 write_fmpc(converted);
+        }
+      }
+    }
   } else if (const FuzzySystem* system = select_system(file, options.system, diagnostics)) {
     text = write_matlab_fis(*system, diagnostics);
   }
@@ -63,9 +82,11 @@ void register_convert_command(CLI::App& app, int& exit_code) {
   CLI::App* command = app.add_subcommand(
       "convert",
       "Convert a rule file between the fmpc language and MATLAB's .fis format (versions 1 and 2 read,\n"
-      "2.0 written). What the target cannot hold is reported as a warning. Exit status: 0 done, 2 errors.");
+      "2.0 written), or a Mamdani system into a Sugeno one (--to sugeno, as MATLAB's convertToSugeno; written\n"
+      "in the file's own dialect). What the target cannot hold is reported as a warning.\n"
+      "Exit status: 0 done, 2 errors.");
   command->add_option("file", options->file, "Rule file to convert (fmpc or MATLAB .fis)")->required();
-  command->add_option("--to", options->to, "Target format")->required()->check(CLI::IsMember({"fmpc", "matlab"}));
+  command->add_option("--to", options->to, "Target format")->required()->check(CLI::IsMember({"fmpc", "matlab", "sugeno"}));
   command->add_option("-o,--output", options->output, "Output file, written atomically (default stdout)");
   command->add_option("--system", options->system, "Which system of the file to convert (MATLAB holds one)");
   command->callback([options, &exit_code] { exit_code = run_convert(*options); });
