@@ -1,0 +1,316 @@
+// fmpc compile: rule file + bindings -> specialised system (compiler/passes/pipeline.h) -> an evaluator header
+// (--target cpp|cuda, compiler/backend/cpp/emit_cpp.h) or a lookup table (--target table: .fzt and/or arrays).
+#include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
+#include <limits>
+#include <sstream>
+
+#include "compiler/backend/cpp/emit_cpp.h"
+#include "compiler/backend/table/lookup_table.h"
+#include "compiler/backend/table/table_arrays.h"
+#include "compiler/backend/table/table_builder.h"
+#include "compiler/ir/content_hash.h"
+#include "compiler/ir/number_format.h"
+#include "compiler/passes/pipeline.h"
+#include "tools/fmpc/commands.h"
+#include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/text_files.h"
+
+namespace fmpc::cli {
+
+namespace {
+
+struct CompileOptions {
+  std::string file;
+  std::string system;
+  std::string target;
+  std::vector<std::string> fix;   // NAME=VALUE
+  std::vector<std::string> vary;  // NAME or NAME:points
+  double max_error = 0.0;         // 0 = 1% of the narrowest output range
+  std::string spacing = "refined";
+  std::string precision = "double";
+  bool report = false;
+  std::vector<std::string> dump_after;
+  std::vector<std::string> outputs;
+  double prune_epsilon = 0.0;
+  std::uint64_t max_grid_points = 1ULL << 21;
+  std::size_t held_out = 100000;
+  std::uint64_t seed = 1;
+  int threads = 2;
+  std::string namespace_name = "fmpc_generated";
+  std::string semantics = "matlab";
+};
+
+SourceRange argument(const std::string& option, const std::string& value) {
+  return SourceRange{"argument '" + option + " " + value + "'", 0, 0, 0, 0};
+}
+
+std::optional<double> parse_number(const std::string& text) {
+  if (text.empty()) return std::nullopt;
+  errno = 0;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (end != text.c_str() + text.size()) return std::nullopt;
+  return value;
+}
+
+Bindings parse_bindings(const CompileOptions& options, DiagnosticList& diagnostics) {
+  Bindings bindings;
+  for (const std::string& text : options.fix) {
+    const SourceRange where = argument("--fix", text);
+    const std::size_t eq = text.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      diagnostics.error(where, "expected NAME=VALUE", {"for example: --fix HCV=7.5"});
+      continue;
+    }
+    const std::optional<double> value = parse_number(text.substr(eq + 1));
+    if (!value) {
+      diagnostics.error(where, "'" + text.substr(eq + 1) + "' is not a number");
+      continue;
+    }
+    bindings.fixed.push_back({text.substr(0, eq), *value, where});
+  }
+  for (const std::string& text : options.vary) {
+    const SourceRange where = argument("--vary", text);
+    const std::size_t colon = text.rfind(':');
+    VariedInput varied{text, 0, where};
+    if (colon != std::string::npos) {
+      varied.name = text.substr(0, colon);
+      const std::optional<double> points = parse_number(text.substr(colon + 1));
+      if (!points || *points != std::floor(*points) || *points < 2 || *points > 1e6) {
+        diagnostics.error(where, "'" + text.substr(colon + 1) + "' is not a point count",
+                          {"write NAME:POINTS with a whole number of at least 2, e.g. --vary HCV:33"});
+        continue;
+      }
+      varied.points = static_cast<int>(*points);
+    }
+    bindings.varied.push_back(varied);
+  }
+  return bindings;
+}
+
+std::string with_unit(double value, const std::string& unit) {
+  return format_number(value) + (unit.empty() || unit == "dimensionless" ? "" : " " + unit);
+}
+
+std::string bound_text(double bound, const std::string& note, const std::string& unit) {
+  if (bound == 0.0) return "0 (" + note + ")";
+  if (std::isinf(bound)) return "none known";
+  return with_unit(bound, unit) + " (" + note + ")";
+}
+
+std::string output_unit(const FuzzySystem& system) {
+  if (system.outputs.empty()) return "";
+  const std::string& unit = system.outputs.front().unit;
+  for (const Variable& output : system.outputs)
+    if (output.unit != unit) return "output units";
+  return unit;
+}
+
+void write_pass_report(const FuzzySystem& source, const CompileResult& compiled, std::ostream& out) {
+  const std::string unit = output_unit(source);
+  out << "fixed:";
+  if (compiled.fixed.empty()) out << " none";
+  for (std::size_t k = 0; k < compiled.fixed.size(); ++k) {
+    const Variable& input = source.inputs[static_cast<std::size_t>(compiled.fixed[k].first)];
+    out << (k ? ", " : " ") << input.name << " = " << with_unit(compiled.fixed[k].second, input.unit);
+  }
+  out << "\nvarying (in this order):";
+  for (std::size_t k = 0; k < compiled.system.inputs.size(); ++k) out << (k ? ", " : " ") << compiled.system.inputs[k].name;
+  out << '\n';
+  for (const PassReport& report : compiled.reports) {
+    out << report.pass << ": " << report.summary << "; error bound " << bound_text(report.error_bound, report.error_note, unit)
+        << '\n';
+    for (const std::string& line : report.details) out << "  " << line << '\n';
+  }
+  out << "passes: " << source.rules.size() << " -> " << compiled.system.rules.size() << " rules, error bound "
+      << (compiled.error_bound() == 0.0 ? "0 (exact)" : with_unit(compiled.error_bound(), unit)) << '\n';
+}
+
+void write_table_report(const LookupTable& table, const TableBuildOptions& options, const TableBuildStatistics& stats,
+                        const std::string& unit, std::ostream& out) {
+  out << "table: ";
+  for (std::size_t a = 0; a < table.axes.size(); ++a) out << (a ? " x " : "") << table.axes[a].breakpoints.size();
+  if (table.axes.size() > 1) out << " = " << table.grid_points();
+  out << " grid points, " << table.output_names.size() << " output"
+      << (table.output_names.size() == 1 ? "" : "s") << ", "
+      << (table.value_type == TableValueType::Float32 ? "float32" : "float64") << ", "
+      << (options.spacing == BreakpointSpacing::Uniform ? "uniform" : "refined") << " breakpoints\n";
+  for (const TableAxis& axis : table.axes)
+    out << "  " << axis.input_name << ": " << axis.breakpoints.size() << " breakpoints in ["
+        << format_number(axis.breakpoints.front()) << ", " << format_number(axis.breakpoints.back()) << "]\n";
+  out << "max error " << with_unit(table.max_error, unit) << " (target " << with_unit(options.max_error, unit)
+      << ") at ";
+  for (std::size_t a = 0; a < table.axes.size(); ++a)
+    out << (a ? ", " : "") << table.axes[a].input_name << " = " << format_number(table.max_error_location[a]);
+  out << ", over " << stats.held_out_points << " held-out points (seed " << options.seed << ", "
+      << stats.held_out_sets << (stats.held_out_sets == 1 ? " set" : " sets") << ", " << stats.rounds
+      << " rounds)\n";
+}
+
+bool is_header_path(const std::string& path) {
+  for (const char* suffix : {".h", ".hpp", ".hh", ".cuh"}) {
+    const std::string s = suffix;
+    if (path.size() >= s.size() && path.compare(path.size() - s.size(), s.size(), s) == 0) return true;
+  }
+  return false;
+}
+
+int run_compile(const CompileOptions& options) {
+  LoadedRuleFile file = load_rule_file_from_disk(options.file);
+  if (file.diagnostics.has_errors()) {
+    print_diagnostics(file.diagnostics, file.sources, std::cerr);
+    return kExitErrors;
+  }
+  DiagnosticList diagnostics;
+  const FuzzySystem* system = select_system(file, options.system, diagnostics);
+  const Bindings bindings = parse_bindings(options, diagnostics);
+  if (options.outputs.empty())
+    diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "no output file", {"add -o FILE"});
+  if (options.target != "table" && options.outputs.size() > 1)
+    diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+                      "--target " + options.target + " writes one header; " + std::to_string(options.outputs.size()) +
+                          " -o files were given");
+  std::optional<CompileResult> compiled;
+  if (system) {  // also after binding errors, so that every mistake is reported at once
+    PipelineOptions pipeline;
+    pipeline.prune_epsilon = options.prune_epsilon;
+    pipeline.dump_after = options.dump_after;
+    compiled = run_pipeline(*system, bindings, pipeline, diagnostics);
+  }
+  if (!compiled || diagnostics.has_errors()) {
+    print_diagnostics(diagnostics, file.sources, std::cerr);
+    return kExitErrors;
+  }
+  bool artefact_on_stdout = false;
+  for (const std::string& path : options.outputs) artefact_on_stdout = artefact_on_stdout || path == "-";
+  std::ostream& report_stream = artefact_on_stdout ? std::cerr : std::cout;
+  for (const IrDump& dump : compiled->dumps) report_stream << "# IR after " << dump.pass << '\n' << dump.text;
+
+  std::string read_error;
+  const std::optional<std::string> bytes = read_text_file(options.file, read_error);
+  const std::uint64_t source_hash = bytes ? fnv1a64(*bytes) : 0;
+  std::ostringstream report;
+  if (options.report) {
+    report << "compile " << system->name << " from " << options.file << " for --target " << options.target << '\n';
+    write_pass_report(*system, *compiled, report);
+  }
+
+  std::vector<std::pair<std::string, std::string>> writes;  // (path, contents)
+  if (options.target == "table") {
+    TableBuildOptions table_options;
+    table_options.max_error = options.max_error;
+    if (table_options.max_error == 0.0) {
+      double narrowest = std::numeric_limits<double>::infinity();
+      for (const Variable& output : system->outputs) narrowest = std::min(narrowest, output.max - output.min);
+      table_options.max_error = 0.01 * narrowest;
+    }
+    table_options.spacing = options.spacing == "uniform" ? BreakpointSpacing::Uniform : BreakpointSpacing::Refined;
+    table_options.value_type = options.precision == "float" ? TableValueType::Float32 : TableValueType::Float64;
+    table_options.max_grid_points = options.max_grid_points;
+    table_options.held_out_points = options.held_out;
+    table_options.seed = options.seed;
+    table_options.threads = options.threads;
+    table_options.evaluation.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
+    table_options.source_path = options.file;
+    table_options.source_hash = source_hash;
+    TableBuildStatistics stats;
+    const std::optional<LookupTable> table = build_table(*system, *compiled, table_options, diagnostics, &stats);
+    if (!table) {
+      print_diagnostics(diagnostics, file.sources, std::cerr);
+      return kExitErrors;
+    }
+    if (options.report) write_table_report(*table, table_options, stats, output_unit(*system), report);
+    TableArraysOptions arrays;
+    arrays.namespace_name = options.namespace_name;
+    for (const std::string& path : options.outputs)
+      writes.emplace_back(path, is_header_path(path) || path == "-" ? write_table_arrays(*table, arrays)
+                                                                    : serialize_fzt(*table));
+  } else {
+    EmitOptions emit;
+    emit.target = options.target == "cuda" ? EmitOptions::Target::Cuda : EmitOptions::Target::Cpp;
+    emit.source_path = options.file;
+    emit.source_hash = source_hash;
+    emit.namespace_name = options.namespace_name;
+    for (const auto& [index, value] : compiled->fixed) {
+      const Variable& input = system->inputs[static_cast<std::size_t>(index)];
+      emit.banner_notes.push_back("fixed " + input.name + " = " + with_unit(value, input.unit));
+    }
+    for (const PassReport& pass : compiled->reports) emit.banner_notes.push_back(pass.pass + ": " + pass.summary);
+    if (!options.outputs.empty() && options.outputs.front() != "-") emit.header_path = options.outputs.front();
+    const std::optional<std::string> header = emit_evaluator(compiled->system, emit, diagnostics);
+    if (!header) {
+      print_diagnostics(diagnostics, file.sources, std::cerr);
+      return kExitErrors;
+    }
+    writes.emplace_back(options.outputs.front(), *header);
+  }
+  print_diagnostics(diagnostics, file.sources, std::cerr);
+  for (const auto& [path, contents] : writes) {
+    std::string error;
+    if (!write_text_file_atomically(path, contents, error)) {
+      std::cerr << path << ": error: " << error << '\n';
+      return kExitErrors;
+    }
+    if (options.report && path != "-") report << "wrote " << path << '\n';
+  }
+  report_stream << report.str();
+  return kExitOk;
+}
+
+}  // namespace
+
+void register_compile_command(CLI::App& app, int& exit_code) {
+  auto options = std::make_shared<CompileOptions>();
+  CLI::App* command = app.add_subcommand(
+      "compile",
+      "Specialise a rule file for fixed inputs and compile it into an evaluator header (--target cpp|cuda) or a\n"
+      "lookup table over the varying inputs (--target table: .fzt, or C++/CUDA arrays for -o NAME.h).\n"
+      "Inputs neither fixed nor varied vary. Exit status: 0 done, 2 errors. docs/compiler.md has the details.");
+  command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis)")->required();
+  command->add_option("--target", options->target, "What to produce")
+      ->required()
+      ->check(CLI::IsMember({"cpp", "cuda", "table"}));
+  command->add_option("--system", options->system, "Which system of the file to compile");
+  command->add_option("--fix", options->fix, "Fold an input in at a value: NAME=VALUE (repeatable)");
+  command->add_option("--vary", options->vary,
+                      "Vary an input: NAME, or NAME:POINTS to fix its table axis at POINTS uniform breakpoints");
+  command
+      ->add_option("--max-error", options->max_error,
+                   "Largest interpolation error a table may have, absolute, in output units (default: 1% of the "
+                   "narrowest output range)")
+      ->check(CLI::PositiveNumber);
+  command->add_option("--spacing", options->spacing, "Table breakpoints: uniform (nested doubling) or refined")
+      ->check(CLI::IsMember({"uniform", "refined"}));
+  command->add_option("--precision", options->precision, "Table value type")
+      ->check(CLI::IsMember({"float", "double"}));
+  command->add_flag("--report", options->report, "Print what each pass removed, its error bound, and the table built");
+  command->add_option("--dump-after", options->dump_after,
+                      "Print the IR after a pass: specialize, prune_rules, fuse_consequents, drop_dead_terms, all");
+  command->add_option("-o,--output", options->outputs,
+                      "Output file; for --target table: .fzt, or .h/.hpp/.cuh for arrays (both: give -o twice)")
+      ->required();
+  command
+      ->add_option("--prune-epsilon", options->prune_epsilon,
+                   "Also remove rules whose firing strength is provably below this (Mamdani, max aggregation); the "
+                   "report states the error bound it costs")
+      ->check(CLI::Range(0.0, 1.0));
+  command->add_option("--max-grid-points", options->max_grid_points, "Table budget: most grid points")
+      ->check(CLI::Range(static_cast<std::uint64_t>(2), kMaxFztValues));
+  command->add_option("--held-out", options->held_out, "Held-out points the table's error is measured on")
+      ->check(CLI::Range(static_cast<std::size_t>(100000), static_cast<std::size_t>(100000000)));
+  command->add_option("--seed", options->seed, "Seed of the training and held-out points");
+  command->add_option("--threads", options->threads, "Threads building and measuring the table")
+      ->check(CLI::Range(1, 256));
+  command->add_option("--namespace", options->namespace_name, "C++ namespace of generated headers");
+  command
+      ->add_option("--semantics", options->semantics,
+                   "Whose numbers the table reproduces where MATLAB and Octave differ (docs/numerics.md)")
+      ->check(CLI::IsMember({"matlab", "octave"}));
+  command->callback([options, &exit_code] { exit_code = run_compile(*options); });
+}
+
+}  // namespace fmpc::cli
