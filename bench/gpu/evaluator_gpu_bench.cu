@@ -1,0 +1,208 @@
+// GPU throughput of the generated CUDA evaluator and of table lookups, checked against the CPU first.
+// Built and run by bench/run_gpu.sh (section "evaluator") with nvcc -arch=sm_90; the headers it includes are
+// generated on the build machine by `bench/run_gpu.sh --prepare` (build-gpu-carry/evaluator/):
+//   liver_evaluator.cuh  fmpc compile rulesets/liver_fibrosis/mamdani.fis --target cuda (all five inputs vary)
+//   liver_table2.h       --target table, HCV ALD NAFLD fixed, HBV:65 CLD:65 (a 2-D table, 65 x 65)
+//   liver_table5.h       --target table, all five inputs :9 (a 5-D table, 9^5 points)
+// Usage: evaluator_gpu_bench OUT_DIR [points]   (default 2^24 points). Writes OUT_DIR/evaluator_gpu.{csv,md} and
+// prints the markdown table last. Exit status 1 when a correctness check fails.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "liver_evaluator.cuh"
+#include "liver_table2.h"
+#include "liver_table5.h"
+
+namespace {
+
+#define CHECK_CUDA(call)                                                                             \
+  do {                                                                                               \
+    const cudaError_t status_ = (call);                                                              \
+    if (status_ != cudaSuccess) {                                                                    \
+      std::fprintf(stderr, "%s:%d: %s: %s\n", __FILE__, __LINE__, #call, cudaGetErrorString(status_)); \
+      std::exit(2);                                                                                  \
+    }                                                                                                \
+  } while (0)
+
+constexpr int kRepetitions = 10;
+constexpr std::size_t kCheckedPoints = 1 << 16;
+
+struct Row {
+  std::string variant;
+  double per_second = 0;
+  double max_difference = 0;
+  double tolerance = 0;
+  bool ok = true;
+};
+
+// Best of kRepetitions launches, in seconds.
+template <typename Launch>
+double best_seconds(Launch launch) {
+  cudaEvent_t start, stop;
+  CHECK_CUDA(cudaEventCreate(&start));
+  CHECK_CUDA(cudaEventCreate(&stop));
+  launch();  // warm-up
+  CHECK_CUDA(cudaDeviceSynchronize());
+  float best = 1e30f;
+  for (int r = 0; r < kRepetitions; ++r) {
+    CHECK_CUDA(cudaEventRecord(start));
+    launch();
+    CHECK_CUDA(cudaEventRecord(stop));
+    CHECK_CUDA(cudaEventSynchronize(stop));
+    float ms = 0;
+    CHECK_CUDA(cudaEventElapsedTime(&ms, start, stop));
+    best = std::min(best, ms);
+  }
+  CHECK_CUDA(cudaEventDestroy(start));
+  CHECK_CUDA(cudaEventDestroy(stop));
+  return static_cast<double>(best) * 1e-3;
+}
+
+template <typename T>
+Row evaluator_row(const std::vector<double>& points, std::size_t n, double tolerance) {
+  const std::size_t d = liver_evaluator::kInputCount;
+  std::vector<T> host_inputs(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(n * d));
+  T* inputs = nullptr;
+  T* outputs = nullptr;
+  CHECK_CUDA(cudaMalloc(&inputs, n * d * sizeof(T)));
+  CHECK_CUDA(cudaMalloc(&outputs, n * sizeof(T)));
+  CHECK_CUDA(cudaMemcpy(inputs, host_inputs.data(), n * d * sizeof(T), cudaMemcpyHostToDevice));
+  const double seconds = best_seconds([&] { CHECK_CUDA(liver_evaluator::evaluate_batch_cuda<T>(inputs, outputs, n)); });
+  std::vector<T> device_outputs(kCheckedPoints);
+  CHECK_CUDA(cudaMemcpy(device_outputs.data(), outputs, kCheckedPoints * sizeof(T), cudaMemcpyDeviceToHost));
+  CHECK_CUDA(cudaFree(inputs));
+  CHECK_CUDA(cudaFree(outputs));
+
+  // The CPU reference: the same header's host path in double, which tests/unit/emit_cpp_test.cpp checks against
+  // the interpreter to 1e-12 of the range.
+  Row row;
+  row.variant = std::string("CUDA evaluator, ") + (sizeof(T) == 8 ? "double" : "float");
+  row.per_second = static_cast<double>(n) / seconds;
+  row.tolerance = tolerance;
+  for (std::size_t p = 0; p < kCheckedPoints; ++p) {
+    double expected = 0;
+    liver_evaluator::evaluate(&points[p * d], &expected);
+    row.max_difference = std::max(row.max_difference, std::fabs(static_cast<double>(device_outputs[p]) - expected));
+  }
+  row.ok = row.max_difference <= tolerance;
+  return row;
+}
+
+// Each generated table header's view() returns its host arrays in host code and its __device__ arrays in device
+// code; a struct per header lets one kernel template serve both tables.
+struct Table2 {
+  using Value = liver_table2::Value;
+  static FMPC_HD fmpc::TableView<Value> view() { return liver_table2::view(); }
+};
+struct Table5 {
+  using Value = liver_table5::Value;
+  static FMPC_HD fmpc::TableView<Value> view() { return liver_table5::view(); }
+};
+
+template <typename Table>
+__global__ void lookup_kernel(const double* __restrict__ queries, typename Table::Value* __restrict__ out,
+                              std::size_t n) {
+  const fmpc::TableView<typename Table::Value> table = Table::view();
+  const std::size_t stride = static_cast<std::size_t>(gridDim.x) * blockDim.x;
+  for (std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x; i < n; i += stride)
+    fmpc::interpolate_table(table, queries + i * static_cast<std::size_t>(table.axes), out + i);
+}
+
+template <typename Table>
+Row table_row(const char* name, const std::vector<double>& points, std::size_t n) {
+  using Value = typename Table::Value;
+  const fmpc::TableView<Value> host = Table::view();
+  const std::size_t d = static_cast<std::size_t>(host.axes);
+  double* queries = nullptr;
+  Value* out = nullptr;
+  CHECK_CUDA(cudaMalloc(&queries, n * d * sizeof(double)));
+  CHECK_CUDA(cudaMalloc(&out, n * sizeof(Value)));
+  // Queries: the first d coordinates of each evaluator point (every input spans [0, 75] kPa).
+  std::vector<double> host_queries(n * d);
+  for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t i = 0; i < d; ++i) host_queries[p * d + i] = points[p * 5 + i];
+  CHECK_CUDA(cudaMemcpy(queries, host_queries.data(), n * d * sizeof(double), cudaMemcpyHostToDevice));
+  const int threads = 256;
+  const int blocks = static_cast<int>(std::min<std::size_t>((n + threads - 1) / threads, 65535u * 32u));
+  const double seconds = best_seconds([&] {
+    lookup_kernel<Table><<<blocks, threads>>>(queries, out, n);
+    CHECK_CUDA(cudaGetLastError());
+  });
+  std::vector<Value> device_out(kCheckedPoints);
+  CHECK_CUDA(cudaMemcpy(device_out.data(), out, kCheckedPoints * sizeof(Value), cudaMemcpyDeviceToHost));
+  CHECK_CUDA(cudaFree(queries));
+  CHECK_CUDA(cudaFree(out));
+  Row row;
+  row.variant = name;
+  row.per_second = static_cast<double>(n) / seconds;
+  // The same double arithmetic on both sides, up to FMA contraction on the device.
+  row.tolerance = 1e-9;
+  for (std::size_t p = 0; p < kCheckedPoints; ++p) {
+    Value expected{};
+    fmpc::interpolate_table(host, &host_queries[p * d], &expected);
+    row.max_difference =
+        std::max(row.max_difference, std::fabs(static_cast<double>(device_out[p]) - static_cast<double>(expected)));
+  }
+  row.ok = row.max_difference <= row.tolerance;
+  return row;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: evaluator_gpu_bench OUT_DIR [points]\n");
+    return 2;
+  }
+  const std::string out_dir = argv[1];
+  const std::size_t n = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : (std::size_t{1} << 24);
+  if (n < kCheckedPoints) {
+    std::fprintf(stderr, "points must be at least %zu\n", kCheckedPoints);
+    return 2;
+  }
+  cudaDeviceProp properties{};
+  CHECK_CUDA(cudaGetDeviceProperties(&properties, 0));
+
+  std::mt19937_64 random(20240601);
+  std::vector<double> points(n * 5);
+  for (double& x : points) x = 75.0 * static_cast<double>(random() >> 11) * 0x1.0p-53;
+
+  std::vector<Row> rows;
+  const double range = liver_evaluator::kOutputMax[0] - liver_evaluator::kOutputMin[0];
+  // Device code contracts a * b + c into FMA (nvcc's default), so double differs from the host by rounding.
+  rows.push_back(evaluator_row<double>(points, n, 1e-12 * range));
+  rows.push_back(evaluator_row<float>(points, n, 1e-5 * range));
+  rows.push_back(table_row<Table2>("table lookup, 2-D 65x65", points, n));
+  rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n));
+
+  std::string csv = "variant,per_second,max_difference_vs_cpu,tolerance,ok\n";
+  std::string md = "| variant (" + std::string(properties.name) + ", " + std::to_string(n) +
+                   " points) | per second | max diff vs CPU | tolerance | check |\n| --- | ---: | ---: | ---: | --- |\n";
+  bool all_ok = true;
+  for (const Row& row : rows) {
+    char line[512];
+    std::snprintf(line, sizeof line, "%s,%.6g,%.3g,%.3g,%s\n", row.variant.c_str(), row.per_second,
+                  row.max_difference, row.tolerance, row.ok ? "ok" : "FAILED");
+    csv += line;
+    std::snprintf(line, sizeof line, "| %s | %.3g | %.3g | %.3g | %s |\n", row.variant.c_str(), row.per_second,
+                  row.max_difference, row.tolerance, row.ok ? "ok" : "FAILED");
+    md += line;
+    all_ok = all_ok && row.ok;
+  }
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"evaluator_gpu.csv", csv},
+                                   std::pair<std::string, std::string>{"evaluator_gpu.md", md}}) {
+    if (std::FILE* file = std::fopen((out_dir + "/" + name).c_str(), "w")) {
+      std::fputs(text.c_str(), file);
+      std::fclose(file);
+    }
+  }
+  std::fputs(md.c_str(), stdout);
+  return all_ok ? 0 : 1;
+}

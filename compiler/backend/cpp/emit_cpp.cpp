@@ -1,0 +1,816 @@
+#include "compiler/backend/cpp/emit_cpp.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include "compiler/backend/cpp/embedded_kernels.h"
+#include "compiler/eval/defuzzify.h"
+#include "compiler/ir/content_hash.h"
+#include "compiler/ir/number_format.h"
+#include "kernels/fuzzy_math.h"
+
+namespace fmpc {
+
+namespace {
+
+// The kernel headers a generated header carries, in dependency order.
+constexpr const char* kEmbeddedMathFiles[] = {"kernels/fmpc_hd.h", "kernels/fuzzy_kinds.h", "kernels/fuzzy_math.h"};
+
+std::string hex64(std::uint64_t value) {
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(value));
+  return text;
+}
+
+// A C++ string literal holding `text` (names, paths: printable ASCII or UTF-8, escaped where C++ needs it).
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (byte < 0x20 || byte == 0x7f) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\%03o", byte);
+      out += escaped;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+// A comment line cannot end in a backslash (it would continue onto the next line) nor hold a newline.
+std::string comment_safe(const std::string& text) {
+  std::string out;
+  for (const char c : text) out += (c == '\n' || c == '\r') ? ' ' : c;
+  while (!out.empty() && (out.back() == '\\' || out.back() == ' ')) out.pop_back();
+  return out;
+}
+
+bool is_identifier(const std::string& text) {
+  if (text.empty()) return false;
+  const auto first = static_cast<unsigned char>(text[0]);
+  if (!(std::isalpha(first) || text[0] == '_')) return false;
+  return std::all_of(text.begin(), text.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+}
+
+bool is_namespace_path(const std::string& text) {
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t end = text.find("::", start);
+    if (!is_identifier(text.substr(start, end == std::string::npos ? std::string::npos : end - start))) return false;
+    if (end == std::string::npos) return true;
+    start = end + 2;
+  }
+}
+
+// A T-typed constant. Parameters are finite after sema; the non-finite spellings keep the header compiling if a
+// caller passes one anyway (HUGE_VAL is <math.h>'s double infinity, usable in device code).
+std::string constant(double value) {
+  if (std::isnan(value)) return "fmpc_math::fmpc_quiet_nan<T>()";
+  if (std::isinf(value)) return value > 0 ? "T(HUGE_VAL)" : "T(-HUGE_VAL)";
+  return "T(" + format_number(value) + ")";
+}
+
+const char* tnorm_enumerator(TNorm norm) {
+  switch (norm) {
+    case TNorm::Minimum: return "fmpc_math::TNorm::Minimum";
+    case TNorm::Product: return "fmpc_math::TNorm::Product";
+    case TNorm::EinsteinProduct: return "fmpc_math::TNorm::EinsteinProduct";
+  }
+  return "fmpc_math::TNorm::Minimum";
+}
+
+const char* snorm_enumerator(SNorm norm) {
+  switch (norm) {
+    case SNorm::Maximum: return "fmpc_math::SNorm::Maximum";
+    case SNorm::ProbabilisticSum: return "fmpc_math::SNorm::ProbabilisticSum";
+    case SNorm::Sum: return "fmpc_math::SNorm::Sum";
+    case SNorm::EinsteinSum: return "fmpc_math::SNorm::EinsteinSum";
+  }
+  return "fmpc_math::SNorm::Maximum";
+}
+
+// Minimum and maximum go through grade_min / grade_max (defined in the generated header): grades cannot be NaN
+// there, because a NaN input returns before any grade is computed, and nan_min's NaN branches cost more than the
+// operation. Product and sum are written out; the Einstein norms call fuzzy_math.h's tnorm / snorm.
+std::string tnorm_call(TNorm norm, const std::string& a, const std::string& b) {
+  switch (norm) {
+    case TNorm::Minimum: return "grade_min(" + a + ", " + b + ")";
+    case TNorm::Product: return "(" + a + " * " + b + ")";
+    case TNorm::EinsteinProduct: break;
+  }
+  return std::string("fmpc_math::tnorm(") + tnorm_enumerator(norm) + ", " + a + ", " + b + ")";
+}
+std::string snorm_call(SNorm norm, const std::string& a, const std::string& b) {
+  switch (norm) {
+    case SNorm::Maximum: return "grade_max(" + a + ", " + b + ")";
+    case SNorm::Sum: return "(" + a + " + " + b + ")";
+    case SNorm::ProbabilisticSum:
+    case SNorm::EinsteinSum: break;
+  }
+  return std::string("fmpc_math::snorm(") + snorm_enumerator(norm) + ", " + a + ", " + b + ")";
+}
+
+// The call of the kernels/fuzzy_math.h function for a type-1 input MF at `x`.
+std::string membership_call(const MembershipFunction& mf, const std::string& x) {
+  const char* function = nullptr;
+  switch (mf.kind) {
+    case MfKind::Triangle: function = "triangle"; break;
+    case MfKind::Trapezoid: function = "trapezoid"; break;
+    case MfKind::Gaussian: function = "gaussian"; break;
+    case MfKind::Gaussian2: function = "gaussian2"; break;
+    case MfKind::GeneralizedBell: function = "generalized_bell"; break;
+    case MfKind::Sigmoid: function = "sigmoid"; break;
+    case MfKind::DifferenceSigmoid: function = "difference_sigmoid"; break;
+    case MfKind::ProductSigmoid: function = "product_sigmoid"; break;
+    case MfKind::ZShape: function = "z_shape"; break;
+    case MfKind::SShape: function = "s_shape"; break;
+    case MfKind::PiShape: function = "pi_shape"; break;
+    case MfKind::LinearS: function = "linear_s"; break;
+    case MfKind::LinearZ: function = "linear_z"; break;
+    case MfKind::Constant:
+    case MfKind::Linear: return "fmpc_math::fmpc_quiet_nan<T>()";  // not a grade of x (sema keeps them out)
+  }
+  const int count = mf_param_count(mf.kind);
+  if (count < 0 || mf.params.size() != static_cast<std::size_t>(count)) return "fmpc_math::fmpc_quiet_nan<T>()";
+  std::string call = std::string("fmpc_math::mf::") + function + "(" + x;
+  for (const double p : mf.params) call += ", " + constant(p);
+  return call + ")";
+}
+
+// Writes lines and counts them, so that `#line` directives can point back into the header itself.
+class CodeWriter {
+ public:
+  void line(const std::string& text = {}) {
+    text_ += text;
+    text_ += '\n';
+    lines_ += 1 + static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  }
+  void block(const std::string& text) {
+    text_ += text;
+    lines_ += static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  }
+  int lines() const { return lines_; }
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string text_;
+  int lines_ = 0;
+};
+
+// The per-rule and per-output state the emitter derives from the system once.
+struct RulePlan {
+  std::vector<Clause> antecedent;  // sorted by input, the interpreter's fold order
+};
+
+class EvaluatorEmitter {
+ public:
+  EvaluatorEmitter(const FuzzySystem& system, const EmitOptions& options, CodeWriter& out)
+      : system_(system), options_(options), out_(out) {}
+
+  void emit_evaluate_function() {
+    const std::size_t input_count = system_.inputs.size();
+    const std::size_t output_count = system_.outputs.size();
+    out_.line("// Evaluates the system at inputs[0 .. kInputCount) into outputs[0 .. kOutputCount) and returns the");
+    out_.line("// kFlag* bits of what happened. T is float or double; every formula is the interpreter's");
+    out_.line("// (fmpc eval), so double agrees with it to rounding.");
+    out_.line("template <typename T>");
+    out_.line("FMPC_HD unsigned evaluate(const T* inputs, T* outputs) {");
+    if (input_count == 0) out_.line("  (void)inputs;");
+    for (std::size_t i = 0; i < input_count; ++i)
+      out_.line("  const T x" + std::to_string(i) + " = inputs[" + std::to_string(i) + "];  // " +
+                comment_safe(system_.inputs[i].name));
+    // A NaN input makes every output NaN (docs/numerics.md): never a silent number.
+    if (input_count > 0) {
+      std::string test;
+      for (std::size_t i = 0; i < input_count; ++i)
+        test += (i ? " || " : "") + std::string("fmpc_math::fmpc_is_nan(x") + std::to_string(i) + ")";
+      out_.line("  if (" + test + ") {");
+      for (std::size_t o = 0; o < output_count; ++o)
+        out_.line("    outputs[" + std::to_string(o) + "] = fmpc_math::fmpc_quiet_nan<T>();");
+      out_.line("    return kFlagNanInput;");
+      out_.line("  }");
+    }
+    out_.line("  unsigned flags = 0u;");
+    if (input_count > 0) {
+      std::string test;
+      for (std::size_t i = 0; i < input_count; ++i) {
+        const std::string x = "x" + std::to_string(i);
+        test += (i ? " || " : "") + x + " < " + constant(system_.inputs[i].min) + " || " + x + " > " +
+                constant(system_.inputs[i].max);
+      }
+      out_.line("  if (" + test + ") flags |= kFlagInputOutOfRange;");
+    }
+    plan_rules();
+    emit_firing_strengths();
+    for (std::size_t o = 0; o < output_count; ++o) {
+      if (system_.type == SystemType::Mamdani) emit_mamdani_output(o);
+      else emit_sugeno_output(o);
+    }
+    out_.line("  return flags;");
+    out_.line("}");
+  }
+
+ private:
+  void line_directive(const SourceRange& range) {
+    if (!options_.line_directives || !range.valid() || options_.source_path.empty()) return;
+    out_.line("#line " + std::to_string(range.line) + " " + quoted(options_.source_path));
+    pending_return_ = true;
+  }
+  void return_to_header() {
+    if (!pending_return_ || options_.header_path.empty()) return;
+    // #line N names the number of the line that follows the directive.
+    out_.line("#line " + std::to_string(out_.lines() + 2) + " " + quoted(options_.header_path));
+    pending_return_ = false;
+  }
+
+  void plan_rules() {
+    plans_.resize(system_.rules.size());
+    for (std::size_t r = 0; r < system_.rules.size(); ++r) {
+      plans_[r].antecedent = system_.rules[r].antecedent;
+      std::stable_sort(plans_[r].antecedent.begin(), plans_[r].antecedent.end(),
+                       [](const Clause& a, const Clause& b) { return a.variable < b.variable; });
+    }
+  }
+
+  // The local holding the grade of input `i` in term `t`, emitted at first use (each term is evaluated once
+  // however many rules name it).
+  std::string term_grade(int i, int t) {
+    const std::string name = "mu" + std::to_string(i) + "_" + std::to_string(t);
+    if (emitted_.insert(name).second) {
+      const Term& term = system_.inputs[static_cast<std::size_t>(i)].terms[static_cast<std::size_t>(t)];
+      out_.line("  const T " + name + " = " + membership_call(term.mf, "x" + std::to_string(i)) + ";  // " +
+                comment_safe(system_.inputs[static_cast<std::size_t>(i)].name + " is " + term.name));
+    }
+    return name;
+  }
+
+  // The clause grade: hedge first, then negation (interpreter's clause_grade).
+  std::string clause_grade(const Clause& clause) {
+    std::string grade = term_grade(clause.variable, clause.term);
+    if (clause.hedge == Hedge::None && !clause.negated) return grade;
+    const std::string name = grade + "_h" + std::to_string(static_cast<int>(clause.hedge)) +
+                             (clause.negated ? "_not" : "");
+    if (emitted_.insert(name).second) {
+      std::string value = grade;
+      if (clause.hedge != Hedge::None)
+        value = "fmpc_math::apply_hedge(" + value + ", " + constant(hedge_exponent(clause.hedge)) + ")";
+      if (clause.negated) value = "fmpc_math::fuzzy_not(" + value + ")";
+      out_.line("  const T " + name + " = " + value + ";");
+    }
+    return name;
+  }
+
+  // Antecedents fold clause by clause in input order from the norm's identity. Rules that share a prefix of
+  // clauses share its partial result (a trie over the sorted clauses): the fold order, and so every rounding, is
+  // the interpreter's. Folding the first clause into the identity is skipped where it is exact for grades in
+  // [0, 1]: min(1, g) = 1 g = max(0, g) = 0 + g - 0 g = g, and (0 + g) / (1 + 0 g) = g.
+  // A grade folded in by the specialize pass (Rule::folded_grade) starts the fold instead of the identity.
+  std::string antecedent_strength(const Rule& rule, const RulePlan& plan) {
+    const bool conjunction = rule.connective == Connective::And;
+    const std::string start = rule.folded_grade ? constant(*rule.folded_grade) : conjunction ? "T(1)" : "T(0)";
+    if (plan.antecedent.empty()) return start;
+    std::string value;
+    for (std::size_t c = 0; c < plan.antecedent.size(); ++c) {
+      const std::string grade = clause_grade(plan.antecedent[c]);
+      if (c == 0 && !rule.folded_grade && !(conjunction && system_.and_method == TNorm::EinsteinProduct)) {
+        value = grade;
+        continue;
+      }
+      const std::string previous = c == 0 ? start : value;
+      const std::string key = (conjunction ? "and|" : "or|") + previous + "|" + grade;
+      auto found = trie_.find(key);
+      if (found == trie_.end()) {
+        const std::string name = "s" + std::to_string(trie_.size());
+        out_.line("  const T " + name + " = " +
+                  (conjunction ? tnorm_call(system_.and_method, previous, grade)
+                               : snorm_call(system_.or_method, previous, grade)) +
+                  ";");
+        found = trie_.emplace(key, name).first;
+      }
+      value = found->second;
+    }
+    return value;
+  }
+
+  void emit_firing_strengths() {
+    firing_.resize(system_.rules.size());
+    for (std::size_t r = 0; r < system_.rules.size(); ++r) {
+      const Rule& rule = system_.rules[r];
+      out_.line("  // " + comment_safe(system_.rule_display_name(r)));
+      line_directive(rule.range);
+      const std::string strength = antecedent_strength(rule, plans_[r]);
+      const std::string name = "w" + std::to_string(r);
+      // firing = weight * strength (interpreter); 1 * s == s exactly.
+      if (rule.weight == 1.0) out_.line("  const T " + name + " = " + strength + ";");
+      else out_.line("  const T " + name + " = " + constant(rule.weight) + " * " + strength + ";");
+      firing_[r] = name;
+      return_to_header();
+    }
+  }
+
+  struct Consequent {
+    std::size_t rule = 0;
+    const Clause* clause = nullptr;
+  };
+  std::vector<Consequent> consequents_of(std::size_t o) const {
+    std::vector<Consequent> result;
+    for (std::size_t r = 0; r < system_.rules.size(); ++r)
+      for (const Clause& clause : system_.rules[r].consequent)
+        if (clause.variable == static_cast<int>(o)) result.push_back({r, &clause});
+    return result;
+  }
+
+  void emit_no_fire(std::size_t o, const std::string& indent) {
+    const std::string target = "outputs[" + std::to_string(o) + "]";
+    out_.line(indent + "flags |= kFlagNoRuleFired;");
+    switch (system_.no_fire) {
+      case NoFirePolicy::Midrange:
+        out_.line(indent + target + " = " +
+                  constant((system_.outputs[o].min + system_.outputs[o].max) / 2.0) + ";");
+        break;
+      case NoFirePolicy::Value: out_.line(indent + target + " = " + constant(system_.no_fire_value) + ";"); break;
+      case NoFirePolicy::Error:
+        out_.line(indent + target + " = fmpc_math::fmpc_quiet_nan<T>();");
+        out_.line(indent + "flags |= kFlagNoFireError;");
+        break;
+    }
+  }
+
+  // A consequent's grades at the output's sample points, hedged and negated as the interpreter does; computed
+  // here in double, so the generated code holds constants instead of output membership functions.
+  std::vector<double> consequent_samples(std::size_t o, const Clause& clause, const std::vector<double>& x) const {
+    const MembershipFunction& mf =
+        system_.outputs[o].terms[static_cast<std::size_t>(clause.term)].mf;
+    std::vector<double> grades(x.size());
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      double mu = membership(mf.kind, mf.params.data(), x[k]);
+      mu = apply_hedge(mu, hedge_exponent(clause.hedge));
+      if (clause.negated) mu = fuzzy_not(mu);
+      grades[k] = mu;
+    }
+    return grades;
+  }
+
+  // A table of constants, in double whatever T is (a float table could not hold grades below float's range as
+  // constant expressions, which nvcc rejects); the code converts each element where it reads it. Static in host
+  // code (one copy in read-only data); a plain local in device code, where unrolled loops fold it into immediates.
+  void emit_table(const std::string& indent, const std::string& name, const std::vector<std::vector<double>>& rows,
+                  std::size_t width) {
+    const bool matrix = rows.size() > 1;
+    out_.line(indent + "FMPC_GENERATED_TABLE double " + name +
+              (matrix ? "[" + std::to_string(rows.size()) + "]" : "") + "[" + std::to_string(width) + "] = {");
+    for (const auto& row : rows) {
+      if (matrix) out_.line(indent + "    {");
+      std::string text;
+      for (std::size_t k = 0; k < row.size(); ++k) {
+        text += format_number(row[k]) + ",";
+        if (text.size() > 100 || k + 1 == row.size()) {
+          out_.line(indent + (matrix ? "        " : "    ") + text);
+          text.clear();
+        }
+      }
+      if (matrix) out_.line(indent + "    },");
+    }
+    out_.line(indent + "};");
+  }
+
+  void emit_mamdani_output(std::size_t o) {
+    const Variable& output = system_.outputs[o];
+    const std::string os = std::to_string(o);
+    const std::vector<double> x =
+        output_sample_points(output.min, output.max, system_.samples, Reference::Matlab);
+    const std::string n = std::to_string(x.size());
+    // The sample loops run over a multiple of 8 so that compilers vectorise them without a remainder loop; the
+    // padding grades are 0, which add exactly nothing.
+    const std::size_t padded = (x.size() + 7) / 8 * 8;
+    const std::string np = std::to_string(padded);
+    const std::vector<Consequent> consequents = consequents_of(o);
+    out_.line("  // output " + comment_safe(output.name) + ": " + n + " samples of the aggregate, then " +
+              to_string(system_.defuzzifier));
+    out_.line("  {");
+
+    // Weighted columns of the aggregate: (strength, grades at the samples). With max aggregation and min or prod
+    // implication, rules with the same consequent merge exactly into one column of strength max(w):
+    // max(min(w1, g), min(w2, g)) = min(max(w1, w2), g), and the same for w g with g >= 0 (rounding is monotone).
+    std::vector<std::string> strengths;
+    std::vector<std::vector<double>> grades;
+    const bool merge = system_.aggregation == SNorm::Maximum &&
+                       (system_.implication == TNorm::Minimum || system_.implication == TNorm::Product);
+    std::map<std::pair<int, std::pair<int, bool>>, std::size_t> column_of_consequent;
+    for (const Consequent& consequent : consequents) {
+      const std::string& w = firing_[consequent.rule];
+      const auto key = std::make_pair(consequent.clause->term,
+                                      std::make_pair(static_cast<int>(consequent.clause->hedge),
+                                                     consequent.clause->negated));
+      if (merge) {
+        const auto found = column_of_consequent.find(key);
+        if (found != column_of_consequent.end()) {
+          std::string& strength = strengths[found->second];
+          const std::string merged = "m" + os + "_" + std::to_string(merged_count_++);
+          out_.line("    const T " + merged + " = grade_max(" + strength + ", " + w + ");");
+          strength = merged;
+          continue;
+        }
+        column_of_consequent.emplace(key, strengths.size());
+      }
+      strengths.push_back(w);
+      grades.push_back(consequent_samples(o, *consequent.clause, x));
+    }
+    // A rule fired when its strength is above zero; merged strengths are maxima, so testing them is the same.
+    std::string fired;
+    for (const std::string& strength : strengths)
+      fired += (fired.empty() ? "(" : " | (") + strength + " > T(0))";
+    out_.line("    const bool fired = " + (fired.empty() ? std::string("false") : fired) + ";");
+
+    // g_k = aggregation over the columns of implication(strength, grade_k), the first column taken as is
+    // (aggregation(0, v) == v for v >= 0). Zero grades need no special case: implication(w, 0) == 0 for every
+    // t-norm and aggregation(a, 0) == a for every s-norm, exactly.
+    out_.line("    T g[" + np + "];");
+    if (strengths.empty()) {
+      out_.line("    for (int k = 0; k < " + np + "; ++k) g[k] = T(0);");
+    } else {
+      emit_table("    ", "kGrades", grades, padded);
+      std::string list;
+      for (const std::string& strength : strengths) list += (list.empty() ? "" : ", ") + strength;
+      out_.line("    const T strength[" + std::to_string(strengths.size()) + "] = {" + list + "};");
+      const bool single = strengths.size() == 1;
+      out_.line("    FMPC_GENERATED_UNROLL");
+      out_.line("    for (int k = 0; k < " + np + "; ++k) {");
+      for (std::size_t c = 0; c < strengths.size(); ++c) {
+        const std::string cs = std::to_string(c);
+        const std::string term = tnorm_call(system_.implication, "strength[" + cs + "]",
+                                            single ? "T(kGrades[k])" : "T(kGrades[" + cs + "][k])");
+        if (c == 0) out_.line("      T value = " + term + ";");
+        else out_.line("      value = " + snorm_call(system_.aggregation, "value", term) + ";");
+      }
+      out_.line("      g[k] = value;");
+      out_.line("    }");
+    }
+    if (system_.defuzzifier == Defuzzifier::Centroid) {
+      // sum(g x) / sum(g) (MATLAB fis.c defuzzCentroid), with x measured from the middle of the range: the same
+      // value, but float keeps its precision when the range is narrow compared with its distance from 0. Four
+      // partial sums break the chain of dependent additions (and differ from one sum by rounding only).
+      const double middle = (output.min + output.max) / 2.0;
+      std::vector<double> offsets(x.size());
+      for (std::size_t k = 0; k < x.size(); ++k) offsets[k] = x[k] - middle;
+      emit_table("    ", "kOffsets", {offsets}, padded);
+      out_.line("    T total0 = T(0), total1 = T(0), total2 = T(0), total3 = T(0);");
+      out_.line("    T moment0 = T(0), moment1 = T(0), moment2 = T(0), moment3 = T(0);");
+      out_.line("    FMPC_GENERATED_UNROLL");
+      out_.line("    for (int k = 0; k < " + np + "; k += 4) {");
+      for (int j = 0; j < 4; ++j) {
+        const std::string js = std::to_string(j);
+        const std::string at = j == 0 ? std::string("k") : "k + " + js;
+        out_.line("      total" + js + " += g[" + at + "];");
+        out_.line("      moment" + js + " += g[" + at + "] * T(kOffsets[" + at + "]);");
+      }
+      out_.line("    }");
+      out_.line("    const T total = (total0 + total1) + (total2 + total3);");
+      out_.line("    const T moment = (moment0 + moment1) + (moment2 + moment3);");
+      out_.line("    if (!fired || total == T(0)) {");
+      emit_no_fire(o, "      ");
+      out_.line("    } else {");
+      out_.line("      outputs[" + os + "] = " + constant(middle) + " + moment / total;");
+      out_.line("    }");
+    } else {
+      emit_sampled_defuzzifier(o, x);
+    }
+    out_.line("  }");
+  }
+
+  // Bisector, mom, som and lom over g[], as compiler/eval/defuzzify.cpp defuzzify_sampled does for MATLAB.
+  void emit_sampled_defuzzifier(std::size_t o, const std::vector<double>& x) {
+    const std::string n = std::to_string(x.size());
+    const std::string target = "outputs[" + std::to_string(o) + "]";
+    emit_table("    ", "kSamplePoints", {x}, x.size());
+    out_.line("    T total = T(0), peak = g[0];");
+    out_.line("    for (int k = 0; k < " + n + "; ++k) {");
+    out_.line("      total += g[k];");
+    out_.line("      peak = peak > g[k] ? peak : g[k];");
+    out_.line("    }");
+    out_.line("    if (!fired || total == T(0)) {");
+    emit_no_fire(o, "      ");
+    out_.line("    } else {");
+    switch (system_.defuzzifier) {
+      case Defuzzifier::Bisector:
+        // The first sample where the running sum reaches half the total.
+        out_.line("      T running = T(0), value = T(kSamplePoints[" + std::to_string(x.size() - 1) + "]);");
+        out_.line("      for (int k = 0; k < " + n + "; ++k) {");
+        out_.line("        running += g[k];");
+        out_.line("        if (running >= total / T(2)) { value = T(kSamplePoints[k]); break; }");
+        out_.line("      }");
+        out_.line("      " + target + " = value;");
+        break;
+      case Defuzzifier::MeanOfMaximum:
+        out_.line("      T sum = T(0);");
+        out_.line("      int count = 0;");
+        out_.line("      for (int k = 0; k < " + n + "; ++k)");
+        out_.line("        if (g[k] == peak) { sum += T(kSamplePoints[k]); ++count; }");
+        out_.line("      " + target + " = sum / T(count);");
+        break;
+      case Defuzzifier::SmallestOfMaximum:
+      case Defuzzifier::LargestOfMaximum: {
+        // MATLAB: the maximising x of smallest (largest) magnitude, the first one on ties.
+        const char* better = system_.defuzzifier == Defuzzifier::SmallestOfMaximum ? "<" : ">";
+        out_.line("      bool found = false;");
+        out_.line("      T best = T(0);");
+        out_.line("      for (int k = 0; k < " + n + "; ++k) {");
+        out_.line("        if (g[k] != peak) continue;");
+        out_.line("        const T candidate = T(kSamplePoints[k]);");
+        out_.line(std::string("        if (!found || fmpc_math::fmpc_fabs(candidate) ") + better +
+                  " fmpc_math::fmpc_fabs(best)) best = candidate;");
+        out_.line("        found = true;");
+        out_.line("      }");
+        out_.line("      " + target + " = best;");
+        break;
+      }
+      case Defuzzifier::Centroid:
+      case Defuzzifier::WeightedAverage:
+      case Defuzzifier::WeightedSum: out_.line("      " + target + " = fmpc_math::fmpc_quiet_nan<T>();"); break;
+    }
+    out_.line("    }");
+  }
+
+  // A Sugeno rule's output value: c, or p1 x1 + ... + pn xn + c summed left to right (interpreter's
+  // sugeno_rule_value). Zero coefficients are kept: 0 * inf is NaN there too.
+  std::string sugeno_value(const MembershipFunction& mf) const {
+    if (mf.kind == MfKind::Constant)
+      return mf.params.empty() ? "fmpc_math::fmpc_quiet_nan<T>()" : constant(mf.params[0]);
+    if (mf.kind != MfKind::Linear || mf.params.size() != system_.inputs.size() + 1)
+      return "fmpc_math::fmpc_quiet_nan<T>()";
+    std::string value;
+    for (std::size_t i = 0; i < system_.inputs.size(); ++i)
+      value += (i ? " + " : "") + constant(mf.params[i]) + " * x" + std::to_string(i);
+    return value.empty() ? constant(mf.params.back()) : value + " + " + constant(mf.params.back());
+  }
+
+  // MATLAB fis.c fisEvaluate: sum(h z) / sum(h) over the rules that fired, where the denominator also counts the
+  // firing strengths of the rules with no consequent on this output; wtsum is the numerator alone.
+  void emit_sugeno_output(std::size_t o) {
+    const Variable& output = system_.outputs[o];
+    const std::vector<Consequent> consequents = consequents_of(o);
+    out_.line("  // output " + comment_safe(output.name) + ": " + to_string(system_.defuzzifier));
+    out_.line("  {");
+    out_.line("    T numerator = T(0), denominator = T(0);");
+    out_.line("    bool fired = false;");
+    std::vector<bool> concludes(system_.rules.size(), false);
+    for (const Consequent& consequent : consequents) {
+      concludes[consequent.rule] = true;
+      const std::string& w = firing_[consequent.rule];
+      const Clause& clause = *consequent.clause;
+      std::string height = w;
+      // Octave's eval_rules_sugeno hedges the height as w^(1/hedge), then negates it (interpreter).
+      if (clause.hedge != Hedge::None)
+        height = "fmpc_math::fmpc_pow(" + height + ", " + constant(1.0 / hedge_exponent(clause.hedge)) + ")";
+      if (clause.negated) height = "fmpc_math::fuzzy_not(" + height + ")";
+      const MembershipFunction& mf = output.terms[static_cast<std::size_t>(clause.term)].mf;
+      out_.line("    if (" + w + " != T(0)) {");
+      out_.line("      const T h = " + height + ";");
+      out_.line("      numerator += h * (" + sugeno_value(mf) + ");");
+      out_.line("      denominator += h;");
+      out_.line("      fired = fired || h != T(0);");
+      out_.line("    }");
+    }
+    if (system_.defuzzifier != Defuzzifier::WeightedSum)
+      for (std::size_t r = 0; r < system_.rules.size(); ++r)
+        if (!concludes[r]) out_.line("    denominator += " + firing_[r] + ";");
+    out_.line("    if (!fired || denominator == T(0)) {");
+    emit_no_fire(o, "      ");
+    out_.line("    } else {");
+    out_.line("      outputs[" + std::to_string(o) + "] = " +
+              (system_.defuzzifier == Defuzzifier::WeightedSum ? "numerator" : "numerator / denominator") + ";");
+    out_.line("    }");
+    out_.line("  }");
+  }
+
+  const FuzzySystem& system_;
+  const EmitOptions& options_;
+  CodeWriter& out_;
+  std::vector<RulePlan> plans_;
+  std::vector<std::string> firing_;
+  std::set<std::string> emitted_;
+  std::map<std::string, std::string> trie_;
+  std::size_t merged_count_ = 0;
+  bool pending_return_ = false;
+};
+
+// Everything a type-1 emitter cannot (yet) turn into code, as located errors.
+bool check_supported(const FuzzySystem& system, const EmitOptions& options, DiagnosticList& diagnostics) {
+  bool supported = true;
+  const SourceRange where = system.range.valid() ? system.range : SourceRange{options.source_path, 0, 0, 0, 0};
+  if (system.interval_type2 || (system.type != SystemType::Mamdani && system.type != SystemType::Sugeno)) {
+    diagnostics.error(where, "the C++/CUDA emitter does not support interval type-2 systems yet",
+                      {"use `fmpc compile --target table`, or evaluate with `fmpc eval`"});
+    supported = false;
+  }
+  if (system.type == SystemType::Mamdani && system.samples <= 0) {
+    diagnostics.error(where,
+                      "the C++/CUDA emitter does not support `samples exact` yet: write `samples 101` (MATLAB's "
+                      "default) or another count in the defuzzify line",
+                      {"`fmpc compile --target table` accepts `samples exact`"});
+    supported = false;
+  }
+  if (!is_namespace_path(options.namespace_name)) {
+    diagnostics.error(SourceRange{options.source_path, 0, 0, 0, 0},
+                      "namespace '" + options.namespace_name +
+                          "' is not a C++ namespace name: use identifiers joined by '::', e.g. scene::liver");
+    supported = false;
+  }
+  return supported;
+}
+
+const char* target_name(EmitOptions::Target target) {
+  return target == EmitOptions::Target::Cuda ? "cuda" : "cpp";
+}
+
+}  // namespace
+
+std::string embedded_fuzzy_math(const std::string& math_namespace) {
+  std::string result;
+  for (const char* path : kEmbeddedMathFiles) {
+    const std::string_view text = embedded_kernel_source(path);
+    if (text.empty()) return {};
+    result += std::string("// ---- copied from ") + path + " ----\n";
+    const bool macro_file = std::string_view(path) == "kernels/fmpc_hd.h";
+    if (macro_file) result += "#ifndef FMPC_HD\n";
+    std::istringstream lines{std::string(text)};
+    std::string line;
+    while (std::getline(lines, line)) {
+      if (line.rfind("#pragma once", 0) == 0 || line.rfind("#include \"kernels/", 0) == 0) continue;
+      if (line == "namespace fmpc {") line = "namespace " + math_namespace + " {";
+      else if (line == "}  // namespace fmpc") line = "}  // namespace " + math_namespace;
+      result += line;
+      result += '\n';
+    }
+    if (macro_file) result += "#endif\n";
+  }
+  return result;
+}
+
+std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitOptions& options,
+                                          DiagnosticList& diagnostics) {
+  if (!check_supported(system, options, diagnostics)) return std::nullopt;
+
+  // The math copy is named after its own hash: identical copies from several headers collapse into one (the
+  // include guard), different fmpc versions' copies live side by side.
+  std::string original;
+  for (const char* path : kEmbeddedMathFiles) original += std::string(embedded_kernel_source(path));
+  const std::string math_hash = hex64(fnv1a64(original));
+  const std::string math_namespace = "fmpc_math_" + math_hash;
+  const std::string math_text = embedded_fuzzy_math(math_namespace);
+  if (math_text.empty()) {
+    diagnostics.error(SourceRange{options.source_path, 0, 0, 0, 0},
+                      "this fmpc was built without the embedded kernel headers; rebuild fmpc");
+    return std::nullopt;
+  }
+
+  const bool cuda = options.target == EmitOptions::Target::Cuda;
+  CodeWriter out;
+  out.line("// Generated by fmpc 0.1.0 (fmpc compile --target " + std::string(target_name(options.target)) +
+           "). Do not edit: regenerate from the rule file.");
+  out.line("// source: " + comment_safe(options.source_path.empty() ? "(unnamed)" : options.source_path));
+  out.line("// source hash (FNV-1a 64): " + hex64(options.source_hash));
+  out.line("// system: " + comment_safe(system.name) + " (" + to_string(system.type) + ", " +
+           std::to_string(system.inputs.size()) + " inputs, " + std::to_string(system.outputs.size()) +
+           " outputs, " + std::to_string(system.rules.size()) + " rules)");
+  for (const std::string& note : options.banner_notes) out.line("// " + comment_safe(note));
+  out.line("//");
+  out.line("// Interface (namespace " + options.namespace_name + "): inputs and outputs in the order below.");
+  for (std::size_t i = 0; i < system.inputs.size(); ++i) {
+    const Variable& v = system.inputs[i];
+    out.line("//   input  " + std::to_string(i) + ": " + comment_safe(v.name) + " in [" + format_number(v.min) +
+             ", " + format_number(v.max) + "]" + (v.unit.empty() ? "" : " " + comment_safe(v.unit)));
+  }
+  for (std::size_t o = 0; o < system.outputs.size(); ++o) {
+    const Variable& v = system.outputs[o];
+    out.line("//   output " + std::to_string(o) + ": " + comment_safe(v.name) + " in [" + format_number(v.min) +
+             ", " + format_number(v.max) + "]" + (v.unit.empty() ? "" : " " + comment_safe(v.unit)));
+  }
+  out.line("//   unsigned evaluate<T>(const T* inputs, T* outputs): one point, returns kFlag* bits");
+  out.line("//   void evaluate_batch<T>(const T* inputs, T* outputs, std::size_t n, unsigned* flags = nullptr):");
+  out.line("//     n points, inputs n x kInputCount and outputs n x kOutputCount, row-major");
+  if (cuda) {
+    out.line("//   __global__ evaluate_kernel<T>(inputs, outputs, n, flags) and");
+    out.line("//   cudaError_t evaluate_batch_cuda<T>(device inputs, device outputs, n, device flags = nullptr,");
+    out.line("//     stream = 0): launches the kernel and returns the launch status (nvcc only)");
+  }
+  out.line("#pragma once");
+  out.line("#include <cstddef>");
+  out.line("#include <math.h>");
+  if (cuda) {
+    out.line("#if defined(__CUDACC__)");
+    out.line("#include <cuda_runtime.h>");
+    out.line("#endif");
+  }
+  out.line();
+  // Constant tables: one static copy on the host; in device code plain locals, which the unrolled loops fold
+  // into immediates (a static local would live in global memory).
+  out.line("#ifndef FMPC_GENERATED_TABLE");
+  out.line("#if defined(__CUDA_ARCH__)");
+  out.line("#define FMPC_GENERATED_TABLE constexpr");
+  out.line("#define FMPC_GENERATED_UNROLL _Pragma(\"unroll\")");
+  out.line("#else");
+  out.line("#define FMPC_GENERATED_TABLE static constexpr");
+  out.line("#define FMPC_GENERATED_UNROLL");
+  out.line("#endif");
+  out.line("#endif");
+  out.line();
+  out.line("#ifndef FMPC_GENERATED_MATH_" + math_hash);
+  out.line("#define FMPC_GENERATED_MATH_" + math_hash);
+  out.block(math_text);
+  out.line("#endif  // FMPC_GENERATED_MATH_" + math_hash);
+  out.line();
+  out.line("namespace " + options.namespace_name + " {");
+  out.line();
+  out.line("namespace fmpc_math = ::" + math_namespace + ";");
+  out.line();
+  out.line("inline constexpr std::size_t kInputCount = " + std::to_string(system.inputs.size()) + ";");
+  out.line("inline constexpr std::size_t kOutputCount = " + std::to_string(system.outputs.size()) + ";");
+  const auto names = [](const std::vector<Variable>& variables) {
+    std::string list;
+    for (const Variable& v : variables) list += (list.empty() ? "" : ", ") + quoted(v.name);
+    return list.empty() ? std::string("\"\"") : list;
+  };
+  const auto limits = [](const std::vector<Variable>& variables, bool upper) {
+    std::string list;
+    for (const Variable& v : variables) list += (list.empty() ? "" : ", ") + format_number(upper ? v.max : v.min);
+    return list.empty() ? std::string("0") : list;
+  };
+  // Arrays keep one element when there are no inputs, so that the declarations stay valid C++.
+  out.line("inline constexpr const char* kInputNames[] = {" + names(system.inputs) + "};");
+  out.line("inline constexpr const char* kOutputNames[] = {" + names(system.outputs) + "};");
+  out.line("inline constexpr double kInputMin[] = {" + limits(system.inputs, false) + "};");
+  out.line("inline constexpr double kInputMax[] = {" + limits(system.inputs, true) + "};");
+  out.line("inline constexpr double kOutputMin[] = {" + limits(system.outputs, false) + "};");
+  out.line("inline constexpr double kOutputMax[] = {" + limits(system.outputs, true) + "};");
+  out.line("inline constexpr unsigned long long kSourceHash = 0x" + hex64(options.source_hash) + "ull;");
+  out.line();
+  out.line("// evaluate()'s result bits. NaN inputs give NaN outputs; out-of-range inputs are evaluated as given.");
+  out.line("inline constexpr unsigned kFlagNanInput = 1u;");
+  out.line("inline constexpr unsigned kFlagInputOutOfRange = 2u;");
+  out.line("inline constexpr unsigned kFlagNoRuleFired = 4u;   // an output took the no-rule-fired value");
+  out.line("inline constexpr unsigned kFlagNoFireError = 8u;   // ... and the policy is `error`: it is NaN");
+  out.line();
+  out.line("// min and max of grades, which cannot be NaN here (a NaN input returns first): fmpc_math::nan_min's and");
+  out.line("// nan_max's values without their NaN branches.");
+  out.line("template <typename T>");
+  out.line("FMPC_HD T grade_min(T a, T b) { return a < b ? a : b; }");
+  out.line("template <typename T>");
+  out.line("FMPC_HD T grade_max(T a, T b) { return a > b ? a : b; }");
+  out.line();
+  EvaluatorEmitter(system, options, out).emit_evaluate_function();
+  out.line();
+  out.line("template <typename T>");
+  out.line("inline void evaluate_batch(const T* inputs, T* outputs, std::size_t n, unsigned* flags = nullptr) {");
+  out.line("  for (std::size_t i = 0; i < n; ++i) {");
+  out.line("    const unsigned f = evaluate(inputs + i * kInputCount, outputs + i * kOutputCount);");
+  out.line("    if (flags != nullptr) flags[i] = f;");
+  out.line("  }");
+  out.line("}");
+  if (cuda) {
+    out.line();
+    out.line("#if defined(__CUDACC__)");
+    out.line("// One thread per point, grid-stride so that any n fits any grid.");
+    out.line("template <typename T>");
+    out.line("__global__ void evaluate_kernel(const T* __restrict__ inputs, T* __restrict__ outputs, std::size_t n,");
+    out.line("                                unsigned* __restrict__ flags) {");
+    out.line("  const std::size_t stride = static_cast<std::size_t>(gridDim.x) * blockDim.x;");
+    out.line("  for (std::size_t i = static_cast<std::size_t>(blockIdx.x) * blockDim.x + threadIdx.x; i < n;");
+    out.line("       i += stride) {");
+    out.line("    const unsigned f = evaluate(inputs + i * kInputCount, outputs + i * kOutputCount);");
+    out.line("    if (flags != nullptr) flags[i] = f;");
+    out.line("  }");
+    out.line("}");
+    out.line();
+    out.line("// Launches evaluate_kernel on `stream` over device arrays; returns the launch status (errors of the");
+    out.line("// kernel itself surface at the next synchronising call, as with any CUDA launch).");
+    out.line("template <typename T>");
+    out.line("inline cudaError_t evaluate_batch_cuda(const T* device_inputs, T* device_outputs, std::size_t n,");
+    out.line("                                       unsigned* device_flags = nullptr, cudaStream_t stream = 0) {");
+    out.line("  if (n == 0) return cudaSuccess;");
+    out.line("  if (device_outputs == nullptr || (kInputCount > 0 && device_inputs == nullptr)) return cudaErrorInvalidValue;");
+    out.line("  constexpr unsigned kThreads = 256;");
+    out.line("  const std::size_t wanted = (n + kThreads - 1) / kThreads;");
+    out.line("  const unsigned blocks = wanted < 65535u * 32u ? static_cast<unsigned>(wanted) : 65535u * 32u;");
+    out.line("  evaluate_kernel<T><<<blocks, kThreads, 0, stream>>>(device_inputs, device_outputs, n, device_flags);");
+    out.line("  return cudaGetLastError();");
+    out.line("}");
+    out.line("#endif  // __CUDACC__");
+  }
+  out.line();
+  out.line("}  // namespace " + options.namespace_name);
+  return out.text();
+}
+
+}  // namespace fmpc
