@@ -11,6 +11,7 @@
 
 #include "kernels/integrator_math.h"
 #include "kernels/spring_math.h"
+#include "kernels/table_math.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/integrate/worker_pool.h"
 
@@ -64,6 +65,20 @@ class CpuSimulationImpl final : public CpuSimulation {
         velocity_.z[v] = static_cast<Real>(setup.initial_velocities[v][2]);
       }
     }
+    const bool probe_force = setup.probe && setup.probe->mode == ProbeLoad::Mode::Force;
+    if (setup.probe && !probe_force) {
+      for (const auto v : setup.probe->vertices) fixed_[static_cast<std::size_t>(v)] = 1;  // moved kinematically
+    }
+    if (setup.strain_stiffness) {
+      table_counts_[0] = static_cast<int>(setup_.strain_stiffness->strain.size());
+      table_breakpoints_[0] = setup_.strain_stiffness->strain.data();
+      table_.axes = 1;
+      table_.outputs = 1;
+      table_.counts = table_counts_;
+      table_.breakpoints = table_breakpoints_;
+      table_.values = setup_.strain_stiffness->modulus.data();
+    }
+    if (probe_force && setup.external_forces.empty()) force_.resize(n_);
     if (!setup.external_forces.empty()) {
       force_.resize(n_);
       for (std::size_t v = 0; v < n_; ++v) {
@@ -110,11 +125,48 @@ class CpuSimulationImpl final : public CpuSimulation {
   bool advance(std::size_t steps, DiagnosticList& diagnostics) override {
     if (non_finite_) return false;
     for (std::size_t i = 0; i < steps; ++i) {
+      apply_probe(time(), true);
+      if (setup_.strain_stiffness) look_up_stiffness();
       if (!step(diagnostics)) return false;
       ++steps_taken_;
+      apply_probe(time(), false);
       if (!check_finite(diagnostics)) return false;
     }
     return true;
+  }
+
+  ProbeReading probe_reading() const override {
+    ProbeReading reading;
+    if (!setup_.probe || setup_.probe->vertices.empty()) return reading;
+    const ProbeLoad& probe = *setup_.probe;
+    const double count = static_cast<double>(probe.vertices.size());
+    for (const auto vertex : probe.vertices) {
+      const auto v = static_cast<std::size_t>(vertex);
+      const Point3& start = start_position(v);
+      reading.displacement[0] += (static_cast<double>(position_.x[v]) - start[0]) / count;
+      reading.displacement[1] += (static_cast<double>(position_.y[v]) - start[1]) / count;
+      reading.displacement[2] += (static_cast<double>(position_.z[v]) - start[2]) / count;
+    }
+    if (probe.mode == ProbeLoad::Mode::Force) {
+      const double share = ramp(time());
+      for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] = share * probe.target[axis];
+      return reading;
+    }
+    const kernels::StateView<Real> state = view(position_, velocity_);
+    for (const auto vertex : probe.vertices) {
+      Real fx, fy, fz;
+      kernels::gather_spring_force(static_cast<int>(vertex), network_view_, state, fx, fy, fz);
+      reading.force[0] -= static_cast<double>(fx);
+      reading.force[1] -= static_cast<double>(fy);
+      reading.force[2] -= static_cast<double>(fz);
+    }
+    return reading;
+  }
+
+  std::vector<double> current_stiffness() const override {
+    std::vector<double> out(stiffness_.size());
+    for (std::size_t s = 0; s < out.size(); ++s) out[s] = static_cast<double>(stiffness_[s]);
+    return out;
   }
 
   std::size_t steps_taken() const override { return steps_taken_; }
@@ -125,43 +177,10 @@ class CpuSimulationImpl final : public CpuSimulation {
   const std::optional<NonFiniteReport>& non_finite() const override { return non_finite_; }
   int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
 
-  double kinetic_energy() const override {
-    double energy = 0.0;
-    for (std::size_t v = 0; v < n_; ++v) {
-      const double vx = static_cast<double>(velocity_.x[v]), vy = static_cast<double>(velocity_.y[v]),
-                   vz = static_cast<double>(velocity_.z[v]);
-      energy += 0.5 * setup_.mass[v] * (vx * vx + vy * vy + vz * vz);
-    }
-    return energy;
-  }
+  double kinetic_energy() const override { return sim::kinetic_energy(setup_, velocities()); }
 
   double potential_energy() const override {
-    const SpringNetwork& net = setup_.springs;
-    double energy = 0.0;
-    for (std::size_t s = 0; s < net.size(); ++s) {
-      const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
-      const double dx = static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]);
-      const double dy = static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]);
-      const double dz = static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]);
-      const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const double rest = net.rest_length[s], k = net.stiffness[s];
-      if (setup_.law == kernels::SpringLaw::BasafaFarahmand) {
-        // Integral of F_s over the length: k l0^2 (X^2/2 + r X^4/4) up to Xc, linear growth of F beyond.
-        const double r = setup_.basafa_k2_over_k1, xc = setup_.basafa_xc;
-        const double strain = std::abs(length - rest) / rest;
-        const double scale = k * rest * rest;
-        if (strain <= xc) {
-          energy += scale * (strain * strain / 2.0 + r * strain * strain * strain * strain / 4.0);
-        } else {
-          const double a_coefficient = xc + r * xc * xc * xc, b_coefficient = 1.0 + 3.0 * r * xc * xc;
-          const double beyond = strain - xc;
-          energy += scale * (xc * xc / 2.0 + r * xc * xc * xc * xc / 4.0 + a_coefficient * beyond +
-                             b_coefficient * beyond * beyond / 2.0);
-        }
-      } else {
-        energy += 0.5 * k * (length - rest) * (length - rest);
-      }
-    }
+    double energy = elastic_energy(setup_, positions());
     for (std::size_t v = 0; v < n_; ++v) {
       const double p[3] = {static_cast<double>(position_.x[v]), static_cast<double>(position_.y[v]),
                            static_cast<double>(position_.z[v])};
@@ -442,6 +461,65 @@ class CpuSimulationImpl final : public CpuSimulation {
     return best;
   }
 
+  const Point3& start_position(std::size_t v) const {
+    return setup_.initial_positions.empty() ? setup_.rest_positions[v] : setup_.initial_positions[v];
+  }
+
+  // The probe's share of its target at time t: linear from 0 at t = 0 to 1 at the ramp time, then 1.
+  double ramp(double t) const {
+    const double ramp_time = setup_.probe->ramp_time;
+    return ramp_time > 0.0 ? std::min(t / ramp_time, 1.0) : 1.0;
+  }
+
+  // Displacement probes: positions (and, before a step, the ramp's velocity, which the dashpots and the implicit
+  // step see) of the probe vertices at time t. Force probes: their share of the force for the step from t.
+  void apply_probe(double t, bool before_step) {
+    if (!setup_.probe) return;
+    const ProbeLoad& probe = *setup_.probe;
+    const double share = ramp(t);
+    if (probe.mode == ProbeLoad::Mode::Force) {
+      if (!before_step) return;
+      const double count = static_cast<double>(probe.vertices.size());
+      for (const auto vertex : probe.vertices) {
+        const auto v = static_cast<std::size_t>(vertex);
+        const Point3 base = setup_.external_forces.empty() ? Point3{0.0, 0.0, 0.0} : setup_.external_forces[v];
+        force_.x[v] = static_cast<Real>(base[0] + share * probe.target[0] / count);
+        force_.y[v] = static_cast<Real>(base[1] + share * probe.target[1] / count);
+        force_.z[v] = static_cast<Real>(base[2] + share * probe.target[2] / count);
+      }
+      return;
+    }
+    const bool ramping = probe.ramp_time > 0.0 && t < probe.ramp_time;
+    for (const auto vertex : probe.vertices) {
+      const auto v = static_cast<std::size_t>(vertex);
+      const Point3& start = start_position(v);
+      position_.x[v] = static_cast<Real>(start[0] + share * probe.target[0]);
+      position_.y[v] = static_cast<Real>(start[1] + share * probe.target[1]);
+      position_.z[v] = static_cast<Real>(start[2] + share * probe.target[2]);
+      velocity_.x[v] = static_cast<Real>(before_step && ramping ? probe.target[0] / probe.ramp_time : 0.0);
+      velocity_.y[v] = static_cast<Real>(before_step && ramping ? probe.target[1] / probe.ramp_time : 0.0);
+      velocity_.z[v] = static_cast<Real>(before_step && ramping ? probe.target[2] / probe.ramp_time : 0.0);
+    }
+  }
+
+  // k = modulus(strain) * stiffness_per_modulus for every spring, from the current positions.
+  void look_up_stiffness() {
+    const SpringNetwork& net = setup_.springs;
+    const StrainStiffnessTable& table = *setup_.strain_stiffness;
+    pool_.run(net.size(), [&](std::size_t begin, std::size_t end) {
+      for (std::size_t s = begin; s < end; ++s) {
+        const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
+        const double dx = static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]);
+        const double dy = static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]);
+        const double dz = static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]);
+        const double strain = (std::sqrt(dx * dx + dy * dy + dz * dz) - net.rest_length[s]) / net.rest_length[s];
+        double modulus = 0.0;
+        interpolate_table(table_, &strain, &modulus);
+        stiffness_[s] = static_cast<Real>(modulus * table.stiffness_per_modulus[s]);
+      }
+    });
+  }
+
   static std::vector<Point3> to_points(const Vector3Arrays<Real>& a) {
     std::vector<Point3> out(a.x.size());
     for (std::size_t i = 0; i < out.size(); ++i) {
@@ -468,12 +546,103 @@ class CpuSimulationImpl final : public CpuSimulation {
   std::vector<Eigen::Triplet<double>> triplets_;
   int implicit_iterations_max_ = 0;
   bool cg_warning_given_ = false;
+  TableView<double> table_{};
+  int table_counts_[1] = {0};
+  const double* table_breakpoints_[1] = {nullptr};
 };
+
+// Probe and strain-table checks (validate_setup covers the rest); errors name the vertex or the entry.
+bool validate_loads(const SimulationSetup& setup, DiagnosticList& diagnostics) {
+  const std::size_t errors = diagnostics.error_count();
+  const std::size_t n = setup.rest_positions.size();
+  if (setup.probe) {
+    const ProbeLoad& probe = *setup.probe;
+    std::vector<unsigned char> fixed(n, 0), seen(n, 0);
+    for (const auto v : setup.fixed_vertices)
+      if (v >= 0 && static_cast<std::size_t>(v) < n) fixed[static_cast<std::size_t>(v)] = 1;
+    if (probe.vertices.empty()) diagnostics.error(SourceRange{}, "the probe has no vertices");
+    for (const auto v : probe.vertices) {
+      if (v < 0 || static_cast<std::size_t>(v) >= n) {
+        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is out of range (the mesh has " +
+                                             std::to_string(n) + " vertices)");
+        continue;
+      }
+      if (fixed[static_cast<std::size_t>(v)])
+        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is also fixed; unfix it or pick another");
+      if (seen[static_cast<std::size_t>(v)])
+        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is given twice");
+      seen[static_cast<std::size_t>(v)] = 1;
+    }
+    bool finite = std::isfinite(probe.ramp_time) && probe.ramp_time >= 0.0;
+    for (const double value : probe.target) finite = finite && std::isfinite(value);
+    if (!finite) diagnostics.error(SourceRange{}, "the probe's target and ramp time must be finite (ramp time >= 0)");
+  }
+  if (setup.strain_stiffness) {
+    const StrainStiffnessTable& table = *setup.strain_stiffness;
+    bool valid = table.strain.size() >= 2 && table.modulus.size() == table.strain.size() &&
+                 table.stiffness_per_modulus.size() == setup.springs.size();
+    for (std::size_t i = 0; valid && i < table.strain.size(); ++i) {
+      valid = std::isfinite(table.strain[i]) && std::isfinite(table.modulus[i]) && table.modulus[i] >= 0.0 &&
+              (i == 0 || table.strain[i] > table.strain[i - 1]);
+    }
+    for (const double factor : table.stiffness_per_modulus) valid = valid && std::isfinite(factor) && factor >= 0.0;
+    if (!valid)
+      diagnostics.error(SourceRange{}, "the strain stiffness table needs at least 2 strictly increasing finite "
+                                       "strains, one finite non-negative modulus per strain and one non-negative "
+                                       "factor per spring");
+  }
+  return diagnostics.error_count() == errors;
+}
 
 }  // namespace
 
+double elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions) {
+  const SpringNetwork& net = setup.springs;
+  const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
+  double energy = 0.0;
+  for (std::size_t s = 0; s < net.size(); ++s) {
+    const Point3& a = positions[static_cast<std::size_t>(net.first[s])];
+    const Point3& b = positions[static_cast<std::size_t>(net.second[s])];
+    const double length = distance(a, b);
+    const double rest = net.rest_length[s];
+    double k = net.stiffness[s];
+    if (setup.strain_stiffness) {
+      const StrainStiffnessTable& table = *setup.strain_stiffness;
+      const double strain = (length - rest) / rest;
+      int cell = 0;
+      double fraction = 0.0;
+      locate_on_axis(table.strain.data(), static_cast<int>(table.strain.size()), strain, cell, fraction);
+      const auto c = static_cast<std::size_t>(cell);
+      k = ((1.0 - fraction) * table.modulus[c] + fraction * table.modulus[c + 1]) * table.stiffness_per_modulus[s];
+    }
+    energy += kernels::spring_potential_energy(length, rest, k, law);
+  }
+  return energy;
+}
+
+double kinetic_energy(const SimulationSetup& setup, const std::vector<Point3>& velocities) {
+  double energy = 0.0;
+  for (std::size_t v = 0; v < velocities.size(); ++v) {
+    const Point3& u = velocities[v];
+    energy += 0.5 * setup.mass[v] * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+  }
+  return energy;
+}
+
 std::unique_ptr<CpuSimulation> CpuSimulation::create(const SimulationSetup& setup, DiagnosticList& diagnostics) {
-  const auto stability = check_stability(setup, diagnostics);  // validates the setup first
+  if (!validate_loads(setup, diagnostics)) return nullptr;
+  std::optional<StabilityReport> stability;
+  if (setup.strain_stiffness && setup.strain_stiffness->stiffness_per_modulus.size() == setup.springs.size()) {
+    // The step must be stable at the stiffest value the table can give.
+    SimulationSetup stiffest = setup;
+    const double modulus_max =
+        *std::max_element(setup.strain_stiffness->modulus.begin(), setup.strain_stiffness->modulus.end());
+    for (std::size_t s = 0; s < stiffest.springs.size(); ++s)
+      stiffest.springs.stiffness[s] = modulus_max * setup.strain_stiffness->stiffness_per_modulus[s];
+    stability = check_stability(stiffest, diagnostics);
+  } else {
+    stability = check_stability(setup, diagnostics);  // validates the setup first
+  }
   if (!stability) return nullptr;
   if (setup.precision == Precision::Float) return std::make_unique<CpuSimulationImpl<float>>(setup, *stability);
   return std::make_unique<CpuSimulationImpl<double>>(setup, *stability);

@@ -25,6 +25,33 @@ struct ImplicitSolverOptions {
   double tolerance = 1e-10;  // relative residual |r| / |b|
 };
 
+// A probe on picked vertices (DESIGN section 7: prescribed displacement or force, reaction force recorded).
+// The load ramps linearly from zero at t = 0 to `target` at t = ramp_time and is then held (ramp_time 0: at once).
+struct ProbeLoad {
+  enum class Mode { Displacement, Force } mode = Mode::Displacement;
+  std::vector<std::int32_t> vertices;  // distinct, not fixed
+  // Displacement: m, every probe vertex is moved kinematically to its initial position + ramp(t) target.
+  // Force: N, the total, shared equally by the probe vertices (added to any external force).
+  Point3 target{0.0, 0.0, 0.0};
+  double ramp_time = 0.0;  // s
+};
+
+// What a probe measures at the current state.
+struct ProbeReading {
+  Point3 displacement{0.0, 0.0, 0.0};  // m, mean over the probe vertices from their initial positions
+  // N, the force the probe exerts on the tissue: the applied total (Force), or minus the sum of the spring forces
+  // (with their dashpots) on the probe vertices (Displacement: the reaction force).
+  Point3 force{0.0, 0.0, 0.0};
+};
+
+// Table-driven stiffness k(strain) (DESIGN section 7): every step, each spring's strain X = (l - l0) / l0 is looked
+// up in modulus(X) (kernels/table_math.h, clamped to the table's ends) and k = modulus(X) * stiffness_per_modulus.
+struct StrainStiffnessTable {
+  std::vector<double> strain;                 // breakpoints, strictly increasing, at least 2
+  std::vector<double> modulus;                // Pa, one per breakpoint
+  std::vector<double> stiffness_per_modulus;  // per spring (m): the material mapping's k for a modulus of 1 Pa
+};
+
 struct SimulationSetup {
   std::vector<Point3> rest_positions;      // also x0 of the nodal damping gamma0 + gamma1 |x - x0|
   std::vector<Point3> initial_positions;   // empty: the rest positions
@@ -53,7 +80,17 @@ struct SimulationSetup {
 
   std::size_t record_every = 0;  // 0: no samples; otherwise every N steps (and step 0)
   std::vector<std::int32_t> recorded_vertices;
+
+  std::optional<ProbeLoad> probe;                         // CPU backend
+  std::optional<StrainStiffnessTable> strain_stiffness;  // CPU backend; replaces springs.stiffness every step
 };
+
+// Elastic energy of the springs at `positions` (J): 1/2 k (l - l0)^2 for the linear law, the integral of F_s for
+// Basafa-Farahmand. With a strain table, k is the table's value at the current strain (an approximation: the
+// integral of the varying k is not taken).
+double elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions);
+// Kinetic energy 1/2 m |v|^2 summed over the vertices (J).
+double kinetic_energy(const SimulationSetup& setup, const std::vector<Point3>& velocities);
 
 // The critical time step from the Gershgorin bound w_max^2 <= max_i 2 sum_j k_ij / m_i (k_ij: the spring's largest
 // tangent stiffness) and the damping rate beta_max = max_i (2 sum_j c_ij + gamma0) / m_i, through each scheme's
@@ -122,6 +159,10 @@ class CpuSimulation {
   virtual const StabilityReport& stability() const = 0;
   virtual const std::optional<NonFiniteReport>& non_finite() const = 0;
   virtual int implicit_max_iterations_used() const = 0;
+  // The probe's displacement and force now; zeros without a probe.
+  virtual ProbeReading probe_reading() const = 0;
+  // The stiffness of every spring now (N/m): springs.stiffness, or the last table lookup with a strain table.
+  virtual std::vector<double> current_stiffness() const = 0;
 };
 
 // create + advance(step_count) with samples every record_every steps.

@@ -1,0 +1,260 @@
+#include "runtime/scene/material_binding.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "compiler/eval/interpreter.h"
+#include "compiler/ir/number_format.h"
+#include "kernels/table_math.h"
+
+namespace fmpc::sim {
+
+std::optional<double> pascals_per_unit(const std::string& unit) {
+  if (unit.empty() || unit == "kPa") return 1000.0;
+  if (unit == "Pa") return 1.0;
+  if (unit == "MPa") return 1e6;
+  return std::nullopt;
+}
+
+namespace {
+
+bool inside(const SceneBox& box, const Point3& p) {
+  for (std::size_t i = 0; i < 3; ++i)
+    if (p[i] < box.min[i] || p[i] > box.max[i]) return false;
+  return true;
+}
+
+// The inputs every binding and the evaluator agree on: per evaluator input, which binding sets it.
+struct ResolvedBindings {
+  std::vector<const InputBinding*> by_input;  // one per evaluator input
+  int strain_input = -1;
+  bool per_region = false;
+};
+
+std::optional<ResolvedBindings> resolve_bindings(const std::vector<std::string>& input_names,
+                                                 const std::string& evaluator, const Scene& scene,
+                                                 DiagnosticList& diagnostics) {
+  ResolvedBindings resolved;
+  resolved.by_input.assign(input_names.size(), nullptr);
+  const std::size_t errors = diagnostics.error_count();
+  std::string all_inputs;
+  for (const auto& name : input_names) all_inputs += (all_inputs.empty() ? "" : ", ") + name;
+  for (const InputBinding& binding : scene.material.bindings) {
+    const std::string field = "material.inputs." + binding.input;
+    const auto found = std::find(input_names.begin(), input_names.end(), binding.input);
+    if (found == input_names.end()) {
+      std::vector<std::string> notes;
+      if (auto suggestion = closest_name(binding.input, input_names)) notes.push_back("did you mean '" + *suggestion + "'?");
+      notes.push_back("the inputs of " + evaluator + " are: " + all_inputs);
+      diagnostics.error(scene.range_of(field), field + ": '" + binding.input + "' is not an input of " + evaluator, notes);
+      continue;
+    }
+    const auto index = static_cast<std::size_t>(found - input_names.begin());
+    resolved.by_input[index] = &binding;
+    if (binding.kind == InputBinding::Kind::Strain) resolved.strain_input = static_cast<int>(index);
+    if (binding.kind == InputBinding::Kind::PerRegion) resolved.per_region = true;
+  }
+  for (std::size_t i = 0; i < input_names.size(); ++i) {
+    if (resolved.by_input[i]) continue;
+    diagnostics.error(scene.range_of("material.inputs"),
+                      "material.inputs: input '" + input_names[i] + "' of " + evaluator +
+                          " is not bound; give it a number, 'strain' or {regions: [...], default: NUMBER}");
+  }
+  if (resolved.strain_input >= 0 && resolved.per_region) {
+    diagnostics.error(scene.range_of("material.inputs"),
+                      "material.inputs: a 'strain' binding cannot be combined with per-region bindings; bind the "
+                      "other inputs to constants");
+  }
+  if (diagnostics.error_count() != errors) return std::nullopt;
+  return resolved;
+}
+
+// The value of every non-strain input for one spring, or nullopt (with an error) when a per-region input has no
+// region and no default at that spring.
+std::optional<double> bound_value(const InputBinding& binding, const Point3& midpoint, std::size_t spring,
+                                  const Scene& scene, DiagnosticList& diagnostics) {
+  if (binding.kind == InputBinding::Kind::Constant) return binding.value;
+  for (const RegionValue& region : binding.regions)
+    if (inside(region.box, midpoint)) return region.value;
+  if (binding.has_default) return binding.value;
+  const std::string field = "material.inputs." + binding.input;
+  diagnostics.error(scene.range_of(field),
+                    field + ": spring " + std::to_string(spring) + " (midpoint " + format_number(midpoint[0]) + ", " +
+                        format_number(midpoint[1]) + ", " + format_number(midpoint[2]) +
+                        ") lies in no region; add a region that contains it or a 'default'");
+  return std::nullopt;
+}
+
+// Checks and converts the evaluator's outputs (output units) to Pa, and fills the range.
+bool finish(MaterialBinding& binding, const Scene& scene, DiagnosticList& diagnostics) {
+  std::vector<double>& values = binding.strain.empty() ? binding.modulus_per_spring : binding.strain_modulus;
+  const std::string field = scene.material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!(values[i] > 0.0) || !std::isfinite(values[i])) {
+      const std::string where = binding.strain.empty() ? "spring " + std::to_string(i)
+                                                       : "strain " + format_number(binding.strain[i]);
+      diagnostics.error(scene.range_of(field), field + ": output '" + binding.output + "' is " +
+                                                   format_number(values[i]) + " at " + where +
+                                                   "; Young's modulus must be a positive number");
+      return false;
+    }
+    values[i] *= binding.pascals_per_output_unit;
+  }
+  if (!values.empty()) {
+    binding.modulus_min = *std::min_element(values.begin(), values.end());
+    binding.modulus_max = *std::max_element(values.begin(), values.end());
+  }
+  return true;
+}
+
+void report_flags(const EvaluationFlags& flags, const FuzzySystem& system, const std::vector<double>& inputs,
+                  const Scene& scene, std::vector<bool>& warned_range, bool& warned_no_fire,
+                  DiagnosticList& diagnostics) {
+  for (const int i : flags.inputs_out_of_range) {
+    const auto index = static_cast<std::size_t>(i);
+    if (warned_range[index]) continue;
+    warned_range[index] = true;
+    const Variable& input = system.inputs[index];
+    const std::string field = "material.inputs." + input.name;
+    diagnostics.warning(scene.range_of(field), "input-out-of-range",
+                        field + ": " + format_number(inputs[index]) + " is outside the input's range [" +
+                            format_number(input.min) + ", " + format_number(input.max) + "]; evaluated as given");
+  }
+  if (!flags.outputs_no_rule_fired.empty() && !warned_no_fire) {
+    warned_no_fire = true;
+    diagnostics.warning(scene.range_of("material.inputs"), "no-rule-fired",
+                        "material.inputs: no rule of '" + system.name +
+                            "' fires for some bound values; the no-fire policy gives the output");
+  }
+}
+
+}  // namespace
+
+std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_index, const Scene& scene,
+                                          const std::vector<Point3>& spring_midpoints, DiagnosticList& diagnostics) {
+  std::vector<std::string> names;
+  for (const Variable& v : system.inputs) names.push_back(v.name);
+  const auto resolved = resolve_bindings(names, "system '" + system.name + "'", scene, diagnostics);
+  if (!resolved) return std::nullopt;
+  MaterialBinding binding;
+  binding.system = system.name;
+  const Variable& output = system.outputs[static_cast<std::size_t>(output_index)];
+  binding.output = output.name;
+  const auto scale = pascals_per_unit(output.unit);
+  if (!scale) {
+    diagnostics.error(scene.range_of("material.rules"),
+                      "material.rules: output '" + output.name + "' is in '" + output.unit +
+                          "'; Young's modulus must be in kPa, Pa or MPa (give the output that unit in the rules)");
+    return std::nullopt;
+  }
+  binding.pascals_per_output_unit = *scale;
+  Interpreter interpreter(system);
+  std::vector<bool> warned_range(system.inputs.size(), false);
+  bool warned_no_fire = false;
+  const auto evaluate = [&](const std::vector<double>& inputs) -> std::optional<double> {
+    const Evaluation evaluation = interpreter.evaluate(inputs);
+    ++binding.evaluations;
+    report_flags(evaluation.flags, system, inputs, scene, warned_range, warned_no_fire, diagnostics);
+    if (evaluation.flags.no_fire_error) {
+      diagnostics.error(scene.range_of("material.inputs"),
+                        "material.inputs: no rule of '" + system.name +
+                            "' fires and its no-fire policy is 'error'; change the bound values");
+      return std::nullopt;
+    }
+    return evaluation.outputs[static_cast<std::size_t>(output_index)];
+  };
+
+  std::vector<double> inputs(system.inputs.size(), 0.0);
+  if (resolved->strain_input >= 0) {
+    const auto strain_index = static_cast<std::size_t>(resolved->strain_input);
+    const Variable& strain_input = system.inputs[strain_index];
+    StrainAxis axis{strain_input.min, strain_input.max, 101};
+    if (scene.material.strain_axis) axis = *scene.material.strain_axis;
+    for (std::size_t i = 0; i < inputs.size(); ++i)
+      if (i != strain_index) inputs[i] = resolved->by_input[i]->value;
+    for (int p = 0; p < axis.points; ++p) {
+      const double strain =
+          p + 1 == axis.points ? axis.max : axis.min + (axis.max - axis.min) * p / (axis.points - 1);
+      inputs[strain_index] = strain;
+      const auto value = evaluate(inputs);
+      if (!value) return std::nullopt;
+      binding.strain.push_back(strain);
+      binding.strain_modulus.push_back(*value);
+    }
+  } else {
+    std::map<std::vector<double>, double> cache;
+    binding.modulus_per_spring.resize(spring_midpoints.size());
+    for (std::size_t s = 0; s < spring_midpoints.size(); ++s) {
+      for (std::size_t i = 0; i < inputs.size(); ++i) {
+        const auto value = bound_value(*resolved->by_input[i], spring_midpoints[s], s, scene, diagnostics);
+        if (!value) return std::nullopt;
+        inputs[i] = *value;
+      }
+      const auto cached = cache.find(inputs);
+      if (cached != cache.end()) {
+        binding.modulus_per_spring[s] = cached->second;
+        continue;
+      }
+      const auto value = evaluate(inputs);
+      if (!value) return std::nullopt;
+      cache.emplace(inputs, *value);
+      binding.modulus_per_spring[s] = *value;
+    }
+  }
+  if (!finish(binding, scene, diagnostics)) return std::nullopt;
+  return binding;
+}
+
+std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const std::string& output_unit,
+                                          const Scene& scene, const std::vector<Point3>& spring_midpoints,
+                                          DiagnosticList& diagnostics) {
+  std::vector<std::string> names;
+  for (const TableAxis& axis : table.axes) names.push_back(axis.input_name);
+  const auto resolved = resolve_bindings(names, "table '" + table.system_name + "'", scene, diagnostics);
+  if (!resolved) return std::nullopt;
+  MaterialBinding binding;
+  binding.system = table.system_name;
+  binding.output = table.output_names[static_cast<std::size_t>(output_index)];
+  const auto scale = pascals_per_unit(output_unit);
+  if (!scale) {
+    diagnostics.error(scene.range_of("material.table"),
+                      "material.table: the output unit '" + output_unit + "' is not kPa, Pa or MPa");
+    return std::nullopt;
+  }
+  binding.pascals_per_output_unit = *scale;
+  std::vector<const double*> breakpoints;
+  std::vector<int> counts;
+  const TableView<double> view = view_of(table, breakpoints, counts);
+  std::vector<double> all_outputs(table.output_names.size());
+  const auto evaluate = [&](const std::vector<double>& query) {
+    interpolate_table(view, query.data(), all_outputs.data());
+    ++binding.evaluations;
+    return all_outputs[static_cast<std::size_t>(output_index)];
+  };
+  std::vector<double> query(table.axes.size(), 0.0);
+  if (resolved->strain_input >= 0) {
+    const auto strain_index = static_cast<std::size_t>(resolved->strain_input);
+    for (std::size_t i = 0; i < query.size(); ++i)
+      if (i != strain_index) query[i] = resolved->by_input[i]->value;
+    for (const double strain : table.axes[strain_index].breakpoints) {
+      query[strain_index] = strain;
+      binding.strain.push_back(strain);
+      binding.strain_modulus.push_back(evaluate(query));
+    }
+  } else {
+    binding.modulus_per_spring.resize(spring_midpoints.size());
+    for (std::size_t s = 0; s < spring_midpoints.size(); ++s) {
+      for (std::size_t i = 0; i < query.size(); ++i) {
+        const auto value = bound_value(*resolved->by_input[i], spring_midpoints[s], s, scene, diagnostics);
+        if (!value) return std::nullopt;
+        query[i] = *value;
+      }
+      binding.modulus_per_spring[s] = evaluate(query);
+    }
+  }
+  if (!finish(binding, scene, diagnostics)) return std::nullopt;
+  return binding;
+}
+
+}  // namespace fmpc::sim

@@ -1,0 +1,44 @@
+#pragma once
+// From fuzzy rules (or a compiled .fzt table) and a scene's input bindings to Young's modulus per spring, or to a
+// modulus(strain) table looked up every step. The FIS output is Young's modulus in its own unit (kPa for the
+// thesis's liver rules); everything returned here is in Pa (SI inside). The material mapping (Van Gelder 1998)
+// then turns the modulus into spring constants (runtime/springs/spring_network.h).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "compiler/backend/table/lookup_table.h"
+#include "compiler/ir/fuzzy_system.h"
+#include "compiler/sema/diagnostic.h"
+#include "runtime/scene/scene_file.h"
+
+namespace fmpc::sim {
+
+struct MaterialBinding {
+  std::string system;  // the system (or table) evaluated
+  std::string output;  // its output used as Young's modulus
+  double pascals_per_output_unit = 1000.0;  // kPa -> Pa by default
+  // Every binding constant or per region: the modulus of every spring (Pa).
+  std::vector<double> modulus_per_spring;
+  // A strain binding: modulus (Pa) at each strain breakpoint (the other inputs at their constants).
+  std::vector<double> strain;
+  std::vector<double> strain_modulus;
+  std::size_t evaluations = 0;  // interpreter (or table) evaluations made
+  double modulus_min = 0.0, modulus_max = 0.0;  // Pa, over the springs or the strain table
+};
+
+// Pa per unit of a FIS output: kPa (or no unit, as in MATLAB files: kPa assumed), Pa, MPa. nullopt otherwise.
+std::optional<double> pascals_per_unit(const std::string& unit);
+
+// Evaluates `system`'s output `output_index` for the bindings. `spring_midpoints` (mesh units, one per spring)
+// place springs in regions. Every input must be bound exactly once; a strain binding cannot be combined with
+// per-region bindings. Errors are located at the scene's fields (scene.range_of("material.inputs.NAME")).
+std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_index, const Scene& scene,
+                                          const std::vector<Point3>& spring_midpoints, DiagnosticList& diagnostics);
+
+// The same for a compiled table: its axes are the inputs to bind; the strain axis uses the table's breakpoints.
+std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const std::string& output_unit,
+                                          const Scene& scene, const std::vector<Point3>& spring_midpoints,
+                                          DiagnosticList& diagnostics);
+
+}  // namespace fmpc::sim

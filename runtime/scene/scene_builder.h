@@ -1,0 +1,37 @@
+#pragma once
+// From a parsed Scene to what runs: the mesh (read or generated, repaired), the spring model with its material
+// (fuzzy rules or a table evaluated for the bindings, Van Gelder mapping), fixed vertices, loads and probe, the
+// integrator settings. Only what the scene uses is built: no strain table without a strain binding, no force
+// arrays without force loads, no probe without a probe.
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "compiler/sema/diagnostic.h"
+#include "runtime/integrate/simulation.h"
+#include "runtime/mesh/mesh.h"
+#include "runtime/scene/material_binding.h"
+#include "runtime/scene/scene_file.h"
+
+namespace fmpc::sim {
+
+struct BuiltScene {
+  Mesh mesh;  // repaired, in mesh units (frames are written in metres from the setup)
+  SimulationSetup setup;
+  std::optional<MaterialBinding> material;  // rules or table
+  std::string stiffness_description;        // for the summary, e.g. "Van Gelder 1998, E = 9.8 kPa"
+  // Files read while building, with their text, so that diagnostics located in them can show the line.
+  std::vector<std::pair<std::string, std::string>> sources;
+};
+
+// Builds everything; returns nullopt after appending errors (located at the scene's fields where they come from
+// the scene). Mesh repairs are reported as one warning.
+std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics);
+
+// Möller-Trumbore: the distance t >= 0 along `direction` (any length; t is in its units) at which the ray from
+// `origin` hits triangle abc, or nullopt.
+std::optional<double> ray_triangle_hit(const Point3& origin, const Point3& direction, const Point3& a, const Point3& b,
+                                       const Point3& c);
+
+}  // namespace fmpc::sim

@@ -1,0 +1,150 @@
+#pragma once
+// Scene files (YAML, docs/scenes.md): what to simulate, as plain data. parse_scene reads the text and checks every
+// field's type and range; every error names the field and what is allowed. Nothing is built here: build_scene
+// (runtime/scene/scene_builder.h) turns a Scene into a mesh, a spring model and a SimulationSetup.
+#include <array>
+#include <cstddef>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "compiler/sema/diagnostic.h"
+#include "runtime/integrate/simulation.h"
+#include "runtime/mesh/generated_mesh.h"
+#include "runtime/springs/spring_network.h"
+
+namespace fmpc::sim {
+
+struct SceneMesh {
+  enum class Kind { File, Box, Ellipsoid } kind = Kind::Box;
+  std::string file;         // resolved against the scene's folder
+  double unit = 1.0;        // metres per mesh unit (`units: m|cm|mm|NUMBER`)
+  BoxSpec box;              // mesh units
+  EllipsoidSpec ellipsoid;  // mesh units
+};
+
+// An axis-aligned box in mesh units (fixed nodes, regions).
+struct SceneBox {
+  Point3 min{0.0, 0.0, 0.0};
+  Point3 max{0.0, 0.0, 0.0};
+};
+
+struct RegionValue {
+  SceneBox box;
+  double value = 0.0;
+};
+
+// How one FIS input gets its value.
+struct InputBinding {
+  std::string input;
+  enum class Kind {
+    Constant,   // the same value for every spring
+    PerRegion,  // by the spring's midpoint: the first region box containing it, else `value` (the default)
+    Strain,     // the spring's strain (l - l0) / l0, looked up in a table every step
+  } kind = Kind::Constant;
+  double value = 0.0;
+  bool has_default = false;  // PerRegion: whether `value` is a default
+  std::vector<RegionValue> regions;
+};
+
+struct StrainAxis {
+  double min = -0.3;
+  double max = 0.3;
+  int points = 61;
+};
+
+struct SceneMaterial {
+  enum class Source {
+    YoungsModulus,        // value: kPa, through `mapping`
+    Stiffness,            // value: N/m, every spring
+    StiffnessOverLength,  // value: N, k = value / l0 (SOFA's MeshSpringForceField)
+    Rules,                // a rule file: its output is Young's modulus, through `mapping`
+    Table,                // a compiled .fzt table: its output is Young's modulus, through `mapping`
+  } source = Source::YoungsModulus;
+  double value = 0.0;
+  std::string file;    // Rules / Table, resolved against the scene's folder
+  std::string system;  // Rules: which system of the file; empty: the only one
+  std::string output;  // which output; empty: the only one
+  std::string patient;  // a label, carried into the summary
+  std::vector<InputBinding> bindings;  // in the order given
+  std::optional<StrainAxis> strain_axis;  // Rules with a strain binding; default: the input's range, 101 points
+  double thickness = 1.0;        // m, membranes (triangle meshes)
+  double flexion_fraction = 0.1;
+};
+
+struct SceneLaw {
+  kernels::SpringLaw law = kernels::SpringLaw::LinearDashpot;
+  double k2_over_k1 = 200.0;
+  double xc = 0.2;
+  double gamma0 = 0.0;
+  double gamma1 = 0.0;
+};
+
+struct SceneFixed {
+  std::vector<std::int32_t> indices;  // as in the mesh file (before repair)
+  std::vector<SceneBox> boxes;
+  struct Plane {
+    Point3 point{0.0, 0.0, 0.0};
+    Point3 normal{0.0, 0.0, 1.0};
+    double tolerance = 1e-9;  // mesh units
+  };
+  std::vector<Plane> planes;
+};
+
+struct SceneProbe {
+  ProbeLoad::Mode mode = ProbeLoad::Mode::Displacement;
+  std::vector<std::int32_t> indices;  // pick by index (mesh file numbering)
+  bool by_ray = false;
+  Point3 ray_origin{0.0, 0.0, 0.0};     // mesh units
+  Point3 ray_direction{0.0, 0.0, -1.0};
+  double radius = 0.0;  // mesh units: the vertices within this distance of the first hit (0: the hit's nearest)
+  Point3 target{0.0, 0.0, 0.0};  // m (displacement) or N (force)
+  double ramp = 0.0;             // s
+};
+
+enum class SceneBackend { Auto, Cpu, Cuda };
+
+struct SceneOutputs {
+  std::string directory;  // resolved against the current folder; empty: "<scene name>.out" beside the scene
+  int frames = 20;        // .vtu frames (evenly spaced, first and last included); 0: none
+  int samples = 200;      // CSV rows (evenly spaced); 0: none
+  bool csv = true;
+  bool summary = true;
+  bool plot = true;  // force-displacement PNG (needs a probe)
+};
+
+struct Scene {
+  std::string path;  // the scene file
+  std::string name;  // `name`, or the file's stem
+  SceneMesh mesh;
+  SceneMaterial material;
+  MassSpec mass;
+  DampingSpec damping;
+  TriangleSpringOptions triangle_springs;
+  SceneLaw law;
+  SceneFixed fixed;
+  Point3 gravity{0.0, 0.0, 0.0};
+  std::optional<SceneProbe> probe;
+  Integrator integrator = Integrator::SemiImplicitEuler;
+  std::optional<double> dt;  // nullopt: auto
+  double duration = 1.0;     // s
+  std::optional<std::size_t> steps;  // overrides duration (command line)
+  SceneBackend backend = SceneBackend::Auto;
+  Precision precision = Precision::Float;
+  unsigned threads = 0;  // 0: hardware concurrency, at most 8
+  SceneOutputs outputs;
+  // Where each field was written ("material.inputs.HCV", "fixed.indices"), for errors found later.
+  std::map<std::string, SourceRange> ranges;
+
+  SourceRange range_of(const std::string& field) const;
+};
+
+// Parses scene YAML `text` read from `path`. Returns nullopt after appending errors (each naming the field, its
+// position and what is allowed); unknown keys are errors with a "did you mean" note.
+std::optional<Scene> parse_scene(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
+
+const char* to_string(SceneBackend backend);
+const char* scene_name(Integrator integrator);  // the scene spelling: "semi_implicit_euler", ...
+
+}  // namespace fmpc::sim

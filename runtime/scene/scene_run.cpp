@@ -1,0 +1,241 @@
+#include "runtime/scene/scene_run.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+
+#include "compiler/ir/number_format.h"
+#include "runtime/io/atomic_file.h"
+#include "runtime/io/json_writer.h"
+#include "runtime/io/vtk_xml.h"
+
+namespace fmpc::sim {
+
+std::vector<std::string> time_series_columns(bool with_probe) {
+  if (!with_probe) return {"time_s", "kinetic_energy_J", "elastic_energy_J", "max_displacement_m"};
+  return {"time_s",          "probe_displacement_m", "probe_force_N",    "probe_dx_m",        "probe_dy_m",
+          "probe_dz_m",      "probe_fx_N",           "probe_fy_N",       "probe_fz_N",        "kinetic_energy_J",
+          "elastic_energy_J", "max_displacement_m"};
+}
+
+namespace {
+
+// `count` steps evenly spread over [0, total], first and last included (one: the last only).
+std::vector<std::size_t> spread(int count, std::size_t total) {
+  std::vector<std::size_t> steps;
+  if (count <= 0) return steps;
+  if (count == 1) return {total};
+  for (int i = 0; i < count; ++i) {
+    const double fraction = static_cast<double>(i) / static_cast<double>(count - 1);
+    steps.push_back(static_cast<std::size_t>(std::llround(fraction * static_cast<double>(total))));
+  }
+  steps.erase(std::unique(steps.begin(), steps.end()), steps.end());
+  return steps;
+}
+
+double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+std::string frame_name(std::size_t index) {
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%05zu.vtu", index);
+  return name;
+}
+
+}  // namespace
+
+std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
+                                        DiagnosticList& diagnostics) {
+  const SimulationSetup& setup = built.setup;
+  const auto simulation = CpuSimulation::create(setup, diagnostics);
+  if (!simulation) return std::nullopt;
+  if (!ensure_directory(options.output_directory, diagnostics)) return std::nullopt;
+  SceneRunResult result;
+  result.stability = simulation->stability();
+  const double dt = result.stability.time_step;
+  result.steps_planned = scene.steps ? *scene.steps
+                                     : static_cast<std::size_t>(std::ceil(scene.duration / dt * (1.0 - 1e-12)));
+  const std::size_t total = result.steps_planned;
+  const std::vector<std::size_t> frame_steps = scene.outputs.frames > 0 ? spread(scene.outputs.frames, total)
+                                                                        : std::vector<std::size_t>{};
+  const bool write_csv = scene.outputs.csv && scene.outputs.samples > 0;
+  const std::vector<std::size_t> sample_steps =
+      write_csv || setup.probe ? spread(std::max(scene.outputs.samples, 2), total) : std::vector<std::size_t>{};
+  std::set<std::size_t> events(frame_steps.begin(), frame_steps.end());
+  events.insert(sample_steps.begin(), sample_steps.end());
+  for (int i = 1; i <= 100; ++i) events.insert(total * static_cast<std::size_t>(i) / 100);
+  events.insert(total);
+
+  const std::filesystem::path directory(options.output_directory);
+  const bool with_probe = setup.probe.has_value();
+  Point3 probe_axis{0.0, 0.0, 0.0};
+  if (with_probe) {
+    const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
+    if (length > 0.0)
+      for (std::size_t i = 0; i < 3; ++i) probe_axis[i] = setup.probe->target[i] / length;
+  }
+  const std::vector<Point3>& rest = setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
+
+  std::string csv;
+  if (write_csv) {
+    const auto columns = time_series_columns(with_probe);
+    for (std::size_t i = 0; i < columns.size(); ++i) csv += (i ? "," : "") + columns[i];
+    csv += "\n";
+  }
+  std::vector<PvdFrame> frames;
+  bool outputs_ok = true;
+  const auto record = [&](bool frame, bool sample) {
+    const std::vector<Point3> positions = simulation->positions();
+    std::vector<Point3> displacement(positions.size());
+    double largest = 0.0;
+    for (std::size_t v = 0; v < positions.size(); ++v) {
+      for (std::size_t i = 0; i < 3; ++i) displacement[v][i] = positions[v][i] - rest[v][i];
+      largest = std::max(largest, std::sqrt(dot(displacement[v], displacement[v])));
+    }
+    result.max_displacement = std::max(result.max_displacement, largest);
+    const double time = simulation->time();
+    if (frame && outputs_ok) {
+      const std::string name = frame_name(frames.size());
+      const std::vector<VtuPointVectors> data = {{"displacement", displacement},
+                                                 {"velocity", simulation->velocities()}};
+      outputs_ok = write_file_atomically((directory / name).string(), vtu_document(positions, built.mesh, data),
+                                         diagnostics);
+      frames.push_back({time, name});
+      result.files.push_back((directory / name).string());
+    }
+    if (!sample) return;
+    const std::vector<Point3> velocities = simulation->velocities();
+    const double kinetic = kinetic_energy(setup, velocities);
+    const double elastic = elastic_energy(setup, positions);
+    std::vector<double> row = {time};
+    if (with_probe) {
+      const ProbeReading reading = simulation->probe_reading();
+      const ProbeCurvePoint point{time, dot(reading.displacement, probe_axis), dot(reading.force, probe_axis)};
+      result.probe_curve.push_back(point);
+      row.insert(row.end(), {point.displacement, point.force, reading.displacement[0], reading.displacement[1],
+                             reading.displacement[2], reading.force[0], reading.force[1], reading.force[2]});
+    }
+    row.insert(row.end(), {kinetic, elastic, largest});
+    if (write_csv) {
+      for (std::size_t i = 0; i < row.size(); ++i) csv += (i ? "," : "") + format_number(row[i]);
+      csv += "\n";
+    }
+  };
+
+  const auto start = std::chrono::steady_clock::now();
+  const auto is_frame = [&](std::size_t step) { return std::binary_search(frame_steps.begin(), frame_steps.end(), step); };
+  const auto is_sample = [&](std::size_t step) {
+    return std::binary_search(sample_steps.begin(), sample_steps.end(), step);
+  };
+  if (is_frame(0) || is_sample(0)) record(is_frame(0), is_sample(0));
+  bool running = true;
+  for (const std::size_t event : events) {
+    if (event == 0) continue;
+    running = simulation->advance(event - simulation->steps_taken(), diagnostics);
+    if (!running) break;
+    if (is_frame(event) || is_sample(event)) record(is_frame(event), is_sample(event));
+    if (options.progress) options.progress(event, total);
+  }
+  if (!running) record(scene.outputs.frames > 0, write_csv || with_probe);  // the last finite state
+  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.completed = running;
+  result.steps_taken = simulation->steps_taken();
+  result.steps_per_second =
+      result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
+
+  if (outputs_ok && !frames.empty()) {
+    const std::string pvd = (directory / (scene.name + ".pvd")).string();
+    outputs_ok = write_file_atomically(pvd, pvd_document(frames), diagnostics);
+    result.files.push_back(pvd);
+  }
+  if (outputs_ok && write_csv) {
+    result.csv_path = (directory / "time_series.csv").string();
+    outputs_ok = write_file_atomically(result.csv_path, csv, diagnostics);
+    result.files.push_back(result.csv_path);
+  }
+  if (outputs_ok && scene.outputs.summary) {
+    const std::vector<double> stiffness = simulation->current_stiffness();
+    double k_min = 0.0, k_max = 0.0, k_sum = 0.0;
+    if (!stiffness.empty()) {
+      k_min = *std::min_element(stiffness.begin(), stiffness.end());
+      k_max = *std::max_element(stiffness.begin(), stiffness.end());
+      for (const double k : stiffness) k_sum += k;
+    }
+    JsonWriter json;
+    json.begin_object()
+        .value("scene", scene.name)
+        .value("scene_file", scene.path)
+        .value("completed", result.completed)
+        .value("backend", options.backend)
+        .value("precision", setup.precision == Precision::Float ? "float" : "double")
+        .value("integrator", scene_name(setup.integrator))
+        .value("dt_s", dt)
+        .value("dt_auto", result.stability.automatic)
+        .value("critical_dt_s", result.stability.critical_time_step)
+        .value("steps", result.steps_taken)
+        .value("steps_planned", result.steps_planned)
+        .value("simulated_time_s", simulation->time())
+        .value("wall_time_s", result.wall_seconds)
+        .value("steps_per_second", result.steps_per_second)
+        .value("threads", static_cast<std::size_t>(setup.threads))
+        .value("max_displacement_m", result.max_displacement)
+        .begin_object("mesh")
+        .value("source", built.mesh.source)
+        .value("vertices", built.mesh.points.size())
+        .value("tetrahedra", built.mesh.tetrahedra.size())
+        .value("triangles", built.mesh.triangles.size())
+        .value("springs", setup.springs.size())
+        .value("fixed_vertices", setup.fixed_vertices.size())
+        .value("metres_per_unit", scene.mesh.unit)
+        .end_object()
+        .begin_object("stiffness")
+        .value("description", built.stiffness_description)
+        .value("k_min_N_per_m", k_min)
+        .value("k_mean_N_per_m", stiffness.empty() ? 0.0 : k_sum / static_cast<double>(stiffness.size()))
+        .value("k_max_N_per_m", k_max)
+        .value("strain_table", setup.strain_stiffness.has_value());
+    if (built.material) {
+      json.value("rules", scene.material.file)
+          .value("system", built.material->system)
+          .value("output", built.material->output)
+          .value("patient", scene.material.patient)
+          .value("youngs_modulus_min_kPa", built.material->modulus_min / 1000.0)
+          .value("youngs_modulus_max_kPa", built.material->modulus_max / 1000.0)
+          .value("evaluations", built.material->evaluations);
+      json.begin_object("inputs");
+      for (const InputBinding& binding : scene.material.bindings) {
+        if (binding.kind == InputBinding::Kind::Constant) json.value(binding.input, binding.value);
+        else json.value(binding.input, binding.kind == InputBinding::Kind::Strain ? "strain" : "per region");
+      }
+      json.end_object();
+    }
+    json.end_object();
+    if (with_probe) {
+      double max_force = 0.0;
+      for (const ProbeCurvePoint& point : result.probe_curve) max_force = std::max(max_force, std::abs(point.force));
+      json.begin_object("probe")
+          .value("mode", setup.probe->mode == ProbeLoad::Mode::Displacement ? "displacement" : "force")
+          .value("vertices", setup.probe->vertices.size())
+          .value("final_displacement_m", result.probe_curve.empty() ? 0.0 : result.probe_curve.back().displacement)
+          .value("final_force_N", result.probe_curve.empty() ? 0.0 : result.probe_curve.back().force)
+          .value("max_abs_force_N", max_force)
+          .end_object();
+    }
+    json.begin_object("outputs")
+        .value("directory", options.output_directory)
+        .value("frames", frames.size())
+        .value("pvd", frames.empty() ? std::string() : scene.name + ".pvd")
+        .value("csv", write_csv ? std::string("time_series.csv") : std::string())
+        .end_object();
+    json.end_object();
+    const std::string summary = (directory / "summary.json").string();
+    outputs_ok = write_file_atomically(summary, json.str(), diagnostics);
+    result.files.push_back(summary);
+  }
+  if (!outputs_ok) return std::nullopt;
+  return result;
+}
+
+}  // namespace fmpc::sim
