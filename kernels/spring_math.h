@@ -82,6 +82,25 @@ FMPC_HD Real spring_tension_slope(Real length, Real rest, Real k, const SpringLa
   return k;
 }
 
+// Energy stored in one spring at length l: the integral of its tension from l0 to l (evaluated in double by the
+// energy reductions of both backends). Linear: k (l - l0)^2 / 2. Basafa-Farahmand with X = |l - l0| / l0,
+// r = K2/K1: k l0^2 (X^2/2 + r X^4/4) up to Xc, and beyond it the linear growth of F_s:
+// k l0^2 (Xc^2/2 + r Xc^4/4 + (Xc + r Xc^3)(X - Xc) + (1 + 3 r Xc^2)(X - Xc)^2 / 2).
+template <typename Real>
+FMPC_HD Real spring_potential_energy(Real length, Real rest, Real k, const SpringLawParameters<Real>& p) {
+  if (p.law == SpringLaw::BasafaFarahmand) {
+    const Real r = p.k2_over_k1, xc = p.xc;
+    const Real difference = length - rest;
+    const Real strain = (difference < Real(0) ? -difference : difference) / rest;
+    const Real scale = k * rest * rest;
+    if (strain <= xc) return scale * (strain * strain / Real(2) + r * strain * strain * strain * strain / Real(4));
+    const Real a = xc + r * xc * xc * xc, b = Real(1) + Real(3) * r * xc * xc;
+    const Real beyond = strain - xc;
+    return scale * (xc * xc / Real(2) + r * xc * xc * xc * xc / Real(4) + a * beyond + b * beyond * beyond / Real(2));
+  }
+  return Real(0.5) * k * (length - rest) * (length - rest);
+}
+
 // Force on the vertex "self" from one spring: d = x_other - x_self, dv = v_other - v_self.
 // A spring shorter than 1e-9 l0 has no direction: it exerts no force (the thesis's code divided by the length
 // unguarded); the nodes around it still move it apart.

@@ -2,9 +2,12 @@
 
 #include <cuda_runtime_api.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
+#include <utility>
 
 #include "runtime/gpu/gpu_launch.h"
 
@@ -26,6 +29,10 @@ namespace fmpc::gpu {
 
 namespace {
 
+// Longer chunks replay the same graph several times: a graph's size (and its instantiation time) grows with its
+// kernel count, while the launch overhead saved per step does not improve beyond a few hundred steps.
+constexpr std::size_t kMaxStepsPerGraph = 256;
+
 // Device memory owned by one object; freed on destruction.
 template <typename T>
 class DeviceArray {
@@ -33,30 +40,49 @@ class DeviceArray {
   DeviceArray() = default;
   DeviceArray(const DeviceArray&) = delete;
   DeviceArray& operator=(const DeviceArray&) = delete;
-  ~DeviceArray() {
-    if (data_ != nullptr) cudaFree(data_);
-  }
+  ~DeviceArray() { release(); }
   cudaError_t upload(const std::vector<T>& host) {
-    if (data_ != nullptr) cudaFree(data_);
-    data_ = nullptr;
-    size_ = host.size();
+    const cudaError_t status = allocate(host.size());
+    if (status != cudaSuccess || size_ == 0) return status;
+    return cudaMemcpy(data_, host.data(), size_ * sizeof(T), cudaMemcpyHostToDevice);
+  }
+  // Zero-filled.
+  cudaError_t allocate(std::size_t size) {
+    release();
+    size_ = size;
     if (size_ == 0) return cudaSuccess;
     void* raw = nullptr;
     const cudaError_t status = cudaMalloc(&raw, size_ * sizeof(T));
-    if (status != cudaSuccess) return status;
+    if (status != cudaSuccess) {
+      size_ = 0;
+      return status;
+    }
     data_ = static_cast<T*>(raw);
-    return cudaMemcpy(data_, host.data(), size_ * sizeof(T), cudaMemcpyHostToDevice);
-  }
-  cudaError_t download(std::vector<T>& host) const {
-    host.resize(size_);
-    if (size_ == 0) return cudaSuccess;
-    return cudaMemcpy(host.data(), data_, size_ * sizeof(T), cudaMemcpyDeviceToHost);
+    return cudaMemset(data_, 0, size_ * sizeof(T));
   }
   T* data() const { return data_; }
+  std::size_t size() const { return size_; }
 
  private:
+  void release() {
+    if (data_ != nullptr) cudaFree(data_);
+    data_ = nullptr;
+    size_ = 0;
+  }
   T* data_ = nullptr;
   std::size_t size_ = 0;
+};
+
+template <typename Real>
+struct DeviceVector3 {
+  DeviceArray<Real> x, y, z;
+  cudaError_t allocate(std::size_t n) {
+    cudaError_t status = x.allocate(n);
+    if (status == cudaSuccess) status = y.allocate(n);
+    if (status == cudaSuccess) status = z.allocate(n);
+    return status;
+  }
+  MutableVector3View<Real> view() const { return {x.data(), y.data(), z.data()}; }
 };
 
 template <typename Real>
@@ -66,7 +92,86 @@ struct DeviceState {
   MutableStateView<Real> mutable_view() const {
     return {x.data(), y.data(), z.data(), vx.data(), vy.data(), vz.data()};
   }
+  std::vector<DeviceArray<Real>*> arrays() { return {&x, &y, &z, &vx, &vy, &vz}; }
+  std::vector<const DeviceArray<Real>*> arrays() const { return {&x, &y, &z, &vx, &vy, &vz}; }
 };
+
+// An instantiated CUDA graph, destroyed with its owner.
+class GraphExecutable {
+ public:
+  explicit GraphExecutable(cudaGraphExec_t executable) : executable_(executable) {}
+  GraphExecutable(const GraphExecutable&) = delete;
+  GraphExecutable& operator=(const GraphExecutable&) = delete;
+  ~GraphExecutable() {
+    if (executable_ != nullptr) cudaGraphExecDestroy(executable_);
+  }
+  cudaGraphExec_t get() const { return executable_; }
+
+ private:
+  cudaGraphExec_t executable_;
+};
+
+template <typename Real>
+cudaError_t copy_async(DeviceArray<Real>& to, const DeviceArray<Real>& from, cudaStream_t stream) {
+  if (from.size() == 0) return cudaSuccess;
+  return cudaMemcpyAsync(to.data(), from.data(), from.size() * sizeof(Real), cudaMemcpyDeviceToDevice, stream);
+}
+
+// The host-side concatenation of a batch (see gpu_launch.h): everything in double, converted on upload.
+struct ConcatenatedScenes {
+  std::vector<int> vertex_begin{0}, spring_begin{0};  // scene_count + 1 entries each
+  std::vector<int> offset, spring, neighbour, first, second, vertex_scene;
+  std::vector<double> rest_length, stiffness, damping, mass;
+  std::vector<unsigned char> fixed;
+  std::vector<double> rest[3], position[3], velocity[3], force[3];
+  bool has_forces = false;
+};
+
+ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) {
+  ConcatenatedScenes c;
+  for (const auto& setup : scenes) c.has_forces = c.has_forces || !setup.external_forces.empty();
+  int entries = 0;
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    const sim::SimulationSetup& setup = scenes[s];
+    const sim::SpringNetwork& net = setup.springs;
+    const int vertex_base = c.vertex_begin.back(), spring_base = c.spring_begin.back();
+    const std::size_t n = setup.rest_positions.size();
+    for (std::size_t v = 0; v < n; ++v) c.offset.push_back(entries + net.adjacency_offset[v]);
+    for (std::size_t e = 0; e < net.adjacency_spring.size(); ++e) {
+      c.spring.push_back(spring_base + net.adjacency_spring[e]);
+      c.neighbour.push_back(vertex_base + net.adjacency_neighbour[e]);
+    }
+    entries += static_cast<int>(net.adjacency_spring.size());
+    for (std::size_t k = 0; k < net.size(); ++k) {
+      c.first.push_back(vertex_base + net.first[k]);
+      c.second.push_back(vertex_base + net.second[k]);
+    }
+    c.rest_length.insert(c.rest_length.end(), net.rest_length.begin(), net.rest_length.end());
+    c.stiffness.insert(c.stiffness.end(), net.stiffness.begin(), net.stiffness.end());
+    c.damping.insert(c.damping.end(), net.damping.begin(), net.damping.end());
+    c.mass.insert(c.mass.end(), setup.mass.begin(), setup.mass.end());
+    std::vector<unsigned char> fixed(n, 0);
+    for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = 1;
+    c.fixed.insert(c.fixed.end(), fixed.begin(), fixed.end());
+    const std::vector<sim::Point3>& start =
+        setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
+    for (std::size_t v = 0; v < n; ++v) {
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        c.rest[axis].push_back(setup.rest_positions[v][axis]);
+        c.position[axis].push_back(start[v][axis]);
+        // As the CPU backend: fixed vertices start at rest.
+        c.velocity[axis].push_back(setup.initial_velocities.empty() || fixed[v] ? 0.0
+                                                                                : setup.initial_velocities[v][axis]);
+        if (c.has_forces) c.force[axis].push_back(setup.external_forces.empty() ? 0.0 : setup.external_forces[v][axis]);
+      }
+      c.vertex_scene.push_back(static_cast<int>(s));
+    }
+    c.vertex_begin.push_back(vertex_base + static_cast<int>(n));
+    c.spring_begin.push_back(spring_base + static_cast<int>(net.size()));
+  }
+  c.offset.push_back(entries);
+  return c;
+}
 
 template <typename Real>
 std::vector<Real> convert(const std::vector<double>& values) {
@@ -75,144 +180,388 @@ std::vector<Real> convert(const std::vector<double>& values) {
   return out;
 }
 
-template <typename Real>
-std::vector<Real> component(const std::vector<sim::Point3>& points, std::size_t axis) {
-  std::vector<Real> out(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) out[i] = static_cast<Real>(points[i][axis]);
-  return out;
+// The first field in which `scene` differs from scene 0 among those a batch shares, or nullptr.
+const char* shared_field_mismatch(const sim::SimulationSetup& scene, const sim::SimulationSetup& reference) {
+  if (scene.integrator != reference.integrator) return "integrator";
+  if (scene.precision != reference.precision) return "precision";
+  if (scene.law != reference.law) return "spring law";
+  if (scene.law == kernels::SpringLaw::BasafaFarahmand &&
+      (scene.basafa_k2_over_k1 != reference.basafa_k2_over_k1 || scene.basafa_xc != reference.basafa_xc)) {
+    return "Basafa-Farahmand parameters";
+  }
+  if (scene.gravity != reference.gravity) return "gravity";
+  if (scene.nodal_damping_gamma0 != reference.nodal_damping_gamma0 ||
+      scene.nodal_damping_gamma1 != reference.nodal_damping_gamma1) {
+    return "nodal damping";
+  }
+  return nullptr;
 }
 
 template <typename Real>
-class GpuSimulationImpl final : public GpuSimulation {
+class GpuBatchImpl final : public GpuBatchSimulation {
  public:
-  GpuSimulationImpl(const sim::SimulationSetup& setup, const sim::StabilityReport& stability)
-      : setup_(setup), stability_(stability), n_(static_cast<int>(setup.rest_positions.size())) {}
+  GpuBatchImpl(std::vector<sim::SimulationSetup> scenes, std::vector<sim::StabilityReport> stability,
+               const GpuOptions& options)
+      : scenes_(std::move(scenes)), stability_(std::move(stability)), options_(options) {}
 
-  ~GpuSimulationImpl() override {
+  ~GpuBatchImpl() override {
+    graphs_.clear();
     if (stream_ != nullptr) cudaStreamDestroy(stream_);
   }
 
   bool upload(DiagnosticList& diagnostics) {
-    const sim::SpringNetwork& net = setup_.springs;
+    const ConcatenatedScenes c = concatenate(scenes_);
+    vertex_begin_ = c.vertex_begin;
+    spring_begin_ = c.spring_begin;
+    n_ = vertex_begin_.back();
+    const sim::SimulationSetup& common = scenes_.front();
     FMPC_CUDA_CHECK(cudaStreamCreateWithFlags(&stream_, cudaStreamNonBlocking), diagnostics, false);
-    FMPC_CUDA_CHECK(offset_.upload(net.adjacency_offset), diagnostics, false);
-    FMPC_CUDA_CHECK(spring_.upload(net.adjacency_spring), diagnostics, false);
-    FMPC_CUDA_CHECK(neighbour_.upload(net.adjacency_neighbour), diagnostics, false);
-    FMPC_CUDA_CHECK(rest_length_.upload(convert<Real>(net.rest_length)), diagnostics, false);
-    FMPC_CUDA_CHECK(stiffness_.upload(convert<Real>(net.stiffness)), diagnostics, false);
-    FMPC_CUDA_CHECK(damping_.upload(convert<Real>(net.damping)), diagnostics, false);
-    FMPC_CUDA_CHECK(mass_.upload(convert<Real>(setup_.mass)), diagnostics, false);
-    std::vector<unsigned char> fixed(setup_.rest_positions.size(), 0);
-    for (const auto v : setup_.fixed_vertices) fixed[static_cast<std::size_t>(v)] = 1;
-    FMPC_CUDA_CHECK(fixed_.upload(fixed), diagnostics, false);
-    FMPC_CUDA_CHECK(rest_x_.upload(component<Real>(setup_.rest_positions, 0)), diagnostics, false);
-    FMPC_CUDA_CHECK(rest_y_.upload(component<Real>(setup_.rest_positions, 1)), diagnostics, false);
-    FMPC_CUDA_CHECK(rest_z_.upload(component<Real>(setup_.rest_positions, 2)), diagnostics, false);
-    if (!setup_.external_forces.empty()) {
-      FMPC_CUDA_CHECK(force_x_.upload(component<Real>(setup_.external_forces, 0)), diagnostics, false);
-      FMPC_CUDA_CHECK(force_y_.upload(component<Real>(setup_.external_forces, 1)), diagnostics, false);
-      FMPC_CUDA_CHECK(force_z_.upload(component<Real>(setup_.external_forces, 2)), diagnostics, false);
+    FMPC_CUDA_CHECK(offset_.upload(c.offset), diagnostics, false);
+    FMPC_CUDA_CHECK(spring_.upload(c.spring), diagnostics, false);
+    FMPC_CUDA_CHECK(neighbour_.upload(c.neighbour), diagnostics, false);
+    FMPC_CUDA_CHECK(first_.upload(c.first), diagnostics, false);
+    FMPC_CUDA_CHECK(second_.upload(c.second), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_length_.upload(convert<Real>(c.rest_length)), diagnostics, false);
+    FMPC_CUDA_CHECK(stiffness_.upload(convert<Real>(c.stiffness)), diagnostics, false);
+    FMPC_CUDA_CHECK(damping_.upload(convert<Real>(c.damping)), diagnostics, false);
+    FMPC_CUDA_CHECK(mass_.upload(convert<Real>(c.mass)), diagnostics, false);
+    FMPC_CUDA_CHECK(energy_mass_.upload(c.mass), diagnostics, false);
+    FMPC_CUDA_CHECK(energy_rest_length_.upload(c.rest_length), diagnostics, false);
+    FMPC_CUDA_CHECK(energy_stiffness_.upload(c.stiffness), diagnostics, false);
+    FMPC_CUDA_CHECK(fixed_.upload(c.fixed), diagnostics, false);
+    DeviceArray<Real>* rest[3] = {&rest_x_, &rest_y_, &rest_z_};
+    DeviceArray<Real>* force[3] = {&force_x_, &force_y_, &force_z_};
+    DeviceArray<double>* energy_force[3] = {&energy_force_x_, &energy_force_y_, &energy_force_z_};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      FMPC_CUDA_CHECK(rest[axis]->upload(convert<Real>(c.rest[axis])), diagnostics, false);
+      if (c.has_forces) {
+        FMPC_CUDA_CHECK(force[axis]->upload(convert<Real>(c.force[axis])), diagnostics, false);
+        FMPC_CUDA_CHECK(energy_force[axis]->upload(c.force[axis]), diagnostics, false);
+      }
     }
-    const std::vector<sim::Point3>& start =
-        setup_.initial_positions.empty() ? setup_.rest_positions : setup_.initial_positions;
-    std::vector<sim::Point3> velocity = setup_.initial_velocities.empty()
-                                            ? std::vector<sim::Point3>(start.size(), sim::Point3{0.0, 0.0, 0.0})
-                                            : setup_.initial_velocities;
-    for (const auto v : setup_.fixed_vertices) velocity[static_cast<std::size_t>(v)] = {0.0, 0.0, 0.0};
-    for (DeviceState<Real>* state : {&state_[0], &state_[1]}) {
-      FMPC_CUDA_CHECK(state->x.upload(component<Real>(start, 0)), diagnostics, false);
-      FMPC_CUDA_CHECK(state->y.upload(component<Real>(start, 1)), diagnostics, false);
-      FMPC_CUDA_CHECK(state->z.upload(component<Real>(start, 2)), diagnostics, false);
-      FMPC_CUDA_CHECK(state->vx.upload(component<Real>(velocity, 0)), diagnostics, false);
-      FMPC_CUDA_CHECK(state->vy.upload(component<Real>(velocity, 1)), diagnostics, false);
-      FMPC_CUDA_CHECK(state->vz.upload(component<Real>(velocity, 2)), diagnostics, false);
+    std::vector<double> scene_h;
+    for (const auto& report : stability_) scene_h.push_back(report.time_step);
+    if (scenes_.size() > 1) {
+      FMPC_CUDA_CHECK(vertex_scene_.upload(c.vertex_scene), diagnostics, false);
+      FMPC_CUDA_CHECK(scene_h_.upload(convert<Real>(scene_h)), diagnostics, false);
     }
-    FMPC_CUDA_CHECK(first_non_finite_.upload(std::vector<int>{n_}), diagnostics, false);
+    const auto count = static_cast<std::size_t>(n_);
+    const std::vector<double>* start[6] = {&c.position[0], &c.position[1], &c.position[2],
+                                           &c.velocity[0], &c.velocity[1], &c.velocity[2]};
+    const std::vector<DeviceArray<Real>*> first_state = state_[0].arrays();
+    for (std::size_t i = 0; i < 6; ++i)
+      FMPC_CUDA_CHECK(first_state[i]->upload(convert<Real>(*start[i])), diagnostics, false);
+    const sim::Integrator scheme = common.integrator;
+    if (scheme == sim::Integrator::ForwardEuler || scheme == sim::Integrator::SemiImplicitEuler) {
+      for (DeviceArray<Real>* array : state_[1].arrays()) FMPC_CUDA_CHECK(array->allocate(count), diagnostics, false);
+    }
+    if (scheme == sim::Integrator::VelocityVerlet) {
+      FMPC_CUDA_CHECK(acceleration_.allocate(count), diagnostics, false);
+      FMPC_CUDA_CHECK(predicted_.allocate(count), diagnostics, false);
+      FMPC_CUDA_CHECK(checkpoint_acceleration_.allocate(count), diagnostics, false);
+    }
+    if (scheme == sim::Integrator::RungeKutta4) {
+      for (auto* buffer : {&stage_position_a_, &stage_position_b_}) {
+        FMPC_CUDA_CHECK(buffer->allocate(count), diagnostics, false);
+      }
+      for (auto& buffer : stage_velocity_) FMPC_CUDA_CHECK(buffer.allocate(count), diagnostics, false);
+      for (auto& buffer : stage_acceleration_) FMPC_CUDA_CHECK(buffer.allocate(count), diagnostics, false);
+    }
+    for (DeviceArray<Real>* array : checkpoint_.arrays()) FMPC_CUDA_CHECK(array->allocate(count), diagnostics, false);
+    FMPC_CUDA_CHECK(first_non_finite_.allocate(1), diagnostics, false);
+    FMPC_CUDA_CHECK(energy_partial_.allocate(kEnergyBlocks), diagnostics, false);
+    FMPC_CUDA_CHECK(energy_result_.allocate(1), diagnostics, false);
 
-    arguments_.network = {
-        offset_.data(),
-        spring_.data(),
-        neighbour_.data(),
-        rest_length_.data(),
-        stiffness_.data(),
-        damping_.data(),
-        {setup_.law, static_cast<Real>(setup_.basafa_k2_over_k1), static_cast<Real>(setup_.basafa_xc)}};
-    arguments_.loads = {mass_.data(),
-                        fixed_.data(),
-                        rest_x_.data(),
-                        rest_y_.data(),
-                        rest_z_.data(),
-                        force_x_.data(),
-                        force_y_.data(),
-                        force_z_.data(),
-                        static_cast<Real>(setup_.gravity[0]),
-                        static_cast<Real>(setup_.gravity[1]),
-                        static_cast<Real>(setup_.gravity[2]),
-                        static_cast<Real>(setup_.nodal_damping_gamma0),
-                        static_cast<Real>(setup_.nodal_damping_gamma1)};
-    arguments_.vertex_count = n_;
-    arguments_.scheme =
-        setup_.integrator == sim::Integrator::ForwardEuler ? FusedScheme::ForwardEuler : FusedScheme::SemiImplicitEuler;
-    arguments_.h = static_cast<Real>(stability_.time_step);
-    return true;
+    network_ = {offset_.data(),
+                spring_.data(),
+                neighbour_.data(),
+                rest_length_.data(),
+                stiffness_.data(),
+                damping_.data(),
+                {common.law, static_cast<Real>(common.basafa_k2_over_k1), static_cast<Real>(common.basafa_xc)}};
+    loads_ = {mass_.data(),
+              fixed_.data(),
+              rest_x_.data(),
+              rest_y_.data(),
+              rest_z_.data(),
+              force_x_.data(),
+              force_y_.data(),
+              force_z_.data(),
+              static_cast<Real>(common.gravity[0]),
+              static_cast<Real>(common.gravity[1]),
+              static_cast<Real>(common.gravity[2]),
+              static_cast<Real>(common.nodal_damping_gamma0),
+              static_cast<Real>(common.nodal_damping_gamma1)};
+    step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
+    // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
+    // stream_ does not wait for.
+    FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
+    return save_checkpoint(diagnostics) && synchronize(diagnostics);
   }
 
   bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
     if (failed_) return false;
     const std::size_t interval = check_every == 0 ? steps : check_every;
-    for (std::size_t i = 0; i < steps; ++i) {
-      arguments_.in = state_[current_].view();
-      arguments_.out = state_[1 - current_].mutable_view();
-      FMPC_CUDA_CHECK(launch_fused_step(arguments_, stream_), diagnostics, false);
-      current_ = 1 - current_;
-      ++steps_taken_;
-      if ((i + 1) % interval == 0 || i + 1 == steps) {
-        if (!check_finite(diagnostics)) return false;
+    std::size_t done = 0;
+    while (done < steps) {
+      const std::size_t chunk = std::min(interval, steps - done);
+      if (!run_steps(chunk, options_.use_graphs, diagnostics)) return fail();
+      done += chunk;
+      const std::optional<int> bad = first_non_finite_vertex(diagnostics);
+      if (!bad) return fail();
+      if (*bad < n_) return locate_non_finite(diagnostics);
+      if (!save_checkpoint(diagnostics)) return fail();
+    }
+    return true;
+  }
+
+  std::size_t scene_count() const override { return scenes_.size(); }
+  std::size_t steps_taken() const override { return steps_taken_; }
+  const sim::StabilityReport& stability(std::size_t scene) const override { return stability_.at(scene); }
+  const std::optional<GpuNonFiniteReport>& non_finite() const override { return non_finite_; }
+
+  std::vector<sim::Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const override {
+    const DeviceState<Real>& s = state_[current_];
+    return download(scene, s.x, s.y, s.z, diagnostics);
+  }
+  std::vector<sim::Point3> velocities(std::size_t scene, DiagnosticList& diagnostics) const override {
+    const DeviceState<Real>& s = state_[current_];
+    return download(scene, s.vx, s.vy, s.vz, diagnostics);
+  }
+
+  std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
+    return energy_sum(EnergyTerm::Kinetic, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
+  }
+  std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
+    const auto springs =
+        energy_sum(EnergyTerm::SpringPotential, spring_begin_.at(scene), spring_begin_.at(scene + 1), diagnostics);
+    if (!springs) return std::nullopt;
+    const auto loads =
+        energy_sum(EnergyTerm::LoadPotential, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
+    if (!loads) return std::nullopt;
+    return *springs + *loads;
+  }
+
+ private:
+  bool fail() {
+    failed_ = true;
+    return false;
+  }
+
+  bool synchronize(DiagnosticList& diagnostics) const {
+    FMPC_CUDA_CHECK(cudaStreamSynchronize(stream_), diagnostics, false);
+    return true;
+  }
+
+  sim::Integrator scheme() const { return scenes_.front().integrator; }
+
+  // Enqueues `count` steps on the stream (directly or while capturing); `parity` is the Euler state buffer read
+  // first and is updated to the one holding the result.
+  bool enqueue_steps(std::size_t count, int& parity, DiagnosticList& diagnostics) {
+    for (std::size_t i = 0; i < count; ++i) {
+      switch (scheme()) {
+        case sim::Integrator::ForwardEuler:
+        case sim::Integrator::SemiImplicitEuler: {
+          FusedStepArguments<Real> a{};
+          a.network = network_;
+          a.loads = loads_;
+          a.in = state_[parity].view();
+          a.out = state_[1 - parity].mutable_view();
+          a.vertex_count = n_;
+          a.scheme =
+              scheme() == sim::Integrator::ForwardEuler ? FusedScheme::ForwardEuler : FusedScheme::SemiImplicitEuler;
+          a.step = step_;
+          FMPC_CUDA_CHECK(launch_fused_step(a, stream_), diagnostics, false);
+          parity = 1 - parity;
+          break;
+        }
+        case sim::Integrator::VelocityVerlet:
+          FMPC_CUDA_CHECK(launch_verlet_drift(verlet_arguments(), stream_), diagnostics, false);
+          FMPC_CUDA_CHECK(launch_verlet_kick(verlet_arguments(), stream_), diagnostics, false);
+          break;
+        case sim::Integrator::RungeKutta4: {
+          const RungeKutta4Arguments<Real> a = runge_kutta4_arguments();
+          for (int stage = 0; stage < 4; ++stage) {
+            FMPC_CUDA_CHECK(launch_runge_kutta4_stage(a, stage, stream_), diagnostics, false);
+          }
+          break;
+        }
+        case sim::Integrator::ImplicitEuler:
+          diagnostics.error(SourceRange{}, "implicit Euler runs on the CPU only");
+          return false;
       }
     }
     return true;
   }
 
-  std::size_t steps_taken() const override { return steps_taken_; }
-  const sim::StabilityReport& stability() const override { return stability_; }
-
-  std::vector<sim::Point3> positions(DiagnosticList& diagnostics) const override {
-    return download(state_[current_].x, state_[current_].y, state_[current_].z, diagnostics);
-  }
-  std::vector<sim::Point3> velocities(DiagnosticList& diagnostics) const override {
-    return download(state_[current_].vx, state_[current_].vy, state_[current_].vz, diagnostics);
+  VerletArguments<Real> verlet_arguments() const {
+    return {network_, loads_, state_[0].mutable_view(), acceleration_.view(), predicted_.view(), n_, step_};
   }
 
- private:
-  std::vector<sim::Point3> download(const DeviceArray<Real>& x, const DeviceArray<Real>& y, const DeviceArray<Real>& z,
-                                    DiagnosticList& diagnostics) const {
-    std::vector<Real> hx, hy, hz;
-    FMPC_CUDA_CHECK(cudaStreamSynchronize(stream_), diagnostics, {});
-    FMPC_CUDA_CHECK(x.download(hx), diagnostics, {});
-    FMPC_CUDA_CHECK(y.download(hy), diagnostics, {});
-    FMPC_CUDA_CHECK(z.download(hz), diagnostics, {});
-    std::vector<sim::Point3> out(hx.size());
-    for (std::size_t i = 0; i < out.size(); ++i) {
-      out[i] = {static_cast<double>(hx[i]), static_cast<double>(hy[i]), static_cast<double>(hz[i])};
+  RungeKutta4Arguments<Real> runge_kutta4_arguments() const {
+    RungeKutta4Arguments<Real> a{};
+    a.network = network_;
+    a.loads = loads_;
+    a.state = state_[0].mutable_view();
+    a.stage_position[1] = stage_position_a_.view();
+    a.stage_position[2] = stage_position_b_.view();
+    a.stage_position[3] = stage_position_a_.view();
+    for (std::size_t s = 1; s < 4; ++s) a.stage_velocity[s] = stage_velocity_[s - 1].view();
+    for (std::size_t s = 0; s < 3; ++s) a.stage_acceleration[s] = stage_acceleration_[s].view();
+    a.vertex_count = n_;
+    a.step = step_;
+    return a;
+  }
+
+  bool run_steps(std::size_t count, bool allow_graph, DiagnosticList& diagnostics) {
+    if (count == 0 || n_ == 0) {
+      steps_taken_ += count;
+      return true;
     }
-    return out;
+    if (scheme() == sim::Integrator::VelocityVerlet && !have_acceleration_) {
+      FMPC_CUDA_CHECK(launch_acceleration(verlet_arguments(), stream_), diagnostics, false);
+      have_acceleration_ = true;
+    }
+    if (!allow_graph || count < 2) {
+      if (!enqueue_steps(count, current_, diagnostics)) return false;
+      steps_taken_ += count;
+      return true;
+    }
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t piece = std::min(count - done, kMaxStepsPerGraph);
+      if (!launch_graph(piece, diagnostics)) return false;
+      done += piece;
+    }
+    return true;
   }
 
-  bool check_finite(DiagnosticList& diagnostics) {
+  // Replays `count` steps from a graph captured on first use (one per length and starting Euler buffer).
+  bool launch_graph(std::size_t count, DiagnosticList& diagnostics) {
+    const std::pair<std::size_t, int> key{count, current_};
+    auto found = graphs_.find(key);
+    if (found == graphs_.end()) {
+      // A few chunk lengths recur (the check interval and a remainder); an unbounded variety is not kept.
+      if (graphs_.size() >= 8) graphs_.clear();
+      cudaGraphExec_t executable = nullptr;
+      if (!capture(count, executable, diagnostics)) return false;
+      found = graphs_.emplace(key, std::make_unique<GraphExecutable>(executable)).first;
+    }
+    FMPC_CUDA_CHECK(cudaGraphLaunch(found->second->get(), stream_), diagnostics, false);
+    if ((scheme() == sim::Integrator::ForwardEuler || scheme() == sim::Integrator::SemiImplicitEuler) &&
+        count % 2 == 1) {
+      current_ = 1 - current_;
+    }
+    steps_taken_ += count;
+    return true;
+  }
+
+  bool capture(std::size_t count, cudaGraphExec_t& executable, DiagnosticList& diagnostics) {
+    FMPC_CUDA_CHECK(cudaStreamBeginCapture(stream_, cudaStreamCaptureModeThreadLocal), diagnostics, false);
+    int parity = current_;
+    const bool enqueued = enqueue_steps(count, parity, diagnostics);
+    cudaGraph_t graph = nullptr;
+    // Capture must be ended even after a failed launch, or the stream stays unusable.
+    const cudaError_t ended = cudaStreamEndCapture(stream_, &graph);
+    if (!enqueued) {
+      if (graph != nullptr) cudaGraphDestroy(graph);
+      return false;
+    }
+    FMPC_CUDA_CHECK(ended, diagnostics, false);
+    const cudaError_t instantiated = cudaGraphInstantiate(&executable, graph, 0);
+    cudaGraphDestroy(graph);
+    FMPC_CUDA_CHECK(instantiated, diagnostics, false);
+    return true;
+  }
+
+  bool save_checkpoint(DiagnosticList& diagnostics) {
+    const std::vector<const DeviceArray<Real>*> from = std::as_const(state_[current_]).arrays();
+    const std::vector<DeviceArray<Real>*> to = checkpoint_.arrays();
+    for (std::size_t i = 0; i < from.size(); ++i)
+      FMPC_CUDA_CHECK(copy_async(*to[i], *from[i], stream_), diagnostics, false);
+    if (scheme() == sim::Integrator::VelocityVerlet) {
+      FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.x, acceleration_.x, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.y, acceleration_.y, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.z, acceleration_.z, stream_), diagnostics, false);
+    }
+    checkpoint_step_ = steps_taken_;
+    checkpoint_has_acceleration_ = have_acceleration_;
+    return true;
+  }
+
+  bool restore_checkpoint(DiagnosticList& diagnostics) {
+    const std::vector<const DeviceArray<Real>*> from = std::as_const(checkpoint_).arrays();
+    const std::vector<DeviceArray<Real>*> to = state_[current_].arrays();
+    for (std::size_t i = 0; i < from.size(); ++i)
+      FMPC_CUDA_CHECK(copy_async(*to[i], *from[i], stream_), diagnostics, false);
+    if (scheme() == sim::Integrator::VelocityVerlet) {
+      FMPC_CUDA_CHECK(copy_async(acceleration_.x, checkpoint_acceleration_.x, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(copy_async(acceleration_.y, checkpoint_acceleration_.y, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(copy_async(acceleration_.z, checkpoint_acceleration_.z, stream_), diagnostics, false);
+    }
+    steps_taken_ = checkpoint_step_;
+    have_acceleration_ = checkpoint_has_acceleration_;
+    return true;
+  }
+
+  // The smallest vertex index with a non-finite position or velocity, n_ when there is none.
+  std::optional<int> first_non_finite_vertex(DiagnosticList& diagnostics) {
+    int first = n_;
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(first_non_finite_.data(), &first, sizeof(int), cudaMemcpyHostToDevice, stream_),
+                    diagnostics, std::nullopt);
     FMPC_CUDA_CHECK(launch_find_non_finite(state_[current_].view(), n_, first_non_finite_.data(), stream_), diagnostics,
-                    false);
-    std::vector<int> first;
-    FMPC_CUDA_CHECK(cudaStreamSynchronize(stream_), diagnostics, false);
-    FMPC_CUDA_CHECK(first_non_finite_.download(first), diagnostics, false);
-    if (first.empty() || first[0] >= n_) return true;
-    failed_ = true;
-    const auto vertex = static_cast<std::size_t>(first[0]);
-    const std::vector<sim::Point3> points = positions(diagnostics);
-    // The most strained spring at the vertex, as the CPU backend reports it.
-    const sim::SpringNetwork& net = setup_.springs;
-    int culprit = -1;
+                    std::nullopt);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(&first, first_non_finite_.data(), sizeof(int), cudaMemcpyDeviceToHost, stream_),
+                    diagnostics, std::nullopt);
+    if (!synchronize(diagnostics)) return std::nullopt;
+    return first;
+  }
+
+  // A check failed: replay from the last good checkpoint one step at a time to find the first non-finite step
+  // (the kernels are deterministic, so the replay retraces the run), then report it like the CPU backend.
+  bool locate_non_finite(DiagnosticList& diagnostics) {
+    const std::size_t failed_by = steps_taken_;
+    if (!restore_checkpoint(diagnostics)) return fail();
+    std::optional<int> bad = n_;
+    while (steps_taken_ < failed_by && *bad >= n_) {
+      if (!run_steps(1, false, diagnostics)) return fail();
+      bad = first_non_finite_vertex(diagnostics);
+      if (!bad) return fail();
+    }
+    const int vertex = *bad < n_ ? *bad : 0;
+    const auto scene = static_cast<std::size_t>(std::upper_bound(vertex_begin_.begin(), vertex_begin_.end(), vertex) -
+                                                vertex_begin_.begin() - 1);
+    const int local = vertex - vertex_begin_[scene];
+    GpuNonFiniteReport found;
+    found.scene = scene;
+    found.report.step = steps_taken_;
+    found.report.time = static_cast<double>(steps_taken_) * stability_[scene].time_step;
+    found.report.vertex = local;
+    found.report.spring = culprit_spring(scene, static_cast<std::size_t>(local), diagnostics);
+    non_finite_ = found;
+    const sim::SpringNetwork& net = scenes_[scene].springs;
+    std::ostringstream message;
+    message << "the GPU simulation became non-finite at step " << found.report.step << " (t = " << found.report.time
+            << " s)";
+    if (scenes_.size() > 1) message << " in scene " << scene;
+    message << ": vertex " << local << " has a NaN or infinite position or velocity";
+    if (found.report.spring >= 0) {
+      const auto s = static_cast<std::size_t>(found.report.spring);
+      message << "; its most strained spring is " << found.report.spring << " (vertices " << net.first[s] << " and "
+              << net.second[s] << ")";
+    }
+    message << "; lower dt, raise damping, or check the loads";
+    diagnostics.error(SourceRange{}, message.str());
+    return fail();
+  }
+
+  // The spring at v whose length is non-finite, or else the one with the largest |strain| (as the CPU backend).
+  std::int32_t culprit_spring(std::size_t scene, std::size_t v, DiagnosticList& diagnostics) const {
+    const std::vector<sim::Point3> points = positions(scene, diagnostics);
+    const sim::SpringNetwork& net = scenes_[scene].springs;
+    if (points.size() != net.vertex_count) return -1;
+    std::int32_t best = -1;
     double worst = -1.0;
-    for (auto e = net.adjacency_offset[vertex]; e < net.adjacency_offset[vertex + 1]; ++e) {
+    for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
       const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
       const double length = sim::distance(points[static_cast<std::size_t>(net.first[s])],
                                           points[static_cast<std::size_t>(net.second[s])]);
@@ -220,31 +569,136 @@ class GpuSimulationImpl final : public GpuSimulation {
                                                   : std::numeric_limits<double>::infinity();
       if (strain > worst) {
         worst = strain;
-        culprit = static_cast<int>(s);
+        best = static_cast<std::int32_t>(s);
       }
+      if (!std::isfinite(strain)) break;
     }
-    std::ostringstream message;
-    message << "the GPU simulation became non-finite by step " << steps_taken_ << ": vertex " << vertex
-            << " has a NaN or infinite position or velocity";
-    if (culprit >= 0) message << "; its most strained spring is " << culprit;
-    message << "; lower dt, raise damping, or check the loads";
-    diagnostics.error(SourceRange{}, message.str());
-    return false;
+    return best;
   }
 
-  const sim::SimulationSetup setup_;
-  sim::StabilityReport stability_;
-  int n_;
+  std::vector<sim::Point3> download(std::size_t scene, const DeviceArray<Real>& x, const DeviceArray<Real>& y,
+                                    const DeviceArray<Real>& z, DiagnosticList& diagnostics) const {
+    if (scene >= scenes_.size()) {
+      diagnostics.error(SourceRange{}, "scene " + std::to_string(scene) + " does not exist; the batch has " +
+                                           std::to_string(scenes_.size()));
+      return {};
+    }
+    const auto begin = static_cast<std::size_t>(vertex_begin_[scene]);
+    const auto count = static_cast<std::size_t>(vertex_begin_[scene + 1]) - begin;
+    std::vector<Real> host[3];
+    const DeviceArray<Real>* device[3] = {&x, &y, &z};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      host[axis].resize(count);
+      if (count == 0) continue;
+      FMPC_CUDA_CHECK(cudaMemcpyAsync(host[axis].data(), device[axis]->data() + begin, count * sizeof(Real),
+                                      cudaMemcpyDeviceToHost, stream_),
+                      diagnostics, {});
+    }
+    if (!synchronize(diagnostics)) return {};
+    std::vector<sim::Point3> out(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      out[i] = {static_cast<double>(host[0][i]), static_cast<double>(host[1][i]), static_cast<double>(host[2][i])};
+    }
+    return out;
+  }
+
+  std::optional<double> energy_sum(EnergyTerm term, int begin, int end, DiagnosticList& diagnostics) const {
+    const sim::SimulationSetup& common = scenes_.front();
+    EnergyArguments<Real> a{};
+    a.state = state_[current_].view();
+    a.mass = energy_mass_.data();
+    a.spring_first = first_.data();
+    a.spring_second = second_.data();
+    a.rest_length = energy_rest_length_.data();
+    a.stiffness = energy_stiffness_.data();
+    a.law = {common.law, common.basafa_k2_over_k1, common.basafa_xc};
+    a.gravity_x = common.gravity[0];
+    a.gravity_y = common.gravity[1];
+    a.gravity_z = common.gravity[2];
+    a.force_x = energy_force_x_.data();
+    a.force_y = energy_force_y_.data();
+    a.force_z = energy_force_z_.data();
+    double result = 0.0;
+    FMPC_CUDA_CHECK(launch_energy_sum(a, term, begin, end, energy_partial_.data(), energy_result_.data(), stream_),
+                    diagnostics, std::nullopt);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(&result, energy_result_.data(), sizeof(double), cudaMemcpyDeviceToHost, stream_),
+                    diagnostics, std::nullopt);
+    if (!synchronize(diagnostics)) return std::nullopt;
+    return result;
+  }
+
+  const std::vector<sim::SimulationSetup> scenes_;
+  const std::vector<sim::StabilityReport> stability_;
+  const GpuOptions options_;
+  std::vector<int> vertex_begin_, spring_begin_;
+  int n_ = 0;
   cudaStream_t stream_ = nullptr;
-  DeviceArray<int> offset_, spring_, neighbour_, first_non_finite_;
-  DeviceArray<Real> rest_length_, stiffness_, damping_, mass_, rest_x_, rest_y_, rest_z_, force_x_, force_y_, force_z_;
+  DeviceArray<int> offset_, spring_, neighbour_, first_, second_, vertex_scene_, first_non_finite_;
+  DeviceArray<Real> rest_length_, stiffness_, damping_, mass_, scene_h_;
+  DeviceArray<Real> rest_x_, rest_y_, rest_z_, force_x_, force_y_, force_z_;
+  DeviceArray<double> energy_mass_, energy_rest_length_, energy_stiffness_;
+  DeviceArray<double> energy_force_x_, energy_force_y_, energy_force_z_, energy_partial_, energy_result_;
   DeviceArray<unsigned char> fixed_;
-  DeviceState<Real> state_[2];
+  DeviceState<Real> state_[2], checkpoint_;
+  DeviceVector3<Real> acceleration_, predicted_, checkpoint_acceleration_;
+  DeviceVector3<Real> stage_position_a_, stage_position_b_, stage_velocity_[3], stage_acceleration_[3];
+  kernels::SpringNetworkView<Real> network_{};
+  kernels::VertexLoads<Real> loads_{};
+  StepSize<Real> step_{};
+  std::map<std::pair<std::size_t, int>, std::unique_ptr<GraphExecutable>> graphs_;
   int current_ = 0;
-  FusedStepArguments<Real> arguments_{};
   std::size_t steps_taken_ = 0;
+  std::size_t checkpoint_step_ = 0;
+  bool have_acceleration_ = false;
+  bool checkpoint_has_acceleration_ = false;
   bool failed_ = false;
+  std::optional<GpuNonFiniteReport> non_finite_;
 };
+
+// One scene: a batch of one, with the single-scene interface.
+class GpuSimulationImpl final : public GpuSimulation {
+ public:
+  explicit GpuSimulationImpl(std::unique_ptr<GpuBatchSimulation> batch) : batch_(std::move(batch)) {}
+
+  bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
+    const bool ok = batch_->advance(steps, diagnostics, check_every);
+    if (batch_->non_finite()) non_finite_ = batch_->non_finite()->report;
+    return ok;
+  }
+  std::size_t steps_taken() const override { return batch_->steps_taken(); }
+  std::vector<sim::Point3> positions(DiagnosticList& diagnostics) const override {
+    return batch_->positions(0, diagnostics);
+  }
+  std::vector<sim::Point3> velocities(DiagnosticList& diagnostics) const override {
+    return batch_->velocities(0, diagnostics);
+  }
+  const sim::StabilityReport& stability() const override { return batch_->stability(0); }
+  double time() const override { return static_cast<double>(steps_taken()) * stability().time_step; }
+  std::optional<double> kinetic_energy(DiagnosticList& diagnostics) const override {
+    return batch_->kinetic_energy(0, diagnostics);
+  }
+  std::optional<double> potential_energy(DiagnosticList& diagnostics) const override {
+    return batch_->potential_energy(0, diagnostics);
+  }
+  const std::optional<sim::NonFiniteReport>& non_finite() const override { return non_finite_; }
+
+ private:
+  std::unique_ptr<GpuBatchSimulation> batch_;
+  std::optional<sim::NonFiniteReport> non_finite_;
+};
+
+// What the GPU kernels do not implement is refused before the device is touched, never silently ignored.
+const char* cpu_only_feature(const sim::SimulationSetup& setup) {
+  if (setup.integrator == sim::Integrator::ImplicitEuler) {
+    return "implicit Euler runs on the CPU only (its conjugate-gradient solve is not ported to the GPU); use the CPU "
+           "backend, or an explicit integrator on the GPU";
+  }
+  if (setup.probe) return "probes run on the CPU backend only; use the CPU backend for a scene with a probe";
+  if (setup.strain_stiffness) {
+    return "table-driven stiffness k(strain) runs on the CPU backend only; use the CPU backend for this scene";
+  }
+  return nullptr;
+}
 
 }  // namespace
 
@@ -268,27 +722,69 @@ bool cuda_device_available(std::string& description) {
   return true;
 }
 
+std::unique_ptr<GpuBatchSimulation> GpuBatchSimulation::create(const std::vector<sim::SimulationSetup>& scenes,
+                                                               const GpuOptions& options, DiagnosticList& diagnostics) {
+  if (scenes.empty()) {
+    diagnostics.error(SourceRange{}, "a GPU batch needs at least one scene");
+    return nullptr;
+  }
+  std::vector<sim::StabilityReport> stability;
+  std::size_t vertices = 0, entries = 0;
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    if (const char* feature = cpu_only_feature(scenes[s])) {
+      diagnostics.error(SourceRange{},
+                        (scenes.size() > 1 ? "scene " + std::to_string(s) + ": " : std::string()) + feature);
+      return nullptr;
+    }
+    if (const char* field = shared_field_mismatch(scenes[s], scenes.front())) {
+      diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + " differs from scene 0 in its " + field +
+                                           "; the scenes of one GPU batch share it: run it in another batch");
+      return nullptr;
+    }
+    DiagnosticList scene_diagnostics;
+    const auto report = sim::check_stability(scenes[s], scene_diagnostics);  // validates the setup first
+    if (scenes.size() > 1) {
+      for (Diagnostic diagnostic : scene_diagnostics.items()) {
+        diagnostic.message = "scene " + std::to_string(s) + ": " + diagnostic.message;
+        diagnostics.add(std::move(diagnostic));
+      }
+    } else {
+      diagnostics.append(scene_diagnostics);
+    }
+    if (!report) return nullptr;
+    stability.push_back(*report);
+    vertices += scenes[s].rest_positions.size();
+    entries += scenes[s].springs.adjacency_spring.size();
+  }
+  const auto limit = static_cast<std::size_t>(std::numeric_limits<int>::max() - 1);
+  if (vertices > limit || entries > limit) {
+    diagnostics.error(SourceRange{}, "the GPU backend indexes vertices and springs with int; " +
+                                         std::to_string(vertices) + " vertices and " + std::to_string(entries) +
+                                         " spring ends are too many: split the batch");
+    return nullptr;
+  }
+  std::unique_ptr<GpuBatchSimulation> batch;
+  if (scenes.front().precision == sim::Precision::Float) {
+    auto impl = std::make_unique<GpuBatchImpl<float>>(scenes, std::move(stability), options);
+    if (!impl->upload(diagnostics)) return nullptr;
+    batch = std::move(impl);
+  } else {
+    auto impl = std::make_unique<GpuBatchImpl<double>>(scenes, std::move(stability), options);
+    if (!impl->upload(diagnostics)) return nullptr;
+    batch = std::move(impl);
+  }
+  return batch;
+}
+
 std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup& setup, DiagnosticList& diagnostics) {
-  if (setup.integrator != sim::Integrator::SemiImplicitEuler && setup.integrator != sim::Integrator::ForwardEuler) {
-    diagnostics.error(SourceRange{}, std::string(sim::to_string(setup.integrator)) +
-                                         " is not available on the GPU yet (forward and semi-implicit Euler are); "
-                                         "use the CPU backend");
-    return nullptr;
-  }
-  if (setup.rest_positions.size() > static_cast<std::size_t>(std::numeric_limits<int>::max() - 1)) {
-    diagnostics.error(SourceRange{}, "the GPU backend indexes vertices with int; the mesh is too large");
-    return nullptr;
-  }
-  const auto stability = sim::check_stability(setup, diagnostics);  // validates the setup first
-  if (!stability) return nullptr;
-  if (setup.precision == sim::Precision::Float) {
-    auto simulation = std::make_unique<GpuSimulationImpl<float>>(setup, *stability);
-    if (!simulation->upload(diagnostics)) return nullptr;
-    return simulation;
-  }
-  auto simulation = std::make_unique<GpuSimulationImpl<double>>(setup, *stability);
-  if (!simulation->upload(diagnostics)) return nullptr;
-  return simulation;
+  return create(setup, GpuOptions{}, diagnostics);
+}
+
+std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup& setup, const GpuOptions& options,
+                                                     DiagnosticList& diagnostics) {
+  auto batch = GpuBatchSimulation::create({setup}, options, diagnostics);
+  if (!batch) return nullptr;
+  return std::make_unique<GpuSimulationImpl>(std::move(batch));
 }
 
 }  // namespace fmpc::gpu

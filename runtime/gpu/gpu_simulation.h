@@ -1,8 +1,11 @@
 #pragma once
 // The CUDA backend's host side. Built only when nvcc is found (FMPC_RUNTIME_HAVE_CUDA); this header itself needs
-// no CUDA headers. Integrators on the GPU: forward Euler and semi-implicit Euler, one fused kernel per step over
-// the same FMPC_HD functions as the CPU loop, in float or double. Every CUDA call and launch is checked and turned
-// into a Diagnostic; nothing exits.
+// no CUDA headers. Integrators on the GPU: forward Euler and semi-implicit Euler (one fused kernel per step),
+// velocity Verlet (two kernels per step) and RK4 (four stage kernels per step), all over the same FMPC_HD functions
+// as the CPU loop, in float or double. Implicit Euler runs on the CPU only (its conjugate-gradient solve is not
+// ported). Repeated steps are replayed from CUDA graphs; many scenes can share one launch (GpuBatchSimulation).
+// Every CUDA call and launch is checked and turned into a Diagnostic; nothing exits.
+#include <cstddef>
 #include <memory>
 #include <optional>
 #include <string>
@@ -15,19 +18,63 @@ namespace fmpc::gpu {
 // Whether a CUDA device can be used, with its name or the reason it cannot.
 bool cuda_device_available(std::string& description);
 
+struct GpuOptions {
+  // Capture the steps between two NaN/Inf checks into a CUDA graph once and replay it (saves the launch overhead
+  // that dominates small meshes). The results are bitwise the same either way.
+  bool use_graphs = true;
+};
+
+// Where a GPU run became non-finite. `step` is exact: the run keeps a copy of the state at every check that
+// passed and, when a check fails, replays from that copy one step at a time (the kernels are deterministic).
+struct GpuNonFiniteReport {
+  std::size_t scene = 0;  // index in the batch (0 for GpuSimulation)
+  sim::NonFiniteReport report;
+};
+
 class GpuSimulation {
  public:
   // Validates the setup like the CPU backend (same stability check), then uploads it.
   static std::unique_ptr<GpuSimulation> create(const sim::SimulationSetup& setup, DiagnosticList& diagnostics);
+  static std::unique_ptr<GpuSimulation> create(const sim::SimulationSetup& setup, const GpuOptions& options,
+                                               DiagnosticList& diagnostics);
   virtual ~GpuSimulation() = default;
 
-  // Advances `steps` steps, checking for NaN/Inf every `check_every` steps and at the end; on a non-finite value
-  // the error names the check's step, the vertex and its most strained spring (read back to the host).
+  // Advances `steps` steps, checking for NaN/Inf every `check_every` steps (0: only at the end) and at the end; on
+  // a non-finite value the error names the exact step, the vertex and its most strained spring.
   virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = 64) = 0;
   virtual std::size_t steps_taken() const = 0;
   virtual std::vector<sim::Point3> positions(DiagnosticList& diagnostics) const = 0;
   virtual std::vector<sim::Point3> velocities(DiagnosticList& diagnostics) const = 0;
   virtual const sim::StabilityReport& stability() const = 0;
+
+  virtual double time() const = 0;
+  // Energies as CpuSimulation defines them, reduced on the device in double with a fixed summation tree (the same
+  // bits on every run); nullopt after a CUDA error (appended to diagnostics).
+  virtual std::optional<double> kinetic_energy(DiagnosticList& diagnostics) const = 0;
+  virtual std::optional<double> potential_energy(DiagnosticList& diagnostics) const = 0;
+  virtual const std::optional<sim::NonFiniteReport>& non_finite() const = 0;
+};
+
+// Many scenes advanced together, one launch per kernel for all of them: the scenes' vertices, springs and CSR
+// entries are concatenated (offset arrays), each scene keeps its own time step. The scenes must share the
+// integrator, the precision, the spring law and its parameters, gravity and the nodal damping (an error names the
+// first scene that differs); sizes, materials, fixed vertices, forces and initial states may differ. A NaN/Inf in
+// any scene stops the whole batch.
+class GpuBatchSimulation {
+ public:
+  static std::unique_ptr<GpuBatchSimulation> create(const std::vector<sim::SimulationSetup>& scenes,
+                                                    const GpuOptions& options, DiagnosticList& diagnostics);
+  virtual ~GpuBatchSimulation() = default;
+
+  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = 64) = 0;
+  virtual std::size_t scene_count() const = 0;
+  virtual std::size_t steps_taken() const = 0;
+  virtual std::vector<sim::Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  virtual std::vector<sim::Point3> velocities(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  virtual const sim::StabilityReport& stability(std::size_t scene) const = 0;
+  virtual std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  virtual std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  virtual const std::optional<GpuNonFiniteReport>& non_finite() const = 0;
 };
 
 }  // namespace fmpc::gpu

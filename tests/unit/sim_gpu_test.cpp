@@ -39,12 +39,12 @@ SimulationSetup hanging_box(Precision precision) {
 
 }  // namespace
 
-TEST_CASE("GPU: integrators without a fused kernel are refused before touching the device", "[sim][gpu]") {
+TEST_CASE("GPU: implicit Euler (CPU only) is refused before touching the device", "[sim][gpu]") {
   SimulationSetup setup = hanging_box(Precision::Double);
-  setup.integrator = Integrator::RungeKutta4;
+  setup.integrator = Integrator::ImplicitEuler;
   DiagnosticList diagnostics;
   CHECK_FALSE(gpu::GpuSimulation::create(setup, diagnostics));
-  CHECK_THAT(diagnostics.items()[0].message, Catch::StartsWith("RK4 is not available on the GPU yet"));
+  CHECK_THAT(diagnostics.items()[0].message, Catch::StartsWith("implicit Euler runs on the CPU only"));
 }
 
 TEST_CASE("GPU: the fused kernel matches the CPU loop to rounding (float and double)", "[sim][gpu]") {

@@ -1,0 +1,311 @@
+// Simulation benchmark: steps per second of the CPU backend (1 and N threads) and the CUDA backend (float/double,
+// with and without CUDA graphs, every GPU integrator), on hanging boxes from ~1k to ~1M springs, plus a batch of
+// small scenes in one launch against the same scenes run one by one. Writes a CSV and prints a table.
+//
+//   fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S]
+//
+// Every run checks for NaN/Inf every 64 steps (the default of advance), and the time includes that check's
+// synchronisation. Scene creation and upload are not timed; one warm-up chunk (graph capture) is excluded.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "runtime/gpu/gpu_simulation.h"
+#include "runtime/mesh/generated_mesh.h"
+#include "runtime/scene/spring_model_builder.h"
+
+using namespace fmpc;
+using namespace fmpc::sim;
+
+namespace {
+
+struct Options {
+  std::string out_dir;
+  bool quick = false;
+  unsigned threads = 0;  // 0: hardware concurrency
+  double min_seconds = 0.5;
+};
+
+struct Row {
+  std::string variant;
+  std::string backend;
+  std::string precision;
+  std::string integrator;
+  std::string graphs;
+  unsigned threads = 1;
+  std::size_t scenes = 1;
+  std::size_t vertices = 0;  // all scenes
+  std::size_t springs = 0;   // all scenes
+  std::size_t steps = 0;
+  double seconds = 0.0;
+  std::string status = "ok";
+
+  double microseconds_per_step() const { return steps == 0 ? 0.0 : 1e6 * seconds / static_cast<double>(steps); }
+  double spring_steps_per_second() const {
+    return seconds > 0.0 ? static_cast<double>(springs) * static_cast<double>(steps) / seconds : 0.0;
+  }
+};
+
+// A box of cells^3 Kuhn cubes (edges, face and body diagonals), 0.1 m, soft tissue, hanging from its top face.
+SimulationSetup benchmark_box(int cells, Precision precision, Integrator integrator, double young_modulus = 5000.0) {
+  DiagnosticList diagnostics;
+  BoxSpec box;
+  box.cells_x = box.cells_y = box.cells_z = cells;
+  box.size = {0.1, 0.1, 0.1};
+  const Mesh mesh = generate_box(box, diagnostics);
+  SpringModelSpec model;
+  model.stiffness.mapping = StiffnessMapping::VanGelder1998;
+  model.stiffness.value = young_modulus;
+  model.mass.value = 1060.0;
+  auto setup = build_spring_model(mesh, model, diagnostics);
+  if (!setup) return {};
+  for (std::size_t v = 0; v < setup->rest_positions.size(); ++v) {
+    if (setup->rest_positions[v][1] > 0.0999) setup->fixed_vertices.push_back(static_cast<std::int32_t>(v));
+  }
+  setup->gravity = {0.0, -9.81, 0.0};
+  setup->precision = precision;
+  setup->integrator = integrator;
+  return *setup;
+}
+
+// Runs advance(chunk) until at least min_seconds have passed (the chunk doubling from `first`), after one untimed
+// warm-up chunk. Returns false when a run failed.
+bool time_steps(const std::function<bool(std::size_t)>& advance, std::size_t first, double min_seconds, Row& row) {
+  if (!advance(first)) return false;
+  std::size_t chunk = first;
+  std::size_t steps = 0;
+  const auto start = std::chrono::steady_clock::now();
+  double elapsed = 0.0;
+  while (elapsed < min_seconds) {
+    if (!advance(chunk)) return false;
+    steps += chunk;
+    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (elapsed < min_seconds / 4.0) chunk *= 2;
+  }
+  row.steps = steps;
+  row.seconds = elapsed;
+  return true;
+}
+
+std::string failure_text(const DiagnosticList& diagnostics) {
+  return diagnostics.items().empty() ? "failed" : "failed: " + diagnostics.items().front().message;
+}
+
+const char* precision_name(Precision precision) { return precision == Precision::Float ? "float" : "double"; }
+
+Row cpu_row(const SimulationSetup& base, unsigned threads, Precision precision, const Options& options) {
+  SimulationSetup setup = base;
+  setup.threads = threads;
+  setup.precision = precision;
+  Row row;
+  row.variant = "cpu";
+  row.backend = "cpu";
+  row.precision = precision_name(precision);
+  row.integrator = to_string(setup.integrator);
+  row.graphs = "-";
+  row.threads = threads;
+  row.vertices = setup.rest_positions.size();
+  row.springs = setup.springs.size();
+  DiagnosticList diagnostics;
+  const auto simulation = CpuSimulation::create(setup, diagnostics);
+  if (!simulation ||
+      !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics); }, 1, options.min_seconds, row)) {
+    row.status = failure_text(diagnostics);
+  }
+  return row;
+}
+
+Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, bool graphs,
+            const Options& options) {
+  SimulationSetup setup = base;
+  setup.precision = precision;
+  setup.integrator = integrator;
+  Row row;
+  row.variant = "cuda";
+  row.backend = "cuda";
+  row.precision = precision_name(precision);
+  row.integrator = to_string(integrator);
+  row.graphs = graphs ? "yes" : "no";
+  row.vertices = setup.rest_positions.size();
+  row.springs = setup.springs.size();
+  gpu::GpuOptions gpu_options;
+  gpu_options.use_graphs = graphs;
+  DiagnosticList diagnostics;
+  const auto simulation = gpu::GpuSimulation::create(setup, gpu_options, diagnostics);
+  if (!simulation ||
+      !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics); }, 64, options.min_seconds, row)) {
+    row.status = failure_text(diagnostics);
+  }
+  return row;
+}
+
+// `count` small scenes (different stiffness, hence different steps) in one batch, against the same scenes as
+// separate GpuSimulations advanced one after another.
+std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, const Options& options) {
+  std::vector<SimulationSetup> scenes;
+  for (std::size_t s = 0; s < count; ++s) {
+    scenes.push_back(
+        benchmark_box(cells, precision, Integrator::SemiImplicitEuler, 4000.0 + 10.0 * static_cast<double>(s)));
+  }
+  std::size_t vertices = 0, springs = 0;
+  for (const auto& scene : scenes) {
+    vertices += scene.rest_positions.size();
+    springs += scene.springs.size();
+  }
+  std::vector<Row> rows;
+  for (const bool batched : {true, false}) {
+    Row row;
+    row.variant = batched ? "cuda-batch" : "cuda-one-by-one";
+    row.backend = "cuda";
+    row.precision = precision_name(precision);
+    row.integrator = to_string(Integrator::SemiImplicitEuler);
+    row.graphs = "yes";
+    row.scenes = count;
+    row.vertices = vertices;
+    row.springs = springs;
+    DiagnosticList diagnostics;
+    if (batched) {
+      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      if (!batch ||
+          !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, row)) {
+        row.status = failure_text(diagnostics);
+      }
+    } else {
+      std::vector<std::unique_ptr<gpu::GpuSimulation>> singles;
+      for (const auto& scene : scenes) {
+        singles.push_back(gpu::GpuSimulation::create(scene, diagnostics));
+        if (!singles.back()) break;
+      }
+      const auto advance_all = [&](std::size_t n) {
+        for (auto& single : singles) {
+          if (!single || !single->advance(n, diagnostics)) return false;
+        }
+        return true;
+      };
+      if (!time_steps(advance_all, 64, options.min_seconds, row)) row.status = failure_text(diagnostics);
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+std::string format(double value, int precision) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.*f", precision, value);
+  return text;
+}
+
+std::string scientific(double value) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.3g", value);
+  return text;
+}
+
+void write_csv(const std::vector<Row>& rows, std::ostream& out) {
+  out << "variant,backend,precision,integrator,graphs,threads,scenes,vertices,springs,steps,seconds,us_per_step,"
+         "spring_steps_per_s,status\n";
+  for (const Row& r : rows) {
+    out << r.variant << ',' << r.backend << ',' << r.precision << ',' << r.integrator << ',' << r.graphs << ','
+        << r.threads << ',' << r.scenes << ',' << r.vertices << ',' << r.springs << ',' << r.steps << ','
+        << format(r.seconds, 6) << ',' << format(r.microseconds_per_step(), 3) << ','
+        << scientific(r.spring_steps_per_second()) << ",\"" << r.status << "\"\n";
+  }
+}
+
+void print_table(const std::vector<Row>& rows, std::ostream& out) {
+  out << "| variant | precision | integrator | graphs | threads | scenes | springs | us/step | spring-steps/s |\n";
+  out << "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+  for (const Row& r : rows) {
+    out << "| " << r.variant << " | " << r.precision << " | " << r.integrator << " | " << r.graphs << " | " << r.threads
+        << " | " << r.scenes << " | " << r.springs << " | "
+        << (r.status == "ok" ? format(r.microseconds_per_step(), 2) : r.status) << " | "
+        << (r.status == "ok" ? scientific(r.spring_steps_per_second()) : "-") << " |\n";
+  }
+}
+
+bool parse(int argc, char** argv, Options& options) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--quick") {
+      options.quick = true;
+    } else if (arg == "--out" && i + 1 < argc) {
+      options.out_dir = argv[++i];
+    } else if (arg == "--threads" && i + 1 < argc) {
+      options.threads = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
+    } else if (arg == "--min-seconds" && i + 1 < argc) {
+      options.min_seconds = std::strtod(argv[++i], nullptr);
+    } else {
+      std::cerr << "usage: fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S]\n";
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  if (!parse(argc, argv, options)) return 2;
+  if (options.quick) options.min_seconds = std::min(options.min_seconds, 0.1);
+  const unsigned threads = options.threads != 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  std::string device;
+  const bool have_device = gpu::cuda_device_available(device);
+  std::cout << "CPU threads: " << threads << "; CUDA: " << (have_device ? device : "skipped (" + device + ")") << "\n";
+
+  // cells^3 boxes, 3n(n+1)^2 + 3n^2(n+1) + n^3 springs: 5 -> 1,115, 11 -> 10,439, 24 -> 102,024, 52 -> 1,008,748.
+  const std::vector<int> sizes = options.quick ? std::vector<int>{5, 11} : std::vector<int>{5, 11, 24, 52};
+  std::vector<Row> rows;
+  for (const int cells : sizes) {
+    const SimulationSetup base = benchmark_box(cells, Precision::Double, Integrator::SemiImplicitEuler);
+    std::cout << "box " << cells << "^3: " << base.rest_positions.size() << " vertices, " << base.springs.size()
+              << " springs\n"
+              << std::flush;
+    rows.push_back(cpu_row(base, 1, Precision::Double, options));
+    if (threads > 1) {
+      rows.push_back(cpu_row(base, threads, Precision::Double, options));
+      rows.push_back(cpu_row(base, threads, Precision::Float, options));
+    }
+    if (!have_device) continue;
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      for (const bool graphs : {false, true}) {
+        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, graphs, options));
+      }
+      for (const Integrator integrator :
+           {Integrator::ForwardEuler, Integrator::VelocityVerlet, Integrator::RungeKutta4}) {
+        rows.push_back(gpu_row(base, precision, integrator, true, options));
+      }
+    }
+  }
+  if (have_device) {
+    const std::size_t scenes = options.quick ? 16 : 256;
+    std::cout << "batch: " << scenes << " boxes of 5^3 cells\n" << std::flush;
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      for (Row& row : batch_rows(5, scenes, precision, options)) rows.push_back(row);
+    }
+  }
+
+  if (!options.out_dir.empty()) {
+    std::ofstream csv(options.out_dir + "/sim_bench.csv");
+    write_csv(rows, csv);
+    std::ofstream table(options.out_dir + "/sim_bench.md");
+    table << "CPU threads: " << threads << "; CUDA: " << (have_device ? device : "none") << "\n\n";
+    print_table(rows, table);
+    if (!csv || !table) {
+      std::cerr << "cannot write the results under " << options.out_dir << "\n";
+      return 1;
+    }
+  }
+  print_table(rows, std::cout);
+  bool all_ok = true;
+  for (const Row& r : rows) all_ok = all_ok && r.status == "ok";
+  return all_ok ? 0 : 1;
+}

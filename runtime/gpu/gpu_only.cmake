@@ -1,0 +1,51 @@
+# FMPC_GPU_ONLY=ON: the build for the GPU machine, which has CMake, nvcc and the CUDA libraries but none of the
+# Debian packages the full build needs (antlr4, yaml-cpp, CLI11, Catch2, Eigen, fuzzylite). It builds only
+#   fmpc_runtime     kernels/spring_step.cu, runtime/gpu, and the CPU reference it is compared with: meshes,
+#                    springs, integrators, the model builder, and compiler/sema/diagnostic.cpp;
+#   fmpc_gpu_tests   tests/gpu (its own runner, no Catch2), ctest label `gpu`;
+#   fmpc_sim_bench   bench/sim.
+# Eigen (header-only, used by the CPU implicit Euler) is not searched for on the system: its headers come from
+# FMPC_EIGEN_INCLUDE_DIR, which `bench/run_gpu.sh --prepare` fills from /usr/include/eigen3 on the build machine
+# (build-gpu-carry/eigen3, carried to the GPU machine).
+set(FMPC_CUDA ON)
+include(${PROJECT_SOURCE_DIR}/cmake/FmpcWarnings.cmake)
+include(${PROJECT_SOURCE_DIR}/cmake/FmpcCuda.cmake)
+option(FMPC_GPU_ONLY_WERROR "Warnings are errors in the GPU-only build (off: the GPU machine's compilers may differ)" OFF)
+if(NOT FMPC_GPU_ONLY_WERROR)
+  target_compile_options(fmpc_warnings INTERFACE $<$<COMPILE_LANGUAGE:CXX>:-Wno-error>)
+endif()
+find_package(Threads REQUIRED)
+
+set(FMPC_EIGEN_INCLUDE_DIR "${PROJECT_SOURCE_DIR}/build-gpu-carry/eigen3" CACHE PATH
+    "Directory holding Eigen/ (copied by bench/run_gpu.sh --prepare)")
+if(NOT EXISTS "${FMPC_EIGEN_INCLUDE_DIR}/Eigen/Sparse")
+  message(FATAL_ERROR "FMPC_GPU_ONLY: no Eigen headers in ${FMPC_EIGEN_INCLUDE_DIR}; run `bench/run_gpu.sh --prepare` "
+                      "on the build machine and carry build-gpu-carry/, or set FMPC_EIGEN_INCLUDE_DIR")
+endif()
+
+add_library(fmpc_kernels INTERFACE)
+target_include_directories(fmpc_kernels INTERFACE ${PROJECT_SOURCE_DIR})
+
+file(GLOB FMPC_GPU_ONLY_SOURCES CONFIGURE_DEPENDS
+  ${PROJECT_SOURCE_DIR}/runtime/mesh/*.cpp
+  ${PROJECT_SOURCE_DIR}/runtime/springs/*.cpp
+  ${PROJECT_SOURCE_DIR}/runtime/integrate/*.cpp
+  ${PROJECT_SOURCE_DIR}/runtime/gpu/*.cpp)
+add_library(fmpc_runtime STATIC
+  ${FMPC_GPU_ONLY_SOURCES}
+  ${PROJECT_SOURCE_DIR}/runtime/scene/spring_model_builder.cpp
+  ${PROJECT_SOURCE_DIR}/compiler/sema/diagnostic.cpp
+  ${PROJECT_SOURCE_DIR}/kernels/spring_step.cu)
+target_include_directories(fmpc_runtime PUBLIC ${PROJECT_SOURCE_DIR})
+target_include_directories(fmpc_runtime SYSTEM PUBLIC ${FMPC_EIGEN_INCLUDE_DIR})
+target_link_libraries(fmpc_runtime PUBLIC fmpc_kernels Threads::Threads CUDA::cudart_static PRIVATE fmpc_warnings)
+# As in runtime/CMakeLists.txt: the device must round like the CPU loop (no fused multiply-add contraction).
+target_compile_options(fmpc_runtime PRIVATE $<$<COMPILE_LANGUAGE:CUDA>:--fmad=false>)
+if(FMPC_GPU_ONLY_WERROR)
+  target_compile_options(fmpc_runtime PRIVATE $<$<COMPILE_LANGUAGE:CUDA>:--Werror=all-warnings>)
+endif()
+target_compile_definitions(fmpc_runtime PUBLIC FMPC_RUNTIME_HAVE_CUDA=1)
+
+enable_testing()
+add_subdirectory(${PROJECT_SOURCE_DIR}/tests/gpu ${PROJECT_BINARY_DIR}/tests/gpu)
+add_subdirectory(${PROJECT_SOURCE_DIR}/bench/sim ${PROJECT_BINARY_DIR}/bench/sim)

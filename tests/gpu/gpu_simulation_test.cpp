@@ -1,0 +1,447 @@
+// The CUDA backend against the CPU loop (the host reference), run to run, with and without graphs, batched and
+// alone, with odd mesh sizes (never a multiple of the block size) and NaN/Inf detection.
+//
+// Stated tolerance (docs/simulator.md): after 10,000 steps of a damped hanging 0.1 m box, every position of the
+// GPU run is within 1e-5 m (float) and 1e-12 m (double) of the CPU run. Both sides evaluate the same FMPC_HD
+// functions in the same order, and the device code is compiled with --fmad=false, so the expected difference is 0;
+// the tests print the measured maximum.
+#include "runtime/gpu/gpu_simulation.h"
+
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+
+#include "runtime/mesh/generated_mesh.h"
+#include "runtime/scene/spring_model_builder.h"
+#include "tests/gpu/gpu_test_harness.h"
+
+using namespace fmpc;
+using namespace fmpc::sim;
+using fmpc::gpu_test::note;
+
+namespace {
+
+struct BoxScene {
+  int cells_x = 3, cells_y = 5, cells_z = 2;
+  double young_modulus = 5000.0;  // Pa
+  Precision precision = Precision::Double;
+  Integrator integrator = Integrator::SemiImplicitEuler;
+  unsigned seed = 1;  // initial velocities, uniform in +-0.05 m/s
+};
+
+// A 0.1 m box of soft tissue (1060 kg/m^3, Van Gelder stiffness, damping ratio 0.9) hanging from its top face
+// under gravity, with seeded random initial velocities so that every vertex moves.
+SimulationSetup hanging_box(const BoxScene& scene) {
+  DiagnosticList diagnostics;
+  BoxSpec box;
+  box.cells_x = scene.cells_x;
+  box.cells_y = scene.cells_y;
+  box.cells_z = scene.cells_z;
+  box.size = {0.1, 0.1, 0.1};
+  const Mesh mesh = generate_box(box, diagnostics);
+  SpringModelSpec model;
+  model.stiffness.mapping = StiffnessMapping::VanGelder1998;
+  model.stiffness.value = scene.young_modulus;
+  model.mass.value = 1060.0;
+  auto setup = build_spring_model(mesh, model, diagnostics);
+  SimulationSetup out = setup ? *setup : SimulationSetup{};
+  for (std::size_t v = 0; v < out.rest_positions.size(); ++v) {
+    if (out.rest_positions[v][1] > 0.0999) out.fixed_vertices.push_back(static_cast<std::int32_t>(v));
+  }
+  std::mt19937 random(scene.seed);
+  std::uniform_real_distribution<double> speed(-0.05, 0.05);
+  out.initial_velocities.resize(out.rest_positions.size());
+  for (Point3& v : out.initial_velocities) v = {speed(random), speed(random), speed(random)};
+  out.gravity = {0.0, -9.81, 0.0};
+  out.precision = scene.precision;
+  out.integrator = scene.integrator;
+  return out;
+}
+
+// One tetrahedron, nothing fixed, falling and spinning: the smallest mesh with springs.
+SimulationSetup single_tetrahedron(Precision precision, Integrator integrator) {
+  DiagnosticList diagnostics;
+  Mesh mesh;
+  mesh.points = {{0.0, 0.0, 0.0}, {0.02, 0.0, 0.0}, {0.0, 0.02, 0.0}, {0.0, 0.0, 0.02}};
+  mesh.tetrahedra = {{0, 1, 2, 3}};
+  SpringModelSpec model;
+  model.stiffness.mapping = StiffnessMapping::Uniform;
+  model.stiffness.value = 50.0;
+  model.mass.value = 1000.0;
+  auto setup = build_spring_model(mesh, model, diagnostics);
+  SimulationSetup out = setup ? *setup : SimulationSetup{};
+  out.initial_velocities = {{0.0, 0.0, 0.0}, {0.0, 0.1, 0.0}, {0.0, 0.0, 0.1}, {0.1, 0.0, 0.0}};
+  out.gravity = {0.0, -9.81, 0.0};
+  out.precision = precision;
+  out.integrator = integrator;
+  return out;
+}
+
+// Basafa-Farahmand springs, nodal damping gamma0 + gamma1 |x - x0|, external forces and an initial displacement:
+// every load term of vertex_acceleration.
+SimulationSetup nonlinear_box(Precision precision, Integrator integrator) {
+  BoxScene scene;
+  scene.cells_x = 4;
+  scene.cells_y = 3;
+  scene.cells_z = 3;
+  scene.precision = precision;
+  scene.integrator = integrator;
+  SimulationSetup setup = hanging_box(scene);
+  setup.law = kernels::SpringLaw::BasafaFarahmand;
+  setup.nodal_damping_gamma0 = 1e-3;
+  setup.nodal_damping_gamma1 = 0.05;
+  setup.external_forces.assign(setup.rest_positions.size(), Point3{0.0, 0.0, 0.0});
+  setup.initial_positions = setup.rest_positions;
+  for (std::size_t v = 0; v < setup.rest_positions.size(); ++v) {
+    if (setup.rest_positions[v][1] < 1e-6) {
+      setup.external_forces[v] = {0.01, -0.02, 0.005};
+      setup.initial_positions[v][0] += 0.002;
+    }
+  }
+  return setup;
+}
+
+const char* name_of(Precision precision) { return precision == Precision::Float ? "float" : "double"; }
+
+double max_difference(const std::vector<Point3>& a, const std::vector<Point3>& b) {
+  if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
+  double worst = 0.0;
+  for (std::size_t v = 0; v < a.size(); ++v) {
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const double d = std::abs(a[v][axis] - b[v][axis]);
+      if (!(d <= worst)) worst = d;  // NaN propagates as a failure
+    }
+  }
+  return worst;
+}
+
+bool bitwise_equal(const std::vector<Point3>& a, const std::vector<Point3>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Point3)) == 0);
+}
+
+std::string first_error(const DiagnosticList& diagnostics) {
+  for (const auto& d : diagnostics.items()) {
+    if (d.severity == Severity::Error) return d.message;
+  }
+  return {};
+}
+
+std::string describe(const DiagnosticList& diagnostics) {
+  std::string text;
+  for (const auto& d : diagnostics.items()) text += d.message + "; ";
+  return text;
+}
+
+// Runs the setup on the CPU and on the GPU for `steps` steps and returns the largest difference of the positions
+// (m) and, separately, of the velocities (m/s); infinity when a run failed.
+struct Difference {
+  double positions = std::numeric_limits<double>::infinity();
+  double velocities = std::numeric_limits<double>::infinity();
+};
+
+Difference cpu_gpu_difference(const SimulationSetup& setup, std::size_t steps, const gpu::GpuOptions& options) {
+  DiagnosticList diagnostics;
+  const auto cpu = CpuSimulation::create(setup, diagnostics);
+  const auto device = gpu::GpuSimulation::create(setup, options, diagnostics);
+  if (!cpu || !device || !cpu->advance(steps, diagnostics) || !device->advance(steps, diagnostics)) {
+    note("setup or run failed: " + describe(diagnostics));
+    return {};
+  }
+  Difference difference;
+  difference.positions = max_difference(cpu->positions(), device->positions(diagnostics));
+  difference.velocities = max_difference(cpu->velocities(), device->velocities(diagnostics));
+  if (diagnostics.has_errors()) {
+    note("errors: " + describe(diagnostics));
+    return {};
+  }
+  return difference;
+}
+
+// Velocities are compared at 100 x the position tolerance per second (the box moves at most ~0.1 m/s).
+double position_tolerance(Precision precision) { return precision == Precision::Float ? 1e-5 : 1e-12; }
+double velocity_tolerance(Precision precision) { return 100.0 * position_tolerance(precision); }
+
+const Integrator kGpuIntegrators[] = {Integrator::ForwardEuler, Integrator::SemiImplicitEuler,
+                                      Integrator::VelocityVerlet, Integrator::RungeKutta4};
+
+}  // namespace
+
+FMPC_GPU_TEST(cpu_only_refused, "implicit Euler, probes and strain tables are refused before touching the device",
+              false) {
+  {
+    BoxScene scene;
+    scene.integrator = Integrator::ImplicitEuler;
+    DiagnosticList diagnostics;
+    FMPC_EXPECT(!gpu::GpuSimulation::create(hanging_box(scene), diagnostics));
+    FMPC_REQUIRE(diagnostics.error_count() == 1);
+    FMPC_EXPECT(diagnostics.items()[0].message.rfind("implicit Euler runs on the CPU only", 0) == 0);
+  }
+  {
+    SimulationSetup setup = hanging_box(BoxScene{});
+    setup.probe = ProbeLoad{};
+    setup.probe->vertices = {0};
+    DiagnosticList diagnostics;
+    FMPC_EXPECT(!gpu::GpuSimulation::create(setup, diagnostics));
+    FMPC_REQUIRE(diagnostics.error_count() == 1);
+    FMPC_EXPECT(diagnostics.items()[0].message.rfind("probes run on the CPU backend only", 0) == 0);
+  }
+  {
+    std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
+    scenes[1].strain_stiffness = StrainStiffnessTable{};
+    DiagnosticList diagnostics;
+    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics));
+    FMPC_REQUIRE(diagnostics.error_count() == 1);
+    FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 1: table-driven stiffness k(strain) runs on the CPU", 0) ==
+                0);
+  }
+}
+
+FMPC_GPU_TEST(batch_refusals, "a batch refuses no scenes, mixed shared fields and invalid scenes by index", false) {
+  const gpu::GpuOptions options;
+  {
+    DiagnosticList diagnostics;
+    FMPC_EXPECT(!gpu::GpuBatchSimulation::create({}, options, diagnostics));
+    FMPC_EXPECT(diagnostics.error_count() == 1);
+  }
+  {
+    std::vector<SimulationSetup> scenes(3, hanging_box(BoxScene{}));
+    scenes[2].gravity = {0.0, 0.0, -9.81};
+    DiagnosticList diagnostics;
+    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, options, diagnostics));
+    FMPC_REQUIRE(diagnostics.error_count() == 1);
+    FMPC_EXPECT(diagnostics.items()[0].message ==
+                "scene 2 differs from scene 0 in its gravity; the scenes of one "
+                "GPU batch share it: run it in another batch");
+  }
+  {
+    std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
+    scenes[1].precision = Precision::Float;
+    DiagnosticList diagnostics;
+    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, options, diagnostics));
+    FMPC_EXPECT(diagnostics.items().at(0).message.find("in its precision") != std::string::npos);
+  }
+  {
+    std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
+    scenes[1].mass.pop_back();
+    DiagnosticList diagnostics;
+    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, options, diagnostics));
+    FMPC_REQUIRE(diagnostics.has_errors());
+    FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 1: masses:", 0) == 0);
+  }
+}
+
+FMPC_GPU_TEST(cpu_agreement_10000, "every GPU integrator matches the CPU after 10,000 steps (float and double)", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const Integrator integrator : kGpuIntegrators) {
+      BoxScene scene;
+      scene.precision = precision;
+      scene.integrator = integrator;
+      const Difference difference = cpu_gpu_difference(hanging_box(scene), 10000, gpu::GpuOptions{});
+      std::ostringstream line;
+      line << to_string(integrator) << ", " << name_of(precision)
+           << ": max |GPU - CPU| after 10,000 steps: " << difference.positions << " m (tolerance "
+           << position_tolerance(precision) << "), " << difference.velocities << " m/s (tolerance "
+           << velocity_tolerance(precision) << ")";
+      note(line.str());
+      FMPC_EXPECT(difference.positions <= position_tolerance(precision));
+      FMPC_EXPECT(difference.velocities <= velocity_tolerance(precision));
+    }
+  }
+}
+
+FMPC_GPU_TEST(cpu_agreement_loads, "Basafa-Farahmand springs, nodal damping and forces match the CPU", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const Integrator integrator : kGpuIntegrators) {
+      const Difference difference = cpu_gpu_difference(nonlinear_box(precision, integrator), 2000, gpu::GpuOptions{});
+      std::ostringstream line;
+      line << "nonlinear box, " << to_string(integrator) << ", " << name_of(precision)
+           << ": max |GPU - CPU| after 2,000 steps: " << difference.positions << " m, " << difference.velocities
+           << " m/s";
+      note(line.str());
+      FMPC_EXPECT(difference.positions <= position_tolerance(precision));
+      FMPC_EXPECT(difference.velocities <= velocity_tolerance(precision));
+    }
+  }
+}
+
+FMPC_GPU_TEST(bitwise_reproducible, "runs are bitwise identical: run to run, graphs or not, any check interval", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const Integrator integrator : kGpuIntegrators) {
+      BoxScene scene;
+      scene.cells_x = 7;  // 8 x 7 x 6 = 336 vertices: two blocks, the second partly idle
+      scene.cells_y = 6;
+      scene.cells_z = 5;
+      scene.precision = precision;
+      scene.integrator = integrator;
+      const SimulationSetup setup = hanging_box(scene);
+      DiagnosticList diagnostics;
+      // Reference: no graphs, a check after every step.
+      gpu::GpuOptions plain;
+      plain.use_graphs = false;
+      const auto reference = gpu::GpuSimulation::create(setup, plain, diagnostics);
+      FMPC_REQUIRE(reference && reference->advance(1000, diagnostics, 1));
+      const auto expected_x = reference->positions(diagnostics);
+      const auto expected_v = reference->velocities(diagnostics);
+      const auto expected_kinetic = reference->kinetic_energy(diagnostics);
+      const auto expected_potential = reference->potential_energy(diagnostics);
+      FMPC_REQUIRE(expected_kinetic && expected_potential);
+      // Graphs, in uneven pieces: 0, 1, 3 (checked every 2), 65 (every 64), 931 (every 0 = at the end).
+      for (int repeat = 0; repeat < 2; ++repeat) {
+        const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+        FMPC_REQUIRE(run);
+        FMPC_REQUIRE(run->advance(0, diagnostics));
+        FMPC_REQUIRE(run->advance(1, diagnostics));
+        FMPC_REQUIRE(run->advance(3, diagnostics, 2));
+        FMPC_REQUIRE(run->advance(65, diagnostics, 64));
+        FMPC_REQUIRE(run->advance(931, diagnostics, 0));
+        FMPC_EXPECT(run->steps_taken() == 1000);
+        FMPC_EXPECT(bitwise_equal(run->positions(diagnostics), expected_x));
+        FMPC_EXPECT(bitwise_equal(run->velocities(diagnostics), expected_v));
+        const auto kinetic = run->kinetic_energy(diagnostics);
+        const auto potential = run->potential_energy(diagnostics);
+        FMPC_REQUIRE(kinetic && potential);
+        FMPC_EXPECT(std::memcmp(&*kinetic, &*expected_kinetic, sizeof(double)) == 0);
+        FMPC_EXPECT(std::memcmp(&*potential, &*expected_potential, sizeof(double)) == 0);
+      }
+      FMPC_EXPECT(!diagnostics.has_errors());
+      if (diagnostics.has_errors()) note(describe(diagnostics));
+    }
+  }
+}
+
+FMPC_GPU_TEST(energy_matches_cpu, "device energy reductions match the CPU's sums", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const SimulationSetup& setup :
+         {hanging_box(BoxScene{3, 5, 2, 5000.0, precision}), nonlinear_box(precision, Integrator::RungeKutta4)}) {
+      DiagnosticList diagnostics;
+      const auto cpu = CpuSimulation::create(setup, diagnostics);
+      const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+      FMPC_REQUIRE(cpu && device && cpu->advance(300, diagnostics) && device->advance(300, diagnostics));
+      const auto kinetic = device->kinetic_energy(diagnostics);
+      const auto potential = device->potential_energy(diagnostics);
+      FMPC_REQUIRE(kinetic && potential);
+      // Same terms in double, summed in another order: relative rounding only.
+      FMPC_EXPECT_WITHIN(*kinetic, cpu->kinetic_energy(), 1e-10 * std::abs(cpu->kinetic_energy()) + 1e-300);
+      FMPC_EXPECT_WITHIN(*potential, cpu->potential_energy(), 1e-10 * std::abs(cpu->potential_energy()) + 1e-12);
+      FMPC_EXPECT(*kinetic > 0.0);
+    }
+  }
+}
+
+FMPC_GPU_TEST(batch_equals_single, "a batch of odd-sized scenes gives each scene's single-run bits", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const Integrator integrator : kGpuIntegrators) {
+      std::vector<SimulationSetup> scenes;
+      scenes.push_back(single_tetrahedron(precision, integrator));
+      scenes.push_back(hanging_box(BoxScene{1, 1, 1, 2000.0, precision, integrator, 2}));
+      scenes.push_back(hanging_box(BoxScene{3, 5, 2, 5000.0, precision, integrator, 3}));
+      scenes.push_back(hanging_box(BoxScene{7, 6, 5, 9000.0, precision, integrator, 4}));
+      for (SimulationSetup& scene : scenes) scene.gravity = {0.0, -9.81, 0.0};
+      DiagnosticList diagnostics;
+      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      FMPC_REQUIRE(batch);
+      FMPC_REQUIRE(batch->scene_count() == scenes.size());
+      FMPC_REQUIRE(batch->advance(500, diagnostics, 100));
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        const auto single = gpu::GpuSimulation::create(scenes[s], diagnostics);
+        FMPC_REQUIRE(single && single->advance(500, diagnostics, 100));
+        FMPC_EXPECT(batch->stability(s).time_step == single->stability().time_step);
+        FMPC_EXPECT(bitwise_equal(batch->positions(s, diagnostics), single->positions(diagnostics)));
+        FMPC_EXPECT(bitwise_equal(batch->velocities(s, diagnostics), single->velocities(diagnostics)));
+        const auto batch_energy = batch->kinetic_energy(s, diagnostics);
+        const auto single_energy = single->kinetic_energy(diagnostics);
+        FMPC_EXPECT(batch_energy && single_energy && *batch_energy == *single_energy);
+      }
+      // The scenes' own time steps differ (different stiffness and size): the per-scene step array is used.
+      FMPC_EXPECT(batch->stability(0).time_step != batch->stability(3).time_step);
+      FMPC_EXPECT(batch->positions(scenes.size(), diagnostics).empty());
+      FMPC_EXPECT(diagnostics.error_count() == 1);  // the scene index past the end
+    }
+  }
+}
+
+FMPC_GPU_TEST(non_finite_located, "NaN/Inf stops the run naming the exact step, vertex and spring", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    BoxScene scene;
+    scene.precision = precision;
+    SimulationSetup setup = hanging_box(scene);
+    DiagnosticList probe;
+    const auto stability = check_stability(setup, probe);
+    FMPC_REQUIRE(stability);
+    setup.time_step = 40.0 * stability->critical_time_step;
+    setup.refuse_unstable_time_step = false;
+    DiagnosticList cpu_diagnostics;
+    const auto cpu = CpuSimulation::create(setup, cpu_diagnostics);
+    FMPC_REQUIRE(cpu);
+    FMPC_EXPECT(!cpu->advance(100000, cpu_diagnostics));
+    FMPC_REQUIRE(cpu->non_finite());
+    for (const std::size_t check_every : {std::size_t{1}, std::size_t{64}, std::size_t{0}}) {
+      DiagnosticList diagnostics;
+      const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+      FMPC_REQUIRE(run);
+      FMPC_EXPECT(!run->advance(100000, diagnostics, check_every));
+      FMPC_REQUIRE(run->non_finite());
+      const NonFiniteReport& report = *run->non_finite();
+      std::ostringstream line;
+      line << name_of(precision) << ", check every " << check_every << ": GPU step " << report.step << " vertex "
+           << report.vertex << " spring " << report.spring << "; CPU step " << cpu->non_finite()->step << " vertex "
+           << cpu->non_finite()->vertex << " spring " << cpu->non_finite()->spring;
+      note(line.str());
+      FMPC_EXPECT(report.step == cpu->non_finite()->step);
+      FMPC_EXPECT(report.vertex == cpu->non_finite()->vertex);
+      FMPC_EXPECT(report.spring == cpu->non_finite()->spring);
+      FMPC_EXPECT(run->steps_taken() == report.step);
+      FMPC_REQUIRE(diagnostics.error_count() == 1);  // besides the warning about the unstable step
+      FMPC_EXPECT(
+          first_error(diagnostics)
+              .rfind("the GPU simulation became non-finite at step " + std::to_string(report.step) + " (t = ", 0) == 0);
+      FMPC_EXPECT(!run->advance(1, diagnostics));  // a failed run stays stopped
+    }
+  }
+}
+
+FMPC_GPU_TEST(non_finite_names_scene, "a NaN in one scene of a batch names that scene", true) {
+  std::vector<SimulationSetup> scenes(3, hanging_box(BoxScene{}));
+  DiagnosticList probe;
+  const auto stability = check_stability(scenes[1], probe);
+  FMPC_REQUIRE(stability);
+  scenes[1].time_step = 40.0 * stability->critical_time_step;
+  scenes[1].refuse_unstable_time_step = false;
+  DiagnosticList diagnostics;
+  const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+  FMPC_REQUIRE(batch);
+  FMPC_EXPECT(!batch->advance(100000, diagnostics));
+  FMPC_REQUIRE(batch->non_finite());
+  FMPC_EXPECT(batch->non_finite()->scene == 1);
+  FMPC_EXPECT(first_error(diagnostics).find(" in scene 1: vertex ") != std::string::npos);
+}
+
+// Small enough for compute-sanitizer (memcheck, racecheck, initcheck, synccheck): every kernel, graphs, a batch,
+// energies and a NaN replay.
+FMPC_GPU_TEST(sanitizer_smoke, "sanitizer smoke: every kernel on tiny scenes", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const Integrator integrator : kGpuIntegrators) {
+      std::vector<SimulationSetup> scenes{single_tetrahedron(precision, integrator),
+                                          hanging_box(BoxScene{2, 1, 3, 5000.0, precision, integrator, 5})};
+      DiagnosticList diagnostics;
+      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      FMPC_REQUIRE(batch && batch->advance(20, diagnostics, 8));
+      FMPC_EXPECT(batch->kinetic_energy(1, diagnostics).has_value());
+      FMPC_EXPECT(batch->potential_energy(1, diagnostics).has_value());
+      const Difference difference = cpu_gpu_difference(scenes[1], 20, gpu::GpuOptions{});
+      FMPC_EXPECT(difference.positions <= position_tolerance(precision));
+      if (diagnostics.has_errors()) note(describe(diagnostics));
+    }
+  }
+  SimulationSetup setup = hanging_box(BoxScene{2, 1, 3});
+  DiagnosticList probe;
+  setup.time_step = 40.0 * check_stability(setup, probe)->critical_time_step;
+  setup.refuse_unstable_time_step = false;
+  DiagnosticList diagnostics;
+  const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+  FMPC_REQUIRE(run);
+  FMPC_EXPECT(!run->advance(5000, diagnostics, 16));
+  FMPC_EXPECT(run->non_finite().has_value());
+}
