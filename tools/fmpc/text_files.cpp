@@ -1,14 +1,12 @@
 #include "tools/fmpc/text_files.h"
 
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <cerrno>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iostream>
 #include <sstream>
+
+#include "runtime/io/atomic_file.h"
 
 namespace fmpc::cli {
 
@@ -37,39 +35,10 @@ bool write_text_file_atomically(const std::string& path, const std::string& cont
     std::cout << contents << std::flush;
     return true;
   }
-  // mkstemp in the target's folder: rename(2) is only atomic within one file system.
-  std::string temp = path + ".tmp.XXXXXX";
-  const int fd = ::mkstemp(temp.data());
-  if (fd < 0) {
-    error = "cannot write '" + path + "': " + std::strerror(errno);
-    return false;
-  }
-  std::size_t written = 0;
-  while (written < contents.size()) {
-    const ssize_t n = ::write(fd, contents.data() + written, contents.size() - written);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      error = "cannot write '" + path + "': " + std::strerror(errno);
-      ::close(fd);
-      ::unlink(temp.c_str());
-      return false;
-    }
-    written += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) {
-    error = "cannot write '" + path + "': " + std::strerror(errno);
-    ::unlink(temp.c_str());
-    return false;
-  }
-  // mkstemp creates 0600; keep the mode of the file being replaced, or give a new one the usual 0644.
-  struct stat existing {};
-  ::chmod(temp.c_str(), ::stat(path.c_str(), &existing) == 0 ? (existing.st_mode & 07777) : 0644);
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    error = "cannot write '" + path + "': " + std::strerror(errno);
-    ::unlink(temp.c_str());
-    return false;
-  }
-  return true;
+  DiagnosticList diagnostics;
+  if (sim::write_file_atomically(path, contents, diagnostics)) return true;
+  error = diagnostics.items().front().message;
+  return false;
 }
 
 }  // namespace fmpc::cli
