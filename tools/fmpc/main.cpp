@@ -15,6 +15,10 @@ int main(int argc, char** argv) {
   fmpc::cli::register_fmt_command(app, exit_code);
   fmpc::cli::register_eval_command(app, exit_code);
   fmpc::cli::register_convert_command(app, exit_code);
+  fmpc::cli::register_simulate_command(app, exit_code);
+  fmpc::cli::register_compile_command(app, exit_code);
+  fmpc::cli::register_plot_command(app, exit_code);
+  fmpc::cli::register_trade_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
