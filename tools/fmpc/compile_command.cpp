@@ -15,6 +15,7 @@
 #include "compiler/ir/content_hash.h"
 #include "compiler/ir/number_format.h"
 #include "compiler/passes/pipeline.h"
+#include "tools/fmpc/binding_arguments.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
@@ -43,54 +44,6 @@ struct CompileOptions {
   std::string namespace_name = "fmpc_generated";
   std::string semantics = "matlab";
 };
-
-SourceRange argument(const std::string& option, const std::string& value) {
-  return SourceRange{"argument '" + option + " " + value + "'", 0, 0, 0, 0};
-}
-
-std::optional<double> parse_number(const std::string& text) {
-  if (text.empty()) return std::nullopt;
-  errno = 0;
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() + text.size()) return std::nullopt;
-  return value;
-}
-
-Bindings parse_bindings(const CompileOptions& options, DiagnosticList& diagnostics) {
-  Bindings bindings;
-  for (const std::string& text : options.fix) {
-    const SourceRange where = argument("--fix", text);
-    const std::size_t eq = text.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      diagnostics.error(where, "expected NAME=VALUE", {"for example: --fix HCV=7.5"});
-      continue;
-    }
-    const std::optional<double> value = parse_number(text.substr(eq + 1));
-    if (!value) {
-      diagnostics.error(where, "'" + text.substr(eq + 1) + "' is not a number");
-      continue;
-    }
-    bindings.fixed.push_back({text.substr(0, eq), *value, where});
-  }
-  for (const std::string& text : options.vary) {
-    const SourceRange where = argument("--vary", text);
-    const std::size_t colon = text.rfind(':');
-    VariedInput varied{text, 0, where};
-    if (colon != std::string::npos) {
-      varied.name = text.substr(0, colon);
-      const std::optional<double> points = parse_number(text.substr(colon + 1));
-      if (!points || *points != std::floor(*points) || *points < 2 || *points > 1e6) {
-        diagnostics.error(where, "'" + text.substr(colon + 1) + "' is not a point count",
-                          {"write NAME:POINTS with a whole number of at least 2, e.g. --vary HCV:33"});
-        continue;
-      }
-      varied.points = static_cast<int>(*points);
-    }
-    bindings.varied.push_back(varied);
-  }
-  return bindings;
-}
 
 std::string with_unit(double value, const std::string& unit) {
   return format_number(value) + (unit.empty() || unit == "dimensionless" ? "" : " " + unit);
@@ -167,7 +120,7 @@ int run_compile(const CompileOptions& options) {
   }
   DiagnosticList diagnostics;
   const FuzzySystem* system = select_system(file, options.system, diagnostics);
-  const Bindings bindings = parse_bindings(options, diagnostics);
+  const Bindings bindings = parse_binding_arguments(options.fix, options.vary, diagnostics);
   if (options.outputs.empty())
     diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "no output file", {"add -o FILE"});
   if (options.target != "table" && options.outputs.size() > 1)
