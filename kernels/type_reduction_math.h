@@ -82,6 +82,18 @@ FMPC_HD int switch_point(const T* x, int n, T y) {
   return k;
 }
 
+// The centroid with weights lower_i + upper_i: the Nie-Tan output and the Karnik-Mendel starting point (the
+// centroid of the mid weights; halving every weight leaves a centroid unchanged, so it is the same number).
+template <typename T>
+FMPC_HD T summed_weight_centroid(const T* x, const T* lower, const T* upper, int n) {
+  T numerator = T(0), denominator = T(0);
+  for (int i = 0; i < n; ++i) {
+    numerator += x[i] * (lower[i] + upper[i]);
+    denominator += lower[i] + upper[i];
+  }
+  return numerator / denominator;
+}
+
 // Records one endpoint: side 0 is yl, side 1 is yr.
 template <typename T>
 FMPC_HD void store_endpoint(TypeReducedInterval<T>& r, int side, T y, int switch_point, int iterations) {
@@ -129,13 +141,7 @@ FMPC_HD TypeReducedInterval<T> karnik_mendel(const T* x, const T* lower, const T
   TypeReducedInterval<T> r{quiet_nan<T>(), quiet_nan<T>(), 0, 0, 0, 0, false};
   if (!any_weight(upper, n)) return r;
   r.fired = true;
-  T numerator = T(0), denominator = T(0);
-  for (int i = 0; i < n; ++i) {
-    const T w = (lower[i] + upper[i]) / T(2);
-    numerator += x[i] * w;
-    denominator += w;
-  }
-  const T start = numerator / denominator;
+  const T start = summed_weight_centroid(x, lower, upper, n);
   for (int side = 0; side < 2; ++side) {
     const T* first = side == 0 ? upper : lower;
     const T* second = side == 0 ? lower : upper;
@@ -280,12 +286,7 @@ FMPC_HD TypeReducedInterval<T> nie_tan(const T* x, const T* lower, const T* uppe
   TypeReducedInterval<T> r{quiet_nan<T>(), quiet_nan<T>(), 0, 0, 1, 1, false};
   if (!any_weight(upper, n)) return r;
   r.fired = true;
-  T numerator = T(0), denominator = T(0);
-  for (int i = 0; i < n; ++i) {
-    numerator += x[i] * (lower[i] + upper[i]);
-    denominator += lower[i] + upper[i];
-  }
-  r.left = r.right = numerator / denominator;
+  r.left = r.right = summed_weight_centroid(x, lower, upper, n);
   return r;
 }
 
