@@ -77,6 +77,24 @@ FMPC_HD void verlet_velocity_update(Real& v, Real a0, Real a1, Real h) {
   v += Real(0.5) * h * (a0 + a1);
 }
 
+// A probe's share of its target at time t (s): linear from 0 at t = 0 to 1 at the ramp time, then held
+// (ramp_time 0: at once). Evaluated in double by both backends so that the prescribed path is the same bits.
+FMPC_HD double probe_ramp_share(double t, double ramp_time) {
+  if (!(ramp_time > 0.0)) return 1.0;
+  const double share = t / ramp_time;
+  return share < 1.0 ? share : 1.0;
+}
+
+// One axis of a displacement probe's vertex at time t: position start + share target, and, before a step while
+// the ramp is rising, the ramp's velocity (which the dashpots and the implicit step see); zero otherwise.
+template <typename Real>
+FMPC_HD void probe_prescribed_state(double start, double target, double t, double ramp_time, bool before_step,
+                                    Real& position, Real& velocity) {
+  position = static_cast<Real>(start + probe_ramp_share(t, ramp_time) * target);
+  const bool ramping = ramp_time > 0.0 && t < ramp_time;
+  velocity = static_cast<Real>(before_step && ramping ? target / ramp_time : 0.0);
+}
+
 // Classical Runge-Kutta: y1 = y0 + h/6 (k1 + 2 k2 + 2 k3 + k4).
 template <typename Real>
 FMPC_HD Real runge_kutta4_combine(Real y0, Real k1, Real k2, Real k3, Real k4, Real h) {

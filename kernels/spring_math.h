@@ -129,7 +129,7 @@ struct SpringNetworkView {
   const int* adjacency_neighbour;
   const Real* rest_length;
   const Real* stiffness;
-  const Real* damping;
+  const Real* damping;  // null: no dashpots (a scene without damping allocates no array)
   SpringLawParameters<Real> law;
 };
 
@@ -155,8 +155,8 @@ FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, cons
     const int other = net.adjacency_neighbour[e];
     Real f0, f1, f2;
     spring_force_on_vertex(s.x[other] - x, s.y[other] - y, s.z[other] - z, s.vx[other] - vx, s.vy[other] - vy,
-                           s.vz[other] - vz, net.rest_length[spring], net.stiffness[spring], net.damping[spring],
-                           net.law, f0, f1, f2);
+                           s.vz[other] - vz, net.rest_length[spring], net.stiffness[spring],
+                           net.damping ? net.damping[spring] : Real(0), net.law, f0, f1, f2);
     sx += f0;
     sy += f1;
     sz += f2;

@@ -153,7 +153,10 @@ __device__ double energy_term(const EnergyArguments<Real>& a, EnergyTerm term, i
     const double dy = static_cast<double>(s.y[q]) - static_cast<double>(s.y[p]);
     const double dz = static_cast<double>(s.z[q]) - static_cast<double>(s.z[p]);
     const double length = sqrt(dx * dx + dy * dy + dz * dz);
-    return kernels::spring_potential_energy(length, a.rest_length[i], a.stiffness[i], a.law);
+    const double k = a.table.strain != nullptr ? kernels::strain_table_stiffness(a.table, dx, dy, dz, a.rest_length[i],
+                                                                                 a.stiffness_per_modulus[i])
+                                               : a.stiffness[i];
+    return kernels::spring_potential_energy(length, a.rest_length[i], k, a.law);
   }
   const double x = static_cast<double>(s.x[i]), y = static_cast<double>(s.y[i]), z = static_cast<double>(s.z[i]);
   double energy = -(a.mass[i] * a.gravity_x * x) - a.mass[i] * a.gravity_y * y - a.mass[i] * a.gravity_z * z;
@@ -192,6 +195,213 @@ __global__ void energy_final_kernel(const double* partial, double* result) {
   for (int i = static_cast<int>(threadIdx.x); i < kEnergyBlocks; i += kEnergyThreads) sum += partial[i];
   const double total = block_tree_sum(sum, cache);
   if (threadIdx.x == 0) *result = total;
+}
+
+template <typename Real>
+__global__ void apply_probe_kernel(ProbeArguments<Real> a, int offset, bool before_step) {
+  const int i = vertex_index();
+  if (i >= a.count) return;
+  const int v = a.vertices[i];
+  const double t = static_cast<double>(*a.step_base + static_cast<unsigned long long>(offset + (before_step ? 0 : 1))) * a.h;
+  if (a.force_mode) {
+    if (!before_step) return;
+    const double share = kernels::probe_ramp_share(t, a.ramp_time);
+    const double count = static_cast<double>(a.count);
+    const bool based = a.base_force_x != nullptr;
+    a.force.x[v] = static_cast<Real>((based ? a.base_force_x[i] : 0.0) + share * a.target_x / count);
+    a.force.y[v] = static_cast<Real>((based ? a.base_force_y[i] : 0.0) + share * a.target_y / count);
+    a.force.z[v] = static_cast<Real>((based ? a.base_force_z[i] : 0.0) + share * a.target_z / count);
+    return;
+  }
+  kernels::probe_prescribed_state(a.start_x[i], a.target_x, t, a.ramp_time, before_step, a.state.x[v], a.state.vx[v]);
+  kernels::probe_prescribed_state(a.start_y[i], a.target_y, t, a.ramp_time, before_step, a.state.y[v], a.state.vy[v]);
+  kernels::probe_prescribed_state(a.start_z[i], a.target_z, t, a.ramp_time, before_step, a.state.z[v], a.state.vz[v]);
+}
+
+template <typename Real>
+__global__ void strain_stiffness_kernel(StrainStiffnessArguments<Real> a) {
+  const int s = vertex_index();
+  if (s >= a.spring_count) return;
+  const int p = a.first[s], q = a.second[s];
+  const double dx = static_cast<double>(a.state.x[q]) - static_cast<double>(a.state.x[p]);
+  const double dy = static_cast<double>(a.state.y[q]) - static_cast<double>(a.state.y[p]);
+  const double dz = static_cast<double>(a.state.z[q]) - static_cast<double>(a.state.z[p]);
+  a.stiffness[s] =
+      static_cast<Real>(kernels::strain_table_stiffness(a.table, dx, dy, dz, a.rest_length[s], a.stiffness_per_modulus[s]));
+}
+
+template <typename Real>
+__global__ void implicit_spring_blocks_kernel(ImplicitArguments<Real> a) {
+  const int s = vertex_index();
+  if (s >= a.spring_count) return;
+  const int p = a.first[s], q = a.second[s];
+  const kernels::SpringLawParameters<double> law{a.network.law.law, static_cast<double>(a.network.law.k2_over_k1),
+                                                 static_cast<double>(a.network.law.xc)};
+  kernels::implicit_spring_blocks(static_cast<double>(a.state.x[q]) - static_cast<double>(a.state.x[p]),
+                                  static_cast<double>(a.state.y[q]) - static_cast<double>(a.state.y[p]),
+                                  static_cast<double>(a.state.z[q]) - static_cast<double>(a.state.z[p]),
+                                  a.rest_length[s], static_cast<double>(a.network.stiffness[s]),
+                                  a.network.damping ? static_cast<double>(a.network.damping[s]) : 0.0, law, a.h,
+                                  a.blocks + 12 * s, a.blocks + 12 * s + 6);
+}
+
+template <typename Real>
+__global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count) return;
+  double* b = a.rhs + 3 * v;
+  if (a.loads.fixed[v]) {
+    a.diagonal[v] = 1.0;
+    for (int c = 0; c < 3; ++c) {
+      b[c] = 0.0;
+      a.inverse_jacobi[3 * v + c] = 1.0;
+    }
+    return;
+  }
+  Real acceleration[3];
+  const kernels::StateView<Real> state{a.state.x, a.state.y, a.state.z, a.state.vx, a.state.vy, a.state.vz};
+  kernels::vertex_acceleration(v, a.network, state, a.loads, acceleration[0], acceleration[1], acceleration[2]);
+  for (int c = 0; c < 3; ++c) b[c] = a.h * a.mass[v] * static_cast<double>(acceleration[c]);
+  const double own_velocity[3] = {static_cast<double>(a.state.vx[v]), static_cast<double>(a.state.vy[v]),
+                                  static_cast<double>(a.state.vz[v])};
+  const double dx = static_cast<double>(a.state.x[v]) - a.rest_position[3 * v];
+  const double dy = static_cast<double>(a.state.y[v]) - a.rest_position[3 * v + 1];
+  const double dz = static_cast<double>(a.state.z[v]) - a.rest_position[3 * v + 2];
+  const double diagonal = a.mass[v] + a.h * (static_cast<double>(a.loads.gamma0) +
+                                             static_cast<double>(a.loads.gamma1) * sqrt(dx * dx + dy * dy + dz * dz));
+  double jacobi[3] = {diagonal, diagonal, diagonal};
+  for (int e = a.network.adjacency_offset[v]; e < a.network.adjacency_offset[v + 1]; ++e) {
+    const int s = a.network.adjacency_spring[e], o = a.network.adjacency_neighbour[e];
+    const double* stiffness = a.blocks + 12 * s;
+    const double* system = stiffness + 6;
+    const double relative[3] = {own_velocity[0] - static_cast<double>(a.state.vx[o]),
+                                own_velocity[1] - static_cast<double>(a.state.vy[o]),
+                                own_velocity[2] - static_cast<double>(a.state.vz[o])};
+    double kv[3];
+    kernels::symmetric_multiply(stiffness, relative, kv);
+    for (int c = 0; c < 3; ++c) {
+      b[c] -= a.h * a.h * kv[c];
+      jacobi[c] += system[kernels::symmetric_index(c, c)];
+    }
+  }
+  a.diagonal[v] = diagonal;
+  for (int c = 0; c < 3; ++c) a.inverse_jacobi[3 * v + c] = jacobi[c] != 0.0 ? 1.0 / jacobi[c] : 1.0;
+}
+
+template <typename Real>
+__global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count) return;
+  const double* own = a.p + 3 * v;
+  double* out = a.ap + 3 * v;
+  if (a.loads.fixed[v]) {
+    for (int c = 0; c < 3; ++c) out[c] = own[c];
+    return;
+  }
+  double sum[3] = {a.diagonal[v] * own[0], a.diagonal[v] * own[1], a.diagonal[v] * own[2]};
+  for (int e = a.network.adjacency_offset[v]; e < a.network.adjacency_offset[v + 1]; ++e) {
+    const int s = a.network.adjacency_spring[e], o = a.network.adjacency_neighbour[e];
+    const bool other_free = !a.loads.fixed[o];
+    const double relative[3] = {own[0] - (other_free ? a.p[3 * o] : 0.0), own[1] - (other_free ? a.p[3 * o + 1] : 0.0),
+                                own[2] - (other_free ? a.p[3 * o + 2] : 0.0)};
+    double product[3];
+    kernels::symmetric_multiply(a.blocks + 12 * s + 6, relative, product);
+    for (int c = 0; c < 3; ++c) sum[c] += product[c];
+  }
+  for (int c = 0; c < 3; ++c) out[c] = sum[c];
+}
+
+// Partial sums of first . second (and of third . fourth when third is not null) over [0, count), in the fixed
+// shape of the energy sums; block b writes partial[b] and partial[kEnergyBlocks + b].
+__global__ void dot_partial_kernel(const double* first, const double* second, const double* third,
+                                   const double* fourth, int count, double* partial) {
+  __shared__ double cache[kEnergyThreads];
+  double sum = 0.0, other = 0.0;
+  const long long stride = static_cast<long long>(kEnergyBlocks) * kEnergyThreads;
+  for (long long i = static_cast<long long>(blockIdx.x) * kEnergyThreads + threadIdx.x; i < count; i += stride) {
+    sum += first[i] * second[i];
+    if (third != nullptr) other += third[i] * fourth[i];
+  }
+  const double total = block_tree_sum(sum, cache);
+  __syncthreads();  // every thread has read cache[0] before the second tree overwrites it
+  const double other_total = block_tree_sum(other, cache);
+  if (threadIdx.x == 0) {
+    partial[blockIdx.x] = total;
+    partial[kEnergyBlocks + blockIdx.x] = other_total;
+  }
+}
+
+enum class CgStage : int { Start = 0, Alpha = 1, Residual = 2 };
+
+__global__ void cg_scalars_kernel(const double* partial, ConjugateGradientScalars* scalars, CgStage stage) {
+  __shared__ double cache[kEnergyThreads];
+  double sum = 0.0, other = 0.0;
+  for (int i = static_cast<int>(threadIdx.x); i < kEnergyBlocks; i += kEnergyThreads) {
+    sum += partial[i];
+    other += partial[kEnergyBlocks + i];
+  }
+  const double total = block_tree_sum(sum, cache);
+  __syncthreads();
+  const double other_total = block_tree_sum(other, cache);
+  if (threadIdx.x != 0) return;
+  switch (stage) {
+    case CgStage::Start:
+      scalars->rhs_norm2 = total;
+      scalars->rz = other_total;
+      break;
+    case CgStage::Alpha:
+      scalars->p_ap = total;
+      scalars->alpha = scalars->rz / total;
+      break;
+    case CgStage::Residual:
+      scalars->rr = total;
+      scalars->rz_next = other_total;
+      scalars->beta = other_total / scalars->rz;
+      break;
+  }
+}
+
+// Per degree of freedom: x = 0, r = b, z = p = M^-1 r.
+template <typename Real>
+__global__ void cg_start_kernel(ImplicitArguments<Real> a) {
+  const int i = vertex_index();
+  if (i >= 3 * a.vertex_count) return;
+  a.x[i] = 0.0;
+  a.r[i] = a.rhs[i];
+  a.z[i] = a.inverse_jacobi[i] * a.r[i];
+  a.p[i] = a.z[i];
+}
+
+template <typename Real>
+__global__ void cg_update_kernel(ImplicitArguments<Real> a) {
+  const int i = vertex_index();
+  if (i >= 3 * a.vertex_count) return;
+  const double alpha = a.scalars->alpha;
+  a.x[i] += alpha * a.p[i];
+  a.r[i] -= alpha * a.ap[i];
+  a.z[i] = a.inverse_jacobi[i] * a.r[i];
+}
+
+template <typename Real>
+__global__ void cg_direction_kernel(ImplicitArguments<Real> a) {
+  const int i = vertex_index();
+  if (i >= 3 * a.vertex_count) return;
+  a.p[i] = a.z[i] + a.scalars->beta * a.p[i];
+  // Nothing in this kernel reads rz: thread 0 may move rz_next into it.
+  if (i == 0) a.scalars->rz = a.scalars->rz_next;
+}
+
+template <typename Real>
+__global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count || a.loads.fixed[v]) return;
+  const Real h = static_cast<Real>(a.h);
+  a.state.vx[v] += static_cast<Real>(a.x[3 * v]);
+  a.state.vy[v] += static_cast<Real>(a.x[3 * v + 1]);
+  a.state.vz[v] += static_cast<Real>(a.x[3 * v + 2]);
+  a.state.x[v] += h * a.state.vx[v];
+  a.state.y[v] += h * a.state.vy[v];
+  a.state.z[v] += h * a.state.vz[v];
 }
 
 int blocks_for(int count) { return (count + kThreadsPerBlock - 1) / kThreadsPerBlock; }
@@ -235,6 +445,79 @@ cudaError_t launch_energy(const EnergyArguments<Real>& arguments, EnergyTerm ter
   cudaError_t status = cudaGetLastError();
   if (status != cudaSuccess) return status;
   energy_final_kernel<<<1, kEnergyThreads, 0, stream>>>(partial, result);
+  return cudaGetLastError();
+}
+
+template <typename Real>
+cudaError_t launch_probe(const ProbeArguments<Real>& arguments, int offset, bool before_step, cudaStream_t stream) {
+  if (arguments.count <= 0) return cudaSuccess;
+  apply_probe_kernel<Real><<<blocks_for(arguments.count), kThreadsPerBlock, 0, stream>>>(arguments, offset, before_step);
+  return cudaGetLastError();
+}
+
+template <typename Real>
+cudaError_t launch_strain(const StrainStiffnessArguments<Real>& arguments, cudaStream_t stream) {
+  if (arguments.spring_count <= 0) return cudaSuccess;
+  strain_stiffness_kernel<Real><<<blocks_for(arguments.spring_count), kThreadsPerBlock, 0, stream>>>(arguments);
+  return cudaGetLastError();
+}
+
+cudaError_t launch_dots(const double* first, const double* second, const double* third, const double* fourth,
+                        int count, double* partial, ConjugateGradientScalars* scalars, CgStage stage,
+                        cudaStream_t stream) {
+  dot_partial_kernel<<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(first, second, third, fourth, count, partial);
+  const cudaError_t status = cudaGetLastError();
+  if (status != cudaSuccess) return status;
+  cg_scalars_kernel<<<1, kEnergyThreads, 0, stream>>>(partial, scalars, stage);
+  return cudaGetLastError();
+}
+
+template <typename Real>
+cudaError_t launch_assemble(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+  if (a.spring_count > 0) {
+    implicit_spring_blocks_kernel<Real><<<blocks_for(a.spring_count), kThreadsPerBlock, 0, stream>>>(a);
+    const cudaError_t status = cudaGetLastError();
+    if (status != cudaSuccess) return status;
+  }
+  if (a.vertex_count <= 0) return cudaSuccess;
+  implicit_vertex_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+  return cudaGetLastError();
+}
+
+template <typename Real>
+cudaError_t launch_start(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+  if (a.vertex_count <= 0) return cudaSuccess;
+  cg_start_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+  const cudaError_t status = cudaGetLastError();
+  if (status != cudaSuccess) return status;
+  return launch_dots(a.rhs, a.rhs, a.r, a.z, 3 * a.vertex_count, a.partial, a.scalars, CgStage::Start, stream);
+}
+
+template <typename Real>
+cudaError_t launch_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+  if (a.vertex_count <= 0) return cudaSuccess;
+  implicit_apply_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+  cudaError_t status = cudaGetLastError();
+  if (status != cudaSuccess) return status;
+  status = launch_dots(a.p, a.ap, nullptr, nullptr, 3 * a.vertex_count, a.partial, a.scalars, CgStage::Alpha, stream);
+  if (status != cudaSuccess) return status;
+  cg_update_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+  status = cudaGetLastError();
+  if (status != cudaSuccess) return status;
+  return launch_dots(a.r, a.r, a.r, a.z, 3 * a.vertex_count, a.partial, a.scalars, CgStage::Residual, stream);
+}
+
+template <typename Real>
+cudaError_t launch_direction(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+  if (a.vertex_count <= 0) return cudaSuccess;
+  cg_direction_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+  return cudaGetLastError();
+}
+
+template <typename Real>
+cudaError_t launch_finish(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+  if (a.vertex_count <= 0) return cudaSuccess;
+  implicit_finish_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
   return cudaGetLastError();
 }
 
@@ -285,6 +568,51 @@ cudaError_t launch_energy_sum(const EnergyArguments<float>& arguments, EnergyTer
 cudaError_t launch_energy_sum(const EnergyArguments<double>& arguments, EnergyTerm term, int begin, int end,
                               double* partial, double* result, cudaStream_t stream) {
   return launch_energy(arguments, term, begin, end, partial, result, stream);
+}
+
+cudaError_t launch_apply_probe(const ProbeArguments<float>& arguments, int offset, bool before_step,
+                               cudaStream_t stream) {
+  return launch_probe(arguments, offset, before_step, stream);
+}
+cudaError_t launch_apply_probe(const ProbeArguments<double>& arguments, int offset, bool before_step,
+                               cudaStream_t stream) {
+  return launch_probe(arguments, offset, before_step, stream);
+}
+cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<float>& arguments, cudaStream_t stream) {
+  return launch_strain(arguments, stream);
+}
+cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<double>& arguments, cudaStream_t stream) {
+  return launch_strain(arguments, stream);
+}
+cudaError_t launch_implicit_assemble(const ImplicitArguments<float>& arguments, cudaStream_t stream) {
+  return launch_assemble(arguments, stream);
+}
+cudaError_t launch_implicit_assemble(const ImplicitArguments<double>& arguments, cudaStream_t stream) {
+  return launch_assemble(arguments, stream);
+}
+cudaError_t launch_cg_start(const ImplicitArguments<float>& arguments, cudaStream_t stream) {
+  return launch_start(arguments, stream);
+}
+cudaError_t launch_cg_start(const ImplicitArguments<double>& arguments, cudaStream_t stream) {
+  return launch_start(arguments, stream);
+}
+cudaError_t launch_cg_iteration(const ImplicitArguments<float>& arguments, cudaStream_t stream) {
+  return launch_iteration(arguments, stream);
+}
+cudaError_t launch_cg_iteration(const ImplicitArguments<double>& arguments, cudaStream_t stream) {
+  return launch_iteration(arguments, stream);
+}
+cudaError_t launch_cg_direction(const ImplicitArguments<float>& arguments, cudaStream_t stream) {
+  return launch_direction(arguments, stream);
+}
+cudaError_t launch_cg_direction(const ImplicitArguments<double>& arguments, cudaStream_t stream) {
+  return launch_direction(arguments, stream);
+}
+cudaError_t launch_implicit_finish(const ImplicitArguments<float>& arguments, cudaStream_t stream) {
+  return launch_finish(arguments, stream);
+}
+cudaError_t launch_implicit_finish(const ImplicitArguments<double>& arguments, cudaStream_t stream) {
+  return launch_finish(arguments, stream);
 }
 
 }  // namespace fmpc::gpu

@@ -7,8 +7,10 @@
 // steps are read through vertex_scene (null for a single scene, which then uses `h`).
 #include <cuda_runtime_api.h>
 
+#include "kernels/implicit_math.h"
 #include "kernels/integrator_math.h"
 #include "kernels/spring_math.h"
+#include "kernels/strain_table_math.h"
 
 namespace fmpc::gpu {
 
@@ -94,6 +96,105 @@ struct RungeKutta4Arguments {
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<float>& arguments, int stage, cudaStream_t stream);
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<double>& arguments, int stage, cudaStream_t stream);
 
+// A probe on one scene's vertices, applied around every step exactly as the CPU backend does (kernels/
+// integrator_math.h): before a step at t = (step_base + offset) h, displacement probes set their vertices' positions
+// and ramp velocity and force probes their share of the force; after it (t + h) displacement probes set the
+// positions again with zero velocity. step_base (device memory) is written before every chunk, so a captured graph
+// replays with the right times; offset is the step's index within the chunk.
+template <typename Real>
+struct ProbeArguments {
+  const int* vertices;
+  int count;
+  const double* start_x;  // the probe vertices' start positions (m)
+  const double* start_y;
+  const double* start_z;
+  const double* base_force_x;  // force probes: the vertices' own external force (N), null: none
+  const double* base_force_y;
+  const double* base_force_z;
+  double target_x, target_y, target_z;
+  double ramp_time;
+  double h;
+  bool force_mode;
+  const unsigned long long* step_base;
+  MutableStateView<Real> state;    // displacement probes write here
+  MutableVector3View<Real> force;  // force probes write here
+};
+cudaError_t launch_apply_probe(const ProbeArguments<float>& arguments, int offset, bool before_step,
+                               cudaStream_t stream);
+cudaError_t launch_apply_probe(const ProbeArguments<double>& arguments, int offset, bool before_step,
+                               cudaStream_t stream);
+
+// k(strain) for every spring from the positions in `state` (kernels/strain_table_math.h), before every step.
+template <typename Real>
+struct StrainStiffnessArguments {
+  kernels::StateView<Real> state;
+  const int* first;
+  const int* second;
+  const double* rest_length;
+  const double* stiffness_per_modulus;
+  kernels::StrainTableView table;  // device pointers
+  Real* stiffness;
+  int spring_count;
+};
+cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<float>& arguments, cudaStream_t stream);
+cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<double>& arguments, cudaStream_t stream);
+
+// Implicit Euler on the GPU (kernels/implicit_math.h): the system M - h df/dv - h^2 df/dx is applied matrix-free
+// from per-spring blocks, and solved by a Jacobi-preconditioned conjugate gradient in double with Eigen's
+// iteration and stopping rule (|r|^2 < tol^2 |b|^2, x0 = 0). Dot products use the fixed summation tree of the energy
+// sums, so a run gives the same bits every time. Scalars stay on the device; the host reads |r|^2 once per
+// iteration to decide whether to stop.
+struct ConjugateGradientScalars {
+  double rhs_norm2;  // |b|^2
+  double rz;         // r . z of the current direction (Eigen's absNew)
+  double p_ap;       // p . A p
+  double alpha;      // rz / p_ap
+  double rr;         // |r|^2 after the update
+  double rz_next;    // r . z after the update
+  double beta;       // rz_next / rz
+};
+
+template <typename Real>
+struct ImplicitArguments {
+  kernels::SpringNetworkView<Real> network;
+  kernels::VertexLoads<Real> loads;
+  MutableStateView<Real> state;
+  const int* first;             // spring ends
+  const int* second;
+  const double* rest_length;    // double, as the CPU assembly reads them
+  const double* mass;           // double
+  const double* rest_position;  // x0 of the nodal damping, xyz interleaved (3 per vertex), double
+  double h;
+  int vertex_count;
+  int spring_count;
+  double* blocks;         // 12 per spring: K_s (6) then the system block (6)
+  double* diagonal;       // per vertex: m + h (gamma0 + gamma1 |x - x0|); 1 for fixed vertices
+  double* inverse_jacobi; // 3 per vertex
+  double* rhs;            // 3 per vertex, b
+  double* x;              // dv
+  double* r;
+  double* z;
+  double* p;
+  double* ap;
+  ConjugateGradientScalars* scalars;
+  double* partial;  // 2 * kEnergyBlocks
+};
+// Blocks of every spring, then b, the diagonal and the Jacobi preconditioner of every vertex.
+cudaError_t launch_implicit_assemble(const ImplicitArguments<float>& arguments, cudaStream_t stream);
+cudaError_t launch_implicit_assemble(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+// x = 0, r = b, z = p = M^-1 r, scalars: rhs_norm2 = b.b, rz = r.z.
+cudaError_t launch_cg_start(const ImplicitArguments<float>& arguments, cudaStream_t stream);
+cudaError_t launch_cg_start(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+// ap = A p, alpha = rz / p.ap, x += alpha p, r -= alpha ap, z = M^-1 r, rr = r.r, rz_next = r.z, beta.
+cudaError_t launch_cg_iteration(const ImplicitArguments<float>& arguments, cudaStream_t stream);
+cudaError_t launch_cg_iteration(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+// p = z + beta p, rz = rz_next.
+cudaError_t launch_cg_direction(const ImplicitArguments<float>& arguments, cudaStream_t stream);
+cudaError_t launch_cg_direction(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+// v += dv, x += h v on the free vertices (x and v in Real, as the CPU backend).
+cudaError_t launch_implicit_finish(const ImplicitArguments<float>& arguments, cudaStream_t stream);
+cudaError_t launch_implicit_finish(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+
 // Writes into *first_vertex (device memory, preset to vertex_count) the smallest vertex index whose position or
 // velocity is NaN or infinite (integer atomicMin: the answer does not depend on scheduling).
 cudaError_t launch_find_non_finite(const kernels::StateView<float>& state, int vertex_count, int* first_vertex,
@@ -115,6 +216,9 @@ struct EnergyArguments {
   const double* rest_length;
   const double* stiffness;
   kernels::SpringLawParameters<double> law;
+  // With a strain table (table.strain not null): k = strain_table_stiffness(...) at the current length instead.
+  kernels::StrainTableView table;
+  const double* stiffness_per_modulus;
   double gravity_x, gravity_y, gravity_z;
   const double* force_x;  // null: no external forces
   const double* force_y;

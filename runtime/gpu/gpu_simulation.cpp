@@ -125,11 +125,19 @@ struct ConcatenatedScenes {
   std::vector<unsigned char> fixed;
   std::vector<double> rest[3], position[3], velocity[3], force[3];
   bool has_forces = false;
+  bool has_damping = false;  // false: no scene has dashpots, and no damping array is uploaded
 };
+
+bool force_probe(const sim::SimulationSetup& setup) {
+  return setup.probe && setup.probe->mode == sim::ProbeLoad::Mode::Force;
+}
 
 ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) {
   ConcatenatedScenes c;
-  for (const auto& setup : scenes) c.has_forces = c.has_forces || !setup.external_forces.empty();
+  for (const auto& setup : scenes) {
+    c.has_forces = c.has_forces || !setup.external_forces.empty() || force_probe(setup);
+    c.has_damping = c.has_damping || !setup.springs.damping.empty();
+  }
   int entries = 0;
   for (std::size_t s = 0; s < scenes.size(); ++s) {
     const sim::SimulationSetup& setup = scenes[s];
@@ -148,7 +156,10 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     }
     c.rest_length.insert(c.rest_length.end(), net.rest_length.begin(), net.rest_length.end());
     c.stiffness.insert(c.stiffness.end(), net.stiffness.begin(), net.stiffness.end());
-    c.damping.insert(c.damping.end(), net.damping.begin(), net.damping.end());
+    if (c.has_damping) {
+      if (net.damping.empty()) c.damping.insert(c.damping.end(), net.size(), 0.0);
+      else c.damping.insert(c.damping.end(), net.damping.begin(), net.damping.end());
+    }
     c.mass.insert(c.mass.end(), setup.mass.begin(), setup.mass.end());
     std::vector<unsigned char> fixed(n, 0);
     for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = 1;
@@ -166,6 +177,10 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
       }
       c.vertex_scene.push_back(static_cast<int>(s));
     }
+    // Displacement probes move their vertices kinematically, as in the CPU backend (which also marks them after
+    // taking the initial velocities).
+    if (setup.probe && !force_probe(setup))
+      for (const auto v : setup.probe->vertices) c.fixed[static_cast<std::size_t>(vertex_base + v)] = 1;
     c.vertex_begin.push_back(vertex_base + static_cast<int>(n));
     c.spring_begin.push_back(spring_base + static_cast<int>(net.size()));
   }
@@ -223,7 +238,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     FMPC_CUDA_CHECK(second_.upload(c.second), diagnostics, false);
     FMPC_CUDA_CHECK(rest_length_.upload(convert<Real>(c.rest_length)), diagnostics, false);
     FMPC_CUDA_CHECK(stiffness_.upload(convert<Real>(c.stiffness)), diagnostics, false);
-    FMPC_CUDA_CHECK(damping_.upload(convert<Real>(c.damping)), diagnostics, false);
+    if (c.has_damping) FMPC_CUDA_CHECK(damping_.upload(convert<Real>(c.damping)), diagnostics, false);
     FMPC_CUDA_CHECK(mass_.upload(convert<Real>(c.mass)), diagnostics, false);
     FMPC_CUDA_CHECK(energy_mass_.upload(c.mass), diagnostics, false);
     FMPC_CUDA_CHECK(energy_rest_length_.upload(c.rest_length), diagnostics, false);
@@ -272,12 +287,14 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     FMPC_CUDA_CHECK(energy_partial_.allocate(kEnergyBlocks), diagnostics, false);
     FMPC_CUDA_CHECK(energy_result_.allocate(1), diagnostics, false);
 
+    if (!upload_single_scene_features(diagnostics)) return false;
+
     network_ = {offset_.data(),
                 spring_.data(),
                 neighbour_.data(),
                 rest_length_.data(),
                 stiffness_.data(),
-                damping_.data(),
+                c.has_damping ? damping_.data() : nullptr,
                 {common.law, static_cast<Real>(common.basafa_k2_over_k1), static_cast<Real>(common.basafa_xc)}};
     loads_ = {mass_.data(),
               fixed_.data(),
@@ -297,6 +314,52 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     // stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
     return save_checkpoint(diagnostics) && synchronize(diagnostics);
+  }
+
+  // The probe, the strain table and implicit Euler's buffers (a batch of one scene only; create() refuses them in
+  // larger batches). Nothing is allocated for what the scene does not use.
+  bool upload_single_scene_features(DiagnosticList& diagnostics) {
+    const sim::SimulationSetup& setup = scenes_.front();
+    const auto count = static_cast<std::size_t>(n_);
+    if (setup.probe) {
+      const sim::ProbeLoad& probe = *setup.probe;
+      std::vector<double> start[3], base[3];
+      for (const auto v : probe.vertices) {
+        const sim::Point3& point = sim::start_position(setup, static_cast<std::size_t>(v));
+        for (std::size_t axis = 0; axis < 3; ++axis) {
+          start[axis].push_back(point[axis]);
+          if (!setup.external_forces.empty()) base[axis].push_back(setup.external_forces[static_cast<std::size_t>(v)][axis]);
+        }
+      }
+      FMPC_CUDA_CHECK(probe_vertices_.upload(std::vector<int>(probe.vertices.begin(), probe.vertices.end())),
+                      diagnostics, false);
+      DeviceArray<double>* start_arrays[3] = {&probe_start_x_, &probe_start_y_, &probe_start_z_};
+      DeviceArray<double>* base_arrays[3] = {&probe_base_x_, &probe_base_y_, &probe_base_z_};
+      for (std::size_t axis = 0; axis < 3; ++axis) {
+        FMPC_CUDA_CHECK(start_arrays[axis]->upload(start[axis]), diagnostics, false);
+        FMPC_CUDA_CHECK(base_arrays[axis]->upload(base[axis]), diagnostics, false);
+      }
+      FMPC_CUDA_CHECK(step_base_.allocate(1), diagnostics, false);
+    }
+    if (setup.strain_stiffness) {
+      const sim::StrainStiffnessTable& table = *setup.strain_stiffness;
+      FMPC_CUDA_CHECK(table_strain_.upload(table.strain), diagnostics, false);
+      FMPC_CUDA_CHECK(table_modulus_.upload(table.modulus), diagnostics, false);
+      FMPC_CUDA_CHECK(stiffness_per_modulus_.upload(table.stiffness_per_modulus), diagnostics, false);
+    }
+    if (setup.integrator == sim::Integrator::ImplicitEuler) {
+      std::vector<double> rest(3 * count);
+      for (std::size_t v = 0; v < count; ++v)
+        for (std::size_t axis = 0; axis < 3; ++axis) rest[3 * v + axis] = setup.rest_positions[v][axis];
+      FMPC_CUDA_CHECK(implicit_rest_.upload(rest), diagnostics, false);
+      FMPC_CUDA_CHECK(implicit_blocks_.allocate(12 * setup.springs.size()), diagnostics, false);
+      FMPC_CUDA_CHECK(implicit_diagonal_.allocate(count), diagnostics, false);
+      for (DeviceArray<double>* array : {&implicit_jacobi_, &implicit_rhs_, &cg_x_, &cg_r_, &cg_z_, &cg_p_, &cg_ap_})
+        FMPC_CUDA_CHECK(array->allocate(3 * count), diagnostics, false);
+      FMPC_CUDA_CHECK(cg_scalars_.allocate(1), diagnostics, false);
+      FMPC_CUDA_CHECK(cg_partial_.allocate(2 * kEnergyBlocks), diagnostics, false);
+    }
+    return true;
   }
 
   bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
@@ -329,6 +392,33 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return download(scene, s.vx, s.vy, s.vz, diagnostics);
   }
 
+  std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const override {
+    if (scene >= scenes_.size()) {
+      diagnostics.error(SourceRange{}, "scene " + std::to_string(scene) + " does not exist; the batch has " +
+                                           std::to_string(scenes_.size()));
+      return {};
+    }
+    const auto begin = static_cast<std::size_t>(spring_begin_[scene]);
+    const auto count = static_cast<std::size_t>(spring_begin_[scene + 1]) - begin;
+    std::vector<Real> host(count);
+    if (count > 0) {
+      FMPC_CUDA_CHECK(cudaMemcpyAsync(host.data(), stiffness_.data() + begin, count * sizeof(Real),
+                                      cudaMemcpyDeviceToHost, stream_),
+                      diagnostics, {});
+      if (!synchronize(diagnostics)) return {};
+    }
+    return std::vector<double>(host.begin(), host.end());
+  }
+
+  sim::ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const override {
+    if (scene >= scenes_.size() || !scenes_[scene].probe) return {};
+    const double time = static_cast<double>(steps_taken_) * stability_[scene].time_step;
+    return sim::read_probe(scenes_[scene], time, positions(scene, diagnostics), velocities(scene, diagnostics),
+                           current_stiffness(scene, diagnostics));
+  }
+
+  int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
+
   std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     return energy_sum(EnergyTerm::Kinetic, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
   }
@@ -356,9 +446,13 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   sim::Integrator scheme() const { return scenes_.front().integrator; }
 
   // Enqueues `count` steps on the stream (directly or while capturing); `parity` is the Euler state buffer read
-  // first and is updated to the one holding the result.
+  // first and is updated to the one holding the result. Around each step, as the CPU backend: the probe before it,
+  // the strain table's lookup, the step, the probe after it.
   bool enqueue_steps(std::size_t count, int& parity, DiagnosticList& diagnostics) {
     for (std::size_t i = 0; i < count; ++i) {
+      const int offset = static_cast<int>(i);
+      if (!enqueue_probe(offset, true, state_[parity], diagnostics)) return false;
+      if (!enqueue_strain_lookup(state_[parity], diagnostics)) return false;
       switch (scheme()) {
         case sim::Integrator::ForwardEuler:
         case sim::Integrator::SemiImplicitEuler: {
@@ -376,6 +470,11 @@ class GpuBatchImpl final : public GpuBatchSimulation {
           break;
         }
         case sim::Integrator::VelocityVerlet:
+          // a(x0, v0) once, after the first step's probe and lookup (run_steps keeps that step out of graphs).
+          if (!have_acceleration_) {
+            FMPC_CUDA_CHECK(launch_acceleration(verlet_arguments(), stream_), diagnostics, false);
+            have_acceleration_ = true;
+          }
           FMPC_CUDA_CHECK(launch_verlet_drift(verlet_arguments(), stream_), diagnostics, false);
           FMPC_CUDA_CHECK(launch_verlet_kick(verlet_arguments(), stream_), diagnostics, false);
           break;
@@ -387,10 +486,136 @@ class GpuBatchImpl final : public GpuBatchSimulation {
           break;
         }
         case sim::Integrator::ImplicitEuler:
-          diagnostics.error(SourceRange{}, "implicit Euler runs on the CPU only");
-          return false;
+          if (!implicit_solve(diagnostics)) return false;
+          break;
+      }
+      if (!enqueue_probe(offset, false, state_[parity], diagnostics)) return false;
+    }
+    return true;
+  }
+
+  bool enqueue_probe(int offset, bool before_step, const DeviceState<Real>& state, DiagnosticList& diagnostics) {
+    const sim::SimulationSetup& setup = scenes_.front();
+    if (!setup.probe) return true;
+    const sim::ProbeLoad& probe = *setup.probe;
+    ProbeArguments<Real> a{};
+    a.vertices = probe_vertices_.data();
+    a.count = static_cast<int>(probe.vertices.size());
+    a.start_x = probe_start_x_.data();
+    a.start_y = probe_start_y_.data();
+    a.start_z = probe_start_z_.data();
+    a.base_force_x = probe_base_x_.data();
+    a.base_force_y = probe_base_y_.data();
+    a.base_force_z = probe_base_z_.data();
+    a.target_x = probe.target[0];
+    a.target_y = probe.target[1];
+    a.target_z = probe.target[2];
+    a.ramp_time = probe.ramp_time;
+    a.h = stability_.front().time_step;
+    a.force_mode = force_probe(setup);
+    a.step_base = step_base_.data();
+    a.state = state.mutable_view();
+    a.force = {force_x_.data(), force_y_.data(), force_z_.data()};
+    FMPC_CUDA_CHECK(launch_apply_probe(a, offset, before_step, stream_), diagnostics, false);
+    return true;
+  }
+
+  bool enqueue_strain_lookup(const DeviceState<Real>& state, DiagnosticList& diagnostics) {
+    if (!scenes_.front().strain_stiffness) return true;
+    StrainStiffnessArguments<Real> a{};
+    a.state = state.view();
+    a.first = first_.data();
+    a.second = second_.data();
+    a.rest_length = energy_rest_length_.data();
+    a.stiffness_per_modulus = stiffness_per_modulus_.data();
+    a.table = {table_strain_.data(), table_modulus_.data(), static_cast<int>(table_strain_.size())};
+    a.stiffness = stiffness_.data();
+    a.spring_count = spring_begin_.back();
+    FMPC_CUDA_CHECK(launch_strain_stiffness(a, stream_), diagnostics, false);
+    return true;
+  }
+
+  // The probe kernels' time origin for the chunk about to be enqueued or replayed.
+  bool set_step_base(DiagnosticList& diagnostics) {
+    if (!scenes_.front().probe) return true;
+    step_base_host_ = steps_taken_;
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(step_base_.data(), &step_base_host_, sizeof step_base_host_,
+                                    cudaMemcpyHostToDevice, stream_),
+                    diagnostics, false);
+    return true;
+  }
+
+  ImplicitArguments<Real> implicit_arguments() {
+    ImplicitArguments<Real> a{};
+    a.network = network_;
+    a.loads = loads_;
+    a.state = state_[0].mutable_view();
+    a.first = first_.data();
+    a.second = second_.data();
+    a.rest_length = energy_rest_length_.data();
+    a.mass = energy_mass_.data();
+    a.rest_position = implicit_rest_.data();
+    // The CPU backend steps with h rounded to Real and widened again; so does this.
+    a.h = static_cast<double>(static_cast<Real>(stability_.front().time_step));
+    a.vertex_count = n_;
+    a.spring_count = spring_begin_.back();
+    a.blocks = implicit_blocks_.data();
+    a.diagonal = implicit_diagonal_.data();
+    a.inverse_jacobi = implicit_jacobi_.data();
+    a.rhs = implicit_rhs_.data();
+    a.x = cg_x_.data();
+    a.r = cg_r_.data();
+    a.z = cg_z_.data();
+    a.p = cg_p_.data();
+    a.ap = cg_ap_.data();
+    a.scalars = cg_scalars_.data();
+    a.partial = cg_partial_.data();
+    return a;
+  }
+
+  bool read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics) {
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(&scalars, cg_scalars_.data(), sizeof scalars, cudaMemcpyDeviceToHost, stream_),
+                    diagnostics, false);
+    return synchronize(diagnostics);
+  }
+
+  // One implicit Euler step: assemble, then Eigen's preconditioned conjugate gradient (same iteration, same
+  // stopping rule, same warning as the CPU backend), then v += dv, x += h v. The host reads |r|^2 once per
+  // iteration, so implicit steps are never captured into graphs.
+  bool implicit_solve(DiagnosticList& diagnostics) {
+    const ImplicitArguments<Real> a = implicit_arguments();
+    FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
+    ConjugateGradientScalars scalars{};
+    if (!read_cg_scalars(scalars, diagnostics)) return false;
+    // As the CPU backend: a right-hand side this small means the system is at rest to double precision.
+    if (std::sqrt(scalars.rhs_norm2) < 1e-150) return true;
+    const sim::ImplicitSolverOptions& options = scenes_.front().implicit;
+    const double threshold =
+        std::max(options.tolerance * options.tolerance * scalars.rhs_norm2, std::numeric_limits<double>::min());
+    double residual = scalars.rhs_norm2;
+    int iterations = 0;
+    if (residual >= threshold) {
+      while (iterations < options.max_iterations) {
+        FMPC_CUDA_CHECK(launch_cg_iteration(a, stream_), diagnostics, false);
+        if (!read_cg_scalars(scalars, diagnostics)) return false;
+        residual = scalars.rr;
+        if (residual < threshold) break;
+        FMPC_CUDA_CHECK(launch_cg_direction(a, stream_), diagnostics, false);
+        ++iterations;
       }
     }
+    implicit_iterations_max_ = std::max(implicit_iterations_max_, iterations);
+    const double error = std::sqrt(residual / scalars.rhs_norm2);
+    if (!(error <= options.tolerance) && !cg_warning_given_) {
+      cg_warning_given_ = true;
+      std::ostringstream message;
+      message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after " << iterations
+              << " iterations with relative residual " << error << " (tolerance " << options.tolerance
+              << "); raise max_iterations or use a smaller dt";
+      diagnostics.warning(SourceRange{}, "cg-not-converged", message.str());
+    }
+    FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
     return true;
   }
 
@@ -418,14 +643,16 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       steps_taken_ += count;
       return true;
     }
-    if (scheme() == sim::Integrator::VelocityVerlet && !have_acceleration_) {
-      FMPC_CUDA_CHECK(launch_acceleration(verlet_arguments(), stream_), diagnostics, false);
-      have_acceleration_ = true;
-    }
-    if (!allow_graph || count < 2) {
-      if (!enqueue_steps(count, current_, diagnostics)) return false;
-      steps_taken_ += count;
-      return true;
+    // Velocity Verlet's first step computes a(x0, v0) and implicit Euler reads the residual every CG iteration:
+    // those steps are enqueued directly, never captured.
+    const bool direct = !allow_graph || count < 2 || scheme() == sim::Integrator::ImplicitEuler;
+    if (direct || (scheme() == sim::Integrator::VelocityVerlet && !have_acceleration_)) {
+      const std::size_t piece = direct ? count : 1;
+      for (std::size_t done = 0; done < piece; ++done) {
+        if (!set_step_base(diagnostics) || !enqueue_steps(1, current_, diagnostics)) return false;
+        ++steps_taken_;
+      }
+      count -= piece;
     }
     for (std::size_t done = 0; done < count;) {
       const std::size_t piece = std::min(count - done, kMaxStepsPerGraph);
@@ -446,6 +673,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       if (!capture(count, executable, diagnostics)) return false;
       found = graphs_.emplace(key, std::make_unique<GraphExecutable>(executable)).first;
     }
+    if (!set_step_base(diagnostics)) return false;
     FMPC_CUDA_CHECK(cudaGraphLaunch(found->second->get(), stream_), diagnostics, false);
     if ((scheme() == sim::Integrator::ForwardEuler || scheme() == sim::Integrator::SemiImplicitEuler) &&
         count % 2 == 1) {
@@ -618,6 +846,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     a.force_x = energy_force_x_.data();
     a.force_y = energy_force_y_.data();
     a.force_z = energy_force_z_.data();
+    if (common.strain_stiffness) {
+      a.table = {table_strain_.data(), table_modulus_.data(), static_cast<int>(table_strain_.size())};
+      a.stiffness_per_modulus = stiffness_per_modulus_.data();
+    }
     double result = 0.0;
     FMPC_CUDA_CHECK(launch_energy_sum(a, term, begin, end, energy_partial_.data(), energy_result_.data(), stream_),
                     diagnostics, std::nullopt);
@@ -639,6 +871,16 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceArray<double> energy_mass_, energy_rest_length_, energy_stiffness_;
   DeviceArray<double> energy_force_x_, energy_force_y_, energy_force_z_, energy_partial_, energy_result_;
   DeviceArray<unsigned char> fixed_;
+  DeviceArray<int> probe_vertices_;
+  DeviceArray<double> probe_start_x_, probe_start_y_, probe_start_z_, probe_base_x_, probe_base_y_, probe_base_z_;
+  DeviceArray<unsigned long long> step_base_;
+  DeviceArray<double> table_strain_, table_modulus_, stiffness_per_modulus_;
+  DeviceArray<double> implicit_rest_, implicit_blocks_, implicit_diagonal_, implicit_jacobi_, implicit_rhs_;
+  DeviceArray<double> cg_x_, cg_r_, cg_z_, cg_p_, cg_ap_, cg_partial_;
+  DeviceArray<ConjugateGradientScalars> cg_scalars_;
+  unsigned long long step_base_host_ = 0;
+  int implicit_iterations_max_ = 0;
+  bool cg_warning_given_ = false;
   DeviceState<Real> state_[2], checkpoint_;
   DeviceVector3<Real> acceleration_, predicted_, checkpoint_acceleration_;
   DeviceVector3<Real> stage_position_a_, stage_position_b_, stage_velocity_[3], stage_acceleration_[3];
@@ -681,21 +923,28 @@ class GpuSimulationImpl final : public GpuSimulation {
     return batch_->potential_energy(0, diagnostics);
   }
   const std::optional<sim::NonFiniteReport>& non_finite() const override { return non_finite_; }
+  sim::ProbeReading probe_reading(DiagnosticList& diagnostics) const override {
+    return batch_->probe_reading(0, diagnostics);
+  }
+  std::vector<double> current_stiffness(DiagnosticList& diagnostics) const override {
+    return batch_->current_stiffness(0, diagnostics);
+  }
+  int implicit_max_iterations_used() const override { return batch_->implicit_max_iterations_used(); }
 
  private:
   std::unique_ptr<GpuBatchSimulation> batch_;
   std::optional<sim::NonFiniteReport> non_finite_;
 };
 
-// What the GPU kernels do not implement is refused before the device is touched, never silently ignored.
-const char* cpu_only_feature(const sim::SimulationSetup& setup) {
+// What a batch of several scenes cannot share is refused before the device is touched, never silently ignored.
+const char* single_scene_feature(const sim::SimulationSetup& setup) {
   if (setup.integrator == sim::Integrator::ImplicitEuler) {
-    return "implicit Euler runs on the CPU only (its conjugate-gradient solve is not ported to the GPU); use the CPU "
-           "backend, or an explicit integrator on the GPU";
+    return "implicit Euler runs one scene at a time on the GPU (its conjugate gradient solves one system); run the "
+           "scene as its own GpuSimulation";
   }
-  if (setup.probe) return "probes run on the CPU backend only; use the CPU backend for a scene with a probe";
+  if (setup.probe) return "a scene with a probe runs on its own on the GPU; run it as its own GpuSimulation";
   if (setup.strain_stiffness) {
-    return "table-driven stiffness k(strain) runs on the CPU backend only; use the CPU backend for this scene";
+    return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as its own GpuSimulation";
   }
   return nullptr;
 }
@@ -731,9 +980,9 @@ std::unique_ptr<GpuBatchSimulation> GpuBatchSimulation::create(const std::vector
   std::vector<sim::StabilityReport> stability;
   std::size_t vertices = 0, entries = 0;
   for (std::size_t s = 0; s < scenes.size(); ++s) {
-    if (const char* feature = cpu_only_feature(scenes[s])) {
-      diagnostics.error(SourceRange{},
-                        (scenes.size() > 1 ? "scene " + std::to_string(s) + ": " : std::string()) + feature);
+    const char* feature = scenes.size() > 1 ? single_scene_feature(scenes[s]) : nullptr;
+    if (feature != nullptr) {
+      diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + ": " + feature);
       return nullptr;
     }
     if (const char* field = shared_field_mismatch(scenes[s], scenes.front())) {

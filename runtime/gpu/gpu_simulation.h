@@ -1,9 +1,10 @@
 #pragma once
 // The CUDA backend's host side. Built only when nvcc is found (FMPC_RUNTIME_HAVE_CUDA); this header itself needs
 // no CUDA headers. Integrators on the GPU: forward Euler and semi-implicit Euler (one fused kernel per step),
-// velocity Verlet (two kernels per step) and RK4 (four stage kernels per step), all over the same FMPC_HD functions
-// as the CPU loop, in float or double. Implicit Euler runs on the CPU only (its conjugate-gradient solve is not
-// ported). Repeated steps are replayed from CUDA graphs; many scenes can share one launch (GpuBatchSimulation).
+// velocity Verlet (two kernels per step), RK4 (four stage kernels per step) and implicit Euler (a matrix-free,
+// Jacobi-preconditioned conjugate gradient in double, kernels/implicit_math.h), all over the same FMPC_HD functions
+// as the CPU loop, in float or double. Probes and strain tables run beside every step as on the CPU. Repeated
+// explicit steps are replayed from CUDA graphs; many scenes can share one launch (GpuBatchSimulation).
 // Every CUDA call and launch is checked and turned into a Diagnostic; nothing exits.
 #include <cstddef>
 #include <memory>
@@ -53,13 +54,19 @@ class GpuSimulation {
   virtual std::optional<double> kinetic_energy(DiagnosticList& diagnostics) const = 0;
   virtual std::optional<double> potential_energy(DiagnosticList& diagnostics) const = 0;
   virtual const std::optional<sim::NonFiniteReport>& non_finite() const = 0;
+  // The probe's displacement and force now (sim::read_probe on the downloaded state); zeros without a probe.
+  virtual sim::ProbeReading probe_reading(DiagnosticList& diagnostics) const = 0;
+  // Every spring's stiffness now (N/m): the setup's, or the strain table's last lookup.
+  virtual std::vector<double> current_stiffness(DiagnosticList& diagnostics) const = 0;
+  // The most conjugate-gradient iterations one implicit step needed (0 for the explicit schemes).
+  virtual int implicit_max_iterations_used() const = 0;
 };
 
 // Many scenes advanced together, one launch per kernel for all of them: the scenes' vertices, springs and CSR
 // entries are concatenated (offset arrays), each scene keeps its own time step. The scenes must share the
 // integrator, the precision, the spring law and its parameters, gravity and the nodal damping (an error names the
-// first scene that differs); sizes, materials, fixed vertices, forces and initial states may differ. A NaN/Inf in
-// any scene stops the whole batch.
+// first scene that differs); sizes, materials, fixed vertices, forces and initial states may differ. Implicit Euler,
+// probes and strain tables need a batch of one scene. A NaN/Inf in any scene stops the whole batch.
 class GpuBatchSimulation {
  public:
   static std::unique_ptr<GpuBatchSimulation> create(const std::vector<sim::SimulationSetup>& scenes,
@@ -75,6 +82,9 @@ class GpuBatchSimulation {
   virtual std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual const std::optional<GpuNonFiniteReport>& non_finite() const = 0;
+  virtual std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  virtual sim::ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  virtual int implicit_max_iterations_used() const = 0;
 };
 
 }  // namespace fmpc::gpu

@@ -11,7 +11,8 @@
 
 #include "kernels/integrator_math.h"
 #include "kernels/spring_math.h"
-#include "kernels/table_math.h"
+#include "kernels/implicit_math.h"
+#include "kernels/strain_table_math.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/integrate/worker_pool.h"
 
@@ -42,7 +43,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     };
     rest_length_ = convert(net.rest_length);
     stiffness_ = convert(net.stiffness);
-    damping_ = convert(net.damping);
+    damping_ = convert(net.damping);  // empty without damping
     mass_ = convert(setup.mass);
     fixed_.assign(n_, 0);
     for (const auto v : setup.fixed_vertices) fixed_[static_cast<std::size_t>(v)] = 1;
@@ -69,15 +70,6 @@ class CpuSimulationImpl final : public CpuSimulation {
     if (setup.probe && !probe_force) {
       for (const auto v : setup.probe->vertices) fixed_[static_cast<std::size_t>(v)] = 1;  // moved kinematically
     }
-    if (setup.strain_stiffness) {
-      table_counts_[0] = static_cast<int>(setup_.strain_stiffness->strain.size());
-      table_breakpoints_[0] = setup_.strain_stiffness->strain.data();
-      table_.axes = 1;
-      table_.outputs = 1;
-      table_.counts = table_counts_;
-      table_.breakpoints = table_breakpoints_;
-      table_.values = setup_.strain_stiffness->modulus.data();
-    }
     if (probe_force && setup.external_forces.empty()) force_.resize(n_);
     if (!setup.external_forces.empty()) {
       force_.resize(n_);
@@ -92,7 +84,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     network_view_.adjacency_neighbour = net.adjacency_neighbour.data();
     network_view_.rest_length = rest_length_.data();
     network_view_.stiffness = stiffness_.data();
-    network_view_.damping = damping_.data();
+    network_view_.damping = damping_.empty() ? nullptr : damping_.data();
     network_view_.law.law = setup.law;
     network_view_.law.k2_over_k1 = static_cast<Real>(setup.basafa_k2_over_k1);
     network_view_.law.xc = static_cast<Real>(setup.basafa_xc);
@@ -136,31 +128,7 @@ class CpuSimulationImpl final : public CpuSimulation {
   }
 
   ProbeReading probe_reading() const override {
-    ProbeReading reading;
-    if (!setup_.probe || setup_.probe->vertices.empty()) return reading;
-    const ProbeLoad& probe = *setup_.probe;
-    const double count = static_cast<double>(probe.vertices.size());
-    for (const auto vertex : probe.vertices) {
-      const auto v = static_cast<std::size_t>(vertex);
-      const Point3& start = start_position(v);
-      reading.displacement[0] += (static_cast<double>(position_.x[v]) - start[0]) / count;
-      reading.displacement[1] += (static_cast<double>(position_.y[v]) - start[1]) / count;
-      reading.displacement[2] += (static_cast<double>(position_.z[v]) - start[2]) / count;
-    }
-    if (probe.mode == ProbeLoad::Mode::Force) {
-      const double share = ramp(time());
-      for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] = share * probe.target[axis];
-      return reading;
-    }
-    const kernels::StateView<Real> state = view(position_, velocity_);
-    for (const auto vertex : probe.vertices) {
-      Real fx, fy, fz;
-      kernels::gather_spring_force(static_cast<int>(vertex), network_view_, state, fx, fy, fz);
-      reading.force[0] -= static_cast<double>(fx);
-      reading.force[1] -= static_cast<double>(fy);
-      reading.force[2] -= static_cast<double>(fz);
-    }
-    return reading;
+    return read_probe(setup_, time(), positions(), velocities(), current_stiffness());
   }
 
   std::vector<double> current_stiffness() const override {
@@ -293,12 +261,8 @@ class CpuSimulationImpl final : public CpuSimulation {
     });
   }
 
-  // Baraff & Witkin (1998), "Large steps in cloth simulation", Eq. (16) linearised backward Euler:
-  //   (M - h df/dv - h^2 df/dx) dv = h (f0 + h df/dx v0),  x1 = x0 + h (v0 + dv)
-  // with the spring Jacobian df_a/dx_a = -K_s, K_s = f'(l) u u^T + max(f/l, 0) (I - u u^T) (the transverse term is
-  // clamped at zero under compression so the matrix stays positive definite), df_a/dv_a = -c u u^T - gamma I.
-  // Solved with Eigen's conjugate gradient and its Jacobi (diagonal) preconditioner; fixed vertices become identity
-  // rows with a zero right-hand side.
+  // Baraff & Witkin's linearised backward Euler (kernels/implicit_math.h), solved with Eigen's conjugate gradient
+  // and its Jacobi (diagonal) preconditioner; fixed vertices become identity rows with a zero right-hand side.
   bool implicit_euler_step(DiagnosticList& diagnostics) {
     const double h = static_cast<double>(h_);
     const SpringNetwork& net = setup_.springs;
@@ -321,43 +285,36 @@ class CpuSimulationImpl final : public CpuSimulation {
     const kernels::SpringLawParameters<double> law{setup_.law, setup_.basafa_k2_over_k1, setup_.basafa_xc};
     for (std::size_t s = 0; s < net.size(); ++s) {
       const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
-      const double d[3] = {static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]),
-                           static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]),
-                           static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a])};
-      const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      const double rest = net.rest_length[s];
-      if (!(length > 1e-9 * rest)) continue;
-      const double u[3] = {d[0] / length, d[1] / length, d[2] / length};
-      const double slope = kernels::spring_tension_slope(length, rest, net.stiffness[s], law);
-      const double transverse = std::max(kernels::spring_tension(length, rest, net.stiffness[s], law) / length, 0.0);
-      double block[3][3];
-      double stiffness_block[3][3];
-      for (std::size_t r = 0; r < 3; ++r) {
-        for (std::size_t c = 0; c < 3; ++c) {
-          const double uu = u[r] * u[c];
-          stiffness_block[r][c] = slope * uu + transverse * ((r == c ? 1.0 : 0.0) - uu);
-          block[r][c] = h * h * stiffness_block[r][c] + h * net.damping[s] * uu;
-        }
+      double stiffness_block[6], block[6];
+      // The springs' current stiffness (a strain table's last lookup), as the forces use.
+      if (!kernels::implicit_spring_blocks(static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]),
+                                           static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]),
+                                           static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]),
+                                           net.rest_length[s], static_cast<double>(stiffness_[s]),
+                                           damping_.empty() ? 0.0 : static_cast<double>(damping_[s]), law, h,
+                                           stiffness_block, block)) {
+        continue;
       }
       // rhs += h^2 df/dx v0: for vertex a, -K_s (v_a - v_b); for b, -K_s (v_b - v_a).
-      for (std::size_t r = 0; r < 3; ++r) {
-        double kv = 0.0;
-        for (std::size_t c = 0; c < 3; ++c) {
-          kv += stiffness_block[r][c] *
-                (v0[static_cast<Eigen::Index>(3 * a + c)] - v0[static_cast<Eigen::Index>(3 * b + c)]);
-        }
-        rhs[static_cast<Eigen::Index>(3 * a + r)] -= h * h * kv;
-        rhs[static_cast<Eigen::Index>(3 * b + r)] += h * h * kv;
+      double relative[3], kv[3];
+      for (std::size_t c = 0; c < 3; ++c) {
+        relative[c] = v0[static_cast<Eigen::Index>(3 * a + c)] - v0[static_cast<Eigen::Index>(3 * b + c)];
       }
+      kernels::symmetric_multiply(stiffness_block, relative, kv);
       for (std::size_t r = 0; r < 3; ++r) {
-        for (std::size_t c = 0; c < 3; ++c) {
-          const auto ra = static_cast<int>(3 * a + r), rb = static_cast<int>(3 * b + r);
-          const auto ca = static_cast<int>(3 * a + c), cb = static_cast<int>(3 * b + c);
-          if (!fixed_[a]) triplets_.emplace_back(ra, ca, block[r][c]);
-          if (!fixed_[b]) triplets_.emplace_back(rb, cb, block[r][c]);
+        rhs[static_cast<Eigen::Index>(3 * a + r)] -= h * h * kv[r];
+        rhs[static_cast<Eigen::Index>(3 * b + r)] += h * h * kv[r];
+      }
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) {
+          const double entry = block[kernels::symmetric_index(r, c)];
+          const auto ra = static_cast<int>(3 * a) + r, rb = static_cast<int>(3 * b) + r;
+          const auto ca = static_cast<int>(3 * a) + c, cb = static_cast<int>(3 * b) + c;
+          if (!fixed_[a]) triplets_.emplace_back(ra, ca, entry);
+          if (!fixed_[b]) triplets_.emplace_back(rb, cb, entry);
           if (!fixed_[a] && !fixed_[b]) {
-            triplets_.emplace_back(ra, cb, -block[r][c]);
-            triplets_.emplace_back(rb, ca, -block[r][c]);
+            triplets_.emplace_back(ra, cb, -entry);
+            triplets_.emplace_back(rb, ca, -entry);
           }
         }
       }
@@ -461,24 +418,15 @@ class CpuSimulationImpl final : public CpuSimulation {
     return best;
   }
 
-  const Point3& start_position(std::size_t v) const {
-    return setup_.initial_positions.empty() ? setup_.rest_positions[v] : setup_.initial_positions[v];
-  }
 
-  // The probe's share of its target at time t: linear from 0 at t = 0 to 1 at the ramp time, then 1.
-  double ramp(double t) const {
-    const double ramp_time = setup_.probe->ramp_time;
-    return ramp_time > 0.0 ? std::min(t / ramp_time, 1.0) : 1.0;
-  }
-
-  // Displacement probes: positions (and, before a step, the ramp's velocity, which the dashpots and the implicit
-  // step see) of the probe vertices at time t. Force probes: their share of the force for the step from t.
+  // Displacement probes: positions (and, before a step, the ramp's velocity) of the probe vertices at time t.
+  // Force probes: their share of the force for the step from t.
   void apply_probe(double t, bool before_step) {
     if (!setup_.probe) return;
     const ProbeLoad& probe = *setup_.probe;
-    const double share = ramp(t);
     if (probe.mode == ProbeLoad::Mode::Force) {
       if (!before_step) return;
+      const double share = kernels::probe_ramp_share(t, probe.ramp_time);
       const double count = static_cast<double>(probe.vertices.size());
       for (const auto vertex : probe.vertices) {
         const auto v = static_cast<std::size_t>(vertex);
@@ -489,16 +437,15 @@ class CpuSimulationImpl final : public CpuSimulation {
       }
       return;
     }
-    const bool ramping = probe.ramp_time > 0.0 && t < probe.ramp_time;
     for (const auto vertex : probe.vertices) {
       const auto v = static_cast<std::size_t>(vertex);
-      const Point3& start = start_position(v);
-      position_.x[v] = static_cast<Real>(start[0] + share * probe.target[0]);
-      position_.y[v] = static_cast<Real>(start[1] + share * probe.target[1]);
-      position_.z[v] = static_cast<Real>(start[2] + share * probe.target[2]);
-      velocity_.x[v] = static_cast<Real>(before_step && ramping ? probe.target[0] / probe.ramp_time : 0.0);
-      velocity_.y[v] = static_cast<Real>(before_step && ramping ? probe.target[1] / probe.ramp_time : 0.0);
-      velocity_.z[v] = static_cast<Real>(before_step && ramping ? probe.target[2] / probe.ramp_time : 0.0);
+      const Point3& start = start_position(setup_, v);
+      kernels::probe_prescribed_state(start[0], probe.target[0], t, probe.ramp_time, before_step, position_.x[v],
+                                      velocity_.x[v]);
+      kernels::probe_prescribed_state(start[1], probe.target[1], t, probe.ramp_time, before_step, position_.y[v],
+                                      velocity_.y[v]);
+      kernels::probe_prescribed_state(start[2], probe.target[2], t, probe.ramp_time, before_step, position_.z[v],
+                                      velocity_.z[v]);
     }
   }
 
@@ -506,16 +453,15 @@ class CpuSimulationImpl final : public CpuSimulation {
   void look_up_stiffness() {
     const SpringNetwork& net = setup_.springs;
     const StrainStiffnessTable& table = *setup_.strain_stiffness;
+    const kernels::StrainTableView view = strain_table_view(table);
     pool_.run(net.size(), [&](std::size_t begin, std::size_t end) {
       for (std::size_t s = begin; s < end; ++s) {
         const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
-        const double dx = static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]);
-        const double dy = static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]);
-        const double dz = static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]);
-        const double strain = (std::sqrt(dx * dx + dy * dy + dz * dz) - net.rest_length[s]) / net.rest_length[s];
-        double modulus = 0.0;
-        interpolate_table(table_, &strain, &modulus);
-        stiffness_[s] = static_cast<Real>(modulus * table.stiffness_per_modulus[s]);
+        stiffness_[s] = static_cast<Real>(kernels::strain_table_stiffness(
+            view, static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]),
+            static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]),
+            static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]), net.rest_length[s],
+            table.stiffness_per_modulus[s]));
       }
     });
   }
@@ -546,53 +492,7 @@ class CpuSimulationImpl final : public CpuSimulation {
   std::vector<Eigen::Triplet<double>> triplets_;
   int implicit_iterations_max_ = 0;
   bool cg_warning_given_ = false;
-  TableView<double> table_{};
-  int table_counts_[1] = {0};
-  const double* table_breakpoints_[1] = {nullptr};
 };
-
-// Probe and strain-table checks (validate_setup covers the rest); errors name the vertex or the entry.
-bool validate_loads(const SimulationSetup& setup, DiagnosticList& diagnostics) {
-  const std::size_t errors = diagnostics.error_count();
-  const std::size_t n = setup.rest_positions.size();
-  if (setup.probe) {
-    const ProbeLoad& probe = *setup.probe;
-    std::vector<unsigned char> fixed(n, 0), seen(n, 0);
-    for (const auto v : setup.fixed_vertices)
-      if (v >= 0 && static_cast<std::size_t>(v) < n) fixed[static_cast<std::size_t>(v)] = 1;
-    if (probe.vertices.empty()) diagnostics.error(SourceRange{}, "the probe has no vertices");
-    for (const auto v : probe.vertices) {
-      if (v < 0 || static_cast<std::size_t>(v) >= n) {
-        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is out of range (the mesh has " +
-                                             std::to_string(n) + " vertices)");
-        continue;
-      }
-      if (fixed[static_cast<std::size_t>(v)])
-        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is also fixed; unfix it or pick another");
-      if (seen[static_cast<std::size_t>(v)])
-        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is given twice");
-      seen[static_cast<std::size_t>(v)] = 1;
-    }
-    bool finite = std::isfinite(probe.ramp_time) && probe.ramp_time >= 0.0;
-    for (const double value : probe.target) finite = finite && std::isfinite(value);
-    if (!finite) diagnostics.error(SourceRange{}, "the probe's target and ramp time must be finite (ramp time >= 0)");
-  }
-  if (setup.strain_stiffness) {
-    const StrainStiffnessTable& table = *setup.strain_stiffness;
-    bool valid = table.strain.size() >= 2 && table.modulus.size() == table.strain.size() &&
-                 table.stiffness_per_modulus.size() == setup.springs.size();
-    for (std::size_t i = 0; valid && i < table.strain.size(); ++i) {
-      valid = std::isfinite(table.strain[i]) && std::isfinite(table.modulus[i]) && table.modulus[i] >= 0.0 &&
-              (i == 0 || table.strain[i] > table.strain[i - 1]);
-    }
-    for (const double factor : table.stiffness_per_modulus) valid = valid && std::isfinite(factor) && factor >= 0.0;
-    if (!valid)
-      diagnostics.error(SourceRange{}, "the strain stiffness table needs at least 2 strictly increasing finite "
-                                       "strains, one finite non-negative modulus per strain and one non-negative "
-                                       "factor per spring");
-  }
-  return diagnostics.error_count() == errors;
-}
 
 }  // namespace
 
@@ -605,16 +505,11 @@ double elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& p
     const Point3& b = positions[static_cast<std::size_t>(net.second[s])];
     const double length = distance(a, b);
     const double rest = net.rest_length[s];
-    double k = net.stiffness[s];
-    if (setup.strain_stiffness) {
-      const StrainStiffnessTable& table = *setup.strain_stiffness;
-      const double strain = (length - rest) / rest;
-      int cell = 0;
-      double fraction = 0.0;
-      locate_on_axis(table.strain.data(), static_cast<int>(table.strain.size()), strain, cell, fraction);
-      const auto c = static_cast<std::size_t>(cell);
-      k = ((1.0 - fraction) * table.modulus[c] + fraction * table.modulus[c + 1]) * table.stiffness_per_modulus[s];
-    }
+    const double k = setup.strain_stiffness
+                         ? kernels::strain_table_stiffness(strain_table_view(*setup.strain_stiffness), b[0] - a[0],
+                                                           b[1] - a[1], b[2] - a[2], rest,
+                                                           setup.strain_stiffness->stiffness_per_modulus[s])
+                         : net.stiffness[s];
     energy += kernels::spring_potential_energy(length, rest, k, law);
   }
   return energy;
@@ -630,19 +525,7 @@ double kinetic_energy(const SimulationSetup& setup, const std::vector<Point3>& v
 }
 
 std::unique_ptr<CpuSimulation> CpuSimulation::create(const SimulationSetup& setup, DiagnosticList& diagnostics) {
-  if (!validate_loads(setup, diagnostics)) return nullptr;
-  std::optional<StabilityReport> stability;
-  if (setup.strain_stiffness && setup.strain_stiffness->stiffness_per_modulus.size() == setup.springs.size()) {
-    // The step must be stable at the stiffest value the table can give.
-    SimulationSetup stiffest = setup;
-    const double modulus_max =
-        *std::max_element(setup.strain_stiffness->modulus.begin(), setup.strain_stiffness->modulus.end());
-    for (std::size_t s = 0; s < stiffest.springs.size(); ++s)
-      stiffest.springs.stiffness[s] = modulus_max * setup.strain_stiffness->stiffness_per_modulus[s];
-    stability = check_stability(stiffest, diagnostics);
-  } else {
-    stability = check_stability(setup, diagnostics);  // validates the setup first
-  }
+  const std::optional<StabilityReport> stability = check_stability(setup, diagnostics);  // validates the setup first
   if (!stability) return nullptr;
   if (setup.precision == Precision::Float) return std::make_unique<CpuSimulationImpl<float>>(setup, *stability);
   return std::make_unique<CpuSimulationImpl<double>>(setup, *stability);

@@ -10,6 +10,7 @@
 
 #include "compiler/sema/diagnostic.h"
 #include "kernels/spring_math.h"
+#include "kernels/strain_table_math.h"
 #include "runtime/mesh/mesh.h"
 #include "runtime/springs/spring_network.h"
 
@@ -81,9 +82,24 @@ struct SimulationSetup {
   std::size_t record_every = 0;  // 0: no samples; otherwise every N steps (and step 0)
   std::vector<std::int32_t> recorded_vertices;
 
-  std::optional<ProbeLoad> probe;                         // CPU backend
-  std::optional<StrainStiffnessTable> strain_stiffness;  // CPU backend; replaces springs.stiffness every step
+  std::optional<ProbeLoad> probe;
+  std::optional<StrainStiffnessTable> strain_stiffness;  // replaces springs.stiffness every step
 };
+
+// Where vertex v starts: its initial position, or its rest position.
+const Point3& start_position(const SimulationSetup& setup, std::size_t v);
+
+// The table as the shared lookup (kernels/strain_table_math.h) reads it; it points into `table`.
+kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table);
+
+// The probe's reading at a state, computed in double by both backends: the mean displacement of the probe vertices
+// from their start, and the applied force (Force) or minus the spring and dashpot forces on the probe vertices with
+// the springs' current `stiffness` (Displacement). Zeros without a probe or with mismatched sizes.
+ProbeReading read_probe(const SimulationSetup& setup, double time, const std::vector<Point3>& positions,
+                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness);
+
+// Probe and strain-table checks (validate_setup calls it); errors name the vertex or the entry.
+bool validate_loads(const SimulationSetup& setup, DiagnosticList& diagnostics);
 
 // Elastic energy of the springs at `positions` (J): 1/2 k (l - l0)^2 for the linear law, the integral of F_s for
 // Basafa-Farahmand. With a strain table, k is the table's value at the current strain (an approximation: the
@@ -105,11 +121,12 @@ struct StabilityReport {
   std::string limit;  // the formula applied, e.g. "h <= 2 / (beta/2 + sqrt(w^2 + beta^2/4))"
 };
 
-// Sizes, indices, masses, rest lengths and parameters; appends one error per problem, naming the vertex or spring.
+// Sizes, indices, masses, rest lengths, parameters, the probe and the strain table; appends one error per problem,
+// naming the vertex or spring. springs.damping may be empty (no dashpots).
 bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics);
 
-// Validates the setup, then computes the bounds and the critical step; appends an error and returns nullopt when
-// the setup is invalid, the scheme is unstable at any step (forward Euler without damping) or a given step exceeds
+// Validates the setup, then computes the bounds and the critical step (with a strain table, at the stiffest value
+// the table can give); appends an error and returns nullopt when the setup is invalid, the scheme is unstable at any step (forward Euler without damping) or a given step exceeds
 // the critical one.
 std::optional<StabilityReport> check_stability(const SimulationSetup& setup, DiagnosticList& diagnostics);
 

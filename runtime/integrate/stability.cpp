@@ -33,8 +33,10 @@ std::string number(double value) {
 
 // The largest tangent stiffness a spring can have: k for the linear law, K1 + 3 K2 Xc^2 (per unit length) for the
 // Basafa-Farahmand law, whose slope grows with the strain up to Xc and stays constant beyond.
-double tangent_stiffness_bound(const SimulationSetup& setup, std::size_t spring) {
-  const double k = setup.springs.stiffness[spring];
+// With a strain table, k is the largest value the table can give the spring (the step must stay stable there).
+double tangent_stiffness_bound(const SimulationSetup& setup, double table_modulus_max, std::size_t spring) {
+  const double k = setup.strain_stiffness ? table_modulus_max * setup.strain_stiffness->stiffness_per_modulus[spring]
+                                          : setup.springs.stiffness[spring];
   if (setup.law == kernels::SpringLaw::BasafaFarahmand) {
     return k * (1.0 + 3.0 * setup.basafa_k2_over_k1 * setup.basafa_xc * setup.basafa_xc);
   }
@@ -60,6 +62,10 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
         std::max(largest_displacement, distance(setup.initial_positions[v], setup.rest_positions[v]));
   }
   const double nodal_damping = setup.nodal_damping_gamma0 + setup.nodal_damping_gamma1 * largest_displacement;
+  const double table_modulus_max =
+      setup.strain_stiffness ? *std::max_element(setup.strain_stiffness->modulus.begin(),
+                                                 setup.strain_stiffness->modulus.end())
+                             : 0.0;
   double omega_squared_max = 0.0;
   double euler_limit = std::numeric_limits<double>::infinity();
   for (std::size_t v = 0; v < n; ++v) {
@@ -67,8 +73,8 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
     double stiffness_sum = 0.0, damping_sum = 0.0;
     for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
       const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
-      stiffness_sum += tangent_stiffness_bound(setup, s);
-      damping_sum += net.damping[s];
+      stiffness_sum += tangent_stiffness_bound(setup, table_modulus_max, s);
+      if (!net.damping.empty()) damping_sum += net.damping[s];
     }
     const double omega_squared = 2.0 * stiffness_sum / setup.mass[v];
     if (omega_squared > omega_squared_max) {

@@ -50,10 +50,13 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                                  std::to_string(n) + "; build the springs from the same mesh");
   }
   const std::size_t m = net.size();
-  if (net.second.size() != m || net.rest_length.size() != m || net.stiffness.size() != m || net.damping.size() != m) {
+  const bool damped = !net.damping.empty();
+  if (net.second.size() != m || net.rest_length.size() != m || net.stiffness.size() != m ||
+      (damped && net.damping.size() != m)) {
     diagnostics.error(range,
-                      "the spring network is incomplete (rest lengths, stiffness and damping are needed for "
-                      "every spring); call compute_rest_lengths, assign_stiffness and assign_damping");
+                      "the spring network is incomplete (rest lengths and stiffness are needed for every spring, and "
+                      "damping for every spring or none); call compute_rest_lengths, assign_stiffness and "
+                      "assign_damping");
     return false;
   }
   if (net.adjacency_offset.size() != net.vertex_count + 1 || net.adjacency_spring.size() != 2 * m ||
@@ -74,10 +77,11 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                                    "; rest lengths must be positive: merge duplicate vertices");
       return false;
     }
-    if (!(net.stiffness[s] >= 0.0) || !std::isfinite(net.stiffness[s]) || !(net.damping[s] >= 0.0) ||
-        !std::isfinite(net.damping[s])) {
+    const double damping = damped ? net.damping[s] : 0.0;
+    if (!(net.stiffness[s] >= 0.0) || !std::isfinite(net.stiffness[s]) || !(damping >= 0.0) ||
+        !std::isfinite(damping)) {
       diagnostics.error(range, "spring " + std::to_string(s) + " has stiffness " + std::to_string(net.stiffness[s]) +
-                                   " and damping " + std::to_string(net.damping[s]) +
+                                   " and damping " + std::to_string(damping) +
                                    "; both must be finite and non-negative");
       return false;
     }
@@ -110,7 +114,8 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
   if (setup.implicit.max_iterations < 1 || !(setup.implicit.tolerance > 0.0)) {
     diagnostics.error(range, "implicit Euler needs at least one CG iteration and a positive tolerance");
   }
-  return diagnostics.error_count() == errors_before;
+  if (diagnostics.error_count() != errors_before) return false;
+  return validate_loads(setup, diagnostics);
 }
 
 }  // namespace fmpc::sim

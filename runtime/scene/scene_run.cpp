@@ -11,6 +11,9 @@
 #include "runtime/io/atomic_file.h"
 #include "runtime/io/json_writer.h"
 #include "runtime/io/vtk_xml.h"
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+#include "runtime/gpu/gpu_simulation.h"
+#endif
 
 namespace fmpc::sim {
 
@@ -38,6 +41,80 @@ std::vector<std::size_t> spread(int count, std::size_t total) {
 
 double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+// The run's simulation behind one interface, whichever backend steps it (called per output event, never per
+// element).
+class SceneStepper {
+ public:
+  virtual ~SceneStepper() = default;
+  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics) = 0;
+  virtual std::size_t steps_taken() const = 0;
+  virtual double time() const = 0;
+  virtual const StabilityReport& stability() const = 0;
+  virtual std::vector<Point3> positions(DiagnosticList& diagnostics) const = 0;
+  virtual std::vector<Point3> velocities(DiagnosticList& diagnostics) const = 0;
+  virtual ProbeReading probe_reading(DiagnosticList& diagnostics) const = 0;
+  virtual std::vector<double> current_stiffness(DiagnosticList& diagnostics) const = 0;
+};
+
+class CpuStepper final : public SceneStepper {
+ public:
+  explicit CpuStepper(std::unique_ptr<CpuSimulation> simulation) : simulation_(std::move(simulation)) {}
+  bool advance(std::size_t steps, DiagnosticList& diagnostics) override { return simulation_->advance(steps, diagnostics); }
+  std::size_t steps_taken() const override { return simulation_->steps_taken(); }
+  double time() const override { return simulation_->time(); }
+  const StabilityReport& stability() const override { return simulation_->stability(); }
+  std::vector<Point3> positions(DiagnosticList&) const override { return simulation_->positions(); }
+  std::vector<Point3> velocities(DiagnosticList&) const override { return simulation_->velocities(); }
+  ProbeReading probe_reading(DiagnosticList&) const override { return simulation_->probe_reading(); }
+  std::vector<double> current_stiffness(DiagnosticList&) const override { return simulation_->current_stiffness(); }
+
+ private:
+  std::unique_ptr<CpuSimulation> simulation_;
+};
+
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+class CudaStepper final : public SceneStepper {
+ public:
+  explicit CudaStepper(std::unique_ptr<gpu::GpuSimulation> simulation) : simulation_(std::move(simulation)) {}
+  bool advance(std::size_t steps, DiagnosticList& diagnostics) override { return simulation_->advance(steps, diagnostics); }
+  std::size_t steps_taken() const override { return simulation_->steps_taken(); }
+  double time() const override { return simulation_->time(); }
+  const StabilityReport& stability() const override { return simulation_->stability(); }
+  std::vector<Point3> positions(DiagnosticList& diagnostics) const override {
+    return simulation_->positions(diagnostics);
+  }
+  std::vector<Point3> velocities(DiagnosticList& diagnostics) const override {
+    return simulation_->velocities(diagnostics);
+  }
+  ProbeReading probe_reading(DiagnosticList& diagnostics) const override {
+    return simulation_->probe_reading(diagnostics);
+  }
+  std::vector<double> current_stiffness(DiagnosticList& diagnostics) const override {
+    return simulation_->current_stiffness(diagnostics);
+  }
+
+ private:
+  std::unique_ptr<gpu::GpuSimulation> simulation_;
+};
+#endif
+
+std::unique_ptr<SceneStepper> create_stepper(const SimulationSetup& setup, const std::string& backend,
+                                             DiagnosticList& diagnostics) {
+  if (backend == "cuda") {
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+    auto simulation = gpu::GpuSimulation::create(setup, diagnostics);
+    if (!simulation) return nullptr;
+    return std::make_unique<CudaStepper>(std::move(simulation));
+#else
+    diagnostics.error(SourceRange{}, "this fmpc was built without CUDA; run the scene with backend cpu or auto");
+    return nullptr;
+#endif
+  }
+  auto simulation = CpuSimulation::create(setup, diagnostics);
+  if (!simulation) return nullptr;
+  return std::make_unique<CpuStepper>(std::move(simulation));
+}
+
 std::string frame_name(std::size_t index) {
   char name[32];
   std::snprintf(name, sizeof name, "frame_%05zu.vtu", index);
@@ -49,7 +126,7 @@ std::string frame_name(std::size_t index) {
 std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
                                         DiagnosticList& diagnostics) {
   const SimulationSetup& setup = built.setup;
-  const auto simulation = CpuSimulation::create(setup, diagnostics);
+  const auto simulation = create_stepper(setup, options.backend, diagnostics);
   if (!simulation) return std::nullopt;
   if (!ensure_directory(options.output_directory, diagnostics)) return std::nullopt;
   SceneRunResult result;
@@ -87,7 +164,11 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
   std::vector<PvdFrame> frames;
   bool outputs_ok = true;
   const auto record = [&](bool frame, bool sample) {
-    const std::vector<Point3> positions = simulation->positions();
+    const std::vector<Point3> positions = simulation->positions(diagnostics);
+    if (positions.size() != rest.size()) {  // a device error, already reported
+      outputs_ok = false;
+      return;
+    }
     std::vector<Point3> displacement(positions.size());
     double largest = 0.0;
     for (std::size_t v = 0; v < positions.size(); ++v) {
@@ -99,19 +180,19 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
     if (frame && outputs_ok) {
       const std::string name = frame_name(frames.size());
       const std::vector<VtuPointVectors> data = {{"displacement", displacement},
-                                                 {"velocity", simulation->velocities()}};
+                                                 {"velocity", simulation->velocities(diagnostics)}};
       outputs_ok = write_file_atomically((directory / name).string(), vtu_document(positions, built.mesh, data),
                                          diagnostics);
       frames.push_back({time, name});
       result.files.push_back((directory / name).string());
     }
     if (!sample) return;
-    const std::vector<Point3> velocities = simulation->velocities();
+    const std::vector<Point3> velocities = simulation->velocities(diagnostics);
     const double kinetic = kinetic_energy(setup, velocities);
     const double elastic = elastic_energy(setup, positions);
     std::vector<double> row = {time};
     if (with_probe) {
-      const ProbeReading reading = simulation->probe_reading();
+      const ProbeReading reading = simulation->probe_reading(diagnostics);
       const ProbeCurvePoint point{time, dot(reading.displacement, probe_axis), dot(reading.force, probe_axis)};
       result.probe_curve.push_back(point);
       row.insert(row.end(), {point.displacement, point.force, reading.displacement[0], reading.displacement[1],
@@ -156,7 +237,7 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
     result.files.push_back(result.csv_path);
   }
   if (outputs_ok && scene.outputs.summary) {
-    const std::vector<double> stiffness = simulation->current_stiffness();
+    const std::vector<double> stiffness = simulation->current_stiffness(diagnostics);
     double k_min = 0.0, k_max = 0.0, k_sum = 0.0;
     if (!stiffness.empty()) {
       k_min = *std::min_element(stiffness.begin(), stiffness.end());

@@ -1,5 +1,5 @@
 #pragma once
-// Runs a built scene on the CPU backend and writes its outputs (docs/scenes.md, "Outputs"): VTK XML frames (.vtu)
+// Runs a built scene on the CPU or the CUDA backend and writes its outputs (docs/scenes.md, "Outputs"): VTK XML frames (.vtu)
 // and their .pvd collection, a CSV time series (probe displacement and force, kinetic and elastic energy) and a JSON
 // summary, each written atomically. Nothing is printed: progress goes to a callback the caller may draw.
 #include <cstddef>
@@ -16,7 +16,7 @@ namespace fmpc::sim {
 
 struct SceneRunOptions {
   std::string output_directory;  // created when missing
-  std::string backend = "cpu";   // what the summary records
+  std::string backend = "cpu";   // "cpu" or "cuda" (the caller decides; the summary records it)
   // Called about 100 times during the run with (steps done, steps planned).
   std::function<void(std::size_t, std::size_t)> progress;
 };

@@ -269,6 +269,12 @@ bool assign_damping(SpringNetwork& network, const std::vector<double>& mass, con
     diagnostics.error(range, "a fixed damping coefficient must be non-negative");
     return false;
   }
+  const bool undamped = (spec.rule == DampingSpec::Rule::Fixed && spec.value == 0.0) ||
+                        (spec.rule != DampingSpec::Rule::Fixed && spec.ratio == 0.0);
+  if (undamped) {
+    network.damping.clear();  // no dashpots: the backends allocate and read no damping array
+    return true;
+  }
   network.damping.assign(network.size(), 0.0);
   for (std::size_t s = 0; s < network.size(); ++s) {
     const double k = network.stiffness[s];

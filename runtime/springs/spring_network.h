@@ -21,11 +21,11 @@ struct SpringNetwork {
   std::vector<std::int32_t> second;  // endpoint with the larger index
   std::vector<SpringKind> kind;
   // Sum of the volumes of the tetrahedra that contain the edge (TetrahedronEdge) or of the areas of the triangles
-  // that contain it (Structural); 0 for flexion springs. Used by the Van Gelder mapping.
+  // that contain it (Structural); 0 for flexion and bending springs. Used by the Young's modulus mappings.
   std::vector<double> element_measure;
   std::vector<double> rest_length;  // m (mesh units)
   std::vector<double> stiffness;    // N/m
-  std::vector<double> damping;      // N s/m, along the spring (dashpot)
+  std::vector<double> damping;      // N s/m, along the spring (dashpot); empty: no dashpots
 
   // CSR: the springs at vertex v are adjacency_spring[adjacency_offset[v] .. adjacency_offset[v+1]), in increasing
   // spring order; adjacency_neighbour holds the other endpoint of each.

@@ -166,26 +166,91 @@ double velocity_tolerance(Precision precision) { return 100.0 * position_toleran
 const Integrator kGpuIntegrators[] = {Integrator::ForwardEuler, Integrator::SemiImplicitEuler,
                                       Integrator::VelocityVerlet, Integrator::RungeKutta4};
 
+// The box pressed 5 mm upwards at its free bottom face by a displacement probe (or pulled down by a force probe),
+// the load ramping over 0.05 s.
+SimulationSetup probed_box(Precision precision, Integrator integrator, ProbeLoad::Mode mode) {
+  BoxScene scene;
+  scene.precision = precision;
+  scene.integrator = integrator;
+  SimulationSetup setup = hanging_box(scene);
+  ProbeLoad probe;
+  probe.mode = mode;
+  for (std::size_t v = 0; v < setup.rest_positions.size(); ++v) {
+    if (setup.rest_positions[v][1] < 1e-6) probe.vertices.push_back(static_cast<std::int32_t>(v));
+  }
+  probe.target = mode == ProbeLoad::Mode::Displacement ? Point3{0.0, 0.005, 0.0} : Point3{0.0, -0.5, 0.0};
+  probe.ramp_time = 0.05;
+  setup.probe = probe;
+  return setup;
+}
+
+// The box's springs stiffen with strain: E(X) = 4, 5, 9 kPa at X = -0.2, 0, 0.2 (Van Gelder k scales with E).
+SimulationSetup strain_table_box(Precision precision, Integrator integrator) {
+  BoxScene scene;
+  scene.precision = precision;
+  scene.integrator = integrator;
+  SimulationSetup setup = hanging_box(scene);
+  StrainStiffnessTable table;
+  table.strain = {-0.2, 0.0, 0.2};
+  table.modulus = {4000.0, 5000.0, 9000.0};
+  for (const double k : setup.springs.stiffness) table.stiffness_per_modulus.push_back(k / scene.young_modulus);
+  setup.strain_stiffness = table;
+  return setup;
+}
+
+// CPU and GPU side by side for `steps` steps: positions, velocities, the probe's reading and the springs' current
+// stiffness; the largest differences.
+struct SceneDifference {
+  Difference state;
+  double probe_force = std::numeric_limits<double>::infinity();
+  double stiffness = std::numeric_limits<double>::infinity();
+};
+
+SceneDifference scene_difference(const SimulationSetup& setup, std::size_t steps) {
+  SceneDifference out;
+  DiagnosticList diagnostics;
+  const auto cpu = CpuSimulation::create(setup, diagnostics);
+  const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+  if (!cpu || !device || !cpu->advance(steps, diagnostics) || !device->advance(steps, diagnostics)) {
+    note("setup or run failed: " + describe(diagnostics));
+    return out;
+  }
+  out.state.positions = max_difference(cpu->positions(), device->positions(diagnostics));
+  out.state.velocities = max_difference(cpu->velocities(), device->velocities(diagnostics));
+  const ProbeReading a = cpu->probe_reading(), b = device->probe_reading(diagnostics);
+  out.probe_force = 0.0;
+  for (std::size_t axis = 0; axis < 3; ++axis) out.probe_force = std::max(out.probe_force, std::abs(a.force[axis] - b.force[axis]));
+  const std::vector<double> k_cpu = cpu->current_stiffness(), k_gpu = device->current_stiffness(diagnostics);
+  out.stiffness = k_cpu.size() == k_gpu.size() ? 0.0 : std::numeric_limits<double>::infinity();
+  for (std::size_t s = 0; s < k_cpu.size() && s < k_gpu.size(); ++s)
+    out.stiffness = std::max(out.stiffness, std::abs(k_cpu[s] - k_gpu[s]));
+  if (diagnostics.has_errors()) {
+    note("errors: " + describe(diagnostics));
+    out.state = {};
+  }
+  return out;
+}
+
 }  // namespace
 
-FMPC_GPU_TEST(cpu_only_refused, "implicit Euler, probes and strain tables are refused before touching the device",
+FMPC_GPU_TEST(single_scene_refused, "implicit Euler, probes and strain tables refuse a batch of several scenes",
               false) {
   {
-    BoxScene scene;
-    scene.integrator = Integrator::ImplicitEuler;
+    std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
+    for (SimulationSetup& scene : scenes) scene.integrator = Integrator::ImplicitEuler;
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuSimulation::create(hanging_box(scene), diagnostics));
+    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics));
     FMPC_REQUIRE(diagnostics.error_count() == 1);
-    FMPC_EXPECT(diagnostics.items()[0].message.rfind("implicit Euler runs on the CPU only", 0) == 0);
+    FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 0: implicit Euler runs one scene at a time", 0) == 0);
   }
   {
-    SimulationSetup setup = hanging_box(BoxScene{});
-    setup.probe = ProbeLoad{};
-    setup.probe->vertices = {0};
+    std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
+    scenes[1].probe = ProbeLoad{};
+    scenes[1].probe->vertices = {0};
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuSimulation::create(setup, diagnostics));
+    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics));
     FMPC_REQUIRE(diagnostics.error_count() == 1);
-    FMPC_EXPECT(diagnostics.items()[0].message.rfind("probes run on the CPU backend only", 0) == 0);
+    FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 1: a scene with a probe runs on its own", 0) == 0);
   }
   {
     std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
@@ -193,8 +258,14 @@ FMPC_GPU_TEST(cpu_only_refused, "implicit Euler, probes and strain tables are re
     DiagnosticList diagnostics;
     FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics));
     FMPC_REQUIRE(diagnostics.error_count() == 1);
-    FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 1: table-driven stiffness k(strain) runs on the CPU", 0) ==
-                0);
+    FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 1: a scene with table-driven stiffness", 0) == 0);
+  }
+  {
+    SimulationSetup setup = hanging_box(BoxScene{});
+    setup.probe = ProbeLoad{};  // no vertices: the shared validation names the problem
+    DiagnosticList diagnostics;
+    FMPC_EXPECT(!gpu::GpuSimulation::create(setup, diagnostics));
+    FMPC_EXPECT(first_error(diagnostics) == "the probe has no vertices");
   }
 }
 
@@ -444,4 +515,108 @@ FMPC_GPU_TEST(sanitizer_smoke, "sanitizer smoke: every kernel on tiny scenes", t
   FMPC_REQUIRE(run);
   FMPC_EXPECT(!run->advance(5000, diagnostics, 16));
   FMPC_EXPECT(run->non_finite().has_value());
+}
+
+FMPC_GPU_TEST(probe_matches_cpu, "displacement and force probes: GPU equals CPU for every explicit integrator", true) {
+  for (const ProbeLoad::Mode mode : {ProbeLoad::Mode::Displacement, ProbeLoad::Mode::Force}) {
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      for (const Integrator integrator : kGpuIntegrators) {
+        const SceneDifference d = scene_difference(probed_box(precision, integrator, mode), 3001);
+        std::ostringstream line;
+        line << (mode == ProbeLoad::Mode::Displacement ? "displacement" : "force") << " probe, "
+             << to_string(integrator) << ", " << name_of(precision) << ": max |GPU - CPU| after 3,001 steps "
+             << d.state.positions << " m, " << d.state.velocities << " m/s, probe force " << d.probe_force << " N";
+        note(line.str());
+        FMPC_EXPECT(d.state.positions <= position_tolerance(precision));
+        FMPC_EXPECT(d.state.velocities <= velocity_tolerance(precision));
+        FMPC_EXPECT(d.probe_force <= (precision == Precision::Float ? 1e-3 : 1e-9));
+      }
+    }
+  }
+}
+
+FMPC_GPU_TEST(strain_table_matches_cpu, "table-driven stiffness k(strain): GPU equals CPU, stiffness included", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const Integrator integrator : kGpuIntegrators) {
+      const SceneDifference d = scene_difference(strain_table_box(precision, integrator), 2000);
+      std::ostringstream line;
+      line << "strain table, " << to_string(integrator) << ", " << name_of(precision)
+           << ": max |GPU - CPU| after 2,000 steps " << d.state.positions << " m, stiffness " << d.stiffness << " N/m";
+      note(line.str());
+      FMPC_EXPECT(d.state.positions <= position_tolerance(precision));
+      FMPC_EXPECT(d.stiffness <= (precision == Precision::Float ? 1e-2 : 1e-9));
+    }
+  }
+  // Device energy with a strain table: k at the current strain, as the CPU's elastic_energy.
+  const SimulationSetup setup = strain_table_box(Precision::Double, Integrator::SemiImplicitEuler);
+  DiagnosticList diagnostics;
+  const auto cpu = CpuSimulation::create(setup, diagnostics);
+  const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+  FMPC_REQUIRE(cpu && device && cpu->advance(500, diagnostics) && device->advance(500, diagnostics));
+  const auto potential = device->potential_energy(diagnostics);
+  FMPC_REQUIRE(potential);
+  FMPC_EXPECT_WITHIN(*potential, cpu->potential_energy(), 1e-10 * std::abs(cpu->potential_energy()) + 1e-12);
+}
+
+FMPC_GPU_TEST(undamped_network, "a network without dashpots (no damping array) matches the CPU", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    BoxScene scene;
+    scene.precision = precision;
+    SimulationSetup setup = hanging_box(scene);
+    setup.springs.damping.clear();
+    setup.nodal_damping_gamma0 = 1e-3;
+    const Difference d = cpu_gpu_difference(setup, 2000, gpu::GpuOptions{});
+    note(std::string("undamped springs, ") + name_of(precision) + ": max |GPU - CPU| " + std::to_string(d.positions) +
+         " m");
+    FMPC_EXPECT(d.positions <= position_tolerance(precision));
+  }
+}
+
+// Implicit Euler: the same preconditioned CG as Eigen's, summed in another order, so the runs agree to the solver's
+// tolerance rather than bitwise; GPU runs are bitwise reproducible.
+FMPC_GPU_TEST(implicit_matches_cpu, "implicit Euler: GPU CG agrees with Eigen's, and GPU runs repeat bitwise", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const bool with_probe : {false, true}) {
+      SimulationSetup setup = with_probe ? probed_box(precision, Integrator::ImplicitEuler, ProbeLoad::Mode::Displacement)
+                                         : hanging_box(BoxScene{3, 5, 2, 5000.0, precision, Integrator::ImplicitEuler});
+      const SceneDifference d = scene_difference(setup, 200);
+      const double tolerance = precision == Precision::Float ? 1e-5 : 1e-9;
+      std::ostringstream line;
+      line << "implicit Euler" << (with_probe ? " with a probe" : "") << ", " << name_of(precision)
+           << ": max |GPU - CPU| after 200 steps " << d.state.positions << " m (tolerance " << tolerance << "), "
+           << d.state.velocities << " m/s";
+      note(line.str());
+      FMPC_EXPECT(d.state.positions <= tolerance);
+      FMPC_EXPECT(d.state.velocities <= 100.0 * tolerance);
+      DiagnosticList diagnostics;
+      const auto first = gpu::GpuSimulation::create(setup, diagnostics);
+      const auto second = gpu::GpuSimulation::create(setup, diagnostics);
+      FMPC_REQUIRE(first && second && first->advance(50, diagnostics) && second->advance(50, diagnostics, 7));
+      FMPC_EXPECT(bitwise_equal(first->positions(diagnostics), second->positions(diagnostics)));
+      FMPC_EXPECT(first->implicit_max_iterations_used() > 0);
+      note("implicit Euler, " + std::string(name_of(precision)) + ": at most " +
+           std::to_string(first->implicit_max_iterations_used()) + " CG iterations per step");
+    }
+  }
+}
+
+// The scene features on tiny scenes for compute-sanitizer: probes, a strain table, implicit Euler, no damping.
+FMPC_GPU_TEST(sanitizer_scene_features, "sanitizer smoke: probe, strain table and implicit kernels", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    SimulationSetup probed = probed_box(precision, Integrator::SemiImplicitEuler, ProbeLoad::Mode::Force);
+    SimulationSetup table = strain_table_box(precision, Integrator::VelocityVerlet);
+    SimulationSetup implicit = probed_box(precision, Integrator::ImplicitEuler, ProbeLoad::Mode::Displacement);
+    implicit.strain_stiffness = strain_table_box(precision, Integrator::ImplicitEuler).strain_stiffness;
+    implicit.springs.damping.clear();
+    for (const SimulationSetup* setup : {&probed, &table, &implicit}) {
+      DiagnosticList diagnostics;
+      const auto run = gpu::GpuSimulation::create(*setup, diagnostics);
+      FMPC_REQUIRE(run && run->advance(12, diagnostics, 5));
+      FMPC_EXPECT(run->potential_energy(diagnostics).has_value());
+      FMPC_EXPECT(!run->current_stiffness(diagnostics).empty());
+      (void)run->probe_reading(diagnostics);
+      if (diagnostics.has_errors()) note(describe(diagnostics));
+      FMPC_EXPECT(!diagnostics.has_errors());
+    }
+  }
 }

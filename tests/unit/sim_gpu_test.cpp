@@ -39,12 +39,12 @@ SimulationSetup hanging_box(Precision precision) {
 
 }  // namespace
 
-TEST_CASE("GPU: implicit Euler (CPU only) is refused before touching the device", "[sim][gpu]") {
+TEST_CASE("GPU: a batch of implicit Euler scenes is refused before touching the device", "[sim][gpu]") {
   SimulationSetup setup = hanging_box(Precision::Double);
   setup.integrator = Integrator::ImplicitEuler;
   DiagnosticList diagnostics;
-  CHECK_FALSE(gpu::GpuSimulation::create(setup, diagnostics));
-  CHECK_THAT(diagnostics.items()[0].message, Catch::StartsWith("implicit Euler runs on the CPU only"));
+  CHECK_FALSE(gpu::GpuBatchSimulation::create({setup, setup}, gpu::GpuOptions{}, diagnostics));
+  CHECK_THAT(diagnostics.items()[0].message, Catch::StartsWith("scene 0: implicit Euler runs one scene at a time"));
 }
 
 TEST_CASE("GPU: the fused kernel matches the CPU loop to rounding (float and double)", "[sim][gpu]") {

@@ -149,8 +149,8 @@ bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, Diagnost
   return !diagnostics.has_errors();
 }
 
-// The backend that runs: the CPU unless CUDA was asked for. Scenes do not drive the CUDA backend yet (probes and
-// strain tables are CPU-only), so `auto` says which it took and `cuda` is refused with what to do.
+// The backend that runs: `auto` takes CUDA when a device can be used and says which it took; `cuda` without a
+// usable device is an error that says why.
 std::optional<std::string> choose_backend(const sim::Scene& scene, DiagnosticList& diagnostics) {
   std::string device;
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
@@ -163,17 +163,16 @@ std::optional<std::string> choose_backend(const sim::Scene& scene, DiagnosticLis
     case sim::SceneBackend::Cpu:
       return std::string("cpu");
     case sim::SceneBackend::Auto:
-      if (have_device)
-        std::cerr << "fmpc simulate: backend auto: running on the CPU (scenes do not run on the CUDA backend yet; "
-                  << device << ")\n";
-      else
-        std::cerr << "fmpc simulate: backend auto: no GPU (" << device << "); running on the CPU\n";
+      if (have_device) {
+        std::cerr << "fmpc simulate: backend auto: running on CUDA (" << device << ")\n";
+        return std::string("cuda");
+      }
+      std::cerr << "fmpc simulate: backend auto: no GPU (" << device << "); running on the CPU\n";
       return std::string("cpu");
     case sim::SceneBackend::Cuda:
+      if (have_device) return std::string("cuda");
       diagnostics.error(scene.range_of("backend"),
-                        std::string("backend: 'cuda' cannot run this scene: ") +
-                            (have_device ? "scenes do not run on the CUDA backend yet" : device) +
-                            "; use backend cpu or auto");
+                        "backend: 'cuda' cannot run here: " + device + "; use backend cpu or auto");
       return std::nullopt;
   }
   return std::nullopt;

@@ -1,0 +1,97 @@
+// The probe and the strain stiffness table: their checks, the probe's reading and the table's view, shared by the
+// CPU backend (cpu_simulation.cpp) and the CUDA backend (runtime/gpu).
+#include <cmath>
+
+#include "kernels/integrator_math.h"
+#include "runtime/integrate/simulation.h"
+
+namespace fmpc::sim {
+
+const Point3& start_position(const SimulationSetup& setup, std::size_t v) {
+  return setup.initial_positions.empty() ? setup.rest_positions[v] : setup.initial_positions[v];
+}
+
+kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table) {
+  return {table.strain.data(), table.modulus.data(), static_cast<int>(table.strain.size())};
+}
+
+ProbeReading read_probe(const SimulationSetup& setup, double time, const std::vector<Point3>& positions,
+                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness) {
+  ProbeReading reading;
+  if (!setup.probe || setup.probe->vertices.empty()) return reading;
+  const std::size_t n = setup.rest_positions.size();
+  if (positions.size() != n || velocities.size() != n || stiffness.size() != setup.springs.size()) return reading;
+  const ProbeLoad& probe = *setup.probe;
+  const double count = static_cast<double>(probe.vertices.size());
+  for (const auto vertex : probe.vertices) {
+    const auto v = static_cast<std::size_t>(vertex);
+    const Point3& start = start_position(setup, v);
+    for (std::size_t axis = 0; axis < 3; ++axis) reading.displacement[axis] += (positions[v][axis] - start[axis]) / count;
+  }
+  if (probe.mode == ProbeLoad::Mode::Force) {
+    const double share = kernels::probe_ramp_share(time, probe.ramp_time);
+    for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] = share * probe.target[axis];
+    return reading;
+  }
+  const SpringNetwork& net = setup.springs;
+  const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
+  for (const auto vertex : probe.vertices) {
+    const auto v = static_cast<std::size_t>(vertex);
+    for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
+      const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
+      const auto o = static_cast<std::size_t>(net.adjacency_neighbour[static_cast<std::size_t>(e)]);
+      double f[3];
+      kernels::spring_force_on_vertex(positions[o][0] - positions[v][0], positions[o][1] - positions[v][1],
+                                      positions[o][2] - positions[v][2], velocities[o][0] - velocities[v][0],
+                                      velocities[o][1] - velocities[v][1], velocities[o][2] - velocities[v][2],
+                                      net.rest_length[s], stiffness[s], net.damping.empty() ? 0.0 : net.damping[s],
+                                      law, f[0], f[1], f[2]);
+      for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] -= f[axis];
+    }
+  }
+  return reading;
+}
+
+bool validate_loads(const SimulationSetup& setup, DiagnosticList& diagnostics) {
+  const std::size_t errors = diagnostics.error_count();
+  const std::size_t n = setup.rest_positions.size();
+  if (setup.probe) {
+    const ProbeLoad& probe = *setup.probe;
+    std::vector<unsigned char> fixed(n, 0), seen(n, 0);
+    for (const auto v : setup.fixed_vertices)
+      if (v >= 0 && static_cast<std::size_t>(v) < n) fixed[static_cast<std::size_t>(v)] = 1;
+    if (probe.vertices.empty()) diagnostics.error(SourceRange{}, "the probe has no vertices");
+    for (const auto v : probe.vertices) {
+      if (v < 0 || static_cast<std::size_t>(v) >= n) {
+        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is out of range (the mesh has " +
+                                             std::to_string(n) + " vertices)");
+        continue;
+      }
+      if (fixed[static_cast<std::size_t>(v)])
+        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is also fixed; unfix it or pick another");
+      if (seen[static_cast<std::size_t>(v)])
+        diagnostics.error(SourceRange{}, "probe vertex " + std::to_string(v) + " is given twice");
+      seen[static_cast<std::size_t>(v)] = 1;
+    }
+    bool finite = std::isfinite(probe.ramp_time) && probe.ramp_time >= 0.0;
+    for (const double value : probe.target) finite = finite && std::isfinite(value);
+    if (!finite) diagnostics.error(SourceRange{}, "the probe's target and ramp time must be finite (ramp time >= 0)");
+  }
+  if (setup.strain_stiffness) {
+    const StrainStiffnessTable& table = *setup.strain_stiffness;
+    bool valid = table.strain.size() >= 2 && table.modulus.size() == table.strain.size() &&
+                 table.stiffness_per_modulus.size() == setup.springs.size();
+    for (std::size_t i = 0; valid && i < table.strain.size(); ++i) {
+      valid = std::isfinite(table.strain[i]) && std::isfinite(table.modulus[i]) && table.modulus[i] >= 0.0 &&
+              (i == 0 || table.strain[i] > table.strain[i - 1]);
+    }
+    for (const double factor : table.stiffness_per_modulus) valid = valid && std::isfinite(factor) && factor >= 0.0;
+    if (!valid)
+      diagnostics.error(SourceRange{}, "the strain stiffness table needs at least 2 strictly increasing finite "
+                                       "strains, one finite non-negative modulus per strain and one non-negative "
+                                       "factor per spring");
+  }
+  return diagnostics.error_count() == errors;
+}
+
+}  // namespace fmpc::sim
