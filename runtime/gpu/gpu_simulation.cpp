@@ -596,7 +596,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     double residual = scalars.rhs_norm2;
     int iterations = 0;
     if (residual >= threshold) {
-      while (iterations < options.max_iterations) {
+      const int limit = sim::implicit_iteration_limit(scenes_.front());
+      while (iterations < limit) {
         FMPC_CUDA_CHECK(launch_cg_iteration(a, stream_), diagnostics, false);
         if (!read_cg_scalars(scalars, diagnostics)) return false;
         residual = scalars.rr;

@@ -340,7 +340,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
                              Eigen::DiagonalPreconditioner<double>>
         solver;
-    solver.setMaxIterations(setup_.implicit.max_iterations);
+    solver.setMaxIterations(implicit_iteration_limit(setup_));
     solver.setTolerance(setup_.implicit.tolerance);
     // A right-hand side this small means the system is at rest to double precision; CG on denormals would only
     // report a spurious failure.

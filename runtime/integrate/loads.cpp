@@ -11,6 +11,11 @@ const Point3& start_position(const SimulationSetup& setup, std::size_t v) {
   return setup.initial_positions.empty() ? setup.rest_positions[v] : setup.initial_positions[v];
 }
 
+int implicit_iteration_limit(const SimulationSetup& setup) {
+  return setup.implicit.max_iterations > 0 ? setup.implicit.max_iterations
+                                           : static_cast<int>(6 * setup.rest_positions.size());
+}
+
 kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table) {
   return {table.strain.data(), table.modulus.data(), static_cast<int>(table.strain.size())};
 }

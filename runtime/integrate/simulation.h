@@ -22,7 +22,9 @@ enum class Precision { Float, Double };
 const char* to_string(Integrator integrator);
 
 struct ImplicitSolverOptions {
-  int max_iterations = 200;  // conjugate-gradient iterations per step
+  // Conjugate-gradient iterations per step; 0: twice the unknowns (3 per vertex), Eigen's default. A fixed small
+  // cap stopped SOFA's liver with fuzzy stiffness short of the tolerance (stiff springs, Jacobi preconditioning).
+  int max_iterations = 0;
   double tolerance = 1e-10;  // relative residual |r| / |b|
 };
 
@@ -97,6 +99,9 @@ kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table);
 // the springs' current `stiffness` (Displacement). Zeros without a probe or with mismatched sizes.
 ProbeReading read_probe(const SimulationSetup& setup, double time, const std::vector<Point3>& positions,
                         const std::vector<Point3>& velocities, const std::vector<double>& stiffness);
+
+// The CG iteration cap of one implicit step: options.max_iterations, or twice the unknowns when it is 0.
+int implicit_iteration_limit(const SimulationSetup& setup);
 
 // Probe and strain-table checks (validate_setup calls it); errors name the vertex or the entry.
 bool validate_loads(const SimulationSetup& setup, DiagnosticList& diagnostics);
