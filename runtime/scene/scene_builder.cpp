@@ -366,14 +366,15 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
       built.stiffness_description = "k = " + format_number(material.value) + " N / rest length (SOFA)";
       break;
     case SceneMaterial::Source::YoungsModulus:
-      model.stiffness.mapping = StiffnessMapping::VanGelder1998;
+      model.stiffness.mapping = material.mapping;
       model.stiffness.value = material.value * 1000.0;  // kPa -> Pa
-      built.stiffness_description = "Van Gelder 1998 with E = " + format_number(material.value) + " kPa";
+      built.stiffness_description =
+          std::string(mapping_citation(material.mapping)) + " with E = " + format_number(material.value) + " kPa";
       break;
     case SceneMaterial::Source::Rules:
     case SceneMaterial::Source::Table:
       // Springs first (their midpoints place them in regions); k for E = 1 Pa is each spring's mapping factor.
-      model.stiffness.mapping = StiffnessMapping::VanGelder1998;
+      model.stiffness.mapping = material.mapping;
       model.stiffness.value = 1.0;
       break;
   }
@@ -386,7 +387,8 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
     const MaterialBinding& binding = *built.material;
     if (binding.strain.empty()) {
       for (std::size_t s = 0; s < factor.size(); ++s) setup->springs.stiffness[s] = binding.modulus_per_spring[s] * factor[s];
-      built.stiffness_description = "Van Gelder 1998 with E from '" + binding.system + "' output '" + binding.output +
+      built.stiffness_description = std::string(mapping_citation(material.mapping)) + " with E from '" +
+                                    binding.system + "' output '" + binding.output +
                                     "': " + format_number(binding.modulus_min / 1000.0) +
                                     (binding.modulus_min == binding.modulus_max
                                          ? ""
@@ -411,7 +413,8 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
       interpolate_table(view, &zero, &rest_modulus);
       for (std::size_t s = 0; s < factor.size(); ++s) setup->springs.stiffness[s] = rest_modulus * factor[s];
       setup->strain_stiffness = std::move(table);
-      built.stiffness_description = "Van Gelder 1998 with E(strain) from '" + binding.system + "' output '" +
+      built.stiffness_description = std::string(mapping_citation(material.mapping)) + " with E(strain) from '" +
+                                    binding.system + "' output '" +
                                     binding.output + "', " + std::to_string(binding.strain.size()) +
                                     "-point table over strain " + format_number(binding.strain.front()) + " to " +
                                     format_number(binding.strain.back()) + ": " +

@@ -1,8 +1,8 @@
 #pragma once
 // From a parsed Scene to what runs: the mesh (read or generated, repaired), the spring model with its material
-// (fuzzy rules or a table evaluated for the bindings, Van Gelder mapping), fixed vertices, loads and probe, the
-// integrator settings. Only what the scene uses is built: no strain table without a strain binding, no force
-// arrays without force loads, no probe without a probe.
+// (fuzzy rules or a table evaluated for the bindings, Van Gelder or Lloyd-Szekely-Harders mapping), fixed vertices,
+// loads and probe, the integrator settings. Only what the scene uses is built: no strain table without a strain
+// binding, no force arrays without force loads, no probe without a probe.
 #include <optional>
 #include <string>
 #include <utility>

@@ -31,6 +31,16 @@ const char* scene_name(Integrator integrator) {
   return "semi_implicit_euler";
 }
 
+const char* scene_name(StiffnessMapping mapping) {
+  switch (mapping) {
+    case StiffnessMapping::Uniform: return "uniform";
+    case StiffnessMapping::StiffnessOverLength: return "stiffness_over_length";
+    case StiffnessMapping::VanGelder1998: return "van_gelder_1998";
+    case StiffnessMapping::LloydSzekelyHarders2007: return "lloyd_szekely_harders_2007";
+  }
+  return "van_gelder_1998";
+}
+
 SourceRange Scene::range_of(const std::string& field) const {
   const auto found = ranges.find(field);
   if (found != ranges.end()) return found->second;
@@ -398,7 +408,7 @@ class SceneParser {
     remember(node, "material");
     if (!check_map(node, "material", {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table",
                                       "system", "output", "patient", "inputs", "strain_axis", "thickness",
-                                      "flexion_fraction"}))
+                                      "flexion_fraction", "mapping"}))
       return;
     SceneMaterial& material = scene_.material;
     const std::vector<std::string> sources = {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table"};
@@ -435,6 +445,18 @@ class SceneParser {
       if (auto v = text(node["output"], "material.output")) material.output = *v;
     if (node["patient"])
       if (auto v = text(node["patient"], "material.patient")) material.patient = *v;
+    if (node["mapping"]) {
+      if (material.source == SceneMaterial::Source::Stiffness ||
+          material.source == SceneMaterial::Source::StiffnessOverLength) {
+        error(node["mapping"], "material.mapping",
+              "only allowed with 'youngs_modulus', 'rules' or 'table' (it maps Young's modulus to spring constants)");
+      } else {
+        const std::vector<std::string> names = {scene_name(StiffnessMapping::VanGelder1998),
+                                                scene_name(StiffnessMapping::LloydSzekelyHarders2007)};
+        if (auto i = keyword(node["mapping"], "material.mapping", names, "a Young's modulus mapping"))
+          material.mapping = *i == 0 ? StiffnessMapping::VanGelder1998 : StiffnessMapping::LloydSzekelyHarders2007;
+      }
+    }
     if (node["thickness"])
       if (auto v = positive(node["thickness"], "material.thickness", " (m)")) material.thickness = *v;
     if (node["flexion_fraction"])
@@ -576,11 +598,32 @@ class SceneParser {
 
   void parse_springs(const YAML::Node& node) {
     remember(node, "springs");
-    if (!check_map(node, "springs", {"structural", "flexion"})) return;
+    if (node.IsMap() && node["shear"]) {
+      // The thesis names shear springs (section 3.2.1) but gives no rule for them; its flexion springs are the
+      // across-edge diagonals that cloth models call shear springs (docs/simulator.md, Springs).
+      error(node["shear"], "springs.shear",
+            "the thesis gives no rule for shear springs on a triangle mesh; its flexion springs (Fig. 3.4) join the "
+            "two vertices across each shared edge, the diagonal that cloth models call a shear spring: use "
+            "'flexion' (and 'bending' for springs that skip a vertex)");
+      return;
+    }
+    if (!check_map(node, "springs", {"structural", "flexion", "bending", "bending_min_angle"})) return;
     if (node["structural"])
       if (auto v = boolean(node["structural"], "springs.structural")) scene_.triangle_springs.structural = *v;
     if (node["flexion"])
       if (auto v = boolean(node["flexion"], "springs.flexion")) scene_.triangle_springs.flexion = *v;
+    if (node["bending"])
+      if (auto v = boolean(node["bending"], "springs.bending")) scene_.triangle_springs.bending = *v;
+    if (node["bending_min_angle"]) {
+      const YAML::Node angle = node["bending_min_angle"];
+      if (auto v = number(angle, "springs.bending_min_angle", "an angle from 90 to 180 (degrees)")) {
+        if (*v < 90.0 || *v > 180.0)
+          error(angle, "springs.bending_min_angle",
+                "expected an angle from 90 to 180 (degrees), got " + format_number(*v));
+        else
+          scene_.triangle_springs.bending_min_angle_degrees = *v;
+      }
+    }
   }
 
   void parse_law(const YAML::Node& node) {

@@ -69,6 +69,8 @@ struct SceneMaterial {
   std::string patient;  // a label, carried into the summary
   std::vector<InputBinding> bindings;  // in the order given
   std::optional<StrainAxis> strain_axis;  // Rules with a strain binding; default: the input's range, 101 points
+  // Young's modulus -> spring constants (`mapping`): YoungsModulus, Rules and Table only.
+  StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
   double thickness = 1.0;        // m, membranes (triangle meshes)
   double flexion_fraction = 0.1;
 };
@@ -146,5 +148,6 @@ std::optional<Scene> parse_scene(const std::string& path, const std::string& tex
 
 const char* to_string(SceneBackend backend);
 const char* scene_name(Integrator integrator);  // the scene spelling: "semi_implicit_euler", ...
+const char* scene_name(StiffnessMapping mapping);  // the scene spelling: "van_gelder_1998", ...
 
 }  // namespace fmpc::sim

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "runtime/mesh/mesh_check.h"
+
 namespace fmpc::sim {
 
 std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const SpringModelSpec& spec,
@@ -15,6 +17,24 @@ std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const Spring
   if (mesh.tetrahedra.empty() && mesh.triangles.empty()) {
     diagnostics.error(range, "the mesh has no tetrahedra or triangles to build springs from");
     return std::nullopt;
+  }
+  if (is_modulus_mapping(spec.stiffness.mapping)) {
+    // Young's modulus mappings weigh every spring by the volumes (areas) of its elements: a degenerate element has
+    // none to give, and a network built over it would be silently soft there.
+    const bool volume = !mesh.tetrahedra.empty();
+    const std::size_t errors = diagnostics.error_count();
+    for (const MeshFinding& finding : check_mesh(mesh)) {
+      const bool degenerate = volume ? finding.kind == MeshFindingKind::DegenerateTetrahedron
+                                     : finding.kind == MeshFindingKind::DegenerateTriangle;
+      if (!degenerate) continue;
+      SourceRange at = range;
+      at.line = finding.line;
+      at.column = finding.line > 0 ? 1 : 0;
+      diagnostics.error(at, finding_message(finding) + ": the " + mapping_citation(spec.stiffness.mapping) +
+                                " mapping needs every element's " + (volume ? "volume" : "area") +
+                                "; repair the mesh first (repair_mesh drops degenerate elements)");
+    }
+    if (diagnostics.error_count() > errors) return std::nullopt;
   }
   Mesh scaled = mesh;
   for (Point3& p : scaled.points) {

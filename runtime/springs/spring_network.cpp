@@ -6,6 +6,8 @@
 #include <string>
 #include <utility>
 
+#include "compiler/ir/number_format.h"
+
 namespace fmpc::sim {
 
 namespace {
@@ -47,7 +49,72 @@ void append_springs(SpringNetwork& network, const std::map<Edge, double>& edges,
   }
 }
 
+// The bending links of springs_from_triangles: for every vertex j and structural neighbour i, the neighbour k of j
+// with the most negative cos(i-j-k), kept when the angle reaches min_angle_degrees and no structural or flexion
+// spring joins i and k. Ties go to the smaller k (neighbours are visited in increasing order), so the result does
+// not depend on the order of the triangles.
+std::map<Edge, double> bending_links(const Mesh& mesh, const std::map<Edge, double>& structural,
+                                     const std::map<Edge, std::vector<std::int32_t>>& opposite,
+                                     double min_angle_degrees) {
+  std::vector<std::vector<std::int32_t>> neighbours(mesh.points.size());
+  for (const auto& [edge, measure] : structural) {
+    neighbours[static_cast<std::size_t>(edge.first)].push_back(edge.second);
+    neighbours[static_cast<std::size_t>(edge.second)].push_back(edge.first);
+  }
+  std::map<Edge, bool> flexion;
+  for (const auto& [edge, across] : opposite) {
+    for (std::size_t i = 0; i < across.size(); ++i)
+      for (std::size_t j = i + 1; j < across.size(); ++j) flexion[make_edge(across[i], across[j])] = true;
+  }
+  const double pi = std::acos(-1.0);
+  const double max_cosine = std::cos(min_angle_degrees * pi / 180.0);
+  std::map<Edge, double> links;
+  for (std::size_t j = 0; j < neighbours.size(); ++j) {
+    std::vector<std::int32_t>& around = neighbours[j];
+    std::sort(around.begin(), around.end());
+    const Point3& centre = mesh.points[j];
+    for (const std::int32_t i : around) {
+      const Point3& a = mesh.points[static_cast<std::size_t>(i)];
+      std::int32_t best = -1;
+      double best_cosine = 2.0;
+      for (const std::int32_t k : around) {
+        if (k == i) continue;
+        const Point3& b = mesh.points[static_cast<std::size_t>(k)];
+        double dot = 0.0;
+        for (std::size_t c = 0; c < 3; ++c) dot += (a[c] - centre[c]) * (b[c] - centre[c]);
+        const double cosine = dot / (distance(a, centre) * distance(b, centre));
+        if (cosine < best_cosine) {
+          best_cosine = cosine;
+          best = k;
+        }
+      }
+      if (best < 0 || !(best_cosine <= max_cosine)) continue;
+      const Edge link = make_edge(i, best);
+      if (structural.count(link) == 0 && flexion.count(link) == 0) links.emplace(link, 0.0);
+    }
+  }
+  return links;
+}
+
 }  // namespace
+
+const char* mapping_citation(StiffnessMapping mapping) {
+  switch (mapping) {
+    case StiffnessMapping::Uniform:
+      return "uniform stiffness";
+    case StiffnessMapping::StiffnessOverLength:
+      return "stiffness over rest length (SOFA)";
+    case StiffnessMapping::VanGelder1998:
+      return "Van Gelder 1998";
+    case StiffnessMapping::LloydSzekelyHarders2007:
+      return "Lloyd, Szekely & Harders 2007";
+  }
+  return "unknown mapping";
+}
+
+bool is_modulus_mapping(StiffnessMapping mapping) {
+  return mapping == StiffnessMapping::VanGelder1998 || mapping == StiffnessMapping::LloydSzekelyHarders2007;
+}
 
 SpringNetwork springs_from_tetrahedra(const Mesh& mesh, DiagnosticList& diagnostics) {
   SpringNetwork network;
@@ -97,6 +164,10 @@ SpringNetwork springs_from_triangles(const Mesh& mesh, const TriangleSpringOptio
       }
     }
     append_springs(network, flexion, SpringKind::Flexion);
+  }
+  if (options.bending) {
+    append_springs(network, bending_links(mesh, structural, opposite, options.bending_min_angle_degrees),
+                   SpringKind::Bending);
   }
   build_adjacency(network);
   return network;
@@ -160,19 +231,43 @@ bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, Diagnos
     diagnostics.error(range, "rest lengths are missing; call compute_rest_lengths first");
     return false;
   }
-  if (spec.mapping == StiffnessMapping::VanGelder1998 && !(spec.thickness > 0.0)) {
-    diagnostics.error(range, "the membrane thickness must be positive for the Van Gelder mapping");
+  const bool modulus = is_modulus_mapping(spec.mapping);
+  if (modulus && !(spec.thickness > 0.0 && std::isfinite(spec.thickness))) {
+    diagnostics.error(range, std::string("the membrane thickness must be a positive number for the ") +
+                                 mapping_citation(spec.mapping) + " mapping");
     return false;
   }
+  const auto spring_name = [&](std::size_t s) {
+    return "spring " + std::to_string(s) + " (vertices " + std::to_string(network.first[s]) + " and " +
+           std::to_string(network.second[s]) + ")";
+  };
   network.stiffness.assign(network.size(), 0.0);
   for (std::size_t s = 0; s < network.size(); ++s) {
     const double value = spec.per_spring.empty() ? spec.value : spec.per_spring[s];
+    if (modulus && !(value > 0.0 && std::isfinite(value))) {
+      // A zero modulus leaves the network without stiffness (every vertex free), NaN would reach the integrator.
+      diagnostics.error(range, spring_name(s) + ": Young's modulus " + format_number(value) + " Pa (" +
+                                   mapping_citation(spec.mapping) +
+                                   " mapping) is not a positive, finite number; fix the material value");
+      return false;
+    }
     if (!(value >= 0.0) || !std::isfinite(value)) {
-      diagnostics.error(range, "spring " + std::to_string(s) + ": stiffness parameter " + std::to_string(value) +
+      diagnostics.error(range, spring_name(s) + ": stiffness parameter " + std::to_string(value) +
                                    " is not a finite, non-negative number; fix the material value");
       return false;
     }
     const double length = network.rest_length[s];
+    const SpringKind kind = network.kind[s];
+    const bool element_spring = kind == SpringKind::TetrahedronEdge || kind == SpringKind::Structural;
+    if (modulus && element_spring && !(network.element_measure[s] > 0.0)) {
+      diagnostics.error(range, spring_name(s) + " belongs only to elements of zero " +
+                                   (kind == SpringKind::Structural ? "area" : "volume") +
+                                   ", so the mapping gives it no stiffness; repair the mesh (repair_mesh drops "
+                                   "degenerate elements)");
+      return false;
+    }
+    const double measure =
+        kind == SpringKind::Structural ? spec.thickness * network.element_measure[s] : network.element_measure[s];
     switch (spec.mapping) {
       case StiffnessMapping::Uniform:
         network.stiffness[s] = value;
@@ -180,18 +275,22 @@ bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, Diagnos
       case StiffnessMapping::StiffnessOverLength:
         network.stiffness[s] = value / length;
         break;
-      case StiffnessMapping::VanGelder1998: {
-        const double measure = network.kind[s] == SpringKind::Structural ? spec.thickness * network.element_measure[s]
-                                                                         : network.element_measure[s];
+      case StiffnessMapping::VanGelder1998:
         network.stiffness[s] = value * measure / (length * length);
+        break;
+      case StiffnessMapping::LloydSzekelyHarders2007: {
+        // Lloyd et al. 2007: k = (2 sqrt 2 / 25) E l on a regular tetrahedron = (24/25) E V / l^2; the equilateral
+        // triangle's k = (sqrt 3 / 4) E h = E h A / l^2 (see StiffnessMapping).
+        const double factor = kind == SpringKind::TetrahedronEdge ? 24.0 / 25.0 : 1.0;
+        network.stiffness[s] = factor * value * measure / (length * length);
         break;
       }
     }
   }
-  if (spec.mapping == StiffnessMapping::VanGelder1998) {
-    // Flexion springs: a fraction of the mean structural stiffness at their two endpoints.
+  if (modulus) {
+    // Flexion and bending springs: a fraction of the mean structural stiffness at their two endpoints.
     for (std::size_t s = 0; s < network.size(); ++s) {
-      if (network.kind[s] != SpringKind::Flexion) continue;
+      if (network.kind[s] != SpringKind::Flexion && network.kind[s] != SpringKind::Bending) continue;
       double sum = 0.0;
       int count = 0;
       for (const std::int32_t v : {network.first[s], network.second[s]}) {

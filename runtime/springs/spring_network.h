@@ -13,6 +13,9 @@ enum class SpringKind : std::uint8_t {
   TetrahedronEdge,  // an edge of one or more tetrahedra
   Structural,       // an edge of one or more triangles (thesis Fig. 3.3)
   Flexion,          // joins the two vertices opposite a shared triangle edge (thesis Fig. 3.4, "LINK [2][5]")
+  // Joins the two ends of the straightest pair of structural edges through a vertex, skipping that vertex: Provot
+  // (1995)'s flexion spring (grid node [i][j] to [i+2][j]) carried over to triangle meshes (springs_from_triangles).
+  Bending,
 };
 
 struct SpringNetwork {
@@ -43,9 +46,16 @@ SpringNetwork springs_from_tetrahedra(const Mesh& mesh, DiagnosticList& diagnost
 struct TriangleSpringOptions {
   bool structural = true;
   bool flexion = true;
+  bool bending = false;
+  // A bending spring i-k through vertex j needs the angle i-j-k to be at least this (degrees): 180 on a straight
+  // grid line; 150 keeps the straightest continuation on a mildly irregular mesh and refuses corners.
+  double bending_min_angle_degrees = 150.0;
 };
-// The thesis's springs on a triangle mesh: structural (every triangle edge once) and flexion (for every pair of
-// triangles sharing an edge, the two vertices opposite it, unless a spring already joins them).
+// The thesis's springs on a triangle mesh (Tan Sing Yee 2014, section 3.2.1): structural (every triangle edge once,
+// Fig. 3.3) and flexion (for every pair of triangles sharing an edge, the two vertices opposite it, unless a spring
+// already joins them, Fig. 3.4). Optional bending springs: for every vertex j and every structural neighbour i, the
+// neighbour k of j that makes the angle i-j-k largest, when that angle is at least bending_min_angle_degrees and no
+// spring joins i and k yet. Springs are ordered structural, flexion, bending, each sorted by (first, second).
 SpringNetwork springs_from_triangles(const Mesh& mesh, const TriangleSpringOptions& options,
                                      DiagnosticList& diagnostics);
 
@@ -67,13 +77,29 @@ enum class StiffnessMapping {
   // Tools 3(2):21-42, in its simplest form (stiffness = Young's modulus x incident element measure / length^2):
   //   tetrahedron edges: k = E * sum(V_e) / l0^2      (the paper's three-dimensional extension)
   //   triangle edges:    k = E * h * sum(A_e) / l0^2  (membrane of thickness h; Poisson correction not applied)
-  // Flexion springs have no incident element; they get flexion_fraction x the mean structural k at their vertices.
+  // Flexion and bending springs have no incident element; they get flexion_fraction x the mean structural k at
+  // their vertices (for both Young's modulus mappings).
   VanGelder1998,
+  // Lloyd, Szekely & Harders (2007), "Identification of spring parameters for deformable object simulation", IEEE
+  // TVCG 13(5):1081-1094. Their closed forms (spring matrix fitted to the linear FEM element stiffness matrix):
+  //   regular tetrahedron, edge l:        k = (2 sqrt(2) / 25) E l   (least squares; springs force nu = 1/4)
+  //   equilateral triangle, thickness h:  k = (sqrt(3) / 4) E h      (exact, plane stress; springs force nu = 1/3)
+  // Applied to any element as "measure over length squared", summed over the elements that share the edge:
+  //   tetrahedron edges: k = (24/25) E sum(V_e) / l0^2   ((24/25) V / l^2 = (2 sqrt(2)/25) l for a regular one)
+  //   triangle edges:    k = E h sum(A_e) / l0^2          (A / l^2 = sqrt(3)/4 for an equilateral one)
+  // The Poisson ratio is not a parameter: a network of central springs can only represent nu = 1/4 (3-D) or
+  // nu = 1/3 (2-D, the Cauchy relations). docs/simulator.md gives the derivation and what was confirmed.
+  LloydSzekelyHarders2007,
 };
+
+// "Van Gelder 1998", "Lloyd, Szekely & Harders 2007", ... (summaries and messages).
+const char* mapping_citation(StiffnessMapping mapping);
+// Whether the mapping's value is Young's modulus (so it uses the element measures).
+bool is_modulus_mapping(StiffnessMapping mapping);
 
 struct StiffnessSpec {
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
-  double value = 0.0;              // N/m (Uniform), N (StiffnessOverLength), Pa = Young's modulus (VanGelder1998)
+  double value = 0.0;  // N/m (Uniform), N (StiffnessOverLength), Pa = Young's modulus (VanGelder1998, Lloyd...)
   std::vector<double> per_spring;  // optional per-spring value (e.g. a FIS output per spring); overrides `value`
   double thickness = 1.0;          // m, triangle membranes only
   double flexion_fraction = 0.1;
