@@ -393,11 +393,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const override {
-    if (scene >= scenes_.size()) {
-      diagnostics.error(SourceRange{}, "scene " + std::to_string(scene) + " does not exist; the batch has " +
-                                           std::to_string(scenes_.size()));
-      return {};
-    }
+    if (!scene_exists(scene, diagnostics)) return {};
     const auto begin = static_cast<std::size_t>(spring_begin_[scene]);
     const auto count = static_cast<std::size_t>(spring_begin_[scene + 1]) - begin;
     std::vector<Real> host(count);
@@ -805,13 +801,16 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return best;
   }
 
+  bool scene_exists(std::size_t scene, DiagnosticList& diagnostics) const {
+    if (scene < scenes_.size()) return true;
+    diagnostics.error(SourceRange{}, "scene " + std::to_string(scene) + " does not exist; the batch has " +
+                                         std::to_string(scenes_.size()));
+    return false;
+  }
+
   std::vector<sim::Point3> download(std::size_t scene, const DeviceArray<Real>& x, const DeviceArray<Real>& y,
                                     const DeviceArray<Real>& z, DiagnosticList& diagnostics) const {
-    if (scene >= scenes_.size()) {
-      diagnostics.error(SourceRange{}, "scene " + std::to_string(scene) + " does not exist; the batch has " +
-                                           std::to_string(scenes_.size()));
-      return {};
-    }
+    if (!scene_exists(scene, diagnostics)) return {};
     const auto begin = static_cast<std::size_t>(vertex_begin_[scene]);
     const auto count = static_cast<std::size_t>(vertex_begin_[scene + 1]) - begin;
     std::vector<Real> host[3];
