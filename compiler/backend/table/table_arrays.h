@@ -3,7 +3,8 @@
 // loader: the breakpoints, counts and values as constant arrays, and `view()`, the kernels/table_math.h view to
 // pass to fmpc::interpolate_table. The header includes "kernels/table_math.h" (fmpc's kernels/ directory must be
 // on the include path; fmpc_add_ruleset() adds it). Under nvcc the arrays also exist as __device__ copies and
-// view() returns those in device code, so one call works in host and device functions.
+// view() returns those in device code, so one call works in host and device functions. Also interpolate_batch (n
+// lookups on the host) and, under nvcc, interpolate_kernel and its launcher interpolate_batch_cuda.
 #include <string>
 
 #include "compiler/backend/table/lookup_table.h"
