@@ -50,7 +50,11 @@ prepare_evaluator_headers() {
     "$fmpc" compile "$rules" --target table --vary HCV:9 --vary HBV:9 --vary ALD:9 --vary CLD:9 --vary NAFLD:9 \
       --max-error 75 --namespace liver_table5 -o "$dir/liver_table5.h" &&
     "$fmpc" compile "$rules" --target table --vary HCV:9 --vary HBV:9 --vary ALD:9 --vary CLD:9 --vary NAFLD:9 \
-      --max-error 75 --precision float --namespace liver_table5f -o "$dir/liver_table5f.h" ||
+      --max-error 75 --precision float --namespace liver_table5f -o "$dir/liver_table5f.h" &&
+    "$fmpc" compile "$rules" --target table --vary HCV:7 --vary HBV:7 --vary ALD:7 --vary CLD:7 --vary NAFLD:7 \
+      --max-error 75 --namespace liver_table5r7 -o "$dir/liver_table5r7.h" &&
+    "$fmpc" compile "$rules" --target table --vary HCV:5 --vary HBV:5 --vary ALD:5 --vary CLD:5 --vary NAFLD:5 \
+      --max-error 75 --namespace liver_table5r5 -o "$dir/liver_table5r5.h" ||
     { echo "fmpc compile failed: the evaluator headers are incomplete" >&2; return 1; }
   # The headers of tests/gpu/evaluator (ctest gpu.generated_evaluator), which the GPU-only build reads from here;
   # the list is that of tests/gpu/evaluator/CMakeLists.txt.
@@ -263,7 +267,7 @@ evaluator_section() {
   section "evaluator: generated CUDA evaluator and table lookups (bench/gpu)"
   local dir="$CARRY/evaluator"
   if [[ ! -f "$dir/liver_evaluator.cuh" || ! -f "$dir/liver_table2.h" || ! -f "$dir/liver_table5.h" ||
-        ! -f "$dir/liver_table5f.h" ]] || ! grep -q interpolate_batch_cuda "$dir/liver_table5.h"; then
+        ! -f "$dir/liver_table5f.h" || ! -f "$dir/liver_table5r7.h" || ! -f "$dir/liver_table5r5.h" ]] || ! grep -q interpolate_batch_cuda "$dir/liver_table5.h"; then
     fail "no (or outdated) generated headers in $dir: run 'bash bench/run_gpu.sh --prepare' on the build machine (after building fmpc)"
     return 1
   fi

@@ -5,6 +5,9 @@
 //   liver_table2.h       --target table, HCV ALD NAFLD fixed, HBV:65 CLD:65 (a 2-D table, 65 x 65)
 //   liver_table5.h       --target table, all five inputs :9 (a 5-D table, 9^5 points), double values
 //   liver_table5f.h      the same with --precision float
+//   liver_table5r7.h     all five inputs :7 (7^5 points, double: 131 KiB, fits an SM's L1)
+//   liver_table5r5.h     all five inputs :5 (5^5 points, double: 24 KiB)
+// (Coarser tables are less accurate: docs/performance.md, "The trade, measured", gives each resolution's error.)
 // Usage: evaluator_gpu_bench OUT_DIR [points]   (default 2^24 points). Writes OUT_DIR/evaluator_gpu.{csv,md} and
 // prints the markdown table last. Exit status 1 when a correctness check fails.
 #include <cuda_runtime.h>
@@ -21,6 +24,8 @@
 #include "liver_table2.h"
 #include "liver_table5.h"
 #include "liver_table5f.h"
+#include "liver_table5r5.h"
+#include "liver_table5r7.h"
 
 namespace {
 
@@ -113,6 +118,8 @@ Row evaluator_row(const std::vector<double>& points, std::size_t n, double toler
 FMPC_BENCH_TABLE(Table2, liver_table2)
 FMPC_BENCH_TABLE(Table5, liver_table5)
 FMPC_BENCH_TABLE(Table5Float, liver_table5f)
+FMPC_BENCH_TABLE(Table5Res7, liver_table5r7)
+FMPC_BENCH_TABLE(Table5Res5, liver_table5r5)
 #undef FMPC_BENCH_TABLE
 
 // A lookup kernel as user code would write it: the run-time-dimension interpolate_table on view().
@@ -211,6 +218,8 @@ int main(int argc, char** argv) {
   rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::ProductLauncher));
   rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::UserKernel));
   rows.push_back(table_row<Table5Float>("table lookup, 5-D 9^5", points, n, LookupPath::ProductLauncher));
+  rows.push_back(table_row<Table5Res7>("table lookup, 5-D 7^5", points, n, LookupPath::ProductLauncher));
+  rows.push_back(table_row<Table5Res5>("table lookup, 5-D 5^5", points, n, LookupPath::ProductLauncher));
 
   std::string csv = "variant,per_second,max_difference_vs_cpu,tolerance,ok\n";
   std::string md = "| variant (" + std::string(properties.name) + ", " + std::to_string(n) +
