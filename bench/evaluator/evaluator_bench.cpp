@@ -1,13 +1,20 @@
 // rulesets/liver_fibrosis/mamdani.fis with all five inputs varying, on the same 4096 seeded points:
 //   BM_Interpreter      fmpc's reference interpreter (fmpc::Interpreter, double)
-//   BM_Compiled<T>      the generated evaluator (fmpc compile --target cpp, built into this program)
+//   BM_Compiled<T>      the generated evaluator's batch function, evaluate_batch<T> over the 4096 points in one
+//                       call (fmpc compile --target cpp, built into this program with the build's flags: Release
+//                       is -O3, no -march, so SSE2 on x86-64)
+//   BM_CompiledSingle<T> the generated evaluate<T>, one point per call
+//   BM_CompiledX86_64_v3<T> evaluate_batch<T> compiled with -march=x86-64-v3 (AVX2, FMA), x86-64 only, run only on
+//                       CPUs that have AVX2 and FMA
 //   BM_Fuzzylite        fuzzylite 6.0 (Debian libfuzzylite-dev), the same system imported from MATLAB .fis text
 // One core, one run:  fmpc_evaluator_bench --benchmark_repetitions=1  (docs/performance.md has the figures).
-// Before timing, it checks that the compiled evaluator agrees with the interpreter (1e-12 of the range in double,
-// 1e-5 in float) and reports how far fuzzylite's centroid (its own integration) lies from MATLAB's 101 samples.
+// Before timing, it checks that the compiled evaluator (evaluate and evaluate_batch) agrees with the interpreter
+// (1e-12 of the range in double, 1e-5 in float) and reports how far fuzzylite's centroid (its own integration)
+// lies from MATLAB's 101 samples.
 #include <benchmark/benchmark.h>
 #include <fl/Headers.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -21,6 +28,9 @@
 #include "compiler/frontend/matlab_fis.h"
 #include "compiler/frontend/rule_file_loader.h"
 #include "liver_evaluator.h"
+#if defined(FMPC_BENCH_X86_64_V3)
+#include "evaluator_x86_64_v3.h"
+#endif
 
 namespace {
 
@@ -67,6 +77,10 @@ Fixture& fixture() {
 
     // Agreement before speed.
     fmpc::Interpreter interpreter(made.system);
+    std::vector<double> batch_double(kPoints);
+    std::vector<float> batch_float(kPoints);
+    liver_evaluator::evaluate_batch(made.points.data(), batch_double.data(), kPoints);
+    liver_evaluator::evaluate_batch(made.points_float.data(), batch_float.data(), kPoints);
     double worst_double = 0, worst_float = 0, worst_fuzzylite = 0;
     for (std::size_t p = 0; p < kPoints; ++p) {
       const double* x = &made.points[p * kInputs];
@@ -78,15 +92,33 @@ Fixture& fixture() {
       for (std::size_t i = 0; i < kInputs; ++i) made.fuzzylite->getInputVariable(i)->setValue(x[i]);
       made.fuzzylite->process();
       const double theirs = made.fuzzylite->getOutputVariable(0)->getValue();
-      worst_double = std::max(worst_double, std::fabs(compiled - expected));
-      worst_float = std::max(worst_float, std::fabs(static_cast<double>(compiled_float) - expected));
+      worst_double = std::max({worst_double, std::fabs(compiled - expected), std::fabs(batch_double[p] - expected)});
+      worst_float = std::max({worst_float, std::fabs(static_cast<double>(compiled_float) - expected),
+                              std::fabs(static_cast<double>(batch_float[p]) - expected)});
       worst_fuzzylite = std::max(worst_fuzzylite, std::fabs(theirs - expected));
     }
     const double range = made.system.outputs[0].max - made.system.outputs[0].min;
     std::fprintf(stderr,
-                 "agreement with the interpreter over %zu points: compiled double %.3g, compiled float %.3g, "
+                 "agreement with the interpreter over %zu points (evaluate and evaluate_batch): compiled double "
+                 "%.3g, compiled float %.3g, "
                  "fuzzylite %.3g (kPa; fuzzylite integrates the centroid its own way)\n",
                  kPoints, worst_double, worst_float, worst_fuzzylite);
+#if defined(FMPC_BENCH_X86_64_V3)
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+      liver_batch_x86_64_v3(made.points.data(), batch_double.data(), kPoints);
+      liver_batch_x86_64_v3(made.points_float.data(), batch_float.data(), kPoints);
+      double worst_v3_double = 0, worst_v3_float = 0;
+      for (std::size_t p = 0; p < kPoints; ++p) {
+        const double* x = &made.points[p * kInputs];
+        const double expected = interpreter.evaluate(std::vector<double>(x, x + kInputs)).outputs[0];
+        worst_v3_double = std::max(worst_v3_double, std::fabs(batch_double[p] - expected));
+        worst_v3_float = std::max(worst_v3_float, std::fabs(static_cast<double>(batch_float[p]) - expected));
+      }
+      std::fprintf(stderr, "x86-64-v3 build: double %.3g, float %.3g\n", worst_v3_double, worst_v3_float);
+      worst_double = std::max(worst_double, worst_v3_double);
+      worst_float = std::max(worst_float, worst_v3_float);
+    }
+#endif
     if (!(worst_double <= 1e-12 * range) || !(worst_float <= 1e-5 * range)) {
       std::fprintf(stderr, "the compiled evaluator disagrees with the interpreter: not timing it\n");
       return made;
@@ -129,6 +161,46 @@ void BM_Compiled(benchmark::State& state) {
 }
 BENCHMARK_TEMPLATE(BM_Compiled, double);
 BENCHMARK_TEMPLATE(BM_Compiled, float);
+
+template <typename T>
+void BM_CompiledSingle(benchmark::State& state) {
+  Fixture& f = fixture();
+  if (!f.ready) return state.SkipWithError("setup failed (see stderr)");
+  const T* points = nullptr;
+  if constexpr (sizeof(T) == sizeof(double)) points = f.points.data();
+  else points = f.points_float.data();
+  std::vector<T> outputs(kPoints);
+  for (auto _ : state) {
+    for (std::size_t p = 0; p < kPoints; ++p) liver_evaluator::evaluate(points + p * kInputs, &outputs[p]);
+    benchmark::DoNotOptimize(outputs.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kPoints));
+}
+BENCHMARK_TEMPLATE(BM_CompiledSingle, double);
+BENCHMARK_TEMPLATE(BM_CompiledSingle, float);
+
+#if defined(FMPC_BENCH_X86_64_V3)
+template <typename T>
+void BM_CompiledX86_64_v3(benchmark::State& state) {
+  Fixture& f = fixture();
+  if (!f.ready) return state.SkipWithError("setup failed (see stderr)");
+  if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma"))
+    return state.SkipWithError("this CPU has no AVX2 or FMA");
+  const T* points = nullptr;
+  if constexpr (sizeof(T) == sizeof(double)) points = f.points.data();
+  else points = f.points_float.data();
+  std::vector<T> outputs(kPoints);
+  for (auto _ : state) {
+    liver_batch_x86_64_v3(points, outputs.data(), kPoints);
+    benchmark::DoNotOptimize(outputs.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kPoints));
+}
+BENCHMARK_TEMPLATE(BM_CompiledX86_64_v3, double);
+BENCHMARK_TEMPLATE(BM_CompiledX86_64_v3, float);
+#endif
 
 void BM_Fuzzylite(benchmark::State& state) {
   Fixture& f = fixture();

@@ -7,9 +7,13 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <string>
+#include <tuple>
 #include <utility>
+#include <vector>
 
 #include "compiler/backend/cpp/embedded_kernels.h"
+#include "compiler/backend/cpp/emit_type2.h"
 #include "compiler/eval/defuzzify.h"
 #include "compiler/ir/content_hash.h"
 #include "compiler/ir/number_format.h"
@@ -167,6 +171,39 @@ class CodeWriter {
   std::string text_;
   int lines_ = 0;
 };
+
+// The lines that give output `o` its no-rule-fired value (the system's policy): `target` takes the value and
+// `flags` the kFlag* bits.
+std::vector<std::string> no_fire_lines(const FuzzySystem& system, std::size_t o, const std::string& target,
+                                       const std::string& flags) {
+  std::vector<std::string> lines{flags + " |= kFlagNoRuleFired;"};
+  switch (system.no_fire) {
+    case NoFirePolicy::Midrange:
+      lines.push_back(target + " = " + constant((system.outputs[o].min + system.outputs[o].max) / 2.0) + ";");
+      break;
+    case NoFirePolicy::Value: lines.push_back(target + " = " + constant(system.no_fire_value) + ";"); break;
+    case NoFirePolicy::Error:
+      lines.push_back(target + " = fmpc_math::fmpc_quiet_nan<T>();");
+      lines.push_back(flags + " |= kFlagNoFireError;");
+      break;
+  }
+  return lines;
+}
+
+// A consequent's grades at output `o`'s sample points `x`, hedged and negated as the interpreter does; computed
+// here in double, so the generated code holds constants instead of output membership functions.
+std::vector<double> consequent_samples(const FuzzySystem& system, std::size_t o, const Clause& clause,
+                                       const std::vector<double>& x) {
+  const MembershipFunction& mf = system.outputs[o].terms[static_cast<std::size_t>(clause.term)].mf;
+  std::vector<double> grades(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    double mu = membership(mf.kind, mf.params.data(), x[k]);
+    mu = apply_hedge(mu, hedge_exponent(clause.hedge));
+    if (clause.negated) mu = fuzzy_not(mu);
+    grades[k] = mu;
+  }
+  return grades;
+}
 
 // The per-rule and per-output state the emitter derives from the system once.
 struct RulePlan {
@@ -332,34 +369,8 @@ class EvaluatorEmitter {
   }
 
   void emit_no_fire(std::size_t o, const std::string& indent) {
-    const std::string target = "outputs[" + std::to_string(o) + "]";
-    out_.line(indent + "flags |= kFlagNoRuleFired;");
-    switch (system_.no_fire) {
-      case NoFirePolicy::Midrange:
-        out_.line(indent + target + " = " +
-                  constant((system_.outputs[o].min + system_.outputs[o].max) / 2.0) + ";");
-        break;
-      case NoFirePolicy::Value: out_.line(indent + target + " = " + constant(system_.no_fire_value) + ";"); break;
-      case NoFirePolicy::Error:
-        out_.line(indent + target + " = fmpc_math::fmpc_quiet_nan<T>();");
-        out_.line(indent + "flags |= kFlagNoFireError;");
-        break;
-    }
-  }
-
-  // A consequent's grades at the output's sample points, hedged and negated as the interpreter does; computed
-  // here in double, so the generated code holds constants instead of output membership functions.
-  std::vector<double> consequent_samples(std::size_t o, const Clause& clause, const std::vector<double>& x) const {
-    const MembershipFunction& mf =
-        system_.outputs[o].terms[static_cast<std::size_t>(clause.term)].mf;
-    std::vector<double> grades(x.size());
-    for (std::size_t k = 0; k < x.size(); ++k) {
-      double mu = membership(mf.kind, mf.params.data(), x[k]);
-      mu = apply_hedge(mu, hedge_exponent(clause.hedge));
-      if (clause.negated) mu = fuzzy_not(mu);
-      grades[k] = mu;
-    }
-    return grades;
+    for (const std::string& text : no_fire_lines(system_, o, "outputs[" + std::to_string(o) + "]", "flags"))
+      out_.line(indent + text);
   }
 
   // A table of constants, in double whatever T is (a float table could not hold grades below float's range as
@@ -425,7 +436,7 @@ class EvaluatorEmitter {
         column_of_consequent.emplace(key, strengths.size());
       }
       strengths.push_back(w);
-      grades.push_back(consequent_samples(o, *consequent.clause, x));
+      grades.push_back(consequent_samples(system_, o, *consequent.clause, x));
     }
     // A rule fired when its strength is above zero; merged strengths are maxima, so testing them is the same.
     std::string fired;
@@ -605,15 +616,445 @@ class EvaluatorEmitter {
   bool pending_return_ = false;
 };
 
+// ---- evaluate_batch over blocks of lanes ----
+//
+// For Mamdani systems that defuzzify by centroid with max aggregation and min or product implication (MATLAB's
+// defaults, the liver's kind), evaluate_batch takes the points in blocks of kBatchLanes and runs every step as a
+// loop over the block's lanes on structure-of-arrays locals, which compilers vectorise (GCC: -O2
+// -ftree-vectorize or -O3; docs/codegen.md "Batch evaluation"). Other systems keep a loop over evaluate().
+
+// The consequents of output `o` that share a column of the aggregate: same term, hedge and negation.
+using ColumnKey = std::tuple<int, int, bool>;
+ColumnKey column_key(const Clause& clause) {
+  return {clause.term, static_cast<int>(clause.hedge), clause.negated};
+}
+
+// Unrolled aggregation costs (columns x samples) statements; beyond this the header would be too long to compile
+// quickly, and evaluate_batch keeps the loop over evaluate().
+constexpr std::size_t kMaxUnrolledAggregation = 16384;
+
+bool lane_batch_applies(const FuzzySystem& system) {
+  if (system.interval_type2 || system.type != SystemType::Mamdani || system.defuzzifier != Defuzzifier::Centroid ||
+      system.samples <= 0 || system.aggregation != SNorm::Maximum ||
+      (system.implication != TNorm::Minimum && system.implication != TNorm::Product) || system.inputs.empty() ||
+      system.outputs.empty())
+    return false;
+  std::size_t statements = 0;
+  for (std::size_t o = 0; o < system.outputs.size(); ++o) {
+    std::set<ColumnKey> columns;
+    for (const Rule& rule : system.rules)
+      for (const Clause& clause : rule.consequent)
+        if (clause.variable == static_cast<int>(o)) columns.insert(column_key(clause));
+    statements += columns.size() * static_cast<std::size_t>(system.samples);
+  }
+  return statements <= kMaxUnrolledAggregation;
+}
+
+class LaneBatchEmitter {
+ public:
+  LaneBatchEmitter(const FuzzySystem& system, CodeWriter& out) : system_(system), out_(out) {}
+
+  void emit() {
+    std::vector<OutputPlan> plans;
+    for (std::size_t o = 0; o < system_.outputs.size(); ++o) plans.push_back(plan_output(o));
+    for (std::size_t o = 0; o < plans.size(); ++o) emit_aggregation(o, plans[o]);
+
+    const std::size_t input_count = system_.inputs.size();
+    // The consequent grades the aggregation reads, in its order. Read through a volatile, once per call, so that
+    // compilers cannot see the values: with constants, GCC threads jumps through the chain of min(w, grade)
+    // comparisons (w < 0.5 implies w < 0.9), and the branches it creates stop it vectorising the lane loop.
+    for (std::size_t o = 0; o < plans.size(); ++o) {
+      const std::vector<double>& values = aggregation_grades_[o];
+      if (values.empty()) continue;
+      out_.line("inline const volatile double kLaneGrades" + std::to_string(o) + "[" + std::to_string(values.size()) +
+                "] = {");
+      std::string text;
+      for (std::size_t k = 0; k < values.size(); ++k) {
+        text += format_number(values[k]) + ",";
+        if (text.size() > 100 || k + 1 == values.size()) {
+          out_.line("    " + text);
+          text.clear();
+        }
+      }
+      out_.line("};");
+      out_.line();
+    }
+    out_.line("// Evaluates n points (inputs n x kInputCount, outputs n x kOutputCount, row-major) with evaluate()'s");
+    out_.line("// results and flags (double within 1e-12 of the output range, float within 1e-5; lane_exp is not the");
+    out_.line("// C library's exp). Blocks of kBatchLanes points; each loop over j runs one step for every lane.");
+    out_.line("template <typename T>");
+    out_.line("inline void evaluate_batch(const T* inputs, T* outputs, std::size_t n, unsigned* flags = nullptr) {");
+    if (uses_lane_exp_) out_.line("  const T lowest = lane_exp_lowest(T(0));");
+    for (std::size_t o = 0; o < plans.size(); ++o) {
+      const std::size_t count = aggregation_grades_[o].size();
+      if (count == 0) continue;
+      const std::string os = std::to_string(o), cs = std::to_string(count);
+      out_.line("  T grades" + os + "[" + cs + "];");
+      out_.line("  for (std::size_t k = 0; k < " + cs + "; ++k) grades" + os + "[k] = T(kLaneGrades" + os + "[k]);");
+    }
+    out_.line("  for (std::size_t start = 0; start < n; start += kBatchLanes) {");
+    out_.line("    const std::size_t count = n - start < kBatchLanes ? n - start : kBatchLanes;");
+    out_.line("    // The block's inputs, one row per input; lanes past the last point repeat it.");
+    out_.line("    T x[kInputCount][kBatchLanes];");
+    out_.line("    for (std::size_t j = 0; j < kBatchLanes; ++j) {");
+    out_.line("      const T* point = inputs + (start + (j < count ? j : count - 1)) * kInputCount;");
+    out_.line("      for (std::size_t i = 0; i < kInputCount; ++i) x[i][j] = point[i];");
+    out_.line("    }");
+    for (const std::string& text : grade_lines_) out_.line("    " + text);
+    std::string results;
+    for (std::size_t o = 0; o < plans.size(); ++o) {
+      const std::string os = std::to_string(o);
+      results += (o ? ", " : "") + std::string("value") + os + "[kBatchLanes], total" + os +
+                 "[kBatchLanes], strongest" + os + "[kBatchLanes]";
+    }
+    out_.line("    T " + results + ";");
+    out_.line("    for (std::size_t j = 0; j < kBatchLanes; ++j) {");
+    for (const std::string& text : body_lines_) out_.line("      " + text);
+    out_.line("    }");
+    // Flags, NaN inputs and the no-fire policy, point by point (as evaluate() orders them).
+    out_.line("    for (std::size_t j = 0; j < count; ++j) {");
+    out_.line("      T* y = outputs + (start + j) * kOutputCount;");
+    out_.line("      unsigned f = 0u;");
+    std::string nan_test, range_test;
+    for (std::size_t i = 0; i < input_count; ++i) {
+      const std::string xi = "x[" + std::to_string(i) + "][j]";
+      nan_test += (i ? " || " : "") + std::string("fmpc_math::fmpc_is_nan(") + xi + ")";
+      range_test += (i ? " || " : "") + xi + " < " + constant(system_.inputs[i].min) + " || " + xi + " > " +
+                    constant(system_.inputs[i].max);
+    }
+    out_.line("      if (" + nan_test + ") {");
+    for (std::size_t o = 0; o < plans.size(); ++o)
+      out_.line("        y[" + std::to_string(o) + "] = fmpc_math::fmpc_quiet_nan<T>();");
+    out_.line("        f = kFlagNanInput;");
+    out_.line("      } else {");
+    out_.line("        if (" + range_test + ") f |= kFlagInputOutOfRange;");
+    for (std::size_t o = 0; o < plans.size(); ++o) {
+      const std::string os = std::to_string(o);
+      out_.line("        if (!(strongest" + os + "[j] > T(0)) || total" + os + "[j] == T(0)) {");
+      for (const std::string& text : no_fire_lines(system_, o, "y[" + os + "]", "f")) out_.line("          " + text);
+      out_.line("        } else {");
+      out_.line("          y[" + os + "] = value" + os + "[j];");
+      out_.line("        }");
+    }
+    out_.line("      }");
+    out_.line("      if (flags != nullptr) flags[start + j] = f;");
+    out_.line("    }");
+    out_.line("  }");
+    out_.line("}");
+  }
+
+ private:
+  struct OutputPlan {
+    std::vector<std::string> strengths;           // one per column: max over its rules' firing strengths
+    std::vector<std::vector<double>> grades;      // the column's consequent grades at the sample points
+  };
+
+  // The array holding the grade of clause `clause` for every lane of the block, computed once per block (named
+  // in the lane loop as `name[j]`). Gaussians go through lane_gaussian; the other families call the embedded
+  // math (a loop that compilers may leave scalar, which costs speed, not accuracy).
+  std::string clause_grade(const Clause& clause) {
+    const std::string base = "mu" + std::to_string(clause.variable) + "_" + std::to_string(clause.term);
+    if (emitted_arrays_.insert(base).second) {
+      const Variable& input = system_.inputs[static_cast<std::size_t>(clause.variable)];
+      const MembershipFunction& mf = input.terms[static_cast<std::size_t>(clause.term)].mf;
+      const std::string x = "x[" + std::to_string(clause.variable) + "][j]";
+      std::string value;
+      if (mf.kind == MfKind::Gaussian && mf.params.size() == 2) {
+        value = "lane_gaussian(" + x + ", " + constant(mf.params[0]) + ", " + constant(mf.params[1]) + ", lowest)";
+        uses_lane_exp_ = true;
+      } else {
+        value = membership_call(mf, x);
+      }
+      const Term& term = input.terms[static_cast<std::size_t>(clause.term)];
+      grade_lines_.push_back("T " + base + "[kBatchLanes];  // " + comment_safe(input.name + " is " + term.name));
+      grade_lines_.push_back("for (std::size_t j = 0; j < kBatchLanes; ++j) " + base + "[j] = " + value + ";");
+    }
+    if (clause.hedge == Hedge::None && !clause.negated) return base + "[j]";
+    // Hedge first, then negation (interpreter's clause_grade).
+    const std::string name =
+        base + "_h" + std::to_string(static_cast<int>(clause.hedge)) + (clause.negated ? "_not" : "");
+    if (emitted_arrays_.insert(name).second) {
+      std::string value = base + "[j]";
+      if (clause.hedge != Hedge::None)
+        value = "fmpc_math::apply_hedge(" + value + ", " + constant(hedge_exponent(clause.hedge)) + ")";
+      if (clause.negated) value = "fmpc_math::fuzzy_not(" + value + ")";
+      grade_lines_.push_back("T " + name + "[kBatchLanes];");
+      grade_lines_.push_back("for (std::size_t j = 0; j < kBatchLanes; ++j) " + name + "[j] = " + value + ";");
+    }
+    return name + "[j]";
+  }
+
+  int literal(const std::string& text) {
+    const auto found = literal_ids_.find(text);
+    if (found != literal_ids_.end()) return found->second;
+    literal_texts_.push_back(text);
+    return literal_ids_.emplace(text, static_cast<int>(literal_texts_.size()) - 1).first->second;
+  }
+
+  // A rule's firing strength folded as the interpreter does (clauses in input order from the norm's identity or
+  // the folded grade, then the weight), for rules whose norms are not min / max or whose weight is not 1.
+  std::string folded_strength(std::size_t r) {
+    const Rule& rule = system_.rules[r];
+    const bool conjunction = rule.connective == Connective::And;
+    std::vector<Clause> clauses = rule.antecedent;
+    std::stable_sort(clauses.begin(), clauses.end(),
+                     [](const Clause& a, const Clause& b) { return a.variable < b.variable; });
+    std::string value = rule.folded_grade ? constant(*rule.folded_grade) : conjunction ? "T(1)" : "T(0)";
+    for (std::size_t c = 0; c < clauses.size(); ++c) {
+      const std::string grade = clause_grade(clauses[c]);
+      // Folding the first clause into the identity is exact for grades in [0, 1] (EvaluatorEmitter).
+      if (c == 0 && !rule.folded_grade && !(conjunction && system_.and_method == TNorm::EinsteinProduct)) {
+        value = grade;
+        continue;
+      }
+      value = conjunction ? tnorm_call(system_.and_method, value, grade) : snorm_call(system_.or_method, value, grade);
+    }
+    const std::string name = "r" + std::to_string(r);
+    body_lines_.push_back("const T " + name + " = " +
+                          (rule.weight == 1.0 ? value : constant(rule.weight) + " * (" + value + ")") + ";");
+    return name;
+  }
+
+  // The rule's firing strength as a maximum over products (minima) of literals: exact rewriting where the
+  // antecedent is min or max of grades and the weight is 1; otherwise one product holding the folded strength.
+  const std::vector<std::vector<int>>& rule_products(std::size_t r) {
+    auto found = rule_products_.find(r);
+    if (found != rule_products_.end()) return found->second;
+    const Rule& rule = system_.rules[r];
+    const bool conjunction = rule.connective == Connective::And;
+    const bool lattice = rule.weight == 1.0 && (conjunction ? system_.and_method == TNorm::Minimum
+                                                            : system_.or_method == SNorm::Maximum);
+    std::vector<std::vector<int>> products;
+    if (!lattice) {
+      products.push_back({literal(folded_strength(r))});
+    } else {
+      std::vector<int> literals;
+      if (rule.folded_grade) literals.push_back(literal(constant(*rule.folded_grade)));
+      for (const Clause& clause : rule.antecedent) literals.push_back(literal(clause_grade(clause)));
+      std::sort(literals.begin(), literals.end());
+      literals.erase(std::unique(literals.begin(), literals.end()), literals.end());
+      // An And rule is one product (with no clauses: the identity 1, the empty product); an Or rule is one
+      // single-literal product per clause (with no clauses: 0, which adds nothing to a maximum of grades).
+      if (conjunction) products.push_back(literals);
+      else
+        for (const int l : literals) products.push_back({l});
+    }
+    return rule_products_.emplace(r, std::move(products)).first->second;
+  }
+
+  // min / max of two expressions, emitted once per pair (both are exact and commutative, so sharing is exact).
+  std::string lattice_op(bool minimum, std::string a, std::string b) {
+    if (b < a) std::swap(a, b);
+    const std::string key = (minimum ? "min|" : "max|") + a + "|" + b;
+    const auto found = lattice_ops_.find(key);
+    if (found != lattice_ops_.end()) return found->second;
+    const std::string name = "f" + std::to_string(lattice_ops_.size());
+    body_lines_.push_back("const T " + name + " = " + (minimum ? "grade_min(" : "grade_max(") + a + ", " + b + ");");
+    lattice_ops_.emplace(key, name);
+    return name;
+  }
+
+  // max over `products` of the min of each product's literals, factored: the literal shared by the most
+  // products comes out, max(min(a, b), min(a, c)) = min(a, max(b, c)), recursively. min and max only select
+  // their operands, so the factored form has the unfactored value exactly, in far fewer operations (the liver:
+  // 195 instead of 514, with the sharing across columns). The empty product is 1, which absorbs the maximum
+  // (grades are in [0, 1]).
+  std::string max_of_mins(const std::vector<std::vector<int>>& products) {
+    if (products.empty()) return "T(0)";
+    for (const auto& product : products)
+      if (product.empty()) return "T(1)";
+    std::map<int, int> uses;
+    for (const auto& product : products)
+      for (const int l : product) ++uses[l];
+    int shared = -1, most = 1;
+    for (const auto& [l, count] : uses)
+      if (count > most) shared = l, most = count;
+    if (shared < 0) {
+      std::string result;
+      for (const auto& product : products) {
+        std::string minimum = literal_texts_[static_cast<std::size_t>(product[0])];
+        for (std::size_t k = 1; k < product.size(); ++k)
+          minimum = lattice_op(true, minimum, literal_texts_[static_cast<std::size_t>(product[k])]);
+        result = result.empty() ? minimum : lattice_op(false, result, minimum);
+      }
+      return result;
+    }
+    std::vector<std::vector<int>> with, without;
+    for (const auto& product : products) {
+      if (std::find(product.begin(), product.end(), shared) == product.end()) {
+        without.push_back(product);
+        continue;
+      }
+      std::vector<int> rest;
+      for (const int l : product)
+        if (l != shared) rest.push_back(l);
+      with.push_back(std::move(rest));
+    }
+    const std::string& factor = literal_texts_[static_cast<std::size_t>(shared)];
+    const std::string inner = max_of_mins(with);
+    const std::string joined = inner == "T(1)" ? factor : lattice_op(true, factor, inner);
+    return without.empty() ? joined : lattice_op(false, joined, max_of_mins(without));
+  }
+
+  OutputPlan plan_output(std::size_t o) {
+    const Variable& output = system_.outputs[o];
+    const std::vector<double> x = output_sample_points(output.min, output.max, system_.samples, Reference::Matlab);
+    std::map<ColumnKey, std::size_t> column_of;
+    std::vector<std::vector<std::vector<int>>> column_products;
+    OutputPlan plan;
+    for (std::size_t r = 0; r < system_.rules.size(); ++r)
+      for (const Clause& clause : system_.rules[r].consequent) {
+        if (clause.variable != static_cast<int>(o)) continue;
+        const auto [where, added] = column_of.emplace(column_key(clause), column_products.size());
+        if (added) {
+          column_products.emplace_back();
+          plan.grades.push_back(consequent_samples(system_, o, clause, x));
+        }
+        const auto& products = rule_products(r);
+        auto& column = column_products[where->second];
+        column.insert(column.end(), products.begin(), products.end());
+      }
+    for (const auto& products : column_products) plan.strengths.push_back(max_of_mins(products));
+    return plan;
+  }
+
+  // g_k = max over columns of implication(strength, grade_k), unrolled over the samples with the grades as
+  // constants; a zero grade adds nothing (implication(w, 0) = 0 and max(a, 0) = a), so it is left out, and a
+  // sample where every grade is zero with it. Centroid: sum(g x) / sum(g) as in evaluate(), x measured from the
+  // middle of the range, four partial sums of each.
+  void emit_aggregation(std::size_t o, const OutputPlan& plan) {
+    const Variable& output = system_.outputs[o];
+    const std::string os = std::to_string(o);
+    const std::vector<double> x = output_sample_points(output.min, output.max, system_.samples, Reference::Matlab);
+    const double middle = (output.min + output.max) / 2.0;
+    std::vector<double>& table = aggregation_grades_[o];
+    body_lines_.push_back("{  // output " + comment_safe(output.name) + ": " + std::to_string(x.size()) +
+                          " samples of the aggregate, then centroid");
+    body_lines_.push_back("  T total_0 = T(0), total_1 = T(0), total_2 = T(0), total_3 = T(0);");
+    body_lines_.push_back("  T moment_0 = T(0), moment_1 = T(0), moment_2 = T(0), moment_3 = T(0);");
+    std::size_t emitted = 0;
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      std::vector<std::string> terms;
+      for (std::size_t c = 0; c < plan.strengths.size(); ++c) {
+        const double grade = plan.grades[c][k];
+        if (grade == 0.0) continue;
+        const std::string& w = plan.strengths[c];
+        std::string term;
+        if (system_.implication == TNorm::Product && grade == 1.0) {
+          term = w;  // w 1 = w exactly
+        } else {
+          const std::string read = "grades" + os + "[" + std::to_string(table.size()) + "]";
+          table.push_back(grade);
+          term = system_.implication == TNorm::Minimum ? "grade_min(" + w + ", " + read + ")"
+                                                        : "(" + w + " * " + read + ")";
+        }
+        terms.push_back(term);
+      }
+      if (terms.empty()) continue;
+      // max is exact, so a balanced tree (a shorter chain than a left fold) has the same value.
+      while (terms.size() > 1) {
+        std::vector<std::string> pairs;
+        for (std::size_t t = 0; t + 1 < terms.size(); t += 2)
+          pairs.push_back("grade_max(" + terms[t] + ", " + terms[t + 1] + ")");
+        if (terms.size() % 2 == 1) pairs.push_back(terms.back());
+        terms = std::move(pairs);
+      }
+      const std::string& g = terms[0];
+      const std::string p = std::to_string(emitted++ % 4);
+      const double offset = x[k] - middle;
+      body_lines_.push_back("  { const T g = " + g + "; total_" + p + " += g;" +
+                            (offset == 0.0 ? std::string() : " moment_" + p + " += g * " + constant(offset) + ";") +
+                            " }");
+    }
+    body_lines_.push_back("  const T total = (total_0 + total_1) + (total_2 + total_3);");
+    body_lines_.push_back("  const T moment = (moment_0 + moment_1) + (moment_2 + moment_3);");
+    body_lines_.push_back("  value" + os + "[j] = " + constant(middle) + " + moment / total;");
+    body_lines_.push_back("  total" + os + "[j] = total;");
+    std::string strongest;
+    for (const std::string& w : plan.strengths)
+      strongest = strongest.empty() ? w : "grade_max(" + strongest + ", " + w + ")";
+    body_lines_.push_back("  strongest" + os + "[j] = " + (strongest.empty() ? std::string("T(0)") : strongest) + ";");
+    body_lines_.push_back("}");
+  }
+
+  const FuzzySystem& system_;
+  CodeWriter& out_;
+  std::vector<std::string> grade_lines_, body_lines_;
+  std::set<std::string> emitted_arrays_;
+  std::map<std::string, int> literal_ids_;
+  std::vector<std::string> literal_texts_;
+  std::map<std::size_t, std::vector<std::vector<int>>> rule_products_;
+  std::map<std::string, std::string> lattice_ops_;
+  std::map<std::size_t, std::vector<double>> aggregation_grades_;  // per output, what kLaneGrades<o> holds
+  bool uses_lane_exp_ = false;
+};
+
+// lane_exp and lane_gaussian, the vectorisable exp of evaluate_batch (written into headers that use them).
+constexpr const char* kLaneExpText = R"(// exp for the lanes of evaluate_batch:
+// Cody-Waite reduction a = n ln2 + r, |r| <= ln2 / 2, a polynomial for exp(r) (double: Taylor to degree 13 by
+// Estrin's scheme; float: Cephes expf), then 2^n from its bits, taken as 2^(n + 1000) 2^-1000 (float: 2^(n + 120)
+// 2^-120) so that a subnormal result is rounded once and a result far below the subnormals is a plain 0 (a result
+// that rounds to the smallest subnormals is slow on x86). Within 2 ulp of the C library's exp on normal results
+// (float: 1 ulp), and the same subnormals (tested). Plain arithmetic and bit copies, no branches and no calls, so
+// that compilers vectorise the loops that call it. Arguments below `lowest` (-1400 or -170, where exp is 0) are
+// raised to it, NaN included (NaN lanes are overwritten); arguments must be at most 15 (float: 5), which Gaussian
+// exponents (<= 0) are. `lowest` is read from a volatile once per call, not written as a constant: with a
+// constant GCC folds the clamped case and turns the clamp into a branch, which stops it vectorising the loop.
+inline double lane_exp(double argument, double lowest) {
+  const double a = argument > lowest ? argument : lowest;
+  const double shifted = a * 0x1.71547652b82fep0 + 0x1.8p52;  // 1.5 2^52: the low bits hold n = round(a / ln2)
+  const double n = shifted - 0x1.8p52;
+  const double r = (a - n * 0x1.62e42feep-1) - n * 0x1.a39ef35793c76p-33;
+  // Estrin's scheme: a shorter chain of dependent operations than Horner's, which the lanes' loops wait on.
+  const double r2 = r * r, r4 = r2 * r2, r8 = r4 * r4;
+  const double low = (1.0 + r) + r2 * (0.5 + r * (1.0 / 6.0));
+  const double middle = (1.0 / 24.0 + r * (1.0 / 120.0)) + r2 * (1.0 / 720.0 + r * (1.0 / 5040.0));
+  const double high = (1.0 / 40320.0 + r * (1.0 / 362880.0)) + r2 * (1.0 / 3628800.0 + r * (1.0 / 39916800.0));
+  const double top = 1.0 / 479001600.0 + r * (1.0 / 6227020800.0);
+  const double p = (low + r4 * middle) + r8 * (high + r4 * top);
+  std::uint64_t bits;
+  std::memcpy(&bits, &shifted, sizeof bits);
+  bits = (bits + (1023u + 1000u)) << 52;
+  double scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return p * scale * 0x1p-1000;
+}
+inline float lane_exp(float argument, float lowest) {
+  const float a = argument > lowest ? argument : lowest;
+  const float shifted = a * 0x1.715476p0f + 0x1.8p23f;
+  const float n = shifted - 0x1.8p23f;
+  const float r = (a - n * 0.693359375f) - n * -2.12194440e-4f;
+  float p = 1.9875691500e-4f;
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  p = p * (r * r) + r + 1.0f;
+  std::uint32_t bits;
+  std::memcpy(&bits, &shifted, sizeof bits);
+  bits = (bits + (127u + 120u)) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return p * scale * 0x1p-120f;
+}
+inline const volatile double kLaneExpLowestDouble = -1400.0;
+inline const volatile float kLaneExpLowestFloat = -170.0f;
+inline double lane_exp_lowest(double) { return kLaneExpLowestDouble; }
+inline float lane_exp_lowest(float) { return kLaneExpLowestFloat; }
+
+// gaussmf as fmpc_math::mf::gaussian computes it, with lane_exp.
+template <typename T>
+inline T lane_gaussian(T x, T sigma, T c, T lowest) {
+  const T t = (x - c) / sigma;
+  return lane_exp(-t * t / T(2), lowest);
+}
+)";
+
 // Everything a type-1 emitter cannot (yet) turn into code, as located errors.
 bool check_supported(const FuzzySystem& system, const EmitOptions& options, DiagnosticList& diagnostics) {
   bool supported = true;
   const SourceRange where = system.range.valid() ? system.range : SourceRange{options.source_path, 0, 0, 0, 0};
-  if (system.interval_type2 || (system.type != SystemType::Mamdani && system.type != SystemType::Sugeno)) {
-    diagnostics.error(where, "the C++/CUDA emitter does not support interval type-2 systems yet",
-                      {"use `fmpc compile --target table`, or evaluate with `fmpc eval`"});
-    supported = false;
-  }
   if (system.type == SystemType::Mamdani && system.samples <= 0) {
     diagnostics.error(where,
                       "the C++/CUDA emitter does not support `samples exact` yet: write `samples 101` (MATLAB's "
@@ -637,12 +1078,16 @@ const char* target_name(EmitOptions::Target target) {
 }  // namespace
 
 std::string embedded_fuzzy_math(const std::string& math_namespace) {
+  return embedded_kernel_math({std::begin(kEmbeddedMathFiles), std::end(kEmbeddedMathFiles)}, math_namespace);
+}
+
+std::string embedded_kernel_math(const std::vector<std::string>& paths, const std::string& math_namespace) {
   std::string result;
-  for (const char* path : kEmbeddedMathFiles) {
+  for (const std::string& path : paths) {
     const std::string_view text = embedded_kernel_source(path);
     if (text.empty()) return {};
     result += std::string("// ---- copied from ") + path + " ----\n";
-    const bool macro_file = std::string_view(path) == "kernels/fmpc_hd.h";
+    const bool macro_file = path == "kernels/fmpc_hd.h";
     if (macro_file) result += "#ifndef FMPC_HD\n";
     std::istringstream lines{std::string(text)};
     std::string line;
@@ -664,11 +1109,15 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
 
   // The math copy is named after its own hash: identical copies from several headers collapse into one (the
   // include guard), different fmpc versions' copies live side by side.
+  // Type-2 headers carry the type reduction too (a copy with another hash, so both kinds share a translation unit).
+  const std::vector<std::string> math_files =
+      system.interval_type2 ? type2_embedded_math_files()
+                            : std::vector<std::string>(std::begin(kEmbeddedMathFiles), std::end(kEmbeddedMathFiles));
   std::string original;
-  for (const char* path : kEmbeddedMathFiles) original += std::string(embedded_kernel_source(path));
+  for (const std::string& path : math_files) original += std::string(embedded_kernel_source(path));
   const std::string math_hash = hex64(fnv1a64(original));
   const std::string math_namespace = "fmpc_math_" + math_hash;
-  const std::string math_text = embedded_fuzzy_math(math_namespace);
+  const std::string math_text = embedded_kernel_math(math_files, math_namespace);
   if (math_text.empty()) {
     diagnostics.error(SourceRange{options.source_path, 0, 0, 0, 0},
                       "this fmpc was built without the embedded kernel headers; rebuild fmpc");
@@ -706,7 +1155,12 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
     out.line("//     stream = 0): launches the kernel and returns the launch status (nvcc only)");
   }
   out.line("#pragma once");
+  const bool lane_batch = lane_batch_applies(system);
   out.line("#include <cstddef>");
+  if (lane_batch) {
+    out.line("#include <cstdint>");
+    out.line("#include <cstring>");
+  }
   out.line("#include <math.h>");
   if (cuda) {
     out.line("#if defined(__CUDACC__)");
@@ -769,15 +1223,25 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
   out.line("template <typename T>");
   out.line("FMPC_HD T grade_max(T a, T b) { return a > b ? a : b; }");
   out.line();
-  EvaluatorEmitter(system, options, out).emit_evaluate_function();
+  if (system.interval_type2) out.block(emit_type2_evaluate_function(system, options, out.lines()));
+  else EvaluatorEmitter(system, options, out).emit_evaluate_function();
   out.line();
-  out.line("template <typename T>");
-  out.line("inline void evaluate_batch(const T* inputs, T* outputs, std::size_t n, unsigned* flags = nullptr) {");
-  out.line("  for (std::size_t i = 0; i < n; ++i) {");
-  out.line("    const unsigned f = evaluate(inputs + i * kInputCount, outputs + i * kOutputCount);");
-  out.line("    if (flags != nullptr) flags[i] = f;");
-  out.line("  }");
-  out.line("}");
+  if (lane_batch) {
+    out.line("// Points per block of evaluate_batch: 16 floats or doubles fill whole vector registers of every width.");
+    out.line("inline constexpr std::size_t kBatchLanes = 16;");
+    out.line();
+    out.block(kLaneExpText);
+    out.line();
+    LaneBatchEmitter(system, out).emit();
+  } else {
+    out.line("template <typename T>");
+    out.line("inline void evaluate_batch(const T* inputs, T* outputs, std::size_t n, unsigned* flags = nullptr) {");
+    out.line("  for (std::size_t i = 0; i < n; ++i) {");
+    out.line("    const unsigned f = evaluate(inputs + i * kInputCount, outputs + i * kOutputCount);");
+    out.line("    if (flags != nullptr) flags[i] = f;");
+    out.line("  }");
+    out.line("}");
+  }
   if (cuda) {
     out.line();
     out.line("#if defined(__CUDACC__)");
@@ -811,6 +1275,18 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
   out.line();
   out.line("}  // namespace " + options.namespace_name);
   return out.text();
+}
+
+std::string emitted_constant(double value) { return constant(value); }
+std::string emitted_string_literal(const std::string& text) { return quoted(text); }
+std::string emitted_comment_text(const std::string& text) { return comment_safe(text); }
+std::string emitted_enumerator(TNorm norm) { return tnorm_enumerator(norm); }
+std::string emitted_enumerator(SNorm norm) { return snorm_enumerator(norm); }
+std::string emitted_tnorm_call(TNorm norm, const std::string& a, const std::string& b) {
+  return tnorm_call(norm, a, b);
+}
+std::string emitted_snorm_call(SNorm norm, const std::string& a, const std::string& b) {
+  return snorm_call(norm, a, b);
 }
 
 }  // namespace fmpc

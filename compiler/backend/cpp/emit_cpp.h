@@ -34,13 +34,28 @@ struct EmitOptions {
   std::string header_path;
 };
 
-// The generated header's text, or nullopt with errors in `diagnostics` (a type-2 system, `samples exact`, a
-// namespace that is not a C++ identifier path). Precondition: `system` passed sema (compiler/sema/check.h).
+// The generated header's text, or nullopt with errors in `diagnostics` (`samples exact`, a namespace that is not
+// a C++ identifier path). Interval type-2 systems get emit_type2.h's evaluate function in the same frame.
+// Precondition: `system` passed sema (compiler/sema/check.h).
 std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitOptions& options,
                                           DiagnosticList& diagnostics);
 
 // The text of fmpc's membership math (kernels/fmpc_hd.h, fuzzy_kinds.h, fuzzy_math.h) as embedded at build time,
 // with its namespace renamed to `math_namespace`; used by the emitters and by tests that compare the copy.
 std::string embedded_fuzzy_math(const std::string& math_namespace);
+
+// The same for any list of embedded kernel headers (paths as in embedded_kernel_source), in the order given.
+std::string embedded_kernel_math(const std::vector<std::string>& paths, const std::string& math_namespace);
+
+// Spellings shared with the interval type-2 emitter (emit_type2.h), so that both write the same text.
+std::string emitted_constant(double value);                   // "T(0.25)"; NaN and +-inf spelled for device code
+std::string emitted_string_literal(const std::string& text);  // a C++ string literal, escaped
+std::string emitted_comment_text(const std::string& text);    // fits one `//` line (no newline, no final backslash)
+std::string emitted_enumerator(TNorm norm);                   // "fmpc_math::TNorm::Minimum"
+std::string emitted_enumerator(SNorm norm);                   // "fmpc_math::SNorm::Maximum"
+// norm(a, b) on grades, which cannot be NaN in generated code (a NaN input returns first): min and max through the
+// header's grade_min / grade_max, product and sum written out, the Einstein norms through fmpc_math.
+std::string emitted_tnorm_call(TNorm norm, const std::string& a, const std::string& b);
+std::string emitted_snorm_call(SNorm norm, const std::string& a, const std::string& b);
 
 }  // namespace fmpc
