@@ -132,6 +132,7 @@ int run_compile(const CompileOptions& options) {
     PipelineOptions pipeline;
     pipeline.prune_epsilon = options.prune_epsilon;
     pipeline.dump_after = options.dump_after;
+    pipeline.interval_type2 = options.target != "table";  // the C++/CUDA emitter handles type-2, tables not yet
     compiled = run_pipeline(*system, bindings, pipeline, diagnostics);
   }
   if (!compiled || diagnostics.has_errors()) {
