@@ -1,8 +1,8 @@
 #include "tests/support/generated_program.h"
 
 #include <cstdlib>
-#include <limits>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <system_error>
