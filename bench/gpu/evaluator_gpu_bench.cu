@@ -2,12 +2,15 @@
 // Built and run by bench/run_gpu.sh (section "evaluator") with nvcc -arch=sm_90; the headers it includes are
 // generated on the build machine by `bench/run_gpu.sh --prepare` (build-gpu-carry/evaluator/):
 //   liver_evaluator.cuh  fmpc compile rulesets/liver_fibrosis/mamdani.fis --target cuda (all five inputs vary)
+//   liver_it2_evaluator.cuh  the same for rulesets/liver_fibrosis/it2.fis (interval type-2, Karnik-Mendel)
 //   liver_table2.h       --target table, HCV ALD NAFLD fixed, HBV:65 CLD:65 (a 2-D table, 65 x 65)
 //   liver_table5.h       --target table, all five inputs :9 (a 5-D table, 9^5 points), double values
 //   liver_table5f.h      the same with --precision float
 //   liver_table5r7.h     all five inputs :7 (7^5 points, double: 131 KiB, fits an SM's L1)
 //   liver_table5r5.h     all five inputs :5 (5^5 points, double: 24 KiB)
 // (Coarser tables are less accurate: docs/performance.md, "The trade, measured", gives each resolution's error.)
+// Every table is timed in both layouts of kernels/table_math.h (grid and sector-packed) through the header's
+// launcher; the row says which one the launcher's Automatic picks.
 // Usage: evaluator_gpu_bench OUT_DIR [points]   (default 2^24 points). Writes OUT_DIR/evaluator_gpu.{csv,md} and
 // prints the markdown table last. Exit status 1 when a correctness check fails.
 #include <cuda_runtime.h>
@@ -21,6 +24,7 @@
 #include <vector>
 
 #include "liver_evaluator.cuh"
+#include "liver_it2_evaluator.cuh"
 #include "liver_table2.h"
 #include "liver_table5.h"
 #include "liver_table5f.h"
@@ -40,6 +44,7 @@ namespace {
 
 constexpr int kRepetitions = 10;
 constexpr std::size_t kCheckedPoints = 1 << 16;
+constexpr double kNotChecked = HUGE_VAL;  // a row's tolerance when the row is timed only
 
 struct Row {
   std::string variant;
@@ -72,16 +77,32 @@ double best_seconds(Launch launch) {
   return static_cast<double>(best) * 1e-3;
 }
 
-template <typename T>
+// The liver evaluators: type-1 Mamdani and interval type-2, the same five inputs.
+#define FMPC_BENCH_EVALUATOR(Name, header, label)                                                          \
+  struct Name {                                                                                           \
+    static constexpr const char* kLabel = label;                                                          \
+    static constexpr std::size_t kInputs = header::kInputCount;                                           \
+    static double range() { return header::kOutputMax[0] - header::kOutputMin[0]; }                      \
+    template <typename T>                                                                                 \
+    static cudaError_t device_batch(const T* in, T* out, std::size_t n) {                                 \
+      return header::evaluate_batch_cuda<T>(in, out, n);                                                  \
+    }                                                                                                     \
+    static void host(const double* in, double* out) { header::evaluate(in, out); }                        \
+  };
+FMPC_BENCH_EVALUATOR(LiverMamdani, liver_evaluator, "CUDA evaluator")
+FMPC_BENCH_EVALUATOR(LiverIt2, liver_it2_evaluator, "CUDA evaluator, interval type-2 (it2.fis)")
+#undef FMPC_BENCH_EVALUATOR
+
+template <typename Evaluator, typename T>
 Row evaluator_row(const std::vector<double>& points, std::size_t n, double tolerance) {
-  const std::size_t d = liver_evaluator::kInputCount;
+  const std::size_t d = Evaluator::kInputs;
   std::vector<T> host_inputs(points.begin(), points.begin() + static_cast<std::ptrdiff_t>(n * d));
   T* inputs = nullptr;
   T* outputs = nullptr;
   CHECK_CUDA(cudaMalloc(&inputs, n * d * sizeof(T)));
   CHECK_CUDA(cudaMalloc(&outputs, n * sizeof(T)));
   CHECK_CUDA(cudaMemcpy(inputs, host_inputs.data(), n * d * sizeof(T), cudaMemcpyHostToDevice));
-  const double seconds = best_seconds([&] { CHECK_CUDA(liver_evaluator::evaluate_batch_cuda<T>(inputs, outputs, n)); });
+  const double seconds = best_seconds([&] { CHECK_CUDA(Evaluator::template device_batch<T>(inputs, outputs, n)); });
   std::vector<T> device_outputs(kCheckedPoints);
   CHECK_CUDA(cudaMemcpy(device_outputs.data(), outputs, kCheckedPoints * sizeof(T), cudaMemcpyDeviceToHost));
   CHECK_CUDA(cudaFree(inputs));
@@ -90,12 +111,12 @@ Row evaluator_row(const std::vector<double>& points, std::size_t n, double toler
   // The CPU reference: the same header's host path in double, which tests/unit/emit_cpp_test.cpp checks against
   // the interpreter to 1e-12 of the range.
   Row row;
-  row.variant = std::string("CUDA evaluator, ") + (sizeof(T) == 8 ? "double" : "float");
+  row.variant = std::string(Evaluator::kLabel) + ", " + (sizeof(T) == 8 ? "double" : "float");
   row.per_second = static_cast<double>(n) / seconds;
   row.tolerance = tolerance;
   for (std::size_t p = 0; p < kCheckedPoints; ++p) {
     double expected = 0;
-    liver_evaluator::evaluate(&points[p * d], &expected);
+    Evaluator::host(&points[p * d], &expected);
     row.max_difference = std::max(row.max_difference, std::fabs(static_cast<double>(device_outputs[p]) - expected));
   }
   row.ok = row.max_difference <= tolerance;
@@ -108,11 +129,11 @@ Row evaluator_row(const std::vector<double>& points, std::size_t n, double toler
 #define FMPC_BENCH_TABLE(Name, header)                                                                        \
   struct Name {                                                                                              \
     using Value = header::Value;                                                                              \
-    static constexpr int kAxes = header::kAxes;                                                              \
     static FMPC_HD fmpc::TableView<Value> view() { return header::view(); }                                  \
     static void host_batch(const double* q, Value* out, std::size_t n) { header::interpolate_batch(q, out, n); } \
-    static cudaError_t device_batch(const double* q, Value* out, std::size_t n) {                            \
-      return header::interpolate_batch_cuda(q, out, n);                                                      \
+    static constexpr bool kPackedByDefault = header::kPackedByDefault;                                       \
+    static cudaError_t device_batch(const double* q, Value* out, std::size_t n, fmpc::TableLayout layout) {  \
+      return header::interpolate_batch_cuda(q, out, n, 0, layout);                                           \
     }                                                                                                        \
   };
 FMPC_BENCH_TABLE(Table2, liver_table2)
@@ -132,7 +153,7 @@ __global__ void user_lookup_kernel(const double* __restrict__ queries, typename 
     fmpc::interpolate_table(table, queries + i * static_cast<std::size_t>(table.axes), out + i);
 }
 
-enum class LookupPath { ProductLauncher, UserKernel };
+enum class LookupPath { GridLayout, PackedLayout, UserKernel };
 
 // Every query is read from device memory (d doubles) and every result written back (one Value: the liver table
 // has one output); the 2^d corner values per lookup are gathered from the table, which stays in L1/L2. The row
@@ -155,8 +176,10 @@ Row table_row(const char* name, const std::vector<double>& points, std::size_t n
     for (std::size_t i = 0; i < d; ++i) host_queries[p * d + i] = points[p * 5 + i];
   CHECK_CUDA(cudaMemcpy(queries, host_queries.data(), n * d * sizeof(double), cudaMemcpyHostToDevice));
   const double seconds = best_seconds([&] {
-    if (path == LookupPath::ProductLauncher) {
-      CHECK_CUDA(Table::device_batch(queries, out, n));
+    if (path != LookupPath::UserKernel) {
+      CHECK_CUDA(Table::device_batch(queries, out, n,
+                                     path == LookupPath::GridLayout ? fmpc::TableLayout::Grid
+                                                                    : fmpc::TableLayout::SectorPacked));
     } else {
       constexpr unsigned threads = 256;
       const unsigned blocks = static_cast<unsigned>(std::min<std::size_t>((n + threads - 1) / threads, 65535u * 32u));
@@ -171,11 +194,17 @@ Row table_row(const char* name, const std::vector<double>& points, std::size_t n
   std::vector<Value> expected(kCheckedPoints);
   Table::host_batch(host_queries.data(), expected.data(), kCheckedPoints);
 
-  char variant[256];
-  std::snprintf(variant, sizeof variant, "%s, %s (%s; %zu KiB table; per lookup %zu B read + %zu B written, %d x %zu B gathered)",
-                name, sizeof(Value) == 8 ? "double" : "float",
-                path == LookupPath::ProductLauncher ? "interpolate_batch_cuda" : "interpolate_table in a user kernel",
-                grid_points * sizeof(Value) / 1024, d * sizeof(double), sizeof(Value), 1 << d, sizeof(Value));
+  const bool packed = path == LookupPath::PackedLayout;
+  const int packed_axes = fmpc::packed_lookup_axes<Value>(static_cast<int>(d));
+  const std::size_t sectors = packed ? std::size_t{1} << (d - static_cast<std::size_t>(packed_axes)) : std::size_t{1} << (d - 1);
+  const bool automatic = packed == Table::kPackedByDefault && path != LookupPath::UserKernel;
+  char variant[320];
+  std::snprintf(variant, sizeof variant,
+                "%s, %s, %s layout%s (%s; %zu KiB grid; per lookup %zu B read + %zu B written, %zu places gathered)",
+                name, sizeof(Value) == 8 ? "double" : "float", packed ? "packed" : "grid",
+                automatic ? " [Automatic]" : "",
+                path == LookupPath::UserKernel ? "interpolate_table in a user kernel" : "interpolate_batch_cuda",
+                grid_points * sizeof(Value) / 1024, d * sizeof(double), sizeof(Value), sectors);
   Row row;
   row.variant = variant;
   row.per_second = static_cast<double>(n) / seconds;
@@ -210,16 +239,26 @@ int main(int argc, char** argv) {
   for (double& x : points) x = 75.0 * static_cast<double>(random() >> 11) * 0x1.0p-53;
 
   std::vector<Row> rows;
-  const double range = liver_evaluator::kOutputMax[0] - liver_evaluator::kOutputMin[0];
+  const double range = LiverMamdani::range();
   // Device code contracts a * b + c into FMA (nvcc's default), so double differs from the host by rounding.
-  rows.push_back(evaluator_row<double>(points, n, 1e-12 * range));
-  rows.push_back(evaluator_row<float>(points, n, 1e-5 * range));
-  rows.push_back(table_row<Table2>("table lookup, 2-D 65x65", points, n, LookupPath::ProductLauncher));
-  rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::ProductLauncher));
+  rows.push_back(evaluator_row<LiverMamdani, double>(points, n, 1e-12 * range));
+  rows.push_back(evaluator_row<LiverMamdani, float>(points, n, 1e-5 * range));
+  // Type-2 in float can be compared only where float carries the computation (docs/codegen.md)
+  // (ctest gpu.generated_evaluator checks it, against the CPU's own float): the bench checks double and times float.
+  const std::size_t type2_points = std::max(n / 4, kCheckedPoints);
+  rows.push_back(evaluator_row<LiverIt2, double>(points, type2_points, 1e-12 * LiverIt2::range()));
+  rows.push_back(evaluator_row<LiverIt2, float>(points, type2_points, kNotChecked));
+  rows.push_back(table_row<Table2>("table lookup, 2-D 65x65", points, n, LookupPath::GridLayout));
+  rows.push_back(table_row<Table2>("table lookup, 2-D 65x65", points, n, LookupPath::PackedLayout));
+  rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::GridLayout));
+  rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::PackedLayout));
   rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::UserKernel));
-  rows.push_back(table_row<Table5Float>("table lookup, 5-D 9^5", points, n, LookupPath::ProductLauncher));
-  rows.push_back(table_row<Table5Res7>("table lookup, 5-D 7^5", points, n, LookupPath::ProductLauncher));
-  rows.push_back(table_row<Table5Res5>("table lookup, 5-D 5^5", points, n, LookupPath::ProductLauncher));
+  rows.push_back(table_row<Table5Float>("table lookup, 5-D 9^5", points, n, LookupPath::GridLayout));
+  rows.push_back(table_row<Table5Float>("table lookup, 5-D 9^5", points, n, LookupPath::PackedLayout));
+  rows.push_back(table_row<Table5Res7>("table lookup, 5-D 7^5", points, n, LookupPath::GridLayout));
+  rows.push_back(table_row<Table5Res7>("table lookup, 5-D 7^5", points, n, LookupPath::PackedLayout));
+  rows.push_back(table_row<Table5Res5>("table lookup, 5-D 5^5", points, n, LookupPath::GridLayout));
+  rows.push_back(table_row<Table5Res5>("table lookup, 5-D 5^5", points, n, LookupPath::PackedLayout));
 
   std::string csv = "variant,per_second,max_difference_vs_cpu,tolerance,ok\n";
   std::string md = "| variant (" + std::string(properties.name) + ", " + std::to_string(n) +
@@ -227,11 +266,12 @@ int main(int argc, char** argv) {
   bool all_ok = true;
   for (const Row& row : rows) {
     char line[512];
+    const char* check = row.tolerance == kNotChecked ? "timed only" : row.ok ? "ok" : "FAILED";
     std::snprintf(line, sizeof line, "%s,%.6g,%.3g,%.3g,%s\n", row.variant.c_str(), row.per_second,
-                  row.max_difference, row.tolerance, row.ok ? "ok" : "FAILED");
+                  row.max_difference, row.tolerance, check);
     csv += line;
     std::snprintf(line, sizeof line, "| %s | %.3g | %.3g | %.3g | %s |\n", row.variant.c_str(), row.per_second,
-                  row.max_difference, row.tolerance, row.ok ? "ok" : "FAILED");
+                  row.max_difference, row.tolerance, check);
     md += line;
     all_ok = all_ok && row.ok;
   }
