@@ -300,7 +300,9 @@ struct Interpreter::State {
       const Rule& rule = system.rules[r];
       const bool conjunction = rule.connective == Connective::And;
       const double identity = conjunction ? tnorm_identity<double>() : snorm_identity<double>();
-      GradeInterval<double> strength{identity, identity};
+      // Grades folded in by the specialize pass start the fold on each end, as in type-1.
+      GradeInterval<double> strength{rule.folded_grade_lower.value_or(rule.folded_grade.value_or(identity)),
+                                     rule.folded_grade.value_or(identity)};
       for (const Clause& clause : antecedents[r]) {
         const auto v = static_cast<std::size_t>(clause.variable);
         const auto t = static_cast<std::size_t>(clause.term);

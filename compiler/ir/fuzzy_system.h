@@ -82,6 +82,10 @@ struct Rule {
   // and folded away. It joins the fold of the remaining clauses with the rule's connective (and_method for And,
   // or_method for Or) before them; with no clauses left it is the rule's strength. Never set by a reader.
   std::optional<double> folded_grade;
+  // Interval type-2 systems only, set with folded_grade: the fold's state is an interval, folded_grade holds its
+  // upper end and this its lower end (each end folded with the same norms, kernels/type2_math.h). The ends are
+  // those of the fold, before the interpreter takes their span, so lower <= upper is not assumed.
+  std::optional<double> folded_grade_lower;
   SourceRange range;
 };
 

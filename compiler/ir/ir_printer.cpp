@@ -12,7 +12,12 @@ std::string rule_text(const FuzzySystem& system, std::size_t r) {
   const Rule& rule = system.rules[r];
   std::string body = format_rule_body(system, r);
   if (rule.folded_grade) {
-    const std::string fixed = "<fixed " + format_number(*rule.folded_grade) + ">";
+    // Type-2 rules fold an interval: "<fixed [lower, upper]>".
+    const std::string grade =
+        rule.folded_grade_lower
+            ? "[" + format_number(*rule.folded_grade_lower) + ", " + format_number(*rule.folded_grade) + "]"
+            : format_number(*rule.folded_grade);
+    const std::string fixed = "<fixed " + grade + ">";
     const std::size_t then = body.find("then ");
     const std::string conclusion = then == std::string::npos ? body : body.substr(then);
     if (rule.antecedent.empty()) {

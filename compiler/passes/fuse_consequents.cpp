@@ -32,21 +32,42 @@ Connective effective_connective(const Rule& rule) {
 
 double identity_of(Connective connective) { return connective == Connective::And ? 1.0 : 0.0; }
 
-// Kind 1: identical antecedents. Returns true and updates `into` when `other` was absorbed.
-bool fuse_identical(Rule& into, const Rule& other) {
+// A rule's folded grade on each end: `upper` is Rule::folded_grade; `lower` is Rule::folded_grade_lower in type-2
+// rules and the same as `upper` otherwise.
+struct FoldedEnds {
+  std::optional<double> upper, lower;
+};
+
+FoldedEnds folded_ends(const Rule& rule) {
+  return {rule.folded_grade, rule.folded_grade_lower ? rule.folded_grade_lower : rule.folded_grade};
+}
+
+void set_folded(Rule& rule, std::optional<double> upper, std::optional<double> lower, bool interval_type2) {
+  rule.folded_grade = upper;
+  rule.folded_grade_lower = interval_type2 && upper ? lower : std::nullopt;
+}
+
+// Kind 1: identical antecedents. Returns true and updates `into` when `other` was absorbed. Type-2 rules fold each
+// end of their interval with the same nondecreasing fold, so the argument holds on each end (the lower end never
+// exceeds the upper one for grades in [0, 1], so the interpreter's span of the ends is the ends themselves).
+bool fuse_identical(Rule& into, const Rule& other, bool interval_type2) {
   const Connective connective = effective_connective(into);
   if (connective != effective_connective(other)) return false;
   if (clause_keys(into.antecedent) != clause_keys(other.antecedent)) return false;
-  const double mine = into.folded_grade.value_or(identity_of(connective));
-  const double theirs = other.folded_grade.value_or(identity_of(connective));
+  const double identity = identity_of(connective);
+  const FoldedEnds a = folded_ends(into), b = folded_ends(other);
+  const double mine = a.upper.value_or(identity), theirs = b.upper.value_or(identity);
+  const double mine_lower = a.lower.value_or(identity), theirs_lower = b.lower.value_or(identity);
   if (into.weight == other.weight) {
     if (!into.folded_grade && !other.folded_grade) return true;
-    const double fused = std::max(mine, theirs);
-    if (fused == identity_of(connective) && connective == Connective::And) into.folded_grade.reset();
-    else into.folded_grade = fused;
+    const double fused = std::max(mine, theirs), fused_lower = std::max(mine_lower, theirs_lower);
+    if (fused == identity && fused_lower == identity && connective == Connective::And)
+      set_folded(into, std::nullopt, std::nullopt, interval_type2);
+    else
+      set_folded(into, fused, fused_lower, interval_type2);
     return true;
   }
-  if (mine == theirs) {
+  if (mine == theirs && mine_lower == theirs_lower) {
     into.weight = std::max(into.weight, other.weight);
     return true;
   }
@@ -58,8 +79,8 @@ bool disjunctive(const Rule& rule) {
          (rule.antecedent.size() == 1 && !rule.folded_grade);
 }
 
-// Kind 2: the `or` of two disjunctive rules, when no input gets two different clauses.
-bool fuse_disjunction(Rule& into, const Rule& other) {
+// Kind 2: the `or` of two disjunctive rules, when no input gets two different clauses (on each end for type-2).
+bool fuse_disjunction(Rule& into, const Rule& other, bool interval_type2) {
   if (!disjunctive(into) || !disjunctive(other) || into.weight != other.weight) return false;
   std::vector<Clause> added;
   for (const Clause& clause : other.antecedent) {
@@ -72,14 +93,17 @@ bool fuse_disjunction(Rule& into, const Rule& other) {
     if (!present) added.push_back(clause);
   }
   // An empty AND rule has strength 1: as a disjunction, a folded grade of 1.
-  const auto disjunctive_grade = [](const Rule& rule) -> std::optional<double> {
-    if (rule.connective == Connective::And && rule.antecedent.empty()) return rule.folded_grade.value_or(1.0);
-    return rule.folded_grade;
+  const auto disjunctive_grade = [](const Rule& rule) -> FoldedEnds {
+    const FoldedEnds ends = folded_ends(rule);
+    if (rule.connective == Connective::And && rule.antecedent.empty()) return {ends.upper.value_or(1.0), ends.lower.value_or(1.0)};
+    return ends;
   };
-  const std::optional<double> mine = disjunctive_grade(into), theirs = disjunctive_grade(other);
+  const FoldedEnds mine = disjunctive_grade(into), theirs = disjunctive_grade(other);
   into.antecedent.insert(into.antecedent.end(), added.begin(), added.end());
   into.connective = Connective::Or;
-  if (mine || theirs) into.folded_grade = std::max(mine.value_or(0.0), theirs.value_or(0.0));
+  if (mine.upper || theirs.upper)
+    set_folded(into, std::max(mine.upper.value_or(0.0), theirs.upper.value_or(0.0)),
+               std::max(mine.lower.value_or(0.0), theirs.lower.value_or(0.0)), interval_type2);
   return true;
 }
 
@@ -139,9 +163,15 @@ PassReport fuse_consequents(FuzzySystem& system) {
   std::vector<std::string> names;
   for (std::size_t r = 0; r < system.rules.size(); ++r) names.push_back(system.rule_display_name(r));
   const std::size_t before = system.rules.size();
-  fuse_pass(system, names, fuse_identical, "identical antecedents", report.details);
+  const bool interval_type2 = system.interval_type2;
+  fuse_pass(
+      system, names, [interval_type2](Rule& into, const Rule& other) { return fuse_identical(into, other, interval_type2); },
+      "identical antecedents", report.details);
   if (system.or_method == SNorm::Maximum)
-    fuse_pass(system, names, fuse_disjunction, "or of the antecedents", report.details);
+    fuse_pass(
+        system, names,
+        [interval_type2](Rule& into, const Rule& other) { return fuse_disjunction(into, other, interval_type2); },
+        "or of the antecedents", report.details);
   report.summary = "fused " + std::to_string(before) + " rules into " + std::to_string(system.rules.size());
   return report;
 }

@@ -16,7 +16,10 @@ namespace fmpc {
 //     the union, since max(max(A), max(B)) = max(A u B). MATLAB's one-connective rules cannot express
 //     "(a and b) or c", so conjunctions are fused only by kind 1.
 // The fused rule keeps the first rule's label and position. Sugeno systems and other aggregations are left alone
-// (a weighted average sums the rules). Exact: the aggregate is the same (bitwise, except where an Einstein norm rounds differently).
+// (a weighted average sums the rules). Interval type-2 Mamdani systems are fused the same way: the interpreter
+// aggregates each end of the output sets with max, so the argument holds on each end (folded grades max-ed end by
+// end), the aggregated [lower, upper] sets are unchanged, and so is their type reduction, whichever the method
+// (KM, EKM, EIASC and Nie-Tan read only the aggregated sets). Exact: the aggregate is the same (bitwise, except where an Einstein norm rounds differently).
 PassReport fuse_consequents(FuzzySystem& system);
 
 }  // namespace fmpc

@@ -57,9 +57,8 @@ std::optional<CompileResult> run_pipeline(const FuzzySystem& source, const Bindi
   const std::size_t errors_before = diagnostics.error_count();
   if (source.interval_type2 && !options.interval_type2) {
     diagnostics.error(source.range,
-                      "system '" + source.name + "' is interval type-2, which only fmpc compile --target cpp|cuda "
-                      "handles yet",
-                      {"evaluate it with fmpc eval, or compile its type-1 view after converting it"});
+                      "system '" + source.name + "' is interval type-2, which this back end does not take",
+                      {"evaluate it with fmpc eval, or compile it with fmpc compile --target cpp|cuda|table"});
     return std::nullopt;
   }
   for (const std::string& pass : options.dump_after) {
@@ -114,14 +113,12 @@ std::optional<CompileResult> run_pipeline(const FuzzySystem& source, const Bindi
     }
     points[static_cast<std::size_t>(index)] = binding.points;
   }
-  // specialize folds a fixed input into one type-1 grade per rule; a type-2 rule would need an interval.
-  if (source.interval_type2)
-    for (const FixedInput& binding : bindings.fixed)
-      if (source.find_input(binding.name) >= 0)
-        diagnostics.error(binding.origin,
-                          "input '" + binding.name + "' of interval type-2 system '" + source.name +
-                              "' cannot be fixed: fmpc compile does not specialise type-2 systems yet",
-                          {"let it vary (leave out --fix), or evaluate the point with fmpc eval"});
+  // prune_rules bounds the centroid's change for type-1 sets only (prune_rules.h).
+  if (source.interval_type2 && options.prune_epsilon > 0.0)
+    diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+                      "--prune-epsilon " + format_number(options.prune_epsilon) + " needs an error bound, and none "
+                      "is known for interval type-2 system '" + source.name + "'",
+                      {"leave it out: the rules that cannot fire are removed exactly without it"});
   std::size_t varying = 0;
   for (std::size_t i = 0; i < input_count; ++i) varying += fixed_value[i] ? 0 : 1;
   if (varying == 0 && diagnostics.error_count() == errors_before)
@@ -148,12 +145,6 @@ std::optional<CompileResult> run_pipeline(const FuzzySystem& source, const Bindi
     if (wants_dump(options, report.pass)) result.dumps.push_back({report.pass, print_ir(result.system)});
     result.reports.push_back(std::move(report));
   };
-  if (source.interval_type2) {
-    // prune_rules bounds and fuse_consequents folds type-1 grades: a type-2 system goes to the back ends as written.
-    for (const std::string& pass : pipeline_pass_names())
-      record(PassReport{pass, "not run on interval type-2 systems", {}, 0.0, "exact"});
-    return result;
-  }
   record(specialize(result.system, fixed));
   record(prune_rules(result.system, options.prune_epsilon));
   record(fuse_consequents(result.system));

@@ -34,8 +34,8 @@ struct Bindings {
 struct PipelineOptions {
   double prune_epsilon = 0.0;          // prune_rules: 0 removes only the rules that cannot fire (exact)
   std::vector<std::string> dump_after;  // pass names whose result to print (print_ir); "all" = every pass
-  // The caller's back end takes interval type-2 systems (the C++/CUDA emitter). They pass through untransformed;
-  // otherwise they are refused.
+  // The caller's back end takes interval type-2 systems (every fmpc compile target and fmpc trade do); otherwise
+  // they are refused.
   bool interval_type2 = false;
 };
 
@@ -62,8 +62,9 @@ const std::vector<std::string>& pipeline_pass_names();
 // Resolves the bindings against `source` and runs the passes. Errors (located at the binding's origin, with
 // "did you mean"): an unknown input, an input bound twice or both fixed and varied, a NaN value, fewer than 2
 // points, an unknown --dump-after pass, nothing left to vary; an interval type-2 system unless
-// options.interval_type2, and then any fixed input of it. Type-2 systems are not transformed: every pass reports
-// "not run" (the passes reason on type-1 grades).
+// options.interval_type2, and then a prune_epsilon > 0 (no bound is known for type reduction). Type-2 systems go
+// through every pass: specialize folds each end of the firing interval, prune_rules removes the rules whose upper
+// firing bound is 0, fuse_consequents works on each end, drop_dead_terms is the same (each pass's header).
 // A fixed value outside the input's range is a warning (evaluated as given, as the interpreter does).
 // Unlabelled rules are labelled "rN" (their 1-based position in the source) so reports name them stably.
 std::optional<CompileResult> run_pipeline(const FuzzySystem& source, const Bindings& bindings,

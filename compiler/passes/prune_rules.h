@@ -25,6 +25,16 @@ std::optional<GradeBounds> membership_bounds(const MembershipFunction& mf, doubl
 // bounds the fold. nullopt when a clause has no known bounds.
 std::optional<GradeBounds> firing_bounds(const FuzzySystem& system, std::size_t rule);
 
+// Interval type-2 rules: proven bounds of each end of the firing interval [lower, upper] (the interpreter's
+// weight times the span of the two folded ends), from bounds of each end of every clause's footprint (uncertain
+// mean and explicit lower MFs as quasi-concave / min-max of type-1 bounds, uncertain sd as two Gaussians, scale and
+// lag through its nondecreasing map). nullopt when a clause has no known bounds.
+struct FiringIntervalBounds {
+  GradeBounds lower;
+  GradeBounds upper;
+};
+std::optional<FiringIntervalBounds> firing_interval_bounds(const FuzzySystem& system, std::size_t rule);
+
 // Removes the rules that cannot fire while the inputs lie in their declared ranges (firing bound 0: exact), and,
 // when `epsilon` > 0 in a Mamdani system with max aggregation, the rules whose firing is provably below epsilon.
 // Such a rule's implied set is below epsilon everywhere (T(w, mu) <= w for every t-norm), so removing it lowers
@@ -34,6 +44,9 @@ std::optional<GradeBounds> firing_bounds(const FuzzySystem& system, std::size_t 
 // firing bounds); the bound reported is min(R, that). Other defuzzifiers, `samples exact` and S_min = 0 get R
 // (the whole range: a set that changes by epsilon can move their output anywhere). Sugeno systems and other
 // aggregations ignore epsilon and remove only the rules that cannot fire.
+// Interval type-2 systems: a rule whose upper firing bound is 0 cannot fire (its lower end is 0 too), and the
+// interpreter skips such a rule on every output: removing it is exact. Epsilon is ignored (no bound is known for
+// the type-reduced output; run_pipeline refuses it).
 PassReport prune_rules(FuzzySystem& system, double epsilon);
 
 }  // namespace fmpc

@@ -3,8 +3,10 @@
 #include <optional>
 #include <string>
 
+#include "compiler/eval/interpreter.h"
 #include "compiler/ir/number_format.h"
 #include "kernels/fuzzy_math.h"
+#include "kernels/type2_math.h"
 
 namespace fmpc {
 
@@ -38,7 +40,11 @@ PassReport specialize(FuzzySystem& system, const std::vector<InputValue>& fixed)
   std::size_t constant_rules = 0;
   for (Rule& rule : system.rules) {
     const bool conjunction = rule.connective == Connective::And;
+    const double identity = conjunction ? tnorm_identity<double>() : snorm_identity<double>();
+    // Type-1 rules fold into `folded`; type-2 rules fold each end of the interval (the interpreter's
+    // compute_firing_intervals), the upper end into `folded`, the lower into `folded_lower`.
     std::optional<double> folded = rule.folded_grade;
+    std::optional<double> folded_lower = system.interval_type2 ? rule.folded_grade_lower : std::nullopt;
     std::vector<Clause> remaining;
     for (const Clause& clause : rule.antecedent) {
       const std::size_t variable = static_cast<std::size_t>(clause.variable);
@@ -48,16 +54,28 @@ PassReport specialize(FuzzySystem& system, const std::vector<InputValue>& fixed)
         remaining.push_back(moved);
         continue;
       }
-      const MembershipFunction& mf = system.inputs[variable].terms[static_cast<std::size_t>(clause.term)].mf;
-      double mu = apply_hedge(membership(mf.kind, mf.params.data(), *value_of[variable]), hedge_exponent(clause.hedge));
-      if (clause.negated) mu = fuzzy_not(mu);
-      const double start = folded ? *folded : conjunction ? tnorm_identity<double>() : snorm_identity<double>();
-      folded = conjunction ? tnorm(system.and_method, start, mu) : snorm(system.or_method, start, mu);
+      const Term& term = system.inputs[variable].terms[static_cast<std::size_t>(clause.term)];
+      const double x = *value_of[variable];
+      if (system.interval_type2) {
+        GradeInterval<double> mu = interval_hedge(term_membership(term, x), hedge_exponent(clause.hedge));
+        if (clause.negated) mu = interval_not(mu);
+        const GradeInterval<double> start{folded_lower.value_or(folded.value_or(identity)), folded.value_or(identity)};
+        const GradeInterval<double> next = conjunction ? interval_tnorm(system.and_method, start, mu)
+                                                       : interval_snorm(system.or_method, start, mu);
+        folded = next.upper;
+        folded_lower = next.lower;
+      } else {
+        double mu = apply_hedge(membership(term.mf.kind, term.mf.params.data(), x), hedge_exponent(clause.hedge));
+        if (clause.negated) mu = fuzzy_not(mu);
+        const double start = folded.value_or(identity);
+        folded = conjunction ? tnorm(system.and_method, start, mu) : snorm(system.or_method, start, mu);
+      }
       ++folded_clauses[variable];
     }
     const bool had_clauses = !rule.antecedent.empty();
     rule.antecedent = std::move(remaining);
     rule.folded_grade = folded;
+    rule.folded_grade_lower = folded_lower;
     if (had_clauses && rule.antecedent.empty()) ++constant_rules;
   }
 

@@ -17,6 +17,9 @@ struct InputValue {
 // linear outputs p1 x1 + ... + pn xn + c absorb p_i v_i of each fixed input into c and drop its coefficient.
 // Exact: the output equals the original's at every point (bitwise when every fold is min or max; with prod,
 // probor, sum, Einstein norms or linear outputs the operands are regrouped, which changes rounding only).
+// Interval type-2 systems: each fixed clause's grade is the interval [lower, upper] of its term (footprint,
+// hedge, then `not` swapping the ends: the interpreter's semantics), folded end by end into Rule::folded_grade
+// (upper) and Rule::folded_grade_lower (lower); the same exactness holds for each end.
 // Precondition: each input appears at most once in `fixed`, values are not NaN.
 PassReport specialize(FuzzySystem& system, const std::vector<InputValue>& fixed);
 

@@ -132,7 +132,7 @@ int run_compile(const CompileOptions& options) {
     PipelineOptions pipeline;
     pipeline.prune_epsilon = options.prune_epsilon;
     pipeline.dump_after = options.dump_after;
-    pipeline.interval_type2 = options.target != "table";  // the C++/CUDA emitter handles type-2, tables not yet
+    pipeline.interval_type2 = true;  // every target takes interval type-2 systems
     compiled = run_pipeline(*system, bindings, pipeline, diagnostics);
   }
   if (!compiled || diagnostics.has_errors()) {
@@ -249,8 +249,8 @@ void register_compile_command(CLI::App& app, int& exit_code) {
       ->required();
   command
       ->add_option("--prune-epsilon", options->prune_epsilon,
-                   "Also remove rules whose firing strength is provably below this (Mamdani, max aggregation); the "
-                   "report states the error bound it costs")
+                   "Also remove rules whose firing strength is provably below this (type-1 Mamdani, max aggregation; "
+                   "refused on interval type-2 systems); the report states the error bound it costs")
       ->check(CLI::Range(0.0, 1.0));
   command->add_option("--max-grid-points", options->max_grid_points, "Table budget: most grid points")
       ->check(CLI::Range(static_cast<std::uint64_t>(2), kMaxFztValues));

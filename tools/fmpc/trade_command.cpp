@@ -1,6 +1,7 @@
 // fmpc trade FILE [--fix NAME=VALUE] [--vary NAME]: what speed costs in accuracy, measured on this machine.
 // Every variant evaluates the same seeded held-out points of the specialised system and is compared with the
-// interpreter in `samples exact` mode: the interpreter itself (exact, and sampled as the rule file says), the
+// interpreter in `samples exact` mode (interval type-2 systems: the interpreter as the file samples it, the crisp
+// output (yl + yr) / 2): the interpreter itself (exact, and sampled as the rule file says), the
 // generated C++ evaluator in double and float (compiled at run time and loaded with dlopen), and uniform lookup
 // tables at several resolutions. docs/trade.md describes every column.
 #include <CLI/CLI.hpp>
@@ -137,12 +138,17 @@ double interpreter_bytes(const FuzzySystem& system) {
   double bytes = 0.0;
   for (const auto* variables : {&system.inputs, &system.outputs})
     for (const Variable& v : *variables)
-      for (const Term& t : v.terms) bytes += 8.0 * static_cast<double>(t.mf.params.size());
+      for (const Term& t : v.terms) {
+        bytes += 8.0 * static_cast<double>(t.mf.params.size());
+        if (t.footprint) bytes += 8.0 * static_cast<double>(2 + t.footprint->lower.params.size());
+      }
   for (const Rule& r : system.rules)
     bytes += static_cast<double>(sizeof(Clause) * (r.antecedent.size() + r.consequent.size()));
+  // Type-2 systems keep both ends of every sampled term and of the aggregate.
+  const double ends = system.interval_type2 ? 2.0 : 1.0;
   if (system.type == SystemType::Mamdani && system.samples > 0)
     for (const Variable& v : system.outputs)
-      bytes += 8.0 * static_cast<double>(system.samples) * static_cast<double>(v.terms.size() + 1);
+      bytes += ends * 8.0 * static_cast<double>(system.samples) * static_cast<double>(v.terms.size() + 1);
   return bytes;
 }
 
@@ -166,7 +172,9 @@ int run_trade(const TradeOptions& options) {
   const FuzzySystem* source = select_system(file, options.system, diagnostics);
   const Bindings bindings = parse_binding_arguments(options.fix, options.vary, diagnostics);
   std::optional<CompileResult> compiled;
-  if (source) compiled = run_pipeline(*source, bindings, {}, diagnostics);
+  PipelineOptions pipeline;
+  pipeline.interval_type2 = true;
+  if (source) compiled = run_pipeline(*source, bindings, pipeline, diagnostics);
   if (!compiled || diagnostics.has_errors()) {
     print_diagnostics(diagnostics, file.sources, std::cerr);
     return kExitErrors;
@@ -191,9 +199,12 @@ int run_trade(const TradeOptions& options) {
   };
 
   std::vector<Row> rows;
-  // The reference: the interpreter with `samples exact` (Mamdani); a Sugeno system has no sampling to remove.
+  // The reference: the interpreter with `samples exact` (Mamdani); a Sugeno system has no sampling to remove, and an
+  // interval type-2 Mamdani system is type-reduced over its samples (there is no exact mode): its reference is the
+  // interpreter as the file says, and the sampled row below is left out.
   FuzzySystem exact_system = system;
-  if (exact_system.type == SystemType::Mamdani) exact_system.samples = 0;
+  const bool exact_mode = exact_system.type == SystemType::Mamdani && !exact_system.interval_type2;
+  if (exact_mode) exact_system.samples = 0;
   std::vector<double> reference(n * m);
   {
     Interpreter exact(exact_system);
@@ -201,7 +212,10 @@ int run_trade(const TradeOptions& options) {
       const Evaluation e = exact.evaluate(point(p));
       for (std::size_t o = 0; o < m; ++o) reference[p * m + o] = e.outputs[o];
     }
-    Row row = make_row("interpreter", system.type == SystemType::Mamdani ? "samples exact (reference)" : "reference",
+    Row row = make_row("interpreter",
+                       exact_mode ? "samples exact (reference)"
+                                  : system.interval_type2 ? "interval type-2, " + std::string(to_string(system.type_reduction)) + " (reference)"
+                                                          : "reference",
                        ErrorStats{});
     row.evaluations_per_second = measure_rate(n, options.min_seconds, [&] {
       for (std::size_t p = 0; p < n; ++p) exact.evaluate(point(p));
@@ -210,7 +224,7 @@ int run_trade(const TradeOptions& options) {
     row.memory_note = "IR data";
     rows.push_back(row);
   }
-  if (system.type == SystemType::Mamdani && system.samples > 0) {
+  if (exact_mode && system.samples > 0) {
     Interpreter sampled(system);
     std::vector<double> got(n * m);
     for (std::size_t p = 0; p < n; ++p) {
@@ -323,7 +337,11 @@ int run_trade(const TradeOptions& options) {
   for (const auto& [index, value] : compiled->fixed)
     markdown << ' ' << source->inputs[static_cast<std::size_t>(index)].name << " = " << format_number(value) << ';';
   markdown << "\n" << n << " held-out points (seed " << options.seed
-           << "); errors against the interpreter with `samples exact`, in " << (unit.empty() ? "output units" : unit)
+           << "); errors against the interpreter "
+           << (system.interval_type2 ? "as the file samples it (interval type-2: the crisp output (yl + yr) / 2 that "
+                                                   "`fmpc eval` prints)"
+                                                 : "with `samples exact`")
+           << ", in " << (unit.empty() ? "output units" : unit)
            << ", maximum and RMS over points and outputs; speed in evaluations per CPU second on one core.\n\n";
   markdown << "| variant | detail | max error | RMS error | evaluations/s | memory |\n";
   markdown << "| --- | --- | ---: | ---: | ---: | --- |\n";

@@ -265,10 +265,16 @@ class Type2Emitter {
                        [](const Clause& a, const Clause& b) { return a.variable < b.variable; });
       const bool conjunction = rule.connective == Connective::And;
       const std::string identity = conjunction ? "T(1)" : "T(0)";
+      // Grades folded in by the specialize pass (Rule::folded_grade, folded_grade_lower) start the fold.
+      const bool folded = rule.folded_grade.has_value();
       std::string lower = identity, upper = identity;
+      if (folded) {
+        upper = emitted_constant(*rule.folded_grade);
+        lower = emitted_constant(rule.folded_grade_lower.value_or(*rule.folded_grade));
+      }
       for (std::size_t c = 0; c < antecedent.size(); ++c) {
         const auto [mu_lower, mu_upper] = clause_ends(antecedent[c]);
-        if (c == 0 && !(conjunction && system_.and_method == TNorm::EinsteinProduct)) {
+        if (c == 0 && !folded && !(conjunction && system_.and_method == TNorm::EinsteinProduct)) {
           lower = mu_lower;
           upper = mu_upper;
         } else if (conjunction) {

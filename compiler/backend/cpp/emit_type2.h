@@ -25,7 +25,8 @@ const std::vector<std::string>& type2_embedded_math_files();
 // `fmpc_math` names the embedded math and kFlag* are defined; `first_line` is the number of header lines before
 // it, so that the `#line` directives after each rule can point back into the header.
 // Preconditions: `system` passed sema and is interval type-2 (so Mamdani systems are sampled and defuzzify by
-// centroid); no rule has a folded grade (the pipeline does not specialise type-2 systems).
+// centroid). A rule's folded grades (Rule::folded_grade, folded_grade_lower: fixed inputs folded in by the
+// specialize pass) start the fold of its clauses on each end, as in the interpreter.
 std::string emit_type2_evaluate_function(const FuzzySystem& system, const EmitOptions& options, int first_line);
 
 }  // namespace fmpc
