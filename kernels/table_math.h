@@ -325,6 +325,34 @@ FMPC_HD void load_group(const T* group, T* out) {
 #endif
 }
 
+// The group (in groups of all outputs) of the cell's lower corner, and in stride[a] the step to the upper
+// neighbour on each outer axis a < Axes - PackedAxes.
+template <int Axes, int PackedAxes>
+FMPC_HD long long first_packed_group(const int* counts, const int* cell, long long* stride) {
+  constexpr int kOuter = Axes - PackedAxes;
+  long long inner_cells = 1, inner_cell = 0, outer_point = 0;
+#if defined(__CUDA_ARCH__)
+#pragma unroll
+#endif
+  for (int a = kOuter; a < Axes; ++a) {
+    inner_cell = inner_cell * (counts[a] - 1) + cell[a];
+    inner_cells *= counts[a] - 1;
+  }
+  long long span = inner_cells;
+#if defined(__CUDA_ARCH__)
+#pragma unroll
+#endif
+  for (int a = kOuter - 1; a >= 0; --a) {
+    stride[a] = span;
+    span *= counts[a];
+  }
+#if defined(__CUDA_ARCH__)
+#pragma unroll
+#endif
+  for (int a = 0; a < kOuter; ++a) outer_point = outer_point * counts[a] + cell[a];
+  return outer_point * inner_cells + inner_cell;
+}
+
 }  // namespace table_detail
 
 // interpolate_table on the packed copy: the same cell, weights and blend order, so the same bits. Axes and
@@ -340,33 +368,14 @@ FMPC_HD void interpolate_packed_table(const PackedTableView<T>& table, const dou
   if (!table_detail::locate_cell<Axes>(Axes, table.counts, table.breakpoints, query, cell, weight))
     return table_detail::fill_nan(out, table.outputs);
   long long stride[kOuter > 0 ? kOuter : 1];  // in groups of all outputs, the upper neighbour on each outer axis
-  long long inner_cells = 1, inner_cell = 0, outer_point = 0;
-#if defined(__CUDA_ARCH__)
-#pragma unroll
-#endif
-  for (int a = kOuter; a < Axes; ++a) {
-    inner_cell = inner_cell * (table.counts[a] - 1) + cell[a];
-    inner_cells *= table.counts[a] - 1;
-  }
-  long long span = inner_cells;
-#if defined(__CUDA_ARCH__)
-#pragma unroll
-#endif
-  for (int a = kOuter - 1; a >= 0; --a) {
-    stride[a] = span;
-    span *= table.counts[a];
-  }
-#if defined(__CUDA_ARCH__)
-#pragma unroll
-#endif
-  for (int a = 0; a < kOuter; ++a) outer_point = outer_point * table.counts[a] + cell[a];
+  const long long first_group = table_detail::first_packed_group<Axes, PackedAxes>(table.counts, cell, stride);
   const int outputs = table.outputs;
   for (int o = 0; o < outputs; ++o) {
     T group[kGroup];
     out[o] = table_detail::blend_corners<Axes>(Axes, weight, [&](int corner) {
       const int in_group = corner & (kGroup - 1);
       if (in_group == 0) {
-        long long g = outer_point * inner_cells + inner_cell;
+        long long g = first_group;
 #if defined(__CUDA_ARCH__)
 #pragma unroll
 #endif
@@ -401,21 +410,7 @@ __device__ __forceinline__ void interpolate_packed_table_lane_pairs(const Packed
   T weight[Axes];
   const bool valid = table_detail::locate_cell<Axes>(Axes, table.counts, table.breakpoints, query, cell, weight);
   long long stride[kOuter > 0 ? kOuter : 1];
-  long long inner_cells = 1, inner_cell = 0, outer_point = 0;
-#pragma unroll
-  for (int a = kOuter; a < Axes; ++a) {
-    inner_cell = inner_cell * (table.counts[a] - 1) + cell[a];
-    inner_cells *= table.counts[a] - 1;
-  }
-  long long span = inner_cells;
-#pragma unroll
-  for (int a = kOuter - 1; a >= 0; --a) {
-    stride[a] = span;
-    span *= table.counts[a];
-  }
-#pragma unroll
-  for (int a = 0; a < kOuter; ++a) outer_point = outer_point * table.counts[a] + cell[a];
-  const long long first_group = outer_point * inner_cells + inner_cell;
+  const long long first_group = table_detail::first_packed_group<Axes, PackedAxes>(table.counts, cell, stride);
   const int half = static_cast<int>(threadIdx.x & 1u);
   const int outputs = table.outputs;
   for (int o = 0; o < outputs; ++o) {
