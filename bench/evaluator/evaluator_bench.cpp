@@ -2,10 +2,13 @@
 //   BM_Interpreter      fmpc's reference interpreter (fmpc::Interpreter, double)
 //   BM_Compiled<T>      the generated evaluator's batch function, evaluate_batch<T> over the 4096 points in one
 //                       call (fmpc compile --target cpp, built into this program with the build's flags: Release
-//                       is -O3, no -march, so SSE2 on x86-64)
+//                       is -O3, no -march; with GCC on glibc x86-64 the CPU picks among its clones for the
+//                       baseline, x86-64-v3 and x86-64-v4, docs/codegen.md)
 //   BM_CompiledSingle<T> the generated evaluate<T>, one point per call
-//   BM_CompiledX86_64_v3<T> evaluate_batch<T> compiled with -march=x86-64-v3 (AVX2, FMA), x86-64 only, run only on
-//                       CPUs that have AVX2 and FMA
+//   BM_CompiledBaseline<T> evaluate_batch<T> built with FMPC_NO_TARGET_CLONES: the baseline target only (x86-64:
+//                       SSE2), x86-64 with GCC or Clang only
+//   BM_CompiledX86_64_v3<T> evaluate_batch<T> compiled with -march=x86-64-v3 (AVX2, FMA) and no clones, x86-64
+//                       only, run only on CPUs that have AVX2 and FMA
 //   BM_Fuzzylite        fuzzylite 6.0 (Debian libfuzzylite-dev), the same system imported from MATLAB .fis text
 // One core, one run:  fmpc_evaluator_bench --benchmark_repetitions=1  (docs/performance.md has the figures).
 // Before timing, it checks that the compiled evaluator (evaluate and evaluate_batch) agrees with the interpreter
@@ -29,6 +32,7 @@
 #include "compiler/frontend/rule_file_loader.h"
 #include "liver_evaluator.h"
 #if defined(FMPC_BENCH_X86_64_V3)
+#include "evaluator_baseline.h"
 #include "evaluator_x86_64_v3.h"
 #endif
 
@@ -104,20 +108,27 @@ Fixture& fixture() {
                  "fuzzylite %.3g (kPa; fuzzylite integrates the centroid its own way)\n",
                  kPoints, worst_double, worst_float, worst_fuzzylite);
 #if defined(FMPC_BENCH_X86_64_V3)
-    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
-      liver_batch_x86_64_v3(made.points.data(), batch_double.data(), kPoints);
-      liver_batch_x86_64_v3(made.points_float.data(), batch_float.data(), kPoints);
-      double worst_v3_double = 0, worst_v3_float = 0;
+    const auto check_build = [&](const char* name, auto batch_double_function, auto batch_float_function) {
+      batch_double_function(made.points.data(), batch_double.data(), kPoints);
+      batch_float_function(made.points_float.data(), batch_float.data(), kPoints);
+      double worst_build_double = 0, worst_build_float = 0;
       for (std::size_t p = 0; p < kPoints; ++p) {
         const double* x = &made.points[p * kInputs];
         const double expected = interpreter.evaluate(std::vector<double>(x, x + kInputs)).outputs[0];
-        worst_v3_double = std::max(worst_v3_double, std::fabs(batch_double[p] - expected));
-        worst_v3_float = std::max(worst_v3_float, std::fabs(static_cast<double>(batch_float[p]) - expected));
+        worst_build_double = std::max(worst_build_double, std::fabs(batch_double[p] - expected));
+        worst_build_float = std::max(worst_build_float, std::fabs(static_cast<double>(batch_float[p]) - expected));
       }
-      std::fprintf(stderr, "x86-64-v3 build: double %.3g, float %.3g\n", worst_v3_double, worst_v3_float);
-      worst_double = std::max(worst_double, worst_v3_double);
-      worst_float = std::max(worst_float, worst_v3_float);
-    }
+      std::fprintf(stderr, "%s build: double %.3g, float %.3g\n", name, worst_build_double, worst_build_float);
+      worst_double = std::max(worst_double, worst_build_double);
+      worst_float = std::max(worst_float, worst_build_float);
+    };
+    using DoubleBatch = void (*)(const double*, double*, std::size_t);
+    using FloatBatch = void (*)(const float*, float*, std::size_t);
+    check_build("baseline", static_cast<DoubleBatch>(&liver_batch_baseline),
+                static_cast<FloatBatch>(&liver_batch_baseline));
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma"))
+      check_build("x86-64-v3", static_cast<DoubleBatch>(&liver_batch_x86_64_v3),
+                  static_cast<FloatBatch>(&liver_batch_x86_64_v3));
 #endif
     if (!(worst_double <= 1e-12 * range) || !(worst_float <= 1e-5 * range)) {
       std::fprintf(stderr, "the compiled evaluator disagrees with the interpreter: not timing it\n");
@@ -181,6 +192,24 @@ BENCHMARK_TEMPLATE(BM_CompiledSingle, double);
 BENCHMARK_TEMPLATE(BM_CompiledSingle, float);
 
 #if defined(FMPC_BENCH_X86_64_V3)
+template <typename T>
+void BM_CompiledBaseline(benchmark::State& state) {
+  Fixture& f = fixture();
+  if (!f.ready) return state.SkipWithError("setup failed (see stderr)");
+  const T* points = nullptr;
+  if constexpr (sizeof(T) == sizeof(double)) points = f.points.data();
+  else points = f.points_float.data();
+  std::vector<T> outputs(kPoints);
+  for (auto _ : state) {
+    liver_batch_baseline(points, outputs.data(), kPoints);
+    benchmark::DoNotOptimize(outputs.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kPoints));
+}
+BENCHMARK_TEMPLATE(BM_CompiledBaseline, double);
+BENCHMARK_TEMPLATE(BM_CompiledBaseline, float);
+
 template <typename T>
 void BM_CompiledX86_64_v3(benchmark::State& state) {
   Fixture& f = fixture();

@@ -1,6 +1,6 @@
-// The same liver evaluator compiled for x86-64-v3 (AVX2, FMA): its own header (namespace liver_evaluator_v3), so
-// that no inline function is shared with the baseline build of evaluator_bench.cpp. evaluator_bench.cpp calls it
-// only where the CPU has AVX2 and FMA.
+// The same liver evaluator compiled for x86-64-v3 (AVX2, FMA) and FMPC_NO_TARGET_CLONES (CMakeLists.txt): its own
+// header (namespace liver_evaluator_v3), so that no inline function is shared with the other builds.
+// evaluator_bench.cpp calls it only where the CPU has AVX2 and FMA.
 #include "evaluator_x86_64_v3.h"
 
 #include "liver_evaluator_v3.h"

@@ -15,6 +15,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "compiler/backend/cpp/embedded_kernels.h"
@@ -166,7 +167,10 @@ int main(int argc, char** argv) {
 }
 
 // Emits every case into one translation unit, compiles it with the warnings fmpc's own code obeys, runs it.
-std::vector<std::vector<Result>> compile_and_run(const std::vector<Case>& cases, const std::string& tag) {
+// `defines`: extra compiler arguments, e.g. -DFMPC_NO_TARGET_CLONES (evaluate_batch for the baseline x86-64 only;
+// without it, the clone this CPU supports runs).
+std::vector<std::vector<Result>> compile_and_run(const std::vector<Case>& cases, const std::string& tag,
+                                                 const std::string& defines = "") {
   ScratchFolder folder(tag);
   for (std::size_t c = 0; c < cases.size(); ++c) {
     EmitOptions options;
@@ -194,7 +198,7 @@ std::vector<std::vector<Result>> compile_and_run(const std::vector<Case>& cases,
 
   const std::string compile = std::string(FMPC_CXX_COMPILER) +
                               " -std=c++17 -O1 -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wdouble-promotion "
-                              "-Wold-style-cast -Werror -o " +
+                              "-Wold-style-cast -Werror " + defines + " -o " +
                               (folder.path / "driver").string() + " " + (folder.path / "driver.cpp").string() +
                               " > " + (folder.path / "compile.log").string() + " 2>&1";
   const int compiled = std::system(compile.c_str());
@@ -385,7 +389,8 @@ TEST_CASE("emitted headers agree with the interpreter on seeded random systems",
     c.points = test_points(c.system, seed * 7, 30);
     cases.push_back(std::move(c));
   }
-  const auto results = compile_and_run(cases, "random");
+  // The baseline x86-64 evaluate_batch; the golden files run the clone this CPU supports.
+  const auto results = compile_and_run(cases, "random", "-DFMPC_NO_TARGET_CLONES");
   Tally tally;
   for (std::size_t c = 0; c < cases.size(); ++c) compare_with_interpreter(cases[c], results[c], tally);
   CHECK(tally.float_checked > tally.points / 2);
@@ -532,8 +537,12 @@ TEST_CASE("evaluate_batch runs blocks of lanes for centroid Mamdani systems, and
   while (std::getline(lines, line))
     if (line.rfind("      const T f", 0) == 0) ++lattice_operations;
   CHECK(lattice_operations == 195);
-  // The liver's 4 columns x 101 samples, less the exact zeros (the F0-F1 and F2 tails): 357 grades.
-  CHECK(lanes->find("inline const volatile double kLaneGrades0[357] = {") != std::string::npos);
+  // The liver's 4 columns x 101 samples, less the grades below 1e-36 (the F0-F1, F2 and F3 tails): 210 grades.
+  CHECK(lanes->find("inline const volatile double kLaneGrades0[210] = {") != std::string::npos);
+  // Points whose aggregate total is below the floor go through evaluate() (test "... too small for its shortcuts").
+  CHECK(lanes->find("const T total_floor = sizeof(T) < sizeof(double) ? T(") != std::string::npos);
+  CHECK(lanes->find("f = evaluate(inputs + (start + j) * kInputCount, y);") != std::string::npos);
+  CHECK(lanes->find("FMPC_GENERATED_BATCH_CLONES\ninline void evaluate_batch(") != std::string::npos);
 
   for (const Defuzzifier method : {Defuzzifier::Bisector, Defuzzifier::MeanOfMaximum}) {
     liver.defuzzifier = method;
@@ -551,16 +560,57 @@ TEST_CASE("evaluate_batch runs blocks of lanes for centroid Mamdani systems, and
   CHECK(diagnostics.empty());
 }
 
-TEST_CASE("evaluate_batch's lane_exp is within 2 ulp of exp (float: 1), with the same subnormals and zeros",
+TEST_CASE("evaluate_batch gives evaluate() the points whose aggregate is too small for its shortcuts", "[emit]") {
+  // evaluate_batch flushes input grades below 3.3e-308 to 0 and leaves out consequent grades below 1e-36; points
+  // whose aggregate total is below the floor that makes both harmless go through evaluate(). Each point below
+  // would come out wrong without that: at x = 38.2 `near` is 2e-317 (a subnormal: the rule fired, but the lanes
+  // see 0, "no rule fired"); at x = 46.68 `far` is 1e-60, which clips `large` at 1e-60 wherever it exceeds that,
+  // also where the lanes left its grades (below 1e-36, y < 1.6) out. Others: a normal grade of 5e-306, a NaN, out
+  // of range on both sides, and ordinary points the lanes evaluate.
+  const std::string text = R"(system tails "Rules that fire very weakly"
+  type mamdani
+  defuzzify centroid samples 101
+  when no rule fires: midrange
+
+input x "Position" in [0, 50] mm
+  near is gauss(mean 0, sd 1)
+  far is gauss(mean 50, sd 0.2)
+
+output y "Force" in [0, 10] N
+  small is triangle(start 0, peak 2, end 4)
+  large is gauss(mean 8, sd 0.5)
+
+rule r1: if x is near then y is small
+rule r2: if x is far then y is large
+)";
+  fmpc::DiagnosticList diagnostics;
+  fmpc::RuleFile file = fmpc::load_rule_file("tails.fis", text, diagnostics);
+  REQUIRE_FALSE(diagnostics.has_errors());
+  REQUIRE(file.systems.size() == 1);
+  Case c;
+  c.label = "tails";
+  c.system = file.systems[0];
+  for (const double x : {0.5, 3.0, 20.0, 37.5, 38.2, 38.5, 46.68, 47.0, 49.0, 50.0, 50.1, 55.0, -1.0, kNaN})
+    c.points.push_back({x});
+  const auto results = compile_and_run({c}, "tails", "-DFMPC_NO_TARGET_CLONES");
+  Tally tally;
+  compare_with_interpreter(c, results[0], tally);
+  // The subnormal firing at 38.2: the interpreter fires, and so must evaluate_batch.
+  CHECK(results[0][4].flags_batch_double == 0u);
+  CHECK(std::fabs(results[0][4].outputs_batch_double[0] - 2.0) < 0.01);
+}
+
+TEST_CASE("evaluate_batch's lane_exp is within 2 ulp of exp (float: 1) down to its lowest argument, 0 below",
           "[emit]") {
   ScratchFolder folder("lane_exp");
   fmpc::DiagnosticList diagnostics;
   const auto header = fmpc::emit_evaluator(liver_system(), default_options(), diagnostics);
   REQUIRE(header);
   write_text(folder.path / "liver.h", *header);
-  // Prints, for double then float: the largest distance in ulp on normal results, the number of subnormal or
-  // zero results that differ by more than one unit of the smallest subnormal, and the number of arguments whose
-  // result is not the expected exact value (1 at 0, 0 far below, at -inf and at NaN, which lane_exp clamps).
+  // Prints, for double then float: the largest distance in ulp from exp at arguments from `lowest` up, the number
+  // of results that are neither 0 nor normal (lane_exp never computes a subnormal), the number of arguments below
+  // `lowest` whose result is not 0, and the number of arguments whose result is not the expected value (1 at 0, a
+  // normal number at `lowest`, 0 just below it, far below, at -inf and at NaN). Then `lowest` itself.
   write_text(folder.path / "driver.cpp", R"(#include <cmath>
 #include <cstdio>
 #include <limits>
@@ -570,23 +620,27 @@ template <typename T>
 void measure(std::FILE* out, T lowest, T far_below) {
   std::mt19937_64 random(7);
   double worst_ulp = 0;
-  long subnormal_misses = 0, special_misses = 0;
+  long not_normal = 0, below_misses = 0, special_misses = 0;
   for (long i = 0; i < 2000000; ++i) {
-    const double spans[] = {1.0, 40.0, 700.0, static_cast<double>(-far_below)};
+    const double spans[] = {1.0, 40.0, static_cast<double>(-lowest), static_cast<double>(-far_below)};
     const T a = static_cast<T>(-std::uniform_real_distribution<double>(0.0, spans[i % 4])(random));
     const T expected = std::exp(a), got = liver::lane_exp(a, lowest);
-    if (expected >= std::numeric_limits<T>::min()) {
+    if (got != T(0) && !(got >= std::numeric_limits<T>::min())) ++not_normal;
+    if (a >= lowest) {
       const double ulp = static_cast<double>(std::nextafter(expected, T(2)) - expected);
       worst_ulp = std::fmax(worst_ulp, std::fabs(static_cast<double>(got) - static_cast<double>(expected)) / ulp);
-    } else if (std::fabs(got - expected) > std::numeric_limits<T>::denorm_min()) {
-      ++subnormal_misses;
+    } else if (got != T(0)) {
+      ++below_misses;
     }
   }
   const T inf = std::numeric_limits<T>::infinity();
   if (liver::lane_exp(T(0), lowest) != T(1) || liver::lane_exp(-T(0), lowest) != T(1)) ++special_misses;
-  for (const T a : {far_below, T(10) * far_below, -inf, std::numeric_limits<T>::quiet_NaN()})
+  if (!(liver::lane_exp(lowest, lowest) >= std::numeric_limits<T>::min())) ++special_misses;
+  for (const T a : {std::nextafter(lowest, -inf), far_below, T(10) * far_below, -inf,
+                    std::numeric_limits<T>::quiet_NaN()})
     if (liver::lane_exp(a, lowest) != T(0)) ++special_misses;
-  std::fprintf(out, "%g %ld %ld\n", worst_ulp, subnormal_misses, special_misses);
+  std::fprintf(out, "%g %ld %ld %ld %g\n", worst_ulp, not_normal, below_misses, special_misses,
+               static_cast<double>(lowest));
 }
 int main(int, char** argv) {
   std::FILE* out = std::fopen(argv[1], "w");
@@ -604,15 +658,19 @@ int main(int, char** argv) {
   REQUIRE(compiled == 0);
   REQUIRE(std::system(((folder.path / "driver").string() + " " + (folder.path / "out.txt").string()).c_str()) == 0);
   std::istringstream results(read_text(folder.path / "out.txt"));
-  for (const double allowed_ulp : {2.0, 1.0}) {
-    double worst_ulp = -1;
-    long subnormal_misses = -1, special_misses = -1;
-    results >> worst_ulp >> subnormal_misses >> special_misses;
+  // lowest: exp(-708) = 3.3e-308 and exp(-86) = 4.5e-38 are normal, and within a factor 1.5 (float: 3.7) of the
+  // smallest normal number.
+  for (const auto& [allowed_ulp, lowest] : {std::pair{2.0, -708.0}, std::pair{1.0, -86.0}}) {
+    double worst_ulp = -1, got_lowest = 0;
+    long not_normal = -1, below_misses = -1, special_misses = -1;
+    results >> worst_ulp >> not_normal >> below_misses >> special_misses >> got_lowest;
     INFO("allowed " << allowed_ulp << " ulp");
     CHECK(worst_ulp >= 0.0);
     CHECK(worst_ulp <= allowed_ulp);
-    CHECK(subnormal_misses == 0);
+    CHECK(not_normal == 0);
+    CHECK(below_misses == 0);
     CHECK(special_misses == 0);
+    CHECK(got_lowest == lowest);
   }
   REQUIRE_FALSE(results.fail());
 }

@@ -650,6 +650,41 @@ bool lane_batch_applies(const FuzzySystem& system) {
   return statements <= kMaxUnrolledAggregation;
 }
 
+// evaluate_batch's two shortcuts, which evaluate() does not take. lane_exp returns 0 below its `lowest`, where
+// exp is below these (exp(-708), float exp(-86)), so that no lane computes a subnormal (slow on x86); and the
+// aggregation leaves out consequent grades of at most kDroppedGrade (the liver: 210 of 357 remain), which is also
+// above float's smallest normal, so that the grades read in float are normal numbers too.
+constexpr double kLaneExpFlushedDouble = 3.31e-308;
+constexpr double kLaneExpFlushedFloat = 4.48e-38;
+constexpr double kDroppedGrade = 1e-36;
+
+// The smallest aggregate total (sum of g_k over the samples) for which the shortcuts move a centroid by at most
+// `relative_error` of the output range; evaluate_batch sends points with a smaller total to evaluate().
+// Bound: a flushed input grade (below `flushed`) moves a clause grade by at most flushed^p under a hedge of
+// exponent p < 1 (x^p is not Lipschitz at 0), p flushed otherwise, and `not` by as much; a rule's strength moves
+// by at most the sum over its clauses (min, max, product, probabilistic sum and the Einstein norms have partial
+// derivatives of at most 1 on grades; the factor 2 is margin), times its weight; implication min or product and
+// max aggregation move g_k by at most the largest strength change, and a left-out grade g by at most g. A change of
+// at most d in every g_k moves sum(g (x - middle)) by n d R / 2 and sum(g) by n d, so the centroid by at most
+// n d R / total_true, and total_true >= floor / 2 where the computed total is at least floor = 2 n d / relative.
+double lane_total_floor(const FuzzySystem& system, double flushed, double relative_error, double smallest) {
+  double strength_change = 0.0;
+  for (const Rule& rule : system.rules) {
+    double clause_change = 0.0;
+    for (const Clause& clause : rule.antecedent) {
+      const double p = hedge_exponent(clause.hedge);
+      clause_change = std::max(clause_change, p < 1.0 ? std::pow(flushed, p) : p * flushed);
+    }
+    strength_change = std::max(strength_change, 2.0 * static_cast<double>(rule.antecedent.size()) * clause_change *
+                                                    std::max(1.0, rule.weight));
+  }
+  const double n = static_cast<double>(std::max(system.samples, 1));
+  const double floor = std::max(smallest, 2.0 * n * (strength_change + kDroppedGrade) / relative_error);
+  // Rounded up to one significant digit, so that the header reads 3e-19 rather than 2.0199999999999997e-19.
+  const double unit = std::pow(10.0, std::floor(std::log10(floor)));
+  return std::ceil(floor / unit) * unit;
+}
+
 class LaneBatchEmitter {
  public:
   LaneBatchEmitter(const FuzzySystem& system, CodeWriter& out) : system_(system), out_(out) {}
@@ -683,8 +718,14 @@ class LaneBatchEmitter {
     out_.line("// results and flags (double within 1e-12 of the output range, float within 1e-5; lane_exp is not the");
     out_.line("// C library's exp). Blocks of kBatchLanes points; each loop over j runs one step for every lane.");
     out_.line("template <typename T>");
+    out_.line("FMPC_GENERATED_BATCH_CLONES");
     out_.line("inline void evaluate_batch(const T* inputs, T* outputs, std::size_t n, unsigned* flags = nullptr) {");
     if (uses_lane_exp_) out_.line("  const T lowest = lane_exp_lowest(T(0));");
+    // The smallest aggregate total for which the shortcuts (grades flushed to 0 by lane_exp, consequent grades
+    // left out) move the centroid by less than 1e-15 of the output range (float: 1e-8); see lane_total_floor.
+    out_.line("  const T total_floor = sizeof(T) < sizeof(double) ? T(" +
+              format_number(lane_total_floor(system_, kLaneExpFlushedFloat, 1e-8, 1e-30)) + ") : T(" +
+              format_number(lane_total_floor(system_, kLaneExpFlushedDouble, 1e-15, 1e-300)) + ");");
     for (std::size_t o = 0; o < plans.size(); ++o) {
       const std::size_t count = aggregation_grades_[o].size();
       if (count == 0) continue;
@@ -704,38 +745,32 @@ class LaneBatchEmitter {
     std::string results;
     for (std::size_t o = 0; o < plans.size(); ++o) {
       const std::string os = std::to_string(o);
-      results += (o ? ", " : "") + std::string("value") + os + "[kBatchLanes], total" + os +
-                 "[kBatchLanes], strongest" + os + "[kBatchLanes]";
+      results += (o ? ", " : "") + std::string("value") + os + "[kBatchLanes], total" + os + "[kBatchLanes]";
     }
     out_.line("    T " + results + ";");
     out_.line("    for (std::size_t j = 0; j < kBatchLanes; ++j) {");
     for (const std::string& text : body_lines_) out_.line("      " + text);
     out_.line("    }");
-    // Flags, NaN inputs and the no-fire policy, point by point (as evaluate() orders them).
+    // Point by point: NaN inputs, and aggregates too small for the shortcuts (which include every point where no
+    // rule fired), go through evaluate(); the others take the lanes' values and the out-of-range flag.
     out_.line("    for (std::size_t j = 0; j < count; ++j) {");
     out_.line("      T* y = outputs + (start + j) * kOutputCount;");
     out_.line("      unsigned f = 0u;");
-    std::string nan_test, range_test;
+    std::string slow_test, range_test;
     for (std::size_t i = 0; i < input_count; ++i) {
       const std::string xi = "x[" + std::to_string(i) + "][j]";
-      nan_test += (i ? " || " : "") + std::string("fmpc_math::fmpc_is_nan(") + xi + ")";
+      slow_test += (i ? " || " : "") + std::string("fmpc_math::fmpc_is_nan(") + xi + ")";
       range_test += (i ? " || " : "") + xi + " < " + constant(system_.inputs[i].min) + " || " + xi + " > " +
                     constant(system_.inputs[i].max);
     }
-    out_.line("      if (" + nan_test + ") {");
     for (std::size_t o = 0; o < plans.size(); ++o)
-      out_.line("        y[" + std::to_string(o) + "] = fmpc_math::fmpc_quiet_nan<T>();");
-    out_.line("        f = kFlagNanInput;");
+      slow_test += " || !(total" + std::to_string(o) + "[j] >= total_floor)";
+    out_.line("      if (" + slow_test + ") {");
+    out_.line("        f = evaluate(inputs + (start + j) * kInputCount, y);");
     out_.line("      } else {");
-    out_.line("        if (" + range_test + ") f |= kFlagInputOutOfRange;");
-    for (std::size_t o = 0; o < plans.size(); ++o) {
-      const std::string os = std::to_string(o);
-      out_.line("        if (!(strongest" + os + "[j] > T(0)) || total" + os + "[j] == T(0)) {");
-      for (const std::string& text : no_fire_lines(system_, o, "y[" + os + "]", "f")) out_.line("          " + text);
-      out_.line("        } else {");
-      out_.line("          y[" + os + "] = value" + os + "[j];");
-      out_.line("        }");
-    }
+    out_.line("        if (" + range_test + ") f = kFlagInputOutOfRange;");
+    for (std::size_t o = 0; o < plans.size(); ++o)
+      out_.line("        y[" + std::to_string(o) + "] = value" + std::to_string(o) + "[j];");
     out_.line("      }");
     out_.line("      if (flags != nullptr) flags[start + j] = f;");
     out_.line("    }");
@@ -919,9 +954,9 @@ class LaneBatchEmitter {
   }
 
   // g_k = max over columns of implication(strength, grade_k), unrolled over the samples with the grades as
-  // constants; a zero grade adds nothing (implication(w, 0) = 0 and max(a, 0) = a), so it is left out, and a
-  // sample where every grade is zero with it. Centroid: sum(g x) / sum(g) as in evaluate(), x measured from the
-  // middle of the range, four partial sums of each.
+  // constants; a grade of at most kDroppedGrade is left out (implication(w, g) <= g, so g_k moves by at most that
+  // much; lane_total_floor accounts for it), and a sample where every grade is left out with it. Centroid:
+  // sum(g x) / sum(g) as in evaluate(), x measured from the middle of the range, four partial sums of each.
   void emit_aggregation(std::size_t o, const OutputPlan& plan) {
     const Variable& output = system_.outputs[o];
     const std::string os = std::to_string(o);
@@ -937,7 +972,7 @@ class LaneBatchEmitter {
       std::vector<std::string> terms;
       for (std::size_t c = 0; c < plan.strengths.size(); ++c) {
         const double grade = plan.grades[c][k];
-        if (grade == 0.0) continue;
+        if (grade <= kDroppedGrade) continue;
         const std::string& w = plan.strengths[c];
         std::string term;
         if (system_.implication == TNorm::Product && grade == 1.0) {
@@ -970,10 +1005,6 @@ class LaneBatchEmitter {
     body_lines_.push_back("  const T moment = (moment_0 + moment_1) + (moment_2 + moment_3);");
     body_lines_.push_back("  value" + os + "[j] = " + constant(middle) + " + moment / total;");
     body_lines_.push_back("  total" + os + "[j] = total;");
-    std::string strongest;
-    for (const std::string& w : plan.strengths)
-      strongest = strongest.empty() ? w : "grade_max(" + strongest + ", " + w + ")";
-    body_lines_.push_back("  strongest" + os + "[j] = " + (strongest.empty() ? std::string("T(0)") : strongest) + ";");
     body_lines_.push_back("}");
   }
 
@@ -992,14 +1023,15 @@ class LaneBatchEmitter {
 // lane_exp and lane_gaussian, the vectorisable exp of evaluate_batch (written into headers that use them).
 constexpr const char* kLaneExpText = R"(// exp for the lanes of evaluate_batch:
 // Cody-Waite reduction a = n ln2 + r, |r| <= ln2 / 2, a polynomial for exp(r) (double: Taylor to degree 13 by
-// Estrin's scheme; float: Cephes expf), then 2^n from its bits, taken as 2^(n + 1000) 2^-1000 (float: 2^(n + 120)
-// 2^-120) so that a subnormal result is rounded once and a result far below the subnormals is a plain 0 (a result
-// that rounds to the smallest subnormals is slow on x86). Within 2 ulp of the C library's exp on normal results
-// (float: 1 ulp), and the same subnormals (tested). Plain arithmetic and bit copies, no branches and no calls, so
-// that compilers vectorise the loops that call it. Arguments below `lowest` (-1400 or -170, where exp is 0) are
-// raised to it, NaN included (NaN lanes are overwritten); arguments must be at most 15 (float: 5), which Gaussian
-// exponents (<= 0) are. `lowest` is read from a volatile once per call, not written as a constant: with a
-// constant GCC folds the clamped case and turns the clamp into a branch, which stops it vectorising the loop.
+// Estrin's scheme; float: Cephes expf), then 2^n from its bits. Within 2 ulp of the C library's exp (float: 1 ulp)
+// for arguments from `lowest` (-708, float: -86) up; below it, where exp is below 3.3e-308 (float: 4.5e-38), the
+// result is 0 (NaN included: NaN lanes are overwritten). So every result is 0 or a normal number: computing a
+// subnormal, or a product that rounds to one, costs a microcode assist on x86, and evaluate_batch sends the points
+// where such grades could matter to evaluate() (docs/codegen.md "Batch evaluation"). Plain arithmetic, selects and
+// bit copies, no branches and no calls, so that compilers vectorise the loops that call it. Arguments must be at
+// most 15 (float: 5), which Gaussian exponents (<= 0) are. `lowest` is read from a volatile once per call, not
+// written as a constant: with a constant GCC folds the clamped case and turns the clamp into a branch, which stops
+// it vectorising the loop.
 inline double lane_exp(double argument, double lowest) {
   const double a = argument > lowest ? argument : lowest;
   const double shifted = a * 0x1.71547652b82fep0 + 0x1.8p52;  // 1.5 2^52: the low bits hold n = round(a / ln2)
@@ -1012,12 +1044,14 @@ inline double lane_exp(double argument, double lowest) {
   const double high = (1.0 / 40320.0 + r * (1.0 / 362880.0)) + r2 * (1.0 / 3628800.0 + r * (1.0 / 39916800.0));
   const double top = 1.0 / 479001600.0 + r * (1.0 / 6227020800.0);
   const double p = (low + r4 * middle) + r8 * (high + r4 * top);
+  // 2^n with n >= -1021 (a >= -708): a normal number, and so is p 2^n (p >= 0.7); 0 below `lowest`. (A select
+  // on the bits: GCC turns a select on the result into a branch, which stops it vectorising the loop.)
   std::uint64_t bits;
   std::memcpy(&bits, &shifted, sizeof bits);
-  bits = (bits + (1023u + 1000u)) << 52;
+  bits = argument >= lowest ? (bits + 1023u) << 52 : 0u;
   double scale;
   std::memcpy(&scale, &bits, sizeof scale);
-  return p * scale * 0x1p-1000;
+  return p * scale;
 }
 inline float lane_exp(float argument, float lowest) {
   const float a = argument > lowest ? argument : lowest;
@@ -1031,15 +1065,16 @@ inline float lane_exp(float argument, float lowest) {
   p = p * r + 1.6666665459e-1f;
   p = p * r + 5.0000001201e-1f;
   p = p * (r * r) + r + 1.0f;
+  // 2^n with n >= -124 (a >= -86): normal, and so is p 2^n; 0 below `lowest`.
   std::uint32_t bits;
   std::memcpy(&bits, &shifted, sizeof bits);
-  bits = (bits + (127u + 120u)) << 23;
+  bits = argument >= lowest ? (bits + 127u) << 23 : 0u;
   float scale;
   std::memcpy(&scale, &bits, sizeof scale);
-  return p * scale * 0x1p-120f;
+  return p * scale;
 }
-inline const volatile double kLaneExpLowestDouble = -1400.0;
-inline const volatile float kLaneExpLowestFloat = -170.0f;
+inline const volatile double kLaneExpLowestDouble = -708.0;
+inline const volatile float kLaneExpLowestFloat = -86.0f;
 inline double lane_exp_lowest(double) { return kLaneExpLowestDouble; }
 inline float lane_exp_lowest(float) { return kLaneExpLowestFloat; }
 
@@ -1227,6 +1262,19 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
   else EvaluatorEmitter(system, options, out).emit_evaluate_function();
   out.line();
   if (lane_batch) {
+    out.line("// evaluate_batch is compiled for the baseline x86-64 and for x86-64-v3 (AVX2, FMA) and v4 (AVX-512) by");
+    out.line("// GCC on glibc x86-64 (target_clones); the dynamic loader runs the clone the CPU supports. Define");
+    out.line("// FMPC_NO_TARGET_CLONES to compile only the one the compiler's flags select.");
+    out.line("#ifndef FMPC_GENERATED_BATCH_CLONES");
+    out.line("#if !defined(FMPC_NO_TARGET_CLONES) && defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 11 && \\");
+    out.line("    defined(__x86_64__) && defined(__ELF__) && defined(__GLIBC__) && !defined(__CUDACC__)");
+    out.line("#define FMPC_GENERATED_BATCH_CLONES \\");
+    out.line("  __attribute__((target_clones(\"default\", \"arch=x86-64-v3\", \"arch=x86-64-v4\")))");
+    out.line("#else");
+    out.line("#define FMPC_GENERATED_BATCH_CLONES");
+    out.line("#endif");
+    out.line("#endif");
+    out.line();
     out.line("// Points per block of evaluate_batch: 16 floats or doubles fill whole vector registers of every width.");
     out.line("inline constexpr std::size_t kBatchLanes = 16;");
     out.line();
