@@ -371,7 +371,7 @@ FMPC_HD void interpolate_packed_table(const PackedTableView<T>& table, const dou
   const long long first_group = table_detail::first_packed_group<Axes, PackedAxes>(table.counts, cell, stride);
   const int outputs = table.outputs;
   for (int o = 0; o < outputs; ++o) {
-    T group[kGroup];
+    T group[kGroup] = {};  // written at each group's first corner, before any read (GCC cannot see it)
     out[o] = table_detail::blend_corners<Axes>(Axes, weight, [&](int corner) {
       const int in_group = corner & (kGroup - 1);
       if (in_group == 0) {
@@ -430,7 +430,7 @@ __device__ __forceinline__ void interpolate_packed_table_lane_pairs(const Packed
 #pragma unroll
       for (int a = 0; a < Axes; ++a)
         if (a != kOuter) packed_weights[k++] = w[a];
-      T values[kHalf];
+      T values[kHalf] = {};
       const T value = table_detail::blend_corners<Axes - 1>(
           Axes - 1, packed_weights, [&](int corner) {
             const int in_half = corner & (kHalf - 1);
