@@ -47,6 +47,9 @@ struct Row {
   std::size_t steps = 0;
   double seconds = 0.0;
   std::string status = "ok";
+  // Forward Euler diverging on a prestressed network is the documented result (docs/simulator.md: no step is
+  // stable there), not a failure of the bench; the row still says what happened.
+  bool divergence_expected = false;
 
   double microseconds_per_step() const { return steps == 0 ? 0.0 : 1e6 * seconds / static_cast<double>(steps); }
   double spring_steps_per_second() const {
@@ -226,7 +229,9 @@ void print_table(const std::vector<Row>& rows, std::ostream& out) {
   for (const Row& r : rows) {
     out << "| " << r.variant << " | " << r.precision << " | " << r.integrator << " | " << r.graphs << " | " << r.threads
         << " | " << r.scenes << " | " << r.springs << " | "
-        << (r.status == "ok" ? format(r.microseconds_per_step(), 2) : r.status) << " | "
+        << (r.status == "ok" ? format(r.microseconds_per_step(), 2)
+                             : (r.divergence_expected ? "expected divergence, " : "") + r.status)
+        << " | "
         << (r.status == "ok" ? scientific(r.spring_steps_per_second()) : "-") << " |\n";
   }
 }
@@ -282,6 +287,9 @@ int main(int argc, char** argv) {
       for (const Integrator integrator :
            {Integrator::ForwardEuler, Integrator::VelocityVerlet, Integrator::RungeKutta4}) {
         rows.push_back(gpu_row(base, precision, integrator, true, options));
+        // Only the largest box runs long enough (seconds of simulated time) for the growth to show.
+        rows.back().divergence_expected = integrator == Integrator::ForwardEuler && cells == sizes.back() &&
+                                          !options.quick;
       }
     }
   }
@@ -306,6 +314,6 @@ int main(int argc, char** argv) {
   }
   print_table(rows, std::cout);
   bool all_ok = true;
-  for (const Row& r : rows) all_ok = all_ok && r.status == "ok";
+  for (const Row& r : rows) all_ok = all_ok && (r.status == "ok" || r.divergence_expected);
   return all_ok ? 0 : 1;
 }
