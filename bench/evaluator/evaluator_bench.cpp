@@ -155,8 +155,9 @@ void BM_Interpreter(benchmark::State& state) {
 }
 BENCHMARK(BM_Interpreter);
 
-template <typename T>
-void BM_Compiled(benchmark::State& state) {
+// Times `batch(points, outputs, kPoints)` over the fixture's points in precision T.
+template <typename T, typename Batch>
+void time_batch(benchmark::State& state, Batch batch) {
   Fixture& f = fixture();
   if (!f.ready) return state.SkipWithError("setup failed (see stderr)");
   const T* points = nullptr;
@@ -164,29 +165,25 @@ void BM_Compiled(benchmark::State& state) {
   else points = f.points_float.data();
   std::vector<T> outputs(kPoints);
   for (auto _ : state) {
-    liver_evaluator::evaluate_batch(points, outputs.data(), kPoints);
+    batch(points, outputs.data(), kPoints);
     benchmark::DoNotOptimize(outputs.data());
     benchmark::ClobberMemory();
   }
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kPoints));
+}
+
+template <typename T>
+void BM_Compiled(benchmark::State& state) {
+  time_batch<T>(state, [](const T* in, T* out, std::size_t n) { liver_evaluator::evaluate_batch(in, out, n); });
 }
 BENCHMARK_TEMPLATE(BM_Compiled, double);
 BENCHMARK_TEMPLATE(BM_Compiled, float);
 
 template <typename T>
 void BM_CompiledSingle(benchmark::State& state) {
-  Fixture& f = fixture();
-  if (!f.ready) return state.SkipWithError("setup failed (see stderr)");
-  const T* points = nullptr;
-  if constexpr (sizeof(T) == sizeof(double)) points = f.points.data();
-  else points = f.points_float.data();
-  std::vector<T> outputs(kPoints);
-  for (auto _ : state) {
-    for (std::size_t p = 0; p < kPoints; ++p) liver_evaluator::evaluate(points + p * kInputs, &outputs[p]);
-    benchmark::DoNotOptimize(outputs.data());
-    benchmark::ClobberMemory();
-  }
-  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kPoints));
+  time_batch<T>(state, [](const T* in, T* out, std::size_t n) {
+    for (std::size_t p = 0; p < n; ++p) liver_evaluator::evaluate(in + p * kInputs, &out[p]);
+  });
 }
 BENCHMARK_TEMPLATE(BM_CompiledSingle, double);
 BENCHMARK_TEMPLATE(BM_CompiledSingle, float);
@@ -194,38 +191,16 @@ BENCHMARK_TEMPLATE(BM_CompiledSingle, float);
 #if defined(FMPC_BENCH_X86_64_V3)
 template <typename T>
 void BM_CompiledBaseline(benchmark::State& state) {
-  Fixture& f = fixture();
-  if (!f.ready) return state.SkipWithError("setup failed (see stderr)");
-  const T* points = nullptr;
-  if constexpr (sizeof(T) == sizeof(double)) points = f.points.data();
-  else points = f.points_float.data();
-  std::vector<T> outputs(kPoints);
-  for (auto _ : state) {
-    liver_batch_baseline(points, outputs.data(), kPoints);
-    benchmark::DoNotOptimize(outputs.data());
-    benchmark::ClobberMemory();
-  }
-  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kPoints));
+  time_batch<T>(state, [](const T* in, T* out, std::size_t n) { liver_batch_baseline(in, out, n); });
 }
 BENCHMARK_TEMPLATE(BM_CompiledBaseline, double);
 BENCHMARK_TEMPLATE(BM_CompiledBaseline, float);
 
 template <typename T>
 void BM_CompiledX86_64_v3(benchmark::State& state) {
-  Fixture& f = fixture();
-  if (!f.ready) return state.SkipWithError("setup failed (see stderr)");
   if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma"))
     return state.SkipWithError("this CPU has no AVX2 or FMA");
-  const T* points = nullptr;
-  if constexpr (sizeof(T) == sizeof(double)) points = f.points.data();
-  else points = f.points_float.data();
-  std::vector<T> outputs(kPoints);
-  for (auto _ : state) {
-    liver_batch_x86_64_v3(points, outputs.data(), kPoints);
-    benchmark::DoNotOptimize(outputs.data());
-    benchmark::ClobberMemory();
-  }
-  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(kPoints));
+  time_batch<T>(state, [](const T* in, T* out, std::size_t n) { liver_batch_x86_64_v3(in, out, n); });
 }
 BENCHMARK_TEMPLATE(BM_CompiledX86_64_v3, double);
 BENCHMARK_TEMPLATE(BM_CompiledX86_64_v3, float);
