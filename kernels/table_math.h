@@ -451,6 +451,18 @@ __device__ __forceinline__ void interpolate_packed_table_lane_pairs(const Packed
     if (active) out[o] = valid ? table_detail::lerp(low, high, weight[kOuter]) : T(0) / T(0);
   }
 }
+
+// The device's packed reader for a warp (every lane calls it, as above): lane pairs where a group fills one
+// 32-byte sector, else (float tables of 1 or 2 axes, double tables of 1: groups of 8 or 16 bytes) each lane alone.
+template <int Axes, int PackedAxes, typename T>
+__device__ __forceinline__ void interpolate_packed_table_in_warp(const PackedTableView<T>& table, const double* query,
+                                                                 T* out, bool active) {
+  if constexpr ((sizeof(T) << PackedAxes) == 32) {
+    interpolate_packed_table_lane_pairs<Axes, PackedAxes>(table, query, out, active);
+  } else {
+    if (active) interpolate_packed_table<Axes, PackedAxes>(table, query, out);
+  }
+}
 #endif  // __CUDACC__
 
 }  // namespace fmpc

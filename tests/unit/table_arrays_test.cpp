@@ -462,3 +462,51 @@ TEST_CASE("locate_on_axis finds the binary search's cell on uniform, refined and
     }
   }
 }
+
+TEST_CASE("table arrays headers compile with nvcc for sm_90: every packed depth, float and double", "[table][arrays][nvcc]") {
+  // The launcher instantiates both layouts' kernels; the packed reader takes lane pairs only where a group fills
+  // a 32-byte sector (double from 2 axes, float from 3), so 1- and 2-axis float and 1-axis double tables take the
+  // other path. The device run is the GPU tests' job (tests/gpu/evaluator).
+  const std::filesystem::path nvcc = "/usr/local/cuda/bin/nvcc";
+  if (!std::filesystem::exists(nvcc)) {
+    WARN("skipping the nvcc compile test: " << nvcc << " is absent");
+    return;
+  }
+  testing::ScratchFolder folder("table_arrays_nvcc");
+  std::string driver = "#include <cstddef>\n";
+  std::string launches;
+  for (int axes = 1; axes <= 6; ++axes) {
+    for (const TableValueType type : {TableValueType::Float32, TableValueType::Float64}) {
+      const int outputs = axes % 2 + 1;
+      LookupTable t;
+      t.system_name = "grid";
+      t.source_path = "grid.fis";
+      t.value_type = type;
+      for (int a = 0; a < axes; ++a)
+        t.axes.push_back(TableAxis{"x" + std::to_string(a), static_cast<std::uint32_t>(a), {0.0, 1.0, 3.0}});
+      for (int o = 0; o < outputs; ++o) t.output_names.push_back("y" + std::to_string(o));
+      t.values.assign(t.grid_points() * static_cast<std::uint64_t>(outputs), 0.5);
+      t.max_error_location.assign(static_cast<std::size_t>(axes), 0.0);
+      TableArraysOptions options;
+      options.namespace_name =
+          "t" + std::to_string(axes) + (type == TableValueType::Float32 ? "f" : "d");
+      testing::write_text_file(folder.path() / (options.namespace_name + ".h"), write_table_arrays(t, options));
+      driver += "#include \"" + options.namespace_name + ".h\"\n";
+      const std::string value = type == TableValueType::Float32 ? "float" : "double";
+      for (const char* layout : {"Grid", "SectorPacked"})
+        launches += "  if (status == cudaSuccess) status = " + options.namespace_name +
+                    "::interpolate_batch_cuda(q, reinterpret_cast<" + value + "*>(out), n, 0, fmpc::TableLayout::" +
+                    layout + ");\n";
+    }
+  }
+  driver += "cudaError_t launch_all(const double* q, void* out, std::size_t n) {\n  cudaError_t status = cudaSuccess;\n" +
+            launches + "  return status;\n}\n";
+  testing::write_text_file(folder.path() / "launch.cu", driver);
+  const std::string command = nvcc.string() + " -std=c++17 -arch=sm_90 -O3 --Werror all-warnings -I" +
+                              FMPC_SOURCE_DIR + " -c " + (folder.path() / "launch.cu").string() + " -o " +
+                              (folder.path() / "launch.o").string() + " > " + (folder.path() / "nvcc.log").string() +
+                              " 2>&1";
+  const int status = std::system(command.c_str());
+  INFO("nvcc output:\n" << testing::read_text_file(folder.path() / "nvcc.log").substr(0, 4000));
+  CHECK(status == 0);
+}
