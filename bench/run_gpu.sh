@@ -15,8 +15,9 @@
 #               build-gpu-carry/bin/fmpc) runs the README's demo scene with backend auto (CUDA) and cpu, and SOFA's
 #               liver scenes (implicit Euler) on CUDA and on the CPU; outputs under $OUT/scenes, compared in summary
 #   evaluator   bench/gpu/evaluator_gpu_bench.cu (nvcc alone): the generated CUDA evaluators (type-1 and interval
-#               type-2, float and double) and table lookups (2-D; 5-D double and float at 9^5, 7^5, 5^5, each in
-#               the grid and the sector-packed layout) on the liver rule base, each checked against the CPU, then
+#               type-2, float and double) and table lookups (2-D double and float; 5-D double and float at 9^5,
+#               7^5, 5^5; each in the grid and the sector-packed layout) on the liver rule base, each checked
+#               against the CPU, then
 #               timed; then the bench on a small batch under compute-sanitizer memcheck and racecheck. Its headers
 #               come from --prepare (build-gpu-carry/evaluator, generated with the build machine's fmpc), as do
 #               those of the gpu-labelled test gpu.generated_evaluator (simulator section: evaluators and tables)
@@ -51,6 +52,8 @@ prepare_evaluator_headers() {
       -o "$dir/liver_it2_evaluator.cuh" &&
     "$fmpc" compile "$rules" --target table --fix HCV=10 --fix ALD=22 --fix NAFLD=6 --vary HBV:65 --vary CLD:65 \
       --max-error 75 --namespace liver_table2 -o "$dir/liver_table2.h" &&
+    "$fmpc" compile "$rules" --target table --fix HCV=10 --fix ALD=22 --fix NAFLD=6 --vary HBV:65 --vary CLD:65 \
+      --max-error 75 --precision float --namespace liver_table2f -o "$dir/liver_table2f.h" &&
     "$fmpc" compile "$rules" --target table --vary HCV:9 --vary HBV:9 --vary ALD:9 --vary CLD:9 --vary NAFLD:9 \
       --max-error 75 --namespace liver_table5 -o "$dir/liver_table5.h" &&
     "$fmpc" compile "$rules" --target table --vary HCV:9 --vary HBV:9 --vary ALD:9 --vary CLD:9 --vary NAFLD:9 \
@@ -286,6 +289,7 @@ evaluator_section() {
   section "evaluator: generated CUDA evaluator and table lookups (bench/gpu)"
   local dir="$CARRY/evaluator"
   if [[ ! -f "$dir/liver_evaluator.cuh" || ! -f "$dir/liver_it2_evaluator.cuh" || ! -f "$dir/liver_table2.h" ||
+        ! -f "$dir/liver_table2f.h" ||
         ! -f "$dir/liver_table5.h" || ! -f "$dir/liver_table5f.h" || ! -f "$dir/liver_table5r7.h" ||
         ! -f "$dir/liver_table5r5.h" ]] || ! grep -q kPackedValues "$dir/liver_table5.h"; then
     fail "no (or outdated) generated headers in $dir: run 'bash bench/run_gpu.sh --prepare' on the build machine (after building fmpc)"

@@ -4,6 +4,7 @@
 //   liver_evaluator.cuh  fmpc compile rulesets/liver_fibrosis/mamdani.fis --target cuda (all five inputs vary)
 //   liver_it2_evaluator.cuh  the same for rulesets/liver_fibrosis/it2.fis (interval type-2, Karnik-Mendel)
 //   liver_table2.h       --target table, HCV ALD NAFLD fixed, HBV:65 CLD:65 (a 2-D table, 65 x 65)
+//   liver_table2f.h      the same with --precision float (its packed groups are 16 bytes: read one lane each)
 //   liver_table5.h       --target table, all five inputs :9 (a 5-D table, 9^5 points), double values
 //   liver_table5f.h      the same with --precision float
 //   liver_table5r7.h     all five inputs :7 (7^5 points, double: 131 KiB, fits an SM's L1)
@@ -26,6 +27,7 @@
 #include "liver_evaluator.cuh"
 #include "liver_it2_evaluator.cuh"
 #include "liver_table2.h"
+#include "liver_table2f.h"
 #include "liver_table5.h"
 #include "liver_table5f.h"
 #include "liver_table5r5.h"
@@ -137,6 +139,7 @@ Row evaluator_row(const std::vector<double>& points, std::size_t n, double toler
     }                                                                                                        \
   };
 FMPC_BENCH_TABLE(Table2, liver_table2)
+FMPC_BENCH_TABLE(Table2Float, liver_table2f)
 FMPC_BENCH_TABLE(Table5, liver_table5)
 FMPC_BENCH_TABLE(Table5Float, liver_table5f)
 FMPC_BENCH_TABLE(Table5Res7, liver_table5r7)
@@ -250,6 +253,8 @@ int main(int argc, char** argv) {
   rows.push_back(evaluator_row<LiverIt2, float>(points, type2_points, kNotChecked));
   rows.push_back(table_row<Table2>("table lookup, 2-D 65x65", points, n, LookupPath::GridLayout));
   rows.push_back(table_row<Table2>("table lookup, 2-D 65x65", points, n, LookupPath::PackedLayout));
+  rows.push_back(table_row<Table2Float>("table lookup, 2-D 65x65", points, n, LookupPath::GridLayout));
+  rows.push_back(table_row<Table2Float>("table lookup, 2-D 65x65", points, n, LookupPath::PackedLayout));
   rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::GridLayout));
   rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::PackedLayout));
   rows.push_back(table_row<Table5>("table lookup, 5-D 9^5", points, n, LookupPath::UserKernel));
