@@ -260,15 +260,12 @@ class EvaluatorEmitter {
 
  private:
   void line_directive(const SourceRange& range) {
-    if (!options_.line_directives || !range.valid() || options_.source_path.empty()) return;
-    out_.line("#line " + std::to_string(range.line) + " " + quoted(options_.source_path));
-    pending_return_ = true;
+    const std::string directive = directives_.to_rule(range);
+    if (!directive.empty()) out_.line(directive);
   }
   void return_to_header() {
-    if (!pending_return_ || options_.header_path.empty()) return;
-    // #line N names the number of the line that follows the directive.
-    out_.line("#line " + std::to_string(out_.lines() + 2) + " " + quoted(options_.header_path));
-    pending_return_ = false;
+    const std::string directive = directives_.back_to_header(out_.lines());
+    if (!directive.empty()) out_.line(directive);
   }
 
   void plan_rules() {
@@ -356,18 +353,6 @@ class EvaluatorEmitter {
     }
   }
 
-  struct Consequent {
-    std::size_t rule = 0;
-    const Clause* clause = nullptr;
-  };
-  std::vector<Consequent> consequents_of(std::size_t o) const {
-    std::vector<Consequent> result;
-    for (std::size_t r = 0; r < system_.rules.size(); ++r)
-      for (const Clause& clause : system_.rules[r].consequent)
-        if (clause.variable == static_cast<int>(o)) result.push_back({r, &clause});
-    return result;
-  }
-
   void emit_no_fire(std::size_t o, const std::string& indent) {
     for (const std::string& text : no_fire_lines(system_, o, "outputs[" + std::to_string(o) + "]", "flags"))
       out_.line(indent + text);
@@ -406,7 +391,7 @@ class EvaluatorEmitter {
     // padding grades are 0, which add exactly nothing.
     const std::size_t padded = (x.size() + 7) / 8 * 8;
     const std::string np = std::to_string(padded);
-    const std::vector<Consequent> consequents = consequents_of(o);
+    const std::vector<EmittedConsequent> consequents = consequents_on_output(system_, o);
     out_.line("  // output " + comment_safe(output.name) + ": " + n + " samples of the aggregate, then " +
               to_string(system_.defuzzifier));
     out_.line("  {");
@@ -419,7 +404,7 @@ class EvaluatorEmitter {
     const bool merge = system_.aggregation == SNorm::Maximum &&
                        (system_.implication == TNorm::Minimum || system_.implication == TNorm::Product);
     std::map<std::pair<int, std::pair<int, bool>>, std::size_t> column_of_consequent;
-    for (const Consequent& consequent : consequents) {
+    for (const EmittedConsequent& consequent : consequents) {
       const std::string& w = firing_[consequent.rule];
       const auto key = std::make_pair(consequent.clause->term,
                                       std::make_pair(static_cast<int>(consequent.clause->hedge),
@@ -553,30 +538,17 @@ class EvaluatorEmitter {
     out_.line("    }");
   }
 
-  // A Sugeno rule's output value: c, or p1 x1 + ... + pn xn + c summed left to right (interpreter's
-  // sugeno_rule_value). Zero coefficients are kept: 0 * inf is NaN there too.
-  std::string sugeno_value(const MembershipFunction& mf) const {
-    if (mf.kind == MfKind::Constant)
-      return mf.params.empty() ? "fmpc_math::fmpc_quiet_nan<T>()" : constant(mf.params[0]);
-    if (mf.kind != MfKind::Linear || mf.params.size() != system_.inputs.size() + 1)
-      return "fmpc_math::fmpc_quiet_nan<T>()";
-    std::string value;
-    for (std::size_t i = 0; i < system_.inputs.size(); ++i)
-      value += (i ? " + " : "") + constant(mf.params[i]) + " * x" + std::to_string(i);
-    return value.empty() ? constant(mf.params.back()) : value + " + " + constant(mf.params.back());
-  }
-
   // MATLAB fis.c fisEvaluate: sum(h z) / sum(h) over the rules that fired, where the denominator also counts the
   // firing strengths of the rules with no consequent on this output; wtsum is the numerator alone.
   void emit_sugeno_output(std::size_t o) {
     const Variable& output = system_.outputs[o];
-    const std::vector<Consequent> consequents = consequents_of(o);
+    const std::vector<EmittedConsequent> consequents = consequents_on_output(system_, o);
     out_.line("  // output " + comment_safe(output.name) + ": " + to_string(system_.defuzzifier));
     out_.line("  {");
     out_.line("    T numerator = T(0), denominator = T(0);");
     out_.line("    bool fired = false;");
     std::vector<bool> concludes(system_.rules.size(), false);
-    for (const Consequent& consequent : consequents) {
+    for (const EmittedConsequent& consequent : consequents) {
       concludes[consequent.rule] = true;
       const std::string& w = firing_[consequent.rule];
       const Clause& clause = *consequent.clause;
@@ -588,7 +560,7 @@ class EvaluatorEmitter {
       const MembershipFunction& mf = output.terms[static_cast<std::size_t>(clause.term)].mf;
       out_.line("    if (" + w + " != T(0)) {");
       out_.line("      const T h = " + height + ";");
-      out_.line("      numerator += h * (" + sugeno_value(mf) + ");");
+      out_.line("      numerator += h * (" + emitted_sugeno_value(mf, system_.inputs.size()) + ");");
       out_.line("      denominator += h;");
       out_.line("      fired = fired || h != T(0);");
       out_.line("    }");
@@ -613,7 +585,7 @@ class EvaluatorEmitter {
   std::set<std::string> emitted_;
   std::map<std::string, std::string> trie_;
   std::size_t merged_count_ = 0;
-  bool pending_return_ = false;
+  LineDirectives directives_{options_};
 };
 
 // ---- evaluate_batch over blocks of lanes ----
@@ -1335,6 +1307,36 @@ std::string emitted_tnorm_call(TNorm norm, const std::string& a, const std::stri
 }
 std::string emitted_snorm_call(SNorm norm, const std::string& a, const std::string& b) {
   return snorm_call(norm, a, b);
+}
+
+std::string emitted_sugeno_value(const MembershipFunction& mf, std::size_t input_count) {
+  if (mf.kind == MfKind::Constant) return mf.params.empty() ? "fmpc_math::fmpc_quiet_nan<T>()" : constant(mf.params[0]);
+  if (mf.kind != MfKind::Linear || mf.params.size() != input_count + 1) return "fmpc_math::fmpc_quiet_nan<T>()";
+  std::string value;
+  for (std::size_t i = 0; i < input_count; ++i)
+    value += (i ? " + " : "") + constant(mf.params[i]) + " * x" + std::to_string(i);
+  return value.empty() ? constant(mf.params.back()) : value + " + " + constant(mf.params.back());
+}
+
+std::vector<EmittedConsequent> consequents_on_output(const FuzzySystem& system, std::size_t output) {
+  std::vector<EmittedConsequent> result;
+  for (std::size_t r = 0; r < system.rules.size(); ++r)
+    for (const Clause& clause : system.rules[r].consequent)
+      if (clause.variable == static_cast<int>(output)) result.push_back({r, &clause});
+  return result;
+}
+
+std::string LineDirectives::to_rule(const SourceRange& range) {
+  if (!options_.line_directives || !range.valid() || options_.source_path.empty()) return "";
+  pending_return_ = true;
+  return "#line " + std::to_string(range.line) + " " + quoted(options_.source_path);
+}
+
+std::string LineDirectives::back_to_header(int lines_written) {
+  if (!pending_return_ || options_.header_path.empty()) return "";
+  pending_return_ = false;
+  // The directive itself is line lines_written + 1; #line N names the line after it.
+  return "#line " + std::to_string(lines_written + 2) + " " + quoted(options_.header_path);
 }
 
 }  // namespace fmpc

@@ -57,5 +57,30 @@ std::string emitted_enumerator(SNorm norm);                   // "fmpc_math::SNo
 // header's grade_min / grade_max, product and sum written out, the Einstein norms through fmpc_math.
 std::string emitted_tnorm_call(TNorm norm, const std::string& a, const std::string& b);
 std::string emitted_snorm_call(SNorm norm, const std::string& a, const std::string& b);
+// A Sugeno rule's output value: c, or p1 x1 + ... + pn xn + c summed left to right (the interpreter's
+// sugeno_rule_value), over the inputs x0 .. x(input_count - 1); NaN for a malformed consequent. Zero coefficients
+// are kept: 0 * inf is NaN there too.
+std::string emitted_sugeno_value(const MembershipFunction& mf, std::size_t input_count);
+
+// A rule's consequent clause on one output, in rule order.
+struct EmittedConsequent {
+  std::size_t rule = 0;
+  const Clause* clause = nullptr;
+};
+std::vector<EmittedConsequent> consequents_on_output(const FuzzySystem& system, std::size_t output);
+
+// The `#line` directives around a rule's code: one to the rule's line in the rule file, and after the code one
+// back to the header (where the options name a source and a header path). Each returns the directive, or "".
+class LineDirectives {
+ public:
+  explicit LineDirectives(const EmitOptions& options) : options_(options) {}
+  std::string to_rule(const SourceRange& range);
+  // `lines_written`: the header lines before this directive (#line N names the line after the directive).
+  std::string back_to_header(int lines_written);
+
+ private:
+  const EmitOptions& options_;
+  bool pending_return_ = false;
+};
 
 }  // namespace fmpc

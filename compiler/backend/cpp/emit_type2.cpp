@@ -65,12 +65,6 @@ std::string constant_list(const std::vector<double>& values) {
   return "{" + (list.empty() ? std::string("T(0)") : list) + "}";
 }
 
-// A rule's consequent on one output.
-struct Consequent {
-  std::size_t rule = 0;
-  const Clause* clause = nullptr;
-};
-
 class Type2Emitter {
  public:
   Type2Emitter(const FuzzySystem& system, const EmitOptions& options, int first_line)
@@ -96,23 +90,12 @@ class Type2Emitter {
   }
 
   void line_directive(const SourceRange& range) {
-    if (!options_.line_directives || !range.valid() || options_.source_path.empty()) return;
-    line("#line " + std::to_string(range.line) + " " + emitted_string_literal(options_.source_path));
-    pending_return_ = true;
+    const std::string directive = directives_.to_rule(range);
+    if (!directive.empty()) line(directive);
   }
   void return_to_header() {
-    if (!pending_return_ || options_.header_path.empty()) return;
-    // #line N names the number of the line that follows the directive.
-    line("#line " + std::to_string(lines_ + 2) + " " + emitted_string_literal(options_.header_path));
-    pending_return_ = false;
-  }
-
-  std::vector<Consequent> consequents_of(std::size_t o) const {
-    std::vector<Consequent> result;
-    for (std::size_t r = 0; r < system_.rules.size(); ++r)
-      for (const Clause& clause : system_.rules[r].consequent)
-        if (clause.variable == static_cast<int>(o)) result.push_back({r, &clause});
-    return result;
+    const std::string directive = directives_.back_to_header(lines_);
+    if (!directive.empty()) line(directive);
   }
 
   // The Sugeno centre-of-sets reduction sorts the rules by their output value at run time (linear consequents
@@ -312,7 +295,7 @@ class Type2Emitter {
     rule_columns_.assign(system_.rules.size(), {});
     for (std::size_t o = 0; o < system_.outputs.size(); ++o) {
       std::map<std::tuple<int, int, bool>, std::size_t> column_of_consequent;
-      for (const Consequent& consequent : consequents_of(o)) {
+      for (const EmittedConsequent& consequent : consequents_on_output(system_, o)) {
         const Clause& clause = *consequent.clause;
         const auto key = std::make_tuple(clause.term, static_cast<int>(clause.hedge), clause.negated);
         const auto found = merge ? column_of_consequent.find(key) : column_of_consequent.end();
@@ -489,30 +472,17 @@ class Type2Emitter {
     emit_output_store(o);
   }
 
-  // A Sugeno rule's output value: c, or p1 x1 + ... + pn xn + c summed left to right (interpreter's
-  // sugeno_rule_value).
-  std::string sugeno_value(const MembershipFunction& mf) const {
-    if (mf.kind == MfKind::Constant)
-      return mf.params.empty() ? "fmpc_math::fmpc_quiet_nan<T>()" : emitted_constant(mf.params[0]);
-    if (mf.kind != MfKind::Linear || mf.params.size() != system_.inputs.size() + 1)
-      return "fmpc_math::fmpc_quiet_nan<T>()";
-    std::string value;
-    for (std::size_t i = 0; i < system_.inputs.size(); ++i)
-      value += (i ? " + " : "") + emitted_constant(mf.params[i]) + " * x" + std::to_string(i);
-    return value.empty() ? emitted_constant(mf.params.back()) : value + " + " + emitted_constant(mf.params.back());
-  }
-
   // Sugeno (interpreter's sugeno_type2_output): each rule that fired gives a point [z_low, z_high] with weights
   // [lower, upper]; rules without a consequent on this output count as z = 0 with their firing interval (fis.c).
   // wtsum, and wtaver where every weight and z is exact, sum directly; wtaver otherwise type-reduces the points
   // sorted by z_low (yl) and, where some z is an interval, by z_high (yr).
   void emit_sugeno_output(std::size_t o) {
     const Variable& output = system_.outputs[o];
-    const std::vector<Consequent> consequents = consequents_of(o);
+    const std::vector<EmittedConsequent> consequents = consequents_on_output(system_, o);
     const bool weighted_sum = system_.defuzzifier == Defuzzifier::WeightedSum;
     std::vector<bool> concludes(system_.rules.size(), false);
     bool interval_values = false;
-    for (const Consequent& consequent : consequents) {
+    for (const EmittedConsequent& consequent : consequents) {
       concludes[consequent.rule] = true;
       const Term& term = output.terms[static_cast<std::size_t>(consequent.clause->term)];
       interval_values = interval_values || (term.footprint && term.footprint->kind == FootprintKind::IntervalValue);
@@ -529,7 +499,7 @@ class Type2Emitter {
     line("    T z_low[" + p + "] = {}, z_high[" + p + "] = {}, w_low[" + p + "] = {}, w_high[" + p + "] = {};");
     line("    int n = 0;");
     line("    bool fired = false;");
-    for (const Consequent& consequent : consequents) {
+    for (const EmittedConsequent& consequent : consequents) {
       const std::string rs = std::to_string(consequent.rule);
       const Clause& clause = *consequent.clause;
       const Term& term = output.terms[static_cast<std::size_t>(clause.term)];
@@ -547,7 +517,7 @@ class Type2Emitter {
         line("      z_low[n] = " + emitted_constant(term.footprint->first) + ";");
         line("      z_high[n] = " + emitted_constant(term.footprint->second) + ";");
       } else {
-        line("      z_low[n] = " + sugeno_value(term.mf) + ";");
+        line("      z_low[n] = " + emitted_sugeno_value(term.mf, system_.inputs.size()) + ";");
         line("      z_high[n] = z_low[n];");
       }
       line("      w_low[n] = h.lower;");
@@ -627,7 +597,7 @@ class Type2Emitter {
   std::string text_;
   int lines_;
   std::set<std::string> emitted_;
-  bool pending_return_ = false;
+  LineDirectives directives_{options_};
   struct Column {
     const Clause* clause;
     std::string lower, upper;  // the locals holding its strength ends
