@@ -7,6 +7,8 @@
 #include <sstream>
 #include <system_error>
 
+#include <catch2/catch.hpp>
+
 #include "tests/support/random_system.h"
 
 namespace fmpc::testing {
@@ -64,6 +66,33 @@ std::vector<std::vector<double>> evaluator_test_points(const FuzzySystem& system
   }
   for (auto* edge : {&low, &high, &below, &above, &infinite, &nan}) points.push_back(*edge);
   return points;
+}
+
+void check_line_directives(const std::string& header, const std::string& header_name, const std::string& rule_file,
+                           const FuzzySystem& system) {
+  std::istringstream lines(header);
+  std::string line;
+  int physical = 0, rule_directives = 0, return_directives = 0;
+  std::size_t next_rule = 0;
+  while (std::getline(lines, line)) {
+    ++physical;
+    if (line.rfind("#line ", 0) != 0) continue;
+    std::istringstream directive(line.substr(6));
+    int number = 0;
+    std::string file;
+    directive >> number >> file;
+    if (file == "\"" + header_name + "\"") {
+      CHECK(number == physical + 1);
+      ++return_directives;
+    } else {
+      CHECK(file == "\"" + rule_file + "\"");
+      REQUIRE(next_rule < system.rules.size());
+      CHECK(number == system.rules[next_rule++].range.line);
+      ++rule_directives;
+    }
+  }
+  CHECK(rule_directives == static_cast<int>(system.rules.size()));
+  CHECK(return_directives == rule_directives);
 }
 
 }  // namespace fmpc::testing

@@ -36,4 +36,9 @@ bool compile_generated_program(const std::filesystem::path& source, const std::f
 std::vector<std::vector<double>> evaluator_test_points(const FuzzySystem& system, std::uint64_t seed,
                                                        std::size_t count);
 
+// Checks (Catch2 CHECKs) the `#line` directives of a generated header: one per rule, in rule order, naming the
+// rule's line in `rule_file`, each followed later by one back to `header_name` that names its own next line.
+void check_line_directives(const std::string& header, const std::string& header_name, const std::string& rule_file,
+                           const FuzzySystem& system);
+
 }  // namespace fmpc::testing

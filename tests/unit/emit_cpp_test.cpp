@@ -24,6 +24,7 @@
 #include "compiler/frontend/rule_file_loader.h"
 #include "compiler/ir/content_hash.h"
 #include "compiler/passes/pipeline.h"
+#include "tests/support/generated_program.h"
 #include "tests/support/random_system.h"
 
 namespace {
@@ -461,29 +462,7 @@ TEST_CASE("the banner names the source and its hash; #line points at rules and b
   CHECK(header->find("kSourceHash = 0xfeedfacecafebeefull;") != std::string::npos);
 
   // Each rule's #line names its line in the rule file; each return directive names its own next line.
-  std::istringstream lines(*header);
-  std::string line;
-  int physical = 0, rule_directives = 0, return_directives = 0;
-  std::size_t next_rule = 0;
-  while (std::getline(lines, line)) {
-    ++physical;
-    if (line.rfind("#line ", 0) != 0) continue;
-    std::istringstream directive(line.substr(6));
-    int number = 0;
-    std::string file;
-    directive >> number >> file;
-    if (file == "\"liver_evaluator.h\"") {
-      CHECK(number == physical + 1);
-      ++return_directives;
-    } else {
-      CHECK(file == "\"rulesets/liver_fibrosis/mamdani.fis\"");
-      REQUIRE(next_rule < liver.rules.size());
-      CHECK(number == liver.rules[next_rule++].range.line);
-      ++rule_directives;
-    }
-  }
-  CHECK(rule_directives == static_cast<int>(liver.rules.size()));
-  CHECK(return_directives == rule_directives);
+  fmpc::testing::check_line_directives(*header, "liver_evaluator.h", "rulesets/liver_fibrosis/mamdani.fis", liver);
 
   options.line_directives = false;
   const auto plain = fmpc::emit_evaluator(liver, options, diagnostics);

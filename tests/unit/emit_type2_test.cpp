@@ -472,29 +472,7 @@ TEST_CASE("type-2 headers: banner, #line per rule, the type-2 math verbatim, bes
   CHECK(header->find("__global__") == std::string::npos);
 
   // Each rule's #line names its line in the rule file; each return directive names its own next line.
-  std::istringstream lines(*header);
-  std::string line;
-  int physical = 0, rule_directives = 0, return_directives = 0;
-  std::size_t next_rule = 0;
-  while (std::getline(lines, line)) {
-    ++physical;
-    if (line.rfind("#line ", 0) != 0) continue;
-    std::istringstream directive(line.substr(6));
-    int number = 0;
-    std::string file;
-    directive >> number >> file;
-    if (file == "\"liver_it2.h\"") {
-      CHECK(number == physical + 1);
-      ++return_directives;
-    } else {
-      CHECK(file == "\"rulesets/liver_fibrosis/it2.fis\"");
-      REQUIRE(next_rule < it2.rules.size());
-      CHECK(number == it2.rules[next_rule++].range.line);
-      ++rule_directives;
-    }
-  }
-  CHECK(rule_directives == static_cast<int>(it2.rules.size()));
-  CHECK(return_directives == rule_directives);
+  fmpc::testing::check_line_directives(*header, "liver_it2.h", "rulesets/liver_fibrosis/it2.fis", it2);
   options.line_directives = false;
   const auto plain = fmpc::emit_evaluator(it2, options, diagnostics);
   REQUIRE(plain);
