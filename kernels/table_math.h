@@ -419,17 +419,14 @@ __device__ __forceinline__ void interpolate_packed_table_lane_pairs(const Packed
     for (int pass = 0; pass < 2; ++pass) {
       const int owner = static_cast<int>(threadIdx.x & 31u & ~1u) + pass;
       const long long group0 = __shfl_sync(kWarp, first_group, owner);
-      // The owner's weights on every axis but the first packed one (blended outside this lane).
-      T w[Axes];
-#pragma unroll
-      for (int a = 0; a < Axes; ++a) w[a] = a == kOuter ? T(0) : __shfl_sync(kWarp, weight[a], owner);
       // The outer corners in binary order, each one's half-group blended over the packed axes after the first:
-      // the blend_corners tree over kOuter + PackedAxes - 1 axes, with that axis left out.
+      // the blend_corners tree over kOuter + PackedAxes - 1 axes, with that axis left out, on the owner's weights
+      // (the first packed axis is blended outside this lane).
       T packed_weights[Axes];
       int k = 0;
 #pragma unroll
       for (int a = 0; a < Axes; ++a)
-        if (a != kOuter) packed_weights[k++] = w[a];
+        if (a != kOuter) packed_weights[k++] = __shfl_sync(kWarp, weight[a], owner);
       T values[kHalf] = {};
       const T value = table_detail::blend_corners<Axes - 1>(
           Axes - 1, packed_weights, [&](int corner) {
