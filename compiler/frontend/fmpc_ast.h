@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "compiler/ir/fuzzy_system.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc::ast {
 

@@ -14,7 +14,7 @@
 #include "MatlabFisParser.h"
 #include "antlr4-runtime.h"
 #include "compiler/frontend/matlab_fis.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc {
 

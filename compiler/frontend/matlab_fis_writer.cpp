@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "compiler/frontend/matlab_fis.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc {
 

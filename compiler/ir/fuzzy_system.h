@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "compiler/ir/source_range.h"
+#include "diagnostics/source_range.h"
 #include "kernels/fuzzy_kinds.h"
 #include "kernels/type2_math.h"
 #include "kernels/type_reduction_math.h"

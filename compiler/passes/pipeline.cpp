@@ -2,8 +2,8 @@
 
 #include <cmath>
 
-#include "compiler/ir/ir_printer.h"
-#include "compiler/ir/number_format.h"
+#include "compiler/frontend/ir_printer.h"
+#include "diagnostics/number_format.h"
 #include "compiler/passes/drop_dead_terms.h"
 #include "compiler/passes/fuse_consequents.h"
 #include "compiler/passes/prune_rules.h"

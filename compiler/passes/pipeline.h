@@ -9,7 +9,7 @@
 
 #include "compiler/ir/fuzzy_system.h"
 #include "compiler/passes/pass_report.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc {
 

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "compiler/eval/interpreter.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "kernels/fuzzy_math.h"
 #include "kernels/type2_math.h"
 

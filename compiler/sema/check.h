@@ -4,7 +4,7 @@
 // weights outside [0, 1], Sugeno/Mamdani mismatches (a gaussmf output in a Sugeno system, a constant in a Mamdani
 // one), defuzzifiers that do not fit the type.
 #include "compiler/ir/fuzzy_system.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc {
 

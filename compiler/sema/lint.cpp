@@ -8,7 +8,7 @@
 #include <tuple>
 #include <vector>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "compiler/sema/coverage.h"
 #include "compiler/sema/term_shape.h"
 #include "kernels/fuzzy_math.h"

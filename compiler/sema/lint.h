@@ -2,7 +2,7 @@
 // Lint: warnings about systems that are valid but probably wrong. Each warning has a code (the name in brackets)
 // that `fmpc check` prints and that docs/lint.md explains.
 #include "compiler/ir/fuzzy_system.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc {
 

@@ -1,8 +1,8 @@
 # FMPC_GPU_ONLY=ON: the build for the GPU machine, which has CMake, nvcc and the CUDA libraries but none of the
 # Debian packages the full build needs (antlr4, yaml-cpp, CLI11, Catch2, Eigen, fuzzylite). It builds only
 #   fmpc_runtime     kernels/spring_step.cu, runtime/gpu, and the CPU reference it is compared with: meshes,
-#                    springs, integrators, the model builder, compiler/sema/diagnostic.cpp and
-#                    compiler/ir/number_format.cpp;
+#                    springs, integrators, the model builder, diagnostics/diagnostic.cpp and
+#                    diagnostics/number_format.cpp;
 #   fmpc_gpu_tests   tests/gpu (its own runner, no Catch2), ctest label `gpu`;
 #   fmpc_sim_bench   bench/sim.
 # Eigen (header-only, used by the CPU implicit Euler) is not searched for on the system: its headers come from
@@ -35,8 +35,8 @@ file(GLOB FMPC_GPU_ONLY_SOURCES CONFIGURE_DEPENDS
 add_library(fmpc_runtime STATIC
   ${FMPC_GPU_ONLY_SOURCES}
   ${PROJECT_SOURCE_DIR}/runtime/scene/spring_model_builder.cpp
-  ${PROJECT_SOURCE_DIR}/compiler/sema/diagnostic.cpp
-  ${PROJECT_SOURCE_DIR}/compiler/ir/number_format.cpp
+  ${PROJECT_SOURCE_DIR}/diagnostics/diagnostic.cpp
+  ${PROJECT_SOURCE_DIR}/diagnostics/number_format.cpp
   ${PROJECT_SOURCE_DIR}/kernels/spring_step.cu)
 target_include_directories(fmpc_runtime PUBLIC ${PROJECT_SOURCE_DIR})
 target_include_directories(fmpc_runtime SYSTEM PUBLIC ${FMPC_EIGEN_INCLUDE_DIR})

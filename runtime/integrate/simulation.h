@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
 #include "runtime/mesh/mesh.h"

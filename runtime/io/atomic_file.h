@@ -3,7 +3,7 @@
 // plotting script) never sees a half-written file and a failed run leaves the previous file in place.
 #include <string>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc::sim {
 

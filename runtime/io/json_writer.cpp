@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc::sim {
 

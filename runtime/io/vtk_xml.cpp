@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc::sim {
 

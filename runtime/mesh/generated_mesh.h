@@ -1,6 +1,6 @@
 #pragma once
 // Tetrahedral meshes built in code, at any resolution, for tests, benchmarks and scenes without a mesh file.
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "runtime/mesh/mesh.h"
 
 namespace fmpc::sim {

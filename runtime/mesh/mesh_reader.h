@@ -5,7 +5,7 @@
 #include <string>
 #include <string_view>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "runtime/mesh/mesh.h"
 
 namespace fmpc::sim {

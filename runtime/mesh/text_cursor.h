@@ -7,7 +7,7 @@
 #include <string>
 #include <string_view>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc::sim {
 

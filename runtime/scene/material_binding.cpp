@@ -5,7 +5,7 @@
 #include <map>
 
 #include "compiler/eval/interpreter.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "kernels/table_math.h"
 
 namespace fmpc::sim {

@@ -9,7 +9,7 @@
 
 #include "compiler/backend/table/lookup_table.h"
 #include "compiler/ir/fuzzy_system.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "runtime/scene/scene_file.h"
 
 namespace fmpc::sim {

@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "compiler/frontend/rule_file_loader.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "kernels/table_math.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_check.h"

@@ -8,7 +8,7 @@
 #include <utility>
 #include <vector>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/mesh/mesh.h"
 #include "runtime/scene/material_binding.h"

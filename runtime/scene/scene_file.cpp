@@ -7,7 +7,7 @@
 #include <initializer_list>
 #include <limits>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc::sim {
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/springs/spring_network.h"

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <set>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "runtime/io/atomic_file.h"
 #include "runtime/io/json_writer.h"
 #include "runtime/io/vtk_xml.h"

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
 

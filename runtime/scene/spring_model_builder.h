@@ -3,7 +3,7 @@
 // The caller then sets loads, fixed vertices, the integrator and the step count on the returned setup.
 #include <optional>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/mesh/mesh.h"
 #include "runtime/springs/spring_network.h"

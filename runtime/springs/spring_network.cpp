@@ -6,7 +6,7 @@
 #include <string>
 #include <utility>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc::sim {
 

@@ -14,7 +14,7 @@
 
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/rule_file_loader.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace {
 

@@ -15,7 +15,7 @@
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/frontend/matlab_fis.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "compiler/sema/check.h"
 #include "tests/support/random_system.h"
 #include "tests/support/system_comparison.h"

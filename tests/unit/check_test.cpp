@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "compiler/frontend/matlab_fis.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "compiler/sema/check.h"
 #include "tests/support/ir_builders.h"
 #include "tests/support/random_system.h"

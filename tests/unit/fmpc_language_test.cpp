@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "compiler/frontend/fmpc_language.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "tests/support/random_system.h"
 
 namespace fmpc {

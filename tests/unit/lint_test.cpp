@@ -7,7 +7,7 @@
 #include <map>
 #include <sstream>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "compiler/sema/check.h"
 #include "compiler/sema/coverage.h"
 #include "compiler/sema/lint.h"

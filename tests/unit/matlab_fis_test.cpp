@@ -10,7 +10,7 @@
 #include <string>
 
 #include "compiler/frontend/matlab_fis.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "tests/support/random_system.h"
 #include "tests/support/system_comparison.h"
 

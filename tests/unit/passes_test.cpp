@@ -11,7 +11,7 @@
 
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/rule_file_loader.h"
-#include "compiler/ir/ir_printer.h"
+#include "compiler/frontend/ir_printer.h"
 #include "compiler/passes/drop_dead_terms.h"
 #include "compiler/passes/fuse_consequents.h"
 #include "compiler/passes/pipeline.h"

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "compiler/passes/pipeline.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc::cli {
 

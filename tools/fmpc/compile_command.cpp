@@ -13,7 +13,7 @@
 #include "compiler/backend/table/table_arrays.h"
 #include "compiler/backend/table/table_builder.h"
 #include "compiler/ir/content_hash.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "compiler/passes/pipeline.h"
 #include "tools/fmpc/binding_arguments.h"
 #include "tools/fmpc/commands.h"

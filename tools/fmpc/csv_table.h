@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc::cli {
 

@@ -7,7 +7,7 @@
 
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/fmpc_language.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/rule_file_session.h"

@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "compiler/eval/interpreter.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"

@@ -23,7 +23,7 @@
 #include "compiler/backend/table/lookup_table.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/ir/content_hash.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "compiler/passes/pipeline.h"
 #include "kernels/table_math.h"
 #include "tools/fmpc/binding_arguments.h"

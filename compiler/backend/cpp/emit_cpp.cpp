@@ -16,7 +16,7 @@
 #include "compiler/backend/cpp/emit_type2.h"
 #include "compiler/eval/defuzzify.h"
 #include "compiler/ir/content_hash.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "kernels/fuzzy_math.h"
 
 namespace fmpc {

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "compiler/ir/fuzzy_system.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc {
 

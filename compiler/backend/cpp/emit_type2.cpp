@@ -8,7 +8,7 @@
 
 #include "compiler/eval/defuzzify.h"
 #include "compiler/eval/interpreter.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 #include "kernels/type2_math.h"
 
 namespace fmpc {

@@ -4,7 +4,7 @@
 #include <cstring>
 
 #include "compiler/ir/content_hash.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc {
 

@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 #include "kernels/table_math.h"
 
 namespace fmpc {

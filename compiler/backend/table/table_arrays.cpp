@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc {
 

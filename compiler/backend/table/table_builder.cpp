@@ -8,7 +8,7 @@
 #include <set>
 #include <thread>
 
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc {
 

@@ -23,7 +23,7 @@
 #include "compiler/backend/table/lookup_table.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/passes/pipeline.h"
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 namespace fmpc {
 

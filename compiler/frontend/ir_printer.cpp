@@ -1,7 +1,7 @@
-#include "compiler/ir/ir_printer.h"
+#include "compiler/frontend/ir_printer.h"
 
 #include "compiler/frontend/fmpc_language.h"
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 namespace fmpc {
 

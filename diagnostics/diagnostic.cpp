@@ -1,4 +1,4 @@
-#include "compiler/sema/diagnostic.h"
+#include "diagnostics/diagnostic.h"
 
 #include <algorithm>
 #include <cctype>

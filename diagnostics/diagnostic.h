@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "compiler/ir/source_range.h"
+#include "diagnostics/source_range.h"
 
 namespace fmpc {
 

@@ -1,4 +1,4 @@
-#include "compiler/ir/number_format.h"
+#include "diagnostics/number_format.h"
 
 #include <charconv>
 #include <cmath>
