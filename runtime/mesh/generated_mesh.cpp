@@ -39,18 +39,30 @@ Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
       }
     }
   }
-  // Kuhn subdivision: one tetrahedron per permutation of the axes, walking from corner (0,0,0) to (1,1,1).
+  // Kuhn subdivision: one tetrahedron per permutation of the axes, walking from the cell's local corner (0,0,0) to
+  // (1,1,1). The cell is mirrored along every axis whose cell index is odd, so that the cut diagonals alternate
+  // and the 2 x 2 x 2 block of cells is symmetric under the three reflections: a box cut the same way round in
+  // every cell is anisotropic (its loaded face slides sideways about as far as it moves along the load,
+  // docs/simulator.md). Mirroring keeps the mesh conforming: both cells sharing a face cut it along the diagonal
+  // through their common local corners (0,0) and (1,1) of that face.
   static const int kPermutations[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
   for (std::int64_t k = 0; k + 1 < nz; ++k) {
     for (std::int64_t j = 0; j + 1 < ny; ++j) {
       for (std::int64_t i = 0; i + 1 < nx; ++i) {
+        const std::int64_t cell[3] = {i, j, k};
+        const auto global = [&](const int local[3]) {
+          std::int64_t g[3];
+          for (int axis = 0; axis < 3; ++axis)
+            g[axis] = cell[axis] + (cell[axis] % 2 == 1 ? 1 - local[axis] : local[axis]);
+          return vertex(g[0], g[1], g[2]);
+        };
         for (const auto& order : kPermutations) {
-          std::int64_t corner[3] = {i, j, k};
+          int local[3] = {0, 0, 0};
           Tetrahedron t{};
-          t[0] = vertex(corner[0], corner[1], corner[2]);
+          t[0] = global(local);
           for (int step = 0; step < 3; ++step) {
-            ++corner[order[step]];
-            t[static_cast<std::size_t>(step + 1)] = vertex(corner[0], corner[1], corner[2]);
+            ++local[order[step]];
+            t[static_cast<std::size_t>(step + 1)] = global(local);
           }
           if (signed_volume(mesh, t) < 0.0) std::swap(t[1], t[2]);
           mesh.tetrahedra.push_back(t);

@@ -17,8 +17,10 @@ struct EllipsoidSpec {
   int resolution = 4;  // cells along each half-axis of the underlying cube
 };
 
-// A box of (cells_x+1)(cells_y+1)(cells_z+1) vertices; each cube is cut into 6 tetrahedra around its main diagonal
-// (Kuhn/Freudenthal subdivision), which makes neighbouring cubes share their face diagonals: a conforming mesh.
+// A box of (cells_x+1)(cells_y+1)(cells_z+1) vertices; each cube is cut into 6 tetrahedra around a main diagonal
+// (Kuhn/Freudenthal subdivision), mirrored along every axis whose cell index is odd, so that the cut has no preferred
+// direction (a 2 x 2 x 2 block of cells is symmetric under reflection in each axis) and neighbouring cubes share
+// their face diagonals: a conforming mesh.
 // Returns an empty mesh and an error for non-positive cell counts or sizes, or more than 2^31 vertices.
 Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics);
 
