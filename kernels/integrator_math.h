@@ -1,6 +1,7 @@
 #pragma once
 // Per-vertex pieces of the integrators, shared by the CPU loops and the CUDA kernels.
 #include "kernels/fmpc_hd.h"
+#include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 
 namespace fmpc::kernels {
@@ -18,19 +19,20 @@ struct VertexLoads {
   const Real* force_z;
   Real gravity_x, gravity_y, gravity_z;
   Real gamma0, gamma1;  // nodal damping (Basafa-Farahmand), N s/m and N s/m^2
+  Real mass_damping;    // Rayleigh's mass-proportional alpha (1/s): force -alpha m v
 };
 
-// Acceleration of vertex v: (sum of spring forces + external force - (gamma0 + gamma1 |x - x0|) v) / m + g;
-// zero for fixed vertices.
-template <typename Real>
-FMPC_HD void vertex_acceleration(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s,
-                                 const VertexLoads<Real>& loads, Real& ax, Real& ay, Real& az) {
+// Acceleration of vertex v: (internal forces of the model + external force - (gamma0 + gamma1 |x - x0|) v
+// - alpha m v) / m + g; zero for fixed vertices. `forces` is one of the structs of kernels/internal_force_math.h.
+template <typename Real, typename Forces>
+FMPC_HD void vertex_acceleration(int v, const Forces& forces, const StateView<Real>& s, const VertexLoads<Real>& loads,
+                                 Real& ax, Real& ay, Real& az) {
   if (loads.fixed[v]) {
     ax = ay = az = Real(0);
     return;
   }
   Real fx, fy, fz;
-  gather_spring_force(v, net, s, fx, fy, fz);
+  forces.gather(v, s, fx, fy, fz);
   if (loads.force_x) {
     fx += loads.force_x[v];
     fy += loads.force_y[v];
@@ -42,6 +44,12 @@ FMPC_HD void vertex_acceleration(int v, const SpringNetworkView<Real>& net, cons
     fx -= gamma * s.vx[v];
     fy -= gamma * s.vy[v];
     fz -= gamma * s.vz[v];
+  }
+  if (loads.mass_damping != Real(0)) {
+    const Real drag = loads.mass_damping * loads.mass[v];
+    fx -= drag * s.vx[v];
+    fy -= drag * s.vy[v];
+    fz -= drag * s.vz[v];
   }
   const Real inverse_mass = Real(1) / loads.mass[v];
   ax = fx * inverse_mass + loads.gravity_x;

@@ -1,6 +1,6 @@
 #pragma once
 // Spring laws and the per-vertex force gather, shared by the CPU loops (runtime/integrate) and the CUDA kernels
-// (kernels/spring_step.cu). Everything is FMPC_HD, templated on the real type (float or double), and sums in the
+// (kernels/simulation_step.cu). Everything is FMPC_HD, templated on the real type (float or double), and sums in the
 // CSR order of the adjacency, so every backend adds the same terms in the same order.
 #include "kernels/fmpc_hd.h"
 
