@@ -494,10 +494,11 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
     if (failed_) return false;
-    const std::size_t interval = check_every == 0 ? steps : check_every;
     std::size_t done = 0;
     while (done < steps) {
-      const std::size_t chunk = std::min(interval, steps - done);
+      // Checks fall on multiples of check_every counted from the run's start (as the CPU backend's), and at the end.
+      const std::size_t chunk =
+          check_every == 0 ? steps : std::min(check_every - steps_taken_ % check_every, steps - done);
       if (!run_steps(chunk, options_.use_graphs, diagnostics)) return fail();
       done += chunk;
       const std::optional<int> bad = first_non_finite_vertex(diagnostics);
@@ -632,10 +633,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
           std::string message = sim::inversion_message(scenes_[scene], report);
           if (scenes_.size() > 1) message = "scene " + std::to_string(scene) + ": " + message;
           if (scenes_[scene].on_inversion == sim::InversionPolicy::Stop) {
-            diagnostics.error(SourceRange{}, message + "; the scene's on_inversion is stop");
+            diagnostics.error(scenes_[scene].source_range, message + "; the scene's on_inversion is stop");
             stop = true;
           } else {
-            diagnostics.warning(SourceRange{}, "inverted-elements", message);
+            diagnostics.warning(scenes_[scene].source_range, "inverted-elements", message);
           }
         }
         if (stop) return false;
@@ -666,7 +667,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         message << "vertex " << v << " moved " << moved << " m from rest by step " << steps_taken_ << ", beyond the "
                 << bound << " m the stable time step assumed for the nodal damping gamma1 |x - x0| (gamma1 = "
                 << setup.nodal_damping_gamma1 << " N s/m^2); give a smaller dt explicitly or lower gamma1";
-        diagnostics.error(SourceRange{}, message.str());
+        diagnostics.error(setup.source_range, message.str());
         return false;
       }
     }
@@ -858,7 +859,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after " << iterations
               << " iterations with relative residual " << error << " (tolerance " << options.tolerance
               << "); raise max_iterations or use a smaller dt";
-      diagnostics.warning(SourceRange{}, "cg-not-converged", message.str());
+      diagnostics.warning(scenes_.front().source_range, "cg-not-converged", message.str());
     }
     FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
     return true;
@@ -1023,7 +1024,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
               << net.second[s] << ")";
     }
     message << "; lower dt, raise damping, or check the loads";
-    diagnostics.error(SourceRange{}, message.str());
+    diagnostics.error(scenes_[scene].source_range, message.str());
     return fail();
   }
 

@@ -43,7 +43,7 @@ class GpuSimulation {
 
   // Advances `steps` steps, checking for NaN/Inf every `check_every` steps (0: only at the end) and at the end; on
   // a non-finite value the error names the exact step, the vertex and its most strained spring.
-  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = 64) = 0;
+  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = sim::kCheckEvery) = 0;
   virtual std::size_t steps_taken() const = 0;
   virtual std::vector<sim::Point3> positions(DiagnosticList& diagnostics) const = 0;
   virtual std::vector<sim::Point3> velocities(DiagnosticList& diagnostics) const = 0;
@@ -77,7 +77,7 @@ class GpuBatchSimulation {
                                                     const GpuOptions& options, DiagnosticList& diagnostics);
   virtual ~GpuBatchSimulation() = default;
 
-  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = 64) = 0;
+  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = sim::kCheckEvery) = 0;
   virtual std::size_t scene_count() const = 0;
   virtual std::size_t steps_taken() const = 0;
   virtual std::vector<sim::Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const = 0;

@@ -254,10 +254,10 @@ class CpuSimulationImpl final : public CpuSimulation {
       inversions_.largest_count = found.count;
       inversions_.current_count = found.count;
       if (setup_.on_inversion == InversionPolicy::Stop) {
-        diagnostics.error(SourceRange{}, inversion_message(setup_, inversions_) + "; the scene's on_inversion is stop");
+        diagnostics.error(setup_.source_range, inversion_message(setup_, inversions_) + "; the scene's on_inversion is stop");
         return false;
       }
-      diagnostics.warning(SourceRange{}, "inverted-elements", inversion_message(setup_, inversions_));
+      diagnostics.warning(setup_.source_range, "inverted-elements", inversion_message(setup_, inversions_));
       while (steps_taken_ < failed_by) {
         if (!one_step(diagnostics)) return false;
       }
@@ -289,7 +289,7 @@ class CpuSimulationImpl final : public CpuSimulation {
       const double dz = static_cast<double>(position_.z[v]) - setup_.rest_positions[v][2];
       const double moved = std::sqrt(dx * dx + dy * dy + dz * dz);
       if (moved <= stability_.assumed_displacement_max) continue;
-      diagnostics.error(SourceRange{}, displacement_bound_message(v, moved, steps_taken_));
+      diagnostics.error(setup_.source_range, displacement_bound_message(v, moved, steps_taken_));
       return false;
     }
     return true;
@@ -502,7 +502,7 @@ class CpuSimulationImpl final : public CpuSimulation {
       message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after "
               << solver.iterations() << " iterations with relative residual " << solver.error() << " (tolerance "
               << setup_.implicit.tolerance << "); raise max_iterations or use a smaller dt";
-      diagnostics.warning(SourceRange{}, "cg-not-converged", message.str());
+      diagnostics.warning(setup_.source_range, "cg-not-converged", message.str());
     }
     for (std::size_t i = 0; i < n_; ++i) {
       if (fixed_[i]) continue;
@@ -577,7 +577,7 @@ class CpuSimulationImpl final : public CpuSimulation {
                 << " and " << setup_.springs.second[s] << ")";
       }
       message << "; lower dt, raise damping, or check the loads";
-      diagnostics.error(SourceRange{}, message.str());
+      diagnostics.error(setup_.source_range, message.str());
       return false;
     }
     return true;

@@ -106,12 +106,13 @@ std::vector<double> element_von_mises_stress(const SimulationSetup& setup, const
       out[e] = std::abs(m.bulk_modulus * (kernels::tetrahedron_volume(x) - m.rest_volume) / m.rest_volume);
       continue;
     }
-    double F[9], R[9], stretch[3];
-    kernels::corner_gradient(x, m.rest_inverse, F);
-    kernels::rotation_and_stretches(F, R, stretch);
-    const double modulus =
-        m.strain_table ? kernels::strain_table_modulus(table, kernels::principal_strain_of_largest_magnitude(stretch))
-                       : m.youngs_modulus;
+    double modulus = m.youngs_modulus;
+    if (m.strain_table) {
+      double F[9], R[9], stretch[3];
+      kernels::corner_gradient(x, m.rest_inverse, F);
+      kernels::rotation_and_stretches(F, R, stretch);
+      modulus = kernels::strain_table_modulus(table, kernels::principal_strain_of_largest_magnitude(stretch));
+    }
     double sigma[9];
     kernels::corotational_stress(m.rest_inverse, modulus, m.poisson_ratio, x, sigma);
     out[e] = kernels::von_mises_stress(sigma);

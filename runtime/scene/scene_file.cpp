@@ -41,6 +41,8 @@ const char* scene_name(StiffnessMapping mapping) {
   return "van_gelder_1998";
 }
 
+const char* scene_name(ForceModel model) { return to_string(model); }
+
 SourceRange Scene::range_of(const std::string& field) const {
   const auto found = ranges.find(field);
   if (found != ranges.end()) return found->second;
@@ -274,10 +276,20 @@ class SceneParser {
                                       "docs/scenes.md");
       return;
     }
-    check_map(root, "", {"name", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "loads",
-                         "integrator", "dt", "duration", "backend", "precision", "threads", "outputs"});
+    check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "loads",
+                         "integrator", "dt", "duration", "backend", "precision", "threads", "outputs", "on_inversion"});
     if (root["name"]) {
       if (auto name = text(root["name"], "name")) scene_.name = *name;
+    }
+    if (root["model"]) {
+      static const std::vector<std::string> names = {"springs", "corotational_fem"};
+      if (auto i = keyword(root["model"], "model", names, "a force model"))
+        scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::CorotationalFem;
+    }
+    if (root["on_inversion"]) {
+      static const std::vector<std::string> names = {"warn", "stop"};
+      if (auto i = keyword(root["on_inversion"], "on_inversion", names, "what to do when an element turns inside out"))
+        scene_.on_inversion = *i == 0 ? InversionPolicy::Warn : InversionPolicy::Stop;
     }
     if (!root["mesh"]) diagnostics_.error(range(root), "mesh: missing; give a mesh file or a generated box or ellipsoid");
     else parse_mesh(root["mesh"]);
@@ -328,6 +340,13 @@ class SceneParser {
       if (auto value = integer(root["threads"], "threads", 0, 256)) scene_.threads = static_cast<unsigned>(*value);
     }
     if (root["outputs"]) parse_outputs(root["outputs"]);
+    if (scene_.model == ForceModel::CorotationalFem) check_fem_fields(root);
+    if (scene_.model == ForceModel::Springs && scene_.material.poisson_ratio && !scene_.volume_term) {
+      diagnostics_.error(scene_.range_of("material.poisson_ratio"),
+                         "material.poisson_ratio: springs alone have nu = 1/4 (central springs obey the Cauchy "
+                         "relation lambda = mu); add the volume term (springs: {volume_term: true}) to reach another "
+                         "ratio, or use model: corotational_fem");
+    }
   }
 
   void parse_mesh(const YAML::Node& node) {
@@ -408,7 +427,7 @@ class SceneParser {
     remember(node, "material");
     if (!check_map(node, "material", {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table",
                                       "system", "output", "patient", "inputs", "strain_axis", "thickness",
-                                      "flexion_fraction", "mapping"}))
+                                      "flexion_fraction", "mapping", "poisson_ratio"}))
       return;
     SceneMaterial& material = scene_.material;
     const std::vector<std::string> sources = {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table"};
@@ -453,10 +472,12 @@ class SceneParser {
       } else {
         const std::vector<std::string> names = {scene_name(StiffnessMapping::VanGelder1998),
                                                 scene_name(StiffnessMapping::LloydSzekelyHarders2007)};
+        material.mapping_given = true;
         if (auto i = keyword(node["mapping"], "material.mapping", names, "a Young's modulus mapping"))
           material.mapping = *i == 0 ? StiffnessMapping::VanGelder1998 : StiffnessMapping::LloydSzekelyHarders2007;
       }
     }
+    if (node["poisson_ratio"]) material.poisson_ratio = poisson_ratio(node["poisson_ratio"]);
     if (node["thickness"])
       if (auto v = positive(node["thickness"], "material.thickness", " (m)")) material.thickness = *v;
     if (node["flexion_fraction"])
@@ -485,6 +506,85 @@ class SceneParser {
           error(axis, "material.strain_axis", "'min' must be below 'max'");
         material.strain_axis = strain_axis;
       }
+    }
+  }
+
+  // `regions: [{box: {min, max}, value: NUMBER}, ...]` of a map; false after an error.
+  bool parse_regions(const YAML::Node& value, const std::string& field, std::vector<RegionValue>& out) {
+    const YAML::Node regions = value["regions"];
+    if (!regions || !regions.IsSequence() || regions.size() == 0) {
+      error(regions ? regions : value, field + ".regions", "expected a list of {box: {min, max}, value: NUMBER}");
+      return false;
+    }
+    for (std::size_t r = 0; r < regions.size(); ++r) {
+      const std::string region_field = field + ".regions[" + std::to_string(r) + "]";
+      if (!check_map(regions[r], region_field, {"box", "value"})) continue;
+      if (!regions[r]["box"] || !regions[r]["value"]) {
+        error(regions[r], region_field, "a region needs 'box' and 'value'");
+        continue;
+      }
+      const auto region_box = box(regions[r]["box"], region_field + ".box");
+      const auto region_value = number(regions[r]["value"], region_field + ".value", "a number");
+      if (region_box && region_value) out.push_back({*region_box, *region_value});
+    }
+    return true;
+  }
+
+  // A Poisson ratio in [0, 0.499]: a number, or {regions: [...], default: NUMBER}.
+  std::optional<RegionalValue> poisson_ratio(const YAML::Node& node) {
+    const std::string field = "material.poisson_ratio";
+    remember(node, field);
+    const std::string allowed = "a number in [0, 0.499]";
+    const auto in_range = [&](const YAML::Node& at, const std::string& where, double v) {
+      if (v >= 0.0 && v <= 0.499) return true;
+      error(at, where, "expected " + allowed + " (0.5 is incompressible, which linear tetrahedra cannot represent "
+                       "without locking), got " + format_number(v));
+      return false;
+    };
+    RegionalValue out;
+    if (node.IsMap()) {
+      if (!check_map(node, field, {"regions", "default"})) return std::nullopt;
+      out.has_default = false;
+      if (node["default"]) {
+        const auto v = number(node["default"], field + ".default", allowed);
+        if (!v || !in_range(node["default"], field + ".default", *v)) return std::nullopt;
+        out.value = *v;
+        out.has_default = true;
+      }
+      if (!parse_regions(node, field, out.regions)) return std::nullopt;
+      for (std::size_t r = 0; r < out.regions.size(); ++r)
+        if (!in_range(node["regions"][r]["value"], field + ".regions[" + std::to_string(r) + "].value",
+                      out.regions[r].value))
+          return std::nullopt;
+      return out;
+    }
+    const auto v = number(node, field, allowed + " or {regions: [...], default: NUMBER}");
+    if (!v || !in_range(node, field, *v)) return std::nullopt;
+    out.value = *v;
+    return out;
+  }
+
+  // What only springs have is refused with the co-rotational FEM, naming the field.
+  void check_fem_fields(const YAML::Node& root) {
+    const std::string why = " has no meaning for model: corotational_fem (it is a spring setting)";
+    const YAML::Node material = root["material"];
+    if (material && material.IsMap()) {
+      for (const char* key : {"stiffness", "stiffness_over_length"})
+        if (material[key])
+          error(material[key], std::string("material.") + key,
+                "the co-rotational FEM takes Young's modulus (youngs_modulus, rules or table), not spring constants");
+      for (const char* key : {"mapping", "thickness", "flexion_fraction"})
+        if (material[key]) error(material[key], std::string("material.") + key, why.substr(1));
+    }
+    if (root["springs"]) error(root["springs"], "springs", why.substr(1));
+    if (root["law"]) error(root["law"], "law", why.substr(1) + "; the FEM's material is linear elastic (co-rotated)");
+    const YAML::Node damping = root["damping"];
+    if (damping && damping.IsMap()) {
+      for (const char* key : {"coefficient", "natural_frequency"})
+        if (damping[key])
+          error(damping[key], std::string("damping.") + key,
+                "a per-spring dashpot setting; the FEM is damped by 'ratio' (each element's fastest mode) and "
+                "'rayleigh'");
     }
   }
 
@@ -518,22 +618,7 @@ class SceneParser {
             binding.has_default = true;
           }
         }
-        const YAML::Node regions = value["regions"];
-        if (!regions || !regions.IsSequence() || regions.size() == 0) {
-          error(regions ? regions : value, field + ".regions", "expected a list of {box: {min, max}, value: NUMBER}");
-          continue;
-        }
-        for (std::size_t r = 0; r < regions.size(); ++r) {
-          const std::string region_field = field + ".regions[" + std::to_string(r) + "]";
-          if (!check_map(regions[r], region_field, {"box", "value"})) continue;
-          if (!regions[r]["box"] || !regions[r]["value"]) {
-            error(regions[r], region_field, "a region needs 'box' and 'value'");
-            continue;
-          }
-          const auto region_box = box(regions[r]["box"], region_field + ".box");
-          const auto region_value = number(regions[r]["value"], region_field + ".value", "a number");
-          if (region_box && region_value) binding.regions.push_back({*region_box, *region_value});
-        }
+        if (!parse_regions(value, field, binding.regions)) continue;
       } else {
         error(value, field, "expected a number, 'strain' or {regions: [...], default: NUMBER}, got " + describe(value));
         continue;
@@ -571,10 +656,31 @@ class SceneParser {
     }
     if (!node.IsMap()) {
       error(node, "damping", "expected 'none' or a map with 'ratio' (and optionally 'natural_frequency') or "
-                             "'coefficient'");
+                             "'coefficient', and/or 'rayleigh'");
       return;
     }
-    if (!check_map(node, "damping", {"ratio", "natural_frequency", "coefficient"})) return;
+    if (!check_map(node, "damping", {"ratio", "natural_frequency", "coefficient", "rayleigh"})) return;
+    if (node["rayleigh"]) {
+      const YAML::Node rayleigh = node["rayleigh"];
+      remember(rayleigh, "damping.rayleigh");
+      if (check_map(rayleigh, "damping.rayleigh", {"mass", "stiffness"})) {
+        if (!rayleigh["mass"] && !rayleigh["stiffness"])
+          error(rayleigh, "damping.rayleigh", "give 'mass' (alpha, 1/s) and/or 'stiffness' (beta, s)");
+        if (rayleigh["mass"])
+          if (auto v = non_negative(rayleigh["mass"], "damping.rayleigh.mass", " (1/s)")) scene_.rayleigh.mass = *v;
+        if (rayleigh["stiffness"])
+          if (auto v = non_negative(rayleigh["stiffness"], "damping.rayleigh.stiffness", " (s)"))
+            scene_.rayleigh.stiffness = *v;
+      }
+      if (!node["ratio"] && !node["coefficient"]) {
+        // Rayleigh alone: no ratio damping beside it.
+        scene_.damping.rule = DampingSpec::Rule::DampingRatio;
+        scene_.damping.ratio = 0.0;
+        if (node["natural_frequency"])
+          error(node["natural_frequency"], "damping.natural_frequency", "only allowed with 'ratio'");
+        return;
+      }
+    }
     switch (one_of(node, "damping", {"ratio", "coefficient"})) {
       case 0:
         if (auto v = non_negative(node["ratio"], "damping.ratio", "")) scene_.damping.ratio = *v;
@@ -607,7 +713,9 @@ class SceneParser {
             "'flexion' (and 'bending' for springs that skip a vertex)");
       return;
     }
-    if (!check_map(node, "springs", {"structural", "flexion", "bending", "bending_min_angle"})) return;
+    if (!check_map(node, "springs", {"structural", "flexion", "bending", "bending_min_angle", "volume_term"})) return;
+    if (node["volume_term"])
+      if (auto v = boolean(node["volume_term"], "springs.volume_term")) scene_.volume_term = *v;
     if (node["structural"])
       if (auto v = boolean(node["structural"], "springs.structural")) scene_.triangle_springs.structural = *v;
     if (node["flexion"])

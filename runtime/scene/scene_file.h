@@ -35,6 +35,14 @@ struct RegionValue {
   double value = 0.0;
 };
 
+// A number for the whole scene, or per region (the first region box containing the element's centroid), with a
+// default outside every region.
+struct RegionalValue {
+  double value = 0.0;  // the default (or the only value)
+  bool has_default = true;
+  std::vector<RegionValue> regions;
+};
+
 // How one FIS input gets its value.
 struct InputBinding {
   std::string input;
@@ -71,6 +79,9 @@ struct SceneMaterial {
   std::optional<StrainAxis> strain_axis;  // Rules with a strain binding; default: the input's range, 101 points
   // Young's modulus -> spring constants (`mapping`): YoungsModulus, Rules and Table only.
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
+  bool mapping_given = false;
+  // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.499].
+  std::optional<RegionalValue> poisson_ratio;
   double thickness = 1.0;        // m, membranes (triangle meshes)
   double flexion_fraction = 0.1;
 };
@@ -116,14 +127,27 @@ struct SceneOutputs {
   bool plot = true;  // force-displacement PNG (needs a probe)
 };
 
+// Rayleigh damping C = alpha M + beta K (`damping: {rayleigh: {mass: ALPHA, stiffness: BETA}}`): alpha (1/s) acts on
+// every vertex, beta (s) is added to each spring's dashpot (c += beta k) or each element's stiffness damping.
+struct SceneRayleigh {
+  double mass = 0.0;
+  double stiffness = 0.0;
+};
+
+constexpr double kDefaultPoissonRatio = 0.45;
+
 struct Scene {
   std::string path;  // the scene file
   std::string name;  // `name`, or the file's stem
+  ForceModel model = ForceModel::Springs;
   SceneMesh mesh;
   SceneMaterial material;
   MassSpec mass;
   DampingSpec damping;
+  SceneRayleigh rayleigh;
   TriangleSpringOptions triangle_springs;
+  bool volume_term = false;  // springs: {volume_term: true}
+  InversionPolicy on_inversion = InversionPolicy::Warn;
   SceneLaw law;
   SceneFixed fixed;
   Point3 gravity{0.0, 0.0, 0.0};
@@ -149,5 +173,6 @@ std::optional<Scene> parse_scene(const std::string& path, const std::string& tex
 const char* to_string(SceneBackend backend);
 const char* scene_name(Integrator integrator);  // the scene spelling: "semi_implicit_euler", ...
 const char* scene_name(StiffnessMapping mapping);  // the scene spelling: "van_gelder_1998", ...
+const char* scene_name(ForceModel model);  // "springs", "corotational_fem"
 
 }  // namespace fmpc::sim

@@ -54,6 +54,7 @@ class SceneStepper {
   virtual std::vector<Point3> velocities(DiagnosticList& diagnostics) const = 0;
   virtual ProbeReading probe_reading(DiagnosticList& diagnostics) const = 0;
   virtual std::vector<double> current_stiffness(DiagnosticList& diagnostics) const = 0;
+  virtual const InversionReport& inversions() const = 0;
 };
 
 class CpuStepper final : public SceneStepper {
@@ -67,6 +68,7 @@ class CpuStepper final : public SceneStepper {
   std::vector<Point3> velocities(DiagnosticList&) const override { return simulation_->velocities(); }
   ProbeReading probe_reading(DiagnosticList&) const override { return simulation_->probe_reading(); }
   std::vector<double> current_stiffness(DiagnosticList&) const override { return simulation_->current_stiffness(); }
+  const InversionReport& inversions() const override { return simulation_->inversions(); }
 
  private:
   std::unique_ptr<CpuSimulation> simulation_;
@@ -92,6 +94,7 @@ class CudaStepper final : public SceneStepper {
   std::vector<double> current_stiffness(DiagnosticList& diagnostics) const override {
     return simulation_->current_stiffness(diagnostics);
   }
+  const InversionReport& inversions() const override { return simulation_->inversions(); }
 
  private:
   std::unique_ptr<gpu::GpuSimulation> simulation_;
@@ -225,6 +228,7 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
   result.steps_taken = simulation->steps_taken();
   result.steps_per_second =
       result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
+  result.inversions = simulation->inversions();
 
   if (outputs_ok && !frames.empty()) {
     const std::string pvd = (directory / (scene.name + ".pvd")).string();
@@ -249,6 +253,8 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
         .value("scene", scene.name)
         .value("scene_file", scene.path)
         .value("completed", result.completed)
+        .value("model", scene_name(setup.model))
+        .value("inverted_elements", result.inversions.largest_count)
         .value("backend", options.backend)
         .value("precision", setup.precision == Precision::Float ? "float" : "double")
         .value("integrator", scene_name(setup.integrator))
@@ -268,6 +274,7 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
         .value("tetrahedra", built.mesh.tetrahedra.size())
         .value("triangles", built.mesh.triangles.size())
         .value("springs", setup.springs.size())
+        .value("volume_term", setup.model == ForceModel::Springs && setup.tetrahedron_field.has_value())
         .value("fixed_vertices", setup.fixed_vertices.size())
         .value("metres_per_unit", scene.mesh.unit)
         .end_object()
@@ -304,6 +311,17 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
           .value("max_abs_force_N", max_force)
           .end_object();
     }
+    json.begin_object("inversions")
+        .value("largest_count", result.inversions.largest_count)
+        .value("final_count", result.inversions.current_count)
+        .value("checked_every_steps", kCheckEvery)
+        .value("policy", setup.on_inversion == InversionPolicy::Stop ? "stop" : "warn");
+    if (result.inversions.largest_count > 0) {
+      json.value("first_step", result.inversions.first_step)
+          .value("first_time_s", result.inversions.first_time)
+          .value("first_element", static_cast<std::size_t>(result.inversions.first_element));
+    }
+    json.end_object();
     json.begin_object("outputs")
         .value("directory", options.output_directory)
         .value("frames", frames.size())

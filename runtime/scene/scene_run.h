@@ -36,6 +36,7 @@ struct SceneRunResult {
   double steps_per_second = 0.0;
   double max_displacement = 0.0;  // m, over every vertex at the recorded times (frames and samples)
   std::vector<ProbeCurvePoint> probe_curve;  // at the samples; empty without a probe
+  InversionReport inversions;
   std::vector<std::string> files;            // written, in order
   std::string csv_path;                      // empty when no CSV was written
 };

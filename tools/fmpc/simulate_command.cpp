@@ -237,7 +237,8 @@ int run_simulate(const SimulateOptions& options) {
   std::cout << scene->name << ": " << result->steps_taken << " steps of " << six_digits(result->stability.time_step)
             << " s" << (result->stability.automatic ? " (auto)" : "") << ", " << sim::scene_name(setup.integrator)
             << ", " << (setup.precision == sim::Precision::Float ? "float" : "double") << ", " << *backend << "\n"
-            << "  mesh: " << built->mesh.points.size() << " vertices, " << setup.springs.size() << " springs, "
+            << "  model: " << sim::scene_name(setup.model) << "; mesh: " << built->mesh.points.size() << " vertices, "
+            << built->mesh.tetrahedra.size() << " tetrahedra, " << setup.springs.size() << " springs, "
             << setup.fixed_vertices.size() << " fixed\n"
             << "  stiffness: " << built->stiffness_description << "\n"
             << "  wall time " << six_digits(result->wall_seconds) << " s (" << six_digits(result->steps_per_second)
@@ -246,6 +247,13 @@ int run_simulate(const SimulateOptions& options) {
     const sim::ProbeCurvePoint& last = result->probe_curve.back();
     std::cout << "  probe: " << setup.probe->vertices.size() << " vertices, displacement "
               << six_digits(last.displacement * 1000.0) << " mm, force " << six_digits(last.force) << " N\n";
+  }
+  if (result->inversions.largest_count > 0) {
+    std::cout << "  inverted elements: " << result->inversions.largest_count << " at most (first: tetrahedron "
+              << result->inversions.first_element << " at step " << result->inversions.first_step << "), "
+              << result->inversions.current_count << " at the end\n";
+  } else if (!setup.tetrahedra.empty()) {
+    std::cout << "  inverted elements: none\n";
   }
   std::cout << "  wrote " << result->files.size() + (plot_path.empty() ? 0 : 1) << " files to "
             << run_options.output_directory << (plot_path.empty() ? "" : " (plot: force_displacement.png)") << "\n";
