@@ -214,8 +214,9 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "precision: half\n") == "3:12: precision: 'half' is not a precision; use float or double");
   CHECK(error_of(kMinimal + "threads: 1.5\n") == "3:10: threads: expected an integer from 0 to 256, got '1.5'");
   CHECK(error_of(kMinimal + "gravity: [0, 0, -9.81]\n") ==
-        "3:1: gravity: unknown key; allowed: 'name', 'mesh', 'material', 'mass', 'damping', 'springs', 'law', "
-        "'fixed', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads' or 'outputs'");
+        "3:1: gravity: unknown key; allowed: 'name', 'model', 'mesh', 'material', 'mass', 'damping', 'springs', "
+        "'law', 'fixed', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads', 'outputs' or "
+        "'on_inversion'");
   CHECK(error_of("material: {youngs_modulus: 10}\n") ==
         "1:1: mesh: missing; give a mesh file or a generated box or ellipsoid");
   CHECK(error_of("mesh: {box: {size: [1, 1, 1]}}\n") ==
@@ -247,7 +248,8 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "damping: {ratio: -0.5}\n") ==
         "3:18: damping.ratio: expected a non-negative number, got -0.5");
   CHECK(error_of(kMinimal + "damping: lots\n") ==
-        "3:10: damping: expected 'none' or a map with 'ratio' (and optionally 'natural_frequency') or 'coefficient'");
+        "3:10: damping: expected 'none' or a map with 'ratio' (and optionally 'natural_frequency') or 'coefficient', "
+        "and/or 'rayleigh'");
   CHECK(error_of(kMinimal + "law: hooke\n") == "3:6: law: 'hooke' is not a spring law; use linear or basafa_farahmand");
   CHECK(error_of(kMinimal + "fixed: {indices: [1, -2]}\n") ==
         "3:22: fixed.indices: expected an integer from 0 to 2147483647, got '-2'");
