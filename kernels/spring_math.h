@@ -26,6 +26,37 @@ FMPC_HD double square_root(double value) {
 #endif
 }
 
+// value = fraction 2^exponent with |fraction| in [0.5, 1) (frexp), and its exact inverse scaling (ldexp): powers of
+// two rescale without rounding, so the host and the device agree bit for bit.
+FMPC_HD float fraction_and_exponent(float value, int& exponent) {
+#if defined(__CUDACC__)
+  return frexpf(value, &exponent);
+#else
+  return std::frexp(value, &exponent);
+#endif
+}
+FMPC_HD double fraction_and_exponent(double value, int& exponent) {
+#if defined(__CUDACC__)
+  return frexp(value, &exponent);
+#else
+  return std::frexp(value, &exponent);
+#endif
+}
+FMPC_HD float scale_by_power_of_two(float value, int exponent) {
+#if defined(__CUDACC__)
+  return ldexpf(value, exponent);
+#else
+  return std::ldexp(value, exponent);
+#endif
+}
+FMPC_HD double scale_by_power_of_two(double value, int exponent) {
+#if defined(__CUDACC__)
+  return ldexp(value, exponent);
+#else
+  return std::ldexp(value, exponent);
+#endif
+}
+
 enum class SpringLaw : int {
   LinearDashpot = 0,    // f = k (l - l0), plus dashpot c (dv . u)
   BasafaFarahmand = 1,  // f = F_s(X), X = (l - l0) / l0, plus dashpot c (dv . u); see basafa_farahmand_force

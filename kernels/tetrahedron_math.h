@@ -35,10 +35,12 @@ struct RealLimits;
 template <>
 struct RealLimits<float> {
   static constexpr float epsilon = 1.1920929e-7f;
+  static constexpr float largest = 3.4028235e38f;
 };
 template <>
 struct RealLimits<double> {
   static constexpr double epsilon = 2.220446049250313e-16;
+  static constexpr double largest = 1.7976931348623157e308;
 };
 
 // ---- 3 x 3 matrices (row-major arrays of 9) ---------------------------------------------------------------------
@@ -171,8 +173,36 @@ FMPC_HD void symmetric_eigen3(Real* a, Real* eigenvalues, Real* vectors) {
 // of F v_2 orthogonal to u_1, normalised, u_3 = u_1 x u_2 and v_3 = v_1 x v_2, R = sum u_i v_i^T. A collapsed
 // element (F v_1 = 0) gets R = I; a flat one (F v_2 parallel to u_1 within rounding) gets u_2 perpendicular to u_1
 // along the coordinate axis u_1 is least aligned with.
+// F scaled by an exact power of two so that its largest entry lies in [0.5, 1): F^T F neither underflows nor
+// overflows whatever the element's scale, and the rotation (scale-invariant) is unchanged. Returns the exponent
+// that undoes the scaling (0 for a zero or non-finite F, copied as it is).
 template <typename Real>
-FMPC_HD void rotation_and_stretches(const Real* F, Real* R, Real* stretch) {
+FMPC_HD int normalised_copy(const Real* F, Real* out) {
+  Real largest = Real(0);
+  for (int i = 0; i < 9; ++i) {
+    const Real magnitude = F[i] < Real(0) ? -F[i] : F[i];
+    largest = magnitude > largest ? magnitude : largest;
+  }
+  int exponent = 0;
+  if (largest > Real(0) && largest <= RealLimits<Real>::largest) fraction_and_exponent(largest, exponent);
+  for (int i = 0; i < 9; ++i) out[i] = scale_by_power_of_two(F[i], -exponent);
+  return exponent;
+}
+
+template <typename Real>
+FMPC_HD void rotation_and_stretches_of_normalised(const Real* F, Real* R, Real* stretch);
+
+template <typename Real>
+FMPC_HD void rotation_and_stretches(const Real* unscaled, Real* R, Real* stretch) {
+  Real F[9];
+  const int exponent = normalised_copy(unscaled, F);
+  rotation_and_stretches_of_normalised(F, R, stretch);
+  for (int k = 0; k < 3; ++k) stretch[k] = scale_by_power_of_two(stretch[k], exponent);
+}
+
+// rotation_and_stretches for an F whose largest entry is about 1.
+template <typename Real>
+FMPC_HD void rotation_and_stretches_of_normalised(const Real* F, Real* R, Real* stretch) {
   Real c[9], eigenvalues[3], v[9];
   multiply3_transposed_left(F, F, c);
   symmetric_eigen3(c, eigenvalues, v);
@@ -228,7 +258,9 @@ FMPC_HD void rotation_and_stretches(const Real* F, Real* R, Real* stretch) {
 // less than 1e-2 (it would only slow the final quadratic steps); the iteration stops when the change is below
 // 64 epsilon |X|.
 template <typename Real>
-FMPC_HD void polar_rotation(const Real* F, Real* R) {
+FMPC_HD void polar_rotation(const Real* unscaled, Real* R) {
+  Real F[9];
+  normalised_copy(unscaled, F);
   Real norm_squared = Real(0);
   for (int i = 0; i < 9; ++i) norm_squared += F[i] * F[i];
   const Real det = determinant3(F);
@@ -276,7 +308,7 @@ FMPC_HD void polar_rotation(const Real* F, Real* R) {
     }
   }
   Real stretch[3];
-  rotation_and_stretches(F, R, stretch);
+  rotation_and_stretches_of_normalised(F, R, stretch);
 }
 
 // The strain a strain table looks up for an element: its principal strain (stretch - 1) of largest magnitude,
