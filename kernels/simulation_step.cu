@@ -161,7 +161,7 @@ __global__ void runge_kutta4_stage_kernel(RungeKutta4Arguments<Real> a, int stag
     a.stage_velocity[next].z[v] = a.state.vz[v] + c * az;
     return;
   }
-  if (a.loads.fixed[v]) return;
+  if (a.loads.fixed[v] == kernels::kAllAxesFixed) return;
   const auto& kv = a.stage_velocity;
   const auto& ka = a.stage_acceleration;
   Real& x = a.state.x[v];
@@ -349,8 +349,8 @@ __global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a) {
   double p[4][3], kp[4][3];
   for (int c = 0; c < 4; ++c) {
     const int vertex = f.corners[4 * e + c];
-    const bool free = !a.loads.fixed[vertex];
-    for (int i = 0; i < 3; ++i) p[c][i] = free ? a.p[3 * vertex + i] : 0.0;
+    const unsigned char held = a.loads.fixed[vertex];
+    for (int i = 0; i < 3; ++i) p[c][i] = kernels::axis_fixed(held, i) ? 0.0 : a.p[3 * vertex + i];
   }
   const kernels::TetrahedronMaterial<double> m = implicit_material(f, e);
   kernels::tetrahedron_stiffness_action(m, f.linearisation[e], p, kp);
@@ -373,7 +373,8 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   const int v = vertex_index();
   if (v >= a.vertex_count) return;
   double* b = a.rhs + 3 * v;
-  if (a.loads.fixed[v]) {
+  const unsigned char held = a.loads.fixed[v];
+  if (held == kernels::kAllAxesFixed) {
     a.diagonal[v] = 1.0;
     for (int c = 0; c < 3; ++c) {
       b[c] = 0.0;
@@ -422,7 +423,14 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
     }
   }
   a.diagonal[v] = diagonal;
-  for (int c = 0; c < 3; ++c) a.inverse_jacobi[3 * v + c] = jacobi[c] != 0.0 ? 1.0 / jacobi[c] : 1.0;
+  for (int c = 0; c < 3; ++c) {
+    // A held axis is an identity row with a zero right-hand side.
+    if (kernels::axis_fixed(held, c)) {
+      b[c] = 0.0;
+      jacobi[c] = 1.0;
+    }
+    a.inverse_jacobi[3 * v + c] = jacobi[c] != 0.0 ? 1.0 / jacobi[c] : 1.0;
+  }
 }
 
 template <typename Real>
@@ -431,7 +439,8 @@ __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
   if (v >= a.vertex_count) return;
   const double* own = a.p + 3 * v;
   double* out = a.ap + 3 * v;
-  if (a.loads.fixed[v]) {
+  const unsigned char held = a.loads.fixed[v];
+  if (held == kernels::kAllAxesFixed) {
     for (int c = 0; c < 3; ++c) out[c] = own[c];
     return;
   }
@@ -439,9 +448,9 @@ __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
   const kernels::SpringNetworkView<Real>& springs = a.model.springs;
   for (int e = springs.adjacency_offset[v]; e < springs.adjacency_offset[v + 1]; ++e) {
     const int s = springs.adjacency_spring[e], o = springs.adjacency_neighbour[e];
-    const bool other_free = !a.loads.fixed[o];
-    const double relative[3] = {own[0] - (other_free ? a.p[3 * o] : 0.0), own[1] - (other_free ? a.p[3 * o + 1] : 0.0),
-                                own[2] - (other_free ? a.p[3 * o + 2] : 0.0)};
+    const unsigned char other = a.loads.fixed[o];
+    double relative[3];
+    for (int c = 0; c < 3; ++c) relative[c] = own[c] - (kernels::axis_fixed(other, c) ? 0.0 : a.p[3 * o + c]);
     double product[3];
     kernels::symmetric_multiply(a.blocks + 12 * s + 6, relative, product);
     for (int c = 0; c < 3; ++c) sum[c] += product[c];
@@ -450,7 +459,7 @@ __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
     const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
     gather_corner_values(v, corners, a.elements.product, sum);
   }
-  for (int c = 0; c < 3; ++c) out[c] = sum[c];
+  for (int c = 0; c < 3; ++c) out[c] = kernels::axis_fixed(held, c) ? own[c] : sum[c];
 }
 
 template <typename Real>
@@ -547,7 +556,7 @@ __global__ void cg_direction_kernel(ImplicitArguments<Real> a) {
 template <typename Real>
 __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
   const int v = vertex_index();
-  if (v >= a.vertex_count || a.loads.fixed[v]) return;
+  if (v >= a.vertex_count || a.loads.fixed[v] == kernels::kAllAxesFixed) return;
   const Real h = static_cast<Real>(a.h);
   a.state.vx[v] += static_cast<Real>(a.x[3 * v]);
   a.state.vy[v] += static_cast<Real>(a.x[3 * v + 1]);

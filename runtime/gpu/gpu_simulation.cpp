@@ -194,26 +194,28 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
       else c.damping.insert(c.damping.end(), net.damping.begin(), net.damping.end());
     }
     c.mass.insert(c.mass.end(), setup.mass.begin(), setup.mass.end());
+    // Held axes at the start (a displacement probe's vertices are held only after the initial velocities are taken,
+    // as in the CPU backend), then the full mask.
     std::vector<unsigned char> fixed(n, 0);
-    for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = 1;
-    c.fixed.insert(c.fixed.end(), fixed.begin(), fixed.end());
+    for (std::size_t v = 0; v < n && setup.fixed_axes.size() == n; ++v) fixed[v] = setup.fixed_axes[v];
+    for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
+    const std::vector<unsigned char> held = sim::held_axes(setup);
+    c.fixed.insert(c.fixed.end(), held.begin(), held.end());
     const std::vector<sim::Point3>& start =
         setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
     for (std::size_t v = 0; v < n; ++v) {
       for (std::size_t axis = 0; axis < 3; ++axis) {
         c.rest[axis].push_back(setup.rest_positions[v][axis]);
         c.position[axis].push_back(start[v][axis]);
-        // As the CPU backend: fixed vertices start at rest.
-        c.velocity[axis].push_back(setup.initial_velocities.empty() || fixed[v] ? 0.0
-                                                                                : setup.initial_velocities[v][axis]);
+        // As the CPU backend: held axes start at rest.
+        c.velocity[axis].push_back(setup.initial_velocities.empty() || kernels::axis_fixed(fixed[v], static_cast<int>(axis))
+                                       ? 0.0
+                                       : setup.initial_velocities[v][axis]);
         if (c.has_forces) c.force[axis].push_back(setup.external_forces.empty() ? 0.0 : setup.external_forces[v][axis]);
       }
       c.vertex_scene.push_back(static_cast<int>(s));
     }
-    // Displacement probes move their vertices kinematically, as in the CPU backend (which also marks them after
-    // taking the initial velocities).
-    if (setup.probe && !force_probe(setup))
-      for (const auto v : setup.probe->vertices) c.fixed[static_cast<std::size_t>(vertex_base + v)] = 1;
+
     c.vertex_begin.push_back(vertex_base + static_cast<int>(n));
     c.spring_begin.push_back(spring_base + static_cast<int>(net.size()));
     c.element_begin.push_back(element_base + static_cast<int>(setup.tetrahedra.size()));

@@ -14,6 +14,7 @@
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
+#include "runtime/integrate/model_tangent.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/integrate/worker_pool.h"
 
@@ -46,8 +47,11 @@ class CpuSimulationImpl final : public CpuSimulation {
     stiffness_ = convert(net.stiffness);
     damping_ = convert(net.damping);  // empty without damping
     mass_ = convert(setup.mass);
-    fixed_.assign(n_, 0);
-    for (const auto v : setup.fixed_vertices) fixed_[static_cast<std::size_t>(v)] = 1;
+    // Displacement probes' vertices are held (moved kinematically) only after the initial velocities are taken.
+    fixed_ = held_axes(setup);
+    std::vector<unsigned char> held_at_start(n_, 0);
+    for (std::size_t v = 0; v < n_ && setup.fixed_axes.size() == n_; ++v) held_at_start[v] = setup.fixed_axes[v];
+    for (const auto v : setup.fixed_vertices) held_at_start[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
     position_.resize(n_);
     velocity_.resize(n_);
     rest_.resize(n_);
@@ -61,16 +65,14 @@ class CpuSimulationImpl final : public CpuSimulation {
       position_.x[v] = static_cast<Real>(p[0]);
       position_.y[v] = static_cast<Real>(p[1]);
       position_.z[v] = static_cast<Real>(p[2]);
-      if (!setup.initial_velocities.empty() && !fixed_[v]) {
-        velocity_.x[v] = static_cast<Real>(setup.initial_velocities[v][0]);
-        velocity_.y[v] = static_cast<Real>(setup.initial_velocities[v][1]);
-        velocity_.z[v] = static_cast<Real>(setup.initial_velocities[v][2]);
+      if (!setup.initial_velocities.empty()) {
+        const unsigned char held = held_at_start[v];
+        velocity_.x[v] = kernels::axis_fixed(held, 0) ? Real(0) : static_cast<Real>(setup.initial_velocities[v][0]);
+        velocity_.y[v] = kernels::axis_fixed(held, 1) ? Real(0) : static_cast<Real>(setup.initial_velocities[v][1]);
+        velocity_.z[v] = kernels::axis_fixed(held, 2) ? Real(0) : static_cast<Real>(setup.initial_velocities[v][2]);
       }
     }
     const bool probe_force = setup.probe && setup.probe->mode == ProbeLoad::Mode::Force;
-    if (setup.probe && !probe_force) {
-      for (const auto v : setup.probe->vertices) fixed_[static_cast<std::size_t>(v)] = 1;  // moved kinematically
-    }
     if (probe_force && setup.external_forces.empty()) force_.resize(n_);
     if (!setup.external_forces.empty()) {
       force_.resize(n_);
@@ -397,7 +399,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     const auto& kv = rk_velocity_;
     const auto& ka = rk_acceleration_;
     for_each_vertex([&](std::size_t i) {
-      if (fixed_[i]) return;
+      if (fixed_[i] == kernels::kAllAxesFixed) return;
       position_.x[i] = kernels::runge_kutta4_combine(position_.x[i], kv[0].x[i], kv[1].x[i], kv[2].x[i], kv[3].x[i], h);
       position_.y[i] = kernels::runge_kutta4_combine(position_.y[i], kv[0].y[i], kv[1].y[i], kv[2].y[i], kv[3].y[i], h);
       position_.z[i] = kernels::runge_kutta4_combine(position_.z[i], kv[0].z[i], kv[1].z[i], kv[2].z[i], kv[3].z[i], h);
@@ -407,11 +409,11 @@ class CpuSimulationImpl final : public CpuSimulation {
     });
   }
 
-  // Baraff & Witkin's linearised backward Euler (kernels/implicit_math.h), solved with Eigen's conjugate gradient
-  // and its Jacobi (diagonal) preconditioner; fixed vertices become identity rows with a zero right-hand side.
+  // Baraff & Witkin's linearised backward Euler (kernels/implicit_math.h), (M + h D + h^2 K) dv = h (f0 - h K v0)
+  // with the model's tangent (model_tangent.h), solved with Eigen's conjugate gradient and its Jacobi (diagonal)
+  // preconditioner; fixed vertices become identity rows with a zero right-hand side.
   bool implicit_euler_step(DiagnosticList& diagnostics) {
     const double h = static_cast<double>(h_);
-    const SpringNetwork& net = setup_.springs;
     const std::size_t dofs = 3 * n_;
     accelerations(position_, velocity_, acceleration_);
     Eigen::VectorXd rhs(static_cast<Eigen::Index>(dofs));
@@ -427,64 +429,32 @@ class CpuSimulationImpl final : public CpuSimulation {
         v0[row] = v[axis];
       }
     }
+    // The springs' current stiffness (a strain table's last lookup), as the forces use.
+    const ModelTangent tangent = model_tangent(setup_, positions(), current_stiffness());
+    rhs -= h * h * (tangent.stiffness * v0);
+    Eigen::SparseMatrix<double> system = h * h * tangent.stiffness + h * tangent.damping;
+    system.prune([this](Eigen::Index row, Eigen::Index column, double) {
+      return !dof_held(row) && !dof_held(column);
+    });
     triplets_.clear();
-    const kernels::SpringLawParameters<double> law{setup_.law, setup_.basafa_k2_over_k1, setup_.basafa_xc};
-    for (std::size_t s = 0; s < net.size(); ++s) {
-      const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
-      double stiffness_block[6], block[6];
-      // The springs' current stiffness (a strain table's last lookup), as the forces use.
-      if (!kernels::implicit_spring_blocks(static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]),
-                                           static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]),
-                                           static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]),
-                                           net.rest_length[s], static_cast<double>(stiffness_[s]),
-                                           damping_.empty() ? 0.0 : static_cast<double>(damping_[s]), law, h,
-                                           stiffness_block, block)) {
-        continue;
-      }
-      // rhs += h^2 df/dx v0: for vertex a, -K_s (v_a - v_b); for b, -K_s (v_b - v_a).
-      double relative[3], kv[3];
-      for (std::size_t c = 0; c < 3; ++c) {
-        relative[c] = v0[static_cast<Eigen::Index>(3 * a + c)] - v0[static_cast<Eigen::Index>(3 * b + c)];
-      }
-      kernels::symmetric_multiply(stiffness_block, relative, kv);
-      for (std::size_t r = 0; r < 3; ++r) {
-        rhs[static_cast<Eigen::Index>(3 * a + r)] -= h * h * kv[r];
-        rhs[static_cast<Eigen::Index>(3 * b + r)] += h * h * kv[r];
-      }
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) {
-          const double entry = block[kernels::symmetric_index(r, c)];
-          const auto ra = static_cast<int>(3 * a) + r, rb = static_cast<int>(3 * b) + r;
-          const auto ca = static_cast<int>(3 * a) + c, cb = static_cast<int>(3 * b) + c;
-          if (!fixed_[a]) triplets_.emplace_back(ra, ca, entry);
-          if (!fixed_[b]) triplets_.emplace_back(rb, cb, entry);
-          if (!fixed_[a] && !fixed_[b]) {
-            triplets_.emplace_back(ra, cb, -entry);
-            triplets_.emplace_back(rb, ca, -entry);
-          }
-        }
-      }
-    }
-    if (setup_.tetrahedron_field) add_element_blocks(h, v0, rhs);
     for (std::size_t i = 0; i < n_; ++i) {
-      double diagonal = setup_.mass[i];
-      if (!fixed_[i]) {
-        const double dx = static_cast<double>(position_.x[i]) - setup_.rest_positions[i][0];
-        const double dy = static_cast<double>(position_.y[i]) - setup_.rest_positions[i][1];
-        const double dz = static_cast<double>(position_.z[i]) - setup_.rest_positions[i][2];
-        diagonal += h * (setup_.nodal_damping_gamma0 +
-                         setup_.nodal_damping_gamma1 * std::sqrt(dx * dx + dy * dy + dz * dz) +
-                         setup_.mass_damping * setup_.mass[i]);
-      } else {
-        diagonal = 1.0;
-        for (std::size_t axis = 0; axis < 3; ++axis) rhs[static_cast<Eigen::Index>(3 * i + axis)] = 0.0;
-      }
+      const double dx = static_cast<double>(position_.x[i]) - setup_.rest_positions[i][0];
+      const double dy = static_cast<double>(position_.y[i]) - setup_.rest_positions[i][1];
+      const double dz = static_cast<double>(position_.z[i]) - setup_.rest_positions[i][2];
+      const double diagonal =
+          setup_.mass[i] + h * (setup_.nodal_damping_gamma0 +
+                                setup_.nodal_damping_gamma1 * std::sqrt(dx * dx + dy * dy + dz * dz) +
+                                setup_.mass_damping * setup_.mass[i]);
       for (std::size_t axis = 0; axis < 3; ++axis) {
-        triplets_.emplace_back(static_cast<int>(3 * i + axis), static_cast<int>(3 * i + axis), diagonal);
+        const auto dof = static_cast<Eigen::Index>(3 * i + axis);
+        // A held axis is an identity row with a zero right-hand side.
+        if (dof_held(dof)) rhs[dof] = 0.0;
+        triplets_.emplace_back(static_cast<int>(dof), static_cast<int>(dof), dof_held(dof) ? 1.0 : diagonal);
       }
     }
-    Eigen::SparseMatrix<double> system(static_cast<Eigen::Index>(dofs), static_cast<Eigen::Index>(dofs));
-    system.setFromTriplets(triplets_.begin(), triplets_.end());
+    Eigen::SparseMatrix<double> diagonal_part(static_cast<Eigen::Index>(dofs), static_cast<Eigen::Index>(dofs));
+    diagonal_part.setFromTriplets(triplets_.begin(), triplets_.end());
+    system += diagonal_part;
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
                              Eigen::DiagonalPreconditioner<double>>
         solver;
@@ -505,7 +475,7 @@ class CpuSimulationImpl final : public CpuSimulation {
       diagnostics.warning(setup_.source_range, "cg-not-converged", message.str());
     }
     for (std::size_t i = 0; i < n_; ++i) {
-      if (fixed_[i]) continue;
+      if (fixed_[i] == kernels::kAllAxesFixed) continue;
       velocity_.x[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i)]);
       velocity_.y[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i + 1)]);
       velocity_.z[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i + 2)]);
@@ -516,44 +486,8 @@ class CpuSimulationImpl final : public CpuSimulation {
     return true;
   }
 
-  // Each element's share of the implicit system, linearised at the step's start: (h^2 + h beta_e) K_e (K_e = R K0
-  // R^T or the volume term's Gauss-Newton stiffness, kernels/tetrahedron_math.h) into the matrix, -h^2 K_e v0 into
-  // the right-hand side (h^2 df/dx v0). Rows of fixed vertices are dropped as for springs.
-  void add_element_blocks(double h, const Eigen::VectorXd& v0, Eigen::VectorXd& rhs) {
-    const TetrahedronField& field = *setup_.tetrahedron_field;
-    const kernels::StrainTableView table =
-        setup_.strain_stiffness ? strain_table_view(*setup_.strain_stiffness) : kernels::StrainTableView{nullptr, nullptr, 0};
-    for (std::size_t e = 0; e < field.size(); ++e) {
-      kernels::TetrahedronMaterial<double> m = tetrahedron_material(field, e);
-      if (table.strain && field.law == kernels::TetrahedronLaw::CorotationalLinear) m.strain_table = &table;
-      const Tetrahedron& t = setup_.tetrahedra[e];
-      double x[4][3], velocity[4][3], kv[4][3];
-      for (std::size_t a = 0; a < 4; ++a) {
-        const auto v = static_cast<std::size_t>(t[a]);
-        x[a][0] = static_cast<double>(position_.x[v]);
-        x[a][1] = static_cast<double>(position_.y[v]);
-        x[a][2] = static_cast<double>(position_.z[v]);
-        for (std::size_t c = 0; c < 3; ++c) velocity[a][c] = v0[static_cast<Eigen::Index>(3 * v + c)];
-      }
-      kernels::TetrahedronLinearisation lin{};
-      kernels::linearise_tetrahedron(m, x, lin);
-      kernels::tetrahedron_stiffness_action(m, lin, velocity, kv);
-      const double scale = h * h + h * m.stiffness_damping;
-      for (std::size_t a = 0; a < 4; ++a) {
-        const auto va = static_cast<std::size_t>(t[a]);
-        for (std::size_t r = 0; r < 3; ++r) rhs[static_cast<Eigen::Index>(3 * va + r)] -= h * h * kv[a][r];
-        if (fixed_[va]) continue;
-        for (std::size_t b = 0; b < 4; ++b) {
-          const auto vb = static_cast<std::size_t>(t[b]);
-          if (fixed_[vb]) continue;
-          double block[9];
-          kernels::tetrahedron_stiffness_block(m, lin, static_cast<int>(a), static_cast<int>(b), block);
-          for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c)
-              triplets_.emplace_back(static_cast<int>(3 * va) + r, static_cast<int>(3 * vb) + c, scale * block[3 * r + c]);
-        }
-      }
-    }
+  bool dof_held(Eigen::Index dof) const {
+    return kernels::axis_fixed(fixed_[static_cast<std::size_t>(dof / 3)], static_cast<int>(dof % 3));
   }
 
   bool check_finite(DiagnosticList& diagnostics) {

@@ -11,6 +11,19 @@ const Point3& start_position(const SimulationSetup& setup, std::size_t v) {
   return setup.initial_positions.empty() ? setup.rest_positions[v] : setup.initial_positions[v];
 }
 
+std::vector<unsigned char> held_axes(const SimulationSetup& setup) {
+  const std::size_t n = setup.rest_positions.size();
+  std::vector<unsigned char> held(n, 0);
+  if (setup.fixed_axes.size() == n)
+    for (std::size_t v = 0; v < n; ++v) held[v] = static_cast<unsigned char>(setup.fixed_axes[v] & kernels::kAllAxesFixed);
+  for (const auto v : setup.fixed_vertices)
+    if (v >= 0 && static_cast<std::size_t>(v) < n) held[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
+  if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement)
+    for (const auto v : setup.probe->vertices)
+      if (v >= 0 && static_cast<std::size_t>(v) < n) held[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
+  return held;
+}
+
 int implicit_iteration_limit(const SimulationSetup& setup) {
   return setup.implicit.max_iterations > 0 ? setup.implicit.max_iterations
                                            : static_cast<int>(6 * setup.rest_positions.size());

@@ -92,7 +92,10 @@ struct SimulationSetup {
   double basafa_xc = 0.2;             // Basafa-Farahmand Xc (strain)
   double nodal_damping_gamma0 = 0.0;  // N s/m
   double nodal_damping_gamma1 = 0.0;  // N s/m^2
-  std::vector<std::int32_t> fixed_vertices;
+  std::vector<std::int32_t> fixed_vertices;  // held along every axis
+  // Per vertex (or empty): the axes held besides those of fixed_vertices, bit a for axis a (a vertex sliding on a
+  // plane z = c has bit 2), as SOFA's PartialFixedConstraint.
+  std::vector<std::uint8_t> fixed_axes;
   Point3 gravity{0.0, 0.0, 0.0};        // m/s^2
   std::vector<Point3> external_forces;  // N per vertex, constant; empty: none
 
@@ -120,6 +123,11 @@ struct SimulationSetup {
 
 // Where vertex v starts: its initial position, or its rest position.
 const Point3& start_position(const SimulationSetup& setup, std::size_t v);
+
+// The held axes of every vertex (kernels::kAllAxesFixed for fixed vertices and a displacement probe's, which are
+// moved kinematically; fixed_axes' bits otherwise): what both backends, the stability check and the static solver
+// read.
+std::vector<unsigned char> held_axes(const SimulationSetup& setup);
 
 // The table as the shared lookup (kernels/strain_table_math.h) reads it; it points into `table`.
 kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table);

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "kernels/integrator_math.h"
 #include "kernels/tetrahedron_math.h"
 #include "runtime/integrate/simulation.h"
 
@@ -71,10 +72,9 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
   if (!validate_setup(setup, diagnostics)) return std::nullopt;
   const SpringNetwork& net = setup.springs;
   const std::size_t n = setup.mass.size();
-  std::vector<bool> fixed(n, false);
-  for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = true;
-  if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement)
-    for (const auto v : setup.probe->vertices) fixed[static_cast<std::size_t>(v)] = true;
+  // Vertices held along every axis take no part in the bounds; a vertex held along some axes still vibrates along
+  // the others (its bound is kept, which is conservative).
+  const std::vector<unsigned char> held = held_axes(setup);
   StabilityReport report;
   if (setup.nodal_damping_gamma1 > 0.0) report.assumed_displacement_max = assumed_displacement(setup);
   const double nodal_damping =
@@ -112,7 +112,7 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
   }
   double omega_squared_max = 0.0, mass_damping_min = std::numeric_limits<double>::infinity();
   for (std::size_t v = 0; v < n; ++v) {
-    if (fixed[v]) continue;
+    if (held[v] == kernels::kAllAxesFixed) continue;
     const double omega_squared = stiffness_sum[v] / setup.mass[v];
     if (omega_squared > omega_squared_max) {
       omega_squared_max = omega_squared;

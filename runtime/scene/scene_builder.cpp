@@ -124,17 +124,20 @@ bool inside(const SceneBox& box, const Point3& p) {
   return true;
 }
 
-std::optional<std::vector<std::int32_t>> fixed_vertices(const Scene& scene, const Mesh& mesh,
-                                                        const std::vector<std::int32_t>& new_index,
-                                                        DiagnosticList& diagnostics) {
+// The vertices a selection (of `fixed` or a `hold` entry) names; errors name `prefix`.box or .plane when one holds
+// no vertex.
+std::optional<std::vector<std::int32_t>> selected_vertices(const Scene& scene, const SceneFixed& selection,
+                                                           const std::string& prefix, const Mesh& mesh,
+                                                           const std::vector<std::int32_t>& new_index,
+                                                           DiagnosticList& diagnostics) {
   std::vector<unsigned char> fixed(mesh.points.size(), 0);
   bool ok = true;
-  for (const auto index : scene.fixed.indices) {
-    const auto mapped = remap(index, new_index, scene, "fixed.indices", diagnostics);
+  for (const auto index : selection.indices) {
+    const auto mapped = remap(index, new_index, scene, prefix + ".indices", diagnostics);
     if (mapped) fixed[static_cast<std::size_t>(*mapped)] = 1;
     ok = ok && mapped;
   }
-  for (const SceneBox& box : scene.fixed.boxes) {
+  for (const SceneBox& box : selection.boxes) {
     std::size_t count = 0;
     for (std::size_t v = 0; v < mesh.points.size(); ++v) {
       if (!inside(box, mesh.points[v])) continue;
@@ -142,12 +145,13 @@ std::optional<std::vector<std::int32_t>> fixed_vertices(const Scene& scene, cons
       ++count;
     }
     if (count == 0) {
-      diagnostics.error(scene.range_of("fixed.box"), "fixed.box: no vertex lies in the box " + point_text(box.min) +
-                                                         " to " + point_text(box.max) + "; " + bounds_text(mesh));
+      diagnostics.error(scene.range_of(prefix + ".box"), prefix + ".box: no vertex lies in the box " +
+                                                             point_text(box.min) + " to " + point_text(box.max) + "; " +
+                                                             bounds_text(mesh));
       ok = false;
     }
   }
-  for (const SceneFixed::Plane& plane : scene.fixed.planes) {
+  for (const SceneFixed::Plane& plane : selection.planes) {
     const Point3& n = plane.normal;
     const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     std::size_t count = 0;
@@ -160,10 +164,11 @@ std::optional<std::vector<std::int32_t>> fixed_vertices(const Scene& scene, cons
       ++count;
     }
     if (count == 0) {
-      diagnostics.error(scene.range_of("fixed.plane"),
-                        "fixed.plane: no vertex lies within " + format_number(plane.tolerance) + " of the plane through " +
-                            point_text(plane.point) + " with normal " + point_text(plane.normal) +
-                            "; raise 'tolerance' or move the plane (" + bounds_text(mesh) + ")");
+      diagnostics.error(scene.range_of(prefix + ".plane"),
+                        prefix + ".plane: no vertex lies within " + format_number(plane.tolerance) +
+                            " of the plane through " + point_text(plane.point) + " with normal " +
+                            point_text(plane.normal) + "; raise 'tolerance' or move the plane (" + bounds_text(mesh) +
+                            ")");
       ok = false;
     }
   }
@@ -553,8 +558,16 @@ std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& bui
 std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResult& repair, BuiltScene built,
                                        SimulationSetup setup_value, std::size_t errors, DiagnosticList& diagnostics) {
   std::optional<SimulationSetup> setup = std::move(setup_value);
-  const auto fixed = fixed_vertices(scene, built.mesh, repair.new_vertex_index, diagnostics);
+  const auto fixed = selected_vertices(scene, scene.fixed, "fixed", built.mesh, repair.new_vertex_index, diagnostics);
   if (fixed) setup->fixed_vertices = *fixed;
+  for (const SceneHold& hold : scene.holds) {
+    const auto held = selected_vertices(scene, hold.selection, hold.field, built.mesh, repair.new_vertex_index, diagnostics);
+    if (!held) continue;
+    if (setup->fixed_axes.empty()) setup->fixed_axes.assign(built.mesh.points.size(), 0);
+    for (const auto v : *held)
+      setup->fixed_axes[static_cast<std::size_t>(v)] =
+          static_cast<std::uint8_t>(setup->fixed_axes[static_cast<std::size_t>(v)] | hold.axes);
+  }
   if (scene.probe) {
     const SceneProbe& probe = *scene.probe;
     std::optional<std::vector<std::int32_t>> picked;

@@ -276,8 +276,9 @@ class SceneParser {
                                       "docs/scenes.md");
       return;
     }
-    check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "loads",
-                         "integrator", "dt", "duration", "backend", "precision", "threads", "outputs", "on_inversion"});
+    check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "hold",
+                         "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
+                         "on_inversion"});
     if (root["name"]) {
       if (auto name = text(root["name"], "name")) scene_.name = *name;
     }
@@ -301,6 +302,7 @@ class SceneParser {
     if (root["springs"]) parse_springs(root["springs"]);
     if (root["law"]) parse_law(root["law"]);
     if (root["fixed"]) parse_fixed(root["fixed"]);
+    if (root["hold"]) parse_hold(root["hold"]);
     if (root["loads"]) parse_loads(root["loads"]);
     if (root["integrator"]) {
       static const std::vector<std::string> names = {"forward_euler", "semi_implicit_euler", "velocity_verlet", "rk4",
@@ -773,17 +775,49 @@ class SceneParser {
   void parse_fixed(const YAML::Node& node) {
     remember(node, "fixed");
     if (!check_map(node, "fixed", {"indices", "box", "plane"})) return;
+    parse_selection(node, "fixed", scene_.fixed);
+  }
+
+  // `hold`: one map or a list of maps, each with the selectors of `fixed` and `axes: [x, y, z]` (the axes held).
+  void parse_hold(const YAML::Node& node) {
+    remember(node, "hold");
+    one_or_list(node, "hold", [&](const YAML::Node& entry, const std::string& field) {
+      if (!check_map(entry, field, {"indices", "box", "plane", "axes"})) return;
+      SceneHold hold;
+      hold.field = field;
+      remember(entry, field);
+      const YAML::Node axes = entry["axes"];
+      if (!axes || !axes.IsSequence() || axes.size() == 0) {
+        error(axes ? axes : entry, field + ".axes", "expected the held axes, a list of x, y and z (e.g. [z])");
+        return;
+      }
+      for (std::size_t i = 0; i < axes.size(); ++i) {
+        static const std::vector<std::string> names = {"x", "y", "z"};
+        if (auto axis = keyword(axes[i], field + ".axes", names, "an axis"))
+          hold.axes = static_cast<std::uint8_t>(hold.axes | (1u << *axis));
+      }
+      if (!entry["indices"] && !entry["box"] && !entry["plane"]) {
+        error(entry, field, "give the vertices to hold: 'indices', 'box' or 'plane'");
+        return;
+      }
+      parse_selection(entry, field, hold.selection);
+      scene_.holds.push_back(std::move(hold));
+    });
+  }
+
+  // The vertex selectors of `fixed` and `hold` entries: indices, boxes, planes.
+  void parse_selection(const YAML::Node& node, const std::string& prefix, SceneFixed& out) {
     if (node["indices"])
-      if (auto v = indices(node["indices"], "fixed.indices")) scene_.fixed.indices = *v;
+      if (auto v = indices(node["indices"], prefix + ".indices")) out.indices = *v;
     if (node["box"]) {
-      remember(node["box"], "fixed.box");
-      one_or_list(node["box"], "fixed.box", [&](const YAML::Node& b, const std::string& field) {
-        if (auto parsed = box(b, field)) scene_.fixed.boxes.push_back(*parsed);
+      remember(node["box"], prefix + ".box");
+      one_or_list(node["box"], prefix + ".box", [&](const YAML::Node& b, const std::string& field) {
+        if (auto parsed = box(b, field)) out.boxes.push_back(*parsed);
       });
     }
     if (node["plane"]) {
-      remember(node["plane"], "fixed.plane");
-      one_or_list(node["plane"], "fixed.plane", [&](const YAML::Node& p, const std::string& field) {
+      remember(node["plane"], prefix + ".plane");
+      one_or_list(node["plane"], prefix + ".plane", [&](const YAML::Node& p, const std::string& field) {
         if (!check_map(p, field, {"point", "normal", "tolerance"})) return;
         if (!p["point"] || !p["normal"]) {
           error(p, field, "a plane needs 'point' and 'normal' [x, y, z] (mesh units)");
@@ -804,7 +838,7 @@ class SceneParser {
           if (!tolerance) return;
           plane.tolerance = *tolerance;
         }
-        scene_.fixed.planes.push_back(plane);
+        out.planes.push_back(plane);
       });
     }
   }

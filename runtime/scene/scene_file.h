@@ -105,6 +105,14 @@ struct SceneFixed {
   std::vector<Plane> planes;
 };
 
+// Vertices held along some axes only (`hold`), e.g. a face sliding on a frictionless plane: the selectors of
+// `fixed`, and the axes held (bit a for axis a).
+struct SceneHold {
+  SceneFixed selection;
+  std::uint8_t axes = 0;
+  std::string field;  // "hold" or "hold[i]", for errors found when the mesh is known
+};
+
 struct SceneProbe {
   ProbeLoad::Mode mode = ProbeLoad::Mode::Displacement;
   std::vector<std::int32_t> indices;  // pick by index (mesh file numbering)
@@ -150,6 +158,7 @@ struct Scene {
   InversionPolicy on_inversion = InversionPolicy::Warn;
   SceneLaw law;
   SceneFixed fixed;
+  std::vector<SceneHold> holds;
   Point3 gravity{0.0, 0.0, 0.0};
   std::optional<SceneProbe> probe;
   Integrator integrator = Integrator::SemiImplicitEuler;
