@@ -58,6 +58,16 @@ std::optional<StaticResult> static_equilibrium(const SimulationSetup& setup, con
   for (std::size_t v = 0; v < n; ++v)
     for (std::size_t i = 0; i < 3; ++i)
       if (!kernels::axis_fixed(held[v], static_cast<int>(i))) free_index[3 * v + i] = free_count++;
+  // Every axis must be held somewhere, or the body translates freely along it (rotations are the factorisation's
+  // to find: a tiny pivot below).
+  unsigned char held_somewhere = 0;
+  for (const unsigned char mask : held) held_somewhere = static_cast<unsigned char>(held_somewhere | mask);
+  if (held_somewhere != kernels::kAllAxesFixed && free_count > 0) {
+    diagnostics.error(setup.source_range, "static equilibrium: nothing holds the body along every axis, so it has no "
+                                          "resting state; fix or hold vertices (fixed, hold) so that x, y and z are "
+                                          "each held somewhere");
+    return std::nullopt;
+  }
   const Loads loads = applied_loads(setup);
   const std::vector<Point3> zero(n, Point3{0.0, 0.0, 0.0});
   std::vector<std::int32_t> all(n);
@@ -111,8 +121,11 @@ std::optional<StaticResult> static_equilibrium(const SimulationSetup& setup, con
     Eigen::SparseMatrix<double> K(free_count, free_count);
     K.setFromTriplets(entries.begin(), entries.end());
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(K);
-    const Eigen::VectorXd step = solver.info() == Eigen::Success ? Eigen::VectorXd(solver.solve(r)) : Eigen::VectorXd();
-    if (solver.info() != Eigen::Success || !step.allFinite()) {
+    // A pivot 1e-12 below the largest: a rigid motion left free (e.g. a rotation about a single fixed vertex).
+    const bool singular = solver.info() != Eigen::Success || free_count == 0 ||
+                          !(solver.vectorD().cwiseAbs().minCoeff() > 1e-12 * solver.vectorD().cwiseAbs().maxCoeff());
+    const Eigen::VectorXd step = singular ? Eigen::VectorXd() : Eigen::VectorXd(solver.solve(r));
+    if (singular || !step.allFinite()) {
       diagnostics.error(setup.source_range,
                         "static equilibrium: the stiffness cannot be factorised at Newton step " +
                             std::to_string(iteration + 1) +
