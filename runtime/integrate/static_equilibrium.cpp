@@ -39,6 +39,69 @@ Loads applied_loads(const SimulationSetup& setup) {
   return loads;
 }
 
+// K0 restricted to the free rows, and the full K0 for the right-hand side and the reactions.
+Eigen::SparseMatrix<double> free_block(const Eigen::SparseMatrix<double>& K, const std::vector<int>& free_index,
+                                       int free_count) {
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int column = 0; column < K.outerSize(); ++column) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K, column); it; ++it) {
+      const int row = free_index[static_cast<std::size_t>(it.row())], col = free_index[static_cast<std::size_t>(it.col())];
+      if (row >= 0 && col >= 0) entries.emplace_back(row, col, it.value());
+    }
+  }
+  Eigen::SparseMatrix<double> block(free_count, free_count);
+  block.setFromTriplets(entries.begin(), entries.end());
+  return block;
+}
+
+// The linear solution (StaticOptions::linear): K0 u = f_ext at rest, the held axes' u given.
+std::optional<StaticResult> linear_solution(const SimulationSetup& setup, const std::vector<unsigned char>& held,
+                                            const std::vector<int>& free_index, int free_count, const Loads& loads,
+                                            std::vector<Point3> start, DiagnosticList& diagnostics) {
+  const std::size_t n = setup.rest_positions.size();
+  const Eigen::SparseMatrix<double> K = model_tangent(setup, setup.rest_positions, setup.springs.stiffness).stiffness;
+  Eigen::VectorXd u(static_cast<Eigen::Index>(3 * n)), f(static_cast<Eigen::Index>(3 * n));
+  for (std::size_t v = 0; v < n; ++v)
+    for (std::size_t i = 0; i < 3; ++i) {
+      const auto dof = static_cast<Eigen::Index>(3 * v + i);
+      u[dof] = kernels::axis_fixed(held[v], static_cast<int>(i)) ? start[v][i] - setup.rest_positions[v][i] : 0.0;
+      f[dof] = loads.applied[v][i];
+    }
+  const Eigen::VectorXd load = f - K * u;
+  Eigen::VectorXd rhs(free_count);
+  for (std::size_t d = 0; d < 3 * n; ++d)
+    if (free_index[d] >= 0) rhs[free_index[d]] = load[static_cast<Eigen::Index>(d)];
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(free_block(K, free_index, free_count));
+  const bool singular = solver.info() != Eigen::Success || free_count == 0 ||
+                        !(solver.vectorD().cwiseAbs().minCoeff() > 1e-12 * solver.vectorD().cwiseAbs().maxCoeff());
+  if (singular) {
+    diagnostics.error(setup.source_range, "static equilibrium: the stiffness at rest cannot be factorised (a body "
+                                          "without enough held vertices can move freely); fix vertices to hold it");
+    return std::nullopt;
+  }
+  const Eigen::VectorXd solution = solver.solve(rhs);
+  for (std::size_t d = 0; d < 3 * n; ++d)
+    if (free_index[d] >= 0) u[static_cast<Eigen::Index>(d)] = solution[free_index[d]];
+  const Eigen::VectorXd reaction = K * u - f;
+  StaticResult result;
+  result.iterations = 1;
+  result.positions.resize(n);
+  result.reactions.assign(n, Point3{0.0, 0.0, 0.0});
+  double residual = 0.0;
+  for (std::size_t v = 0; v < n; ++v)
+    for (std::size_t i = 0; i < 3; ++i) {
+      const auto dof = static_cast<Eigen::Index>(3 * v + i);
+      result.positions[v][i] = setup.rest_positions[v][i] + u[dof];
+      if (free_index[3 * v + i] < 0) result.reactions[v][i] = reaction[dof];
+      else residual += reaction[dof] * reaction[dof];
+    }
+  result.residual = std::sqrt(residual);
+  const std::vector<Point3> zero(n, Point3{0.0, 0.0, 0.0});
+  result.probe = read_probe(setup, setup.probe ? setup.probe->ramp_time : 0.0, result.positions, zero,
+                            setup.springs.stiffness);
+  return result;
+}
+
 }  // namespace
 
 std::optional<StaticResult> static_equilibrium(const SimulationSetup& setup, const StaticOptions& options,
@@ -102,25 +165,16 @@ std::optional<StaticResult> static_equilibrium(const SimulationSetup& setup, con
     probe_scale = r.norm();
   }
   const double scale = std::max(loads.scale, probe_scale);
+  if (options.linear) return linear_solution(setup, held, free_index, free_count, loads, std::move(x), diagnostics);
   StaticResult result;
   Eigen::VectorXd r;
   if (!residual_of(x, r)) {
     diagnostics.error(setup.source_range, "static equilibrium: the starting state gives non-finite forces");
     return std::nullopt;
   }
-  const int limit = options.linear ? 1 : options.max_iterations;
-  for (int iteration = 0; iteration < limit && !(r.norm() <= options.tolerance * scale); ++iteration) {
+  for (int iteration = 0; iteration < options.max_iterations && !(r.norm() <= options.tolerance * scale); ++iteration) {
     const ModelTangent tangent = model_tangent(setup, x, spring_stiffness(x));
-    std::vector<Eigen::Triplet<double>> entries;
-    for (int column = 0; column < tangent.stiffness.outerSize(); ++column) {
-      for (Eigen::SparseMatrix<double>::InnerIterator it(tangent.stiffness, column); it; ++it) {
-        const int row = free_index[static_cast<std::size_t>(it.row())], col = free_index[static_cast<std::size_t>(it.col())];
-        if (row >= 0 && col >= 0) entries.emplace_back(row, col, it.value());
-      }
-    }
-    Eigen::SparseMatrix<double> K(free_count, free_count);
-    K.setFromTriplets(entries.begin(), entries.end());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(K);
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(free_block(tangent.stiffness, free_index, free_count));
     // A pivot 1e-12 below the largest: a rigid motion left free (e.g. a rotation about a single fixed vertex).
     const bool singular = solver.info() != Eigen::Success || free_count == 0 ||
                           !(solver.vectorD().cwiseAbs().minCoeff() > 1e-12 * solver.vectorD().cwiseAbs().maxCoeff());
@@ -142,7 +196,7 @@ std::optional<StaticResult> static_equilibrium(const SimulationSetup& setup, con
       for (std::size_t v = 0; v < n; ++v)
         for (std::size_t i = 0; i < 3; ++i)
           if (free_index[3 * v + i] >= 0) trial[v][i] += alpha * step[free_index[3 * v + i]];
-      if (residual_of(trial, trial_r) && (options.linear || trial_r.norm() < before)) break;
+      if (residual_of(trial, trial_r) && trial_r.norm() < before) break;
     }
     x = std::move(trial);
     r = std::move(trial_r);
@@ -153,7 +207,7 @@ std::optional<StaticResult> static_equilibrium(const SimulationSetup& setup, con
     diagnostics.error(setup.source_range, "static equilibrium: the state became non-finite");
     return std::nullopt;
   }
-  if (!options.linear && !(result.residual <= options.tolerance * scale)) {
+  if (!(result.residual <= options.tolerance * scale)) {
     std::ostringstream message;
     message << "static equilibrium: Newton's method stopped after " << result.iterations << " iterations with residual "
             << result.residual << " N, above " << options.tolerance << " x the load (" << scale
