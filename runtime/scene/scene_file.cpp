@@ -575,8 +575,11 @@ class SceneParser {
         if (material[key])
           error(material[key], std::string("material.") + key,
                 "the co-rotational FEM takes Young's modulus (youngs_modulus, rules or table), not spring constants");
+      // A mapping beside spring constants already has its own error (it needs Young's modulus).
+      const bool modulus = material["youngs_modulus"] || material["rules"] || material["table"];
       for (const char* key : {"mapping", "thickness", "flexion_fraction"})
-        if (material[key]) error(material[key], std::string("material.") + key, why.substr(1));
+        if (material[key] && (modulus || std::string(key) != "mapping"))
+          error(material[key], std::string("material.") + key, why.substr(1));
     }
     if (root["springs"]) error(root["springs"], "springs", why.substr(1));
     if (root["law"]) error(root["law"], "law", why.substr(1) + "; the FEM's material is linear elastic (co-rotated)");
@@ -912,8 +915,16 @@ class SceneParser {
 
   void parse_outputs(const YAML::Node& node) {
     remember(node, "outputs");
-    if (!check_map(node, "outputs", {"directory", "frames", "samples", "csv", "summary", "plot"})) return;
+    if (!check_map(node, "outputs", {"directory", "frames", "samples", "csv", "summary", "plot", "precision_check"}))
+      return;
     SceneOutputs& out = scene_.outputs;
+    if (node["precision_check"]) {
+      static const std::vector<std::string> names = {"auto", "on", "off"};
+      if (auto i = keyword(node["precision_check"], "outputs.precision_check", names, "auto, on or off"))
+        out.precision_check = *i == 0   ? SceneOutputs::PrecisionCheck::Auto
+                              : *i == 1 ? SceneOutputs::PrecisionCheck::On
+                                        : SceneOutputs::PrecisionCheck::Off;
+    }
     if (node["directory"])
       if (auto v = text(node["directory"], "outputs.directory")) out.directory = *v;
     if (node["frames"])

@@ -133,6 +133,9 @@ struct SceneOutputs {
   bool csv = true;
   bool summary = true;
   bool plot = true;  // force-displacement PNG (needs a probe)
+  // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the scene's work is
+  // at most kPrecisionCheckWork vertex-steps; on always; off never.
+  enum class PrecisionCheck { Auto, On, Off } precision_check = PrecisionCheck::Auto;
 };
 
 // Rayleigh damping C = alpha M + beta K (`damping: {rayleigh: {mass: ALPHA, stiffness: BETA}}`): alpha (1/s) acts on

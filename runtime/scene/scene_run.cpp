@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <set>
+#include <sstream>
 
 #include "diagnostics/number_format.h"
 #include "runtime/io/atomic_file.h"
@@ -116,6 +117,82 @@ std::unique_ptr<SceneStepper> create_stepper(const SimulationSetup& setup, const
   auto simulation = CpuSimulation::create(setup, diagnostics);
   if (!simulation) return nullptr;
   return std::make_unique<CpuStepper>(std::move(simulation));
+}
+
+// The largest distance of any vertex from its start.
+double largest_displacement(const std::vector<Point3>& positions, const std::vector<Point3>& start) {
+  double largest = 0.0;
+  for (std::size_t v = 0; v < positions.size() && v < start.size(); ++v)
+    largest = std::max(largest, distance(positions[v], start[v]));
+  return largest;
+}
+
+double relative_difference(double a, double b) {
+  const double scale = std::max(std::abs(a), std::abs(b));
+  return scale > 0.0 ? std::abs(a - b) / scale : 0.0;
+}
+
+// The scene again in the other precision, to its last step, compared with the run's final answers.
+PrecisionCheckResult check_precision(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
+                                     const SceneRunResult& run, DiagnosticList& diagnostics) {
+  PrecisionCheckResult check;
+  const SimulationSetup& setup = built.setup;
+  check.other = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
+  const double work = static_cast<double>(setup.rest_positions.size()) * static_cast<double>(run.steps_taken);
+  if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Off) {
+    check.reason = "off (outputs.precision_check)";
+    return check;
+  }
+  if (!run.completed) {
+    check.reason = "the run did not complete";
+    return check;
+  }
+  if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Auto && work > kPrecisionCheckWork) {
+    check.reason = "skipped: " + format_number(work) + " vertex-steps is above the automatic limit of " +
+                   format_number(kPrecisionCheckWork) + " (outputs.precision_check: on forces it)";
+    return check;
+  }
+  SimulationSetup other = setup;
+  other.precision = check.other;
+  other.time_step = run.stability.time_step;  // the same step, not the other precision's automatic one
+  DiagnosticList ignored;  // the main run reported everything the scene says
+  const auto simulation = create_stepper(other, options.backend, ignored);
+  if (!simulation || !simulation->advance(run.steps_taken, ignored)) {
+    check.reason = "the rerun in the other precision did not complete";
+    check.agrees = false;
+  } else {
+    check.ran = true;
+    const std::vector<Point3>& start = setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
+    check.displacement_difference =
+        relative_difference(largest_displacement(simulation->positions(ignored), start), run.final_max_displacement);
+    if (setup.probe && !run.probe_curve.empty()) {
+      const ProbeReading reading = simulation->probe_reading(ignored);
+      const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
+      const double force = length > 0.0 ? dot(reading.force, setup.probe->target) / length : 0.0;
+      check.probe_force_difference = relative_difference(force, run.probe_curve.back().force);
+    }
+    check.other_inverted = simulation->inversions().largest_count;
+    check.agrees = check.displacement_difference <= kPrecisionTolerance &&
+                   check.probe_force_difference <= kPrecisionTolerance &&
+                   (check.other_inverted == 0) == (run.inversions.largest_count == 0);
+  }
+  const char* mine = setup.precision == Precision::Float ? "float" : "double";
+  const char* theirs = check.other == Precision::Float ? "float" : "double";
+  if (check.ran && !check.agrees) {
+    std::ostringstream message;
+    message << "precision: the answer depends on rounding: in " << theirs << " ";
+    if (setup.probe) message << "the final probe force differs by " << 100 * check.probe_force_difference << "% and ";
+    message << "the final largest displacement by " << 100 * check.displacement_difference << "% (tolerance "
+            << 100 * kPrecisionTolerance << "%), with " << check.other_inverted << " inverted elements against "
+            << run.inversions.largest_count << " in " << mine
+            << "; an equilibrium that rounding breaks (a symmetric load that can buckle either way) or an element "
+               "near inversion: use precision double, or break the symmetry (docs/scenes.md)";
+    diagnostics.warning(scene.range_of("precision"), "precision-dependent", message.str());
+    check.reason = "differs";
+  } else if (check.ran) {
+    check.reason = std::string("agrees with ") + theirs;
+  }
+  return check;
 }
 
 std::string frame_name(std::size_t index) {
@@ -230,6 +307,8 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
   result.steps_per_second =
       result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
   result.inversions = simulation->inversions();
+  result.final_max_displacement = largest_displacement(simulation->positions(diagnostics), rest);
+  result.precision_check = check_precision(scene, built, options, result, diagnostics);
 
   if (outputs_ok && !frames.empty()) {
     const std::string pvd = (directory / (scene.name + ".pvd")).string();
@@ -321,6 +400,19 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
       json.value("first_step", result.inversions.first_step)
           .value("first_time_s", result.inversions.first_time)
           .value("first_element", static_cast<std::size_t>(result.inversions.first_element));
+    }
+    json.end_object();
+    const PrecisionCheckResult& precision = result.precision_check;
+    json.begin_object("precision_check")
+        .value("ran", precision.ran)
+        .value("other_precision", precision.other == Precision::Float ? "float" : "double")
+        .value("result", precision.reason)
+        .value("tolerance", kPrecisionTolerance);
+    if (precision.ran) {
+      json.value("probe_force_relative_difference", precision.probe_force_difference)
+          .value("max_displacement_relative_difference", precision.displacement_difference)
+          .value("other_inverted_elements", precision.other_inverted)
+          .value("agrees", precision.agrees);
     }
     json.end_object();
     json.begin_object("outputs")

@@ -255,7 +255,12 @@ int run_simulate(const SimulateOptions& options) {
   } else if (!setup.tetrahedra.empty()) {
     std::cout << "  inverted elements: none\n";
   }
-  std::cout << "  wrote " << result->files.size() + (plot_path.empty() ? 0 : 1) << " files to "
+  const sim::PrecisionCheckResult& precision = result->precision_check;
+  std::cout << "  precision check: " << precision.reason;
+  if (precision.ran)
+    std::cout << " (probe force " << six_digits(precision.probe_force_difference) << ", largest displacement "
+              << six_digits(precision.displacement_difference) << " relative)";
+  std::cout << "\n  wrote " << result->files.size() + (plot_path.empty() ? 0 : 1) << " files to "
             << run_options.output_directory << (plot_path.empty() ? "" : " (plot: force_displacement.png)") << "\n";
   return result->completed ? kExitOk : kExitErrors;
 }
