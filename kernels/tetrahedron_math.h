@@ -552,6 +552,35 @@ FMPC_HD void tetrahedron_stiffness_block(const TetrahedronMaterial<double>& m, c
                          rk[3 * i + 2] * lin.rotation[3 * j + 2];
 }
 
+// All 16 blocks at once (row-major 12 x 12: K[3a + i][3b + j]), the shape gradients and Lame's parameters computed
+// once: what assembling a matrix wants.
+FMPC_HD void tetrahedron_stiffness_matrix(const TetrahedronMaterial<double>& m, const TetrahedronLinearisation& lin,
+                                          double* K) {
+  if (m.law == TetrahedronLaw::VolumePreservation) {
+    const double scale = m.bulk_modulus / m.rest_volume;
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) K[12 * (3 * a + i) + 3 * b + j] = scale * lin.gradient[a][i] * lin.gradient[b][j];
+    return;
+  }
+  double g[4][3], rg[4][3], mu, lambda;
+  shape_gradients(m.rest_inverse, g);
+  lame_parameters(lin.modulus, m.poisson_ratio, mu, lambda);
+  // R K0_ab R^T = V0 (lambda (R g_a)(R g_b)^T + mu (R g_b)(R g_a)^T + mu (g_a . g_b) I).
+  for (int a = 0; a < 4; ++a)
+    for (int i = 0; i < 3; ++i)
+      rg[a][i] = lin.rotation[3 * i] * g[a][0] + lin.rotation[3 * i + 1] * g[a][1] + lin.rotation[3 * i + 2] * g[a][2];
+  for (int a = 0; a < 4; ++a)
+    for (int b = 0; b < 4; ++b) {
+      const double gg = dot3(g[a], g[b]);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          K[12 * (3 * a + i) + 3 * b + j] =
+              m.rest_volume * (lambda * rg[a][i] * rg[b][j] + mu * rg[b][i] * rg[a][j] + (i == j ? mu * gg : 0.0));
+    }
+}
+
 // The linearisation at positions x: the rotation, or the volume gradient.
 FMPC_HD void linearise_tetrahedron(const TetrahedronMaterial<double>& m, const double x[4][3],
                                    TetrahedronLinearisation& lin) {

@@ -31,6 +31,9 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
   const auto dofs = static_cast<Eigen::Index>(3 * positions.size());
   Triplets stiffness, damping;
   const SpringNetwork& net = setup.springs;
+  const std::size_t elements = setup.tetrahedron_field ? setup.tetrahedron_field->size() : 0;
+  stiffness.reserve(36 * net.size() + 144 * elements);
+  damping.reserve(36 * net.size() + 144 * elements);
   const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
   for (std::size_t s = 0; s < net.size(); ++s) {
     const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
@@ -63,17 +66,15 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
         for (std::size_t i = 0; i < 3; ++i) x[corner][i] = positions[static_cast<std::size_t>(t[corner])][i];
       kernels::TetrahedronLinearisation lin{};
       kernels::linearise_tetrahedron(m, x, lin);
-      for (int a = 0; a < 4; ++a) {
-        for (int b = 0; b < 4; ++b) {
-          double block[9];
-          kernels::tetrahedron_stiffness_block(m, lin, a, b, block);
-          for (int r = 0; r < 3; ++r) {
-            for (int c = 0; c < 3; ++c) {
-              const int row = 3 * t[static_cast<std::size_t>(a)] + r, column = 3 * t[static_cast<std::size_t>(b)] + c;
-              stiffness.emplace_back(row, column, block[3 * r + c]);
-              if (m.stiffness_damping != 0.0) damping.emplace_back(row, column, m.stiffness_damping * block[3 * r + c]);
-            }
-          }
+      double K[144];
+      kernels::tetrahedron_stiffness_matrix(m, lin, K);
+      for (int row = 0; row < 12; ++row) {
+        for (int column = 0; column < 12; ++column) {
+          const int global_row = 3 * t[static_cast<std::size_t>(row / 3)] + row % 3;
+          const int global_column = 3 * t[static_cast<std::size_t>(column / 3)] + column % 3;
+          const double entry = K[12 * row + column];
+          stiffness.emplace_back(global_row, global_column, entry);
+          if (m.stiffness_damping != 0.0) damping.emplace_back(global_row, global_column, m.stiffness_damping * entry);
         }
       }
     }

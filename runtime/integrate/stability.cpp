@@ -147,18 +147,19 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
     case Integrator::ForwardEuler: {
       // A mode with m = x*Mx, c = x*Cx, k = x*Kx (x its eigenvector) has m l^2 + c l + k = 0. Underdamped, forward
       // Euler needs |1 + h l|^2 = 1 - h c/m + h^2 k/m <= 1, i.e. h <= c / k; overdamped, h |l| <= 2 with |l| <= c/m
-      // <= beta_max. Dashpots damp only along springs and element damping only the elements' own stiffness, so
-      // c >= r k_damped + alpha m with r the smallest ratio c_s / k_s or beta_e; the rest of k (stretched springs'
-      // sideways stiffness, rotations of loaded elements) is at most w_max^2 m. Hence c / k >= min(r, alpha_min /
-      // w_max^2): without mass or nodal damping (alpha_min = 0) those modes grow at every step.
+      // <= beta_max. Mass and nodal damping act on every motion: c >= alpha_min m >= (alpha_min / w_max^2) k for every
+      // mode, so h <= alpha_min / w_max^2 is stable whatever the prestress. Dashpots damp only along springs and
+      // element damping only the elements' own stiffness: a stretched spring's sideways stiffness (T/l)(I - u u^T) and
+      // a loaded element's rotation are undamped by them, so without mass or nodal damping (alpha_min = 0) those
+      // modes grow at every step; modes the dashpots do reach need h <= min_s c_s / k_s (or beta_e).
       const double ratio = std::min(spring_ratio_min, element_ratio_min);
       const double overdamped = beta > 0.0 ? 2.0 / beta : infinity;
       damped_modes_limit = std::min(ratio, overdamped);
-      const double mass_term =
-          omega_squared_max > 0.0 && std::isfinite(mass_damping_min) ? mass_damping_min / omega_squared_max : infinity;
-      report.critical_time_step = std::min(damped_modes_limit, mass_term);
-      report.undamped_modes = omega_squared_max > 0.0 && !(mass_term > 0.0);
-      report.limit = "h <= min(min_s c_s / k_s, min_e beta_e, alpha_min / w^2, 2 / beta)";
+      report.undamped_modes = omega_squared_max > 0.0 && !(mass_damping_min > 0.0);
+      const double mass_term = omega_squared_max > 0.0 ? mass_damping_min / omega_squared_max : infinity;
+      report.critical_time_step = report.undamped_modes ? 0.0 : std::min(mass_term, overdamped);
+      report.limit = report.undamped_modes ? "h <= min(min_s c_s / k_s, min_e beta_e, 2 / beta) for the damped modes"
+                                           : "h <= min(alpha_min / w^2, 2 / beta)";
       break;
     }
     case Integrator::ImplicitEuler:

@@ -369,6 +369,11 @@ TEST_CASE("element stiffness: blocks are the forces' derivative at rest, the bou
           for (int i = 0; i < 3; ++i) CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * scale);
       }
     }
+    // The whole matrix at once is the blocks.
+    double whole[144];
+    tetrahedron_stiffness_matrix(m, lin, whole);
+    for (int r = 0; r < 12; ++r)
+      for (int c = 0; c < 12; ++c) CHECK(whole[12 * r + c] == Approx(K(r, c)).margin(1e-12 * scale));
     // The action is the blocks' product.
     double p[4][3], out[4][3];
     Eigen::Matrix<double, 12, 1> pv;
