@@ -2,9 +2,38 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace fmpc::sim {
+
+std::uint64_t tetrahedron_count(const BoxSpec& spec) {
+  if (spec.cells_x < 1 || spec.cells_y < 1 || spec.cells_z < 1) return 0;
+  // Each factor is below 2^31, so the product of three fits in 93 bits only as a double: compare in double first.
+  const double cells = static_cast<double>(spec.cells_x) * spec.cells_y * spec.cells_z;
+  if (cells * 6.0 > 1.8e19) return UINT64_MAX;
+  return 6 * static_cast<std::uint64_t>(spec.cells_x) * static_cast<std::uint64_t>(spec.cells_y) *
+         static_cast<std::uint64_t>(spec.cells_z);
+}
+
+std::uint64_t tetrahedron_count(const EllipsoidSpec& spec) {
+  if (spec.resolution < 1) return 0;
+  BoxSpec cube;
+  cube.cells_x = cube.cells_y = cube.cells_z = spec.resolution > (1 << 29) ? (1 << 30) : 2 * spec.resolution;
+  return tetrahedron_count(cube);
+}
+
+std::optional<std::string> generated_mesh_too_large(std::uint64_t tetrahedra) {
+  if (tetrahedra <= kMaxGeneratedTetrahedra) return std::nullopt;
+  const double gib = static_cast<double>(tetrahedra) * static_cast<double>(kEstimatedBytesPerTetrahedron) /
+                     static_cast<double>(std::uint64_t{1} << 30);
+  char estimate[64];
+  std::snprintf(estimate, sizeof estimate, "%.3g GiB", gib);
+  return "makes " + std::to_string(tetrahedra) + " tetrahedra (an estimated " + estimate +
+         " for the mesh, springs and state); the limit is " + std::to_string(kMaxGeneratedTetrahedra) +
+         " tetrahedra (about " + std::to_string(kMaxGeneratedTetrahedra * kEstimatedBytesPerTetrahedron >> 30) +
+         " GiB): use fewer cells";
+}
 
 Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
   Mesh mesh;
@@ -19,6 +48,10 @@ Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
   if (!(spec.size[0] > 0.0 && spec.size[1] > 0.0 && spec.size[2] > 0.0) || !std::isfinite(spec.size[0]) ||
       !std::isfinite(spec.size[1]) || !std::isfinite(spec.size[2])) {
     diagnostics.error(range, "a box needs a positive, finite size along each axis");
+    return mesh;
+  }
+  if (const auto too_large = generated_mesh_too_large(tetrahedron_count(spec))) {
+    diagnostics.error(range, "the box " + *too_large);
     return mesh;
   }
   const std::int64_t nx = spec.cells_x + 1, ny = spec.cells_y + 1, nz = spec.cells_z + 1;
@@ -72,6 +105,10 @@ Mesh generate_ellipsoid(const EllipsoidSpec& spec, DiagnosticList& diagnostics) 
   if (!(spec.radii[0] > 0.0 && spec.radii[1] > 0.0 && spec.radii[2] > 0.0) || !std::isfinite(spec.radii[0]) ||
       !std::isfinite(spec.radii[1]) || !std::isfinite(spec.radii[2])) {
     diagnostics.error(range, "an ellipsoid needs positive, finite radii");
+    return Mesh{};
+  }
+  if (const auto too_large = generated_mesh_too_large(tetrahedron_count(spec))) {
+    diagnostics.error(range, "the ellipsoid of resolution " + std::to_string(spec.resolution) + " " + *too_large);
     return Mesh{};
   }
   BoxSpec cube;

@@ -1,5 +1,9 @@
 #pragma once
 // Tetrahedral meshes built in code, at any resolution, for tests, benchmarks and scenes without a mesh file.
+#include <cstdint>
+#include <optional>
+#include <string>
+
 #include "diagnostics/diagnostic.h"
 #include "runtime/mesh/mesh.h"
 
@@ -16,6 +20,17 @@ struct EllipsoidSpec {
   Point3 radii{1.0, 1.0, 1.0};
   int resolution = 4;  // cells along each half-axis of the underlying cube
 };
+
+// The largest generated mesh (docs/limits.md). A spec is sized before anything is allocated: its tetrahedra are
+// counted exactly and the memory the simulator needs for them is estimated (mesh, springs, CSR adjacency and
+// state: kEstimatedBytesPerTetrahedron, measured on a 60^3 box, see docs/limits.md).
+inline constexpr std::uint64_t kMaxGeneratedTetrahedra = std::uint64_t{1} << 24;  // 16,777,216
+inline constexpr std::uint64_t kEstimatedBytesPerTetrahedron = 256;
+
+std::uint64_t tetrahedron_count(const BoxSpec& spec);        // 6 per cell
+std::uint64_t tetrahedron_count(const EllipsoidSpec& spec);  // a box of 2 * resolution cells per axis
+// nullopt when the mesh is within the limit; else one sentence naming the count, the estimate and the limit.
+std::optional<std::string> generated_mesh_too_large(std::uint64_t tetrahedra);
 
 // A box of (cells_x+1)(cells_y+1)(cells_z+1) vertices; each cube is cut into 6 tetrahedra around its main diagonal
 // (Kuhn/Freudenthal subdivision), which makes neighbouring cubes share their face diagonals: a conforming mesh.
