@@ -7,6 +7,7 @@
 
 #include "FmpcLexer.h"
 #include "FmpcParser.h"
+#include "grammar/parse_depth_limit.h"
 #include "antlr4-runtime.h"
 #include "compiler/frontend/fmpc_ast.h"
 
@@ -732,7 +733,16 @@ std::optional<File> parse_fmpc(const std::string& path, const std::string& text,
   FmpcParser parser(&tokens);
   parser.removeErrorListeners();
   parser.setErrorHandler(std::make_shared<FmpcErrorStrategy>(source, syntax));
-  FmpcParser::FileContext* tree = parser.file();
+  // Fmpc.g4 is flat (a file is a list of items, a rule a list of clauses), so no text nests deeply; the limit
+  // stays as a guard should the grammar ever gain a recursive rule.
+  grammar::ParseDepthLimit depth_limit;
+  parser.addParseListener(&depth_limit);
+  FmpcParser::FileContext* tree = nullptr;
+  try {
+    tree = parser.file();
+  } catch (const grammar::ParseDepthExceeded& exceeded) {
+    syntax.error(source.token(exceeded.token), grammar::parse_depth_message());
+  }
 
   if (syntax.has_errors()) {
     syntax.sort_by_position();

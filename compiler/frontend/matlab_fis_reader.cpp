@@ -12,6 +12,7 @@
 
 #include "MatlabFisLexer.h"
 #include "MatlabFisParser.h"
+#include "grammar/parse_depth_limit.h"
 #include "antlr4-runtime.h"
 #include "compiler/frontend/matlab_fis.h"
 #include "diagnostics/number_format.h"
@@ -977,7 +978,16 @@ RuleFile read_matlab_fis(const std::string& path, const std::string& text, Diagn
   MatlabFisParser parser(&tokens);
   parser.removeErrorListeners();
   parser.addErrorListener(&errors);
-  MatlabFisParser::FileContext* tree = parser.file();
+  grammar::ParseDepthLimit depth_limit;
+  parser.addParseListener(&depth_limit);
+  MatlabFisParser::FileContext* tree = nullptr;
+  try {
+    tree = parser.file();
+  } catch (const grammar::ParseDepthExceeded& exceeded) {
+    diagnostics.error(positions.token(exceeded.token), grammar::parse_depth_message(),
+                      {"nesting is limited so that the parser cannot run off the end of its stack"});
+    return file;
+  }
   // A tree repaired by error recovery has missing children; only a clean parse is lowered.
   if (errors.count() > 0) return file;
 
