@@ -23,7 +23,7 @@ int run_fmt(const FmtOptions& options) {
     DiagnosticList diagnostics;
     SourceFiles sources;
     std::string error;
-    const std::optional<std::string> text = read_text_file(path, error);
+    const std::optional<std::string> text = read_text_file(path, sim::kMaxRuleFileBytes, "rule file", error);
     if (!text) {
       diagnostics.error(SourceRange{path, 0, 0, 0, 0}, error);
     } else if (detect_dialect(*text) == Dialect::Matlab) {

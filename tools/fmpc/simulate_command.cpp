@@ -188,7 +188,7 @@ int run_simulate(const SimulateOptions& options) {
   DiagnosticList diagnostics;
   SourceFiles sources;
   std::string read_error;
-  const std::optional<std::string> text = read_text_file(options.scene, read_error);
+  const std::optional<std::string> text = read_text_file(options.scene, sim::kMaxSceneFileBytes, "scene file", read_error);
   if (!text) {
     diagnostics.error(SourceRange{options.scene, 0, 0, 0, 0}, read_error);
     report(diagnostics, sources);
