@@ -7,3 +7,9 @@ target_compile_options(fmpc_warnings INTERFACE
   $<$<COMPILE_LANGUAGE:CXX>:-Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion
     -Wnon-virtual-dtor -Wold-style-cast -Wcast-align -Woverloaded-virtual
     -Wdouble-promotion -Wformat=2 -Wimplicit-fallthrough -Werror>)
+# Clang builds (fuzzing, sanitizers) see the same code through a second compiler. Clang 14's
+# -Wunused-but-set-variable flags compiler/eval/defuzzify.cpp's running `moment` (kept for symmetry with `area`,
+# read by nothing): reported to its owner, a warning rather than an error here until it is settled.
+if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+  target_compile_options(fmpc_warnings INTERFACE $<$<COMPILE_LANGUAGE:CXX>:-Wno-error=unused-but-set-variable>)
+endif()

@@ -13,7 +13,7 @@ namespace fmpc::sim {
 inline constexpr std::size_t kMiB = std::size_t{1} << 20;
 inline constexpr std::size_t kMaxRuleFileBytes = 8 * kMiB;      // fmpc language and MATLAB .fis
 inline constexpr std::size_t kMaxSceneFileBytes = 1 * kMiB;     // scene YAML
-inline constexpr std::size_t kMaxMeshFileBytes = 512 * kMiB;    // Gmsh, OBJ, legacy VTK
+inline constexpr std::size_t kMaxMeshFileBytes = 256 * kMiB;    // Gmsh, OBJ, legacy VTK
 inline constexpr std::size_t kMaxCsvFileBytes = 64 * kMiB;      // fmpc eval --csv
 inline constexpr std::size_t kMaxTableFileBytes = 1024 * kMiB;  // .fzt lookup tables
 

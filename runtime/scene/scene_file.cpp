@@ -191,7 +191,9 @@ class SceneParser {
       std::vector<std::string> notes;
       if (auto suggestion = closest_name(key, allowed)) notes.push_back("did you mean '" + *suggestion + "'?");
       const std::string where = field.empty() ? "" : " in " + field;
-      diagnostics_.error(range(it->first), (field.empty() ? key : field + "." + key) + ": unknown key" + where +
+      // A hostile key can be megabytes long: the message shows its start.
+      const std::string shown = key.size() > 60 ? key.substr(0, 60) + "..." : key;
+      diagnostics_.error(range(it->first), (field.empty() ? shown : field + "." + shown) + ": unknown key" + where +
                                                "; allowed: " + join_names(quoted(allowed)),
                          notes);
     }

@@ -20,7 +20,7 @@ struct CsvTable {
 };
 
 // Every cell keeps its text and position (about 100 bytes each); a table of more cells is refused.
-inline constexpr std::size_t kMaxCsvCells = std::size_t{1} << 22;  // 4,194,304
+inline constexpr std::size_t kMaxCsvCells = std::size_t{1} << 20;  // 1,048,576
 
 CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
 
