@@ -32,7 +32,7 @@ std::optional<std::string> generated_mesh_too_large(std::uint64_t tetrahedra) {
   return "makes " + std::to_string(tetrahedra) + " tetrahedra (an estimated " + estimate +
          " for the mesh, springs and state); the limit is " + std::to_string(kMaxGeneratedTetrahedra) +
          " tetrahedra (about " + std::to_string(kMaxGeneratedTetrahedra * kEstimatedBytesPerTetrahedron >> 30) +
-         " GiB): use fewer cells";
+         " GiB)";
 }
 
 Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
@@ -51,7 +51,7 @@ Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
     return mesh;
   }
   if (const auto too_large = generated_mesh_too_large(tetrahedron_count(spec))) {
-    diagnostics.error(range, "the box " + *too_large);
+    diagnostics.error(range, "the box " + *too_large + ": use fewer cells");
     return mesh;
   }
   const std::int64_t nx = spec.cells_x + 1, ny = spec.cells_y + 1, nz = spec.cells_z + 1;
@@ -108,7 +108,8 @@ Mesh generate_ellipsoid(const EllipsoidSpec& spec, DiagnosticList& diagnostics) 
     return Mesh{};
   }
   if (const auto too_large = generated_mesh_too_large(tetrahedron_count(spec))) {
-    diagnostics.error(range, "the ellipsoid of resolution " + std::to_string(spec.resolution) + " " + *too_large);
+    diagnostics.error(range, "the ellipsoid of resolution " + std::to_string(spec.resolution) + " " + *too_large +
+                                 ": use a resolution of at most 70");
     return Mesh{};
   }
   BoxSpec cube;

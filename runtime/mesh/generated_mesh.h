@@ -29,7 +29,8 @@ inline constexpr std::uint64_t kEstimatedBytesPerTetrahedron = 256;
 
 std::uint64_t tetrahedron_count(const BoxSpec& spec);        // 6 per cell
 std::uint64_t tetrahedron_count(const EllipsoidSpec& spec);  // a box of 2 * resolution cells per axis
-// nullopt when the mesh is within the limit; else one sentence naming the count, the estimate and the limit.
+// nullopt when the mesh is within the limit; else what it makes, the estimate and the limit (the caller adds
+// what to change: cells, or resolution).
 std::optional<std::string> generated_mesh_too_large(std::uint64_t tetrahedra);
 
 // A box of (cells_x+1)(cells_y+1)(cells_z+1) vertices; each cube is cut into 6 tetrahedra around its main diagonal

@@ -494,7 +494,8 @@ class SceneParser {
             if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.box)))
               error(cells, "mesh.box.cells", "[" + std::to_string(mesh.box.cells_x) + ", " +
                                                  std::to_string(mesh.box.cells_y) + ", " +
-                                                 std::to_string(mesh.box.cells_z) + "] " + *too_large);
+                                                 std::to_string(mesh.box.cells_z) + "] " + *too_large +
+                                                 ": use fewer cells");
           }
         }
         break;
@@ -518,7 +519,7 @@ class SceneParser {
             mesh.ellipsoid.resolution = static_cast<int>(*n);
             if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.ellipsoid)))
               error(ellipsoid["resolution"], "mesh.ellipsoid.resolution",
-                    std::to_string(*n) + " " + *too_large + " (a resolution of at most 70)");
+                    std::to_string(*n) + " " + *too_large + ": use a resolution of at most 70");
           }
         break;
       }

@@ -1,28 +1,22 @@
-# The seed files of each fuzz target: tests/fuzz/seeds/NAME, the tests/hostile cases of the same reader and the
-# shipped files of that kind (rulesets/, tests/golden/), plus ../shared/data's (read in place, never committed).
-# Used by run_fuzz_smoke.cmake and run_fuzzers.sh (through cmake -P tests/fuzz/list_seeds.cmake).
+# The seed files of each fuzz target: tests/fuzz/seeds/NAME and the shipped files of that kind (rulesets/,
+# tests/golden/), plus ../shared/data's (read in place, never committed). Used by run_fuzz_smoke.cmake and
+# copy_seeds.cmake (run_fuzzers.sh).
 function(fmpc_fuzz_seed_files name source_dir shared_data out)
   set(patterns ${source_dir}/tests/fuzz/seeds/${name}/*)
   if(name STREQUAL "fmpc_language" OR name STREQUAL "matlab_fis")
     list(APPEND patterns ${source_dir}/rulesets/*.fis ${source_dir}/rulesets/*/*.fis
-         ${source_dir}/tests/golden/*/*.fis ${source_dir}/tests/hostile/*/*.fis)
+         ${source_dir}/tests/golden/*/*.fis)
     if(name STREQUAL "matlab_fis")
       list(APPEND patterns ${shared_data}/matlab-fis/*.fis)
     endif()
   elseif(name STREQUAL "scene_yaml")
-    list(APPEND patterns ${source_dir}/rulesets/scenes/*.yaml ${source_dir}/tests/golden/*/*.yaml
-         ${source_dir}/tests/hostile/*/*.yaml)
+    list(APPEND patterns ${source_dir}/rulesets/scenes/*.yaml ${source_dir}/tests/golden/*/*.yaml)
   elseif(name STREQUAL "gmsh")
-    list(APPEND patterns ${source_dir}/tests/hostile/*/*.msh ${shared_data}/sofa-liver/*.msh)
+    list(APPEND patterns ${shared_data}/sofa-liver/*.msh)
   elseif(name STREQUAL "obj")
-    list(APPEND patterns ${source_dir}/tests/hostile/*/*.obj ${shared_data}/sofa-liver/liver.obj)
-  elseif(name STREQUAL "vtk")
-    list(APPEND patterns ${source_dir}/tests/hostile/*/*.vtk)
-  elseif(name STREQUAL "fzt")
-    list(APPEND patterns ${source_dir}/tests/hostile/*/*.fzt)
+    list(APPEND patterns ${shared_data}/sofa-liver/liver.obj)
   elseif(name STREQUAL "csv")
-    list(APPEND patterns ${source_dir}/rulesets/*/*.csv ${source_dir}/tests/golden/*/*.csv
-         ${source_dir}/tests/hostile/*/*.csv)
+    list(APPEND patterns ${source_dir}/rulesets/*/*.csv ${source_dir}/tests/golden/*/*.csv)
   endif()
   file(GLOB files LIST_DIRECTORIES false ${patterns})
   set(kept)

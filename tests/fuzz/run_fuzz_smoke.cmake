@@ -2,7 +2,7 @@
 # that kind, and ../shared/data's when present: read in place and copied into the build folder only), then fuzzes
 # for SECONDS. A crash, sanitizer report, leak, timeout or out-of-memory fails the test; the input that caused it
 # is left in WORK_DIR as crash-*, leak-*, timeout-* or oom-*: add it to tests/hostile as a regression case.
-# Arguments: FUZZER NAME KIND SOURCE_DIR SHARED_DATA WORK_DIR SECONDS.
+# Arguments: FUZZER NAME SOURCE_DIR SHARED_DATA WORK_DIR SECONDS.
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR}/corpus ${WORK_DIR}/seeds)
 include(${SOURCE_DIR}/tests/fuzz/fuzz_seeds.cmake)
@@ -11,12 +11,8 @@ list(LENGTH seeds seed_count)
 if(seed_count EQUAL 0)
   message(FATAL_ERROR "no seeds found for fuzz_${NAME}")
 endif()
-set(index 0)
-foreach(seed ${seeds})
-  get_filename_component(base ${seed} NAME)
-  configure_file(${seed} ${WORK_DIR}/seeds/${index}_${base} COPYONLY)
-  math(EXPR index "${index} + 1")
-endforeach()
+execute_process(COMMAND ${CMAKE_COMMAND} -DNAME=${NAME} -DSOURCE_DIR=${SOURCE_DIR} -DSHARED_DATA=${SHARED_DATA}
+                        -DOUT=${WORK_DIR}/seeds -P ${SOURCE_DIR}/tests/fuzz/copy_seeds.cmake)
 set(dictionary ${SOURCE_DIR}/tests/fuzz/dict/${NAME}.dict)
 set(dict_arg)
 if(EXISTS ${dictionary})
