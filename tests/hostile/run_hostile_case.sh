@@ -9,6 +9,7 @@
 #   max-seconds: 20              wall-clock limit (a hang or runaway is a failure)
 #   max-rss-mib: 1024            peak resident memory (times MEMORY_FACTOR in sanitizer builds)
 #   files: a.fzt b.h             the files the run may leave in $DIR besides its inputs (default: none)
+#   unchanged: a.fis b.fis       inputs whose contents the run must leave as they were
 # Every run checks, besides the exit status and messages, that nothing was written outside $DIR, that $DIR holds
 # only the inputs and `files`, and that stderr stays under 64 KiB (diagnostics cap their count and excerpts).
 set -uo pipefail
@@ -16,7 +17,7 @@ case_file=$1 fmpc=$2 work=$3 memory_factor=${4:-1}
 name=$(basename "$case_file" .case)
 fail() { echo "hostile case $name: FAILED: $*" >&2; exit 1; }
 
-args="" exit_expected="" input_name="" generate="" max_seconds=20 max_rss=1024 files=""
+args="" exit_expected="" input_name="" generate="" max_seconds=20 max_rss=1024 files="" unchanged=""
 stderr_needles=() stdout_needles=()
 body_start=0 line_no=0
 while IFS= read -r line || [ -n "$line" ]; do
@@ -33,6 +34,7 @@ while IFS= read -r line || [ -n "$line" ]; do
     max-seconds:*) max_seconds=${line#max-seconds: } ;;
     max-rss-mib:*) max_rss=${line#max-rss-mib: } ;;
     files:*) files=${line#files: } ;;
+    unchanged:*) unchanged=${line#unchanged: } ;;
     *) fail "unknown line '$line' in $case_file" ;;
   esac
 done < "$case_file"
@@ -51,6 +53,7 @@ if [ -n "$generate" ]; then
   (cd "$DIR" && eval "$generate") || fail "generate failed: $generate"
 fi
 before=$(cd "$DIR" && find . -mindepth 1 | sort)
+sums_before=$(cd "$DIR" && for f in $unchanged; do cksum "$f"; done)
 outside_before=$(find "$work" -mindepth 1 -maxdepth 1 | sort)
 
 eval "set -- $args"
@@ -88,6 +91,8 @@ expected_after=$( (echo "$before"; for f in $files; do echo "./$f"; d=$(dirname 
 if [ "$(echo "$after" | grep -v '^$')" != "$(echo "$expected_after" | grep -v '^$')" ]; then
   fail "the run left files it should not have: $(diff <(echo "$expected_after") <(echo "$after") | grep '^>' | tr '\n' ' ')"
 fi
+[ "$(cd "$DIR" && for f in $unchanged; do cksum "$f"; done)" = "$sums_before" ] ||
+  fail "the run changed one of: $unchanged"
 outside_after=$(find "$work" -mindepth 1 -maxdepth 1 | grep -v -e "/stdout$" -e "/stderr$" -e "/rss$" | sort)
 [ "$outside_after" = "$outside_before" ] || fail "the run wrote outside its folder: $outside_after"
 echo "hostile case $name: ok (exit $status, ${elapsed_ms} ms, $((${rss_kib:-0} / 1024)) MiB)"

@@ -19,6 +19,7 @@ struct FmtOptions {
 
 int run_fmt(const FmtOptions& options) {
   int status = kExitOk;
+  std::vector<std::pair<std::string, std::string>> rewrites;
   for (const std::string& path : options.files) {
     DiagnosticList diagnostics;
     SourceFiles sources;
@@ -47,10 +48,20 @@ int run_fmt(const FmtOptions& options) {
       }
     } else if (options.to_stdout) {
       std::cout << *formatted;
-    } else if (*formatted != *text && !write_text_file_atomically(path, *formatted, error)) {
-      std::cerr << path << ": error: " << error << '\n';
-      status = kExitErrors;
+    } else if (*formatted != *text) {
+      rewrites.emplace_back(path, *formatted);
     }
+  }
+  // The files are rewritten together, all or none: after an error in any file, none is touched.
+  if (rewrites.empty()) return status;
+  if (status == kExitErrors) {
+    std::cerr << "fmpc fmt: no file rewritten (" << rewrites.size() << " would change): fix the errors above first\n";
+    return status;
+  }
+  std::string error;
+  if (!write_text_files_atomically(rewrites, error)) {
+    std::cerr << "fmpc fmt: error: " << error << '\n';
+    return kExitErrors;
   }
   return status;
 }
