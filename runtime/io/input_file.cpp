@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 
 namespace fmpc::sim {
@@ -43,9 +44,15 @@ bool read_all(int fd, std::size_t limit, std::string& contents, bool& too_large,
 }  // namespace
 
 std::string byte_size_text(std::size_t bytes) {
-  if (bytes >= kMiB * 1024 && bytes % (kMiB * 1024) == 0) return std::to_string(bytes / (kMiB * 1024)) + " GiB";
-  if (bytes >= kMiB && bytes % kMiB == 0) return std::to_string(bytes / kMiB) + " MiB";
-  if (bytes >= 1024 && bytes % 1024 == 0) return std::to_string(bytes / 1024) + " KiB";
+  const auto scaled = [&](std::size_t unit, const char* name) {
+    if (bytes % unit == 0) return std::to_string(bytes / unit) + " " + name;
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f %s", static_cast<double>(bytes) / static_cast<double>(unit), name);
+    return std::string(text);
+  };
+  if (bytes >= kMiB * 1024) return scaled(kMiB * 1024, "GiB");
+  if (bytes >= kMiB) return scaled(kMiB, "MiB");
+  if (bytes >= 1024) return scaled(1024, "KiB");
   return std::to_string(bytes) + " bytes";
 }
 
@@ -56,54 +63,49 @@ std::optional<std::string> read_input_file(const std::string& path, std::size_t 
     error = "cannot read the " + what + ": its path contains a NUL byte; check the path";
     return std::nullopt;
   }
+  const bool from_stdin = path == "-";
+  const std::string shown = from_stdin ? "standard input" : "'" + path + "'";
+  const int fd = from_stdin ? STDIN_FILENO : ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+  if (fd < 0) {
+    error = "cannot read " + shown + ": " + std::strerror(errno);
+    return std::nullopt;
+  }
+  struct Closer {
+    int fd;
+    bool owned;
+    ~Closer() {
+      if (owned) ::close(fd);
+    }
+  } closer{fd, !from_stdin};
   std::string contents;
+  if (!from_stdin) {  // standard input may be a pipe or a terminal: it is read up to the limit
+    struct stat info {};
+    if (::fstat(fd, &info) != 0) {
+      error = "cannot read " + shown + ": " + std::strerror(errno);
+      return std::nullopt;
+    }
+    if (!S_ISREG(info.st_mode)) {
+      error = "cannot read " + shown + ": it is " + file_kind(info.st_mode) + ", not a " + what +
+              "; give the path of a regular file";
+      return std::nullopt;
+    }
+    if (static_cast<unsigned long long>(info.st_size) > limit) {
+      error = shown + " is " + byte_size_text(static_cast<std::size_t>(info.st_size)) + "; " + limit_text +
+              ": split or simplify the file";
+      return std::nullopt;
+    }
+    // Regular files never block; clearing O_NONBLOCK keeps read(2) from reporting EAGAIN on unusual file systems.
+    ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
+    contents.reserve(static_cast<std::size_t>(info.st_size));
+  }
   bool too_large = false;
   std::string reason;
-  if (path == "-") {
-    if (!read_all(STDIN_FILENO, limit, contents, too_large, reason)) {
-      error = "cannot read the " + what + " from standard input: " + reason;
-      return std::nullopt;
-    }
-    if (too_large) {
-      error = "the " + what + " on standard input is larger than " + byte_size_text(limit) + "; " + limit_text;
-      return std::nullopt;
-    }
-    return contents;
-  }
-  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
-  if (fd < 0) {
-    error = "cannot read '" + path + "': " + std::strerror(errno);
-    return std::nullopt;
-  }
-  struct stat info {};
-  if (::fstat(fd, &info) != 0) {
-    error = "cannot read '" + path + "': " + std::strerror(errno);
-    ::close(fd);
-    return std::nullopt;
-  }
-  if (!S_ISREG(info.st_mode)) {
-    error = "cannot read '" + path + "': it is " + file_kind(info.st_mode) + ", not a " + what +
-            "; give the path of a regular file";
-    ::close(fd);
-    return std::nullopt;
-  }
-  if (static_cast<unsigned long long>(info.st_size) > limit) {
-    error = "'" + path + "' is " + byte_size_text(static_cast<std::size_t>(info.st_size)) + "; " + limit_text +
-            ": split or simplify the file";
-    ::close(fd);
-    return std::nullopt;
-  }
-  // Regular files never block; clearing O_NONBLOCK keeps read(2) from reporting EAGAIN on unusual file systems.
-  ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) & ~O_NONBLOCK);
-  contents.reserve(static_cast<std::size_t>(info.st_size));
-  const bool ok = read_all(fd, limit, contents, too_large, reason);
-  ::close(fd);
-  if (!ok) {
-    error = "cannot read '" + path + "': " + reason;
+  if (!read_all(fd, limit, contents, too_large, reason)) {
+    error = "cannot read " + shown + ": " + reason;
     return std::nullopt;
   }
   if (too_large) {
-    error = "'" + path + "' grew past " + byte_size_text(limit) + " while it was read; " + limit_text;
+    error = shown + " holds more than " + byte_size_text(limit) + "; " + limit_text;
     return std::nullopt;
   }
   return contents;
