@@ -42,7 +42,8 @@ void DiagnosticList::add(Diagnostic diagnostic) {
   }
   diagnostic.message = shortened(std::move(diagnostic.message), kMaxDiagnosticTextBytes);
   for (std::string& note : diagnostic.notes) note = shortened(std::move(note), kMaxDiagnosticTextBytes);
-  if (diagnostic.fix) diagnostic.fix->replacement = shortened(std::move(diagnostic.fix->replacement), kMaxExcerptBytes);
+  // A fix-it is text to put in the file: dropped rather than cut when it is too long to be a fix.
+  if (diagnostic.fix && diagnostic.fix->replacement.size() > kMaxDiagnosticTextBytes) diagnostic.fix.reset();
   items_.push_back(std::move(diagnostic));
 }
 
@@ -149,7 +150,7 @@ std::string render(const Diagnostic& diagnostic, const SourceFiles& sources) {
       width = std::min(width, kMaxExcerptBytes);
       out << ' ' << gutter << " | " << pad << '^' << std::string(width - 1, '~') << '\n';
       if (diagnostic.fix && diagnostic.fix->range.line == r.line)
-        out << ' ' << gutter << " | " << pad << diagnostic.fix->replacement << '\n';
+        out << ' ' << gutter << " | " << pad << shortened(diagnostic.fix->replacement, kMaxExcerptBytes) << '\n';
     }
   }
   for (const std::string& note : diagnostic.notes) out << "note: " << note << '\n';

@@ -29,7 +29,8 @@ struct Diagnostic {
 
 // Bounds on what a list keeps (docs/limits.md): hostile input can ask for millions of diagnostics, each quoting a
 // megabyte-long name. A message or note longer than kMaxDiagnosticTextBytes keeps its start and end around
-// "[... N bytes ...]"; past kMaxStoredDiagnostics the list only counts what it drops, by severity.
+// "[... N bytes ...]" (a longer fix-it is dropped: cut, it would no longer be a fix); past kMaxStoredDiagnostics
+// the list only counts what it drops, by severity.
 inline constexpr std::size_t kMaxDiagnosticTextBytes = 1024;
 inline constexpr std::size_t kMaxStoredDiagnostics = 100000;
 
