@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "compiler/frontend/rule_file_loader.h"
+#include "compiler/frontend/utf8.h"
 #include "diagnostics/diagnostic.h"
 #include "runtime/io/atomic_file.h"
 #include "runtime/io/input_file.h"
@@ -303,4 +304,38 @@ TEST_CASE("mesh counts claim no more than the bytes left", "[hostile]") {
                             "CELLS 1 2147483647\n4 0 0 0 0\n",
                             "m.vtk", cells));
   CHECK(cells.items().front().message.find("truncated") != std::string::npos);
+}
+
+TEST_CASE("UTF-8 is checked to Unicode's table before ANTLR sees the text", "[hostile]") {
+  // (text, offset of the first bad byte or npos)
+  const std::vector<std::pair<std::string, std::size_t>> cases = {
+      {"plain ascii", std::string::npos},
+      {"caf\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x98\x80 \xF4\x8F\xBF\xBF", std::string::npos},  // U+10FFFF is the last
+      {"x\xF4\x90\x8A\x8B", 1},  // above U+10FFFF: the fuzz finding
+      {"x\xED\xA0\x80", 1},       // a surrogate
+      {"\xED\x9F\xBF", std::string::npos},  // U+D7FF, just below them
+      {"\xE0\x80\xAF", 0},        // overlong '/'
+      {"\xE0\xA0\x80", std::string::npos},
+      {"\xF0\x8F\xBF\xBF", 0},   // overlong
+      {"\xC0\xAF", 0},
+      {"\xC1\xBF", 0},
+      {"ab\xC3", 2},                // truncated
+      {"\xE2\x82", 0},
+      {"\xF5\x80\x80\x80", 0},
+      {"\x80", 0},
+      {"a\xE2\x28\xA1", 1},       // second byte not a continuation
+      {"a\xF0\x9F\x98\x28", 1},  // fourth byte not a continuation
+  };
+  for (const auto& [text, bad] : cases) {
+    INFO(text);
+    CHECK(first_invalid_utf8(text) == bad);
+    if (bad == std::string::npos) continue;
+    // Both readers refuse it with a located error instead of letting ANTLR throw.
+    for (const std::string& prefix : {std::string("[System]\nName='"), std::string("system ")}) {
+      DiagnosticList diagnostics;
+      CHECK_NOTHROW(load_rule_file("bad.fis", prefix + text + "\n", diagnostics));
+      REQUIRE(diagnostics.has_errors());
+      CHECK(diagnostics.items().front().message.find("UTF-8") != std::string::npos);
+    }
+  }
 }
