@@ -50,4 +50,21 @@ class ParseDepthLimit : public antlr4::tree::ParseTreeListener {
   std::size_t depth_ = 0;
 };
 
+// Parses the start rule `file` of `parser` within the limit: the tree, or nullptr with `*too_deep` set to the token
+// where the limit was hit.
+template <typename Parser>
+auto parse_file_within_depth_limit(Parser& parser, const antlr4::Token** too_deep) -> decltype(parser.file()) {
+  ParseDepthLimit depth_limit;
+  parser.addParseListener(&depth_limit);
+  try {
+    auto* tree = parser.file();
+    parser.removeParseListener(&depth_limit);
+    return tree;
+  } catch (const ParseDepthExceeded& exceeded) {
+    parser.removeParseListener(&depth_limit);
+    *too_deep = exceeded.token;
+    return nullptr;
+  }
+}
+
 }  // namespace fmpc::grammar

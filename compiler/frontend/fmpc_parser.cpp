@@ -717,14 +717,9 @@ std::optional<File> parse_fmpc(const std::string& path, const std::string& text,
   parser.setErrorHandler(std::make_shared<FmpcErrorStrategy>(source, syntax));
   // Fmpc.g4 is flat (a file is a list of items, a rule a list of clauses), so no text nests deeply; the limit
   // stays as a guard should the grammar ever gain a recursive rule.
-  grammar::ParseDepthLimit depth_limit;
-  parser.addParseListener(&depth_limit);
-  FmpcParser::FileContext* tree = nullptr;
-  try {
-    tree = parser.file();
-  } catch (const grammar::ParseDepthExceeded& exceeded) {
-    syntax.error(source.token(exceeded.token), grammar::parse_depth_message());
-  }
+  const antlr4::Token* too_deep = nullptr;
+  FmpcParser::FileContext* tree = grammar::parse_file_within_depth_limit(parser, &too_deep);
+  if (!tree) syntax.error(source.token(too_deep), grammar::parse_depth_message());
 
   if (syntax.has_errors()) {
     syntax.sort_by_position();

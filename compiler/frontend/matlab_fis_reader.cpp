@@ -960,13 +960,10 @@ RuleFile read_matlab_fis(const std::string& path, const std::string& text, Diagn
   MatlabFisParser parser(&tokens);
   parser.removeErrorListeners();
   parser.addErrorListener(&errors);
-  grammar::ParseDepthLimit depth_limit;
-  parser.addParseListener(&depth_limit);
-  MatlabFisParser::FileContext* tree = nullptr;
-  try {
-    tree = parser.file();
-  } catch (const grammar::ParseDepthExceeded& exceeded) {
-    diagnostics.error(positions.token(exceeded.token), grammar::parse_depth_message(),
+  const antlr4::Token* too_deep = nullptr;
+  MatlabFisParser::FileContext* tree = grammar::parse_file_within_depth_limit(parser, &too_deep);
+  if (!tree) {
+    diagnostics.error(positions.token(too_deep), grammar::parse_depth_message(),
                       {"nesting is limited so that the parser cannot run off the end of its stack"});
     return file;
   }
