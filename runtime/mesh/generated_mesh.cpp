@@ -1,10 +1,51 @@
 #include "runtime/mesh/generated_mesh.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace fmpc::sim {
+
+std::uint64_t tetrahedron_count(const BoxSpec& spec) {
+  if (spec.cells_x < 1 || spec.cells_y < 1 || spec.cells_z < 1) return 0;
+  // Each factor is below 2^31, so the product of three fits in 93 bits only as a double: compare in double first.
+  const double cells = static_cast<double>(spec.cells_x) * spec.cells_y * spec.cells_z;
+  if (cells * 6.0 > 1.8e19) return UINT64_MAX;
+  return 6 * static_cast<std::uint64_t>(spec.cells_x) * static_cast<std::uint64_t>(spec.cells_y) *
+         static_cast<std::uint64_t>(spec.cells_z);
+}
+
+std::uint64_t tetrahedron_count(const EllipsoidSpec& spec) {
+  if (spec.resolution < 1) return 0;
+  BoxSpec cube;
+  cube.cells_x = cube.cells_y = cube.cells_z = spec.resolution > (1 << 29) ? (1 << 30) : 2 * spec.resolution;
+  return tetrahedron_count(cube);
+}
+
+std::uint64_t physical_memory_bytes() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
+}
+
+std::optional<std::string> generated_mesh_too_large(std::uint64_t tetrahedra) {
+  const double bytes = static_cast<double>(tetrahedra) * static_cast<double>(kEstimatedBytesPerTetrahedron);
+  const std::uint64_t memory = physical_memory_bytes();
+  const bool too_many = tetrahedra > kMaxGeneratedTetrahedra;
+  const bool too_big = memory > 0 && bytes > static_cast<double>(memory);
+  if (!too_many && !too_big) return std::nullopt;
+  const auto gib = [](double value) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.3g GiB", value / static_cast<double>(std::uint64_t{1} << 30));
+    return std::string(text);
+  };
+  std::string message = "makes " + std::to_string(tetrahedra) + " tetrahedra (an estimated " + gib(bytes) +
+                        " for the mesh, springs and state); the limit is ";
+  if (too_many) return message + std::to_string(kMaxGeneratedTetrahedra) + " tetrahedra (int32 indices)";
+  return message + "this machine's memory, " + gib(static_cast<double>(memory));
+}
 
 Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
   Mesh mesh;
@@ -19,6 +60,10 @@ Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
   if (!(spec.size[0] > 0.0 && spec.size[1] > 0.0 && spec.size[2] > 0.0) || !std::isfinite(spec.size[0]) ||
       !std::isfinite(spec.size[1]) || !std::isfinite(spec.size[2])) {
     diagnostics.error(range, "a box needs a positive, finite size along each axis");
+    return mesh;
+  }
+  if (const auto too_large = generated_mesh_too_large(tetrahedron_count(spec))) {
+    diagnostics.error(range, "the box " + *too_large + ": use fewer cells");
     return mesh;
   }
   const std::int64_t nx = spec.cells_x + 1, ny = spec.cells_y + 1, nz = spec.cells_z + 1;
@@ -84,6 +129,11 @@ Mesh generate_ellipsoid(const EllipsoidSpec& spec, DiagnosticList& diagnostics) 
   if (!(spec.radii[0] > 0.0 && spec.radii[1] > 0.0 && spec.radii[2] > 0.0) || !std::isfinite(spec.radii[0]) ||
       !std::isfinite(spec.radii[1]) || !std::isfinite(spec.radii[2])) {
     diagnostics.error(range, "an ellipsoid needs positive, finite radii");
+    return Mesh{};
+  }
+  if (const auto too_large = generated_mesh_too_large(tetrahedron_count(spec))) {
+    diagnostics.error(range, "the ellipsoid of resolution " + std::to_string(spec.resolution) + " " + *too_large +
+                                 ": use a resolution of at most 70");
     return Mesh{};
   }
   BoxSpec cube;

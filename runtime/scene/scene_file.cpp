@@ -1,13 +1,18 @@
 #include "runtime/scene/scene_file.h"
 
+#include <sys/stat.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <filesystem>
 #include <initializer_list>
 #include <limits>
+#include <sstream>
+#include <unordered_map>
 
 #include "diagnostics/number_format.h"
+#include "runtime/io/input_file.h"
 
 namespace fmpc::sim {
 
@@ -62,23 +67,110 @@ std::string join_names(const std::vector<std::string>& names) {
   return text;
 }
 
+SourceRange mark_range(const std::string& path, const YAML::Mark& mark) {
+  SourceRange r;
+  r.file = path;
+  if (mark.line >= 0) {
+    r.line = mark.line + 1;
+    r.column = mark.column + 1;
+    r.end_line = r.line;
+    r.end_column = r.column + 1;
+  }
+  return r;
+}
+
+// A pass over the YAML events before the document is built: yaml-cpp keeps the last of two equal keys silently
+// (`material` given twice would use one of them), so duplicates are found here, with both positions. The pass also
+// bounds the nesting depth and counts the documents (a scene is one). Aliases are events, not copies, so a
+// "billion laughs" file costs what its text costs.
+class SceneYamlScan : public YAML::EventHandler {
+ public:
+  struct TooDeep {
+    YAML::Mark mark;
+  };
+
+  SceneYamlScan(const std::string& path, DiagnosticList& diagnostics) : path_(path), diagnostics_(diagnostics) {}
+
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t) override { node_done(mark, nullptr); }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { node_done(mark, nullptr); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t, const std::string& value) override {
+    node_done(mark, &value);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    open(mark, false);
+  }
+  void OnSequenceEnd() override { close(); }
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    open(mark, true);
+  }
+  void OnMapEnd() override { close(); }
+
+ private:
+  struct Frame {
+    bool map = false;
+    bool expecting_key = true;
+    std::size_t items = 0;
+    std::string field;  // "loads.probe", "fixed.box[1]"
+    std::string pending_key;
+    std::unordered_map<std::string, YAML::Mark> keys;
+  };
+
+  std::string child_field() const {
+    if (frames_.empty()) return "";
+    const Frame& parent = frames_.back();
+    if (parent.map) return parent.field.empty() ? parent.pending_key : parent.field + "." + parent.pending_key;
+    return parent.field + "[" + std::to_string(parent.items) + "]";
+  }
+
+  void open(const YAML::Mark& mark, bool map) {
+    if (frames_.size() >= kMaxSceneNesting) throw TooDeep{mark};
+    Frame frame;
+    frame.map = map;
+    frame.field = child_field();
+    frames_.push_back(std::move(frame));
+  }
+
+  void close() {
+    frames_.pop_back();
+    node_done(YAML::Mark(), nullptr);
+  }
+
+  // A whole node has been read at the level of frames_.back(): a key or a value of a map, or a list item.
+  void node_done(const YAML::Mark& mark, const std::string* scalar) {
+    if (frames_.empty()) return;
+    Frame& frame = frames_.back();
+    if (!frame.map) {
+      ++frame.items;
+      return;
+    }
+    if (!frame.expecting_key) {
+      frame.expecting_key = true;
+      return;
+    }
+    frame.expecting_key = false;
+    frame.pending_key = scalar ? *scalar : std::string();
+    if (!scalar) return;  // a complex key: the scene parser reports it as unknown
+    const auto [first, inserted] = frame.keys.emplace(*scalar, mark);
+    if (inserted) return;
+    const std::string field = frame.field.empty() ? *scalar : frame.field + "." + *scalar;
+    diagnostics_.error(mark_range(path_, mark), field + ": duplicate key; YAML keeps only one of the two, so remove one",
+                       {"first given here: " + std::to_string(first->second.line + 1) + ":" +
+                        std::to_string(first->second.column + 1)});
+  }
+
+  std::string path_;
+  DiagnosticList& diagnostics_;
+  std::vector<Frame> frames_;
+};
+
 class SceneParser {
  public:
   SceneParser(const std::string& path, Scene& scene, DiagnosticList& diagnostics)
       : path_(path), scene_(scene), diagnostics_(diagnostics) {}
 
-  SourceRange range(const YAML::Node& node) const {
-    SourceRange r;
-    r.file = path_;
-    const YAML::Mark mark = node.Mark();
-    if (mark.line >= 0) {
-      r.line = mark.line + 1;
-      r.column = mark.column + 1;
-      r.end_line = r.line;
-      r.end_column = r.column + 1;
-    }
-    return r;
-  }
+  SourceRange range(const YAML::Node& node) const { return mark_range(path_, node.Mark()); }
 
   void error(const YAML::Node& node, const std::string& field, const std::string& message,
              std::vector<std::string> notes = {}) {
@@ -101,7 +193,9 @@ class SceneParser {
       std::vector<std::string> notes;
       if (auto suggestion = closest_name(key, allowed)) notes.push_back("did you mean '" + *suggestion + "'?");
       const std::string where = field.empty() ? "" : " in " + field;
-      diagnostics_.error(range(it->first), (field.empty() ? key : field + "." + key) + ": unknown key" + where +
+      // A hostile key can be megabytes long: the message shows its start.
+      const std::string shown = key.size() > 60 ? key.substr(0, 60) + "..." : key;
+      diagnostics_.error(range(it->first), (field.empty() ? shown : field + "." + shown) + ": unknown key" + where +
                                                "; allowed: " + join_names(quoted(allowed)),
                          notes);
     }
@@ -183,6 +277,10 @@ class SceneParser {
     remember(node, field);
     if (!node.IsScalar() || node.Scalar().empty()) {
       error(node, field, "expected a non-empty text, got " + describe(node));
+      return std::nullopt;
+    }
+    if (node.Scalar().find('\0') != std::string::npos) {
+      error(node, field, "the text contains a NUL byte (\\0), which no file name or label may hold; remove it");
       return std::nullopt;
     }
     return node.Scalar();
@@ -270,6 +368,20 @@ class SceneParser {
     return (fs::path(path_).parent_path() / given).lexically_normal().string();
   }
 
+  // A file named by the scene must be a regular file within its reader's limit (docs/limits.md). Checked here so
+  // that the error points at the field; a missing file is left to the reader, which says where it looked.
+  void check_input_file(const YAML::Node& node, const std::string& field, const std::string& file, std::size_t limit,
+                        const std::string& what) {
+    struct stat info {};
+    if (::stat(file.c_str(), &info) != 0) return;
+    if (!S_ISREG(info.st_mode)) {
+      error(node, field, "'" + file + "' is " + (S_ISDIR(info.st_mode) ? "a directory" : "not a regular file") +
+                             " (a device, FIFO or socket), not a " + what + "; give the path of a regular file");
+    } else if (static_cast<unsigned long long>(info.st_size) > limit) {
+      error(node, field, "'" + file + "' is larger than " + byte_size_text(limit) + ", the limit for a " + what);
+    }
+  }
+
   void parse(const YAML::Node& root) {
     if (!root.IsMap()) {
       diagnostics_.error(range(root), "a scene file is a YAML map with 'mesh', 'material' and the other keys of "
@@ -280,7 +392,15 @@ class SceneParser {
                          "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
                          "on_inversion"});
     if (root["name"]) {
-      if (auto name = text(root["name"], "name")) scene_.name = *name;
+      if (auto name = text(root["name"], "name")) {
+        if (const auto problem = output_name_problem(*name))
+          error(root["name"], "name", "'" + *name + "' " + *problem);
+        else
+          scene_.name = *name;
+      }
+    } else if (const auto problem = output_name_problem(scene_.name)) {
+      diagnostics_.error(range(root), "name: the scene file's name '" + scene_.name + "' " + *problem +
+                                          "; give the scene a 'name'");
     }
     if (root["model"]) {
       static const std::vector<std::string> names = {"springs", "corotational_fem"};
@@ -349,6 +469,13 @@ class SceneParser {
                          "relation lambda = mu); add the volume term (springs: {volume_term: true}) to reach another "
                          "ratio, or use model: corotational_fem");
     }
+    if (scene_.dt && root["dt"]) {
+      const double steps = std::ceil(scene_.duration / *scene_.dt);
+      if (!(steps <= kMaxSimulationSteps))
+        error(root["dt"], "dt", "duration " + format_number(scene_.duration) + " s / dt " + format_number(*scene_.dt) +
+                                    " s is " + format_number(steps) + " steps; the limit is " +
+                                    format_number(kMaxSimulationSteps) + ": raise dt or shorten the duration");
+    }
   }
 
   void parse_mesh(const YAML::Node& node) {
@@ -360,6 +487,7 @@ class SceneParser {
         if (auto file = text(node["file"], "mesh.file")) {
           mesh.kind = SceneMesh::Kind::File;
           mesh.file = resolve(*file);
+          check_input_file(node["file"], "mesh.file", mesh.file, kMaxMeshFileBytes, "mesh file");
         }
         break;
       case 1: {
@@ -384,6 +512,11 @@ class SceneParser {
             int* counts[3] = {&mesh.box.cells_x, &mesh.box.cells_y, &mesh.box.cells_z};
             for (std::size_t i = 0; i < 3; ++i)
               if (auto n = integer(cells[i], "mesh.box.cells", 1, 1000)) *counts[i] = static_cast<int>(*n);
+            if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.box)))
+              error(cells, "mesh.box.cells", "[" + std::to_string(mesh.box.cells_x) + ", " +
+                                                 std::to_string(mesh.box.cells_y) + ", " +
+                                                 std::to_string(mesh.box.cells_z) + "] " + *too_large +
+                                                 ": use fewer cells");
           }
         }
         break;
@@ -403,8 +536,12 @@ class SceneParser {
           if (auto centre = vector3(ellipsoid["centre"], "mesh.ellipsoid.centre", " (mesh units)"))
             mesh.ellipsoid.centre = *centre;
         if (ellipsoid["resolution"])
-          if (auto n = integer(ellipsoid["resolution"], "mesh.ellipsoid.resolution", 1, 200))
+          if (auto n = integer(ellipsoid["resolution"], "mesh.ellipsoid.resolution", 1, 200)) {
             mesh.ellipsoid.resolution = static_cast<int>(*n);
+            if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.ellipsoid)))
+              error(ellipsoid["resolution"], "mesh.ellipsoid.resolution",
+                    std::to_string(*n) + " " + *too_large + ": use a resolution of at most 70");
+          }
         break;
       }
       default:
@@ -450,7 +587,13 @@ class SceneParser {
         break;
       case SceneMaterial::Source::Rules:
       case SceneMaterial::Source::Table:
-        if (auto file = text(node[key], field)) material.file = resolve(*file);
+        if (auto file = text(node[key], field)) {
+          material.file = resolve(*file);
+          if (material.source == SceneMaterial::Source::Rules)
+            check_input_file(node[key], field, material.file, kMaxRuleFileBytes, "rule file");
+          else
+            check_input_file(node[key], field, material.file, kMaxTableFileBytes, "table file");
+        }
         break;
     }
     const bool fuzzy = material.source == SceneMaterial::Source::Rules || material.source == SceneMaterial::Source::Table;
@@ -947,6 +1090,41 @@ class SceneParser {
 
 }  // namespace
 
+std::optional<std::size_t> planned_step_count(const Scene& scene, double dt, DiagnosticList& diagnostics) {
+  if (scene.steps) {
+    if (static_cast<double>(*scene.steps) <= kMaxSimulationSteps) return *scene.steps;
+    diagnostics.error(scene.range_of("steps"), "steps: " + std::to_string(*scene.steps) + " is above the limit of " +
+                                                   format_number(kMaxSimulationSteps) + " steps");
+    return std::nullopt;
+  }
+  // The factor keeps a duration that is an exact multiple of dt from gaining a step to rounding.
+  const double steps = std::ceil(scene.duration / dt * (1.0 - 1e-12));
+  if (dt > 0.0 && steps <= kMaxSimulationSteps) return static_cast<std::size_t>(steps);
+  diagnostics.error(scene.range_of(scene.ranges.count("duration") ? "duration" : "dt"),
+                    "duration " + format_number(scene.duration) + " s at dt " + format_number(dt) + " s" +
+                        (scene.dt ? "" : " (dt auto, from the stability limit)") + " is " + format_number(steps) +
+                        " steps; the limit is " + format_number(kMaxSimulationSteps) +
+                        ": shorten the duration or raise dt");
+  return std::nullopt;
+}
+
+std::optional<std::string> output_name_problem(const std::string& name) {
+  if (name.empty()) return std::string("is empty");
+  if (name == "." || name == "..") return std::string("names a folder, not a file");
+  if (name.size() > kMaxSceneNameBytes)
+    return "is " + std::to_string(name.size()) + " bytes long; the limit is " + std::to_string(kMaxSceneNameBytes) +
+           " (the output files add to it and a file name must stay under 255)";
+  for (const char c : name) {
+    if (c == '/' || c == '\\')
+      return std::string("contains a path separator; the name becomes file names inside the output folder "
+                         "(-o DIR), so it may not lead out of it: use letters, digits, '-', '_' and '.'");
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      return std::string("contains a control character (a NUL byte, a newline, ...); use letters, digits, '-', '_' "
+                         "and '.'");
+  }
+  return std::nullopt;
+}
+
 std::optional<Scene> parse_scene(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
   Scene scene;
   scene.path = path;
@@ -954,18 +1132,28 @@ std::optional<Scene> parse_scene(const std::string& path, const std::string& tex
   const std::size_t errors = diagnostics.error_count();
   SceneParser parser(path, scene, diagnostics);
   try {
-    const YAML::Node root = YAML::Load(text);
-    parser.parse(root);
-  } catch (const YAML::Exception& e) {
-    SourceRange range;
-    range.file = path;
-    if (e.mark.line >= 0) {
-      range.line = e.mark.line + 1;
-      range.column = e.mark.column + 1;
-      range.end_line = range.line;
-      range.end_column = range.column + 1;
+    {
+      std::istringstream stream(text);
+      YAML::Parser events(stream);
+      SceneYamlScan scan(path, diagnostics);
+      if (events.HandleNextDocument(scan)) {
+        // A second document would be ignored by YAML::Load.
+        SceneYamlScan rest(path, diagnostics);
+        if (events.HandleNextDocument(rest))
+          diagnostics.error(SourceRange{path, 0, 0, 0, 0},
+                            "the file holds more than one YAML document ('---'); a scene file is one document");
+      }
     }
-    diagnostics.error(range, "invalid YAML: " + e.msg);
+    if (diagnostics.error_count() == errors) {
+      const YAML::Node root = YAML::Load(text);
+      parser.parse(root);
+    }
+  } catch (const SceneYamlScan::TooDeep& too_deep) {
+    diagnostics.error(mark_range(path, too_deep.mark),
+                      "the YAML nests deeper than " + std::to_string(kMaxSceneNesting) +
+                          " levels; a scene needs about 6: check the indentation and brackets");
+  } catch (const YAML::Exception& e) {
+    diagnostics.error(mark_range(path, e.mark), "invalid YAML: " + e.msg);
   }
   if (diagnostics.error_count() != errors) return std::nullopt;
   return scene;

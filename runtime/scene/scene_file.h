@@ -178,8 +178,24 @@ struct Scene {
   SourceRange range_of(const std::string& field) const;
 };
 
+// Scene limits (docs/limits.md). The file itself is at most kMaxSceneFileBytes (runtime/io/input_file.h).
+inline constexpr std::size_t kMaxSceneNesting = 32;      // YAML levels; a scene needs about 6
+inline constexpr std::size_t kMaxSceneNameBytes = 200;   // `name` becomes <name>.pvd and other file names
+inline constexpr double kMaxSimulationSteps = 1e9;       // ceil(duration / dt), or --steps
+
+// Why `name` cannot name the scene's output files, or nullopt when it can: it must be a single file-name
+// component (no '/', '\\', "." or ".."), without control characters or NUL bytes, at most kMaxSceneNameBytes
+// long, so that nothing is written outside the output folder.
+std::optional<std::string> output_name_problem(const std::string& name);
+
+// The number of steps a run takes: scene.steps when set, else ceil(duration / dt), checked against
+// kMaxSimulationSteps before it becomes an integer (a huge duration or a tiny dt would overflow size_t and run 0
+// steps); nullopt after an error naming `duration` and `dt` otherwise. dt is the step actually used (auto or given).
+std::optional<std::size_t> planned_step_count(const Scene& scene, double dt, DiagnosticList& diagnostics);
+
 // Parses scene YAML `text` read from `path`. Returns nullopt after appending errors (each naming the field, its
-// position and what is allowed); unknown keys are errors with a "did you mean" note.
+// position and what is allowed); unknown keys are errors with a "did you mean" note, and so are duplicate keys
+// (which YAML itself would silently collapse).
 std::optional<Scene> parse_scene(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
 
 const char* to_string(SceneBackend backend);
