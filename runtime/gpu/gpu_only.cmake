@@ -4,7 +4,8 @@
 #                    springs, integrators, the model builder, diagnostics/diagnostic.cpp and
 #                    diagnostics/number_format.cpp;
 #   fmpc_gpu_tests   tests/gpu (its own runner, no Catch2), ctest label `gpu`;
-#   fmpc_sim_bench   bench/sim.
+#   fmpc_sim_bench   bench/sim;
+#   fmpc_setup_bench bench/setup (host setup: seconds per phase, peak memory per spring).
 # Eigen (header-only, used by the CPU implicit Euler) is not searched for on the system: its headers come from
 # FMPC_EIGEN_INCLUDE_DIR, which `bench/run_gpu.sh --prepare` fills from /usr/include/eigen3 on the build machine
 # (build-gpu-carry/eigen3, carried to the GPU machine).
@@ -51,3 +52,4 @@ target_compile_definitions(fmpc_runtime PUBLIC FMPC_RUNTIME_HAVE_CUDA=1)
 enable_testing()
 add_subdirectory(${PROJECT_SOURCE_DIR}/tests/gpu ${PROJECT_BINARY_DIR}/tests/gpu)
 add_subdirectory(${PROJECT_SOURCE_DIR}/bench/sim ${PROJECT_BINARY_DIR}/bench/sim)
+add_subdirectory(${PROJECT_SOURCE_DIR}/bench/setup ${PROJECT_BINARY_DIR}/bench/setup)
