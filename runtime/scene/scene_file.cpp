@@ -770,12 +770,17 @@ class SceneParser {
 
   void parse_outputs(const YAML::Node& node) {
     remember(node, "outputs");
-    if (!check_map(node, "outputs", {"directory", "frames", "samples", "csv", "summary", "plot"})) return;
+    if (!check_map(node, "outputs", {"directory", "frames", "vtu", "samples", "csv", "summary", "plot"})) return;
     SceneOutputs& out = scene_.outputs;
     if (node["directory"])
       if (auto v = text(node["directory"], "outputs.directory")) out.directory = *v;
     if (node["frames"])
       if (auto v = integer(node["frames"], "outputs.frames", 0, 100000)) out.frames = static_cast<int>(*v);
+    if (node["vtu"]) {
+      static const std::vector<std::string> names = {"binary", "ascii"};
+      if (auto i = keyword(node["vtu"], "outputs.vtu", names, "a VTU encoding"))
+        out.vtu = *i == 0 ? VtuFormat::Binary : VtuFormat::Ascii;
+    }
     if (node["samples"])
       if (auto v = integer(node["samples"], "outputs.samples", 0, 1000000)) out.samples = static_cast<int>(*v);
     if (node["csv"])

@@ -163,6 +163,7 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
   }
   std::vector<PvdFrame> frames;
   VtuOptions vtu_options;
+  vtu_options.format = scene.outputs.vtu;
   std::optional<VtuCells> vtu_cells;  // the cells are the same in every frame: encoded once, at the first
   bool outputs_ok = true;
   const auto record = [&](bool frame, bool sample) {
