@@ -152,25 +152,24 @@ bool append_binary(std::string& out, std::size_t size, const WordWriter& write, 
   std::vector<char> failed(parts, 0);
   pool.run_parts(blocks, [&](unsigned part, std::size_t first, std::size_t last) {
     if (first == last) return;
-    std::vector<unsigned char> raw(kBlockSize);
-    std::string& piece = pieces[part];
     z_stream stream{};
     if (deflateInit2(&stream, level, Z_DEFLATED, 15, 8, floating ? Z_HUFFMAN_ONLY : Z_DEFAULT_STRATEGY) != Z_OK) {
       failed[part] = 1;
       return;
     }
     const uLong bound = deflateBound(&stream, static_cast<uLong>(kBlockSize));
+    std::vector<unsigned char> raw(kBlockSize), packed(bound);
+    std::string& piece = pieces[part];
+    piece.reserve((last - first) * kBlockSize);  // address space only: no regrowth, pages touched as written
     for (std::size_t b = first; b < last && !failed[part]; ++b) {
       const std::size_t begin = b * kBlockSize, end = std::min(size, begin + kBlockSize);
       write(begin / word, end / word, raw.data());
-      const std::size_t at = piece.size();
-      piece.resize(at + bound);
       stream.next_in = raw.data();
       stream.avail_in = static_cast<uInt>(end - begin);
-      stream.next_out = reinterpret_cast<Bytef*>(&piece[at]);
+      stream.next_out = packed.data();
       stream.avail_out = static_cast<uInt>(bound);
       if (deflate(&stream, Z_FINISH) != Z_STREAM_END) failed[part] = 1;
-      piece.resize(at + stream.total_out);
+      piece.append(reinterpret_cast<const char*>(packed.data()), stream.total_out);
       compressed[b] = stream.total_out;
       if (deflateReset(&stream) != Z_OK) failed[part] = 1;
     }
@@ -196,11 +195,6 @@ void append_ascii(std::string& out, std::size_t lines, const LineWriter& line, W
   for (const std::string& piece : pieces) out += piece;
 }
 
-// One array, either way: its DataArray attributes and its body (ASCII lines or appended bytes).
-struct ArrayText {
-  std::string element;  // after "<DataArray"
-  std::string body;
-};
 
 std::string element_attributes(const char* type, const std::string& name, int components) {
   std::string text = std::string(" type=\"") + type + "\"";
@@ -209,13 +203,14 @@ std::string element_attributes(const char* type, const std::string& name, int co
   return text;
 }
 
-bool encode(ArrayText& array, const VtuOptions& options, std::size_t words, std::size_t word, bool floating,
+// Appends an array's body to `out`: its ASCII lines, or its appended bytes.
+bool encode(std::string& out, const VtuOptions& options, std::size_t words, std::size_t word, bool floating,
             std::size_t lines, const WordWriter& write, const LineWriter& line, WorkerPool& pool) {
   if (options.format == VtuFormat::Ascii) {
-    append_ascii(array.body, lines, line, pool);
+    append_ascii(out, lines, line, pool);
     return true;
   }
-  return append_binary(array.body, words * word, write, word, floating, options.compression_level, pool);
+  return append_binary(out, words * word, write, word, floating, options.compression_level, pool);
 }
 
 // The first vector (3 components) and scalar (1 component) arrays, as the PointData/CellData attributes that make
@@ -260,18 +255,19 @@ bool check_arrays(const std::vector<VtuArray>& arrays, std::size_t tuples, const
   return true;
 }
 
-bool encode_data(ArrayText& array, const VtuArray& a, const VtuOptions& options, WorkerPool& pool) {
-  array.element = element_attributes(type_name(a.type), a.name, a.components);
+std::string data_attributes(const VtuArray& a) { return element_attributes(type_name(a.type), a.name, a.components); }
+
+bool encode_data(std::string& out, const VtuArray& a, const VtuOptions& options, WorkerPool& pool) {
   const std::size_t words = a.tuples * static_cast<std::size_t>(a.components);
   const std::size_t word = word_size(a.type);
   const bool floating = a.type != VtuType::UInt8;
   if (a.doubles)
-    return encode(array, options, words, word, floating, a.tuples, words_of(a.doubles, a.type),
+    return encode(out, options, words, word, floating, a.tuples, words_of(a.doubles, a.type),
                   lines_of(a.doubles, a.components, a.type), pool);
   if (a.floats)
-    return encode(array, options, words, word, floating, a.tuples, words_of(a.floats, a.type),
+    return encode(out, options, words, word, floating, a.tuples, words_of(a.floats, a.type),
                   lines_of(a.floats, a.components, a.type), pool);
-  return encode(array, options, words, word, floating, a.tuples, words_of(a.bytes, a.type),
+  return encode(out, options, words, word, floating, a.tuples, words_of(a.bytes, a.type),
                 lines_of(a.bytes, a.components, a.type), pool);
 }
 
@@ -279,40 +275,40 @@ bool encode_data(ArrayText& array, const VtuArray& a, const VtuOptions& options,
 
 const char* to_string(VtuFormat format) { return format == VtuFormat::Ascii ? "ascii" : "binary"; }
 
-VtuArray vtu_vectors(std::string name, const std::vector<Point3>& values, VtuType type) {
+namespace {
+
+VtuArray array_of(std::string name, int components, std::size_t tuples, VtuType type) {
   VtuArray array;
   array.name = std::move(name);
-  array.components = 3;
-  array.tuples = values.size();
-  array.doubles = values.empty() ? nullptr : values[0].data();
+  array.components = components;
+  array.tuples = tuples;
   array.type = type;
+  return array;
+}
+
+}  // namespace
+
+VtuArray vtu_vectors(std::string name, const std::vector<Point3>& values, VtuType type) {
+  VtuArray array = array_of(std::move(name), 3, values.size(), type);
+  array.doubles = values.empty() ? nullptr : values[0].data();  // std::array<double, 3> holds no padding
   return array;
 }
 
 VtuArray vtu_scalars(std::string name, const std::vector<double>& values, VtuType type) {
-  VtuArray array;
-  array.name = std::move(name);
-  array.tuples = values.size();
+  VtuArray array = array_of(std::move(name), 1, values.size(), type);
   array.doubles = values.data();
-  array.type = type;
   return array;
 }
 
 VtuArray vtu_scalars(std::string name, const std::vector<float>& values, VtuType type) {
-  VtuArray array;
-  array.name = std::move(name);
-  array.tuples = values.size();
+  VtuArray array = array_of(std::move(name), 1, values.size(), type);
   array.floats = values.data();
-  array.type = type;
   return array;
 }
 
 VtuArray vtu_flags(std::string name, const std::vector<std::uint8_t>& values) {
-  VtuArray array;
-  array.name = std::move(name);
-  array.tuples = values.size();
+  VtuArray array = array_of(std::move(name), 1, values.size(), VtuType::UInt8);
   array.bytes = values.data();
-  array.type = VtuType::UInt8;
   return array;
 }
 
@@ -342,8 +338,8 @@ std::optional<VtuCells> encode_vtu_cells(const Mesh& mesh, const VtuOptions& opt
   const std::int32_t* corner = tetrahedra ? mesh.tetrahedra.empty() ? nullptr : mesh.tetrahedra[0].data()
                                           : mesh.triangles.empty() ? nullptr : mesh.triangles[0].data();
   bool ok = true;
-  ArrayText connectivity{element_attributes("Int32", "connectivity", 1), {}};
-  ok = ok && encode(connectivity, options, count * corners, 4, false, count,
+  VtuCells::Encoded connectivity{element_attributes("Int32", "connectivity", 1), {}};
+  ok = ok && encode(connectivity.body, options, count * corners, 4, false, count,
                     [corner](std::size_t first, std::size_t last, unsigned char* to) {
                       for (std::size_t w = first; w < last; ++w) put(corner[w], to + 4 * (w - first));
                     },
@@ -357,8 +353,8 @@ std::optional<VtuCells> encode_vtu_cells(const Mesh& mesh, const VtuOptions& opt
                     },
                     pool);
   const bool wide = count * corners > int32_max;
-  ArrayText offsets{element_attributes(wide ? "Int64" : "Int32", "offsets", 1), {}};
-  ok = ok && encode(offsets, options, count, wide ? 8 : 4, false, count,
+  VtuCells::Encoded offsets{element_attributes(wide ? "Int64" : "Int32", "offsets", 1), {}};
+  ok = ok && encode(offsets.body, options, count, wide ? 8 : 4, false, count,
                     [corners, wide](std::size_t first, std::size_t last, unsigned char* to) {
                       for (std::size_t c = first; c < last; ++c) {
                         const std::size_t end = (c + 1) * corners;
@@ -373,8 +369,8 @@ std::optional<VtuCells> encode_vtu_cells(const Mesh& mesh, const VtuOptions& opt
                     },
                     pool);
   const std::uint8_t type = tetrahedra ? 10 : 5;  // VTK_TETRA, VTK_TRIANGLE
-  ArrayText types{element_attributes("UInt8", "types", 1), {}};
-  ok = ok && encode(types, options, count, 1, false, count,
+  VtuCells::Encoded types{element_attributes("UInt8", "types", 1), {}};
+  ok = ok && encode(types.body, options, count, 1, false, count,
                     [type](std::size_t first, std::size_t last, unsigned char* to) {
                       std::memset(to, type, last - first);
                     },
@@ -383,9 +379,9 @@ std::optional<VtuCells> encode_vtu_cells(const Mesh& mesh, const VtuOptions& opt
     diagnostics.error(range, "VTU frame: zlib could not compress the cells (out of memory?)");
     return std::nullopt;
   }
-  cells.arrays_[0] = {std::move(connectivity.element), std::move(connectivity.body)};
-  cells.arrays_[1] = {std::move(offsets.element), std::move(offsets.body)};
-  cells.arrays_[2] = {std::move(types.element), std::move(types.body)};
+  cells.arrays_[0] = std::move(connectivity);
+  cells.arrays_[1] = std::move(offsets);
+  cells.arrays_[2] = std::move(types);
   return cells;
 }
 
@@ -411,76 +407,78 @@ std::optional<std::string> vtu_document(const std::vector<Point3>& points, const
   WorkerPool& pool = lease.pool();
   const bool binary = options.format == VtuFormat::Binary;
 
-  // Every array in the order it appears in the file: point data, cell data, points, cells.
-  std::vector<ArrayText> arrays(point_data.size() + cell_data.size() + 1);
+  // Every array in the order of the file: point data, cell data, points, then the cells (encoded already).
+  std::vector<const VtuArray*> data;
+  for (const VtuArray& a : point_data) data.push_back(&a);
+  for (const VtuArray& a : cell_data) data.push_back(&a);
+  const VtuArray positions = vtu_vectors("", points, options.point_type);
+  data.push_back(&positions);
+  std::size_t estimate = 4096 + 256 * (data.size() + cells.arrays_.size());  // the XML, and at most the raw bytes
+  for (const VtuArray* a : data)
+    estimate += a->tuples * static_cast<std::size_t>(a->components) * (binary ? word_size(a->type) : 26);
+  for (const VtuCells::Encoded& array : cells.arrays_) estimate += array.body.size();
+  std::string document;
+  document.reserve(estimate);
+
+  // The XML; an ASCII array's lines go inline, a binary array gets an offset field padded to be filled in once the
+  // bodies are placed in the appended data, after the XML.
+  std::vector<std::size_t> offset_fields;
   bool ok = true;
-  for (std::size_t i = 0; i < point_data.size() && ok; ++i) ok = encode_data(arrays[i], point_data[i], options, pool);
-  for (std::size_t i = 0; i < cell_data.size() && ok; ++i)
-    ok = encode_data(arrays[point_data.size() + i], cell_data[i], options, pool);
-  VtuArray positions = vtu_vectors("", points, options.point_type);
-  ok = ok && encode_data(arrays.back(), positions, options, pool);
+  const auto data_array = [&](const std::string& element, const VtuArray* a, const std::string* encoded) {
+    document += "        <DataArray";
+    document += element;
+    if (binary) {
+      document += " format=\"appended\"";
+      offset_fields.push_back(document.size());
+      document += std::string(32, ' ');
+      document += "/>\n";
+      return;
+    }
+    document += " format=\"ascii\">\n";
+    if (a)
+      ok = ok && encode_data(document, *a, options, pool);
+    else
+      document += *encoded;
+    document += "        </DataArray>\n";
+  };
+  document += "<?xml version=\"1.0\"?>\n";
+  document += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"";
+  if (binary && options.compression_level > 0) document += " compressor=\"vtkZLibDataCompressor\"";
+  document += ">\n  <UnstructuredGrid>\n";
+  document += "    <Piece NumberOfPoints=\"" + std::to_string(points.size()) + "\" NumberOfCells=\"" +
+              std::to_string(cells.size()) + "\">\n";
+  document += "      <PointData" + active_attributes(point_data) + ">\n";
+  for (const VtuArray& a : point_data) data_array(data_attributes(a), &a, nullptr);
+  document += "      </PointData>\n";
+  if (!cell_data.empty()) {
+    document += "      <CellData" + active_attributes(cell_data) + ">\n";
+    for (const VtuArray& a : cell_data) data_array(data_attributes(a), &a, nullptr);
+    document += "      </CellData>\n";
+  }
+  document += "      <Points>\n";
+  data_array(data_attributes(positions), &positions, nullptr);
+  document += "      </Points>\n      <Cells>\n";
+  for (const VtuCells::Encoded& array : cells.arrays_) data_array(array.element, nullptr, &array.body);
+  document += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n";
+  if (binary) {
+    document += "  <AppendedData encoding=\"raw\">\n   _";
+    const std::size_t base = document.size();
+    for (std::size_t i = 0; i < offset_fields.size() && ok; ++i) {
+      const std::string field = " offset=\"" + std::to_string(document.size() - base) + "\"";
+      document.replace(offset_fields[i], field.size(), field);
+      if (i < data.size())
+        ok = encode_data(document, *data[i], options, pool);
+      else
+        document += cells.arrays_[i - data.size()].body;
+    }
+    document += "\n  </AppendedData>\n";
+  }
+  document += "</VTKFile>\n";
   if (!ok) {
     diagnostics.error(range, "VTU frame: zlib could not compress an array (out of memory?)");
     return std::nullopt;
   }
-
-  // The XML with the ASCII bodies inline, or with a padded offset field per binary array (the offsets are known
-  // once the bodies are placed in the appended data, after it).
-  std::vector<const std::string*> bodies;  // every array's body in file order
-  for (const ArrayText& array : arrays) bodies.push_back(&array.body);
-  for (const VtuCells::Encoded& array : cells.arrays_) bodies.push_back(&array.body);
-  std::size_t total = 4096 + 256 * bodies.size();
-  for (const std::string* body : bodies) total += body->size();
-  std::string head;  // the whole file, in the end
-  head.reserve(total);
-  std::vector<std::size_t> offset_fields;  // where each binary array's offset attribute goes in `head`
-  const auto data_array = [&](const std::string& element, const std::string& body) {
-    head += "        <DataArray";
-    head += element;
-    if (binary) {
-      head += " format=\"appended\"";
-      offset_fields.push_back(head.size());
-      head += std::string(32, ' ');
-      head += "/>\n";
-    } else {
-      head += " format=\"ascii\">\n";
-      head += body;
-      head += "        </DataArray>\n";
-    }
-  };
-  head += "<?xml version=\"1.0\"?>\n";
-  head += "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\"";
-  if (binary && options.compression_level > 0) head += " compressor=\"vtkZLibDataCompressor\"";
-  head += ">\n  <UnstructuredGrid>\n";
-  head += "    <Piece NumberOfPoints=\"" + std::to_string(points.size()) + "\" NumberOfCells=\"" +
-          std::to_string(cells.size()) + "\">\n";
-  head += "      <PointData" + active_attributes(point_data) + ">\n";
-  for (std::size_t i = 0; i < point_data.size(); ++i) data_array(arrays[i].element, arrays[i].body);
-  head += "      </PointData>\n";
-  if (!cell_data.empty()) {
-    head += "      <CellData" + active_attributes(cell_data) + ">\n";
-    for (std::size_t i = 0; i < cell_data.size(); ++i)
-      data_array(arrays[point_data.size() + i].element, arrays[point_data.size() + i].body);
-    head += "      </CellData>\n";
-  }
-  head += "      <Points>\n";
-  data_array(arrays.back().element, arrays.back().body);
-  head += "      </Points>\n      <Cells>\n";
-  for (const VtuCells::Encoded& array : cells.arrays_) data_array(array.element, array.body);
-  head += "      </Cells>\n    </Piece>\n  </UnstructuredGrid>\n";
-  if (!binary) {
-    head += "</VTKFile>\n";
-    return head;
-  }
-  head += "  <AppendedData encoding=\"raw\">\n   _";
-  const std::size_t base = head.size();
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    const std::string field = " offset=\"" + std::to_string(head.size() - base) + "\"";
-    head.replace(offset_fields[i], field.size(), field);
-    head += *bodies[i];
-  }
-  head += "\n  </AppendedData>\n</VTKFile>\n";
-  return head;
+  return document;
 }
 
 std::string pvd_document(const std::vector<PvdFrame>& frames) {
