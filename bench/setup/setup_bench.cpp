@@ -24,6 +24,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -57,7 +58,7 @@ struct Row {
   int cells = 0;
   unsigned threads = 0;
   std::size_t vertices = 0, tetrahedra = 0, springs = 0;
-  double generate = 0, repair = 0, model = 0;
+  double generate = 0, repair = 0, model = 0, cpu = 0;
   double peak_bytes = 0, held_bytes = 0, data_bytes = 0;
   double cpu_simulation_peak = -1, gpu_simulation_peak = -1;
   // breakdown (seconds; -1: not measured)
@@ -68,6 +69,13 @@ struct Row {
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// CPU seconds of the process (every thread): on a shared machine the wall time says more about the other load.
+double cpu_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
+  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
 // VmRSS or VmHWM of this process, bytes.
@@ -159,6 +167,7 @@ Row run_size(int cells, const Options& options) {
   BoxSpec box;
   box.cells_x = box.cells_y = box.cells_z = cells;
   box.size = {0.1, 0.1, 0.1};
+  const double cpu_start = cpu_seconds();
   auto start = std::chrono::steady_clock::now();
   Mesh mesh = generate_box(box, diagnostics);
   row.generate = seconds_since(start);
@@ -172,6 +181,7 @@ Row run_size(int cells, const Options& options) {
   start = std::chrono::steady_clock::now();
   auto setup = build_spring_model(mesh, model, diagnostics);
   row.model = seconds_since(start);
+  row.cpu = cpu_seconds() - cpu_start;
   if (!setup) {
     row.status = "failed: " + (diagnostics.items().empty() ? std::string("?") : diagnostics.items().front().message);
     return row;
@@ -237,7 +247,7 @@ std::string encode(const Row& r) {
   std::ostringstream out;
   out.precision(17);
   out << r.cells << ' ' << r.threads << ' ' << r.vertices << ' ' << r.tetrahedra << ' ' << r.springs << ' '
-      << r.generate << ' ' << r.repair << ' ' << r.model << ' ' << r.peak_bytes << ' ' << r.held_bytes << ' '
+      << r.generate << ' ' << r.repair << ' ' << r.model << ' ' << r.cpu << ' ' << r.peak_bytes << ' ' << r.held_bytes << ' '
       << r.data_bytes << ' '
       << r.cpu_simulation_peak << ' ' << r.gpu_simulation_peak << ' ' << r.degenerate << ' ' << r.masses << ' '
       << r.network << ' ' << r.rest_lengths << ' ' << r.stiffness << ' ' << r.damping << ' ' << r.checksum << ' '
@@ -248,7 +258,7 @@ std::string encode(const Row& r) {
 Row decode(const std::string& text) {
   Row r;
   std::istringstream in(text);
-  in >> r.cells >> r.threads >> r.vertices >> r.tetrahedra >> r.springs >> r.generate >> r.repair >> r.model >>
+  in >> r.cells >> r.threads >> r.vertices >> r.tetrahedra >> r.springs >> r.generate >> r.repair >> r.model >> r.cpu >>
       r.peak_bytes >> r.held_bytes >> r.data_bytes >> r.cpu_simulation_peak >> r.gpu_simulation_peak >> r.degenerate >> r.masses >>
       r.network >> r.rest_lengths >> r.stiffness >> r.damping >> r.checksum;
   std::getline(in, r.status);
@@ -335,14 +345,17 @@ int main(int argc, char** argv) {
   }
   std::vector<Row> rows;
   std::string table =
-      "| cells | vertices | tetrahedra | springs | threads | generate s | repair s | model s | setup s | peak B/spring "
-      "| held B/spring | data B/spring | CpuSimulation peak B/spring | GpuSimulation peak B/spring | checksum | status |\n"
-      "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- |\n";
+      "| cells | vertices | tetrahedra | springs | threads | generate s | repair s | model s | setup s | setup CPU s "
+      "| peak B/spring | held B/spring | data B/spring | CpuSimulation peak B/spring | GpuSimulation peak B/spring "
+      "| checksum | status |\n"
+      "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- "
+      "| --- |\n";
   std::string breakdown =
       "| cells | springs | degenerate check s | masses s | springs + CSR s | rest lengths s | stiffness s | damping s |\n"
       "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n";
   std::string csv =
-      "cells,vertices,tetrahedra,springs,threads,generate_s,repair_s,model_s,setup_s,peak_bytes,held_bytes,data_bytes,"
+      "cells,vertices,tetrahedra,springs,threads,generate_s,repair_s,model_s,setup_s,setup_cpu_s,peak_bytes,held_bytes,"
+      "data_bytes,"
       "cpu_simulation_peak_bytes,gpu_simulation_peak_bytes,degenerate_s,masses_s,springs_csr_s,rest_lengths_s,"
       "stiffness_s,damping_s,checksum,status\n";
   std::printf("%s", table.c_str());
@@ -356,6 +369,7 @@ int main(int argc, char** argv) {
                              std::to_string(r.tetrahedra) + " | " + std::to_string(r.springs) + " | " +
                              std::to_string(r.threads) + " | " + fixed(r.generate, 2) + " | " + fixed(r.repair, 2) +
                              " | " + fixed(r.model, 2) + " | " + fixed(r.generate + r.repair + r.model, 2) + " | " +
+                             fixed(r.cpu, 2) + " | " +
                              per_spring(r.peak_bytes, r.springs) + " | " + per_spring(r.held_bytes, r.springs) +
                              " | " + per_spring(r.data_bytes, r.springs) + " | " +
                              per_spring(r.cpu_simulation_peak, r.springs) + " | " +
@@ -371,7 +385,8 @@ int main(int argc, char** argv) {
     std::ostringstream row;
     row.precision(9);
     row << r.cells << ',' << r.vertices << ',' << r.tetrahedra << ',' << r.springs << ',' << r.threads << ','
-        << r.generate << ',' << r.repair << ',' << r.model << ',' << r.generate + r.repair + r.model << ','
+        << r.generate << ',' << r.repair << ',' << r.model << ',' << r.generate + r.repair + r.model << ',' << r.cpu
+        << ','
         << r.peak_bytes << ',' << r.held_bytes << ',' << r.data_bytes << ',' << r.cpu_simulation_peak << ',' << r.gpu_simulation_peak << ','
         << r.degenerate << ',' << r.masses << ',' << r.network << ',' << r.rest_lengths << ',' << r.stiffness << ','
         << r.damping << ',' << checksum << ',' << r.status << '\n';
