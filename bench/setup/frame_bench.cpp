@@ -17,6 +17,7 @@
 #include <string>
 #include <thread>
 
+#include "bench/setup/process_clock.h"
 #include "runtime/integrate/worker_pool.h"
 #include "runtime/io/atomic_file.h"
 #include "runtime/io/vtk_xml.h"
@@ -24,20 +25,10 @@
 
 using namespace fmpc;
 using namespace fmpc::sim;
+using fmpc::bench::cpu_seconds;
+using fmpc::bench::seconds_since;
 
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-// CPU seconds of the whole process (every thread): on a shared machine the wall time says more about the other
-// load than about the writer.
-double cpu_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
-}
 
 struct Timing {
   double cells = 0, document = 0, write = 0;

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "runtime/integrate/simulation.h"
+#include "bench/setup/process_clock.h"
 #include "runtime/integrate/worker_pool.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_check.h"
@@ -42,6 +43,8 @@
 
 using namespace fmpc;
 using namespace fmpc::sim;
+using fmpc::bench::cpu_seconds;
+using fmpc::bench::seconds_since;
 
 namespace {
 
@@ -66,17 +69,6 @@ struct Row {
   std::uint64_t checksum = 0;
   std::string status = "ok";
 };
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-// CPU seconds of the process (every thread): on a shared machine the wall time says more about the other load.
-double cpu_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
-}
 
 // VmRSS or VmHWM of this process, bytes.
 double status_bytes(const char* field) {
