@@ -79,10 +79,13 @@ class PoolLease {
 // its time without it.
 void advise_huge_pages(const void* data, std::size_t bytes);
 
+// Below this, advice would cost a system call for no page fault saved worth it.
+constexpr std::size_t kHugePageAdviceBytes = std::size_t{4} << 20;
+
 // values.resize(n), with a large array advised huge pages before its first touch.
 template <class T>
 void resize_large(std::vector<T>& values, std::size_t n) {
-  if (n > values.capacity() && n * sizeof(T) >= (std::size_t{4} << 20)) {
+  if (n > values.capacity() && n * sizeof(T) >= kHugePageAdviceBytes) {
     values.reserve(n);
     advise_huge_pages(values.data(), n * sizeof(T));
   }

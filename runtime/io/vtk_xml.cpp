@@ -161,7 +161,7 @@ bool append_binary(std::string& out, std::size_t size, const WordWriter& write, 
     std::vector<unsigned char> raw(kBlockSize), packed(bound);
     std::string& piece = pieces[part];
     piece.reserve((last - first) * kBlockSize);  // address space only: no regrowth, pages touched as written
-    advise_huge_pages(piece.data(), piece.capacity());
+    if (piece.capacity() >= kHugePageAdviceBytes) advise_huge_pages(piece.data(), piece.capacity());
     for (std::size_t b = first; b < last && !failed[part]; ++b) {
       const std::size_t begin = b * kBlockSize, end = std::min(size, begin + kBlockSize);
       write(begin / word, end / word, raw.data());
@@ -420,7 +420,7 @@ std::optional<std::string> vtu_document(const std::vector<Point3>& points, const
   for (const VtuCells::Encoded& array : cells.arrays_) estimate += array.body.size();
   std::string document;
   document.reserve(estimate);
-  advise_huge_pages(document.data(), document.capacity());
+  if (document.capacity() >= kHugePageAdviceBytes) advise_huge_pages(document.data(), document.capacity());
 
   // The XML; an ASCII array's lines go inline, a binary array gets an offset field padded to be filled in once the
   // bodies are placed in the appended data, after the XML.
