@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <string>
 
+#include "runtime/integrate/worker_pool.h"
+
 namespace fmpc::sim {
 
 std::uint64_t tetrahedron_count(const BoxSpec& spec) {
@@ -74,16 +76,21 @@ Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
   const auto vertex = [&](std::int64_t i, std::int64_t j, std::int64_t k) {
     return static_cast<std::int32_t>((k * ny + j) * nx + i);
   };
-  mesh.points.reserve(static_cast<std::size_t>(nx * ny * nz));
-  for (std::int64_t k = 0; k < nz; ++k) {
-    for (std::int64_t j = 0; j < ny; ++j) {
-      for (std::int64_t i = 0; i < nx; ++i) {
-        mesh.points.push_back({spec.minimum[0] + spec.size[0] * static_cast<double>(i) / spec.cells_x,
-                               spec.minimum[1] + spec.size[1] * static_cast<double>(j) / spec.cells_y,
-                               spec.minimum[2] + spec.size[2] * static_cast<double>(k) / spec.cells_z});
-      }
+  // Points and cells are filled in parallel, each at its own index (vertex (i,j,k) at (k ny + j) nx + i, cell
+  // (i,j,k)'s six tetrahedra from 6 ((k (ny-1) + j) (nx-1) + i)): the same mesh as one thread appending in order.
+  const std::int64_t cells = std::int64_t{spec.cells_x} * spec.cells_y * spec.cells_z;
+  PoolLease lease(nullptr, 0, static_cast<std::size_t>(nx * ny * nz + 6 * cells));
+  WorkerPool& pool = lease.pool();
+  resize_large(mesh.points, static_cast<std::size_t>(nx * ny * nz));
+  pool.run(mesh.points.size(), [&](std::size_t first, std::size_t last) {
+    for (std::size_t index = first; index < last; ++index) {
+      const auto v = static_cast<std::int64_t>(index);
+      const std::int64_t i = v % nx, j = v / nx % ny, k = v / (nx * ny);
+      mesh.points[index] = {spec.minimum[0] + spec.size[0] * static_cast<double>(i) / spec.cells_x,
+                            spec.minimum[1] + spec.size[1] * static_cast<double>(j) / spec.cells_y,
+                            spec.minimum[2] + spec.size[2] * static_cast<double>(k) / spec.cells_z};
     }
-  }
+  });
   // Kuhn subdivision: one tetrahedron per permutation of the axes, walking from the cell's local corner (0,0,0) to
   // (1,1,1). The cell is mirrored along every axis whose cell index is odd, so that the cut diagonals alternate
   // and the 2 x 2 x 2 block of cells is symmetric under the three reflections: a box cut the same way round in
@@ -91,31 +98,33 @@ Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {
   // docs/simulator.md). Mirroring keeps the mesh conforming: both cells sharing a face cut it along the diagonal
   // through their common local corners (0,0) and (1,1) of that face.
   static const int kPermutations[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
-  for (std::int64_t k = 0; k + 1 < nz; ++k) {
-    for (std::int64_t j = 0; j + 1 < ny; ++j) {
-      for (std::int64_t i = 0; i + 1 < nx; ++i) {
-        const std::int64_t cell[3] = {i, j, k};
-        const auto global = [&](const int local[3]) {
-          std::int64_t g[3];
-          for (int axis = 0; axis < 3; ++axis)
-            g[axis] = cell[axis] + (cell[axis] % 2 == 1 ? 1 - local[axis] : local[axis]);
-          return vertex(g[0], g[1], g[2]);
-        };
-        for (const auto& order : kPermutations) {
-          int local[3] = {0, 0, 0};
-          Tetrahedron t{};
-          t[0] = global(local);
-          for (int step = 0; step < 3; ++step) {
-            ++local[order[step]];
-            t[static_cast<std::size_t>(step + 1)] = global(local);
-          }
-          if (signed_volume(mesh, t) < 0.0) std::swap(t[1], t[2]);
-          mesh.tetrahedra.push_back(t);
-          mesh.tetrahedron_lines.push_back(0);
+  resize_large(mesh.tetrahedra, static_cast<std::size_t>(6 * cells));
+  pool.run(static_cast<std::size_t>(cells), [&](std::size_t first, std::size_t last) {
+    for (std::size_t cell_index = first; cell_index < last; ++cell_index) {
+      const auto c = static_cast<std::int64_t>(cell_index);
+      const std::int64_t cell[3] = {c % (nx - 1), c / (nx - 1) % (ny - 1), c / ((nx - 1) * (ny - 1))};
+      const auto global = [&](const int local[3]) {
+        std::int64_t g[3];
+        for (int axis = 0; axis < 3; ++axis)
+          g[axis] = cell[axis] + (cell[axis] % 2 == 1 ? 1 - local[axis] : local[axis]);
+        return vertex(g[0], g[1], g[2]);
+      };
+      std::size_t next = 6 * cell_index;
+      for (const auto& order : kPermutations) {
+        int local[3] = {0, 0, 0};
+        Tetrahedron t{};
+        t[0] = global(local);
+        for (int step = 0; step < 3; ++step) {
+          ++local[order[step]];
+          t[static_cast<std::size_t>(step + 1)] = global(local);
         }
+        if (signed_volume(mesh, t) < 0.0) std::swap(t[1], t[2]);
+        mesh.tetrahedra[next++] = t;
       }
     }
-  }
+  });
+  // No tetrahedron_lines: a generated element has no source line (line_of reads a missing entry as 0), and the
+  // array would cost 4 bytes per tetrahedron.
   return mesh;
 }
 
@@ -133,7 +142,7 @@ Mesh generate_ellipsoid(const EllipsoidSpec& spec, DiagnosticList& diagnostics) 
   }
   if (const auto too_large = generated_mesh_too_large(tetrahedron_count(spec))) {
     diagnostics.error(range, "the ellipsoid of resolution " + std::to_string(spec.resolution) + " " + *too_large +
-                                 ": use a resolution of at most 70");
+                                 ": use a smaller resolution");
     return Mesh{};
   }
   BoxSpec cube;
@@ -142,15 +151,23 @@ Mesh generate_ellipsoid(const EllipsoidSpec& spec, DiagnosticList& diagnostics) 
   cube.cells_x = cube.cells_y = cube.cells_z = 2 * spec.resolution;
   Mesh mesh = generate_box(cube, diagnostics);
   mesh.source = "generated ellipsoid " + std::to_string(spec.resolution);
-  for (Point3& p : mesh.points) {
-    const double inf_norm = std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])});
-    const double two_norm = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-    const double scale = two_norm > 0.0 ? inf_norm / two_norm : 0.0;
-    for (std::size_t axis = 0; axis < 3; ++axis) p[axis] = spec.centre[axis] + spec.radii[axis] * p[axis] * scale;
-  }
-  for (Tetrahedron& t : mesh.tetrahedra) {
-    if (signed_volume(mesh, t) < 0.0) std::swap(t[1], t[2]);
-  }
+  PoolLease lease(nullptr, 0, mesh.points.size() + mesh.tetrahedra.size());
+  WorkerPool& pool = lease.pool();
+  pool.run(mesh.points.size(), [&](std::size_t first, std::size_t last) {
+    for (std::size_t v = first; v < last; ++v) {
+      Point3& p = mesh.points[v];
+      const double inf_norm = std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])});
+      const double two_norm = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+      const double scale = two_norm > 0.0 ? inf_norm / two_norm : 0.0;
+      for (std::size_t axis = 0; axis < 3; ++axis) p[axis] = spec.centre[axis] + spec.radii[axis] * p[axis] * scale;
+    }
+  });
+  pool.run(mesh.tetrahedra.size(), [&](std::size_t first, std::size_t last) {
+    for (std::size_t e = first; e < last; ++e) {
+      Tetrahedron& t = mesh.tetrahedra[e];
+      if (signed_volume(mesh, t) < 0.0) std::swap(t[1], t[2]);
+    }
+  });
   return mesh;
 }
 

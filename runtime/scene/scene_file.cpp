@@ -540,7 +540,7 @@ class SceneParser {
             mesh.ellipsoid.resolution = static_cast<int>(*n);
             if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.ellipsoid)))
               error(ellipsoid["resolution"], "mesh.ellipsoid.resolution",
-                    std::to_string(*n) + " " + *too_large + ": use a resolution of at most 70");
+                    std::to_string(*n) + " " + *too_large + ": use a smaller resolution");
           }
         break;
       }
@@ -1058,7 +1058,8 @@ class SceneParser {
 
   void parse_outputs(const YAML::Node& node) {
     remember(node, "outputs");
-    if (!check_map(node, "outputs", {"directory", "frames", "samples", "csv", "summary", "plot", "precision_check"}))
+    if (!check_map(node, "outputs",
+                   {"directory", "frames", "vtu", "samples", "csv", "summary", "plot", "precision_check"}))
       return;
     SceneOutputs& out = scene_.outputs;
     if (node["precision_check"]) {
@@ -1072,6 +1073,11 @@ class SceneParser {
       if (auto v = text(node["directory"], "outputs.directory")) out.directory = *v;
     if (node["frames"])
       if (auto v = integer(node["frames"], "outputs.frames", 0, 100000)) out.frames = static_cast<int>(*v);
+    if (node["vtu"]) {
+      static const std::vector<std::string> names = {"binary", "ascii"};
+      if (auto i = keyword(node["vtu"], "outputs.vtu", names, "a VTU encoding"))
+        out.vtu = *i == 0 ? VtuFormat::Binary : VtuFormat::Ascii;
+    }
     if (node["samples"])
       if (auto v = integer(node["samples"], "outputs.samples", 0, 1000000)) out.samples = static_cast<int>(*v);
     if (node["csv"])

@@ -11,6 +11,7 @@
 
 #include "diagnostics/diagnostic.h"
 #include "runtime/integrate/simulation.h"
+#include "runtime/io/vtk_xml.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/springs/spring_network.h"
 
@@ -129,6 +130,7 @@ enum class SceneBackend { Auto, Cpu, Cuda };
 struct SceneOutputs {
   std::string directory;  // resolved against the current folder; empty: "<scene name>.out" beside the scene
   int frames = 20;        // .vtu frames (evenly spaced, first and last included); 0: none
+  VtuFormat vtu = VtuFormat::Binary;  // the frames' encoding: binary (appended, zlib) or ascii
   int samples = 200;      // CSV rows (evenly spaced); 0: none
   bool csv = true;
   bool summary = true;

@@ -242,6 +242,9 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
     csv += "\n";
   }
   std::vector<PvdFrame> frames;
+  VtuOptions vtu_options;
+  vtu_options.format = scene.outputs.vtu;
+  std::optional<VtuCells> vtu_cells;  // the cells are the same in every frame: encoded once, at the first
   bool outputs_ok = true;
   const auto record = [&](bool frame, bool sample) {
     const std::vector<Point3> positions = simulation->positions(diagnostics);
@@ -259,10 +262,14 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
     const double time = simulation->time();
     if (frame && outputs_ok) {
       const std::string name = frame_name(frames.size());
-      const std::vector<VtuPointVectors> data = {{"displacement", displacement},
-                                                 {"velocity", simulation->velocities(diagnostics)}};
-      outputs_ok = write_file_atomically((directory / name).string(), vtu_document(positions, built.mesh, data),
-                                         diagnostics);
+      const std::vector<Point3> velocities = simulation->velocities(diagnostics);
+      if (!vtu_cells) vtu_cells = encode_vtu_cells(built.mesh, vtu_options, diagnostics);
+      const auto vtu = vtu_cells ? vtu_document(positions, *vtu_cells,
+                                                {vtu_vectors("displacement", displacement),
+                                                 vtu_vectors("velocity", velocities)},
+                                                {}, vtu_options, diagnostics)
+                                 : std::nullopt;
+      outputs_ok = vtu && write_file_atomically((directory / name).string(), *vtu, diagnostics);
       frames.push_back({time, name});
       result.files.push_back((directory / name).string());
     }
