@@ -57,8 +57,24 @@ __device__ kernels::TetrahedronMaterial<double> implicit_material(const Implicit
   return m;
 }
 
+// The element pass needs 88 registers per thread in float unbounded, which leaves 2 blocks of 256 per SM (25%
+// occupancy) and the kernel latency-bound at 41% of DRAM bandwidth on an H100 (ncu, docs/performance.md). Bounding
+// it to FMPC_ELEMENT_MIN_BLOCKS blocks per SM trades registers for occupancy; double keeps its registers.
+#ifndef FMPC_ELEMENT_MIN_BLOCKS
+#define FMPC_ELEMENT_MIN_BLOCKS 3
+#endif
 template <typename Real>
-__global__ void element_forces_kernel(ForceModelView<Real> m, kernels::StateView<Real> state) {
+struct ElementOccupancy {
+  static constexpr int min_blocks = 1;
+};
+template <>
+struct ElementOccupancy<float> {
+  static constexpr int min_blocks = FMPC_ELEMENT_MIN_BLOCKS;
+};
+
+template <typename Real>
+__global__ void __launch_bounds__(kThreadsPerBlock, ElementOccupancy<Real>::min_blocks)
+    element_forces_kernel(ForceModelView<Real> m, kernels::StateView<Real> state) {
   const int e = vertex_index();
   if (e >= m.field.count) return;
   kernels::tetrahedron_corner_forces(e, m.field, state, m.corner_force);
