@@ -181,6 +181,7 @@ FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, cons
   Real sx = Real(0), sy = Real(0), sz = Real(0);
   const Real x = s.x[v], y = s.y[v], z = s.z[v];
   const Real vx = s.vx[v], vy = s.vy[v], vz = s.vz[v];
+  FMPC_UNROLL_GATHER
   for (int e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
     const int spring = net.adjacency_spring[e];
     const int other = net.adjacency_neighbour[e];

@@ -467,6 +467,7 @@ struct CornerForceView {
 template <typename Real>
 FMPC_HD void gather_corner_force(int v, const CornerForceView<Real>& view, Real& fx, Real& fy, Real& fz) {
   Real sx = Real(0), sy = Real(0), sz = Real(0);
+  FMPC_UNROLL_GATHER
   for (int k = view.offset[v]; k < view.offset[v + 1]; ++k) {
     const Real* f = view.force + 3 * view.corner[k];
     sx += f[0];

@@ -13,6 +13,7 @@
 #include "diagnostics/number_format.h"
 #include "kernels/table_math.h"
 #include "runtime/fem/fem_model_builder.h"
+#include "runtime/io/input_file.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_check.h"
 #include "runtime/mesh/mesh_reader.h"
@@ -45,19 +46,6 @@ std::optional<double> ray_triangle_hit(const Point3& origin, const Point3& direc
 }
 
 namespace {
-
-std::optional<std::string> read_file(const std::string& path, const SourceRange& where, const std::string& field,
-                                     DiagnosticList& diagnostics) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    diagnostics.error(where, field + ": cannot read '" + path + "': " + std::strerror(errno) +
-                                 " (relative paths are relative to the scene file's folder)");
-    return std::nullopt;
-  }
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  return buffer.str();
-}
 
 std::string point_text(const Point3& p) {
   return "(" + format_number(p[0]) + ", " + format_number(p[1]) + ", " + format_number(p[2]) + ")";
@@ -312,8 +300,15 @@ std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std
                                                    BuiltScene& built, DiagnosticList& diagnostics) {
   const std::string field =
       scene.material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
-  const auto text = read_file(scene.material.file, scene.range_of(field), field, diagnostics);
-  if (!text) return std::nullopt;
+  const bool is_table = scene.material.source == SceneMaterial::Source::Table;
+  std::string read_error;
+  const auto text = read_input_file(scene.material.file, is_table ? kMaxTableFileBytes : kMaxRuleFileBytes,
+                                    is_table ? "table file" : "rule file", read_error);
+  if (!text) {
+    diagnostics.error(scene.range_of(field),
+                      field + ": " + read_error + " (relative paths are relative to the scene file's folder)");
+    return std::nullopt;
+  }
   if (scene.material.source == SceneMaterial::Source::Table) {
     const auto table = parse_fzt(scene.material.file, *text, diagnostics);
     if (!table) return std::nullopt;

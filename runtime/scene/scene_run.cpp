@@ -212,8 +212,9 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
   SceneRunResult result;
   result.stability = simulation->stability();
   const double dt = result.stability.time_step;
-  result.steps_planned = scene.steps ? *scene.steps
-                                     : static_cast<std::size_t>(std::ceil(scene.duration / dt * (1.0 - 1e-12)));
+  const auto planned = planned_step_count(scene, dt, diagnostics);
+  if (!planned) return std::nullopt;
+  result.steps_planned = *planned;
   const std::size_t total = result.steps_planned;
   const std::vector<std::size_t> frame_steps = scene.outputs.frames > 0 ? spread(scene.outputs.frames, total)
                                                                         : std::vector<std::size_t>{};
@@ -264,10 +265,19 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
       const std::string name = frame_name(frames.size());
       const std::vector<Point3> velocities = simulation->velocities(diagnostics);
       if (!vtu_cells) vtu_cells = encode_vtu_cells(built.mesh, vtu_options, diagnostics);
+      // Element stresses as cell data where the cells are the elements: the FEM's von Mises stress, or the volume
+      // term's pressure magnitude (springs carry no continuum stress).
+      std::vector<double> stress;
+      std::vector<VtuArray> cell_data;
+      if (setup.tetrahedron_field && vtu_cells && vtu_cells->size() == setup.tetrahedra.size()) {
+        stress = element_von_mises_stress(setup, positions);
+        cell_data.push_back(vtu_scalars(
+            setup.model == ForceModel::CorotationalFem ? "von_mises_stress_Pa" : "volume_term_pressure_Pa", stress));
+      }
       const auto vtu = vtu_cells ? vtu_document(positions, *vtu_cells,
                                                 {vtu_vectors("displacement", displacement),
                                                  vtu_vectors("velocity", velocities)},
-                                                {}, vtu_options, diagnostics)
+                                                cell_data, vtu_options, diagnostics)
                                  : std::nullopt;
       outputs_ok = vtu && write_file_atomically((directory / name).string(), *vtu, diagnostics);
       frames.push_back({time, name});

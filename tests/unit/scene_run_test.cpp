@@ -368,6 +368,38 @@ TEST_CASE("SOFA's liver spring scenes run, springs and fuzzy", "[scene]") {
   CHECK(sag[1] / sag[0] < 10.0);
 }
 
+TEST_CASE("SOFA's liver-CUDA scene as co-rotational FEM: runs, no inversion, stresses in the frames", "[scene][fem]") {
+  if (!std::filesystem::exists(std::string(FMPC_SHARED_DATA_DIR) + "/sofa-liver/liver.msh")) {
+    WARN("skipped: " << FMPC_SHARED_DATA_DIR << "/sofa-liver is absent (../shared/data holds SOFA's liver mesh)");
+    return;
+  }
+  const std::string path = scene_path("sofa_liver_fem");
+  DiagnosticList diagnostics;
+  auto scene = parse_scene(path, read_text(path), diagnostics);
+  REQUIRE(scene);
+  const auto built = build_scene(*scene, diagnostics);
+  REQUIRE(built);
+  CHECK(built->setup.model == ForceModel::CorotationalFem);
+  CHECK(built->setup.tetrahedra.size() == 596);
+  CHECK(built->setup.mass_damping == 0.1);
+  const auto dir = temporary_directory("sofa_liver_fem");
+  SceneRunOptions options;
+  options.output_directory = dir.string();
+  scene->outputs.frames = 2;
+  scene->steps = 10;
+  scene->outputs.precision_check = SceneOutputs::PrecisionCheck::Off;
+  const auto result = run_scene(*scene, *built, options, diagnostics);
+  REQUIRE(result);
+  CHECK(result->completed);
+  CHECK(result->inversions.largest_count == 0);
+  CHECK(result->max_displacement > 0.0);
+  CHECK_FALSE(diagnostics.has_errors());
+  const std::string frame = read_text((dir / "frame_00001.vtu").string());
+  CHECK(frame.find("<CellData") != std::string::npos);
+  CHECK(frame.find("Name=\"von_mises_stress_Pa\"") != std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
 TEST_CASE("the precision check: agreeing scenes say so, a chaotic one warns, big ones are skipped", "[scene]") {
   const auto run = [](const std::string& text, DiagnosticList& diagnostics) {
     const Scene scene = parse_text(text);
