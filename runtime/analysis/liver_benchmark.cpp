@@ -202,6 +202,18 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
         return std::nullopt;
       }
       const Evaluation evaluation = interpreter.evaluate(patient.readings);
+      for (const int input : evaluation.flags.inputs_out_of_range) {
+        const Variable& variable = system.inputs[static_cast<std::size_t>(input)];
+        diagnostics.warning(SourceRange{}, "input-out-of-range",
+                            "patient '" + patient.label + "': " + variable.name + " = " +
+                                format_number(patient.readings[static_cast<std::size_t>(input)]) + " is outside [" +
+                                format_number(variable.min) + ", " + format_number(variable.max) +
+                                "] of controller '" + controller.name + "'; evaluated as given");
+      }
+      if (!evaluation.flags.outputs_no_rule_fired.empty())
+        diagnostics.warning(SourceRange{}, "no-rule-fired",
+                            "patient '" + patient.label + "': no rule of controller '" + controller.name +
+                                "' fired; its output is the system's no-fire value");
       auto run = compare_modulus_with_benchmark(controller.name, patient.label,
                                                 evaluation.outputs.front() * *pascals, report.reference, options,
                                                 diagnostics);

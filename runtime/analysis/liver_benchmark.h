@@ -16,9 +16,10 @@
 // - units: the controller's output (kPa) was substituted for k; here the spring is a bar with A / L = 1 mm, so
 //   k = E A / L in N/m equals E in kPa. The benchmark's X is the strain (l - l0) / l0 with l0 = 1 m, so X is the
 //   displacement in metres (as in kernels/spring_math.h: K1 = k l0).
-// - the pairing: `thesis_pairing` compares the thesis's linear mass point (Eq. 3.5) driven by the controller with
-//   the benchmark; `benchmark_pairing` runs the benchmark's own law and nodal damping with K1 = k l0 (K2 / K1 and
-//   Xc kept) driven by the controller, as issue 10 item 7 asks. The reference is the benchmark with its own K1.
+// - the pairing: "thesis MSM" (ControllerRun::thesis_*) compares the thesis's linear mass point (Eq. 3.5) driven by
+//   the controller with the benchmark; "benchmark law" (ControllerRun::benchmark_*) runs the benchmark's own law and
+//   nodal damping with K1 = k l0 (K2 / K1 and Xc kept) driven by the controller, as issue 10 item 7 asks. The
+//   reference is the benchmark with its own K1.
 #include <optional>
 #include <string>
 #include <vector>
@@ -106,8 +107,8 @@ std::optional<ControllerRun> compare_modulus_with_benchmark(const std::string& c
                                                             DiagnosticList& diagnostics);
 
 // Evaluates every controller for every patient with the reference interpreter (an output that is NaN, not
-// positive, or in a unit other than Pa, kPa or MPa is an error), runs both pairings and compares their curves
-// with the reference.
+// positive, or in a unit other than Pa, kPa or MPa is an error; a reading outside an input's range, or no rule
+// firing, is a warning), runs both pairings and compares their curves with the reference.
 std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverController>& controllers,
                                                         const std::vector<LiverPatient>& patients,
                                                         const LiverBenchmarkOptions& options,

@@ -146,6 +146,15 @@ TEST_CASE("thesis benchmark: refusals", "[thesis]") {
   CHECK_FALSE(fmpc::sim::run_liver_benchmark({{"mamdani", &mamdani.systems.front()}}, {{"short", {5.0, 5.0}}}, {},
                                              diagnostics));
   CHECK_THAT(fmpc::render_all(diagnostics, fmpc::SourceFiles{}), Catch::Contains("patient 'short' has 2 readings"));
+
+  // A reading outside the input's range is evaluated as given, with a warning naming the patient and the input.
+  DiagnosticList warned;
+  const auto report = fmpc::sim::run_liver_benchmark({{"mamdani", &mamdani.systems.front()}},
+                                                     {{"high", {80.0, 5.0, 5.0, 5.0, 5.0}}}, {}, warned);
+  REQUIRE(report);
+  CHECK(warned.warning_count() == 1);
+  CHECK_THAT(fmpc::render_all(warned, fmpc::SourceFiles{}),
+             Catch::Contains("patient 'high': HCV = 80 is outside [0, 75]"));
 }
 
 TEST_CASE("thesis benchmark: the numbers of docs/liver_fibrosis.md", "[thesis]") {
