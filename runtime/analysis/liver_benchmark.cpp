@@ -81,6 +81,7 @@ SimulationSetup mass_point_setup(MassPointLaw law, double stiffness, const Liver
   setup.integrator = Integrator::RungeKutta4;
   setup.precision = Precision::Double;
   setup.time_step = o.time_step;
+  setup.time_step_range = o.time_step_range;
   return setup;
 }
 

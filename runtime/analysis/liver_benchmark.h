@@ -49,6 +49,7 @@ struct LiverBenchmarkOptions {
   double damping_ratio = 0.9;      // zeta of the thesis's linear mass point, gamma = 2 zeta sqrt(k m)
   double area_over_length = 1e-3;  // m: k (N/m) = E (Pa) x area_over_length
   double rest_length = 1.0;        // m, l0 of the benchmark's spring
+  SourceRange time_step_range;     // where the time step came from (a step the simulator refuses points there)
 };
 
 // Limits on the options (checked before anything is allocated).

@@ -2,6 +2,8 @@
 // printed as CSV: per controller and patient, the similarity (runtime/analysis/curve_similarity.h) of the
 // displacement and velocity curves with the Basafa-Farahmand benchmark's, and their correlations.
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cctype>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -13,6 +15,7 @@
 #include "tools/fmpc/evaluation_points.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
+#include "tools/plot/line_plot.h"
 
 namespace fmpc::cli {
 
@@ -22,6 +25,7 @@ struct ThesisBenchmarkOptions {
   std::vector<std::string> rules;
   std::string patients;
   std::string curves;
+  std::string plot_directory;
   std::vector<double> moduli;  // kPa, given directly (--modulus)
   sim::LiverBenchmarkOptions run;
 };
@@ -89,13 +93,58 @@ std::string curves_csv(const sim::LiverBenchmarkReport& report) {
   return csv;
 }
 
+// File-name stem for a group of runs: letters and digits kept, anything else becomes '_'.
+std::string file_stem(const std::string& label) {
+  std::string stem;
+  for (const char c : label) stem += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return stem;
+}
+
+// For every patient (and the --modulus runs as one group): displacement and velocity against time, the benchmark
+// and each run in both pairings, as PNG files named after the group.
+std::vector<std::pair<std::string, std::string>> plot_files(const sim::LiverBenchmarkReport& report,
+                                                            const std::string& directory) {
+  std::vector<std::string> groups;
+  for (const auto& run : report.runs) {
+    const std::string group = run.controller == "constant" ? "constant" : run.patient;
+    if (std::find(groups.begin(), groups.end(), group) == groups.end()) groups.push_back(group);
+  }
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const std::string& group : groups) {
+    for (const bool velocity : {false, true}) {
+      plot::LinePlot figure;
+      figure.title = (velocity ? "velocity, " : "displacement, ") + group + " (step of 1 N at t = 0)";
+      figure.x_label = "time (s)";
+      figure.y_label = velocity ? "velocity (mm/s)" : "displacement (mm)";
+      const auto add = [&](const std::string& label, const sim::MassPointResponse& response) {
+        const sim::Curve& curve = velocity ? response.velocity : response.displacement;
+        plot::LineSeries series{label, curve.time, curve.value, plot::series_colour(figure.series.size())};
+        for (double& y : series.y) y *= 1000.0;
+        figure.series.push_back(std::move(series));
+      };
+      add("benchmark (Basafa-Farahmand, K1 0.05 N)", report.reference);
+      for (const auto& run : report.runs) {
+        if ((run.controller == "constant" ? "constant" : run.patient) != group) continue;
+        const std::string name = run.controller == "constant" ? run.patient : run.controller;
+        add(name + ", benchmark law", run.benchmark_response);
+        add(name + ", thesis MSM", run.thesis_response);
+      }
+      const std::string path = (std::filesystem::path(directory) /
+                                (file_stem(group) + (velocity ? "_velocity.png" : "_displacement.png")))
+                                   .string();
+      files.emplace_back(path, plot::encode_png(plot::render_line_plot(figure)));
+    }
+  }
+  return files;
+}
+
 int run_thesis_benchmark(const ThesisBenchmarkOptions& options) {
-  std::vector<std::unique_ptr<LoadedRuleFile>> files;
+  std::vector<std::unique_ptr<LoadedRuleFile>> rule_files;
   std::vector<sim::LiverController> controllers;
   DiagnosticList diagnostics;
   for (const std::string& path : options.rules) {
-    files.push_back(std::make_unique<LoadedRuleFile>(load_rule_file_from_disk(path)));
-    LoadedRuleFile& file = *files.back();
+    rule_files.push_back(std::make_unique<LoadedRuleFile>(load_rule_file_from_disk(path)));
+    LoadedRuleFile& file = *rule_files.back();
     if (file.diagnostics.has_errors()) {
       print_diagnostics(file.diagnostics, file.sources, std::cerr);
       return kExitErrors;
@@ -145,12 +194,22 @@ int run_thesis_benchmark(const ThesisBenchmarkOptions& options) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;
   }
-  if (!options.curves.empty()) {
-    std::string error;
-    if (!write_text_file_atomically(options.curves, curves_csv(*report), error)) {
-      std::cerr << "error: " << error << "\n";
+  std::vector<std::pair<std::string, std::string>> outputs;
+  if (!options.curves.empty()) outputs.emplace_back(options.curves, curves_csv(*report));
+  if (!options.plot_directory.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(options.plot_directory, error);
+    if (error) {
+      std::cerr << "argument --plot: error: cannot create folder '" << options.plot_directory
+                << "': " << error.message() << "\n";
       return kExitErrors;
     }
+    for (auto& file : plot_files(*report, options.plot_directory)) outputs.push_back(std::move(file));
+  }
+  std::string error;
+  if (!outputs.empty() && !write_text_files_atomically(outputs, error)) {
+    std::cerr << "error: " << error << "\n";
+    return kExitErrors;
   }
   std::string out = format_csv_row({"controller", "patient", "modulus_kPa", "stiffness_N_per_m",
                                     "benchmark_law_displacement_similarity", "benchmark_law_velocity_similarity",
@@ -177,11 +236,14 @@ void register_thesis_benchmark_command(CLI::App& app, int& exit_code) {
   command->add_option("--patients", options->patients, "CSV of FibroScan readings, a column per input");
   command->add_option("--modulus", options->moduli, "A Young's modulus (kPa) to compare as given (repeatable)");
   command->add_option("--curves", options->curves, "CSV file to write every curve to");
+  command->add_option("--plot", options->plot_directory,
+                      "Folder for PNG plots of displacement and velocity against time, one pair per patient");
   command->add_option("--mass", options->run.mass, "Mass point (kg)")->default_val(1.5);
   command->add_option("--force", options->run.force, "Step force (N)")->default_val(1.0);
   command->add_option("--duration", options->run.duration, "Simulated time (s)")->default_val(10.0);
   command->add_option("--time-step", options->run.time_step, "RK4 time step (s)")->default_val(1e-3);
   command->add_option("--samples", options->run.samples, "Samples per curve")->default_val(1001);
+  options->run.time_step_range = SourceRange{"argument --time-step", 0, 0, 0, 0};
   command->callback([options, &exit_code] { exit_code = run_thesis_benchmark(*options); });
 }
 
