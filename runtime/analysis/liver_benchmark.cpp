@@ -172,9 +172,19 @@ std::optional<ControllerRun> compare_modulus_with_benchmark(const std::string& c
 
 std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverController>& controllers,
                                                         const std::vector<LiverPatient>& patients,
+                                                        const std::vector<double>& moduli,
                                                         const LiverBenchmarkOptions& options,
                                                         DiagnosticList& diagnostics) {
   if (!check_options(options, diagnostics)) return std::nullopt;
+  const double runs = static_cast<double>(controllers.size()) * static_cast<double>(patients.size()) +
+                      static_cast<double>(moduli.size()) + 1.0;
+  if (runs * static_cast<double>(options.samples) > static_cast<double>(kLiverBenchmarkRunSamplesMax)) {
+    diagnostics.error(SourceRange{}, format_number(runs) + " runs of " + std::to_string(options.samples) +
+                                         " samples exceed the limit of " +
+                                         std::to_string(kLiverBenchmarkRunSamplesMax) +
+                                         " runs x samples; take fewer samples, patients or controllers");
+    return std::nullopt;
+  }
   LiverBenchmarkReport report;
   auto reference = simulate_benchmark_reference(options, diagnostics);
   if (!reference) return std::nullopt;
@@ -221,6 +231,12 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
       if (!run) return std::nullopt;
       report.runs.push_back(std::move(*run));
     }
+  }
+  for (const double modulus : moduli) {
+    auto run = compare_modulus_with_benchmark("constant", "E = " + format_number(modulus / 1000.0) + " kPa", modulus,
+                                              report.reference, options, diagnostics);
+    if (!run) return std::nullopt;
+    report.runs.push_back(std::move(*run));
   }
   return report;
 }

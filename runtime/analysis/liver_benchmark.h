@@ -54,7 +54,9 @@ struct LiverBenchmarkOptions {
 
 // Limits on the options (checked before anything is allocated).
 constexpr std::size_t kLiverBenchmarkStepsMax = 100'000'000;
-constexpr std::size_t kLiverBenchmarkSamplesMax = 1'000'000;
+constexpr std::size_t kLiverBenchmarkSamplesMax = 100'000;
+// Runs x samples a report may hold: every run keeps 4 curves (64 bytes a sample), so at most 256 MiB.
+constexpr std::size_t kLiverBenchmarkRunSamplesMax = std::size_t(1) << 22;
 
 enum class MassPointLaw {
   BasafaFarahmand,  // F_s(X), K1 = k l0, K2 = (K2/K1 of the benchmark) K1, nodal damping gamma0 + gamma1 |x - x0|
@@ -109,9 +111,12 @@ std::optional<ControllerRun> compare_modulus_with_benchmark(const std::string& c
 
 // Evaluates every controller for every patient with the reference interpreter (an output that is NaN, not
 // positive, or in a unit other than Pa, kPa or MPa is an error; a reading outside an input's range, or no rule
-// firing, is a warning), runs both pairings and compares their curves with the reference.
+// firing, is a warning), then takes each of `moduli` (Pa) as given (controller "constant", patient
+// "E = ... kPa"), runs both pairings and compares their curves with the reference. More than
+// kLiverBenchmarkRunSamplesMax runs x samples is refused before anything runs.
 std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverController>& controllers,
                                                         const std::vector<LiverPatient>& patients,
+                                                        const std::vector<double>& moduli,
                                                         const LiverBenchmarkOptions& options,
                                                         DiagnosticList& diagnostics);
 

@@ -143,14 +143,21 @@ TEST_CASE("thesis benchmark: refusals", "[thesis]") {
 
   const fmpc::RuleFile mamdani = load_shipped("mamdani.fis");
   DiagnosticList diagnostics;
-  CHECK_FALSE(fmpc::sim::run_liver_benchmark({{"mamdani", &mamdani.systems.front()}}, {{"short", {5.0, 5.0}}}, {},
+  CHECK_FALSE(fmpc::sim::run_liver_benchmark({{"mamdani", &mamdani.systems.front()}}, {{"short", {5.0, 5.0}}}, {}, {},
                                              diagnostics));
   CHECK_THAT(fmpc::render_all(diagnostics, fmpc::SourceFiles{}), Catch::Contains("patient 'short' has 2 readings"));
+
+  // Too many runs x samples is refused before anything runs.
+  DiagnosticList big;
+  LiverBenchmarkOptions many_samples;
+  many_samples.samples = 50'000;
+  CHECK_FALSE(fmpc::sim::run_liver_benchmark({}, {}, std::vector<double>(100, 1e4), many_samples, big));
+  CHECK_THAT(fmpc::render_all(big, fmpc::SourceFiles{}), Catch::Contains("101 runs of 50000 samples exceed the limit"));
 
   // A reading outside the input's range is evaluated as given, with a warning naming the patient and the input.
   DiagnosticList warned;
   const auto report = fmpc::sim::run_liver_benchmark({{"mamdani", &mamdani.systems.front()}},
-                                                     {{"high", {80.0, 5.0, 5.0, 5.0, 5.0}}}, {}, warned);
+                                                     {{"high", {80.0, 5.0, 5.0, 5.0, 5.0}}}, {}, {}, warned);
   REQUIRE(report);
   CHECK(warned.warning_count() == 1);
   CHECK_THAT(fmpc::render_all(warned, fmpc::SourceFiles{}),
@@ -164,7 +171,7 @@ TEST_CASE("thesis benchmark: the numbers of docs/liver_fibrosis.md", "[thesis]")
                                                                {"sugeno", &sugeno.systems.front()},
                                                                {"it2", &it2.systems.front()}};
   DiagnosticList diagnostics;
-  const auto report = fmpc::sim::run_liver_benchmark(controllers, example_patients(), {}, diagnostics);
+  const auto report = fmpc::sim::run_liver_benchmark(controllers, example_patients(), {}, {}, diagnostics);
   INFO(fmpc::render_all(diagnostics, fmpc::SourceFiles{}));
   REQUIRE(report);
   REQUIRE(report->runs.size() == 12);
@@ -203,10 +210,19 @@ TEST_CASE("thesis benchmark: the numbers of docs/liver_fibrosis.md", "[thesis]")
     CHECK(run.thesis_velocity.similarity == Approx(e.thesis_velocity).margin(1e-6));
   }
 
+  // A modulus given as such runs like a controller's output: 10 kPa, as in the docs' sweep table.
+  const auto constant = fmpc::sim::run_liver_benchmark({}, {}, {1e4}, {}, diagnostics);
+  REQUIRE(constant);
+  REQUIRE(constant->runs.size() == 1);
+  CHECK(constant->runs[0].controller == "constant");
+  CHECK(constant->runs[0].patient == "E = 10 kPa");
+  CHECK(constant->runs[0].benchmark_displacement.similarity == Approx(0.688).margin(5e-4));
+  CHECK(constant->runs[0].thesis_displacement.similarity == Approx(0.874).margin(5e-4));
+
   // Halving the step moves no similarity by more than 1e-7: the numbers are the model's, not the integrator's.
   LiverBenchmarkOptions halved;
   halved.time_step = 5e-4;
-  const auto fine = fmpc::sim::run_liver_benchmark({controllers[0]}, example_patients(), halved, diagnostics);
+  const auto fine = fmpc::sim::run_liver_benchmark({controllers[0]}, example_patients(), {}, halved, diagnostics);
   REQUIRE(fine);
   for (std::size_t i = 0; i < fine->runs.size(); ++i) {
     CHECK(fine->runs[i].benchmark_displacement.similarity ==

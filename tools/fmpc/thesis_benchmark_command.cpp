@@ -182,14 +182,9 @@ int run_thesis_benchmark(const ThesisBenchmarkOptions& options) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;
   }
-  auto report = sim::run_liver_benchmark(controllers, patients, options.run, diagnostics);
-  for (std::size_t i = 0; report && i < options.moduli.size(); ++i) {
-    auto run = sim::compare_modulus_with_benchmark("constant", "E = " + format_number(options.moduli[i]) + " kPa",
-                                                   options.moduli[i] * 1000.0, report->reference, options.run,
-                                                   diagnostics);
-    if (run) report->runs.push_back(std::move(*run));
-    else report.reset();
-  }
+  std::vector<double> moduli;
+  for (const double kpa : options.moduli) moduli.push_back(kpa * 1000.0);
+  const auto report = sim::run_liver_benchmark(controllers, patients, moduli, options.run, diagnostics);
   if (!report) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;
