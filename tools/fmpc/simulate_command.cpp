@@ -19,7 +19,8 @@
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
-#include "tools/plot/line_plot.h"
+#include "tools/plot/bitmap_font.h"
+#include "tools/plot/heat_map.h"
 #include "tools/plot/png_image.h"
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
 #include "runtime/gpu/gpu_simulation.h"
@@ -47,14 +48,59 @@ std::string six_digits(double value) {
   return text;
 }
 
-// Force (N) against probe displacement (mm).
+// Force (N) against probe displacement (mm): 640 x 480, plot area 480 x 340, ticks from nice_ticks.
 plot::RgbImage render_force_displacement(const std::vector<sim::ProbeCurvePoint>& curve, const std::string& title) {
-  plot::LineSeries series;
+  const int width = 640, height = 480, left = 100, top = 60, plot_width = 500, plot_height = 340;
+  const plot::Rgb white{255, 255, 255}, black{0, 0, 0}, grey{200, 200, 200}, blue{31, 119, 180};
+  plot::RgbImage image(width, height, white);
+  double x_min = 0.0, x_max = 0.0, y_min = 0.0, y_max = 0.0;
   for (const auto& p : curve) {
-    series.x.push_back(p.displacement * 1000.0);
-    series.y.push_back(p.force);
+    x_min = std::min(x_min, p.displacement * 1000.0);
+    x_max = std::max(x_max, p.displacement * 1000.0);
+    y_min = std::min(y_min, p.force);
+    y_max = std::max(y_max, p.force);
   }
-  return plot::render_line_plot({title, "probe displacement (mm)", "probe force (N)", {series}});
+  if (!(x_max > x_min)) x_max = x_min + 1.0;
+  if (!(y_max > y_min)) y_max = y_min + 1.0;
+  const std::vector<double> x_ticks = plot::nice_ticks(x_min, x_max, 6);
+  const std::vector<double> y_ticks = plot::nice_ticks(y_min, y_max, 6);
+  x_min = std::min(x_min, x_ticks.front());
+  x_max = std::max(x_max, x_ticks.back());
+  y_min = std::min(y_min, y_ticks.front());
+  y_max = std::max(y_max, y_ticks.back());
+  const auto px = [&](double x) { return left + static_cast<int>(std::lround((x - x_min) / (x_max - x_min) * plot_width)); };
+  const auto py = [&](double y) {
+    return top + plot_height - static_cast<int>(std::lround((y - y_min) / (y_max - y_min) * plot_height));
+  };
+  for (const double x : x_ticks) {
+    image.fill_rect(px(x), top, 1, plot_height, grey);
+    const std::string label = six_digits(x);
+    plot::draw_text(image, px(x) - plot::text_width(label, 2) / 2, top + plot_height + 8, label, black, 2);
+  }
+  for (const double y : y_ticks) {
+    image.fill_rect(left, py(y), plot_width, 1, grey);
+    const std::string label = six_digits(y);
+    plot::draw_text(image, left - 8 - plot::text_width(label, 2), py(y) - plot::text_height(2) / 2, label, black, 2);
+  }
+  image.fill_rect(left, top, 1, plot_height + 1, black);
+  image.fill_rect(left, top + plot_height, plot_width + 1, 1, black);
+  // Segments drawn densely enough to leave no gaps (one dot per pixel of the longer side), 3 pixels thick.
+  for (std::size_t i = 1; i < curve.size(); ++i) {
+    const double x0 = px(curve[i - 1].displacement * 1000.0), y0 = py(curve[i - 1].force);
+    const double x1 = px(curve[i].displacement * 1000.0), y1 = py(curve[i].force);
+    const int n = std::max(1, static_cast<int>(std::max(std::abs(x1 - x0), std::abs(y1 - y0))));
+    for (int k = 0; k <= n; ++k) {
+      const double t = static_cast<double>(k) / n;
+      image.fill_rect(static_cast<int>(std::lround(x0 + t * (x1 - x0))) - 1,
+                      static_cast<int>(std::lround(y0 + t * (y1 - y0))) - 1, 3, 3, blue);
+    }
+  }
+  const std::string x_label = "probe displacement (mm)", y_label = "probe force (N)";
+  plot::draw_text(image, left + plot_width / 2 - plot::text_width(x_label, 2) / 2, height - 40, x_label, black, 2);
+  plot::draw_text(image, 8, top + plot_height / 2 + plot::text_width(y_label, 2) / 2, y_label, black, 2, true);
+  const int title_scale = plot::text_width(title, 2) <= width - 20 ? 2 : 1;
+  plot::draw_text(image, (width - plot::text_width(title, title_scale)) / 2, 20, title, black, title_scale);
+  return image;
 }
 
 // A progress bar on stderr, drawn only on a terminal and only once the run has taken a second.

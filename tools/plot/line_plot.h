@@ -1,6 +1,8 @@
 #pragma once
-// Curves y(x) on linear axes as a PNG-ready raster: `fmpc simulate`'s force-displacement plot and the thesis
-// benchmark's displacement and velocity against time. Ticks from nice_ticks; the axes always include 0; a legend
+// Curves y(x) on linear axes as a PNG-ready raster: the thesis benchmark's displacement and velocity against time
+// (`fmpc thesis-benchmark --plot`). The axes are those of `fmpc simulate`'s force-displacement plot; the CLI work
+// (worktree wt-cli) is building tools/plot/line_chart for every line chart: when it lands, this file goes and
+// thesis-benchmark draws with it. Ticks from nice_ticks; the axes always include 0; a legend
 // below the axes when there is more than one curve.
 #include <string>
 #include <vector>
