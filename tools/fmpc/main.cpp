@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   fmpc::cli::register_compile_command(app, exit_code);
   fmpc::cli::register_plot_command(app, exit_code);
   fmpc::cli::register_trade_command(app, exit_code);
+  fmpc::cli::register_thesis_benchmark_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
