@@ -1222,6 +1222,8 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
   out.line("inline constexpr unsigned kFlagInputOutOfRange = 2u;");
   out.line("inline constexpr unsigned kFlagNoRuleFired = 4u;   // an output took the no-rule-fired value");
   out.line("inline constexpr unsigned kFlagNoFireError = 8u;   // ... and the policy is `error`: it is NaN");
+  if (system.interval_type2)
+    out.line("inline constexpr unsigned kFlagInternalError = 16u;  // type reduction hit its cap (an fmpc bug): NaN");
   out.line();
   out.line("// min and max of grades, which cannot be NaN here (a NaN input returns first): fmpc_math::nan_min's and");
   out.line("// nan_max's values without their NaN branches.");
