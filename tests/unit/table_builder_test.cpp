@@ -87,7 +87,7 @@ TEST_CASE("refined tables meet --max-error on held-out points and record the wor
   CHECK(table->axes[0].input_name == "service");
   CHECK(table->axes[1].input_index == 1);
   REQUIRE(table->fixed_inputs.size() == 1);
-  CHECK(table->fixed_inputs[0].first == "mood");
+  CHECK(table->fixed_inputs[0].name == "mood");
   DiagnosticList valid;
   CHECK(validate_table(*table, "built", valid));
   // The recorded error is what the table and the interpreter give at the recorded point.
@@ -168,8 +168,9 @@ TEST_CASE("table arrays header holds the axes, counts and values", "[table-build
   LookupTable table;
   table.system_name = "s";
   table.source_path = "s.fis";
-  table.axes.push_back({"x", 0, {0.0, 0.5, 1.0}});
+  table.axes.push_back({"x", "kPa", 0, {0.0, 0.5, 1.0}});
   table.output_names = {"y"};
+  table.output_units = {"Pa"};
   table.values = {1.0, 2.5, 3.0};
   table.max_error = 0.01;
   table.max_error_location = {0.25};
@@ -180,7 +181,11 @@ TEST_CASE("table arrays header holds the axes, counts and values", "[table-build
   CHECK(header.find("inline const double axis0[3] = {\n    0.0, 0.5, 1.0\n};") != std::string::npos);
   CHECK(header.find("inline const double values[3] = {\n    1.0, 2.5, 3.0\n};") != std::string::npos);
   CHECK(header.find("__device__ const int counts[1] = {3};") != std::string::npos);
-  CHECK(header.find("measured maximum error against the interpreter: 0.01 at x = 0.25") != std::string::npos);
+  CHECK(header.find("maximum error against the interpreter (estimate, measured): 0.01, largest at x = 0.25") !=
+        std::string::npos);
+  CHECK(header.find("inline constexpr const char* kAxisUnits[] = {\"kPa\"};") != std::string::npos);
+  CHECK(header.find("inline constexpr const char* kOutputUnits[] = {\"Pa\"};") != std::string::npos);
+  CHECK(header.find("inline constexpr bool kMaxErrorIsBound = false;") != std::string::npos);
   table.value_type = TableValueType::Float32;
   table.values = {0.1, 2.0, 3.0};
   CHECK(write_table_arrays(table, options).find("const float values[3] = {\n    0.10000000149011612f, 2.0f, 3.0f") !=

@@ -369,9 +369,14 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
   table.source_path = options.source_path;
   table.source_hash = options.source_hash;
   table.value_type = options.value_type;
-  for (const Variable& output : system.outputs) table.output_names.push_back(output.name);
-  for (const auto& [index, value] : compiled.fixed)
-    table.fixed_inputs.emplace_back(source.inputs[static_cast<std::size_t>(index)].name, value);
+  for (const Variable& output : system.outputs) {
+    table.output_names.push_back(output.name);
+    table.output_units.push_back(output.unit);
+  }
+  for (const auto& [index, value] : compiled.fixed) {
+    const Variable& input = source.inputs[static_cast<std::size_t>(index)];
+    table.fixed_inputs.push_back(TableFixedInput{input.name, input.unit, value});
+  }
 
   std::vector<std::vector<double>> axes;
   std::vector<bool> refinable;
@@ -379,6 +384,7 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
     const Variable& input = system.inputs[a];
     TableAxis axis;
     axis.input_name = input.name;
+    axis.input_unit = input.unit;
     axis.input_index = static_cast<std::uint32_t>(compiled.source_inputs[a]);
     axis.breakpoints = {input.min, input.max};
     table.axes.push_back(axis);
