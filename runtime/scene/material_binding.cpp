@@ -11,13 +11,33 @@
 namespace fmpc::sim {
 
 std::optional<double> pascals_per_unit(const std::string& unit) {
-  if (unit.empty() || unit == "kPa") return 1000.0;
+  if (unit == "kPa") return 1000.0;
   if (unit == "Pa") return 1.0;
   if (unit == "MPa") return 1e6;
   return std::nullopt;
 }
 
 namespace {
+
+// Pa per unit of the output `name` of `what` ("rules 'liver.fis'", "table 'liver.fzt'") at the scene's `field`
+// (material.rules or material.table): the unit converted, no unit read as kPa with a warning (MATLAB files carry
+// none; the liver rules' unit), any other unit an error.
+std::optional<double> output_unit_scale(const std::string& unit, const std::string& name, const std::string& what,
+                                        const std::string& field, const Scene& scene, DiagnosticList& diagnostics) {
+  if (unit.empty()) {
+    diagnostics.warning(scene.range_of(field), "assumed-unit",
+                        field + ": output '" + name + "' of " + what +
+                            " has no unit (MATLAB .fis files carry none); it is read as Young's modulus in kPa",
+                        {"if it is in Pa or MPa, use a rule file in the fmpc language that says so (fmpc convert "
+                         "--to fmpc, then give the output its unit)"});
+    return 1000.0;
+  }
+  if (const auto scale = pascals_per_unit(unit)) return scale;
+  diagnostics.error(scene.range_of(field), field + ": output '" + name + "' of " + what + " is in '" + unit +
+                                               "'; Young's modulus must be in kPa, Pa or MPa",
+                    {"give the output one of those units in the rule file (and recompile a table)"});
+  return std::nullopt;
+}
 
 bool inside(const SceneBox& box, const Point3& p) {
   for (std::size_t i = 0; i < 3; ++i)
@@ -141,13 +161,9 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
   binding.system = system.name;
   const Variable& output = system.outputs[static_cast<std::size_t>(output_index)];
   binding.output = output.name;
-  const auto scale = pascals_per_unit(output.unit);
-  if (!scale) {
-    diagnostics.error(scene.range_of("material.rules"),
-                      "material.rules: output '" + output.name + "' is in '" + output.unit +
-                          "'; Young's modulus must be in kPa, Pa or MPa (give the output that unit in the rules)");
-    return std::nullopt;
-  }
+  const auto scale = output_unit_scale(output.unit, output.name, "system '" + system.name + "'", "material.rules",
+                                       scene, diagnostics);
+  if (!scale) return std::nullopt;
   binding.pascals_per_output_unit = *scale;
   Interpreter interpreter(system);
   std::vector<bool> warned_range(system.inputs.size(), false);
@@ -206,9 +222,8 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
   return binding;
 }
 
-std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const std::string& output_unit,
-                                          const Scene& scene, const std::vector<Point3>& spring_midpoints,
-                                          DiagnosticList& diagnostics) {
+std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const Scene& scene,
+                                          const std::vector<Point3>& spring_midpoints, DiagnosticList& diagnostics) {
   std::vector<std::string> names;
   for (const TableAxis& axis : table.axes) names.push_back(axis.input_name);
   const auto resolved = resolve_bindings(names, "table '" + table.system_name + "'", scene, diagnostics);
@@ -216,12 +231,11 @@ std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_i
   MaterialBinding binding;
   binding.system = table.system_name;
   binding.output = table.output_names[static_cast<std::size_t>(output_index)];
-  const auto scale = pascals_per_unit(output_unit);
-  if (!scale) {
-    diagnostics.error(scene.range_of("material.table"),
-                      "material.table: the output unit '" + output_unit + "' is not kPa, Pa or MPa");
-    return std::nullopt;
-  }
+  const auto unit = static_cast<std::size_t>(output_index);
+  const auto scale = output_unit_scale(unit < table.output_units.size() ? table.output_units[unit] : std::string(),
+                                       binding.output, "table '" + table.system_name + "'", "material.table", scene,
+                                       diagnostics);
+  if (!scale) return std::nullopt;
   binding.pascals_per_output_unit = *scale;
   std::vector<const double*> breakpoints;
   std::vector<int> counts;

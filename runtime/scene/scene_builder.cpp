@@ -308,7 +308,7 @@ std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const Sim
     if (!table) return std::nullopt;
     const auto output = select_table_output(scene, *table, diagnostics);
     if (!output) return std::nullopt;
-    return bind_table(*table, *output, "kPa", scene, midpoints, diagnostics);
+    return bind_table(*table, *output, scene, midpoints, diagnostics);
   }
   built.sources.emplace_back(scene.material.file, *text);
   DiagnosticList rule_diagnostics;

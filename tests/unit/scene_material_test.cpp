@@ -2,13 +2,19 @@
 // table looked up every step.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "compiler/backend/table/lookup_table.h"
+#include "compiler/backend/table/table_builder.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/rule_file_loader.h"
+#include "compiler/passes/pipeline.h"
 #include "runtime/scene/material_binding.h"
 #include "runtime/scene/scene_builder.h"
+#include "runtime/scene/scene_file.h"
+#include "tests/support/generated_program.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
@@ -138,8 +144,10 @@ rule r1: if x is all then k is c
   scene.material.bindings = {constant("x", 0.5)};
   DiagnosticList unit;
   CHECK_FALSE(bind_rules(wrong_unit, 0, scene, {{0, 0, 0}}, unit));
-  CHECK(messages(unit) == std::vector<std::string>{"material.rules: output 'k' is in 'mm'; Young's modulus must be in "
-                                                   "kPa, Pa or MPa (give the output that unit in the rules)"});
+  CHECK(messages(unit) == std::vector<std::string>{"material.rules: output 'k' of system 's' is in 'mm'; Young's "
+                                                   "modulus must be in kPa, Pa or MPa"});
+  CHECK(unit.items()[0].notes ==
+        std::vector<std::string>{"give the output one of those units in the rule file (and recompile a table)"});
 }
 
 TEST_CASE("a strain binding builds modulus(strain) from the interpreter over the strain axis", "[scene]") {
@@ -213,4 +221,134 @@ TEST_CASE("the CPU backend looks k(strain) up every step", "[scene]") {
   CHECK(messages(refused) ==
         std::vector<std::string>{"the strain stiffness table needs at least 2 strictly increasing finite strains, one "
                                  "finite non-negative modulus per strain and one non-negative factor per spring"});
+}
+
+namespace {
+
+// Issue 11, item 3: stiffness in Pa. A .fzt compiled from such a file was read as kPa (the issue's: E = 8.19 kPa
+// from the rules, 8,206 kPa from the table, and a probe force 1000 times too large).
+const char* kPascalRules = R"(system tissue_pa "Young's modulus in Pa"
+  type mamdani
+input HCV "stiffness" in [0, 75] kPa
+  soft is gauss(mean 5, sd 3)
+  firm is gauss(mean 15, sd 6)
+input HBV "stiffness" in [0, 75] kPa
+  soft is gauss(mean 5, sd 3)
+  firm is gauss(mean 15, sd 6)
+output E "Young's modulus" in [0, 30000] Pa
+  low is gauss(mean 4000, sd 2000)
+  high is gauss(mean 20000, sd 5000)
+rule r1: if HCV is soft and HBV is soft then E is low
+rule r2: if HCV is firm or HBV is firm then E is high
+)";
+
+// The table of `rules` over both inputs at max_error (output units), as `fmpc compile --target table` builds it.
+LookupTable compiled_table(const std::string& rules, double max_error) {
+  const FuzzySystem source = load_system(rules);
+  DiagnosticList diagnostics;
+  PipelineOptions pipeline;
+  const auto compiled = run_pipeline(source, {}, pipeline, diagnostics);
+  REQUIRE(compiled);
+  TableBuildOptions options;
+  options.max_error = max_error;
+  options.source_path = "rules.fis";
+  const auto table = build_table(source, *compiled, options, diagnostics);
+  INFO((diagnostics.empty() ? std::string() : diagnostics.items().front().message));
+  REQUIRE(table);
+  return *table;
+}
+
+std::optional<BuiltScene> build_material_scene(const std::filesystem::path& folder, const std::string& material,
+                                               DiagnosticList& diagnostics) {
+  const std::string path = (folder / "scene.yaml").string();
+  const std::string text = "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [2, 2, 2]}}\nmaterial:\n  " + material +
+                           "\n  inputs: {HCV: 9.7, HBV: 7.8}\nfixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\n"
+                           "backend: cpu\n";
+  testing::write_text_file(path, text);
+  const auto scene = parse_scene(path, text, diagnostics);
+  REQUIRE(scene);
+  return build_scene(*scene, diagnostics);
+}
+
+}  // namespace
+
+TEST_CASE("a rule file in Pa gives the same E as material.rules and as a compiled .fzt", "[scene][units]") {
+  testing::ScratchFolder folder("pascal_table");
+  testing::write_text_file(folder.path() / "tissue_pa.fis", kPascalRules);
+  const LookupTable table = compiled_table(kPascalRules, 100.0);  // 100 Pa
+  REQUIRE(table.output_units == std::vector<std::string>{"Pa"});
+  REQUIRE(table.axes[0].input_unit == "kPa");
+  testing::write_text_file(folder.path() / "tissue_pa.fzt", serialize_fzt(table));
+
+  DiagnosticList from_rules, from_table;
+  const auto rules = build_material_scene(folder.path(), "rules: tissue_pa.fis", from_rules);
+  const auto tabled = build_material_scene(folder.path(), "table: tissue_pa.fzt", from_table);
+  REQUIRE(rules);
+  REQUIRE(tabled);
+  CHECK(from_rules.empty());
+  CHECK(from_table.empty());
+  const double expected = evaluate(load_system(kPascalRules), {9.7, 7.8}).outputs[0];  // Pa
+  REQUIRE_FALSE(rules->material->modulus_per_spring.empty());
+  for (std::size_t s = 0; s < rules->material->modulus_per_spring.size(); ++s) {
+    CHECK(rules->material->modulus_per_spring[s] == Approx(expected).epsilon(1e-12));
+    CHECK(std::fabs(tabled->material->modulus_per_spring[s] - expected) <= table.max_error);
+  }
+}
+
+TEST_CASE("table and rule outputs without a unit are read as kPa with one warning; other units are refused",
+          "[scene][units]") {
+  testing::ScratchFolder folder("unit_less_table");
+  // MATLAB's format: no units anywhere.
+  const std::string matlab = R"([System]
+Name='tissue'
+Type='sugeno'
+NumInputs=2
+NumOutputs=1
+NumRules=1
+[Input1]
+Name='HCV'
+Range=[0 75]
+NumMFs=1
+MF1='any':'gaussmf',[100 10]
+[Input2]
+Name='HBV'
+Range=[0 75]
+NumMFs=1
+MF1='any':'gaussmf',[100 10]
+[Output1]
+Name='E'
+Range=[0 75]
+NumMFs=1
+MF1='model':'linear',[0.5 0.5 0]
+[Rules]
+1 1, 1 (1) : 1
+)";
+  testing::write_text_file(folder.path() / "tissue.fis", matlab);
+  LookupTable table = compiled_table(matlab, 0.01);
+  REQUIRE(table.output_units == std::vector<std::string>{""});
+  testing::write_text_file(folder.path() / "tissue.fzt", serialize_fzt(table));
+  for (const std::string& material : {std::string("rules: tissue.fis"), std::string("table: tissue.fzt")}) {
+    DiagnosticList diagnostics;
+    const auto built = build_material_scene(folder.path(), material, diagnostics);
+    INFO(material);
+    REQUIRE(built);
+    REQUIRE(diagnostics.items().size() == 1);
+    const Diagnostic& warning = diagnostics.items()[0];
+    CHECK(warning.severity == Severity::Warning);
+    const std::string field = material.substr(0, material.find(':'));
+    CHECK(warning.message == "material." + field + ": output 'E' of " +
+                                 (field == "rules" ? "system" : "table") +
+                                 " 'tissue' has no unit (MATLAB .fis files carry none); it is read as Young's "
+                                 "modulus in kPa");
+    CHECK(warning.range.line == 3);  // the scene's `material.rules` / `material.table` line
+    CHECK(built->material->modulus_per_spring[0] == Approx((9.7 + 7.8) / 2 * 1000).epsilon(1e-9));
+  }
+  table.output_units = {"mm"};
+  testing::write_text_file(folder.path() / "tissue.fzt", serialize_fzt(table));
+  DiagnosticList refused;
+  CHECK_FALSE(build_material_scene(folder.path(), "table: tissue.fzt", refused));
+  REQUIRE(refused.items().size() == 1);
+  CHECK(refused.items()[0].message ==
+        "material.table: output 'E' of table 'tissue' is in 'mm'; Young's modulus must be in kPa, Pa or MPa");
+  CHECK(refused.items()[0].range.line == 3);
 }
