@@ -223,6 +223,10 @@ bool validate_table(const LookupTable& table, const std::string& origin, Diagnos
   return true;
 }
 
+bool has_fzt_signature(const std::string& bytes) {
+  return bytes.size() >= sizeof kMagic && std::memcmp(bytes.data(), kMagic, sizeof kMagic) == 0;
+}
+
 std::string serialize_fzt(const LookupTable& table) {
   ByteWriter w;
   w.raw(kMagic, sizeof kMagic);
@@ -270,7 +274,7 @@ std::string serialize_fzt(const LookupTable& table) {
 std::optional<LookupTable> parse_fzt(const std::string& path, const std::string& bytes, DiagnosticList& diagnostics) {
   const SourceRange where = file_position(path);
   const std::string rebuild = "rebuild it with fmpc compile --target table";
-  if (bytes.size() < sizeof kMagic || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) {
+  if (!has_fzt_signature(bytes)) {
     diagnostics.error(where, "not an .fzt lookup table (the file does not start with the FMPCFZT signature)",
                       {"fmpc compile --target table writes .fzt files"});
     return std::nullopt;

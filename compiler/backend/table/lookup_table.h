@@ -84,6 +84,9 @@ bool validate_table(const LookupTable& table, const std::string& origin, Diagnos
 
 std::string serialize_fzt(const LookupTable& table);
 
+// Whether `bytes` start with the .fzt signature (a table, not a rule file: the CLI tells them apart by this).
+bool has_fzt_signature(const std::string& bytes);
+
 // Parses and validates `bytes` (the contents of `path`). Every read is bounds-checked; a truncated, corrupted,
 // wrong-version, wrong-endian or hostile file gives nullopt and an error naming the field and what to do.
 std::optional<LookupTable> parse_fzt(const std::string& path, const std::string& bytes, DiagnosticList& diagnostics);
