@@ -924,8 +924,27 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
   if (!limitation && !std::isfinite(compiled.error_bound()))
     limitation = std::string("the passes' error has no known bound");
   stats.bound_limitation = limitation.value_or("");
+  // The training points' error is a lower bound of any bound: where refinement stopped above the target, say so.
+  const auto unreachable = [&]() {
+    diagnostics.error(where,
+                      std::string(training.only_fixed_axes ? "cannot refine the grid to reach" : "cannot reach") +
+                          " --max-error " + format_number(options.max_error) + " within " +
+                          std::to_string(options.max_grid_points) + " grid points: the grid reached " +
+                          counts_text(axes) + " with a maximum error of " +
+                          format_number(training.measured.max_error) + " at " +
+                          point_text(table, training.points.point(training.measured.worst)),
+                      {training.only_fixed_axes
+                           ? "the error lies along axes whose point count is fixed (--vary NAME:points): give "
+                             "them more points or leave the count out"
+                           : "raise --max-grid-points or --max-error, fix more inputs (--fix NAME=VALUE), or use "
+                             "--target cpp for an evaluator without interpolation error"});
+  };
   if (!limitation) {
     if (!refine_by_training()) return std::nullopt;
+    if (training.measured.max_error > options.max_error) {
+      unreachable();
+      return std::nullopt;
+    }
     // The interpreter's own rounding, against which the table is stated: far below any target that matters.
     double range = 0.0;
     for (const Variable& output : system.outputs) range = std::max(range, output.max - output.min);
@@ -993,18 +1012,7 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
   for (;;) {
     if (!refine_by_training()) return std::nullopt;
     if (training.measured.max_error > options.max_error) {  // the budget (or fixed counts) stopped refinement
-      diagnostics.error(where,
-                        std::string(training.only_fixed_axes ? "cannot refine the grid to reach" : "cannot reach") +
-                            " --max-error " + format_number(options.max_error) + " within " +
-                            std::to_string(options.max_grid_points) + " grid points: the grid reached " +
-                            counts_text(axes) + " with a maximum error of " +
-                            format_number(training.measured.max_error) + " at " +
-                            point_text(table, training.points.point(training.measured.worst)),
-                        {training.only_fixed_axes
-                             ? "the error lies along axes whose point count is fixed (--vary NAME:points): give "
-                               "them more points or leave the count out"
-                             : "raise --max-grid-points or --max-error, fix more inputs (--fix NAME=VALUE), or use "
-                               "--target cpp for an evaluator without interpolation error"});
+      unreachable();
       return std::nullopt;
     }
     const PointSet held_out = draw_points(table, held_out_seed++, options.held_out_points, evaluators, threads);
