@@ -17,6 +17,7 @@
 #include "compiler/backend/table/table_builder.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/rule_file_loader.h"
+#include "diagnostics/number_format.h"
 
 namespace {
 
@@ -309,23 +310,56 @@ TEST_CASE("an unreachable --max-error stops at the grid budget with what was rea
   DiagnosticList diagnostics;
   CHECK_FALSE(build_table(source, compiled, options, diagnostics));
   REQUIRE(diagnostics.error_count() == 1);
+  // The training points' measured error already exceeds the target at the budget: said before any bounding.
   const std::string& message = diagnostics.items()[0].message;
-  CHECK(message.find("cannot bound the table's error below --max-error 1e-06 within 2000 grid points") !=
-        std::string::npos);
-  CHECK(message.find("its error bound is") != std::string::npos);
+  CHECK(message.find("cannot reach --max-error 1e-06 within 2000 grid points") != std::string::npos);
+  CHECK(message.find("with a maximum error of") != std::string::npos);
+
+  // Where the few training points are met but no grid within the budget bounds every cell below the target.
+  options.max_error = 1e-3;
+  options.training_points = 5;
+  DiagnosticList bound_budget;
+  CHECK_FALSE(build_table(source, compiled, options, bound_budget));
+  REQUIRE(bound_budget.error_count() == 1);
+  CHECK(bound_budget.items()[0].message.find(
+            "cannot bound the table's error below --max-error 0.001 within 2000 grid points") != std::string::npos);
+  CHECK(bound_budget.items()[0].message.find("its error bound is") != std::string::npos);
 
   // When the error lies along an axis whose count is fixed, refining the others does not help: say so at once.
   const CompileResult coarse = compile(source, Bindings{{{"mood", 1.0, {}}}, {{"food", 3, {}}}});
   DiagnosticList fixed_axis;
   CHECK_FALSE(build_table(source, coarse, fast_options(0.05), fixed_axis));
   REQUIRE(fixed_axis.error_count() == 1);
-  CHECK(fixed_axis.items()[0].message.find("by refining the automatic axes") != std::string::npos);
+  CHECK(fixed_axis.items()[0].message.find("cannot refine the grid to reach") != std::string::npos);
   CHECK(fixed_axis.items()[0].notes[0].find("--vary NAME:points") != std::string::npos);
 
   options.max_error = -1.0;
   DiagnosticList negative;
   CHECK_FALSE(build_table(source, compiled, options, negative));
   CHECK(negative.items()[0].message.find("positive") != std::string::npos);
+}
+
+TEST_CASE("a --max-error below what rounding lets a table reach is refused at once, naming the floor",
+          "[table-builder]") {
+  // Before this check, --max-error 1e-300 refined for more than a minute before the budget stopped it.
+  const FuzzySystem source = tipper();
+  const CompileResult compiled = compile(source, Bindings{});
+  for (const TableValueType type : {TableValueType::Float64, TableValueType::Float32}) {
+    const double floor = reachable_error_floor(compiled, type);
+    // tipper's output is [0, 30]: the interpreter's 1e-12 of the range, plus half an ulp of 30 in the value type.
+    CHECK(floor == 30.0 * (type == TableValueType::Float32 ? 0x1.0p-24 : 0x1.0p-53) + 30e-12);
+    for (const double target : {1e-300, 4.9e-324, floor}) {
+      TableBuildOptions options = fast_options(target);
+      options.value_type = type;
+      TableBuildStatistics stats;
+      DiagnosticList diagnostics;
+      CHECK_FALSE(build_table(source, compiled, options, diagnostics, &stats));
+      REQUIRE(diagnostics.error_count() == 1);
+      CHECK(diagnostics.items()[0].range.file == "command line");
+      CHECK(diagnostics.items()[0].message.find("its floor is " + format_number(floor)) != std::string::npos);
+      CHECK(stats.rounds == 0);  // nothing evaluated
+    }
+  }
 }
 
 TEST_CASE("table arrays header holds the axes, counts and values", "[table-builder]") {

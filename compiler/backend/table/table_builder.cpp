@@ -833,6 +833,17 @@ Estimate estimate_error(const LookupTable& table, const PointSet& held_out, Eval
 
 }  // namespace
 
+double reachable_error_floor(const CompileResult& compiled, TableValueType value_type) {
+  double largest = 0.0, range = 0.0;
+  for (const Variable& output : compiled.system.outputs) {
+    largest = std::max({largest, std::fabs(output.min), std::fabs(output.max)});
+    range = std::max(range, output.max - output.min);
+  }
+  const double unit_roundoff = value_type == TableValueType::Float32 ? 0x1.0p-24 : 0x1.0p-53;
+  const double passes = std::isfinite(compiled.error_bound()) ? compiled.error_bound() : 0.0;
+  return unit_roundoff * largest + 1e-12 * range + passes;
+}
+
 std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileResult& compiled,
                                        const TableBuildOptions& options, DiagnosticList& diagnostics,
                                        TableBuildStatistics* statistics) {
@@ -840,8 +851,23 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
   TableBuildStatistics& stats = statistics ? *statistics : local;
   const FuzzySystem& system = compiled.system;
   const SourceRange where{options.source_path, 0, 0, 0, 0};
+  const SourceRange command_line{"command line", 0, 0, 0, 0};
   if (!(options.max_error > 0.0) || !std::isfinite(options.max_error)) {
-    diagnostics.error(where, "--max-error must be a positive number, not " + format_number(options.max_error));
+    diagnostics.error(command_line, "--max-error must be a positive number, not " + format_number(options.max_error));
+    return std::nullopt;
+  }
+  if (const double floor = reachable_error_floor(compiled, options.value_type); options.max_error <= floor) {
+    diagnostics.error(command_line,
+                      "--max-error " + format_number(options.max_error) + " is below what a table of '" +
+                          system.name + "' can reach: its floor is " + format_number(floor),
+                      {"the floor is the rounding of the stored " +
+                           std::string(options.value_type == TableValueType::Float32 ? "float" : "double") +
+                           " values plus the interpreter's own rounding (1e-12 of the output range)" +
+                           (std::isfinite(compiled.error_bound()) && compiled.error_bound() > 0.0
+                                ? " and the passes' error bound"
+                                : "") +
+                           "; give --max-error above it, or use --target cpp for an evaluator without "
+                           "interpolation error"});
     return std::nullopt;
   }
   if (system.inputs.empty() || system.inputs.size() > static_cast<std::size_t>(kMaxTableAxes)) {

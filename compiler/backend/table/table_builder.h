@@ -61,6 +61,12 @@ struct TableBuildStatistics {
   std::size_t local_searches = 0;
 };
 
+// The smallest maximum error a table of `compiled` can state: the stored values' rounding (half an ulp of the
+// value type at the largest |output|), the interpreter's own rounding against which the table is measured (1e-12
+// of the widest output range) and the passes' error bound where it is finite. A --max-error at or below it is
+// refused before anything is evaluated (docs/compiler.md, "Error statement").
+double reachable_error_floor(const CompileResult& compiled, TableValueType value_type);
+
 // The table, with its error statement (max_error, error_kind, max_error_location); nullopt with an error when the
 // target is unreachable within the budget or an output is not finite somewhere (policy `error`). Throws what the
 // interpreter throws (an internal error), from any of its threads.
