@@ -13,7 +13,8 @@
 #               bench/sim (CPU threads vs CUDA float/double, graphs on/off, 1k..1M springs, batch of scenes)
 #   scenes      the carried fmpc (built here with CUDA, statically linked: --prepare copies $FMPC to
 #               build-gpu-carry/bin/fmpc) runs the README's demo scene with backend auto (CUDA) and cpu, and SOFA's
-#               liver scenes (implicit Euler) on CUDA and on the CPU; outputs under $OUT/scenes, compared in summary
+#               liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as liver-CUDA.scn) on CUDA and
+#               on the CPU; outputs under $OUT/scenes, compared in summary
 #   evaluator   bench/gpu/evaluator_gpu_bench.cu (nvcc alone): the generated CUDA evaluators (type-1 and interval
 #               type-2, float and double) and table lookups (2-D double and float; 5-D double and float at 9^5,
 #               7^5, 5^5; each in the grid and the sector-packed layout) on the liver rule base, each checked
@@ -25,7 +26,9 @@
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
 # device.txt, summary.md. Options: --skip-sanitizers, --quick (shorter benchmark), --evaluator-only (that section
-# alone: no CMake build). Exit status: 0 when every step passed.
+# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, evaluator; the build
+# runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses it). Exit status: 0
+# when every step passed.
 set -u -o pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -120,14 +123,31 @@ fi
 SKIP_SANITIZERS=0
 QUICK=0
 EVALUATOR_ONLY=0
-for arg in "$@"; do
-  case "$arg" in
+ONLY="tests,sanitizers,bench,scenes,evaluator"
+usage="usage: bash bench/run_gpu.sh [--prepare | --skip-sanitizers | --quick | --evaluator-only | --only LIST]"
+while [[ $# -gt 0 ]]; do
+  case "$1" in
     --skip-sanitizers) SKIP_SANITIZERS=1 ;;
     --quick) QUICK=1 ;;
     --evaluator-only) EVALUATOR_ONLY=1 ;;
-    *) echo "usage: bash bench/run_gpu.sh [--prepare | --skip-sanitizers | --quick | --evaluator-only]" >&2; exit 2 ;;
+    --only)
+      [[ $# -ge 2 ]] || { echo "$usage" >&2; exit 2; }
+      ONLY="$2"
+      shift
+      for part in ${ONLY//,/ }; do
+        case "$part" in
+          tests | sanitizers | bench | scenes | evaluator) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator)" >&2; exit 2 ;;
+        esac
+      done
+      ;;
+    *) echo "$usage" >&2; exit 2 ;;
   esac
+  shift
 done
+# wanted PART: whether --only asked for it.
+wanted() { [[ ",$ONLY," == *",$1,"* ]]; }
+[[ $EVALUATOR_ONLY -eq 1 ]] && ONLY="evaluator"
 
 OUT="${OUT:-$ROOT/out/gpu}"
 mkdir -p "$OUT"
@@ -185,6 +205,7 @@ build_section() {
 }
 
 simulator_section() {
+  if wanted tests; then
   section "simulator: GPU tests"
   (cd "$BUILD" && ctest -L gpu --output-on-failure -V) > "$OUT/gpu_tests.log" 2>&1
   local status=$?
@@ -192,7 +213,9 @@ simulator_section() {
     | sed -E 's/^[0-9]+: *//' | tee -a "$SUMMARY"
   grep -q 'SKIPPED: ' "$OUT/gpu_tests.log" && fail "GPU tests skipped: no usable CUDA device"
   [[ $status -eq 0 ]] || fail "ctest -L gpu (see gpu_tests.log)"
+  fi
 
+  if wanted sanitizers; then
   section "simulator: compute-sanitizer"
   if [[ $SKIP_SANITIZERS -eq 1 ]]; then
     record "skipped (--skip-sanitizers)"
@@ -220,7 +243,9 @@ simulator_section() {
       done
     fi
   fi
+  fi
 
+  wanted bench || return 0
   section "simulator: benchmark"
   local args=(--out "$OUT")
   [[ $QUICK -eq 1 ]] && args+=(--quick)
@@ -264,7 +289,7 @@ scenes_section() {
     mkdir -p "$ROOT/../shared/data/sofa-liver" && cp "$CARRY/sofa-liver/liver.msh" "$ROOT/../shared/data/sofa-liver/"
   fi
   local sofa
-  for sofa in sofa_liver_springs sofa_liver_fuzzy; do
+  for sofa in sofa_liver_springs sofa_liver_fuzzy sofa_liver_fem; do
     if [[ -f "$ROOT/../shared/data/sofa-liver/liver.msh" ]]; then
       run_scene "$ROOT/rulesets/scenes/$sofa.yaml" cuda "${sofa}_cuda" || fail "$sofa on CUDA (see scenes/${sofa}_cuda.log)"
       run_scene "$ROOT/rulesets/scenes/$sofa.yaml" cpu "${sofa}_cpu" || fail "$sofa on the CPU (see scenes/${sofa}_cpu.log)"
@@ -272,13 +297,14 @@ scenes_section() {
       record "$sofa: skipped (no liver.msh)"
     fi
   done
-  record "| run | backend | steps | wall s | steps/s | max displacement m | probe force N | files |"
-  record "| --- | --- | --- | --- | --- | --- | --- | --- |"
+  record "| run | backend | model | steps | wall s | steps/s | max displacement m | probe force N | inverted | files |"
+  record "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
   local run
-  for run in demo_auto demo_cpu sofa_liver_springs_cuda sofa_liver_springs_cpu sofa_liver_fuzzy_cuda sofa_liver_fuzzy_cpu; do
+  for run in demo_auto demo_cpu sofa_liver_springs_cuda sofa_liver_springs_cpu sofa_liver_fuzzy_cuda sofa_liver_fuzzy_cpu \
+      sofa_liver_fem_cuda sofa_liver_fem_cpu; do
     local summary="$OUT/scenes/$run/summary.json"
     [[ -f "$summary" ]] || continue
-    record "| $run | $(json_field "$summary" backend) | $(json_field "$summary" steps) | $(json_field "$summary" wall_time_s) | $(json_field "$summary" steps_per_second) | $(json_field "$summary" max_displacement_m) | $(json_field "$summary" final_force_N) | $(cat "$OUT/scenes/$run/file_count.txt") |"
+    record "| $run | $(json_field "$summary" backend) | $(json_field "$summary" model) | $(json_field "$summary" steps) | $(json_field "$summary" wall_time_s) | $(json_field "$summary" steps_per_second) | $(json_field "$summary" max_displacement_m) | $(json_field "$summary" final_force_N) | $(json_field "$summary" inverted_elements) | $(cat "$OUT/scenes/$run/file_count.txt") |"
   done
   [[ -f "$OUT/scenes/demo_auto/force_displacement.png" ]] || fail "the CUDA demo wrote no force_displacement.png"
 }
@@ -332,13 +358,13 @@ evaluator_section() {
 }
 
 device_info
-if [[ $EVALUATOR_ONLY -eq 0 ]]; then
+if wanted tests || wanted sanitizers || wanted bench; then
   if build_section; then
     simulator_section
   fi
-  scenes_section
 fi
-evaluator_section
+wanted scenes && scenes_section
+wanted evaluator && evaluator_section
 
 echo
 echo "================ summary ($OUT/summary.md)"

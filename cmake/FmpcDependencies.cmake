@@ -15,6 +15,16 @@ endif()
 
 # antlr4-runtime's config exports no include directory for its targets.
 find_path(FMPC_ANTLR4_INCLUDE_DIR antlr4-runtime.h PATH_SUFFIXES antlr4-runtime REQUIRED)
+# Clang (the fuzzing and sanitizer build) rejects one header the umbrella antlr4-runtime.h pulls in: 4.9's
+# misc/InterpreterDataReader.h default-constructs a Vocabulary whose const members clang will not default-initialise.
+# fmpc never uses it, so clang builds get a copy of the umbrella header without that line, found first.
+set(FMPC_ANTLR4_INCLUDE_DIRS ${FMPC_ANTLR4_INCLUDE_DIR})
+if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+  file(READ ${FMPC_ANTLR4_INCLUDE_DIR}/antlr4-runtime.h fmpc_antlr4_umbrella)
+  string(REPLACE "#include \"misc/InterpreterDataReader.h\"" "" fmpc_antlr4_umbrella "${fmpc_antlr4_umbrella}")
+  file(WRITE ${PROJECT_BINARY_DIR}/antlr4-for-clang/antlr4-runtime.h "${fmpc_antlr4_umbrella}")
+  set(FMPC_ANTLR4_INCLUDE_DIRS ${PROJECT_BINARY_DIR}/antlr4-for-clang ${FMPC_ANTLR4_INCLUDE_DIR})
+endif()
 
 # zlib deflates the PNG figures of `fmpc plot` (tools/plot/png_image.cpp); static, like the rest.
 set(ZLIB_USE_STATIC_LIBS ON)

@@ -1,15 +1,21 @@
 #pragma once
 // Per-vertex pieces of the integrators, shared by the CPU loops and the CUDA kernels.
 #include "kernels/fmpc_hd.h"
+#include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 
 namespace fmpc::kernels {
+
+// Which axes of a vertex are held (bit a: axis a), as SOFA's FixedConstraint (all three) and
+// PartialFixedConstraint (some: a vertex sliding on a plane) do.
+constexpr unsigned char kAllAxesFixed = 7;
+FMPC_HD bool axis_fixed(unsigned char mask, int axis) { return ((mask >> axis) & 1u) != 0u; }
 
 // Loads that are the same for every vertex (per-vertex external forces are an optional array).
 template <typename Real>
 struct VertexLoads {
   const Real* mass;
-  const unsigned char* fixed;  // 1 = the vertex does not move
+  const unsigned char* fixed;  // held axes per vertex (kAllAxesFixed: the vertex does not move)
   const Real* rest_x;          // reference position x0 for the nodal damping gamma0 + gamma1 |x - x0|
   const Real* rest_y;
   const Real* rest_z;
@@ -18,19 +24,21 @@ struct VertexLoads {
   const Real* force_z;
   Real gravity_x, gravity_y, gravity_z;
   Real gamma0, gamma1;  // nodal damping (Basafa-Farahmand), N s/m and N s/m^2
+  Real mass_damping;    // Rayleigh's mass-proportional alpha (1/s): force -alpha m v
 };
 
-// Acceleration of vertex v: (sum of spring forces + external force - (gamma0 + gamma1 |x - x0|) v) / m + g;
-// zero for fixed vertices.
-template <typename Real>
-FMPC_HD void vertex_acceleration(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s,
-                                 const VertexLoads<Real>& loads, Real& ax, Real& ay, Real& az) {
-  if (loads.fixed[v]) {
+// Acceleration of vertex v: (internal forces of the model + external force - (gamma0 + gamma1 |x - x0|) v
+// - alpha m v) / m + g; zero along held axes. `forces` is one of the structs of kernels/internal_force_math.h.
+template <typename Real, typename Forces>
+FMPC_HD void vertex_acceleration(int v, const Forces& forces, const StateView<Real>& s, const VertexLoads<Real>& loads,
+                                 Real& ax, Real& ay, Real& az) {
+  const unsigned char held = loads.fixed[v];
+  if (held == kAllAxesFixed) {
     ax = ay = az = Real(0);
     return;
   }
   Real fx, fy, fz;
-  gather_spring_force(v, net, s, fx, fy, fz);
+  forces.gather(v, s, fx, fy, fz);
   if (loads.force_x) {
     fx += loads.force_x[v];
     fy += loads.force_y[v];
@@ -43,10 +51,16 @@ FMPC_HD void vertex_acceleration(int v, const SpringNetworkView<Real>& net, cons
     fy -= gamma * s.vy[v];
     fz -= gamma * s.vz[v];
   }
+  if (loads.mass_damping != Real(0)) {
+    const Real drag = loads.mass_damping * loads.mass[v];
+    fx -= drag * s.vx[v];
+    fy -= drag * s.vy[v];
+    fz -= drag * s.vz[v];
+  }
   const Real inverse_mass = Real(1) / loads.mass[v];
-  ax = fx * inverse_mass + loads.gravity_x;
-  ay = fy * inverse_mass + loads.gravity_y;
-  az = fz * inverse_mass + loads.gravity_z;
+  ax = axis_fixed(held, 0) ? Real(0) : fx * inverse_mass + loads.gravity_x;
+  ay = axis_fixed(held, 1) ? Real(0) : fy * inverse_mass + loads.gravity_y;
+  az = axis_fixed(held, 2) ? Real(0) : fz * inverse_mass + loads.gravity_z;
 }
 
 // Forward (explicit) Euler, the thesis's scheme: x1 = x0 + h v0, v1 = v0 + h a(x0, v0).

@@ -1,6 +1,6 @@
 #pragma once
 // Spring laws and the per-vertex force gather, shared by the CPU loops (runtime/integrate) and the CUDA kernels
-// (kernels/spring_step.cu). Everything is FMPC_HD, templated on the real type (float or double), and sums in the
+// (kernels/simulation_step.cu). Everything is FMPC_HD, templated on the real type (float or double), and sums in the
 // CSR order of the adjacency, so every backend adds the same terms in the same order.
 #include "kernels/fmpc_hd.h"
 
@@ -23,6 +23,37 @@ FMPC_HD double square_root(double value) {
   return sqrt(value);
 #else
   return std::sqrt(value);
+#endif
+}
+
+// value = fraction 2^exponent with |fraction| in [0.5, 1) (frexp), and its exact inverse scaling (ldexp): powers of
+// two rescale without rounding, so the host and the device agree bit for bit.
+FMPC_HD float fraction_and_exponent(float value, int& exponent) {
+#if defined(__CUDACC__)
+  return frexpf(value, &exponent);
+#else
+  return std::frexp(value, &exponent);
+#endif
+}
+FMPC_HD double fraction_and_exponent(double value, int& exponent) {
+#if defined(__CUDACC__)
+  return frexp(value, &exponent);
+#else
+  return std::frexp(value, &exponent);
+#endif
+}
+FMPC_HD float scale_by_power_of_two(float value, int exponent) {
+#if defined(__CUDACC__)
+  return ldexpf(value, exponent);
+#else
+  return std::ldexp(value, exponent);
+#endif
+}
+FMPC_HD double scale_by_power_of_two(double value, int exponent) {
+#if defined(__CUDACC__)
+  return ldexp(value, exponent);
+#else
+  return std::ldexp(value, exponent);
 #endif
 }
 

@@ -7,8 +7,10 @@
 
 #include "FmpcLexer.h"
 #include "FmpcParser.h"
+#include "grammar/parse_depth_limit.h"
 #include "antlr4-runtime.h"
 #include "compiler/frontend/fmpc_ast.h"
+#include "compiler/frontend/utf8.h"
 
 namespace fmpc::ast {
 
@@ -16,25 +18,6 @@ namespace {
 
 using grammar::FmpcLexer;
 using grammar::FmpcParser;
-
-// Byte offset of the first invalid UTF-8 sequence, or npos.
-std::size_t first_invalid_utf8(const std::string& text) {
-  std::size_t i = 0;
-  while (i < text.size()) {
-    const auto lead = static_cast<unsigned char>(text[i]);
-    std::size_t length = 0;
-    if (lead < 0x80) length = 1;
-    else if ((lead & 0xE0) == 0xC0 && lead >= 0xC2) length = 2;
-    else if ((lead & 0xF0) == 0xE0) length = 3;
-    else if ((lead & 0xF8) == 0xF0 && lead <= 0xF4) length = 4;
-    else return i;
-    if (i + length > text.size()) return i;
-    for (std::size_t k = 1; k < length; ++k)
-      if ((static_cast<unsigned char>(text[i + k]) & 0xC0) != 0x80) return i;
-    i += length;
-  }
-  return std::string::npos;
-}
 
 // ANTLR indexes code points; SourceRange columns count bytes. This maps one to the other.
 class SourceMap {
@@ -732,7 +715,11 @@ std::optional<File> parse_fmpc(const std::string& path, const std::string& text,
   FmpcParser parser(&tokens);
   parser.removeErrorListeners();
   parser.setErrorHandler(std::make_shared<FmpcErrorStrategy>(source, syntax));
-  FmpcParser::FileContext* tree = parser.file();
+  // Fmpc.g4 is flat (a file is a list of items, a rule a list of clauses), so no text nests deeply; the limit
+  // stays as a guard should the grammar ever gain a recursive rule.
+  const antlr4::Token* too_deep = nullptr;
+  FmpcParser::FileContext* tree = grammar::parse_file_within_depth_limit(parser, &too_deep);
+  if (!tree) syntax.error(source.token(too_deep), grammar::parse_depth_message());
 
   if (syntax.has_errors()) {
     syntax.sort_by_position();

@@ -12,8 +12,10 @@
 
 #include "MatlabFisLexer.h"
 #include "MatlabFisParser.h"
+#include "grammar/parse_depth_limit.h"
 #include "antlr4-runtime.h"
 #include "compiler/frontend/matlab_fis.h"
+#include "compiler/frontend/utf8.h"
 #include "diagnostics/number_format.h"
 
 namespace fmpc {
@@ -151,25 +153,6 @@ class SyntaxErrorCollector : public antlr4::BaseErrorListener {
   int count_ = 0;
   std::size_t last_line_ = 0;
 };
-
-// First invalid UTF-8 byte offset, if any (ANTLR's input stream cannot take invalid UTF-8).
-std::optional<std::size_t> invalid_utf8_offset(const std::string& text) {
-  std::size_t i = 0;
-  while (i < text.size()) {
-    const auto byte = static_cast<unsigned char>(text[i]);
-    std::size_t length = 0;
-    if (byte < 0x80U) length = 1;
-    else if ((byte & 0xE0U) == 0xC0U && byte >= 0xC2U) length = 2;
-    else if ((byte & 0xF0U) == 0xE0U) length = 3;
-    else if ((byte & 0xF8U) == 0xF0U && byte <= 0xF4U) length = 4;
-    else return i;
-    if (i + length > text.size()) return i;
-    for (std::size_t k = 1; k < length; ++k)
-      if ((static_cast<unsigned char>(text[i + k]) & 0xC0U) != 0x80U) return i;
-    i += length;
-  }
-  return std::nullopt;
-}
 
 std::string unquote(const std::string& quoted) {
   std::string text;
@@ -954,12 +937,12 @@ RuleFile read_matlab_fis(const std::string& path, const std::string& text, Diagn
   RuleFile file;
   file.path = path;
 
-  if (const std::optional<std::size_t> bad = invalid_utf8_offset(text)) {
+  if (const std::size_t bad_byte = first_invalid_utf8(text); bad_byte != std::string::npos) {
     SourceRange range;
     range.file = path;
-    range.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(*bad), '\n'));
-    const std::size_t line_start = text.rfind('\n', *bad == 0 ? 0 : *bad - 1);
-    range.column = static_cast<int>(*bad - (line_start == std::string::npos || *bad == 0 ? 0 : line_start + 1)) + 1;
+    range.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(bad_byte), '\n'));
+    const std::size_t line_start = text.rfind('\n', bad_byte == 0 ? 0 : bad_byte - 1);
+    range.column = static_cast<int>(bad_byte - (line_start == std::string::npos || bad_byte == 0 ? 0 : line_start + 1)) + 1;
     range.end_line = range.line;
     range.end_column = range.column + 1;
     diagnostics.error(range, "the file is not valid UTF-8 here", {"save the file as UTF-8"});
@@ -979,7 +962,13 @@ RuleFile read_matlab_fis(const std::string& path, const std::string& text, Diagn
   MatlabFisParser parser(&tokens);
   parser.removeErrorListeners();
   parser.addErrorListener(&errors);
-  MatlabFisParser::FileContext* tree = parser.file();
+  const antlr4::Token* too_deep = nullptr;
+  MatlabFisParser::FileContext* tree = grammar::parse_file_within_depth_limit(parser, &too_deep);
+  if (!tree) {
+    diagnostics.error(positions.token(too_deep), grammar::parse_depth_message(),
+                      {"nesting is limited so that the parser cannot run off the end of its stack"});
+    return file;
+  }
   // A tree repaired by error recovery has missing children; only a clean parse is lowered.
   if (errors.count() > 0) return file;
 

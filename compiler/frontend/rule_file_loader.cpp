@@ -31,6 +31,11 @@ RuleFile load_rule_file(const std::string& path, const std::string& text, Diagno
   CheckOptions options;
   options.terms_named_by_index = dialect == Dialect::Matlab;
   for (const FuzzySystem& system : file.systems) check_system(system, options, diagnostics);
+  // An empty file, or one of comments only, would otherwise check clean and evaluate nothing.
+  if (file.systems.empty() && !diagnostics.has_errors())
+    diagnostics.error(SourceRange{path, 0, 0, 0, 0},
+                      "the file defines no system (it is empty or holds only comments); a rule file starts with "
+                      "'system NAME' (docs/language.md) or, in MATLAB's format, '[System]'");
   diagnostics.sort_by_position();
   return file;
 }

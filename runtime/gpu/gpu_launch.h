@@ -1,5 +1,5 @@
 #pragma once
-// Host-side declarations of the kernel launches in kernels/spring_step.cu. Every launcher returns the launch's
+// Host-side declarations of the kernel launches in kernels/simulation_step.cu. Every launcher returns the launch's
 // cudaError_t (cudaGetLastError after <<<>>>), never exits; runtime/gpu/gpu_simulation.cpp turns it into a Diagnostic.
 //
 // A batch of scenes is one concatenated network: scene s owns a contiguous range of vertices and springs, its CSR
@@ -9,10 +9,34 @@
 
 #include "kernels/implicit_math.h"
 #include "kernels/integrator_math.h"
+#include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
+#include "kernels/tetrahedron_math.h"
 
 namespace fmpc::gpu {
+
+// Which internal-force struct of kernels/internal_force_math.h the per-vertex kernels are instantiated with: the
+// launchers dispatch on it once per launch (static dispatch inside the kernels).
+enum class GatherKind : int { Springs = 0, Elements = 1, SpringsAndElements = 2 };
+
+// A force model on the device: the springs (Springs, SpringsAndElements), and the tetrahedron field with the corner
+// forces its element pass writes and the per-vertex gather reads (Elements, SpringsAndElements).
+template <typename Real>
+struct ForceModelView {
+  GatherKind kind;
+  kernels::SpringNetworkView<Real> springs;
+  kernels::TetrahedronFieldView<Real> field;
+  kernels::CornerForceView<Real> corners;  // corners.force == corner_force
+  Real* corner_force;                      // 12 per element
+};
+
+// The element pass at `state`: every element's corner forces (kernels::tetrahedron_corner_forces); nothing for
+// GatherKind::Springs. Enqueued before every per-vertex kernel that gathers at that state.
+cudaError_t launch_element_forces(const ForceModelView<float>& model, const kernels::StateView<float>& state,
+                                  cudaStream_t stream);
+cudaError_t launch_element_forces(const ForceModelView<double>& model, const kernels::StateView<double>& state,
+                                  cudaStream_t stream);
 
 template <typename Real>
 struct MutableStateView {
@@ -43,7 +67,7 @@ enum class FusedScheme : int { ForwardEuler = 0, SemiImplicitEuler = 1 };
 
 template <typename Real>
 struct FusedStepArguments {
-  kernels::SpringNetworkView<Real> network;
+  ForceModelView<Real> model;
   kernels::VertexLoads<Real> loads;
   kernels::StateView<Real> in;  // state at t
   MutableStateView<Real> out;   // state at t + h (a different buffer: neighbours read `in` while `out` is written)
@@ -52,7 +76,8 @@ struct FusedStepArguments {
   StepSize<Real> step;
 };
 
-// One fused kernel per step: gather the spring forces over the CSR adjacency, add the loads, update the vertex.
+// One fused kernel per step: gather the model's forces (springs over their CSR adjacency, elements' corner forces
+// from the element pass launched before it), add the loads, update the vertex.
 cudaError_t launch_fused_step(const FusedStepArguments<float>& arguments, cudaStream_t stream);
 cudaError_t launch_fused_step(const FusedStepArguments<double>& arguments, cudaStream_t stream);
 
@@ -62,7 +87,7 @@ cudaError_t launch_fused_step(const FusedStepArguments<double>& arguments, cudaS
 // `acceleration` alone computes a = a(x, v), for the first step.
 template <typename Real>
 struct VerletArguments {
-  kernels::SpringNetworkView<Real> network;
+  ForceModelView<Real> model;
   kernels::VertexLoads<Real> loads;
   MutableStateView<Real> state;           // x and v, updated in place
   MutableVector3View<Real> acceleration;  // a at the current positions
@@ -84,7 +109,7 @@ cudaError_t launch_verlet_kick(const VerletArguments<double>& arguments, cudaStr
 // writes what its neighbours read.
 template <typename Real>
 struct RungeKutta4Arguments {
-  kernels::SpringNetworkView<Real> network;
+  ForceModelView<Real> model;
   kernels::VertexLoads<Real> loads;
   MutableStateView<Real> state;                    // y0, combined in place by stage 3
   MutableVector3View<Real> stage_position[4];      // [0] unused (the state); [1] and [3] share a buffer
@@ -154,9 +179,31 @@ struct ConjugateGradientScalars {
   double beta;       // rz_next / rz
 };
 
+// The element part of implicit Euler, in double: each element's linearisation at the step's start (rotation or
+// volume gradient, kernels::TetrahedronLinearisation), and per corner 3 values each of h^2 K v0, of the diagonal of
+// (h^2 + h beta) K_aa, and of (h^2 + h beta) K p for the conjugate gradient's current direction (fixed corners' p
+// taken as zero), gathered per vertex over the corner CSR.
+struct ImplicitElements {
+  kernels::TetrahedronLaw law;
+  int count;
+  const int* corners;             // 4 per element
+  const double* rest_inverse;     // 9 per element
+  const double* rest_volume;
+  const double* youngs_modulus;   // null for the volume law
+  const double* poisson_ratio;
+  const double* bulk_modulus;     // null for the co-rotational law
+  const double* stiffness_damping;  // null: none
+  kernels::StrainTableView strain_table;  // strain null: none
+  kernels::TetrahedronLinearisation* linearisation;
+  double* rhs_part;       // 12 per element
+  double* diagonal_part;  // 12 per element
+  double* product;        // 12 per element
+};
+
 template <typename Real>
 struct ImplicitArguments {
-  kernels::SpringNetworkView<Real> network;
+  ForceModelView<Real> model;
+  ImplicitElements elements;  // count 0: none
   kernels::VertexLoads<Real> loads;
   MutableStateView<Real> state;
   const int* first;             // spring ends
@@ -179,13 +226,15 @@ struct ImplicitArguments {
   ConjugateGradientScalars* scalars;
   double* partial;  // 2 * kEnergyBlocks
 };
-// Blocks of every spring, then b, the diagonal and the Jacobi preconditioner of every vertex.
+// Blocks of every spring and the linearisation of every element, then b, the diagonal and the Jacobi preconditioner
+// of every vertex.
 cudaError_t launch_implicit_assemble(const ImplicitArguments<float>& arguments, cudaStream_t stream);
 cudaError_t launch_implicit_assemble(const ImplicitArguments<double>& arguments, cudaStream_t stream);
 // x = 0, r = b, z = p = M^-1 r, scalars: rhs_norm2 = b.b, rz = r.z.
 cudaError_t launch_cg_start(const ImplicitArguments<float>& arguments, cudaStream_t stream);
 cudaError_t launch_cg_start(const ImplicitArguments<double>& arguments, cudaStream_t stream);
-// ap = A p, alpha = rz / p.ap, x += alpha p, r -= alpha ap, z = M^-1 r, rr = r.r, rz_next = r.z, beta.
+// ap = A p (the elements' product first, then per vertex), alpha = rz / p.ap, x += alpha p, r -= alpha ap,
+// z = M^-1 r, rr = r.r, rz_next = r.z, beta.
 cudaError_t launch_cg_iteration(const ImplicitArguments<float>& arguments, cudaStream_t stream);
 cudaError_t launch_cg_iteration(const ImplicitArguments<double>& arguments, cudaStream_t stream);
 // p = z + beta p, rz = rz_next.
@@ -201,6 +250,16 @@ cudaError_t launch_find_non_finite(const kernels::StateView<float>& state, int v
                                    cudaStream_t stream);
 cudaError_t launch_find_non_finite(const kernels::StateView<double>& state, int vertex_count, int* first_vertex,
                                    cudaStream_t stream);
+
+// Inverted tetrahedra (signed volume <= 0) at `state`, per scene: count[scene] += 1 (integer atomics: the count does
+// not depend on scheduling) and first[scene] = the smallest inverted element index (atomicMin). element_scene null:
+// every element is scene 0's. count and first are preset by the caller (0 and element_count).
+cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
+                                  const kernels::StateView<float>& state, unsigned int* count, int* first,
+                                  cudaStream_t stream);
+cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
+                                  const kernels::StateView<double>& state, unsigned int* count, int* first,
+                                  cudaStream_t stream);
 
 // Energies of one scene, summed in double by a fixed-shape tree (kEnergyBlocks partial sums of kEnergyThreads
 // threads each, then one block): the same bits on every run, whatever the scheduling.
@@ -223,12 +282,14 @@ struct EnergyArguments {
   const double* force_x;  // null: no external forces
   const double* force_y;
   const double* force_z;
+  ImplicitElements elements;  // ElementPotential: the field in double (the linearisation arrays unused)
 };
 
 enum class EnergyTerm : int {
-  Kinetic = 0,          // sum over vertices of m |v|^2 / 2
-  SpringPotential = 1,  // sum over springs of spring_potential_energy
-  LoadPotential = 2,    // sum over vertices of -(m g + f) . x
+  Kinetic = 0,           // sum over vertices of m |v|^2 / 2
+  SpringPotential = 1,   // sum over springs of spring_potential_energy
+  LoadPotential = 2,     // sum over vertices of -(m g + f) . x
+  ElementPotential = 3,  // sum over elements of tetrahedron_elastic_energy
 };
 
 // Sums the term over [begin, end) into *result (device memory); `partial` holds kEnergyBlocks doubles.

@@ -119,13 +119,19 @@ cudaError_t copy_async(DeviceArray<Real>& to, const DeviceArray<Real>& from, cud
 
 // The host-side concatenation of a batch (see gpu_launch.h): everything in double, converted on upload.
 struct ConcatenatedScenes {
-  std::vector<int> vertex_begin{0}, spring_begin{0};  // scene_count + 1 entries each
+  std::vector<int> vertex_begin{0}, spring_begin{0}, element_begin{0};  // scene_count + 1 entries each
   std::vector<int> offset, spring, neighbour, first, second, vertex_scene;
   std::vector<double> rest_length, stiffness, damping, mass;
   std::vector<unsigned char> fixed;
   std::vector<double> rest[3], position[3], velocity[3], force[3];
   bool has_forces = false;
   bool has_damping = false;  // false: no scene has dashpots, and no damping array is uploaded
+  // Tetrahedra (every scene's, for inversion counts) and, when the scenes have a tetrahedron field, its arrays and
+  // the corner CSR (each scene's corners point at its own elements).
+  std::vector<int> corners, element_scene, corner_offset, corner_index;
+  std::vector<double> rest_inverse, rest_volume, youngs_modulus, poisson_ratio, bulk_modulus, stiffness_damping;
+  bool has_field = false;
+  bool has_element_damping = false;
 };
 
 bool force_probe(const sim::SimulationSetup& setup) {
@@ -138,11 +144,38 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     c.has_forces = c.has_forces || !setup.external_forces.empty() || force_probe(setup);
     c.has_damping = c.has_damping || !setup.springs.damping.empty();
   }
-  int entries = 0;
+  for (const auto& setup : scenes) {
+    c.has_field = c.has_field || setup.tetrahedron_field.has_value();
+    c.has_element_damping =
+        c.has_element_damping || (setup.tetrahedron_field && !setup.tetrahedron_field->stiffness_damping.empty());
+  }
+  int entries = 0, corner_entries = 0;
   for (std::size_t s = 0; s < scenes.size(); ++s) {
     const sim::SimulationSetup& setup = scenes[s];
     const sim::SpringNetwork& net = setup.springs;
     const int vertex_base = c.vertex_begin.back(), spring_base = c.spring_begin.back();
+    const int element_base = c.element_begin.back();
+    for (const sim::Tetrahedron& t : setup.tetrahedra) {
+      for (const auto v : t) c.corners.push_back(vertex_base + v);
+      c.element_scene.push_back(static_cast<int>(s));
+    }
+    if (setup.tetrahedron_field) {
+      const sim::TetrahedronField& field = *setup.tetrahedron_field;
+      for (std::size_t v = 0; v < setup.rest_positions.size(); ++v)
+        c.corner_offset.push_back(corner_entries + field.corner_offset[v]);
+      for (const auto corner : field.corner_index) c.corner_index.push_back(4 * element_base + corner);
+      corner_entries += static_cast<int>(field.corner_index.size());
+      c.rest_inverse.insert(c.rest_inverse.end(), field.rest_inverse.begin(), field.rest_inverse.end());
+      c.rest_volume.insert(c.rest_volume.end(), field.rest_volume.begin(), field.rest_volume.end());
+      const auto append_or_zero = [&](std::vector<double>& to, const std::vector<double>& from) {
+        if (from.empty()) to.insert(to.end(), field.size(), 0.0);
+        else to.insert(to.end(), from.begin(), from.end());
+      };
+      append_or_zero(c.youngs_modulus, field.youngs_modulus);
+      append_or_zero(c.poisson_ratio, field.poisson_ratio);
+      append_or_zero(c.bulk_modulus, field.bulk_modulus);
+      if (c.has_element_damping) append_or_zero(c.stiffness_damping, field.stiffness_damping);
+    }
     const std::size_t n = setup.rest_positions.size();
     for (std::size_t v = 0; v < n; ++v) c.offset.push_back(entries + net.adjacency_offset[v]);
     for (std::size_t e = 0; e < net.adjacency_spring.size(); ++e) {
@@ -161,31 +194,41 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
       else c.damping.insert(c.damping.end(), net.damping.begin(), net.damping.end());
     }
     c.mass.insert(c.mass.end(), setup.mass.begin(), setup.mass.end());
+    // Held axes at the start (a displacement probe's vertices are held only after the initial velocities are taken,
+    // as in the CPU backend), then the full mask.
     std::vector<unsigned char> fixed(n, 0);
-    for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = 1;
-    c.fixed.insert(c.fixed.end(), fixed.begin(), fixed.end());
+    for (std::size_t v = 0; v < n && setup.fixed_axes.size() == n; ++v) fixed[v] = setup.fixed_axes[v];
+    for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
+    const std::vector<unsigned char> held = sim::held_axes(setup);
+    c.fixed.insert(c.fixed.end(), held.begin(), held.end());
     const std::vector<sim::Point3>& start =
         setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
     for (std::size_t v = 0; v < n; ++v) {
       for (std::size_t axis = 0; axis < 3; ++axis) {
         c.rest[axis].push_back(setup.rest_positions[v][axis]);
         c.position[axis].push_back(start[v][axis]);
-        // As the CPU backend: fixed vertices start at rest.
-        c.velocity[axis].push_back(setup.initial_velocities.empty() || fixed[v] ? 0.0
-                                                                                : setup.initial_velocities[v][axis]);
+        // As the CPU backend: held axes start at rest.
+        c.velocity[axis].push_back(setup.initial_velocities.empty() || kernels::axis_fixed(fixed[v], static_cast<int>(axis))
+                                       ? 0.0
+                                       : setup.initial_velocities[v][axis]);
         if (c.has_forces) c.force[axis].push_back(setup.external_forces.empty() ? 0.0 : setup.external_forces[v][axis]);
       }
       c.vertex_scene.push_back(static_cast<int>(s));
     }
-    // Displacement probes move their vertices kinematically, as in the CPU backend (which also marks them after
-    // taking the initial velocities).
-    if (setup.probe && !force_probe(setup))
-      for (const auto v : setup.probe->vertices) c.fixed[static_cast<std::size_t>(vertex_base + v)] = 1;
+
     c.vertex_begin.push_back(vertex_base + static_cast<int>(n));
     c.spring_begin.push_back(spring_base + static_cast<int>(net.size()));
+    c.element_begin.push_back(element_base + static_cast<int>(setup.tetrahedra.size()));
   }
   c.offset.push_back(entries);
+  if (c.has_field) c.corner_offset.push_back(corner_entries);
   return c;
+}
+
+// The gather a batch's scenes share (create() refuses batches that differ in it).
+GatherKind gather_kind(const sim::SimulationSetup& setup) {
+  if (setup.model == sim::ForceModel::CorotationalFem) return GatherKind::Elements;
+  return setup.tetrahedron_field ? GatherKind::SpringsAndElements : GatherKind::Springs;
 }
 
 template <typename Real>
@@ -197,6 +240,8 @@ std::vector<Real> convert(const std::vector<double>& values) {
 
 // The first field in which `scene` differs from scene 0 among those a batch shares, or nullptr.
 const char* shared_field_mismatch(const sim::SimulationSetup& scene, const sim::SimulationSetup& reference) {
+  if (scene.model != reference.model) return "force model";
+  if (gather_kind(scene) != gather_kind(reference)) return "volume term (on in one scene, off in the other)";
   if (scene.integrator != reference.integrator) return "integrator";
   if (scene.precision != reference.precision) return "precision";
   if (scene.law != reference.law) return "spring law";
@@ -209,6 +254,8 @@ const char* shared_field_mismatch(const sim::SimulationSetup& scene, const sim::
       scene.nodal_damping_gamma1 != reference.nodal_damping_gamma1) {
     return "nodal damping";
   }
+  if (scene.mass_damping != reference.mass_damping) return "mass damping (Rayleigh alpha)";
+  if (scene.on_inversion != reference.on_inversion) return "on_inversion policy";
   return nullptr;
 }
 
@@ -286,16 +333,27 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     FMPC_CUDA_CHECK(first_non_finite_.allocate(1), diagnostics, false);
     FMPC_CUDA_CHECK(energy_partial_.allocate(kEnergyBlocks), diagnostics, false);
     FMPC_CUDA_CHECK(energy_result_.allocate(1), diagnostics, false);
+    element_begin_ = c.element_begin;
+    element_count_ = element_begin_.back();
+    inversions_.assign(scenes_.size(), sim::InversionReport{});
+    if (element_count_ > 0) {
+      FMPC_CUDA_CHECK(corners_.upload(c.corners), diagnostics, false);
+      if (scenes_.size() > 1) FMPC_CUDA_CHECK(element_scene_.upload(c.element_scene), diagnostics, false);
+      FMPC_CUDA_CHECK(inverted_count_.allocate(scenes_.size()), diagnostics, false);
+      FMPC_CUDA_CHECK(inverted_first_.allocate(scenes_.size()), diagnostics, false);
+    }
+    if (c.has_field && !upload_field(c, diagnostics)) return false;
 
     if (!upload_single_scene_features(diagnostics)) return false;
 
-    network_ = {offset_.data(),
-                spring_.data(),
-                neighbour_.data(),
-                rest_length_.data(),
-                stiffness_.data(),
-                c.has_damping ? damping_.data() : nullptr,
-                {common.law, static_cast<Real>(common.basafa_k2_over_k1), static_cast<Real>(common.basafa_xc)}};
+    model_.kind = gather_kind(common);
+    model_.springs = {offset_.data(),
+                      spring_.data(),
+                      neighbour_.data(),
+                      rest_length_.data(),
+                      stiffness_.data(),
+                      c.has_damping ? damping_.data() : nullptr,
+                      {common.law, static_cast<Real>(common.basafa_k2_over_k1), static_cast<Real>(common.basafa_xc)}};
     loads_ = {mass_.data(),
               fixed_.data(),
               rest_x_.data(),
@@ -308,12 +366,80 @@ class GpuBatchImpl final : public GpuBatchSimulation {
               static_cast<Real>(common.gravity[1]),
               static_cast<Real>(common.gravity[2]),
               static_cast<Real>(common.nodal_damping_gamma0),
-              static_cast<Real>(common.nodal_damping_gamma1)};
+              static_cast<Real>(common.nodal_damping_gamma1),
+              static_cast<Real>(common.mass_damping)};
     step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
     // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
     // stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
     return save_checkpoint(diagnostics) && synchronize(diagnostics);
+  }
+
+  // The tetrahedron field: its arrays in Real for the element pass, in double for implicit Euler and the energy
+  // sums, the corner CSR and the corner forces. The strain table (uploaded with the single-scene features) is
+  // attached to the views afterwards.
+  bool upload_field(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
+    const sim::SimulationSetup& common = scenes_.front();
+    const kernels::TetrahedronLaw law = common.tetrahedron_field->law;
+    const bool corotational = law == kernels::TetrahedronLaw::CorotationalLinear;
+    FMPC_CUDA_CHECK(corner_offset_.upload(c.corner_offset), diagnostics, false);
+    FMPC_CUDA_CHECK(corner_index_.upload(c.corner_index), diagnostics, false);
+    FMPC_CUDA_CHECK(field_rest_inverse_.upload(convert<Real>(c.rest_inverse)), diagnostics, false);
+    FMPC_CUDA_CHECK(field_rest_volume_.upload(convert<Real>(c.rest_volume)), diagnostics, false);
+    FMPC_CUDA_CHECK(field_rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
+    FMPC_CUDA_CHECK(field_rest_volume_d_.upload(c.rest_volume), diagnostics, false);
+    if (corotational) {
+      FMPC_CUDA_CHECK(field_youngs_.upload(convert<Real>(c.youngs_modulus)), diagnostics, false);
+      FMPC_CUDA_CHECK(field_poisson_.upload(convert<Real>(c.poisson_ratio)), diagnostics, false);
+      FMPC_CUDA_CHECK(field_youngs_d_.upload(c.youngs_modulus), diagnostics, false);
+      FMPC_CUDA_CHECK(field_poisson_d_.upload(c.poisson_ratio), diagnostics, false);
+    } else {
+      FMPC_CUDA_CHECK(field_bulk_.upload(convert<Real>(c.bulk_modulus)), diagnostics, false);
+      FMPC_CUDA_CHECK(field_bulk_d_.upload(c.bulk_modulus), diagnostics, false);
+    }
+    if (c.has_element_damping) {
+      FMPC_CUDA_CHECK(field_damping_.upload(convert<Real>(c.stiffness_damping)), diagnostics, false);
+      FMPC_CUDA_CHECK(field_damping_d_.upload(c.stiffness_damping), diagnostics, false);
+    }
+    FMPC_CUDA_CHECK(corner_force_.allocate(12 * static_cast<std::size_t>(element_count_)), diagnostics, false);
+    const auto data = [](const DeviceArray<Real>& array) -> const Real* { return array.size() ? array.data() : nullptr; };
+    const auto data_d = [](const DeviceArray<double>& array) -> const double* {
+      return array.size() ? array.data() : nullptr;
+    };
+    model_.field = {law,
+                    element_count_,
+                    corners_.data(),
+                    field_rest_inverse_.data(),
+                    field_rest_volume_.data(),
+                    data(field_youngs_),
+                    data(field_poisson_),
+                    data(field_bulk_),
+                    data(field_damping_),
+                    {nullptr, nullptr, 0}};
+    model_.corners = {corner_offset_.data(), corner_index_.data(), corner_force_.data()};
+    model_.corner_force = corner_force_.data();
+    elements_ = {};
+    elements_.law = law;
+    elements_.count = element_count_;
+    elements_.corners = corners_.data();
+    elements_.rest_inverse = field_rest_inverse_d_.data();
+    elements_.rest_volume = field_rest_volume_d_.data();
+    elements_.youngs_modulus = data_d(field_youngs_d_);
+    elements_.poisson_ratio = data_d(field_poisson_d_);
+    elements_.bulk_modulus = data_d(field_bulk_d_);
+    elements_.stiffness_damping = data_d(field_damping_d_);
+    elements_.strain_table = {nullptr, nullptr, 0};
+    if (common.integrator == sim::Integrator::ImplicitEuler) {
+      const auto count = static_cast<std::size_t>(element_count_);
+      FMPC_CUDA_CHECK(element_linearisation_.allocate(count), diagnostics, false);
+      for (DeviceArray<double>* array : {&element_rhs_part_, &element_diagonal_part_, &element_product_})
+        FMPC_CUDA_CHECK(array->allocate(12 * count), diagnostics, false);
+      elements_.linearisation = element_linearisation_.data();
+      elements_.rhs_part = element_rhs_part_.data();
+      elements_.diagonal_part = element_diagonal_part_.data();
+      elements_.product = element_product_.data();
+    }
+    return true;
   }
 
   // The probe, the strain table and implicit Euler's buffers (a batch of one scene only; create() refuses them in
@@ -346,6 +472,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       FMPC_CUDA_CHECK(table_strain_.upload(table.strain), diagnostics, false);
       FMPC_CUDA_CHECK(table_modulus_.upload(table.modulus), diagnostics, false);
       FMPC_CUDA_CHECK(stiffness_per_modulus_.upload(table.stiffness_per_modulus), diagnostics, false);
+      if (setup.tetrahedron_field && setup.tetrahedron_field->law == kernels::TetrahedronLaw::CorotationalLinear) {
+        const kernels::StrainTableView view{table_strain_.data(), table_modulus_.data(),
+                                            static_cast<int>(table.strain.size())};
+        model_.field.strain_table = view;
+        elements_.strain_table = view;
+      }
     }
     if (setup.integrator == sim::Integrator::ImplicitEuler) {
       std::vector<double> rest(3 * count);
@@ -364,19 +496,23 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
     if (failed_) return false;
-    const std::size_t interval = check_every == 0 ? steps : check_every;
     std::size_t done = 0;
     while (done < steps) {
-      const std::size_t chunk = std::min(interval, steps - done);
+      // Checks fall on multiples of check_every counted from the run's start (as the CPU backend's), and at the end.
+      const std::size_t chunk =
+          check_every == 0 ? steps : std::min(check_every - steps_taken_ % check_every, steps - done);
       if (!run_steps(chunk, options_.use_graphs, diagnostics)) return fail();
       done += chunk;
       const std::optional<int> bad = first_non_finite_vertex(diagnostics);
       if (!bad) return fail();
       if (*bad < n_) return locate_non_finite(diagnostics);
+      if (!check_displacement_bound(diagnostics) || !check_inversions(diagnostics)) return fail();
       if (!save_checkpoint(diagnostics)) return fail();
     }
     return true;
   }
+
+  const sim::InversionReport& inversions(std::size_t scene) const override { return inversions_.at(scene); }
 
   std::size_t scene_count() const override { return scenes_.size(); }
   std::size_t steps_taken() const override { return steps_taken_; }
@@ -422,10 +558,15 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     const auto springs =
         energy_sum(EnergyTerm::SpringPotential, spring_begin_.at(scene), spring_begin_.at(scene + 1), diagnostics);
     if (!springs) return std::nullopt;
+    std::optional<double> elements = 0.0;
+    if (elements_.count > 0)
+      elements =
+          energy_sum(EnergyTerm::ElementPotential, element_begin_.at(scene), element_begin_.at(scene + 1), diagnostics);
+    if (!elements) return std::nullopt;
     const auto loads =
         energy_sum(EnergyTerm::LoadPotential, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
     if (!loads) return std::nullopt;
-    return *springs + *loads;
+    return *springs + *elements + *loads;
   }
 
  private:
@@ -441,6 +582,100 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   sim::Integrator scheme() const { return scenes_.front().integrator; }
 
+  // Inverted elements per scene now: counts and each scene's smallest inverted element (local index, -1: none).
+  bool count_inverted(std::vector<unsigned int>& counts, std::vector<int>& firsts, DiagnosticList& diagnostics) {
+    const std::size_t scenes = scenes_.size();
+    counts.assign(scenes, 0u);
+    firsts.assign(scenes, element_count_);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(inverted_count_.data(), counts.data(), scenes * sizeof(unsigned int),
+                                    cudaMemcpyHostToDevice, stream_),
+                    diagnostics, false);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(inverted_first_.data(), firsts.data(), scenes * sizeof(int), cudaMemcpyHostToDevice,
+                                    stream_),
+                    diagnostics, false);
+    FMPC_CUDA_CHECK(launch_count_inverted(corners_.data(), element_count_, scenes > 1 ? element_scene_.data() : nullptr,
+                                          state_[current_].view(), inverted_count_.data(), inverted_first_.data(),
+                                          stream_),
+                    diagnostics, false);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(counts.data(), inverted_count_.data(), scenes * sizeof(unsigned int),
+                                    cudaMemcpyDeviceToHost, stream_),
+                    diagnostics, false);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(firsts.data(), inverted_first_.data(), scenes * sizeof(int), cudaMemcpyDeviceToHost,
+                                    stream_),
+                    diagnostics, false);
+    if (!synchronize(diagnostics)) return false;
+    for (std::size_t scene = 0; scene < scenes; ++scene)
+      firsts[scene] = counts[scene] > 0 ? firsts[scene] - element_begin_[scene] : -1;
+    return true;
+  }
+
+  // As the CPU backend: inversions counted at every check; a scene's first one is located exactly by replaying from
+  // the last check one step at a time, then warned about (the run goes on) or, with on_inversion: stop, an error.
+  bool check_inversions(DiagnosticList& diagnostics) {
+    if (element_count_ == 0) return true;
+    std::vector<unsigned int> counts;
+    std::vector<int> firsts;
+    if (!count_inverted(counts, firsts, diagnostics)) return false;
+    bool newly = false;
+    for (std::size_t scene = 0; scene < counts.size(); ++scene)
+      newly = newly || (counts[scene] > 0 && inversions_[scene].largest_count == 0);
+    if (newly) {
+      const std::size_t failed_by = steps_taken_;
+      if (!restore_checkpoint(diagnostics)) return false;
+      bool stop = false;
+      for (;;) {
+        if (!count_inverted(counts, firsts, diagnostics)) return false;
+        for (std::size_t scene = 0; scene < counts.size(); ++scene) {
+          sim::InversionReport& report = inversions_[scene];
+          if (counts[scene] == 0 || report.largest_count > 0) continue;
+          report.first_step = steps_taken_;
+          report.first_time = static_cast<double>(steps_taken_) * stability_[scene].time_step;
+          report.first_element = firsts[scene];
+          report.largest_count = report.current_count = counts[scene];
+          std::string message = sim::inversion_message(scenes_[scene], report);
+          if (scenes_.size() > 1) message = "scene " + std::to_string(scene) + ": " + message;
+          if (scenes_[scene].on_inversion == sim::InversionPolicy::Stop) {
+            diagnostics.error(scenes_[scene].source_range, message + "; the scene's on_inversion is stop");
+            stop = true;
+          } else {
+            diagnostics.warning(scenes_[scene].source_range, "inverted-elements", message);
+          }
+        }
+        if (stop) return false;
+        if (steps_taken_ >= failed_by) break;
+        if (!run_steps(1, false, diagnostics)) return false;
+      }
+    }
+    for (std::size_t scene = 0; scene < counts.size(); ++scene) {
+      inversions_[scene].current_count = counts[scene];
+      inversions_[scene].largest_count = std::max<std::size_t>(inversions_[scene].largest_count, counts[scene]);
+    }
+    return true;
+  }
+
+  // The nodal damping gamma1 |x - x0| was bounded with a displacement (sim::StabilityReport); a vertex that moves
+  // further stops the run with an error, as on the CPU.
+  bool check_displacement_bound(DiagnosticList& diagnostics) {
+    for (std::size_t scene = 0; scene < scenes_.size(); ++scene) {
+      const sim::SimulationSetup& setup = scenes_[scene];
+      const double bound = stability_[scene].assumed_displacement_max;
+      if (!(setup.nodal_damping_gamma1 > 0.0) || !std::isfinite(bound)) continue;
+      const std::vector<sim::Point3> points = positions(scene, diagnostics);
+      for (std::size_t v = 0; v < points.size(); ++v) {
+        const double moved = sim::distance(points[v], setup.rest_positions[v]);
+        if (moved <= bound) continue;
+        std::ostringstream message;
+        if (scenes_.size() > 1) message << "scene " << scene << ": ";
+        message << "vertex " << v << " moved " << moved << " m from rest by step " << steps_taken_ << ", beyond the "
+                << bound << " m the stable time step assumed for the nodal damping gamma1 |x - x0| (gamma1 = "
+                << setup.nodal_damping_gamma1 << " N s/m^2); give a smaller dt explicitly or lower gamma1";
+        diagnostics.error(setup.source_range, message.str());
+        return false;
+      }
+    }
+    return true;
+  }
+
   // Enqueues `count` steps on the stream (directly or while capturing); `parity` is the Euler state buffer read
   // first and is updated to the one holding the result. Around each step, as the CPU backend: the probe before it,
   // the strain table's lookup, the step, the probe after it.
@@ -452,8 +687,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       switch (scheme()) {
         case sim::Integrator::ForwardEuler:
         case sim::Integrator::SemiImplicitEuler: {
+          FMPC_CUDA_CHECK(launch_element_forces(model_, state_[parity].view(), stream_), diagnostics, false);
           FusedStepArguments<Real> a{};
-          a.network = network_;
+          a.model = model_;
           a.loads = loads_;
           a.in = state_[parity].view();
           a.out = state_[1 - parity].mutable_view();
@@ -468,15 +704,29 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         case sim::Integrator::VelocityVerlet:
           // a(x0, v0) once, after the first step's probe and lookup (run_steps keeps that step out of graphs).
           if (!have_acceleration_) {
+            FMPC_CUDA_CHECK(launch_element_forces(model_, state_[0].view(), stream_), diagnostics, false);
             FMPC_CUDA_CHECK(launch_acceleration(verlet_arguments(), stream_), diagnostics, false);
             have_acceleration_ = true;
           }
           FMPC_CUDA_CHECK(launch_verlet_drift(verlet_arguments(), stream_), diagnostics, false);
+          {
+            // The kick gathers at the drifted positions with the velocity predictor.
+            const DeviceState<Real>& state = state_[0];
+            const kernels::StateView<Real> drifted{state.x.data(),      state.y.data(),      state.z.data(),
+                                                   predicted_.x.data(), predicted_.y.data(), predicted_.z.data()};
+            FMPC_CUDA_CHECK(launch_element_forces(model_, drifted, stream_), diagnostics, false);
+          }
           FMPC_CUDA_CHECK(launch_verlet_kick(verlet_arguments(), stream_), diagnostics, false);
           break;
         case sim::Integrator::RungeKutta4: {
           const RungeKutta4Arguments<Real> a = runge_kutta4_arguments();
           for (int stage = 0; stage < 4; ++stage) {
+            const kernels::StateView<Real> at =
+                stage == 0 ? state_[0].view()
+                           : kernels::StateView<Real>{a.stage_position[stage].x, a.stage_position[stage].y,
+                                                      a.stage_position[stage].z, a.stage_velocity[stage].x,
+                                                      a.stage_velocity[stage].y, a.stage_velocity[stage].z};
+            FMPC_CUDA_CHECK(launch_element_forces(model_, at, stream_), diagnostics, false);
             FMPC_CUDA_CHECK(launch_runge_kutta4_stage(a, stage, stream_), diagnostics, false);
           }
           break;
@@ -543,7 +793,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   ImplicitArguments<Real> implicit_arguments() {
     ImplicitArguments<Real> a{};
-    a.network = network_;
+    a.model = model_;
+    a.elements = elements_;
     a.loads = loads_;
     a.state = state_[0].mutable_view();
     a.first = first_.data();
@@ -610,19 +861,19 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after " << iterations
               << " iterations with relative residual " << error << " (tolerance " << options.tolerance
               << "); raise max_iterations or use a smaller dt";
-      diagnostics.warning(SourceRange{}, "cg-not-converged", message.str());
+      diagnostics.warning(scenes_.front().source_range, "cg-not-converged", message.str());
     }
     FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
     return true;
   }
 
   VerletArguments<Real> verlet_arguments() const {
-    return {network_, loads_, state_[0].mutable_view(), acceleration_.view(), predicted_.view(), n_, step_};
+    return {model_, loads_, state_[0].mutable_view(), acceleration_.view(), predicted_.view(), n_, step_};
   }
 
   RungeKutta4Arguments<Real> runge_kutta4_arguments() const {
     RungeKutta4Arguments<Real> a{};
-    a.network = network_;
+    a.model = model_;
     a.loads = loads_;
     a.state = state_[0].mutable_view();
     a.stage_position[1] = stage_position_a_.view();
@@ -775,7 +1026,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
               << net.second[s] << ")";
     }
     message << "; lower dt, raise damping, or check the loads";
-    diagnostics.error(SourceRange{}, message.str());
+    diagnostics.error(scenes_[scene].source_range, message.str());
     return fail();
   }
 
@@ -846,6 +1097,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     a.force_x = energy_force_x_.data();
     a.force_y = energy_force_y_.data();
     a.force_z = energy_force_z_.data();
+    a.elements = elements_;
     if (common.strain_stiffness) {
       a.table = {table_strain_.data(), table_modulus_.data(), static_cast<int>(table_strain_.size())};
       a.stiffness_per_modulus = stiffness_per_modulus_.data();
@@ -884,7 +1136,19 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceState<Real> state_[2], checkpoint_;
   DeviceVector3<Real> acceleration_, predicted_, checkpoint_acceleration_;
   DeviceVector3<Real> stage_position_a_, stage_position_b_, stage_velocity_[3], stage_acceleration_[3];
-  kernels::SpringNetworkView<Real> network_{};
+  ForceModelView<Real> model_{};
+  ImplicitElements elements_{};
+  std::vector<int> element_begin_;
+  int element_count_ = 0;
+  DeviceArray<int> corners_, element_scene_, corner_offset_, corner_index_, inverted_first_;
+  DeviceArray<unsigned int> inverted_count_;
+  DeviceArray<Real> field_rest_inverse_, field_rest_volume_, field_youngs_, field_poisson_, field_bulk_, field_damping_,
+      corner_force_;
+  DeviceArray<double> field_rest_inverse_d_, field_rest_volume_d_, field_youngs_d_, field_poisson_d_, field_bulk_d_,
+      field_damping_d_;
+  DeviceArray<kernels::TetrahedronLinearisation> element_linearisation_;
+  DeviceArray<double> element_rhs_part_, element_diagonal_part_, element_product_;
+  std::vector<sim::InversionReport> inversions_;
   kernels::VertexLoads<Real> loads_{};
   StepSize<Real> step_{};
   std::map<std::pair<std::size_t, int>, std::unique_ptr<GraphExecutable>> graphs_;
@@ -923,6 +1187,7 @@ class GpuSimulationImpl final : public GpuSimulation {
     return batch_->potential_energy(0, diagnostics);
   }
   const std::optional<sim::NonFiniteReport>& non_finite() const override { return non_finite_; }
+  const sim::InversionReport& inversions() const override { return batch_->inversions(0); }
   sim::ProbeReading probe_reading(DiagnosticList& diagnostics) const override {
     return batch_->probe_reading(0, diagnostics);
   }

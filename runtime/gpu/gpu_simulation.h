@@ -1,6 +1,7 @@
 #pragma once
 // The CUDA backend's host side. Built only when nvcc is found (FMPC_RUNTIME_HAVE_CUDA); this header itself needs
-// no CUDA headers. Integrators on the GPU: forward Euler and semi-implicit Euler (one fused kernel per step),
+// no CUDA headers. Every force model (springs, springs with the volume term, co-rotational FEM) runs with every
+// integrator. Integrators on the GPU: forward Euler and semi-implicit Euler (one fused kernel per step),
 // velocity Verlet (two kernels per step), RK4 (four stage kernels per step) and implicit Euler (a matrix-free,
 // Jacobi-preconditioned conjugate gradient in double, kernels/implicit_math.h), all over the same FMPC_HD functions
 // as the CPU loop, in float or double. Probes and strain tables run beside every step as on the CPU. Repeated
@@ -42,7 +43,7 @@ class GpuSimulation {
 
   // Advances `steps` steps, checking for NaN/Inf every `check_every` steps (0: only at the end) and at the end; on
   // a non-finite value the error names the exact step, the vertex and its most strained spring.
-  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = 64) = 0;
+  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = sim::kCheckEvery) = 0;
   virtual std::size_t steps_taken() const = 0;
   virtual std::vector<sim::Point3> positions(DiagnosticList& diagnostics) const = 0;
   virtual std::vector<sim::Point3> velocities(DiagnosticList& diagnostics) const = 0;
@@ -54,6 +55,9 @@ class GpuSimulation {
   virtual std::optional<double> kinetic_energy(DiagnosticList& diagnostics) const = 0;
   virtual std::optional<double> potential_energy(DiagnosticList& diagnostics) const = 0;
   virtual const std::optional<sim::NonFiniteReport>& non_finite() const = 0;
+  // Inverted tetrahedra as the CPU backend counts them (sim::InversionReport): at every check (check_every steps and
+  // the end of every advance), the first step exact by replay.
+  virtual const sim::InversionReport& inversions() const = 0;
   // The probe's displacement and force now (sim::read_probe on the downloaded state); zeros without a probe.
   virtual sim::ProbeReading probe_reading(DiagnosticList& diagnostics) const = 0;
   // Every spring's stiffness now (N/m): the setup's, or the strain table's last lookup.
@@ -73,7 +77,7 @@ class GpuBatchSimulation {
                                                     const GpuOptions& options, DiagnosticList& diagnostics);
   virtual ~GpuBatchSimulation() = default;
 
-  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = 64) = 0;
+  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = sim::kCheckEvery) = 0;
   virtual std::size_t scene_count() const = 0;
   virtual std::size_t steps_taken() const = 0;
   virtual std::vector<sim::Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const = 0;
@@ -82,6 +86,7 @@ class GpuBatchSimulation {
   virtual std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual const std::optional<GpuNonFiniteReport>& non_finite() const = 0;
+  virtual const sim::InversionReport& inversions(std::size_t scene) const = 0;
   virtual std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual sim::ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual int implicit_max_iterations_used() const = 0;

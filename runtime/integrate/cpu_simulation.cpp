@@ -9,10 +9,12 @@
 #include <cmath>
 #include <sstream>
 
-#include "kernels/integrator_math.h"
-#include "kernels/spring_math.h"
 #include "kernels/implicit_math.h"
+#include "kernels/integrator_math.h"
+#include "kernels/internal_force_math.h"
+#include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
+#include "runtime/integrate/model_tangent.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/integrate/worker_pool.h"
 
@@ -45,8 +47,11 @@ class CpuSimulationImpl final : public CpuSimulation {
     stiffness_ = convert(net.stiffness);
     damping_ = convert(net.damping);  // empty without damping
     mass_ = convert(setup.mass);
-    fixed_.assign(n_, 0);
-    for (const auto v : setup.fixed_vertices) fixed_[static_cast<std::size_t>(v)] = 1;
+    // Displacement probes' vertices are held (moved kinematically) only after the initial velocities are taken.
+    fixed_ = held_axes(setup);
+    std::vector<unsigned char> held_at_start(n_, 0);
+    for (std::size_t v = 0; v < n_ && setup.fixed_axes.size() == n_; ++v) held_at_start[v] = setup.fixed_axes[v];
+    for (const auto v : setup.fixed_vertices) held_at_start[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
     position_.resize(n_);
     velocity_.resize(n_);
     rest_.resize(n_);
@@ -60,16 +65,14 @@ class CpuSimulationImpl final : public CpuSimulation {
       position_.x[v] = static_cast<Real>(p[0]);
       position_.y[v] = static_cast<Real>(p[1]);
       position_.z[v] = static_cast<Real>(p[2]);
-      if (!setup.initial_velocities.empty() && !fixed_[v]) {
-        velocity_.x[v] = static_cast<Real>(setup.initial_velocities[v][0]);
-        velocity_.y[v] = static_cast<Real>(setup.initial_velocities[v][1]);
-        velocity_.z[v] = static_cast<Real>(setup.initial_velocities[v][2]);
+      if (!setup.initial_velocities.empty()) {
+        const unsigned char held = held_at_start[v];
+        velocity_.x[v] = kernels::axis_fixed(held, 0) ? Real(0) : static_cast<Real>(setup.initial_velocities[v][0]);
+        velocity_.y[v] = kernels::axis_fixed(held, 1) ? Real(0) : static_cast<Real>(setup.initial_velocities[v][1]);
+        velocity_.z[v] = kernels::axis_fixed(held, 2) ? Real(0) : static_cast<Real>(setup.initial_velocities[v][2]);
       }
     }
     const bool probe_force = setup.probe && setup.probe->mode == ProbeLoad::Mode::Force;
-    if (setup.probe && !probe_force) {
-      for (const auto v : setup.probe->vertices) fixed_[static_cast<std::size_t>(v)] = 1;  // moved kinematically
-    }
     if (probe_force && setup.external_forces.empty()) force_.resize(n_);
     if (!setup.external_forces.empty()) {
       force_.resize(n_);
@@ -88,6 +91,31 @@ class CpuSimulationImpl final : public CpuSimulation {
     network_view_.law.law = setup.law;
     network_view_.law.k2_over_k1 = static_cast<Real>(setup.basafa_k2_over_k1);
     network_view_.law.xc = static_cast<Real>(setup.basafa_xc);
+    for (const Tetrahedron& t : setup.tetrahedra) corners_.insert(corners_.end(), t.begin(), t.end());
+    if (setup_.tetrahedron_field) {
+      const TetrahedronField& field = *setup_.tetrahedron_field;
+      field_rest_inverse_ = convert(field.rest_inverse);
+      field_rest_volume_ = convert(field.rest_volume);
+      field_youngs_modulus_ = convert(field.youngs_modulus);
+      field_poisson_ratio_ = convert(field.poisson_ratio);
+      field_bulk_modulus_ = convert(field.bulk_modulus);
+      field_damping_ = convert(field.stiffness_damping);
+      corner_force_.assign(12 * field.size(), Real(0));
+      const auto data_or_null = [](const std::vector<Real>& values) { return values.empty() ? nullptr : values.data(); };
+      field_view_.law = field.law;
+      field_view_.count = static_cast<int>(field.size());
+      field_view_.corners = corners_.data();
+      field_view_.rest_inverse = field_rest_inverse_.data();
+      field_view_.rest_volume = field_rest_volume_.data();
+      field_view_.youngs_modulus = data_or_null(field_youngs_modulus_);
+      field_view_.poisson_ratio = data_or_null(field_poisson_ratio_);
+      field_view_.bulk_modulus = data_or_null(field_bulk_modulus_);
+      field_view_.stiffness_damping = data_or_null(field_damping_);
+      field_view_.strain_table = {nullptr, nullptr, 0};
+      if (setup_.strain_stiffness && field.law == kernels::TetrahedronLaw::CorotationalLinear)
+        field_view_.strain_table = strain_table_view(*setup_.strain_stiffness);
+      corner_view_ = {field.corner_offset.data(), field.corner_index.data(), corner_force_.data()};
+    }
     loads_.mass = mass_.data();
     loads_.fixed = fixed_.data();
     loads_.rest_x = rest_.x.data();
@@ -101,6 +129,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     loads_.gravity_z = static_cast<Real>(setup.gravity[2]);
     loads_.gamma0 = static_cast<Real>(setup.nodal_damping_gamma0);
     loads_.gamma1 = static_cast<Real>(setup.nodal_damping_gamma1);
+    loads_.mass_damping = static_cast<Real>(setup.mass_damping);
     h_ = static_cast<Real>(stability.time_step);
     const Integrator scheme = setup.integrator;
     if (scheme == Integrator::VelocityVerlet || scheme == Integrator::RungeKutta4) {
@@ -112,18 +141,16 @@ class CpuSimulationImpl final : public CpuSimulation {
       for (auto& k : rk_velocity_) k.resize(n_);
       for (auto& k : rk_acceleration_) k.resize(n_);
     }
+    if (!setup_.tetrahedra.empty()) save_checkpoint();
   }
 
   bool advance(std::size_t steps, DiagnosticList& diagnostics) override {
-    if (non_finite_) return false;
+    if (stopped_) return false;
     for (std::size_t i = 0; i < steps; ++i) {
-      apply_probe(time(), true);
-      if (setup_.strain_stiffness) look_up_stiffness();
-      if (!step(diagnostics)) return false;
-      ++steps_taken_;
-      apply_probe(time(), false);
-      if (!check_finite(diagnostics)) return false;
+      if (!one_step(diagnostics)) return fail();
+      if (steps_taken_ % kCheckEvery == 0 && !check(diagnostics)) return fail();
     }
+    if (steps_taken_ % kCheckEvery != 0 && !check(diagnostics)) return fail();
     return true;
   }
 
@@ -143,6 +170,7 @@ class CpuSimulationImpl final : public CpuSimulation {
   std::vector<Point3> velocities() const override { return to_points(velocity_); }
   const StabilityReport& stability() const override { return stability_; }
   const std::optional<NonFiniteReport>& non_finite() const override { return non_finite_; }
+  const InversionReport& inversions() const override { return inversions_; }
   int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
 
   double kinetic_energy() const override { return sim::kinetic_energy(setup_, velocities()); }
@@ -165,13 +193,133 @@ class CpuSimulationImpl final : public CpuSimulation {
     return {p.x.data(), p.y.data(), p.z.data(), v.x.data(), v.y.data(), v.z.data()};
   }
 
+  // a(x, v) for every vertex: the element pass first (when the model has elements), then one gather per vertex with
+  // the model's forces, dispatched once per call.
   void accelerations(const Vector3Arrays<Real>& p, const Vector3Arrays<Real>& v, Vector3Arrays<Real>& a) {
     const kernels::StateView<Real> state = view(p, v);
+    if (setup_.tetrahedron_field) {
+      pool_.run(static_cast<std::size_t>(field_view_.count), [&](std::size_t begin, std::size_t end) {
+        for (std::size_t e = begin; e < end; ++e)
+          kernels::tetrahedron_corner_forces(static_cast<int>(e), field_view_, state, corner_force_.data());
+      });
+      if (setup_.model == ForceModel::CorotationalFem) {
+        vertex_pass(kernels::ElementForces<Real>{corner_view_}, state, a);
+      } else {
+        vertex_pass(kernels::SpringAndElementForces<Real>{network_view_, corner_view_}, state, a);
+      }
+      return;
+    }
+    vertex_pass(kernels::SpringForces<Real>{network_view_}, state, a);
+  }
+
+  template <typename Forces>
+  void vertex_pass(const Forces& forces, const kernels::StateView<Real>& state, Vector3Arrays<Real>& a) {
     pool_.run(n_, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
-        kernels::vertex_acceleration(static_cast<int>(i), network_view_, state, loads_, a.x[i], a.y[i], a.z[i]);
+        kernels::vertex_acceleration(static_cast<int>(i), forces, state, loads_, a.x[i], a.y[i], a.z[i]);
       }
     });
+  }
+
+  bool one_step(DiagnosticList& diagnostics) {
+    apply_probe(time(), true);
+    if (setup_.strain_stiffness && !setup_.springs.stiffness.empty()) look_up_stiffness();
+    if (!step(diagnostics)) return false;
+    ++steps_taken_;
+    apply_probe(time(), false);
+    return check_finite(diagnostics);
+  }
+
+  bool fail() {
+    stopped_ = true;
+    return false;
+  }
+
+  // The checks made every kCheckEvery steps and at the end of every advance: inversions (the first one located
+  // exactly by replaying from the last check) and the displacement the nodal damping's bound assumed.
+  bool check(DiagnosticList& diagnostics) {
+    if (!check_displacement_bound(diagnostics)) return false;
+    if (setup_.tetrahedra.empty()) return true;
+    InversionCount found = count_inversions();
+    if (found.count > 0 && inversions_.largest_count == 0) {
+      // Replay from the last check without an inversion, one step at a time, to the first step with one.
+      const std::size_t failed_by = steps_taken_;
+      restore_checkpoint();
+      found = count_inversions();
+      while (steps_taken_ < failed_by && found.count == 0) {
+        if (!one_step(diagnostics)) return false;
+        found = count_inversions();
+      }
+      inversions_.first_step = steps_taken_;
+      inversions_.first_time = time();
+      inversions_.first_element = found.first;
+      inversions_.largest_count = found.count;
+      inversions_.current_count = found.count;
+      if (setup_.on_inversion == InversionPolicy::Stop) {
+        diagnostics.error(setup_.source_range, inversion_message(setup_, inversions_) + "; the scene's on_inversion is stop");
+        return false;
+      }
+      diagnostics.warning(setup_.source_range, "inverted-elements", inversion_message(setup_, inversions_));
+      while (steps_taken_ < failed_by) {
+        if (!one_step(diagnostics)) return false;
+      }
+      found = count_inversions();
+    }
+    inversions_.current_count = found.count;
+    inversions_.largest_count = std::max(inversions_.largest_count, found.count);
+    if (inversions_.largest_count == 0) save_checkpoint();
+    return true;
+  }
+
+  InversionCount count_inversions() const {
+    InversionCount found;
+    for (std::size_t e = 0; e < setup_.tetrahedra.size(); ++e) {
+      if (!kernels::tetrahedron_inverted(static_cast<int>(e), corners_.data(), position_.x.data(), position_.y.data(),
+                                         position_.z.data()))
+        continue;
+      if (found.count == 0) found.first = static_cast<std::int32_t>(e);
+      ++found.count;
+    }
+    return found;
+  }
+
+  bool check_displacement_bound(DiagnosticList& diagnostics) {
+    if (!(setup_.nodal_damping_gamma1 > 0.0) || !std::isfinite(stability_.assumed_displacement_max)) return true;
+    for (std::size_t v = 0; v < n_; ++v) {
+      const double dx = static_cast<double>(position_.x[v]) - setup_.rest_positions[v][0];
+      const double dy = static_cast<double>(position_.y[v]) - setup_.rest_positions[v][1];
+      const double dz = static_cast<double>(position_.z[v]) - setup_.rest_positions[v][2];
+      const double moved = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (moved <= stability_.assumed_displacement_max) continue;
+      diagnostics.error(setup_.source_range, displacement_bound_message(v, moved, steps_taken_));
+      return false;
+    }
+    return true;
+  }
+
+  std::string displacement_bound_message(std::size_t v, double moved, std::size_t step) const {
+    std::ostringstream message;
+    message << "vertex " << v << " moved " << moved << " m from rest by step " << step
+            << ", beyond the " << stability_.assumed_displacement_max
+            << " m the stable time step assumed for the nodal damping gamma1 |x - x0| (gamma1 = "
+            << setup_.nodal_damping_gamma1 << " N s/m^2); give a smaller dt explicitly or lower gamma1";
+    return message.str();
+  }
+
+  void save_checkpoint() {
+    checkpoint_position_ = position_;
+    checkpoint_velocity_ = velocity_;
+    checkpoint_acceleration_ = acceleration_;
+    checkpoint_have_acceleration_ = have_acceleration_;
+    checkpoint_step_ = steps_taken_;
+  }
+
+  void restore_checkpoint() {
+    position_ = checkpoint_position_;
+    velocity_ = checkpoint_velocity_;
+    acceleration_ = checkpoint_acceleration_;
+    have_acceleration_ = checkpoint_have_acceleration_;
+    steps_taken_ = checkpoint_step_;
   }
 
   template <typename Update>
@@ -251,7 +399,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     const auto& kv = rk_velocity_;
     const auto& ka = rk_acceleration_;
     for_each_vertex([&](std::size_t i) {
-      if (fixed_[i]) return;
+      if (fixed_[i] == kernels::kAllAxesFixed) return;
       position_.x[i] = kernels::runge_kutta4_combine(position_.x[i], kv[0].x[i], kv[1].x[i], kv[2].x[i], kv[3].x[i], h);
       position_.y[i] = kernels::runge_kutta4_combine(position_.y[i], kv[0].y[i], kv[1].y[i], kv[2].y[i], kv[3].y[i], h);
       position_.z[i] = kernels::runge_kutta4_combine(position_.z[i], kv[0].z[i], kv[1].z[i], kv[2].z[i], kv[3].z[i], h);
@@ -261,11 +409,11 @@ class CpuSimulationImpl final : public CpuSimulation {
     });
   }
 
-  // Baraff & Witkin's linearised backward Euler (kernels/implicit_math.h), solved with Eigen's conjugate gradient
-  // and its Jacobi (diagonal) preconditioner; fixed vertices become identity rows with a zero right-hand side.
+  // Baraff & Witkin's linearised backward Euler (kernels/implicit_math.h), (M + h D + h^2 K) dv = h (f0 - h K v0)
+  // with the model's tangent (model_tangent.h), solved with Eigen's conjugate gradient and its Jacobi (diagonal)
+  // preconditioner; fixed vertices become identity rows with a zero right-hand side.
   bool implicit_euler_step(DiagnosticList& diagnostics) {
     const double h = static_cast<double>(h_);
-    const SpringNetwork& net = setup_.springs;
     const std::size_t dofs = 3 * n_;
     accelerations(position_, velocity_, acceleration_);
     Eigen::VectorXd rhs(static_cast<Eigen::Index>(dofs));
@@ -281,62 +429,32 @@ class CpuSimulationImpl final : public CpuSimulation {
         v0[row] = v[axis];
       }
     }
+    // The springs' current stiffness (a strain table's last lookup), as the forces use.
+    const ModelTangent tangent = model_tangent(setup_, positions(), current_stiffness());
+    rhs -= h * h * (tangent.stiffness * v0);
+    Eigen::SparseMatrix<double> system = h * h * tangent.stiffness + h * tangent.damping;
+    system.prune([this](Eigen::Index row, Eigen::Index column, double) {
+      return !dof_held(row) && !dof_held(column);
+    });
     triplets_.clear();
-    const kernels::SpringLawParameters<double> law{setup_.law, setup_.basafa_k2_over_k1, setup_.basafa_xc};
-    for (std::size_t s = 0; s < net.size(); ++s) {
-      const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
-      double stiffness_block[6], block[6];
-      // The springs' current stiffness (a strain table's last lookup), as the forces use.
-      if (!kernels::implicit_spring_blocks(static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]),
-                                           static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]),
-                                           static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]),
-                                           net.rest_length[s], static_cast<double>(stiffness_[s]),
-                                           damping_.empty() ? 0.0 : static_cast<double>(damping_[s]), law, h,
-                                           stiffness_block, block)) {
-        continue;
-      }
-      // rhs += h^2 df/dx v0: for vertex a, -K_s (v_a - v_b); for b, -K_s (v_b - v_a).
-      double relative[3], kv[3];
-      for (std::size_t c = 0; c < 3; ++c) {
-        relative[c] = v0[static_cast<Eigen::Index>(3 * a + c)] - v0[static_cast<Eigen::Index>(3 * b + c)];
-      }
-      kernels::symmetric_multiply(stiffness_block, relative, kv);
-      for (std::size_t r = 0; r < 3; ++r) {
-        rhs[static_cast<Eigen::Index>(3 * a + r)] -= h * h * kv[r];
-        rhs[static_cast<Eigen::Index>(3 * b + r)] += h * h * kv[r];
-      }
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) {
-          const double entry = block[kernels::symmetric_index(r, c)];
-          const auto ra = static_cast<int>(3 * a) + r, rb = static_cast<int>(3 * b) + r;
-          const auto ca = static_cast<int>(3 * a) + c, cb = static_cast<int>(3 * b) + c;
-          if (!fixed_[a]) triplets_.emplace_back(ra, ca, entry);
-          if (!fixed_[b]) triplets_.emplace_back(rb, cb, entry);
-          if (!fixed_[a] && !fixed_[b]) {
-            triplets_.emplace_back(ra, cb, -entry);
-            triplets_.emplace_back(rb, ca, -entry);
-          }
-        }
-      }
-    }
     for (std::size_t i = 0; i < n_; ++i) {
-      double diagonal = setup_.mass[i];
-      if (!fixed_[i]) {
-        const double dx = static_cast<double>(position_.x[i]) - setup_.rest_positions[i][0];
-        const double dy = static_cast<double>(position_.y[i]) - setup_.rest_positions[i][1];
-        const double dz = static_cast<double>(position_.z[i]) - setup_.rest_positions[i][2];
-        diagonal +=
-            h * (setup_.nodal_damping_gamma0 + setup_.nodal_damping_gamma1 * std::sqrt(dx * dx + dy * dy + dz * dz));
-      } else {
-        diagonal = 1.0;
-        for (std::size_t axis = 0; axis < 3; ++axis) rhs[static_cast<Eigen::Index>(3 * i + axis)] = 0.0;
-      }
+      const double dx = static_cast<double>(position_.x[i]) - setup_.rest_positions[i][0];
+      const double dy = static_cast<double>(position_.y[i]) - setup_.rest_positions[i][1];
+      const double dz = static_cast<double>(position_.z[i]) - setup_.rest_positions[i][2];
+      const double diagonal =
+          setup_.mass[i] + h * (setup_.nodal_damping_gamma0 +
+                                setup_.nodal_damping_gamma1 * std::sqrt(dx * dx + dy * dy + dz * dz) +
+                                setup_.mass_damping * setup_.mass[i]);
       for (std::size_t axis = 0; axis < 3; ++axis) {
-        triplets_.emplace_back(static_cast<int>(3 * i + axis), static_cast<int>(3 * i + axis), diagonal);
+        const auto dof = static_cast<Eigen::Index>(3 * i + axis);
+        // A held axis is an identity row with a zero right-hand side.
+        if (dof_held(dof)) rhs[dof] = 0.0;
+        triplets_.emplace_back(static_cast<int>(dof), static_cast<int>(dof), dof_held(dof) ? 1.0 : diagonal);
       }
     }
-    Eigen::SparseMatrix<double> system(static_cast<Eigen::Index>(dofs), static_cast<Eigen::Index>(dofs));
-    system.setFromTriplets(triplets_.begin(), triplets_.end());
+    Eigen::SparseMatrix<double> diagonal_part(static_cast<Eigen::Index>(dofs), static_cast<Eigen::Index>(dofs));
+    diagonal_part.setFromTriplets(triplets_.begin(), triplets_.end());
+    system += diagonal_part;
     Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
                              Eigen::DiagonalPreconditioner<double>>
         solver;
@@ -354,10 +472,10 @@ class CpuSimulationImpl final : public CpuSimulation {
       message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after "
               << solver.iterations() << " iterations with relative residual " << solver.error() << " (tolerance "
               << setup_.implicit.tolerance << "); raise max_iterations or use a smaller dt";
-      diagnostics.warning(SourceRange{}, "cg-not-converged", message.str());
+      diagnostics.warning(setup_.source_range, "cg-not-converged", message.str());
     }
     for (std::size_t i = 0; i < n_; ++i) {
-      if (fixed_[i]) continue;
+      if (fixed_[i] == kernels::kAllAxesFixed) continue;
       velocity_.x[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i)]);
       velocity_.y[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i + 1)]);
       velocity_.z[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i + 2)]);
@@ -366,6 +484,10 @@ class CpuSimulationImpl final : public CpuSimulation {
       position_.z[i] += h_ * velocity_.z[i];
     }
     return true;
+  }
+
+  bool dof_held(Eigen::Index dof) const {
+    return kernels::axis_fixed(fixed_[static_cast<std::size_t>(dof / 3)], static_cast<int>(dof % 3));
   }
 
   bool check_finite(DiagnosticList& diagnostics) {
@@ -389,7 +511,7 @@ class CpuSimulationImpl final : public CpuSimulation {
                 << " and " << setup_.springs.second[s] << ")";
       }
       message << "; lower dt, raise damping, or check the loads";
-      diagnostics.error(SourceRange{}, message.str());
+      diagnostics.error(setup_.source_range, message.str());
       return false;
     }
     return true;
@@ -485,10 +607,20 @@ class CpuSimulationImpl final : public CpuSimulation {
   Vector3Arrays<Real> rk_velocity_[4], rk_acceleration_[4];
   kernels::SpringNetworkView<Real> network_view_{};
   kernels::VertexLoads<Real> loads_{};
+  std::vector<int> corners_;  // 4 per tetrahedron
+  std::vector<Real> field_rest_inverse_, field_rest_volume_, field_youngs_modulus_, field_poisson_ratio_,
+      field_bulk_modulus_, field_damping_, corner_force_;
+  kernels::TetrahedronFieldView<Real> field_view_{};
+  kernels::CornerForceView<Real> corner_view_{};
   Real h_ = Real(0);
   bool have_acceleration_ = false;
   std::size_t steps_taken_ = 0;
   std::optional<NonFiniteReport> non_finite_;
+  InversionReport inversions_;
+  bool stopped_ = false;
+  Vector3Arrays<Real> checkpoint_position_, checkpoint_velocity_, checkpoint_acceleration_;
+  bool checkpoint_have_acceleration_ = false;
+  std::size_t checkpoint_step_ = 0;
   std::vector<Eigen::Triplet<double>> triplets_;
   int implicit_iterations_max_ = 0;
   bool cg_warning_given_ = false;
@@ -512,6 +644,7 @@ double elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& p
                          : net.stiffness[s];
     energy += kernels::spring_potential_energy(length, rest, k, law);
   }
+  if (setup.tetrahedron_field) energy += element_elastic_energy(setup, positions);
   return energy;
 }
 
@@ -560,6 +693,7 @@ SimulationResult simulate(const SimulationSetup& setup, DiagnosticList& diagnost
   result.positions = simulation->positions();
   result.velocities = simulation->velocities();
   result.non_finite = simulation->non_finite();
+  result.inversions = simulation->inversions();
   result.implicit_max_iterations_used = simulation->implicit_max_iterations_used();
   return result;
 }

@@ -11,6 +11,19 @@ const Point3& start_position(const SimulationSetup& setup, std::size_t v) {
   return setup.initial_positions.empty() ? setup.rest_positions[v] : setup.initial_positions[v];
 }
 
+std::vector<unsigned char> held_axes(const SimulationSetup& setup) {
+  const std::size_t n = setup.rest_positions.size();
+  std::vector<unsigned char> held(n, 0);
+  if (setup.fixed_axes.size() == n)
+    for (std::size_t v = 0; v < n; ++v) held[v] = static_cast<unsigned char>(setup.fixed_axes[v] & kernels::kAllAxesFixed);
+  for (const auto v : setup.fixed_vertices)
+    if (v >= 0 && static_cast<std::size_t>(v) < n) held[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
+  if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement)
+    for (const auto v : setup.probe->vertices)
+      if (v >= 0 && static_cast<std::size_t>(v) < n) held[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
+  return held;
+}
+
 int implicit_iteration_limit(const SimulationSetup& setup) {
   return setup.implicit.max_iterations > 0 ? setup.implicit.max_iterations
                                            : static_cast<int>(6 * setup.rest_positions.size());
@@ -38,22 +51,9 @@ ProbeReading read_probe(const SimulationSetup& setup, double time, const std::ve
     for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] = share * probe.target[axis];
     return reading;
   }
-  const SpringNetwork& net = setup.springs;
-  const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
-  for (const auto vertex : probe.vertices) {
-    const auto v = static_cast<std::size_t>(vertex);
-    for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
-      const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
-      const auto o = static_cast<std::size_t>(net.adjacency_neighbour[static_cast<std::size_t>(e)]);
-      double f[3];
-      kernels::spring_force_on_vertex(positions[o][0] - positions[v][0], positions[o][1] - positions[v][1],
-                                      positions[o][2] - positions[v][2], velocities[o][0] - velocities[v][0],
-                                      velocities[o][1] - velocities[v][1], velocities[o][2] - velocities[v][2],
-                                      net.rest_length[s], stiffness[s], net.damping.empty() ? 0.0 : net.damping[s],
-                                      law, f[0], f[1], f[2]);
-      for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] -= f[axis];
-    }
-  }
+  const std::vector<Point3> forces = internal_forces(setup, positions, velocities, stiffness, probe.vertices);
+  for (const Point3& f : forces)
+    for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] -= f[axis];
   return reading;
 }
 

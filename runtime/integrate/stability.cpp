@@ -2,6 +2,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "kernels/integrator_math.h"
+#include "kernels/tetrahedron_math.h"
 #include "runtime/integrate/simulation.h"
 
 namespace fmpc::sim {
@@ -32,8 +34,9 @@ std::string number(double value) {
 }
 
 // The largest tangent stiffness a spring can have: k for the linear law, K1 + 3 K2 Xc^2 (per unit length) for the
-// Basafa-Farahmand law, whose slope grows with the strain up to Xc and stays constant beyond.
-// With a strain table, k is the largest value the table can give the spring (the step must stay stable there).
+// Basafa-Farahmand law, whose slope grows with the strain up to Xc and stays constant beyond. The transverse
+// stiffness T / l of a stretched spring is below k (T / l = k (l - l0) / l). With a strain table, k is the largest
+// value the table can give the spring (the step must stay stable there).
 double tangent_stiffness_bound(const SimulationSetup& setup, double table_modulus_max, std::size_t spring) {
   const double k = setup.strain_stiffness ? table_modulus_max * setup.strain_stiffness->stiffness_per_modulus[spring]
                                           : setup.springs.stiffness[spring];
@@ -43,124 +46,185 @@ double tangent_stiffness_bound(const SimulationSetup& setup, double table_modulu
   return k;
 }
 
+// How far a vertex may move from rest before the nodal damping gamma1 |x - x0| exceeds what the step was chosen
+// for: the largest of the initial displacement and the mesh's extent plus the probe's target (a vertex that moves
+// further stops the run with an error naming it; the bound is never silently left).
+double assumed_displacement(const SimulationSetup& setup) {
+  double initial = 0.0;
+  for (std::size_t v = 0; v < setup.initial_positions.size() && v < setup.rest_positions.size(); ++v)
+    initial = std::max(initial, distance(setup.initial_positions[v], setup.rest_positions[v]));
+  Point3 lo = setup.rest_positions.empty() ? Point3{0.0, 0.0, 0.0} : setup.rest_positions.front(), hi = lo;
+  for (const Point3& p : setup.rest_positions)
+    for (std::size_t i = 0; i < 3; ++i) {
+      lo[i] = std::min(lo[i], p[i]);
+      hi[i] = std::max(hi[i], p[i]);
+    }
+  double probe = 0.0;
+  if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement)
+    probe = std::sqrt(setup.probe->target[0] * setup.probe->target[0] + setup.probe->target[1] * setup.probe->target[1] +
+                      setup.probe->target[2] * setup.probe->target[2]);
+  return std::max(initial, distance(lo, hi) + probe);
+}
+
 }  // namespace
 
 std::optional<StabilityReport> check_stability(const SimulationSetup& setup, DiagnosticList& diagnostics) {
   if (!validate_setup(setup, diagnostics)) return std::nullopt;
   const SpringNetwork& net = setup.springs;
   const std::size_t n = setup.mass.size();
-  std::vector<bool> fixed(n, false);
-  for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = true;
+  // Vertices held along every axis take no part in the bounds; a vertex held along some axes still vibrates along
+  // the others (its bound is kept, which is conservative).
+  const std::vector<unsigned char> held = held_axes(setup);
   StabilityReport report;
-  // Rayleigh quotient argument: x^T K x = sum_s k_s (u_s . (x_a - x_b))^2 <= sum_i |x_i|^2 2 sum_j k_ij, so
-  // w^2 = x^T K x / x^T M x <= max_i 2 sum_j k_ij / m_i (the bound in DESIGN section 7).
-  // The nodal damping gamma0 + gamma1 |x - x0| is bounded with the largest initial displacement; a run that moves
-  // further can exceed it, and the NaN/Inf check then stops it.
-  double largest_displacement = 0.0;
-  for (std::size_t v = 0; v < setup.initial_positions.size() && v < setup.rest_positions.size(); ++v) {
-    largest_displacement =
-        std::max(largest_displacement, distance(setup.initial_positions[v], setup.rest_positions[v]));
-  }
-  const double nodal_damping = setup.nodal_damping_gamma0 + setup.nodal_damping_gamma1 * largest_displacement;
+  if (setup.nodal_damping_gamma1 > 0.0) report.assumed_displacement_max = assumed_displacement(setup);
+  const double nodal_damping =
+      setup.nodal_damping_gamma0 +
+      (setup.nodal_damping_gamma1 > 0.0 ? setup.nodal_damping_gamma1 * report.assumed_displacement_max : 0.0);
   const double table_modulus_max =
       setup.strain_stiffness ? *std::max_element(setup.strain_stiffness->modulus.begin(),
                                                  setup.strain_stiffness->modulus.end())
                              : 0.0;
-  double omega_squared_max = 0.0;
-  double euler_limit = std::numeric_limits<double>::infinity();
-  for (std::size_t v = 0; v < n; ++v) {
-    if (fixed[v]) continue;
-    double stiffness_sum = 0.0, damping_sum = 0.0;
-    for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
-      const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
-      stiffness_sum += tangent_stiffness_bound(setup, table_modulus_max, s);
-      if (!net.damping.empty()) damping_sum += net.damping[s];
+  // Per-vertex stiffness and damping bounds (x^T K x <= sum_i s_i |x_i|^2, the same for C).
+  std::vector<double> stiffness_sum(n, 0.0), damping_sum(n, 0.0);
+  double spring_ratio_min = std::numeric_limits<double>::infinity();  // min_s c_s / k_s
+  for (std::size_t s = 0; s < net.size(); ++s) {
+    const double k = tangent_stiffness_bound(setup, table_modulus_max, s);
+    const double c = net.damping.empty() ? 0.0 : net.damping[s];
+    for (const auto v : {net.first[s], net.second[s]}) {
+      stiffness_sum[static_cast<std::size_t>(v)] += 2.0 * k;
+      damping_sum[static_cast<std::size_t>(v)] += 2.0 * c;
     }
-    const double omega_squared = 2.0 * stiffness_sum / setup.mass[v];
+    if (k > 0.0) spring_ratio_min = std::min(spring_ratio_min, c / k);
+  }
+  double element_ratio_min = std::numeric_limits<double>::infinity();  // min_e beta_e
+  if (setup.tetrahedron_field) {
+    const TetrahedronField& field = *setup.tetrahedron_field;
+    for (std::size_t e = 0; e < field.size(); ++e) {
+      const kernels::TetrahedronMaterial<double> m = tetrahedron_material(field, e);
+      const bool table = setup.strain_stiffness && m.law == kernels::TetrahedronLaw::CorotationalLinear;
+      const double bound = kernels::tetrahedron_stiffness_bound(m, table ? table_modulus_max : m.youngs_modulus);
+      for (const auto v : setup.tetrahedra[e]) {
+        stiffness_sum[static_cast<std::size_t>(v)] += bound;
+        damping_sum[static_cast<std::size_t>(v)] += m.stiffness_damping * bound;
+      }
+      element_ratio_min = std::min(element_ratio_min, m.stiffness_damping);
+    }
+  }
+  double omega_squared_max = 0.0, mass_damping_min = std::numeric_limits<double>::infinity();
+  for (std::size_t v = 0; v < n; ++v) {
+    if (held[v] == kernels::kAllAxesFixed) continue;
+    const double omega_squared = stiffness_sum[v] / setup.mass[v];
     if (omega_squared > omega_squared_max) {
       omega_squared_max = omega_squared;
       report.limiting_vertex = static_cast<std::int32_t>(v);
     }
-    report.damping_rate_max = std::max(report.damping_rate_max, (2.0 * damping_sum + nodal_damping) / setup.mass[v]);
-    // Forward Euler is stable on an underdamped mode only while h <= beta / w^2; use the lowest damping a vertex
-    // can see (sum c / m, no factor 2) over the highest frequency bound.
-    if (omega_squared > 0.0) {
-      euler_limit = std::min(euler_limit, (damping_sum + setup.nodal_damping_gamma0) / setup.mass[v] / omega_squared);
-    }
+    report.damping_rate_max =
+        std::max(report.damping_rate_max, (damping_sum[v] + nodal_damping) / setup.mass[v] + setup.mass_damping);
+    mass_damping_min = std::min(mass_damping_min, setup.mass_damping + setup.nodal_damping_gamma0 / setup.mass[v]);
   }
   report.omega_max = std::sqrt(omega_squared_max);
   const double w = report.omega_max;
   const double beta = report.damping_rate_max;
   // rho bounds |lambda| of the test equation's roots lambda = -beta/2 +- sqrt(beta^2/4 - w^2).
   const double rho = beta / 2.0 + std::sqrt(w * w + beta * beta / 4.0);
-  SourceRange range;
+  const double infinity = std::numeric_limits<double>::infinity();
+  double damped_modes_limit = infinity;  // forward Euler, without the undamped modes
   switch (setup.integrator) {
     case Integrator::SemiImplicitEuler:
     case Integrator::VelocityVerlet:
       // Symplectic Euler on x'' + beta x' + w^2 x = 0 is stable iff h <= 2 / (beta/2 + sqrt(w^2 + beta^2/4))
       // (Jury criterion on its 2x2 step matrix: trace 2 - beta h - w^2 h^2, determinant 1 - beta h); velocity
       // Verlet has the same limit h w <= 2 without damping and is given the same bound with it.
-      report.critical_time_step = rho > 0.0 ? 2.0 / rho : std::numeric_limits<double>::infinity();
+      report.critical_time_step = rho > 0.0 ? 2.0 / rho : infinity;
       report.limit = "h <= 2 / (beta/2 + sqrt(w^2 + beta^2/4))";
       break;
     case Integrator::RungeKutta4:
       // |h lambda| <= 2.5 lies inside RK4's stability region for every Re(lambda) <= 0 (checked numerically:
       // max |R(z)| = 0.873 on that half circle); the region reaches 2.83 on the imaginary axis.
-      report.critical_time_step = rho > 0.0 ? 2.5 / rho : std::numeric_limits<double>::infinity();
+      report.critical_time_step = rho > 0.0 ? 2.5 / rho : infinity;
       report.limit = "h <= 2.5 / (beta/2 + sqrt(w^2 + beta^2/4))";
       break;
-    case Integrator::ForwardEuler:
-      // |1 + h lambda| <= 1 for lambda = -beta/2 +- i sqrt(w^2 - beta^2/4) gives h <= beta / w^2 per mode. The
-      // per-vertex estimate of beta / w^2 is not a bound for the coupled, prestressed network: a 0.1 m box hanging
-      // under gravity (tests/gpu, bench/sim) diverged after about 600 steps at 0.8 x the estimate, on the CPU and
-      // the GPU alike, and stayed bounded for 10,000 steps at 0.5 x and below. The stated critical step is
-      // therefore half the estimate.
-      report.critical_time_step = 0.5 * euler_limit;
-      report.limit = "h <= min_i (sum_j c_ij / m_i) / (2 sum_j k_ij / m_i) / 2";
-      if (omega_squared_max > 0.0 && !(euler_limit > 0.0) && setup.refuse_unstable_time_step) {
-        diagnostics.error(range,
-                          "forward Euler is unstable at every time step for undamped springs (|1 + i h w| > 1); "
-                          "add damping or use semi-implicit Euler");
-        return std::nullopt;
-      }
+    case Integrator::ForwardEuler: {
+      // A mode with m = x*Mx, c = x*Cx, k = x*Kx (x its eigenvector) has m l^2 + c l + k = 0. Underdamped, forward
+      // Euler needs |1 + h l|^2 = 1 - h c/m + h^2 k/m <= 1, i.e. h <= c / k; overdamped, h |l| <= 2 with |l| <= c/m
+      // <= beta_max. Mass and nodal damping act on every motion: c >= alpha_min m >= (alpha_min / w_max^2) k for every
+      // mode, so h <= alpha_min / w_max^2 is stable whatever the prestress. Dashpots damp only along springs and
+      // element damping only the elements' own stiffness: a stretched spring's sideways stiffness (T/l)(I - u u^T) and
+      // a loaded element's rotation are undamped by them, so without mass or nodal damping (alpha_min = 0) those
+      // modes grow at every step; modes the dashpots do reach need h <= min_s c_s / k_s (or beta_e).
+      const double ratio = std::min(spring_ratio_min, element_ratio_min);
+      const double overdamped = beta > 0.0 ? 2.0 / beta : infinity;
+      damped_modes_limit = std::min(ratio, overdamped);
+      report.undamped_modes = omega_squared_max > 0.0 && !(mass_damping_min > 0.0);
+      const double mass_term = omega_squared_max > 0.0 ? mass_damping_min / omega_squared_max : infinity;
+      report.critical_time_step = report.undamped_modes ? 0.0 : std::min(mass_term, overdamped);
+      report.limit = report.undamped_modes ? "h <= min(min_s c_s / k_s, min_e beta_e, 2 / beta) for the damped modes"
+                                           : "h <= min(alpha_min / w^2, 2 / beta)";
       break;
+    }
     case Integrator::ImplicitEuler:
-      report.critical_time_step = std::numeric_limits<double>::infinity();
+      report.critical_time_step = infinity;
       report.limit = "unconditionally stable";
       break;
   }
+  const SourceRange& dt_range = setup.time_step_range;
   if (!setup.time_step) {
     report.automatic = true;
     double reference = report.critical_time_step;
     if (setup.integrator == Integrator::ImplicitEuler) {
       // Stable at any step; 'auto' takes 10 explicit critical steps, which keeps the numerical damping moderate.
-      reference = rho > 0.0 ? 10.0 * 2.0 / rho : std::numeric_limits<double>::infinity();
+      reference = rho > 0.0 ? 10.0 * 2.0 / rho : infinity;
+    }
+    if (setup.integrator == Integrator::ForwardEuler && report.undamped_modes) {
+      diagnostics.error(dt_range,
+                        "dt auto: forward Euler has no stable step here: the sideways vibrations of stretched springs "
+                        "and the rotations of loaded elements are damped by neither the dashpots nor the elements' "
+                        "stiffness-proportional damping, and forward Euler amplifies an undamped vibration at every "
+                        "step; add mass damping (damping: {rayleigh: {mass: ALPHA}}) or nodal damping (law: gamma0), "
+                        "or use semi_implicit_euler");
+      return std::nullopt;
     }
     if (!std::isfinite(reference) || !(reference > 0.0)) {
-      diagnostics.error(range,
+      diagnostics.error(dt_range,
                         std::isfinite(reference)
-                            ? "no stable time step exists for " + std::string(to_string(setup.integrator)) +
+                            ? "dt auto: no stable time step exists for " + std::string(to_string(setup.integrator)) +
                                   " without damping; add damping or use semi-implicit Euler"
-                            : "no time step can be derived (no spring acts on a free vertex); give dt explicitly");
+                            : "dt auto: no time step can be derived (no spring or element acts on a free vertex); "
+                              "give dt explicitly");
       return std::nullopt;
     }
     report.time_step = setup.stability_margin * reference;
     return report;
   }
   report.time_step = *setup.time_step;
-  if (report.time_step > report.critical_time_step) {
-    const std::string message = "time step " + number(report.time_step) + " s exceeds the " +
-                                to_string(setup.integrator) + " stability limit " + number(report.critical_time_step) +
-                                " s (" + report.limit + " with w_max = " + number(w) + " rad/s at vertex " +
+  const double limit =
+      setup.integrator == Integrator::ForwardEuler && report.undamped_modes ? damped_modes_limit : report.critical_time_step;
+  if (setup.integrator == Integrator::ForwardEuler && omega_squared_max > 0.0 && !(limit > 0.0) &&
+      setup.refuse_unstable_time_step) {
+    diagnostics.error(dt_range, "forward Euler is unstable at every time step for undamped springs (|1 + i h w| > 1); "
+                                "add damping or use semi-implicit Euler");
+    return std::nullopt;
+  }
+  if (report.time_step > limit) {
+    const std::string message = "dt: time step " + number(report.time_step) + " s exceeds the " +
+                                to_string(setup.integrator) + " stability limit " + number(limit) + " s (" +
+                                report.limit + " with w_max = " + number(w) + " rad/s at vertex " +
                                 std::to_string(report.limiting_vertex) + ", beta_max = " + number(beta) +
-                                " 1/s); use dt <= " + number(setup.stability_margin * report.critical_time_step) +
+                                " 1/s); use dt <= " + number(setup.stability_margin * limit) +
                                 " s, dt auto, or implicit Euler";
     if (!setup.refuse_unstable_time_step) {
-      diagnostics.warning(range, "unstable-time-step", message);
+      diagnostics.warning(dt_range, "unstable-time-step", message);
       return report;
     }
-    diagnostics.error(range, message);
+    diagnostics.error(dt_range, message);
     return std::nullopt;
+  }
+  if (setup.integrator == Integrator::ForwardEuler && report.undamped_modes) {
+    diagnostics.warning(dt_range, "undamped-modes",
+                        "forward Euler: the sideways vibrations of stretched springs and the rotations of loaded "
+                        "elements are undamped here and grow at any step (slowly at small steps; the NaN guard stops "
+                        "the run if they blow up); add mass damping (damping: {rayleigh: {mass: ALPHA}}) or nodal "
+                        "damping to make the step stable");
   }
   return report;
 }

@@ -27,6 +27,14 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
   if (!setup.external_forces.empty() && setup.external_forces.size() != n) {
     size_error("external forces", setup.external_forces.size());
   }
+  if (!setup.fixed_axes.empty() && setup.fixed_axes.size() != n) size_error("fixed axes", setup.fixed_axes.size());
+  for (std::size_t v = 0; v < setup.fixed_axes.size(); ++v) {
+    if (setup.fixed_axes[v] > 7) {
+      diagnostics.error(range, "vertex " + std::to_string(v) + " has fixed-axes mask " +
+                                   std::to_string(setup.fixed_axes[v]) + "; a mask holds bits 0 (x), 1 (y), 2 (z)");
+      break;
+    }
+  }
   for (std::size_t v = 0; v < setup.mass.size() && v < n; ++v) {
     if (!(setup.mass[v] > 0.0) || !std::isfinite(setup.mass[v])) {
       diagnostics.error(range, "vertex " + std::to_string(v) + " has mass " + std::to_string(setup.mass[v]) +

@@ -1,16 +1,13 @@
 #include "runtime/integrate/worker_pool.h"
 
+#if defined(__linux__)
+#include <sys/mman.h>
+#include <unistd.h>
+#endif
+
 namespace fmpc::sim {
 
-namespace {
-std::pair<std::size_t, std::size_t> chunk(std::size_t count, unsigned parts, unsigned index) {
-  const std::size_t begin = count * index / parts;
-  const std::size_t end = count * (index + 1) / parts;
-  return {begin, end};
-}
-}  // namespace
-
-WorkerPool::WorkerPool(unsigned threads) {
+WorkerPool::WorkerPool(unsigned threads, std::size_t grain) : grain_(grain) {
   for (unsigned i = 1; i < threads; ++i) workers_.emplace_back([this, i] { work(i); });
 }
 
@@ -26,7 +23,7 @@ WorkerPool::~WorkerPool() {
 void WorkerPool::work(unsigned index) {
   std::size_t seen = 0;
   for (;;) {
-    const std::function<void(std::size_t, std::size_t)>* task = nullptr;
+    const std::function<void(unsigned, std::size_t, std::size_t)>* task = nullptr;
     std::size_t count = 0;
     unsigned parts = 1;
     {
@@ -39,8 +36,8 @@ void WorkerPool::work(unsigned index) {
       parts = parts_;
     }
     if (index < parts) {
-      const auto [begin, end] = chunk(count, parts, index);
-      (*task)(begin, end);
+      const auto [begin, end] = chunk_range(count, parts, index);
+      (*task)(index, begin, end);
     }
     {
       std::lock_guard<std::mutex> lock(mutex_);
@@ -49,11 +46,16 @@ void WorkerPool::work(unsigned index) {
   }
 }
 
-void WorkerPool::run(std::size_t count, const std::function<void(std::size_t, std::size_t)>& task,
-                     std::size_t min_per_thread) {
-  const unsigned total = size();
-  if (total == 1 || count < 2 * min_per_thread) {
-    task(0, count);
+unsigned WorkerPool::parts(std::size_t count, std::size_t min_per_thread) const {
+  const std::size_t minimum = grain_ > 0 ? grain_ : min_per_thread;
+  return size() == 1 || count < 2 * minimum ? 1 : size();
+}
+
+void WorkerPool::run_parts(std::size_t count, const std::function<void(unsigned, std::size_t, std::size_t)>& task,
+                           std::size_t min_per_thread) {
+  const unsigned total = parts(count, min_per_thread);
+  if (total == 1) {
+    task(0, 0, count);
     return;
   }
   {
@@ -65,10 +67,34 @@ void WorkerPool::run(std::size_t count, const std::function<void(std::size_t, st
     ++generation_;
   }
   start_.notify_all();
-  const auto [begin, end] = chunk(count, total, 0);
-  task(begin, end);
+  const auto [begin, end] = chunk_range(count, total, 0);
+  task(0, begin, end);
   std::unique_lock<std::mutex> lock(mutex_);
   done_.wait(lock, [&] { return pending_ == 0; });
+}
+
+void WorkerPool::run(std::size_t count, const std::function<void(std::size_t, std::size_t)>& task,
+                     std::size_t min_per_thread) {
+  run_parts(count, [&task](unsigned, std::size_t begin, std::size_t end) { task(begin, end); }, min_per_thread);
+}
+
+void advise_huge_pages(const void* data, std::size_t bytes) {
+#if defined(MADV_HUGEPAGE)
+  const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+  const auto begin = reinterpret_cast<std::uintptr_t>(data) / page * page;
+  const auto end = reinterpret_cast<std::uintptr_t>(data) + bytes;
+  // Advice only: a kernel without THP refuses it, and the memory works the same.
+  (void)madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
+#else
+  (void)data;
+  (void)bytes;
+#endif
+}
+
+unsigned resolve_thread_count(unsigned requested, std::size_t work_items, std::size_t serial_below) {
+  if (requested > 0) return requested;
+  if (work_items < serial_below) return 1;
+  return std::max(1u, std::thread::hardware_concurrency());
 }
 
 }  // namespace fmpc::sim

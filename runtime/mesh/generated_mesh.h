@@ -1,5 +1,9 @@
 #pragma once
 // Tetrahedral meshes built in code, at any resolution, for tests, benchmarks and scenes without a mesh file.
+#include <cstdint>
+#include <optional>
+#include <string>
+
 #include "diagnostics/diagnostic.h"
 #include "runtime/mesh/mesh.h"
 
@@ -17,8 +21,27 @@ struct EllipsoidSpec {
   int resolution = 4;  // cells along each half-axis of the underlying cube
 };
 
-// A box of (cells_x+1)(cells_y+1)(cells_z+1) vertices; each cube is cut into 6 tetrahedra around its main diagonal
-// (Kuhn/Freudenthal subdivision), which makes neighbouring cubes share their face diagonals: a conforming mesh.
+// The largest generated mesh (docs/limits.md). A spec is sized before anything is allocated: its tetrahedra are
+// counted exactly and the memory the simulator needs for them is estimated (mesh, springs, CSR adjacency and
+// state: kEstimatedBytesPerTetrahedron, measured on a 60^3 box, see docs/limits.md). Two limits: 2^28 tetrahedra
+// (their corners, springs and CSR entries stay within the int32 indices of every backend), and the estimate within
+// this machine's physical memory (a 240^3 box, 83 million tetrahedra and 100 million springs, needs about 20 GiB).
+inline constexpr std::uint64_t kMaxGeneratedTetrahedra = std::uint64_t{1} << 28;  // 268,435,456
+inline constexpr std::uint64_t kEstimatedBytesPerTetrahedron = 256;
+
+// Physical memory in bytes (sysconf), 0 when unknown.
+std::uint64_t physical_memory_bytes();
+
+std::uint64_t tetrahedron_count(const BoxSpec& spec);        // 6 per cell
+std::uint64_t tetrahedron_count(const EllipsoidSpec& spec);  // a box of 2 * resolution cells per axis
+// nullopt when the mesh is within the limit; else what it makes, the estimate and the limit (the caller adds
+// what to change: cells, or resolution).
+std::optional<std::string> generated_mesh_too_large(std::uint64_t tetrahedra);
+
+// A box of (cells_x+1)(cells_y+1)(cells_z+1) vertices; each cube is cut into 6 tetrahedra around a main diagonal
+// (Kuhn/Freudenthal subdivision), mirrored along every axis whose cell index is odd, so that the cut has no preferred
+// direction (a 2 x 2 x 2 block of cells is symmetric under reflection in each axis) and neighbouring cubes share
+// their face diagonals: a conforming mesh.
 // Returns an empty mesh and an error for non-positive cell counts or sizes, or more than 2^31 vertices.
 Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics);
 

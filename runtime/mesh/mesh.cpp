@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
+
+#include "runtime/integrate/worker_pool.h"
 
 namespace fmpc::sim {
 
@@ -30,28 +31,57 @@ double triangle_area(const Mesh& mesh, const Triangle& t) {
                        mesh.points[static_cast<std::size_t>(t[2])]);
 }
 
-double distance(const Point3& a, const Point3& b) {
+double squared_distance(const Point3& a, const Point3& b) {
   const double dx = b[0] - a[0], dy = b[1] - a[1], dz = b[2] - a[2];
-  return std::sqrt(dx * dx + dy * dy + dz * dz);
+  return dx * dx + dy * dy + dz * dz;
 }
 
-std::vector<Triangle> boundary_triangles(const Mesh& mesh) {
-  // Faces of a positively oriented tetrahedron (a,b,c,d) with outward normals.
-  std::map<std::array<std::int32_t, 3>, std::pair<Triangle, int>> faces;
-  for (const Tetrahedron& t : mesh.tetrahedra) {
-    const Triangle oriented[4] = {{t[0], t[2], t[1]}, {t[0], t[1], t[3]}, {t[1], t[2], t[3]}, {t[0], t[3], t[2]}};
-    for (const Triangle& face : oriented) {
-      std::array<std::int32_t, 3> key = face;
-      std::sort(key.begin(), key.end());
-      auto [it, inserted] = faces.try_emplace(key, face, 0);
-      ++it->second.second;
-      (void)inserted;
+double distance(const Point3& a, const Point3& b) { return std::sqrt(squared_distance(a, b)); }
+
+std::vector<Triangle> boundary_triangles(const Mesh& mesh, WorkerPool* given_pool) {
+  PoolLease lease(given_pool, 0, mesh.points.size() + mesh.tetrahedra.size());
+  WorkerPool& pool = lease.pool();
+  // Faces of a positively oriented tetrahedron (a,b,c,d) with outward normals; face f of tetrahedron t is item
+  // 4t + f. A face is grouped under its smallest vertex, and each group is sorted by (vertex set, item): a face met
+  // once is on the boundary, kept as its tetrahedron orients it, in the order of the sorted vertex sets.
+  const auto face = [&](std::size_t item) {
+    const Tetrahedron& t = mesh.tetrahedra[item / 4];
+    switch (item % 4) {
+      case 0: return Triangle{t[0], t[2], t[1]};
+      case 1: return Triangle{t[0], t[1], t[3]};
+      case 2: return Triangle{t[1], t[2], t[3]};
+      default: return Triangle{t[0], t[3], t[2]};
     }
-  }
+  };
+  const auto sorted = [](Triangle key) {
+    std::sort(key.begin(), key.end());
+    return key;
+  };
+  const KeyGroups groups = group_by_key(pool, mesh.points.size(), 4 * mesh.tetrahedra.size(),
+                                        [&](std::size_t item, auto emit) {
+                                          const Triangle f = face(item);
+                                          emit(static_cast<std::size_t>(std::min({f[0], f[1], f[2]})));
+                                        });
+  std::vector<std::vector<Triangle>> found(pool.parts(mesh.points.size()));
+  pool.run_parts(mesh.points.size(), [&](unsigned part, std::size_t first, std::size_t last) {
+    std::vector<std::pair<Triangle, std::int32_t>> group;
+    for (std::size_t v = first; v < last; ++v) {
+      group.clear();
+      for (auto g = groups.offset[v]; g < groups.offset[v + 1]; ++g) {
+        const std::int32_t item = groups.item[static_cast<std::size_t>(g)];
+        group.emplace_back(sorted(face(static_cast<std::size_t>(item))), item);
+      }
+      std::sort(group.begin(), group.end());
+      for (std::size_t i = 0; i < group.size();) {
+        std::size_t j = i + 1;
+        while (j < group.size() && group[j].first == group[i].first) ++j;
+        if (j - i == 1) found[part].push_back(face(static_cast<std::size_t>(group[i].second)));
+        i = j;
+      }
+    }
+  });
   std::vector<Triangle> boundary;
-  for (const auto& entry : faces) {
-    if (entry.second.second == 1) boundary.push_back(entry.second.first);
-  }
+  for (const auto& part : found) boundary.insert(boundary.end(), part.begin(), part.end());
   return boundary;
 }
 

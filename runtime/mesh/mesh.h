@@ -16,8 +16,9 @@ struct Mesh {
   std::vector<Point3> points;
   std::vector<Tetrahedron> tetrahedra;  // positive orientation: signed_volume > 0
   std::vector<Triangle> triangles;      // surface or membrane triangles
-  // Where an element came from in its file (1-based line; 0 when generated), parallel to the element arrays, so
-  // that findings can point back at the source.
+  // Where an element came from in its file (1-based line), parallel to the element arrays, so that findings can
+  // point back at the source. Shorter arrays are allowed: a missing entry reads as 0 (unknown); generated meshes
+  // leave them empty.
   std::vector<int> tetrahedron_lines;
   std::vector<int> triangle_lines;
   std::string source;  // file path, or a description such as "generated box 4x4x4"
@@ -31,8 +32,13 @@ double signed_volume(const Mesh& mesh, const Tetrahedron& tetrahedron);
 double triangle_area(const Point3& a, const Point3& b, const Point3& c);
 double triangle_area(const Mesh& mesh, const Triangle& triangle);
 double distance(const Point3& a, const Point3& b);
+// The square of distance(a, b) before its square root: distance(a, b) == std::sqrt(squared_distance(a, b)).
+double squared_distance(const Point3& a, const Point3& b);
 
-// Triangles that belong to exactly one tetrahedron, oriented outwards (used to draw or export a volume mesh).
-std::vector<Triangle> boundary_triangles(const Mesh& mesh);
+class WorkerPool;  // runtime/integrate/worker_pool.h
+
+// Triangles that belong to exactly one tetrahedron, oriented outwards (used to draw or export a volume mesh), sorted
+// by their sorted vertex triples. Needs fewer than 2^31 faces (4 per tetrahedron); null pool: one of its own.
+std::vector<Triangle> boundary_triangles(const Mesh& mesh, WorkerPool* pool = nullptr);
 
 }  // namespace fmpc::sim

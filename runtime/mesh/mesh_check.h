@@ -10,6 +10,8 @@
 
 namespace fmpc::sim {
 
+class WorkerPool;  // runtime/integrate/worker_pool.h
+
 enum class MeshFindingKind {
   IndexOutOfRange,        // an element refers to a vertex that does not exist (repair: element removed)
   DegenerateTetrahedron,  // repeated vertex or |volume| <= shape_tolerance * longest_edge^3 (repair: removed)
@@ -37,10 +39,21 @@ struct MeshCheckOptions {
   // Two vertices closer than this (absolute, file units) are duplicates; a negative value means
   // 1e-9 x the bounding-box diagonal.
   double duplicate_distance = -1.0;
+  // Worker threads when no pool is given (0: every hardware thread; small meshes use one). The findings and the
+  // repair do not depend on it.
+  unsigned threads = 0;
 };
 
 // Findings in a fixed order: indices out of range, tetrahedra, triangles, duplicate vertices, unreferenced vertices.
-std::vector<MeshFinding> check_mesh(const Mesh& mesh, const MeshCheckOptions& options = {});
+// Within each, by index; an element's duplicate finding follows its inverted one. O(N log N) in the vertices and
+// elements (sorting and grouping), multi-threaded.
+std::vector<MeshFinding> check_mesh(const Mesh& mesh, const MeshCheckOptions& options = {},
+                                    WorkerPool* pool = nullptr);
+
+// The DegenerateTetrahedron and DegenerateTriangle findings of check_mesh, in its order, without the rest of its
+// work (duplicates, vertices): for callers that need every element's volume or area.
+std::vector<MeshFinding> degenerate_elements(const Mesh& mesh, const MeshCheckOptions& options = {},
+                                             WorkerPool* pool = nullptr);
 
 struct MeshRepairResult {
   std::vector<MeshFinding> findings;  // every finding, repaired ones flagged
@@ -51,7 +64,7 @@ struct MeshRepairResult {
 
 // Merges duplicate vertices, drops degenerate, duplicate and out-of-range elements, flips inverted tetrahedra and
 // removes unreferenced vertices (only when the mesh has elements). Every finding of check_mesh is repaired.
-MeshRepairResult repair_mesh(Mesh& mesh, const MeshCheckOptions& options = {});
+MeshRepairResult repair_mesh(Mesh& mesh, const MeshCheckOptions& options = {}, WorkerPool* pool = nullptr);
 
 // One sentence for a finding, e.g. "tetrahedron 12 (line 40) is inverted (volume -0.5); repaired: vertices swapped".
 std::string finding_message(const MeshFinding& finding);

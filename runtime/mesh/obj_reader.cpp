@@ -24,11 +24,18 @@ std::optional<Mesh> read_obj(std::string_view text, const std::string& file, Dia
   TextCursor cursor(text, file);
   Mesh mesh;
   mesh.source = file;
-  struct PendingFace {
-    std::vector<std::int64_t> corners;
+  // Faces are checked once every vertex is known (a face may come before its vertices). They are kept flat, one
+  // corner array for all faces, so that memory stays a small multiple of the file size.
+  std::vector<std::int64_t> corners;
+  std::vector<std::size_t> face_start;
+  std::vector<int> face_line;
+  const auto face_range = [&](std::size_t face) {
     SourceRange range;
+    range.file = file;
+    range.line = face_line[face];
+    range.column = 1;
+    return range;
   };
-  std::vector<PendingFace> faces;
   while (!cursor.at_end()) {
     const std::string_view keyword = cursor.next_token();
     if (keyword == "v") {
@@ -48,8 +55,8 @@ std::optional<Mesh> read_obj(std::string_view text, const std::string& file, Dia
       mesh.points.push_back(p);
       cursor.skip_line();  // an optional w weight
     } else if (keyword == "f") {
-      PendingFace face;
-      face.range = cursor.range_here();
+      const SourceRange range = cursor.range_here();
+      const std::size_t first = corners.size();
       while (const auto corner = cursor.next_token_on_line()) {
         std::int64_t index = 0;
         if (!obj_vertex_index(*corner, mesh.points.size(), index)) {
@@ -58,31 +65,36 @@ std::optional<Mesh> read_obj(std::string_view text, const std::string& file, Dia
                                 "' is not a vertex number (1-based, or negative to count back); fix the face");
           return std::nullopt;
         }
-        face.corners.push_back(index);
+        corners.push_back(index);
       }
-      if (face.corners.size() < 3) {
-        diagnostics.error(face.range, "a face needs at least three vertices, this one has " +
-                                          std::to_string(face.corners.size()) +
-                                          "; remove it or add the missing vertices");
+      if (corners.size() - first < 3) {
+        diagnostics.error(range, "a face needs at least three vertices, this one has " +
+                                     std::to_string(corners.size() - first) +
+                                     "; remove it or add the missing vertices");
         return std::nullopt;
       }
-      faces.push_back(std::move(face));
+      face_start.push_back(first);
+      face_line.push_back(range.line);
     } else {
       cursor.skip_line();  // vn, vt, g, o, s, usemtl, mtllib, l, comments: nothing to simulate
     }
   }
-  for (const PendingFace& face : faces) {
-    for (const std::int64_t index : face.corners) {
+  face_start.push_back(corners.size());
+  for (std::size_t face = 0; face + 1 < face_start.size(); ++face) {
+    const std::size_t begin = face_start[face], end = face_start[face + 1];
+    for (std::size_t c = begin; c < end; ++c) {
+      const std::int64_t index = corners[c];
       if (index < 0 || index >= static_cast<std::int64_t>(mesh.points.size())) {
-        diagnostics.error(face.range, "the face refers to vertex " + std::to_string(index + 1) + " but the file has " +
-                                          std::to_string(mesh.points.size()) + " vertices; fix the face");
+        diagnostics.error(face_range(face), "the face refers to vertex " + std::to_string(index + 1) +
+                                                " but the file has " + std::to_string(mesh.points.size()) +
+                                                " vertices; fix the face");
         return std::nullopt;
       }
     }
-    for (std::size_t i = 1; i + 1 < face.corners.size(); ++i) {
-      mesh.triangles.push_back({static_cast<std::int32_t>(face.corners[0]), static_cast<std::int32_t>(face.corners[i]),
-                                static_cast<std::int32_t>(face.corners[i + 1])});
-      mesh.triangle_lines.push_back(face.range.line);
+    for (std::size_t c = begin + 1; c + 1 < end; ++c) {
+      mesh.triangles.push_back({static_cast<std::int32_t>(corners[begin]), static_cast<std::int32_t>(corners[c]),
+                                static_cast<std::int32_t>(corners[c + 1])});
+      mesh.triangle_lines.push_back(face_line[face]);
     }
   }
   return mesh;

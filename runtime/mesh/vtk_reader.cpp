@@ -1,10 +1,10 @@
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <sstream>
 #include <vector>
 
+#include "runtime/io/input_file.h"
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/mesh/text_cursor.h"
 
@@ -60,12 +60,15 @@ std::optional<std::size_t> VtkParser::read_count(std::string_view what) {
 }
 
 bool VtkParser::read_reals(std::size_t count, std::string_view type, std::vector<double>& out) {
-  out.resize(count);
+  out.clear();
   if (!binary_) {
+    // The count is the file's claim: reserve only what the bytes left can hold (two per value, "0 "), so that
+    // `POINTS 2147483648` over one line fails at the end of the text, where it is truncated, having allocated little.
+    out.reserve(std::min(count, cursor_.remaining() / 2));
     for (std::size_t i = 0; i < count; ++i) {
       const auto value = cursor_.read_real(diagnostics_, "a point coordinate");
       if (!value) return false;
-      out[i] = *value;
+      out.push_back(*value);
     }
     return true;
   }
@@ -76,6 +79,7 @@ bool VtkParser::read_reals(std::size_t count, std::string_view type, std::vector
           std::to_string(cursor_.remaining()) + " remain; the file is truncated: export it again");
     return false;
   }
+  out.resize(count);  // checked against the bytes left just above
   const char* bytes = cursor_.data_here();
   for (std::size_t i = 0; i < count; ++i) {
     if (width == 8) {
@@ -97,12 +101,13 @@ bool VtkParser::read_reals(std::size_t count, std::string_view type, std::vector
 }
 
 bool VtkParser::read_integers(std::size_t count, std::vector<std::int64_t>& out) {
-  out.resize(count);
+  out.clear();
   if (!binary_) {
+    out.reserve(std::min(count, cursor_.remaining() / 2));  // as in read_reals
     for (std::size_t i = 0; i < count; ++i) {
       const auto value = cursor_.read_integer(diagnostics_, "a cell entry");
       if (!value) return false;
-      out[i] = *value;
+      out.push_back(*value);
     }
     return true;
   }
@@ -112,6 +117,7 @@ bool VtkParser::read_integers(std::size_t count, std::vector<std::int64_t>& out)
           std::to_string(cursor_.remaining()) + " remain; the file is truncated: export it again");
     return false;
   }
+  out.resize(count);  // checked against the bytes left just above
   const char* bytes = cursor_.data_here();
   for (std::size_t i = 0; i < count; ++i) {
     out[i] = static_cast<std::int32_t>(load_big_endian<std::uint32_t>(bytes + 4 * i));
@@ -318,14 +324,13 @@ std::optional<Mesh> read_mesh_file(const std::string& path, DiagnosticList& diag
     diagnostics.error(range, "unknown mesh format; use a .msh (Gmsh), .obj or .vtk (legacy VTK) file");
     return std::nullopt;
   }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    diagnostics.error(range, "cannot open the mesh file; check the path");
+  std::string error;
+  const std::optional<std::string> read = read_input_file(path, kMaxMeshFileBytes, "mesh file", error);
+  if (!read) {
+    diagnostics.error(range, error);
     return std::nullopt;
   }
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  const std::string contents = buffer.str();
+  const std::string& contents = *read;
   if (gmsh) return read_gmsh(contents, path, diagnostics);
   if (obj) return read_obj(contents, path, diagnostics);
   return read_vtk(contents, path, diagnostics);

@@ -12,6 +12,7 @@
 #include "compiler/frontend/rule_file_loader.h"
 #include "diagnostics/number_format.h"
 #include "kernels/table_math.h"
+#include "runtime/fem/fem_model_builder.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_check.h"
 #include "runtime/mesh/mesh_reader.h"
@@ -123,17 +124,20 @@ bool inside(const SceneBox& box, const Point3& p) {
   return true;
 }
 
-std::optional<std::vector<std::int32_t>> fixed_vertices(const Scene& scene, const Mesh& mesh,
-                                                        const std::vector<std::int32_t>& new_index,
-                                                        DiagnosticList& diagnostics) {
+// The vertices a selection (of `fixed` or a `hold` entry) names; errors name `prefix`.box or .plane when one holds
+// no vertex.
+std::optional<std::vector<std::int32_t>> selected_vertices(const Scene& scene, const SceneFixed& selection,
+                                                           const std::string& prefix, const Mesh& mesh,
+                                                           const std::vector<std::int32_t>& new_index,
+                                                           DiagnosticList& diagnostics) {
   std::vector<unsigned char> fixed(mesh.points.size(), 0);
   bool ok = true;
-  for (const auto index : scene.fixed.indices) {
-    const auto mapped = remap(index, new_index, scene, "fixed.indices", diagnostics);
+  for (const auto index : selection.indices) {
+    const auto mapped = remap(index, new_index, scene, prefix + ".indices", diagnostics);
     if (mapped) fixed[static_cast<std::size_t>(*mapped)] = 1;
     ok = ok && mapped;
   }
-  for (const SceneBox& box : scene.fixed.boxes) {
+  for (const SceneBox& box : selection.boxes) {
     std::size_t count = 0;
     for (std::size_t v = 0; v < mesh.points.size(); ++v) {
       if (!inside(box, mesh.points[v])) continue;
@@ -141,12 +145,13 @@ std::optional<std::vector<std::int32_t>> fixed_vertices(const Scene& scene, cons
       ++count;
     }
     if (count == 0) {
-      diagnostics.error(scene.range_of("fixed.box"), "fixed.box: no vertex lies in the box " + point_text(box.min) +
-                                                         " to " + point_text(box.max) + "; " + bounds_text(mesh));
+      diagnostics.error(scene.range_of(prefix + ".box"), prefix + ".box: no vertex lies in the box " +
+                                                             point_text(box.min) + " to " + point_text(box.max) + "; " +
+                                                             bounds_text(mesh));
       ok = false;
     }
   }
-  for (const SceneFixed::Plane& plane : scene.fixed.planes) {
+  for (const SceneFixed::Plane& plane : selection.planes) {
     const Point3& n = plane.normal;
     const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     std::size_t count = 0;
@@ -159,10 +164,11 @@ std::optional<std::vector<std::int32_t>> fixed_vertices(const Scene& scene, cons
       ++count;
     }
     if (count == 0) {
-      diagnostics.error(scene.range_of("fixed.plane"),
-                        "fixed.plane: no vertex lies within " + format_number(plane.tolerance) + " of the plane through " +
-                            point_text(plane.point) + " with normal " + point_text(plane.normal) +
-                            "; raise 'tolerance' or move the plane (" + bounds_text(mesh) + ")");
+      diagnostics.error(scene.range_of(prefix + ".plane"),
+                        prefix + ".plane: no vertex lies within " + format_number(plane.tolerance) +
+                            " of the plane through " + point_text(plane.point) + " with normal " +
+                            point_text(plane.normal) + "; raise 'tolerance' or move the plane (" + bounds_text(mesh) +
+                            ")");
       ok = false;
     }
   }
@@ -289,20 +295,25 @@ std::optional<int> select_table_output(const Scene& scene, const LookupTable& ta
   return std::nullopt;
 }
 
-// The fuzzy material: per-spring modulus or a strain table, from the rules or the compiled table.
-std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const SimulationSetup& setup,
-                                                   double length_unit, BuiltScene& built,
-                                                   DiagnosticList& diagnostics) {
-  const std::string field =
-      scene.material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
-  const auto text = read_file(scene.material.file, scene.range_of(field), field, diagnostics);
-  if (!text) return std::nullopt;
+// Where each spring sits, for regions: its midpoint in mesh units.
+std::vector<Point3> spring_midpoints(const SimulationSetup& setup, double length_unit) {
   std::vector<Point3> midpoints(setup.springs.size());
   for (std::size_t s = 0; s < midpoints.size(); ++s) {
     const Point3& a = setup.rest_positions[static_cast<std::size_t>(setup.springs.first[s])];
     const Point3& b = setup.rest_positions[static_cast<std::size_t>(setup.springs.second[s])];
     for (std::size_t i = 0; i < 3; ++i) midpoints[s][i] = (a[i] + b[i]) / 2.0 / length_unit;  // back to mesh units
   }
+  return midpoints;
+}
+
+// The fuzzy material: a modulus per material point (spring midpoints or element centroids, mesh units) or a strain
+// table, from the rules or the compiled table.
+std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std::vector<Point3>& midpoints,
+                                                   BuiltScene& built, DiagnosticList& diagnostics) {
+  const std::string field =
+      scene.material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
+  const auto text = read_file(scene.material.file, scene.range_of(field), field, diagnostics);
+  if (!text) return std::nullopt;
   if (scene.material.source == SceneMaterial::Source::Table) {
     const auto table = parse_fzt(scene.material.file, *text, diagnostics);
     if (!table) return std::nullopt;
@@ -326,26 +337,142 @@ std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const Sim
   return bind_rules(*selection->system, selection->output, scene, midpoints, diagnostics);
 }
 
-}  // namespace
-
-std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics) {
-  const std::size_t errors = diagnostics.error_count();
-  BuiltScene built;
-  auto mesh = load_mesh(scene, diagnostics);
-  if (!mesh) return std::nullopt;
-  const MeshRepairResult repair = repair_mesh(*mesh);
-  std::vector<std::string> repaired;
-  for (const MeshFinding& finding : repair.findings)
-    if (finding.repaired) repaired.push_back(finding_message(finding));
-  if (!repaired.empty()) {
-    std::vector<std::string> notes(repaired.begin(), repaired.begin() + std::min<std::ptrdiff_t>(5, static_cast<std::ptrdiff_t>(repaired.size())));
-    if (repaired.size() > 5) notes.push_back("... and " + std::to_string(repaired.size() - 5) + " more");
-    diagnostics.warning(scene.range_of("mesh"), "mesh-repaired",
-                        "mesh: " + std::to_string(repaired.size()) + " defect(s) repaired before building springs",
-                        notes);
+// A regional value at each point (mesh units): the first region containing it, else the default.
+std::optional<std::vector<double>> regional_values(const RegionalValue& value, const std::vector<Point3>& points,
+                                                   const Scene& scene, const std::string& field,
+                                                   DiagnosticList& diagnostics) {
+  std::vector<double> out(points.size(), value.value);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    bool found = false;
+    for (const RegionValue& region : value.regions) {
+      if (!inside(region.box, points[i])) continue;
+      out[i] = region.value;
+      found = true;
+      break;
+    }
+    if (found || value.has_default) continue;
+    diagnostics.error(scene.range_of(field), field + ": element " + std::to_string(i) + " (centroid " +
+                                                 point_text(points[i]) +
+                                                 ") lies in no region and there is no default; add 'default'");
+    return std::nullopt;
   }
-  built.mesh = std::move(*mesh);
+  return out;
+}
 
+// The co-rotational FEM: Young's modulus per element from the material source (at each element's centroid for
+// regions), the Poisson ratio, masses and damping.
+std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, DiagnosticList& diagnostics) {
+  const SceneMaterial& material = scene.material;
+  const std::vector<Point3> centroids = tetrahedron_centroids(built.mesh);
+  FemModelSpec spec;
+  spec.length_unit = scene.mesh.unit;
+  spec.mass = scene.mass;
+  spec.damping_ratio = scene.damping.ratio;
+  spec.rayleigh_stiffness = scene.rayleigh.stiffness;
+  const RegionalValue poisson = material.poisson_ratio.value_or(RegionalValue{kDefaultPoissonRatio, true, {}});
+  const auto nu = regional_values(poisson, centroids, scene, "material.poisson_ratio", diagnostics);
+  if (!nu) return std::nullopt;
+  spec.poisson_ratio = *nu;
+  std::optional<StrainStiffnessTable> strain_table;
+  switch (material.source) {
+    case SceneMaterial::Source::YoungsModulus:
+      spec.youngs_modulus = {material.value * 1000.0};  // kPa -> Pa
+      built.stiffness_description = "co-rotational FEM with E = " + format_number(material.value) + " kPa";
+      break;
+    case SceneMaterial::Source::Rules:
+    case SceneMaterial::Source::Table: {
+      built.material = bind_fuzzy_material(scene, centroids, built, diagnostics);
+      if (!built.material) return std::nullopt;
+      const MaterialBinding& binding = *built.material;
+      if (binding.strain.empty()) {
+        spec.youngs_modulus = binding.modulus_per_spring;  // one per material point: here, per element
+        built.stiffness_description =
+            "co-rotational FEM with E from '" + binding.system + "' output '" + binding.output +
+            "': " + format_number(binding.modulus_min / 1000.0) +
+            (binding.modulus_min == binding.modulus_max ? "" : " to " + format_number(binding.modulus_max / 1000.0)) +
+            " kPa";
+      } else {
+        StrainStiffnessTable table;
+        table.strain = binding.strain;
+        table.modulus = binding.strain_modulus;
+        spec.youngs_modulus = {strain_table_rest_modulus(table)};
+        strain_table = std::move(table);
+        built.stiffness_description = "co-rotational FEM with E(principal strain) from '" + binding.system +
+                                      "' output '" + binding.output + "', " + std::to_string(binding.strain.size()) +
+                                      "-point table: " + format_number(binding.modulus_min / 1000.0) + " to " +
+                                      format_number(binding.modulus_max / 1000.0) + " kPa";
+      }
+      break;
+    }
+    case SceneMaterial::Source::Stiffness:
+    case SceneMaterial::Source::StiffnessOverLength:
+      return std::nullopt;  // refused by the scene parser
+  }
+  const std::string nu_text = poisson.regions.empty() ? format_number(poisson.value) : "per region";
+  built.stiffness_description += ", nu = " + nu_text;
+  auto setup = build_fem_model(built.mesh, spec, diagnostics);
+  if (!setup) return std::nullopt;
+  setup->strain_stiffness = std::move(strain_table);
+  return setup;
+}
+
+// Springs with the volume term reaching the scene's Poisson ratio (calibrate_volume_term): the springs' stiffness is
+// scaled to the calibrated E_s / E, and each element gets kappa = (kappa / E) E at its centroid (one value for a
+// constant material).
+bool add_calibrated_volume_term(const Scene& scene, const BuiltScene& built, SimulationSetup& setup,
+                                std::string& description, DiagnosticList& diagnostics) {
+  const SceneMaterial& material = scene.material;
+  const SourceRange where = scene.range_of("springs");
+  if (built.mesh.tetrahedra.empty()) {
+    diagnostics.error(where, "springs.volume_term: the volume term acts on tetrahedra; this mesh has only triangles");
+    return false;
+  }
+  if (material.source == SceneMaterial::Source::Stiffness ||
+      material.source == SceneMaterial::Source::StiffnessOverLength) {
+    diagnostics.error(where, "springs.volume_term: the volume term is calibrated from Young's modulus and the Poisson "
+                             "ratio; give material.youngs_modulus, rules or table instead of spring constants");
+    return false;
+  }
+  if (setup.strain_stiffness) {
+    diagnostics.error(where, "springs.volume_term: a strain-dependent modulus is not supported with the volume term; "
+                             "use model: corotational_fem for strain-dependent tissue");
+    return false;
+  }
+  const RegionalValue poisson = material.poisson_ratio.value_or(RegionalValue{kDefaultPoissonRatio, true, {}});
+  if (!poisson.regions.empty()) {
+    diagnostics.error(scene.range_of("material.poisson_ratio"),
+                      "material.poisson_ratio: springs with the volume term take one ratio for the whole scene; use "
+                      "model: corotational_fem for a ratio per region");
+    return false;
+  }
+  // The calibration is linear in E: its factors at E = 1 Pa scale the springs and give kappa per unit modulus.
+  const auto unit = calibrate_volume_term(1.0, poisson.value, material.mapping, scene.range_of("material.poisson_ratio"),
+                                          diagnostics);
+  if (!unit) return false;
+  for (double& k : setup.springs.stiffness) k *= unit->spring_modulus;
+  // Young's modulus per element: constant, or the rules at each element's centroid.
+  std::vector<double> modulus(built.mesh.tetrahedra.size(), material.value * 1000.0);
+  if (built.material) {
+    if (built.material->modulus_min == built.material->modulus_max) {
+      std::fill(modulus.begin(), modulus.end(), built.material->modulus_min);
+    } else {
+      BuiltScene scratch;
+      const auto per_element = bind_fuzzy_material(scene, tetrahedron_centroids(built.mesh), scratch, diagnostics);
+      if (!per_element) return false;
+      modulus = per_element->modulus_per_spring;
+    }
+  }
+  if (!add_volume_term(setup, 1.0, scene.damping.ratio, scene.rayleigh.stiffness, diagnostics)) return false;
+  TetrahedronField& field = *setup.tetrahedron_field;
+  for (std::size_t e = 0; e < field.size(); ++e) field.bulk_modulus[e] = unit->bulk_modulus * modulus[e];
+  // The damping coefficients were sized for kappa = 1 Pa; beta_e = 2 zeta / omega_e scales as 1 / sqrt(kappa).
+  assign_element_damping(field, setup.mass, scene.damping.ratio, scene.rayleigh.stiffness);
+  description += "; volume term (Teschner et al. 2004) for nu = " + format_number(poisson.value) + ": springs at " +
+                 format_number(unit->spring_modulus) + " E, kappa = " + format_number(unit->bulk_modulus) + " E";
+  return true;
+}
+
+std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& built, DiagnosticList& diagnostics) {
   const SceneMaterial& material = scene.material;
   SpringModelSpec model;
   model.length_unit = scene.mesh.unit;
@@ -380,8 +507,9 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
   }
   auto setup = build_spring_model(built.mesh, model, diagnostics);
   if (!setup) return std::nullopt;
+  setup->tetrahedra = built.mesh.tetrahedra;
   if (material.source == SceneMaterial::Source::Rules || material.source == SceneMaterial::Source::Table) {
-    built.material = bind_fuzzy_material(scene, *setup, scene.mesh.unit, built, diagnostics);
+    built.material = bind_fuzzy_material(scene, spring_midpoints(*setup, scene.mesh.unit), built, diagnostics);
     if (!built.material) return std::nullopt;
     const std::vector<double> factor = setup->springs.stiffness;
     const MaterialBinding& binding = *built.material;
@@ -400,17 +528,7 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
       table.modulus = binding.strain_modulus;
       table.stiffness_per_modulus = factor;
       // The rest stiffness (strain 0) sets the damping coefficients.
-      std::vector<const double*> breakpoints{table.strain.data()};
-      const int counts[1] = {static_cast<int>(table.strain.size())};
-      TableView<double> view;
-      view.axes = 1;
-      view.outputs = 1;
-      view.counts = counts;
-      view.breakpoints = breakpoints.data();
-      view.values = table.modulus.data();
-      const double zero = 0.0;
-      double rest_modulus = 0.0;
-      interpolate_table(view, &zero, &rest_modulus);
+      const double rest_modulus = strain_table_rest_modulus(table);
       for (std::size_t s = 0; s < factor.size(); ++s) setup->springs.stiffness[s] = rest_modulus * factor[s];
       setup->strain_stiffness = std::move(table);
       built.stiffness_description = std::string(mapping_citation(material.mapping)) + " with E(strain) from '" +
@@ -423,9 +541,33 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
     }
     if (!assign_damping(setup->springs, setup->mass, scene.damping, diagnostics)) return std::nullopt;
   }
+  if (scene.volume_term) {
+    if (!add_calibrated_volume_term(scene, built, *setup, built.stiffness_description, diagnostics)) return std::nullopt;
+    // The springs were scaled to the calibrated modulus: their dashpots follow.
+    if (!assign_damping(setup->springs, setup->mass, scene.damping, diagnostics)) return std::nullopt;
+  }
+  // Rayleigh's stiffness-proportional part: c += beta k on every spring.
+  if (scene.rayleigh.stiffness > 0.0) {
+    SpringNetwork& net = setup->springs;
+    if (net.damping.empty()) net.damping.assign(net.size(), 0.0);
+    for (std::size_t s = 0; s < net.size(); ++s) net.damping[s] += scene.rayleigh.stiffness * net.stiffness[s];
+  }
+  return setup;
+}
 
-  const auto fixed = fixed_vertices(scene, built.mesh, repair.new_vertex_index, diagnostics);
+std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResult& repair, BuiltScene built,
+                                       SimulationSetup setup_value, std::size_t errors, DiagnosticList& diagnostics) {
+  std::optional<SimulationSetup> setup = std::move(setup_value);
+  const auto fixed = selected_vertices(scene, scene.fixed, "fixed", built.mesh, repair.new_vertex_index, diagnostics);
   if (fixed) setup->fixed_vertices = *fixed;
+  for (const SceneHold& hold : scene.holds) {
+    const auto held = selected_vertices(scene, hold.selection, hold.field, built.mesh, repair.new_vertex_index, diagnostics);
+    if (!held) continue;
+    if (setup->fixed_axes.empty()) setup->fixed_axes.assign(built.mesh.points.size(), 0);
+    for (const auto v : *held)
+      setup->fixed_axes[static_cast<std::size_t>(v)] =
+          static_cast<std::uint8_t>(setup->fixed_axes[static_cast<std::size_t>(v)] | hold.axes);
+  }
   if (scene.probe) {
     const SceneProbe& probe = *scene.probe;
     std::optional<std::vector<std::int32_t>> picked;
@@ -476,6 +618,10 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
   setup->integrator = scene.integrator;
   setup->precision = scene.precision;
   setup->time_step = scene.dt;
+  setup->time_step_range = scene.range_of("dt");
+  setup->source_range = SourceRange{scene.path, 0, 0, 0, 0};
+  setup->mass_damping = scene.rayleigh.mass;
+  setup->on_inversion = scene.on_inversion;
   // Automatic: one thread below 10,000 vertices, where a step takes microseconds and handing work to other
   // threads costs more than it saves; otherwise up to 8.
   setup->threads = scene.threads > 0 ? scene.threads
@@ -485,6 +631,36 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
   if (diagnostics.error_count() != errors) return std::nullopt;
   built.setup = std::move(*setup);
   return built;
+}
+
+}  // namespace
+
+double strain_table_rest_modulus(const StrainStiffnessTable& table) {
+  const kernels::StrainTableView view{table.strain.data(), table.modulus.data(), static_cast<int>(table.strain.size())};
+  return kernels::strain_table_modulus(view, 0.0);
+}
+
+std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics) {
+  const std::size_t errors = diagnostics.error_count();
+  BuiltScene built;
+  auto mesh = load_mesh(scene, diagnostics);
+  if (!mesh) return std::nullopt;
+  const MeshRepairResult repair = repair_mesh(*mesh);
+  std::vector<std::string> repaired;
+  for (const MeshFinding& finding : repair.findings)
+    if (finding.repaired) repaired.push_back(finding_message(finding));
+  if (!repaired.empty()) {
+    std::vector<std::string> notes(repaired.begin(), repaired.begin() + std::min<std::ptrdiff_t>(5, static_cast<std::ptrdiff_t>(repaired.size())));
+    if (repaired.size() > 5) notes.push_back("... and " + std::to_string(repaired.size() - 5) + " more");
+    diagnostics.warning(scene.range_of("mesh"), "mesh-repaired",
+                        "mesh: " + std::to_string(repaired.size()) + " defect(s) repaired before building springs",
+                        notes);
+  }
+  built.mesh = std::move(*mesh);
+  std::optional<SimulationSetup> setup =
+      scene.model == ForceModel::CorotationalFem ? build_fem(scene, built, diagnostics) : build_springs(scene, built, diagnostics);
+  if (!setup) return std::nullopt;
+  return finish_scene(scene, repair, std::move(built), std::move(*setup), errors, diagnostics);
 }
 
 }  // namespace fmpc::sim

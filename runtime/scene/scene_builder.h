@@ -29,6 +29,9 @@ struct BuiltScene {
 // the scene). Mesh repairs are reported as one warning.
 std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics);
 
+// The modulus a strain table gives at strain 0 (Pa): what sets the damping coefficients and the summary's E.
+double strain_table_rest_modulus(const StrainStiffnessTable& table);
+
 // Möller-Trumbore: the distance t >= 0 along `direction` (any length; t is in its units) at which the ray from
 // `origin` hits triangle abc, or nullopt.
 std::optional<double> ray_triangle_hit(const Point3& origin, const Point3& direction, const Point3& a, const Point3& b,

@@ -1,13 +1,18 @@
 #include "runtime/scene/scene_file.h"
 
+#include <sys/stat.h>
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <filesystem>
 #include <initializer_list>
 #include <limits>
+#include <sstream>
+#include <unordered_map>
 
 #include "diagnostics/number_format.h"
+#include "runtime/io/input_file.h"
 
 namespace fmpc::sim {
 
@@ -41,6 +46,8 @@ const char* scene_name(StiffnessMapping mapping) {
   return "van_gelder_1998";
 }
 
+const char* scene_name(ForceModel model) { return to_string(model); }
+
 SourceRange Scene::range_of(const std::string& field) const {
   const auto found = ranges.find(field);
   if (found != ranges.end()) return found->second;
@@ -60,23 +67,110 @@ std::string join_names(const std::vector<std::string>& names) {
   return text;
 }
 
+SourceRange mark_range(const std::string& path, const YAML::Mark& mark) {
+  SourceRange r;
+  r.file = path;
+  if (mark.line >= 0) {
+    r.line = mark.line + 1;
+    r.column = mark.column + 1;
+    r.end_line = r.line;
+    r.end_column = r.column + 1;
+  }
+  return r;
+}
+
+// A pass over the YAML events before the document is built: yaml-cpp keeps the last of two equal keys silently
+// (`material` given twice would use one of them), so duplicates are found here, with both positions. The pass also
+// bounds the nesting depth and counts the documents (a scene is one). Aliases are events, not copies, so a
+// "billion laughs" file costs what its text costs.
+class SceneYamlScan : public YAML::EventHandler {
+ public:
+  struct TooDeep {
+    YAML::Mark mark;
+  };
+
+  SceneYamlScan(const std::string& path, DiagnosticList& diagnostics) : path_(path), diagnostics_(diagnostics) {}
+
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark& mark, YAML::anchor_t) override { node_done(mark, nullptr); }
+  void OnAlias(const YAML::Mark& mark, YAML::anchor_t) override { node_done(mark, nullptr); }
+  void OnScalar(const YAML::Mark& mark, const std::string&, YAML::anchor_t, const std::string& value) override {
+    node_done(mark, &value);
+  }
+  void OnSequenceStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    open(mark, false);
+  }
+  void OnSequenceEnd() override { close(); }
+  void OnMapStart(const YAML::Mark& mark, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {
+    open(mark, true);
+  }
+  void OnMapEnd() override { close(); }
+
+ private:
+  struct Frame {
+    bool map = false;
+    bool expecting_key = true;
+    std::size_t items = 0;
+    std::string field;  // "loads.probe", "fixed.box[1]"
+    std::string pending_key;
+    std::unordered_map<std::string, YAML::Mark> keys;
+  };
+
+  std::string child_field() const {
+    if (frames_.empty()) return "";
+    const Frame& parent = frames_.back();
+    if (parent.map) return parent.field.empty() ? parent.pending_key : parent.field + "." + parent.pending_key;
+    return parent.field + "[" + std::to_string(parent.items) + "]";
+  }
+
+  void open(const YAML::Mark& mark, bool map) {
+    if (frames_.size() >= kMaxSceneNesting) throw TooDeep{mark};
+    Frame frame;
+    frame.map = map;
+    frame.field = child_field();
+    frames_.push_back(std::move(frame));
+  }
+
+  void close() {
+    frames_.pop_back();
+    node_done(YAML::Mark(), nullptr);
+  }
+
+  // A whole node has been read at the level of frames_.back(): a key or a value of a map, or a list item.
+  void node_done(const YAML::Mark& mark, const std::string* scalar) {
+    if (frames_.empty()) return;
+    Frame& frame = frames_.back();
+    if (!frame.map) {
+      ++frame.items;
+      return;
+    }
+    if (!frame.expecting_key) {
+      frame.expecting_key = true;
+      return;
+    }
+    frame.expecting_key = false;
+    frame.pending_key = scalar ? *scalar : std::string();
+    if (!scalar) return;  // a complex key: the scene parser reports it as unknown
+    const auto [first, inserted] = frame.keys.emplace(*scalar, mark);
+    if (inserted) return;
+    const std::string field = frame.field.empty() ? *scalar : frame.field + "." + *scalar;
+    diagnostics_.error(mark_range(path_, mark), field + ": duplicate key; YAML keeps only one of the two, so remove one",
+                       {"first given here: " + std::to_string(first->second.line + 1) + ":" +
+                        std::to_string(first->second.column + 1)});
+  }
+
+  std::string path_;
+  DiagnosticList& diagnostics_;
+  std::vector<Frame> frames_;
+};
+
 class SceneParser {
  public:
   SceneParser(const std::string& path, Scene& scene, DiagnosticList& diagnostics)
       : path_(path), scene_(scene), diagnostics_(diagnostics) {}
 
-  SourceRange range(const YAML::Node& node) const {
-    SourceRange r;
-    r.file = path_;
-    const YAML::Mark mark = node.Mark();
-    if (mark.line >= 0) {
-      r.line = mark.line + 1;
-      r.column = mark.column + 1;
-      r.end_line = r.line;
-      r.end_column = r.column + 1;
-    }
-    return r;
-  }
+  SourceRange range(const YAML::Node& node) const { return mark_range(path_, node.Mark()); }
 
   void error(const YAML::Node& node, const std::string& field, const std::string& message,
              std::vector<std::string> notes = {}) {
@@ -99,7 +193,9 @@ class SceneParser {
       std::vector<std::string> notes;
       if (auto suggestion = closest_name(key, allowed)) notes.push_back("did you mean '" + *suggestion + "'?");
       const std::string where = field.empty() ? "" : " in " + field;
-      diagnostics_.error(range(it->first), (field.empty() ? key : field + "." + key) + ": unknown key" + where +
+      // A hostile key can be megabytes long: the message shows its start.
+      const std::string shown = key.size() > 60 ? key.substr(0, 60) + "..." : key;
+      diagnostics_.error(range(it->first), (field.empty() ? shown : field + "." + shown) + ": unknown key" + where +
                                                "; allowed: " + join_names(quoted(allowed)),
                          notes);
     }
@@ -181,6 +277,10 @@ class SceneParser {
     remember(node, field);
     if (!node.IsScalar() || node.Scalar().empty()) {
       error(node, field, "expected a non-empty text, got " + describe(node));
+      return std::nullopt;
+    }
+    if (node.Scalar().find('\0') != std::string::npos) {
+      error(node, field, "the text contains a NUL byte (\\0), which no file name or label may hold; remove it");
       return std::nullopt;
     }
     return node.Scalar();
@@ -268,16 +368,49 @@ class SceneParser {
     return (fs::path(path_).parent_path() / given).lexically_normal().string();
   }
 
+  // A file named by the scene must be a regular file within its reader's limit (docs/limits.md). Checked here so
+  // that the error points at the field; a missing file is left to the reader, which says where it looked.
+  void check_input_file(const YAML::Node& node, const std::string& field, const std::string& file, std::size_t limit,
+                        const std::string& what) {
+    struct stat info {};
+    if (::stat(file.c_str(), &info) != 0) return;
+    if (!S_ISREG(info.st_mode)) {
+      error(node, field, "'" + file + "' is " + (S_ISDIR(info.st_mode) ? "a directory" : "not a regular file") +
+                             " (a device, FIFO or socket), not a " + what + "; give the path of a regular file");
+    } else if (static_cast<unsigned long long>(info.st_size) > limit) {
+      error(node, field, "'" + file + "' is larger than " + byte_size_text(limit) + ", the limit for a " + what);
+    }
+  }
+
   void parse(const YAML::Node& root) {
     if (!root.IsMap()) {
       diagnostics_.error(range(root), "a scene file is a YAML map with 'mesh', 'material' and the other keys of "
                                       "docs/scenes.md");
       return;
     }
-    check_map(root, "", {"name", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "loads",
-                         "integrator", "dt", "duration", "backend", "precision", "threads", "outputs"});
+    check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "hold",
+                         "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
+                         "on_inversion"});
     if (root["name"]) {
-      if (auto name = text(root["name"], "name")) scene_.name = *name;
+      if (auto name = text(root["name"], "name")) {
+        if (const auto problem = output_name_problem(*name))
+          error(root["name"], "name", "'" + *name + "' " + *problem);
+        else
+          scene_.name = *name;
+      }
+    } else if (const auto problem = output_name_problem(scene_.name)) {
+      diagnostics_.error(range(root), "name: the scene file's name '" + scene_.name + "' " + *problem +
+                                          "; give the scene a 'name'");
+    }
+    if (root["model"]) {
+      static const std::vector<std::string> names = {"springs", "corotational_fem"};
+      if (auto i = keyword(root["model"], "model", names, "a force model"))
+        scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::CorotationalFem;
+    }
+    if (root["on_inversion"]) {
+      static const std::vector<std::string> names = {"warn", "stop"};
+      if (auto i = keyword(root["on_inversion"], "on_inversion", names, "what to do when an element turns inside out"))
+        scene_.on_inversion = *i == 0 ? InversionPolicy::Warn : InversionPolicy::Stop;
     }
     if (!root["mesh"]) diagnostics_.error(range(root), "mesh: missing; give a mesh file or a generated box or ellipsoid");
     else parse_mesh(root["mesh"]);
@@ -289,6 +422,7 @@ class SceneParser {
     if (root["springs"]) parse_springs(root["springs"]);
     if (root["law"]) parse_law(root["law"]);
     if (root["fixed"]) parse_fixed(root["fixed"]);
+    if (root["hold"]) parse_hold(root["hold"]);
     if (root["loads"]) parse_loads(root["loads"]);
     if (root["integrator"]) {
       static const std::vector<std::string> names = {"forward_euler", "semi_implicit_euler", "velocity_verlet", "rk4",
@@ -328,6 +462,20 @@ class SceneParser {
       if (auto value = integer(root["threads"], "threads", 0, 256)) scene_.threads = static_cast<unsigned>(*value);
     }
     if (root["outputs"]) parse_outputs(root["outputs"]);
+    if (scene_.model == ForceModel::CorotationalFem) check_fem_fields(root);
+    if (scene_.model == ForceModel::Springs && scene_.material.poisson_ratio && !scene_.volume_term) {
+      diagnostics_.error(scene_.range_of("material.poisson_ratio"),
+                         "material.poisson_ratio: springs alone have nu = 1/4 (central springs obey the Cauchy "
+                         "relation lambda = mu); add the volume term (springs: {volume_term: true}) to reach another "
+                         "ratio, or use model: corotational_fem");
+    }
+    if (scene_.dt && root["dt"]) {
+      const double steps = std::ceil(scene_.duration / *scene_.dt);
+      if (!(steps <= kMaxSimulationSteps))
+        error(root["dt"], "dt", "duration " + format_number(scene_.duration) + " s / dt " + format_number(*scene_.dt) +
+                                    " s is " + format_number(steps) + " steps; the limit is " +
+                                    format_number(kMaxSimulationSteps) + ": raise dt or shorten the duration");
+    }
   }
 
   void parse_mesh(const YAML::Node& node) {
@@ -339,6 +487,7 @@ class SceneParser {
         if (auto file = text(node["file"], "mesh.file")) {
           mesh.kind = SceneMesh::Kind::File;
           mesh.file = resolve(*file);
+          check_input_file(node["file"], "mesh.file", mesh.file, kMaxMeshFileBytes, "mesh file");
         }
         break;
       case 1: {
@@ -363,6 +512,11 @@ class SceneParser {
             int* counts[3] = {&mesh.box.cells_x, &mesh.box.cells_y, &mesh.box.cells_z};
             for (std::size_t i = 0; i < 3; ++i)
               if (auto n = integer(cells[i], "mesh.box.cells", 1, 1000)) *counts[i] = static_cast<int>(*n);
+            if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.box)))
+              error(cells, "mesh.box.cells", "[" + std::to_string(mesh.box.cells_x) + ", " +
+                                                 std::to_string(mesh.box.cells_y) + ", " +
+                                                 std::to_string(mesh.box.cells_z) + "] " + *too_large +
+                                                 ": use fewer cells");
           }
         }
         break;
@@ -382,8 +536,12 @@ class SceneParser {
           if (auto centre = vector3(ellipsoid["centre"], "mesh.ellipsoid.centre", " (mesh units)"))
             mesh.ellipsoid.centre = *centre;
         if (ellipsoid["resolution"])
-          if (auto n = integer(ellipsoid["resolution"], "mesh.ellipsoid.resolution", 1, 200))
+          if (auto n = integer(ellipsoid["resolution"], "mesh.ellipsoid.resolution", 1, 200)) {
             mesh.ellipsoid.resolution = static_cast<int>(*n);
+            if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.ellipsoid)))
+              error(ellipsoid["resolution"], "mesh.ellipsoid.resolution",
+                    std::to_string(*n) + " " + *too_large + ": use a smaller resolution");
+          }
         break;
       }
       default:
@@ -408,7 +566,7 @@ class SceneParser {
     remember(node, "material");
     if (!check_map(node, "material", {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table",
                                       "system", "output", "patient", "inputs", "strain_axis", "thickness",
-                                      "flexion_fraction", "mapping"}))
+                                      "flexion_fraction", "mapping", "poisson_ratio"}))
       return;
     SceneMaterial& material = scene_.material;
     const std::vector<std::string> sources = {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table"};
@@ -429,7 +587,13 @@ class SceneParser {
         break;
       case SceneMaterial::Source::Rules:
       case SceneMaterial::Source::Table:
-        if (auto file = text(node[key], field)) material.file = resolve(*file);
+        if (auto file = text(node[key], field)) {
+          material.file = resolve(*file);
+          if (material.source == SceneMaterial::Source::Rules)
+            check_input_file(node[key], field, material.file, kMaxRuleFileBytes, "rule file");
+          else
+            check_input_file(node[key], field, material.file, kMaxTableFileBytes, "table file");
+        }
         break;
     }
     const bool fuzzy = material.source == SceneMaterial::Source::Rules || material.source == SceneMaterial::Source::Table;
@@ -453,10 +617,12 @@ class SceneParser {
       } else {
         const std::vector<std::string> names = {scene_name(StiffnessMapping::VanGelder1998),
                                                 scene_name(StiffnessMapping::LloydSzekelyHarders2007)};
+        material.mapping_given = true;
         if (auto i = keyword(node["mapping"], "material.mapping", names, "a Young's modulus mapping"))
           material.mapping = *i == 0 ? StiffnessMapping::VanGelder1998 : StiffnessMapping::LloydSzekelyHarders2007;
       }
     }
+    if (node["poisson_ratio"]) material.poisson_ratio = poisson_ratio(node["poisson_ratio"]);
     if (node["thickness"])
       if (auto v = positive(node["thickness"], "material.thickness", " (m)")) material.thickness = *v;
     if (node["flexion_fraction"])
@@ -485,6 +651,88 @@ class SceneParser {
           error(axis, "material.strain_axis", "'min' must be below 'max'");
         material.strain_axis = strain_axis;
       }
+    }
+  }
+
+  // `regions: [{box: {min, max}, value: NUMBER}, ...]` of a map; false after an error.
+  bool parse_regions(const YAML::Node& value, const std::string& field, std::vector<RegionValue>& out) {
+    const YAML::Node regions = value["regions"];
+    if (!regions || !regions.IsSequence() || regions.size() == 0) {
+      error(regions ? regions : value, field + ".regions", "expected a list of {box: {min, max}, value: NUMBER}");
+      return false;
+    }
+    for (std::size_t r = 0; r < regions.size(); ++r) {
+      const std::string region_field = field + ".regions[" + std::to_string(r) + "]";
+      if (!check_map(regions[r], region_field, {"box", "value"})) continue;
+      if (!regions[r]["box"] || !regions[r]["value"]) {
+        error(regions[r], region_field, "a region needs 'box' and 'value'");
+        continue;
+      }
+      const auto region_box = box(regions[r]["box"], region_field + ".box");
+      const auto region_value = number(regions[r]["value"], region_field + ".value", "a number");
+      if (region_box && region_value) out.push_back({*region_box, *region_value});
+    }
+    return true;
+  }
+
+  // A Poisson ratio in [0, 0.499]: a number, or {regions: [...], default: NUMBER}.
+  std::optional<RegionalValue> poisson_ratio(const YAML::Node& node) {
+    const std::string field = "material.poisson_ratio";
+    remember(node, field);
+    const std::string allowed = "a number in [0, 0.499]";
+    const auto in_range = [&](const YAML::Node& at, const std::string& where, double v) {
+      if (v >= 0.0 && v <= 0.499) return true;
+      error(at, where, "expected " + allowed + " (0.5 is incompressible, which linear tetrahedra cannot represent "
+                       "without locking), got " + format_number(v));
+      return false;
+    };
+    RegionalValue out;
+    if (node.IsMap()) {
+      if (!check_map(node, field, {"regions", "default"})) return std::nullopt;
+      out.has_default = false;
+      if (node["default"]) {
+        const auto v = number(node["default"], field + ".default", allowed);
+        if (!v || !in_range(node["default"], field + ".default", *v)) return std::nullopt;
+        out.value = *v;
+        out.has_default = true;
+      }
+      if (!parse_regions(node, field, out.regions)) return std::nullopt;
+      for (std::size_t r = 0; r < out.regions.size(); ++r)
+        if (!in_range(node["regions"][r]["value"], field + ".regions[" + std::to_string(r) + "].value",
+                      out.regions[r].value))
+          return std::nullopt;
+      return out;
+    }
+    const auto v = number(node, field, allowed + " or {regions: [...], default: NUMBER}");
+    if (!v || !in_range(node, field, *v)) return std::nullopt;
+    out.value = *v;
+    return out;
+  }
+
+  // What only springs have is refused with the co-rotational FEM, naming the field.
+  void check_fem_fields(const YAML::Node& root) {
+    const std::string why = " has no meaning for model: corotational_fem (it is a spring setting)";
+    const YAML::Node material = root["material"];
+    if (material && material.IsMap()) {
+      for (const char* key : {"stiffness", "stiffness_over_length"})
+        if (material[key])
+          error(material[key], std::string("material.") + key,
+                "the co-rotational FEM takes Young's modulus (youngs_modulus, rules or table), not spring constants");
+      // A mapping beside spring constants already has its own error (it needs Young's modulus).
+      const bool modulus = material["youngs_modulus"] || material["rules"] || material["table"];
+      for (const char* key : {"mapping", "thickness", "flexion_fraction"})
+        if (material[key] && (modulus || std::string(key) != "mapping"))
+          error(material[key], std::string("material.") + key, why.substr(1));
+    }
+    if (root["springs"]) error(root["springs"], "springs", why.substr(1));
+    if (root["law"]) error(root["law"], "law", why.substr(1) + "; the FEM's material is linear elastic (co-rotated)");
+    const YAML::Node damping = root["damping"];
+    if (damping && damping.IsMap()) {
+      for (const char* key : {"coefficient", "natural_frequency"})
+        if (damping[key])
+          error(damping[key], std::string("damping.") + key,
+                "a per-spring dashpot setting; the FEM is damped by 'ratio' (each element's fastest mode) and "
+                "'rayleigh'");
     }
   }
 
@@ -518,22 +766,7 @@ class SceneParser {
             binding.has_default = true;
           }
         }
-        const YAML::Node regions = value["regions"];
-        if (!regions || !regions.IsSequence() || regions.size() == 0) {
-          error(regions ? regions : value, field + ".regions", "expected a list of {box: {min, max}, value: NUMBER}");
-          continue;
-        }
-        for (std::size_t r = 0; r < regions.size(); ++r) {
-          const std::string region_field = field + ".regions[" + std::to_string(r) + "]";
-          if (!check_map(regions[r], region_field, {"box", "value"})) continue;
-          if (!regions[r]["box"] || !regions[r]["value"]) {
-            error(regions[r], region_field, "a region needs 'box' and 'value'");
-            continue;
-          }
-          const auto region_box = box(regions[r]["box"], region_field + ".box");
-          const auto region_value = number(regions[r]["value"], region_field + ".value", "a number");
-          if (region_box && region_value) binding.regions.push_back({*region_box, *region_value});
-        }
+        if (!parse_regions(value, field, binding.regions)) continue;
       } else {
         error(value, field, "expected a number, 'strain' or {regions: [...], default: NUMBER}, got " + describe(value));
         continue;
@@ -571,10 +804,31 @@ class SceneParser {
     }
     if (!node.IsMap()) {
       error(node, "damping", "expected 'none' or a map with 'ratio' (and optionally 'natural_frequency') or "
-                             "'coefficient'");
+                             "'coefficient', and/or 'rayleigh'");
       return;
     }
-    if (!check_map(node, "damping", {"ratio", "natural_frequency", "coefficient"})) return;
+    if (!check_map(node, "damping", {"ratio", "natural_frequency", "coefficient", "rayleigh"})) return;
+    if (node["rayleigh"]) {
+      const YAML::Node rayleigh = node["rayleigh"];
+      remember(rayleigh, "damping.rayleigh");
+      if (check_map(rayleigh, "damping.rayleigh", {"mass", "stiffness"})) {
+        if (!rayleigh["mass"] && !rayleigh["stiffness"])
+          error(rayleigh, "damping.rayleigh", "give 'mass' (alpha, 1/s) and/or 'stiffness' (beta, s)");
+        if (rayleigh["mass"])
+          if (auto v = non_negative(rayleigh["mass"], "damping.rayleigh.mass", " (1/s)")) scene_.rayleigh.mass = *v;
+        if (rayleigh["stiffness"])
+          if (auto v = non_negative(rayleigh["stiffness"], "damping.rayleigh.stiffness", " (s)"))
+            scene_.rayleigh.stiffness = *v;
+      }
+      if (!node["ratio"] && !node["coefficient"]) {
+        // Rayleigh alone: no ratio damping beside it.
+        scene_.damping.rule = DampingSpec::Rule::DampingRatio;
+        scene_.damping.ratio = 0.0;
+        if (node["natural_frequency"])
+          error(node["natural_frequency"], "damping.natural_frequency", "only allowed with 'ratio'");
+        return;
+      }
+    }
     switch (one_of(node, "damping", {"ratio", "coefficient"})) {
       case 0:
         if (auto v = non_negative(node["ratio"], "damping.ratio", "")) scene_.damping.ratio = *v;
@@ -607,7 +861,9 @@ class SceneParser {
             "'flexion' (and 'bending' for springs that skip a vertex)");
       return;
     }
-    if (!check_map(node, "springs", {"structural", "flexion", "bending", "bending_min_angle"})) return;
+    if (!check_map(node, "springs", {"structural", "flexion", "bending", "bending_min_angle", "volume_term"})) return;
+    if (node["volume_term"])
+      if (auto v = boolean(node["volume_term"], "springs.volume_term")) scene_.volume_term = *v;
     if (node["structural"])
       if (auto v = boolean(node["structural"], "springs.structural")) scene_.triangle_springs.structural = *v;
     if (node["flexion"])
@@ -665,17 +921,49 @@ class SceneParser {
   void parse_fixed(const YAML::Node& node) {
     remember(node, "fixed");
     if (!check_map(node, "fixed", {"indices", "box", "plane"})) return;
+    parse_selection(node, "fixed", scene_.fixed);
+  }
+
+  // `hold`: one map or a list of maps, each with the selectors of `fixed` and `axes: [x, y, z]` (the axes held).
+  void parse_hold(const YAML::Node& node) {
+    remember(node, "hold");
+    one_or_list(node, "hold", [&](const YAML::Node& entry, const std::string& field) {
+      if (!check_map(entry, field, {"indices", "box", "plane", "axes"})) return;
+      SceneHold hold;
+      hold.field = field;
+      remember(entry, field);
+      const YAML::Node axes = entry["axes"];
+      if (!axes || !axes.IsSequence() || axes.size() == 0) {
+        error(axes ? axes : entry, field + ".axes", "expected the held axes, a list of x, y and z (e.g. [z])");
+        return;
+      }
+      for (std::size_t i = 0; i < axes.size(); ++i) {
+        static const std::vector<std::string> names = {"x", "y", "z"};
+        if (auto axis = keyword(axes[i], field + ".axes", names, "an axis"))
+          hold.axes = static_cast<std::uint8_t>(hold.axes | (1u << *axis));
+      }
+      if (!entry["indices"] && !entry["box"] && !entry["plane"]) {
+        error(entry, field, "give the vertices to hold: 'indices', 'box' or 'plane'");
+        return;
+      }
+      parse_selection(entry, field, hold.selection);
+      scene_.holds.push_back(std::move(hold));
+    });
+  }
+
+  // The vertex selectors of `fixed` and `hold` entries: indices, boxes, planes.
+  void parse_selection(const YAML::Node& node, const std::string& prefix, SceneFixed& out) {
     if (node["indices"])
-      if (auto v = indices(node["indices"], "fixed.indices")) scene_.fixed.indices = *v;
+      if (auto v = indices(node["indices"], prefix + ".indices")) out.indices = *v;
     if (node["box"]) {
-      remember(node["box"], "fixed.box");
-      one_or_list(node["box"], "fixed.box", [&](const YAML::Node& b, const std::string& field) {
-        if (auto parsed = box(b, field)) scene_.fixed.boxes.push_back(*parsed);
+      remember(node["box"], prefix + ".box");
+      one_or_list(node["box"], prefix + ".box", [&](const YAML::Node& b, const std::string& field) {
+        if (auto parsed = box(b, field)) out.boxes.push_back(*parsed);
       });
     }
     if (node["plane"]) {
-      remember(node["plane"], "fixed.plane");
-      one_or_list(node["plane"], "fixed.plane", [&](const YAML::Node& p, const std::string& field) {
+      remember(node["plane"], prefix + ".plane");
+      one_or_list(node["plane"], prefix + ".plane", [&](const YAML::Node& p, const std::string& field) {
         if (!check_map(p, field, {"point", "normal", "tolerance"})) return;
         if (!p["point"] || !p["normal"]) {
           error(p, field, "a plane needs 'point' and 'normal' [x, y, z] (mesh units)");
@@ -696,7 +984,7 @@ class SceneParser {
           if (!tolerance) return;
           plane.tolerance = *tolerance;
         }
-        scene_.fixed.planes.push_back(plane);
+        out.planes.push_back(plane);
       });
     }
   }
@@ -770,12 +1058,26 @@ class SceneParser {
 
   void parse_outputs(const YAML::Node& node) {
     remember(node, "outputs");
-    if (!check_map(node, "outputs", {"directory", "frames", "samples", "csv", "summary", "plot"})) return;
+    if (!check_map(node, "outputs",
+                   {"directory", "frames", "vtu", "samples", "csv", "summary", "plot", "precision_check"}))
+      return;
     SceneOutputs& out = scene_.outputs;
+    if (node["precision_check"]) {
+      static const std::vector<std::string> names = {"auto", "on", "off"};
+      if (auto i = keyword(node["precision_check"], "outputs.precision_check", names, "auto, on or off"))
+        out.precision_check = *i == 0   ? SceneOutputs::PrecisionCheck::Auto
+                              : *i == 1 ? SceneOutputs::PrecisionCheck::On
+                                        : SceneOutputs::PrecisionCheck::Off;
+    }
     if (node["directory"])
       if (auto v = text(node["directory"], "outputs.directory")) out.directory = *v;
     if (node["frames"])
       if (auto v = integer(node["frames"], "outputs.frames", 0, 100000)) out.frames = static_cast<int>(*v);
+    if (node["vtu"]) {
+      static const std::vector<std::string> names = {"binary", "ascii"};
+      if (auto i = keyword(node["vtu"], "outputs.vtu", names, "a VTU encoding"))
+        out.vtu = *i == 0 ? VtuFormat::Binary : VtuFormat::Ascii;
+    }
     if (node["samples"])
       if (auto v = integer(node["samples"], "outputs.samples", 0, 1000000)) out.samples = static_cast<int>(*v);
     if (node["csv"])
@@ -794,6 +1096,41 @@ class SceneParser {
 
 }  // namespace
 
+std::optional<std::size_t> planned_step_count(const Scene& scene, double dt, DiagnosticList& diagnostics) {
+  if (scene.steps) {
+    if (static_cast<double>(*scene.steps) <= kMaxSimulationSteps) return *scene.steps;
+    diagnostics.error(scene.range_of("steps"), "steps: " + std::to_string(*scene.steps) + " is above the limit of " +
+                                                   format_number(kMaxSimulationSteps) + " steps");
+    return std::nullopt;
+  }
+  // The factor keeps a duration that is an exact multiple of dt from gaining a step to rounding.
+  const double steps = std::ceil(scene.duration / dt * (1.0 - 1e-12));
+  if (dt > 0.0 && steps <= kMaxSimulationSteps) return static_cast<std::size_t>(steps);
+  diagnostics.error(scene.range_of(scene.ranges.count("duration") ? "duration" : "dt"),
+                    "duration " + format_number(scene.duration) + " s at dt " + format_number(dt) + " s" +
+                        (scene.dt ? "" : " (dt auto, from the stability limit)") + " is " + format_number(steps) +
+                        " steps; the limit is " + format_number(kMaxSimulationSteps) +
+                        ": shorten the duration or raise dt");
+  return std::nullopt;
+}
+
+std::optional<std::string> output_name_problem(const std::string& name) {
+  if (name.empty()) return std::string("is empty");
+  if (name == "." || name == "..") return std::string("names a folder, not a file");
+  if (name.size() > kMaxSceneNameBytes)
+    return "is " + std::to_string(name.size()) + " bytes long; the limit is " + std::to_string(kMaxSceneNameBytes) +
+           " (the output files add to it and a file name must stay under 255)";
+  for (const char c : name) {
+    if (c == '/' || c == '\\')
+      return std::string("contains a path separator; the name becomes file names inside the output folder "
+                         "(-o DIR), so it may not lead out of it: use letters, digits, '-', '_' and '.'");
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      return std::string("contains a control character (a NUL byte, a newline, ...); use letters, digits, '-', '_' "
+                         "and '.'");
+  }
+  return std::nullopt;
+}
+
 std::optional<Scene> parse_scene(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
   Scene scene;
   scene.path = path;
@@ -801,18 +1138,28 @@ std::optional<Scene> parse_scene(const std::string& path, const std::string& tex
   const std::size_t errors = diagnostics.error_count();
   SceneParser parser(path, scene, diagnostics);
   try {
-    const YAML::Node root = YAML::Load(text);
-    parser.parse(root);
-  } catch (const YAML::Exception& e) {
-    SourceRange range;
-    range.file = path;
-    if (e.mark.line >= 0) {
-      range.line = e.mark.line + 1;
-      range.column = e.mark.column + 1;
-      range.end_line = range.line;
-      range.end_column = range.column + 1;
+    {
+      std::istringstream stream(text);
+      YAML::Parser events(stream);
+      SceneYamlScan scan(path, diagnostics);
+      if (events.HandleNextDocument(scan)) {
+        // A second document would be ignored by YAML::Load.
+        SceneYamlScan rest(path, diagnostics);
+        if (events.HandleNextDocument(rest))
+          diagnostics.error(SourceRange{path, 0, 0, 0, 0},
+                            "the file holds more than one YAML document ('---'); a scene file is one document");
+      }
     }
-    diagnostics.error(range, "invalid YAML: " + e.msg);
+    if (diagnostics.error_count() == errors) {
+      const YAML::Node root = YAML::Load(text);
+      parser.parse(root);
+    }
+  } catch (const SceneYamlScan::TooDeep& too_deep) {
+    diagnostics.error(mark_range(path, too_deep.mark),
+                      "the YAML nests deeper than " + std::to_string(kMaxSceneNesting) +
+                          " levels; a scene needs about 6: check the indentation and brackets");
+  } catch (const YAML::Exception& e) {
+    diagnostics.error(mark_range(path, e.mark), "invalid YAML: " + e.msg);
   }
   if (diagnostics.error_count() != errors) return std::nullopt;
   return scene;

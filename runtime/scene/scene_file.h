@@ -11,6 +11,7 @@
 
 #include "diagnostics/diagnostic.h"
 #include "runtime/integrate/simulation.h"
+#include "runtime/io/vtk_xml.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/springs/spring_network.h"
 
@@ -33,6 +34,14 @@ struct SceneBox {
 struct RegionValue {
   SceneBox box;
   double value = 0.0;
+};
+
+// A number for the whole scene, or per region (the first region box containing the element's centroid), with a
+// default outside every region.
+struct RegionalValue {
+  double value = 0.0;  // the default (or the only value)
+  bool has_default = true;
+  std::vector<RegionValue> regions;
 };
 
 // How one FIS input gets its value.
@@ -71,6 +80,9 @@ struct SceneMaterial {
   std::optional<StrainAxis> strain_axis;  // Rules with a strain binding; default: the input's range, 101 points
   // Young's modulus -> spring constants (`mapping`): YoungsModulus, Rules and Table only.
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
+  bool mapping_given = false;
+  // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.499].
+  std::optional<RegionalValue> poisson_ratio;
   double thickness = 1.0;        // m, membranes (triangle meshes)
   double flexion_fraction = 0.1;
 };
@@ -94,6 +106,14 @@ struct SceneFixed {
   std::vector<Plane> planes;
 };
 
+// Vertices held along some axes only (`hold`), e.g. a face sliding on a frictionless plane: the selectors of
+// `fixed`, and the axes held (bit a for axis a).
+struct SceneHold {
+  SceneFixed selection;
+  std::uint8_t axes = 0;
+  std::string field;  // "hold" or "hold[i]", for errors found when the mesh is known
+};
+
 struct SceneProbe {
   ProbeLoad::Mode mode = ProbeLoad::Mode::Displacement;
   std::vector<std::int32_t> indices;  // pick by index (mesh file numbering)
@@ -110,22 +130,40 @@ enum class SceneBackend { Auto, Cpu, Cuda };
 struct SceneOutputs {
   std::string directory;  // resolved against the current folder; empty: "<scene name>.out" beside the scene
   int frames = 20;        // .vtu frames (evenly spaced, first and last included); 0: none
+  VtuFormat vtu = VtuFormat::Binary;  // the frames' encoding: binary (appended, zlib) or ascii
   int samples = 200;      // CSV rows (evenly spaced); 0: none
   bool csv = true;
   bool summary = true;
   bool plot = true;  // force-displacement PNG (needs a probe)
+  // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the scene's work is
+  // at most kPrecisionCheckWork vertex-steps; on always; off never.
+  enum class PrecisionCheck { Auto, On, Off } precision_check = PrecisionCheck::Auto;
 };
+
+// Rayleigh damping C = alpha M + beta K (`damping: {rayleigh: {mass: ALPHA, stiffness: BETA}}`): alpha (1/s) acts on
+// every vertex, beta (s) is added to each spring's dashpot (c += beta k) or each element's stiffness damping.
+struct SceneRayleigh {
+  double mass = 0.0;
+  double stiffness = 0.0;
+};
+
+constexpr double kDefaultPoissonRatio = 0.45;
 
 struct Scene {
   std::string path;  // the scene file
   std::string name;  // `name`, or the file's stem
+  ForceModel model = ForceModel::Springs;
   SceneMesh mesh;
   SceneMaterial material;
   MassSpec mass;
   DampingSpec damping;
+  SceneRayleigh rayleigh;
   TriangleSpringOptions triangle_springs;
+  bool volume_term = false;  // springs: {volume_term: true}
+  InversionPolicy on_inversion = InversionPolicy::Warn;
   SceneLaw law;
   SceneFixed fixed;
+  std::vector<SceneHold> holds;
   Point3 gravity{0.0, 0.0, 0.0};
   std::optional<SceneProbe> probe;
   Integrator integrator = Integrator::SemiImplicitEuler;
@@ -142,12 +180,29 @@ struct Scene {
   SourceRange range_of(const std::string& field) const;
 };
 
+// Scene limits (docs/limits.md). The file itself is at most kMaxSceneFileBytes (runtime/io/input_file.h).
+inline constexpr std::size_t kMaxSceneNesting = 32;      // YAML levels; a scene needs about 6
+inline constexpr std::size_t kMaxSceneNameBytes = 200;   // `name` becomes <name>.pvd and other file names
+inline constexpr double kMaxSimulationSteps = 1e9;       // ceil(duration / dt), or --steps
+
+// Why `name` cannot name the scene's output files, or nullopt when it can: it must be a single file-name
+// component (no '/', '\\', "." or ".."), without control characters or NUL bytes, at most kMaxSceneNameBytes
+// long, so that nothing is written outside the output folder.
+std::optional<std::string> output_name_problem(const std::string& name);
+
+// The number of steps a run takes: scene.steps when set, else ceil(duration / dt), checked against
+// kMaxSimulationSteps before it becomes an integer (a huge duration or a tiny dt would overflow size_t and run 0
+// steps); nullopt after an error naming `duration` and `dt` otherwise. dt is the step actually used (auto or given).
+std::optional<std::size_t> planned_step_count(const Scene& scene, double dt, DiagnosticList& diagnostics);
+
 // Parses scene YAML `text` read from `path`. Returns nullopt after appending errors (each naming the field, its
-// position and what is allowed); unknown keys are errors with a "did you mean" note.
+// position and what is allowed); unknown keys are errors with a "did you mean" note, and so are duplicate keys
+// (which YAML itself would silently collapse).
 std::optional<Scene> parse_scene(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
 
 const char* to_string(SceneBackend backend);
 const char* scene_name(Integrator integrator);  // the scene spelling: "semi_implicit_euler", ...
 const char* scene_name(StiffnessMapping mapping);  // the scene spelling: "van_gelder_1998", ...
+const char* scene_name(ForceModel model);  // "springs", "corotational_fem"
 
 }  // namespace fmpc::sim

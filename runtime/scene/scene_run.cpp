@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <set>
+#include <sstream>
 
 #include "diagnostics/number_format.h"
 #include "runtime/io/atomic_file.h"
@@ -54,6 +55,7 @@ class SceneStepper {
   virtual std::vector<Point3> velocities(DiagnosticList& diagnostics) const = 0;
   virtual ProbeReading probe_reading(DiagnosticList& diagnostics) const = 0;
   virtual std::vector<double> current_stiffness(DiagnosticList& diagnostics) const = 0;
+  virtual const InversionReport& inversions() const = 0;
 };
 
 class CpuStepper final : public SceneStepper {
@@ -67,6 +69,7 @@ class CpuStepper final : public SceneStepper {
   std::vector<Point3> velocities(DiagnosticList&) const override { return simulation_->velocities(); }
   ProbeReading probe_reading(DiagnosticList&) const override { return simulation_->probe_reading(); }
   std::vector<double> current_stiffness(DiagnosticList&) const override { return simulation_->current_stiffness(); }
+  const InversionReport& inversions() const override { return simulation_->inversions(); }
 
  private:
   std::unique_ptr<CpuSimulation> simulation_;
@@ -92,6 +95,7 @@ class CudaStepper final : public SceneStepper {
   std::vector<double> current_stiffness(DiagnosticList& diagnostics) const override {
     return simulation_->current_stiffness(diagnostics);
   }
+  const InversionReport& inversions() const override { return simulation_->inversions(); }
 
  private:
   std::unique_ptr<gpu::GpuSimulation> simulation_;
@@ -113,6 +117,82 @@ std::unique_ptr<SceneStepper> create_stepper(const SimulationSetup& setup, const
   auto simulation = CpuSimulation::create(setup, diagnostics);
   if (!simulation) return nullptr;
   return std::make_unique<CpuStepper>(std::move(simulation));
+}
+
+// The largest distance of any vertex from its start.
+double largest_displacement(const std::vector<Point3>& positions, const std::vector<Point3>& start) {
+  double largest = 0.0;
+  for (std::size_t v = 0; v < positions.size() && v < start.size(); ++v)
+    largest = std::max(largest, distance(positions[v], start[v]));
+  return largest;
+}
+
+double relative_difference(double a, double b) {
+  const double scale = std::max(std::abs(a), std::abs(b));
+  return scale > 0.0 ? std::abs(a - b) / scale : 0.0;
+}
+
+// The scene again in the other precision, to its last step, compared with the run's final answers.
+PrecisionCheckResult check_precision(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
+                                     const SceneRunResult& run, DiagnosticList& diagnostics) {
+  PrecisionCheckResult check;
+  const SimulationSetup& setup = built.setup;
+  check.other = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
+  const double work = static_cast<double>(setup.rest_positions.size()) * static_cast<double>(run.steps_taken);
+  if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Off) {
+    check.reason = "off (outputs.precision_check)";
+    return check;
+  }
+  if (!run.completed) {
+    check.reason = "the run did not complete";
+    return check;
+  }
+  if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Auto && work > kPrecisionCheckWork) {
+    check.reason = "skipped: " + format_number(work) + " vertex-steps is above the automatic limit of " +
+                   format_number(kPrecisionCheckWork) + " (outputs.precision_check: on forces it)";
+    return check;
+  }
+  SimulationSetup other = setup;
+  other.precision = check.other;
+  other.time_step = run.stability.time_step;  // the same step, not the other precision's automatic one
+  DiagnosticList ignored;  // the main run reported everything the scene says
+  const auto simulation = create_stepper(other, options.backend, ignored);
+  if (!simulation || !simulation->advance(run.steps_taken, ignored)) {
+    check.reason = "the rerun in the other precision did not complete";
+    check.agrees = false;
+  } else {
+    check.ran = true;
+    const std::vector<Point3>& start = setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
+    check.displacement_difference =
+        relative_difference(largest_displacement(simulation->positions(ignored), start), run.final_max_displacement);
+    if (setup.probe && !run.probe_curve.empty()) {
+      const ProbeReading reading = simulation->probe_reading(ignored);
+      const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
+      const double force = length > 0.0 ? dot(reading.force, setup.probe->target) / length : 0.0;
+      check.probe_force_difference = relative_difference(force, run.probe_curve.back().force);
+    }
+    check.other_inverted = simulation->inversions().largest_count;
+    check.agrees = check.displacement_difference <= kPrecisionTolerance &&
+                   check.probe_force_difference <= kPrecisionTolerance &&
+                   (check.other_inverted == 0) == (run.inversions.largest_count == 0);
+  }
+  const char* mine = setup.precision == Precision::Float ? "float" : "double";
+  const char* theirs = check.other == Precision::Float ? "float" : "double";
+  if (check.ran && !check.agrees) {
+    std::ostringstream message;
+    message << "precision: the answer depends on rounding: in " << theirs << " ";
+    if (setup.probe) message << "the final probe force differs by " << 100 * check.probe_force_difference << "% and ";
+    message << "the final largest displacement by " << 100 * check.displacement_difference << "% (tolerance "
+            << 100 * kPrecisionTolerance << "%), with " << check.other_inverted << " inverted elements against "
+            << run.inversions.largest_count << " in " << mine
+            << "; an equilibrium that rounding breaks (a symmetric load that can buckle either way) or an element "
+               "near inversion: use precision double, or break the symmetry (docs/scenes.md)";
+    diagnostics.warning(scene.range_of("precision"), "precision-dependent", message.str());
+    check.reason = "differs";
+  } else if (check.ran) {
+    check.reason = std::string("agrees with ") + theirs;
+  }
+  return check;
 }
 
 std::string frame_name(std::size_t index) {
@@ -162,6 +242,9 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
     csv += "\n";
   }
   std::vector<PvdFrame> frames;
+  VtuOptions vtu_options;
+  vtu_options.format = scene.outputs.vtu;
+  std::optional<VtuCells> vtu_cells;  // the cells are the same in every frame: encoded once, at the first
   bool outputs_ok = true;
   const auto record = [&](bool frame, bool sample) {
     const std::vector<Point3> positions = simulation->positions(diagnostics);
@@ -179,10 +262,14 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
     const double time = simulation->time();
     if (frame && outputs_ok) {
       const std::string name = frame_name(frames.size());
-      const std::vector<VtuPointVectors> data = {{"displacement", displacement},
-                                                 {"velocity", simulation->velocities(diagnostics)}};
-      outputs_ok = write_file_atomically((directory / name).string(), vtu_document(positions, built.mesh, data),
-                                         diagnostics);
+      const std::vector<Point3> velocities = simulation->velocities(diagnostics);
+      if (!vtu_cells) vtu_cells = encode_vtu_cells(built.mesh, vtu_options, diagnostics);
+      const auto vtu = vtu_cells ? vtu_document(positions, *vtu_cells,
+                                                {vtu_vectors("displacement", displacement),
+                                                 vtu_vectors("velocity", velocities)},
+                                                {}, vtu_options, diagnostics)
+                                 : std::nullopt;
+      outputs_ok = vtu && write_file_atomically((directory / name).string(), *vtu, diagnostics);
       frames.push_back({time, name});
       result.files.push_back((directory / name).string());
     }
@@ -217,6 +304,7 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
     running = simulation->advance(event - simulation->steps_taken(), diagnostics);
     if (!running) break;
     if (is_frame(event) || is_sample(event)) record(is_frame(event), is_sample(event));
+    else record(false, false);  // the largest displacement is followed at every event (about 100 per run)
     if (options.progress) options.progress(event, total);
   }
   if (!running) record(scene.outputs.frames > 0, write_csv || with_probe);  // the last finite state
@@ -225,6 +313,9 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
   result.steps_taken = simulation->steps_taken();
   result.steps_per_second =
       result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
+  result.inversions = simulation->inversions();
+  result.final_max_displacement = largest_displacement(simulation->positions(diagnostics), rest);
+  result.precision_check = check_precision(scene, built, options, result, diagnostics);
 
   if (outputs_ok && !frames.empty()) {
     const std::string pvd = (directory / (scene.name + ".pvd")).string();
@@ -249,6 +340,8 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
         .value("scene", scene.name)
         .value("scene_file", scene.path)
         .value("completed", result.completed)
+        .value("model", scene_name(setup.model))
+        .value("inverted_elements", result.inversions.largest_count)
         .value("backend", options.backend)
         .value("precision", setup.precision == Precision::Float ? "float" : "double")
         .value("integrator", scene_name(setup.integrator))
@@ -268,6 +361,7 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
         .value("tetrahedra", built.mesh.tetrahedra.size())
         .value("triangles", built.mesh.triangles.size())
         .value("springs", setup.springs.size())
+        .value("volume_term", setup.model == ForceModel::Springs && setup.tetrahedron_field.has_value())
         .value("fixed_vertices", setup.fixed_vertices.size())
         .value("metres_per_unit", scene.mesh.unit)
         .end_object()
@@ -304,6 +398,30 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
           .value("max_abs_force_N", max_force)
           .end_object();
     }
+    json.begin_object("inversions")
+        .value("largest_count", result.inversions.largest_count)
+        .value("final_count", result.inversions.current_count)
+        .value("checked_every_steps", kCheckEvery)
+        .value("policy", setup.on_inversion == InversionPolicy::Stop ? "stop" : "warn");
+    if (result.inversions.largest_count > 0) {
+      json.value("first_step", result.inversions.first_step)
+          .value("first_time_s", result.inversions.first_time)
+          .value("first_element", static_cast<std::size_t>(result.inversions.first_element));
+    }
+    json.end_object();
+    const PrecisionCheckResult& precision = result.precision_check;
+    json.begin_object("precision_check")
+        .value("ran", precision.ran)
+        .value("other_precision", precision.other == Precision::Float ? "float" : "double")
+        .value("result", precision.reason)
+        .value("tolerance", kPrecisionTolerance);
+    if (precision.ran) {
+      json.value("probe_force_relative_difference", precision.probe_force_difference)
+          .value("max_displacement_relative_difference", precision.displacement_difference)
+          .value("other_inverted_elements", precision.other_inverted)
+          .value("agrees", precision.agrees);
+    }
+    json.end_object();
     json.begin_object("outputs")
         .value("directory", options.output_directory)
         .value("frames", frames.size())

@@ -27,6 +27,25 @@ struct ProbeCurvePoint {
   double force = 0.0;         // N, along the same direction
 };
 
+// The same scene run again in the other precision (float <-> double), on the same backend, without outputs: whether
+// rounding changes the answer. A relative difference above kPrecisionTolerance in the final probe force or the final
+// largest displacement, or inverted elements in one precision only, is reported (a warning, code
+// `precision-dependent`): an equilibrium that rounding breaks (a symmetric load that buckles either way), or a
+// near-inversion.
+constexpr double kPrecisionTolerance = 0.01;
+// `auto` checks scenes of at most this many vertex-steps (about a second on one core): the check doubles the run.
+constexpr double kPrecisionCheckWork = 2e8;
+
+struct PrecisionCheckResult {
+  bool ran = false;
+  std::string reason;            // why it did not run, or what it found
+  Precision other = Precision::Double;
+  double probe_force_difference = 0.0;     // relative
+  double displacement_difference = 0.0;    // relative, of the final largest displacement
+  std::size_t other_inverted = 0;          // the largest count in the other precision
+  bool agrees = true;
+};
+
 struct SceneRunResult {
   bool completed = false;  // false: stopped by a non-finite state (the error says where)
   std::size_t steps_planned = 0;
@@ -36,6 +55,9 @@ struct SceneRunResult {
   double steps_per_second = 0.0;
   double max_displacement = 0.0;  // m, over every vertex at the recorded times (frames and samples)
   std::vector<ProbeCurvePoint> probe_curve;  // at the samples; empty without a probe
+  InversionReport inversions;
+  double final_max_displacement = 0.0;  // m, at the last step
+  PrecisionCheckResult precision_check;
   std::vector<std::string> files;            // written, in order
   std::string csv_path;                      // empty when no CSV was written
 };

@@ -2,12 +2,13 @@
 
 #include <cmath>
 
+#include "runtime/integrate/worker_pool.h"
 #include "runtime/mesh/mesh_check.h"
 
 namespace fmpc::sim {
 
 std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const SpringModelSpec& spec,
-                                                  DiagnosticList& diagnostics) {
+                                                  DiagnosticList& diagnostics, WorkerPool* given_pool) {
   SourceRange range;
   range.file = mesh.source;
   if (!(spec.length_unit > 0.0) || !std::isfinite(spec.length_unit)) {
@@ -18,12 +19,14 @@ std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const Spring
     diagnostics.error(range, "the mesh has no tetrahedra or triangles to build springs from");
     return std::nullopt;
   }
+  PoolLease lease(given_pool, spec.threads, mesh.points.size() + mesh.tetrahedra.size() + mesh.triangles.size());
+  WorkerPool& pool = lease.pool();
   if (is_modulus_mapping(spec.stiffness.mapping)) {
     // Young's modulus mappings weigh every spring by the volumes (areas) of its elements: a degenerate element has
     // none to give, and a network built over it would be silently soft there.
     const bool volume = !mesh.tetrahedra.empty();
     const std::size_t errors = diagnostics.error_count();
-    for (const MeshFinding& finding : check_mesh(mesh)) {
+    for (const MeshFinding& finding : degenerate_elements(mesh, {}, &pool)) {
       const bool degenerate = volume ? finding.kind == MeshFindingKind::DegenerateTetrahedron
                                      : finding.kind == MeshFindingKind::DegenerateTriangle;
       if (!degenerate) continue;
@@ -36,20 +39,33 @@ std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const Spring
     }
     if (diagnostics.error_count() > errors) return std::nullopt;
   }
-  Mesh scaled = mesh;
-  for (Point3& p : scaled.points) {
-    for (double& coordinate : p) coordinate *= spec.length_unit;
-  }
   SimulationSetup setup;
-  setup.rest_positions = scaled.points;
-  setup.springs = scaled.tetrahedra.empty() ? springs_from_triangles(scaled, spec.triangle_springs, diagnostics)
-                                            : springs_from_tetrahedra(scaled, diagnostics);
+  resize_large(setup.rest_positions, mesh.points.size());
+  pool.run(mesh.points.size(), [&](std::size_t first, std::size_t last) {
+    for (std::size_t v = first; v < last; ++v) {
+      for (std::size_t axis = 0; axis < 3; ++axis) setup.rest_positions[v][axis] = mesh.points[v][axis] * spec.length_unit;
+    }
+  });
+  const std::vector<Point3>& metres = setup.rest_positions;
+  // The masses come first, while little memory is in use, from the same grouping of the elements by vertex as the
+  // springs; their errors are reported where they always were, after the springs' and the stiffness'.
+  DiagnosticList mass_diagnostics;
+  std::vector<double> mass;
+  {
+    const VertexElements at = elements_at_vertices(mesh, &pool);
+    mass = lumped_masses(mesh, metres, spec.mass, mass_diagnostics, &pool, &at);
+    setup.springs = mesh.tetrahedra.empty()
+                        ? springs_from_triangles(mesh, metres, spec.triangle_springs, diagnostics, &pool, &at)
+                        : springs_from_tetrahedra(mesh, metres, diagnostics, &pool, &at);
+  }
   if (diagnostics.has_errors()) return std::nullopt;
-  if (!compute_rest_lengths(setup.springs, scaled.points, diagnostics)) return std::nullopt;
-  if (!assign_stiffness(setup.springs, spec.stiffness, diagnostics)) return std::nullopt;
-  setup.mass = lumped_masses(scaled, spec.mass, diagnostics);
-  if (setup.mass.empty() && !scaled.points.empty()) return std::nullopt;
-  if (!assign_damping(setup.springs, setup.mass, spec.damping, diagnostics)) return std::nullopt;
+  if (!compute_rest_lengths(setup.springs, metres, diagnostics, 1e-9, &pool)) return std::nullopt;
+  if (!assign_stiffness(setup.springs, spec.stiffness, diagnostics, &pool)) return std::nullopt;
+  std::vector<double>().swap(setup.springs.element_measure);
+  diagnostics.append(mass_diagnostics);
+  setup.mass = std::move(mass);
+  if (setup.mass.empty() && !mesh.points.empty()) return std::nullopt;
+  if (!assign_damping(setup.springs, setup.mass, spec.damping, diagnostics, &pool)) return std::nullopt;
   return setup;
 }
 

@@ -10,6 +10,8 @@
 
 namespace fmpc::sim {
 
+class WorkerPool;  // runtime/integrate/worker_pool.h
+
 struct SpringModelSpec {
   // Tetrahedra give tetrahedron-edge springs; a mesh without tetrahedra uses its triangles (thesis springs).
   TriangleSpringOptions triangle_springs;
@@ -17,11 +19,17 @@ struct SpringModelSpec {
   MassSpec mass;
   DampingSpec damping;
   double length_unit = 1.0;  // metres per mesh unit (e.g. 0.001 for liver.vtk's millimetres)
+  // Worker threads when no pool is given (0: every hardware thread; small meshes use one). The setup does not depend
+  // on it.
+  unsigned threads = 0;
 };
 
 // Scales the points to metres, builds the springs, rest lengths, stiffness, lumped masses and damping. Returns
-// nullopt after appending errors (mesh defects must be repaired first: see repair_mesh).
+// nullopt after appending errors (mesh defects must be repaired first: see repair_mesh). The springs'
+// element_measure is released once the stiffness is set (it is only the mappings' input). The mesh is not copied:
+// the largest transient is the vertex-to-tetrahedron grouping (4 bytes per tetrahedron corner) while the springs are
+// found; the peak is the returned setup itself (docs/performance.md, "Host setup").
 std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const SpringModelSpec& spec,
-                                                  DiagnosticList& diagnostics);
+                                                  DiagnosticList& diagnostics, WorkerPool* pool = nullptr);
 
 }  // namespace fmpc::sim

@@ -5,9 +5,14 @@
 #include <vector>
 
 #include "diagnostics/diagnostic.h"
+#include "runtime/integrate/worker_pool.h"
 #include "runtime/mesh/mesh.h"
 
 namespace fmpc::sim {
+
+// Every builder below takes an optional WorkerPool (null: a pool of its own, every hardware thread for large inputs,
+// see resolve_thread_count); its results, down to the order of springs and CSR entries and the bits of every sum,
+// do not depend on the thread count.
 
 enum class SpringKind : std::uint8_t {
   TetrahedronEdge,  // an edge of one or more tetrahedra
@@ -39,9 +44,21 @@ struct SpringNetwork {
   std::size_t size() const { return first.size(); }
 };
 
-// One spring per distinct tetrahedron edge, sorted by (first, second); element_measure = incident volumes.
-// Tetrahedra with out-of-range indices are reported (error) and the network is empty.
-SpringNetwork springs_from_tetrahedra(const Mesh& mesh, DiagnosticList& diagnostics);
+// The elements at every vertex (the tetrahedra, or without them the triangles), each vertex's in increasing order:
+// what springs_from_* and lumped_masses group the mesh by. Built once and passed to both, it saves a pass over the
+// elements and their largest temporary (4 bytes per element corner). Indices out of range are left out.
+using VertexElements = KeyGroups;
+VertexElements elements_at_vertices(const Mesh& mesh, WorkerPool* pool = nullptr);
+
+// One spring per distinct tetrahedron edge, sorted by (first, second); element_measure = incident volumes, summed
+// in tetrahedron order. Tetrahedra with out-of-range indices, or more than 2^30 - 1 springs (the int32 adjacency),
+// are reported (error) and the network is empty. O(N log N): the tetrahedra are grouped by vertex and each vertex
+// collects the edges it starts.
+SpringNetwork springs_from_tetrahedra(const Mesh& mesh, DiagnosticList& diagnostics, WorkerPool* pool = nullptr);
+// The same with the tetrahedra placed at `points` (one per mesh vertex, e.g. the mesh's points scaled to metres)
+// instead of mesh.points, without copying the mesh; `at`: elements_at_vertices(mesh), or null to build it here.
+SpringNetwork springs_from_tetrahedra(const Mesh& mesh, const std::vector<Point3>& points, DiagnosticList& diagnostics,
+                                     WorkerPool* pool = nullptr, const VertexElements* at = nullptr);
 
 struct TriangleSpringOptions {
   bool structural = true;
@@ -57,15 +74,18 @@ struct TriangleSpringOptions {
 // neighbour k of j that makes the angle i-j-k largest, when that angle is at least bending_min_angle_degrees and no
 // spring joins i and k yet. Springs are ordered structural, flexion, bending, each sorted by (first, second).
 SpringNetwork springs_from_triangles(const Mesh& mesh, const TriangleSpringOptions& options,
-                                     DiagnosticList& diagnostics);
+                                     DiagnosticList& diagnostics, WorkerPool* pool = nullptr);
+SpringNetwork springs_from_triangles(const Mesh& mesh, const std::vector<Point3>& points,
+                                     const TriangleSpringOptions& options, DiagnosticList& diagnostics,
+                                     WorkerPool* pool = nullptr, const VertexElements* at = nullptr);
 
 // Rest lengths from the positions. A spring shorter than min_relative_length x the mean length is an error naming
 // the spring and its vertices (a force direction cannot be defined for it): merge the duplicate vertices first.
 bool compute_rest_lengths(SpringNetwork& network, const std::vector<Point3>& points, DiagnosticList& diagnostics,
-                          double min_relative_length = 1e-9);
+                          double min_relative_length = 1e-9, WorkerPool* pool = nullptr);
 
-// Fills adjacency_* from first/second.
-void build_adjacency(SpringNetwork& network);
+// Fills adjacency_* from first/second (vertex_count vertices, fewer than 2^31 entries).
+void build_adjacency(SpringNetwork& network, WorkerPool* pool = nullptr);
 
 // ---- material mapping ----------------------------------------------------------------------------------------
 
@@ -105,7 +125,9 @@ struct StiffnessSpec {
   double flexion_fraction = 0.1;
 };
 
-bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, DiagnosticList& diagnostics);
+// On an error (naming the first spring that cannot get a stiffness) the springs before it keep theirs, the rest 0.
+bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, DiagnosticList& diagnostics,
+                      WorkerPool* pool = nullptr);
 
 struct MassSpec {
   enum class Source { Density, TotalMass } source = Source::Density;
@@ -116,7 +138,14 @@ struct MassSpec {
 // Lumped masses: each tetrahedron gives rho V / 4 to each vertex, each triangle rho h A / 3 (when the mesh has no
 // tetrahedra). TotalMass scales those shares to the total; a mesh without elements shares it equally.
 // Vertices that get no mass are an error (they would divide by zero), naming the first of them.
-std::vector<double> lumped_masses(const Mesh& mesh, const MassSpec& spec, DiagnosticList& diagnostics);
+std::vector<double> lumped_masses(const Mesh& mesh, const MassSpec& spec, DiagnosticList& diagnostics,
+                                  WorkerPool* pool = nullptr);
+// The same with the elements placed at `points` (one per mesh vertex) instead of mesh.points; `at` as for the
+// springs. Each vertex's mass is the sum of its elements' shares in element order (the bits of the loop that adds
+// each element's share to its vertices).
+std::vector<double> lumped_masses(const Mesh& mesh, const std::vector<Point3>& points, const MassSpec& spec,
+                                  DiagnosticList& diagnostics, WorkerPool* pool = nullptr,
+                                  const VertexElements* at = nullptr);
 
 struct DampingSpec {
   enum class Rule {
@@ -133,6 +162,6 @@ struct DampingSpec {
 };
 
 bool assign_damping(SpringNetwork& network, const std::vector<double>& mass, const DampingSpec& spec,
-                    DiagnosticList& diagnostics);
+                    DiagnosticList& diagnostics, WorkerPool* pool = nullptr);
 
 }  // namespace fmpc::sim

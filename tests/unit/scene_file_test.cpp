@@ -60,6 +60,7 @@ TEST_CASE("a minimal scene gets the documented defaults", "[scene]") {
   CHECK(s.backend == SceneBackend::Auto);
   CHECK(s.precision == Precision::Float);
   CHECK(s.outputs.frames == 20);
+  CHECK(s.outputs.vtu == VtuFormat::Binary);
   CHECK(s.outputs.samples == 200);
   CHECK_FALSE(s.probe);
   CHECK(s.gravity == Point3{0, 0, 0});
@@ -99,7 +100,7 @@ duration: 3
 backend: cpu
 precision: double
 threads: 2
-outputs: {directory: out/here, frames: 7, samples: 50, csv: false, summary: yes, plot: off}
+outputs: {directory: out/here, frames: 7, vtu: ascii, samples: 50, csv: false, summary: yes, plot: off}
 )yaml";
   const Parsed parsed = parse(text);
   INFO((parsed.errors.empty() ? "" : parsed.errors.front()));
@@ -167,6 +168,7 @@ outputs: {directory: out/here, frames: 7, samples: 50, csv: false, summary: yes,
   CHECK(s.threads == 2);
   CHECK(s.outputs.directory == "out/here");
   CHECK(s.outputs.frames == 7);
+  CHECK(s.outputs.vtu == VtuFormat::Ascii);
   CHECK(s.outputs.samples == 50);
   CHECK_FALSE(s.outputs.csv);
   CHECK(s.outputs.summary);
@@ -214,8 +216,9 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "precision: half\n") == "3:12: precision: 'half' is not a precision; use float or double");
   CHECK(error_of(kMinimal + "threads: 1.5\n") == "3:10: threads: expected an integer from 0 to 256, got '1.5'");
   CHECK(error_of(kMinimal + "gravity: [0, 0, -9.81]\n") ==
-        "3:1: gravity: unknown key; allowed: 'name', 'mesh', 'material', 'mass', 'damping', 'springs', 'law', "
-        "'fixed', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads' or 'outputs'");
+        "3:1: gravity: unknown key; allowed: 'name', 'model', 'mesh', 'material', 'mass', 'damping', 'springs', "
+        "'law', 'fixed', 'hold', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads', "
+        "'outputs' or 'on_inversion'");
   CHECK(error_of("material: {youngs_modulus: 10}\n") ==
         "1:1: mesh: missing; give a mesh file or a generated box or ellipsoid");
   CHECK(error_of("mesh: {box: {size: [1, 1, 1]}}\n") ==
@@ -247,7 +250,8 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "damping: {ratio: -0.5}\n") ==
         "3:18: damping.ratio: expected a non-negative number, got -0.5");
   CHECK(error_of(kMinimal + "damping: lots\n") ==
-        "3:10: damping: expected 'none' or a map with 'ratio' (and optionally 'natural_frequency') or 'coefficient'");
+        "3:10: damping: expected 'none' or a map with 'ratio' (and optionally 'natural_frequency') or 'coefficient', "
+        "and/or 'rayleigh'");
   CHECK(error_of(kMinimal + "law: hooke\n") == "3:6: law: 'hooke' is not a spring law; use linear or basafa_farahmand");
   CHECK(error_of(kMinimal + "fixed: {indices: [1, -2]}\n") ==
         "3:22: fixed.indices: expected an integer from 0 to 2147483647, got '-2'");
@@ -264,6 +268,8 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "outputs: {frames: many}\n") ==
         "3:19: outputs.frames: expected an integer from 0 to 100000, got 'many'");
   CHECK(error_of(kMinimal + "outputs: {csv: maybe}\n") == "3:16: outputs.csv: expected true or false, got 'maybe'");
+  CHECK(error_of(kMinimal + "outputs: {vtu: text}\n") ==
+        "3:16: outputs.vtu: 'text' is not a VTU encoding; use binary or ascii");
   CHECK(error_of("mesh: [1, 2\n") == "2:1: invalid YAML: end of sequence flow not found");
   CHECK(error_of("") == "0:0: a scene file is a YAML map with 'mesh', 'material' and the other keys of docs/scenes.md");
 }

@@ -77,7 +77,12 @@ TEST_CASE("VTU frames and the PVD collection are well-formed with the right coun
   REQUIRE(box.points.size() == 12);
   REQUIRE(box.tetrahedra.size() == 12);
   std::vector<Point3> displacement(box.points.size(), Point3{0.5, 0, -1e-300});
-  const std::string vtu = vtu_document(box.points, box, {{"displacement", displacement}});
+  VtuOptions ascii;
+  ascii.format = VtuFormat::Ascii;
+  const auto box_cells = encode_vtu_cells(box, ascii, diagnostics);
+  REQUIRE(box_cells);
+  const std::string vtu = *vtu_document(box.points, *box_cells, {vtu_vectors("displacement", displacement)}, {}, ascii,
+                                        diagnostics);
   CHECK(tags_balanced(vtu));
   CHECK(vtu.find("<Piece NumberOfPoints=\"12\" NumberOfCells=\"12\">") != std::string::npos);
   CHECK(vtu.find("<PointData Vectors=\"displacement\">") != std::string::npos);
@@ -88,7 +93,9 @@ TEST_CASE("VTU frames and the PVD collection are well-formed with the right coun
   Mesh triangles;
   triangles.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   triangles.triangles = {{0, 1, 2}};
-  const std::string surface = vtu_document(triangles.points, triangles, {});
+  const auto triangle_cells = encode_vtu_cells(triangles, ascii, diagnostics);
+  REQUIRE(triangle_cells);
+  const std::string surface = *vtu_document(triangles.points, *triangle_cells, {}, {}, ascii, diagnostics);
   CHECK(tags_balanced(surface));
   CHECK(surface.find("          5\n") != std::string::npos);  // VTK_TRIANGLE
   CHECK(surface.find("<PointData>") != std::string::npos);
@@ -262,8 +269,13 @@ TEST_CASE("the demo scene runs and writes frames, PVD, CSV and summary", "[scene
 
   const std::string pvd = read_text((dir / "liver_indentation.pvd").string());
   CHECK(count(pvd, "<DataSet ") == 4);
+  // Binary frames by default: the XML before the appended data is well-formed (tests/unit/vtk_xml_test.cpp decodes
+  // the data).
   const std::string frame = read_text((dir / "frame_00002.vtu").string());
-  CHECK(tags_balanced(frame));
+  const std::size_t appended = frame.find("  <AppendedData encoding=\"raw\">\n   _");
+  REQUIRE(appended != std::string::npos);
+  CHECK(tags_balanced(frame.substr(0, appended) + "</VTKFile>\n"));
+  CHECK(frame.find("compressor=\"vtkZLibDataCompressor\"") < appended);
   CHECK(frame.find("NumberOfPoints=\"405\" NumberOfCells=\"1536\"") != std::string::npos);
 
   std::istringstream csv(read_text((dir / "time_series.csv").string()));
@@ -354,4 +366,114 @@ TEST_CASE("SOFA's liver spring scenes run, springs and fuzzy", "[scene]") {
   CHECK(sag[1] > 0.0);
   CHECK(sag[1] / sag[0] > 0.1);
   CHECK(sag[1] / sag[0] < 10.0);
+}
+
+TEST_CASE("the precision check: agreeing scenes say so, a chaotic one warns, big ones are skipped", "[scene]") {
+  const auto run = [](const std::string& text, DiagnosticList& diagnostics) {
+    const Scene scene = parse_text(text);
+    const auto built = build_scene(scene, diagnostics);
+    REQUIRE(built);
+    const auto dir = temporary_directory("precision");
+    SceneRunOptions options;
+    options.output_directory = dir.string();
+    auto result = run_scene(scene, *built, options, diagnostics);
+    std::filesystem::remove_all(dir);
+    REQUIRE(result);
+    return result->precision_check;
+  };
+  const std::string box = "mesh: {box: {size: [0.01, 0.01, 0.01], cells: [1, 1, 1]}, units: m}\n"
+                          "material: {youngs_modulus: 1}\nmass: {density: 1000}\n";
+  // An undamped box hanging from one corner tumbles chaotically: float and double part ways.
+  DiagnosticList chaotic;
+  const PrecisionCheckResult tumbling =
+      run(box + "damping: none\nfixed: {indices: [0]}\nloads: {gravity: [0.3, 0.1, -9.81]}\n"
+                "integrator: velocity_verlet\nduration: 3.0\noutputs: {frames: 0, samples: 10}\n",
+          chaotic);
+  CHECK(tumbling.ran);
+  CHECK_FALSE(tumbling.agrees);
+  CHECK(tumbling.displacement_difference > kPrecisionTolerance);
+  bool warned = false;
+  for (const Diagnostic& d : chaotic.items()) warned = warned || d.code == "precision-dependent";
+  CHECK(warned);
+  // A damped box resting on its base settles to the same answer in both.
+  DiagnosticList settled;
+  const PrecisionCheckResult resting =
+      run(box + "damping: {ratio: 0.9}\nfixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\n"
+                "loads: {gravity: [0, 0, -9.81]}\nduration: 0.5\noutputs: {frames: 0, samples: 10}\n",
+          settled);
+  CHECK(resting.ran);
+  CHECK(resting.agrees);
+  CHECK(resting.displacement_difference < 1e-4);
+  // Off, and skipped above the automatic limit (the reason says how to force it).
+  DiagnosticList off;
+  CHECK_FALSE(run(box + "fixed: {indices: [0]}\nduration: 0.01\noutputs: {frames: 0, samples: 0, precision_check: off}\n",
+                  off)
+                  .ran);
+}
+
+TEST_CASE("scenes choose the force model; the FEM refuses spring settings, naming the field", "[scene][fem]") {
+  const std::string base =
+      "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [2, 2, 2]}, units: m}\nmass: {density: 1000}\n"
+      "fixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\nloads: {gravity: [0, 0, -9.81]}\n";
+  DiagnosticList diagnostics;
+  const Scene fem = parse_text("model: corotational_fem\n" + base +
+                               "material: {youngs_modulus: 3, poisson_ratio: 0.3}\n"
+                               "damping: {ratio: 0.5, rayleigh: {mass: 2, stiffness: 0.001}}\non_inversion: stop\n");
+  CHECK(fem.model == ForceModel::CorotationalFem);
+  CHECK(fem.on_inversion == InversionPolicy::Stop);
+  CHECK(fem.rayleigh.mass == 2.0);
+  const auto built = build_scene(fem, diagnostics);
+  REQUIRE(built);
+  const SimulationSetup& setup = built->setup;
+  CHECK(setup.model == ForceModel::CorotationalFem);
+  CHECK(setup.springs.size() == 0);
+  REQUIRE(setup.tetrahedron_field);
+  CHECK(setup.tetrahedron_field->size() == 48);
+  CHECK(setup.tetrahedron_field->youngs_modulus.front() == 3000.0);
+  CHECK(setup.tetrahedron_field->poisson_ratio.front() == 0.3);
+  CHECK(setup.mass_damping == 2.0);
+  CHECK(setup.on_inversion == InversionPolicy::Stop);
+  for (const double beta : setup.tetrahedron_field->stiffness_damping) CHECK(beta > 0.001);
+  CHECK(built->stiffness_description == "co-rotational FEM with E = 3 kPa, nu = 0.3");
+
+  // Springs with the volume term and Rayleigh damping.
+  const Scene volume = parse_text(base + "material: {youngs_modulus: 3, poisson_ratio: 0.45}\n"
+                                         "springs: {volume_term: true}\ndamping: {rayleigh: {stiffness: 0.01}}\n");
+  const auto springs = build_scene(volume, diagnostics);
+  REQUIRE(springs);
+  REQUIRE(springs->setup.tetrahedron_field);
+  CHECK(springs->setup.tetrahedron_field->law == kernels::TetrahedronLaw::VolumePreservation);
+  CHECK(springs->setup.springs.damping.size() == springs->setup.springs.size());
+  CHECK(springs->setup.springs.damping.front() == Approx(0.01 * springs->setup.springs.stiffness.front()));
+
+  const auto errors_of = [](const std::string& text) {
+    DiagnosticList d;
+    parse_scene("s.yaml", text, d);
+    std::vector<std::string> out;
+    for (const Diagnostic& item : d.items())
+      out.push_back(std::to_string(item.range.line) + ":" + std::to_string(item.range.column) + ": " + item.message);
+    return out;
+  };
+  const auto spring_only = errors_of("model: corotational_fem\n" + base +
+                                     "material: {stiffness: 100, mapping: lloyd_szekely_harders_2007}\n"
+                                     "law: basafa_farahmand\ndamping: {coefficient: 2}\nsprings: {bending: true}\n");
+  CHECK(spring_only == std::vector<std::string>{
+                           "6:37: material.mapping: only allowed with 'youngs_modulus', 'rules' or 'table' (it maps "
+                           "Young's modulus to spring constants)",
+                           "6:23: material.stiffness: the co-rotational FEM takes Young's modulus (youngs_modulus, rules "
+                           "or table), not spring constants",
+                           "9:10: springs: has no meaning for model: corotational_fem (it is a spring setting)",
+                           "7:6: law: has no meaning for model: corotational_fem (it is a spring setting); the FEM's "
+                           "material is linear elastic (co-rotated)",
+                           "8:24: damping.coefficient: a per-spring dashpot setting; the FEM is damped by 'ratio' "
+                           "(each element's fastest mode) and 'rayleigh'"});
+  CHECK(errors_of(base + "material: {youngs_modulus: 3, poisson_ratio: 0.3}\n") ==
+        std::vector<std::string>{"5:46: material.poisson_ratio: springs alone have nu = 1/4 (central springs obey the "
+                                 "Cauchy relation lambda = mu); add the volume term (springs: {volume_term: true}) to "
+                                 "reach another ratio, or use model: corotational_fem"});
+  CHECK(errors_of("model: corotational_fem\n" + base + "material: {youngs_modulus: 3, poisson_ratio: 0.5}\n") ==
+        std::vector<std::string>{"6:46: material.poisson_ratio: expected a number in [0, 0.499] (0.5 is incompressible, "
+                                 "which linear tetrahedra cannot represent without locking), got 0.5"});
+  CHECK(errors_of(base + "material: {youngs_modulus: 3}\nmodel: fem\n").front() ==
+        "6:8: model: 'fem' is not a force model; use springs or corotational_fem");
 }

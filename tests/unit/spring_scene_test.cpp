@@ -123,6 +123,7 @@ TEST_CASE("springs: bending springs and the shear key", "[springs][scene]") {
   const Parsed unknown = parse(kBox + "material: {youngs_modulus: 10}\nsprings: {bendin: true}\n");
   CHECK_FALSE(unknown.scene);
   CHECK(unknown.errors == std::vector<std::string>{"3:11: springs.bendin: unknown key in springs; allowed: "
-                                                   "'structural', 'flexion', 'bending' or 'bending_min_angle'"});
+                                                   "'structural', 'flexion', 'bending', 'bending_min_angle' or "
+                                                   "'volume_term'"});
   CHECK(unknown.notes == std::vector<std::string>{"did you mean 'bending'?"});
 }

@@ -153,7 +153,7 @@ int run_compile(const CompileOptions& options) {
   for (const IrDump& dump : compiled->dumps) report_stream << "# IR after " << dump.pass << '\n' << dump.text;
 
   std::string read_error;
-  const std::optional<std::string> bytes = read_text_file(options.file, read_error);
+  const std::optional<std::string> bytes = read_text_file(options.file, sim::kMaxRuleFileBytes, "rule file", read_error);
   const std::uint64_t source_hash = bytes ? fnv1a64(*bytes) : 0;
   std::ostringstream report;
   if (options.report) {
@@ -211,14 +211,13 @@ int run_compile(const CompileOptions& options) {
     writes.emplace_back(options.outputs.front(), *header);
   }
   print_diagnostics(diagnostics, file.sources, std::cerr);
-  for (const auto& [path, contents] : writes) {
-    std::string error;
-    if (!write_text_file_atomically(path, contents, error)) {
-      std::cerr << path << ": error: " << error << '\n';
-      return kExitErrors;
-    }
-    if (options.report && path != "-") report << "wrote " << path << '\n';
+  std::string error;
+  if (!write_text_files_atomically(writes, error)) {  // all or none (-o t.fzt -o missing/t.h writes neither)
+    std::cerr << "fmpc compile: error: " << error << '\n';
+    return kExitErrors;
   }
+  for (const auto& write : writes)
+    if (options.report && write.first != "-") report << "wrote " << write.first << '\n';
   report_stream << report.str();
   return kExitOk;
 }

@@ -1,5 +1,7 @@
 #include "tools/fmpc/csv_table.h"
 
+#include <algorithm>
+
 namespace fmpc::cli {
 
 namespace {
@@ -40,6 +42,12 @@ CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticL
     row_has_content = false;
   };
   for (std::size_t i = 0; i < text.size(); ++i) {
+    if (table.rows.size() * std::max<std::size_t>(table.header.size(), 1) + row.size() > kMaxCsvCells) {
+      diagnostics.error(SourceRange{path, line, 1, line, 2},
+                        "the CSV has more than " + std::to_string(kMaxCsvCells) +
+                            " cells, the limit (docs/limits.md); split it into several files");
+      return table;
+    }
     const char c = text[i];
     if (quoted) {
       if (c == '"' && i + 1 < text.size() && text[i + 1] == '"') {

@@ -19,6 +19,9 @@ struct CsvTable {
   std::vector<std::vector<CsvCell>> rows;  // blank lines skipped
 };
 
+// Every cell keeps its text and position (about 100 bytes each); a table of more cells is refused.
+inline constexpr std::size_t kMaxCsvCells = std::size_t{1} << 20;  // 1,048,576
+
 CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
 
 // One CSV line (with its '\n'); fields are quoted only when they need it.

@@ -18,6 +18,10 @@ namespace fmpc::cli {
 
 namespace {
 
+// The most samples --explain prints (docs/limits.md): about 30 bytes of text each.
+constexpr std::size_t kMaxExplainSamplesPerPoint = 100000;
+constexpr std::size_t kMaxExplainSamplesTotal = 10000000;
+
 struct EvalOptions {
   std::string file;
   std::vector<std::string> assignments;  // NAME=VALUE
@@ -470,7 +474,7 @@ int run_eval(const EvalOptions& options) {
     } else {
       const std::string csv_path = options.csv.empty() ? "-" : options.csv;
       std::string error;
-      const std::optional<std::string> text = read_text_file(csv_path, error);
+      const std::optional<std::string> text = read_text_file(csv_path, sim::kMaxCsvFileBytes, "CSV file", error);
       const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
       if (!text) {
         diagnostics.error(SourceRange{shown_path, 0, 0, 0, 0}, error);
@@ -479,6 +483,22 @@ int run_eval(const EvalOptions& options) {
         const CsvTable table = parse_csv(shown_path, *text, diagnostics);
         if (!diagnostics.has_errors()) points = points_from_csv(table, *system, diagnostics);
       }
+    }
+  }
+  // --explain prints every sample of each output's aggregated set for every point, and builds the sets in memory
+  // first: refused above a stated size (docs/limits.md) instead of growing to gigabytes.
+  if (system && options.explain && !diagnostics.has_errors() && system->samples > 0) {
+    const double per_point = static_cast<double>(system->samples) * static_cast<double>(system->outputs.size());
+    const double total = per_point * static_cast<double>(std::max<std::size_t>(points.size(), 1));
+    if (per_point > static_cast<double>(kMaxExplainSamplesPerPoint) ||
+        total > static_cast<double>(kMaxExplainSamplesTotal)) {
+      diagnostics.error(system->range,
+                        "--explain would print " + format_number(total) + " samples (" +
+                            std::to_string(system->samples) + " per output, " +
+                            std::to_string(system->outputs.size()) + " output(s), " + std::to_string(points.size()) +
+                            " point(s)); the limits are " + format_number(double(kMaxExplainSamplesPerPoint)) +
+                            " per point and " + format_number(double(kMaxExplainSamplesTotal)) +
+                            " in all: lower 'samples', explain fewer points, or evaluate without --explain");
     }
   }
   std::ostringstream csv;

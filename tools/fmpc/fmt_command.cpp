@@ -19,11 +19,12 @@ struct FmtOptions {
 
 int run_fmt(const FmtOptions& options) {
   int status = kExitOk;
+  std::vector<std::pair<std::string, std::string>> rewrites;
   for (const std::string& path : options.files) {
     DiagnosticList diagnostics;
     SourceFiles sources;
     std::string error;
-    const std::optional<std::string> text = read_text_file(path, error);
+    const std::optional<std::string> text = read_text_file(path, sim::kMaxRuleFileBytes, "rule file", error);
     if (!text) {
       diagnostics.error(SourceRange{path, 0, 0, 0, 0}, error);
     } else if (detect_dialect(*text) == Dialect::Matlab) {
@@ -47,10 +48,20 @@ int run_fmt(const FmtOptions& options) {
       }
     } else if (options.to_stdout) {
       std::cout << *formatted;
-    } else if (*formatted != *text && !write_text_file_atomically(path, *formatted, error)) {
-      std::cerr << path << ": error: " << error << '\n';
-      status = kExitErrors;
+    } else if (*formatted != *text) {
+      rewrites.emplace_back(path, *formatted);
     }
+  }
+  // The files are rewritten together, all or none: after an error in any file, none is touched.
+  if (rewrites.empty()) return status;
+  if (status == kExitErrors) {
+    std::cerr << "fmpc fmt: no file rewritten (" << rewrites.size() << " would change): fix the errors above first\n";
+    return status;
+  }
+  std::string error;
+  if (!write_text_files_atomically(rewrites, error)) {
+    std::cerr << "fmpc fmt: error: " << error << '\n';
+    return kExitErrors;
   }
   return status;
 }

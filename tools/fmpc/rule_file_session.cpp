@@ -11,7 +11,7 @@ LoadedRuleFile load_rule_file_from_disk(const std::string& path) {
   LoadedRuleFile file;
   file.path = path;
   std::string error;
-  const std::optional<std::string> text = read_text_file(path, error);
+  const std::optional<std::string> text = read_text_file(path, sim::kMaxRuleFileBytes, "rule file", error);
   if (!text) {
     file.diagnostics.error(SourceRange{path, 0, 0, 0, 0}, error);
     return file;

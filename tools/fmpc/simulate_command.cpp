@@ -15,6 +15,7 @@
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
 #include "runtime/scene/scene_run.h"
+#include "diagnostics/number_format.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
@@ -140,11 +141,23 @@ bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, Diagnost
     else if (options.precision == "double") scene.precision = sim::Precision::Double;
     else diagnostics.error(kCommandLine, "--precision: '" + options.precision + "' is not a precision; use float or double");
   }
-  if (options.steps) scene.steps = *options.steps;
+  if (options.steps) {
+    if (*options.steps == 0 || static_cast<double>(*options.steps) > sim::kMaxSimulationSteps)
+      diagnostics.error(kCommandLine, "--steps: " + std::to_string(*options.steps) + " is not from 1 to " +
+                                          format_number(sim::kMaxSimulationSteps) + " (docs/limits.md)");
+    scene.steps = *options.steps;
+  }
   if (options.duration) {
     if (!(*options.duration > 0.0) || !std::isfinite(*options.duration))
       diagnostics.error(kCommandLine, "--duration: expected a positive number of seconds");
     scene.duration = *options.duration;
+  }
+  // With a given dt the step count is known now; with dt auto the runner checks it once dt is (planned_step_count).
+  if (!diagnostics.has_errors() && scene.dt) {
+    DiagnosticList steps;
+    if (!sim::planned_step_count(scene, *scene.dt, steps))
+      diagnostics.error(options.duration ? kCommandLine : scene.range_of("dt"),
+                        std::string(options.duration ? "--duration: " : "") + steps.items().front().message);
   }
   return !diagnostics.has_errors();
 }
@@ -188,7 +201,7 @@ int run_simulate(const SimulateOptions& options) {
   DiagnosticList diagnostics;
   SourceFiles sources;
   std::string read_error;
-  const std::optional<std::string> text = read_text_file(options.scene, read_error);
+  const std::optional<std::string> text = read_text_file(options.scene, sim::kMaxSceneFileBytes, "scene file", read_error);
   if (!text) {
     diagnostics.error(SourceRange{options.scene, 0, 0, 0, 0}, read_error);
     report(diagnostics, sources);
@@ -237,7 +250,8 @@ int run_simulate(const SimulateOptions& options) {
   std::cout << scene->name << ": " << result->steps_taken << " steps of " << six_digits(result->stability.time_step)
             << " s" << (result->stability.automatic ? " (auto)" : "") << ", " << sim::scene_name(setup.integrator)
             << ", " << (setup.precision == sim::Precision::Float ? "float" : "double") << ", " << *backend << "\n"
-            << "  mesh: " << built->mesh.points.size() << " vertices, " << setup.springs.size() << " springs, "
+            << "  model: " << sim::scene_name(setup.model) << "; mesh: " << built->mesh.points.size() << " vertices, "
+            << built->mesh.tetrahedra.size() << " tetrahedra, " << setup.springs.size() << " springs, "
             << setup.fixed_vertices.size() << " fixed\n"
             << "  stiffness: " << built->stiffness_description << "\n"
             << "  wall time " << six_digits(result->wall_seconds) << " s (" << six_digits(result->steps_per_second)
@@ -247,7 +261,19 @@ int run_simulate(const SimulateOptions& options) {
     std::cout << "  probe: " << setup.probe->vertices.size() << " vertices, displacement "
               << six_digits(last.displacement * 1000.0) << " mm, force " << six_digits(last.force) << " N\n";
   }
-  std::cout << "  wrote " << result->files.size() + (plot_path.empty() ? 0 : 1) << " files to "
+  if (result->inversions.largest_count > 0) {
+    std::cout << "  inverted elements: " << result->inversions.largest_count << " at most (first: tetrahedron "
+              << result->inversions.first_element << " at step " << result->inversions.first_step << "), "
+              << result->inversions.current_count << " at the end\n";
+  } else if (!setup.tetrahedra.empty()) {
+    std::cout << "  inverted elements: none\n";
+  }
+  const sim::PrecisionCheckResult& precision = result->precision_check;
+  std::cout << "  precision check: " << precision.reason;
+  if (precision.ran)
+    std::cout << " (probe force " << six_digits(precision.probe_force_difference) << ", largest displacement "
+              << six_digits(precision.displacement_difference) << " relative)";
+  std::cout << "\n  wrote " << result->files.size() + (plot_path.empty() ? 0 : 1) << " files to "
             << run_options.output_directory << (plot_path.empty() ? "" : " (plot: force_displacement.png)") << "\n";
   return result->completed ? kExitOk : kExitErrors;
 }

@@ -37,6 +37,10 @@ namespace fmpc::cli {
 
 namespace {
 
+// The largest table trade builds: its grid inputs and values take (inputs + outputs) x 8 bytes per point
+// (docs/limits.md).
+constexpr std::uint64_t kMaxTradeGridPoints = std::uint64_t{1} << 24;
+
 struct TradeOptions {
   std::string file;
   std::string system;
@@ -184,6 +188,19 @@ int run_trade(const TradeOptions& options) {
   const std::size_t d = system.inputs.size();
   const std::size_t m = system.outputs.size();
   const std::size_t n = options.points;
+  // Every requested table is measured or the command fails: a resolution whose grid is over budget is an error
+  // naming it, not a row left out.
+  for (const int resolution : options.resolutions) {
+    double grid = 1.0;
+    for (std::size_t i = 0; i < d; ++i) grid *= resolution;
+    if (d > 0 && grid > static_cast<double>(options.max_grid_points)) {
+      std::cerr << "fmpc trade: error: --resolutions " << resolution << " on " << d << " varying input"
+                << (d == 1 ? "" : "s") << " makes " << format_number(grid) << " grid points, above --max-grid-points "
+                << options.max_grid_points << "; lower the resolution or raise --max-grid-points (at most "
+                << kMaxTradeGridPoints << ")\n";
+      return kExitErrors;
+    }
+  }
 
   // Held-out points, uniform over the varying inputs' ranges.
   std::mt19937_64 random(options.seed);
@@ -249,7 +266,7 @@ int run_trade(const TradeOptions& options) {
   emit.source_path = options.file;
   emit.namespace_name = "fmpc_trade";
   std::string read_error;
-  if (const auto bytes = read_text_file(options.file, read_error)) emit.source_hash = fnv1a64(*bytes);
+  if (const auto bytes = read_text_file(options.file, sim::kMaxRuleFileBytes, "rule file", read_error)) emit.source_hash = fnv1a64(*bytes);
   DiagnosticList emit_diagnostics;
   const std::optional<std::string> header = emit_evaluator(system, emit, emit_diagnostics);
   if (!header) {
@@ -287,7 +304,7 @@ int run_trade(const TradeOptions& options) {
     for (const int resolution : options.resolutions) {
       double grid = 1.0;
       for (std::size_t i = 0; i < d; ++i) grid *= resolution;
-      if (resolution < 2 || grid > static_cast<double>(options.max_grid_points) || d == 0) continue;
+      if (d == 0) continue;  // nothing varies: no table to measure
       LookupTable table;
       table.axes.resize(d);
       for (std::size_t i = 0; i < d; ++i) {
@@ -357,15 +374,9 @@ int run_trade(const TradeOptions& options) {
   }
   std::cout << markdown.str();
 
-  std::string error;
-  if (!options.markdown.empty() && !write_text_file_atomically(options.markdown, markdown.str(), error)) {
-    std::cerr << options.markdown << ": error: " << error << '\n';
-    return kExitErrors;
-  }
-  if (!options.csv.empty() && !write_text_file_atomically(options.csv, csv.str(), error)) {
-    std::cerr << options.csv << ": error: " << error << '\n';
-    return kExitErrors;
-  }
+  std::vector<std::pair<std::string, std::string>> writes;  // all or none
+  if (!options.markdown.empty()) writes.emplace_back(options.markdown, markdown.str());
+  if (!options.csv.empty()) writes.emplace_back(options.csv, csv.str());
   if (!options.plot.empty()) {
     plot::TradePlot figure;
     figure.error_unit = unit;
@@ -374,10 +385,12 @@ int run_trade(const TradeOptions& options) {
       if (row.evaluations_per_second > 0 && std::isfinite(row.max_error))
         figure.points.push_back({row.variant + " " + row.detail.substr(0, row.detail.find(',')),
                                  row.evaluations_per_second, row.max_error});
-    if (!write_text_file_atomically(options.plot, plot::encode_png(plot::render_trade_plot(figure)), error)) {
-      std::cerr << options.plot << ": error: " << error << '\n';
-      return kExitErrors;
-    }
+    writes.emplace_back(options.plot, plot::encode_png(plot::render_trade_plot(figure)));
+  }
+  std::string error;
+  if (!write_text_files_atomically(writes, error)) {
+    std::cerr << "fmpc trade: error: " << error << '\n';
+    return kExitErrors;
   }
   return kExitOk;
 }
@@ -399,8 +412,10 @@ void register_trade_command(CLI::App& app, int& exit_code) {
   command->add_option("--points", options->points, "Held-out points")->check(CLI::Range(1, 10000000));
   command->add_option("--seed", options->seed, "Seed of the held-out points");
   command->add_option("--resolutions", options->resolutions, "Table breakpoints per axis (uniform), e.g. 5,9,17")
-      ->delimiter(',');
-  command->add_option("--max-grid-points", options->max_grid_points, "Largest table measured");
+      ->delimiter(',')
+      ->check(CLI::Range(2, 1 << 24));
+  command->add_option("--max-grid-points", options->max_grid_points, "Largest table measured")
+      ->check(CLI::Range(std::uint64_t{2}, kMaxTradeGridPoints));
   command->add_option("--min-seconds", options->min_seconds, "CPU time each speed measurement runs at least")
       ->check(CLI::Range(0.0, 60.0));
   command->add_option("--cxx", options->compiler, "C++ compiler for the generated evaluator (default: $CXX or c++)");

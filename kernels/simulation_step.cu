@@ -1,6 +1,10 @@
-// Thin CUDA kernels over the FMPC_HD functions in spring_math.h and integrator_math.h: each thread owns one
-// vertex, gathers its springs in CSR order (no float atomics) and writes only its own entries, so a run gives the
-// same bits every time and, compiled with --fmad=false, the same bits as the CPU loop.
+// Thin CUDA kernels over the FMPC_HD functions of kernels/*_math.h: each per-vertex thread gathers its model's
+// internal forces (springs in CSR order, elements' corner forces from the element pass; no float atomics) and writes
+// only its own entries; each element thread writes only its own corners. A run gives the same bits every time and,
+// compiled with --fmad=false, the same bits as the CPU loop. The per-vertex kernels are templates over the force
+// model (GatherKind -> a struct of kernels/internal_force_math.h), dispatched once per launch.
+#include <type_traits>
+
 #include "runtime/gpu/gpu_launch.h"
 
 namespace fmpc::gpu {
@@ -13,6 +17,69 @@ __device__ int vertex_index() {
   return static_cast<int>(blockIdx.x) * static_cast<int>(blockDim.x) + static_cast<int>(threadIdx.x);
 }
 
+template <typename Real, GatherKind K>
+__device__ auto forces_of(const ForceModelView<Real>& m) {
+  if constexpr (K == GatherKind::Springs) {
+    return kernels::SpringForces<Real>{m.springs};
+  } else if constexpr (K == GatherKind::Elements) {
+    return kernels::ElementForces<Real>{m.corners};
+  } else {
+    return kernels::SpringAndElementForces<Real>{m.springs, m.corners};
+  }
+}
+
+// Calls launch(std::integral_constant<GatherKind, K>{}) for the model's kind: the one place a kind becomes a
+// template argument.
+template <typename Launch>
+cudaError_t with_kind(GatherKind kind, Launch&& launch) {
+  switch (kind) {
+    case GatherKind::Springs:
+      return launch(std::integral_constant<GatherKind, GatherKind::Springs>{});
+    case GatherKind::Elements:
+      return launch(std::integral_constant<GatherKind, GatherKind::Elements>{});
+    case GatherKind::SpringsAndElements:
+      return launch(std::integral_constant<GatherKind, GatherKind::SpringsAndElements>{});
+  }
+  return cudaErrorInvalidValue;
+}
+
+// The element's material in double, from the implicit copy of the field.
+__device__ kernels::TetrahedronMaterial<double> implicit_material(const ImplicitElements& f, int e) {
+  kernels::TetrahedronMaterial<double> m;
+  m.law = f.law;
+  m.rest_inverse = f.rest_inverse + 9 * e;
+  m.rest_volume = f.rest_volume[e];
+  m.youngs_modulus = f.youngs_modulus ? f.youngs_modulus[e] : 0.0;
+  m.poisson_ratio = f.poisson_ratio ? f.poisson_ratio[e] : 0.0;
+  m.bulk_modulus = f.bulk_modulus ? f.bulk_modulus[e] : 0.0;
+  m.stiffness_damping = f.stiffness_damping ? f.stiffness_damping[e] : 0.0;
+  m.strain_table = f.strain_table.strain ? &f.strain_table : nullptr;
+  return m;
+}
+
+// The element pass needs 88 registers per thread in float unbounded, which leaves 2 blocks of 256 per SM (25%
+// occupancy) and the kernel latency-bound at 41% of DRAM bandwidth on an H100 (ncu, docs/performance.md). Bounding
+// it to FMPC_ELEMENT_MIN_BLOCKS blocks per SM trades registers for occupancy; double keeps its registers.
+#ifndef FMPC_ELEMENT_MIN_BLOCKS
+#define FMPC_ELEMENT_MIN_BLOCKS 3
+#endif
+template <typename Real>
+struct ElementOccupancy {
+  static constexpr int min_blocks = 1;
+};
+template <>
+struct ElementOccupancy<float> {
+  static constexpr int min_blocks = FMPC_ELEMENT_MIN_BLOCKS;
+};
+
+template <typename Real>
+__global__ void __launch_bounds__(kThreadsPerBlock, ElementOccupancy<Real>::min_blocks)
+    element_forces_kernel(ForceModelView<Real> m, kernels::StateView<Real> state) {
+  const int e = vertex_index();
+  if (e >= m.field.count) return;
+  kernels::tetrahedron_corner_forces(e, m.field, state, m.corner_force);
+}
+
 template <typename Real>
 __device__ Real step_of(const StepSize<Real>& step, int v) {
   return step.vertex_scene == nullptr ? step.h : step.scene_h[step.vertex_scene[v]];
@@ -23,13 +90,13 @@ __device__ kernels::StateView<Real> read_only(const MutableStateView<Real>& s) {
   return {s.x, s.y, s.z, s.vx, s.vy, s.vz};
 }
 
-template <typename Real>
+template <typename Real, GatherKind K>
 __global__ void fused_step_kernel(FusedStepArguments<Real> a) {
   const int v = vertex_index();
   if (v >= a.vertex_count) return;
   const Real h = step_of(a.step, v);
   Real ax, ay, az;
-  kernels::vertex_acceleration(v, a.network, a.in, a.loads, ax, ay, az);
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), a.in, a.loads, ax, ay, az);
   Real x = a.in.x[v], y = a.in.y[v], z = a.in.z[v];
   Real vx = a.in.vx[v], vy = a.in.vy[v], vz = a.in.vz[v];
   if (a.scheme == FusedScheme::ForwardEuler) {
@@ -49,15 +116,15 @@ __global__ void fused_step_kernel(FusedStepArguments<Real> a) {
   a.out.vz[v] = vz;
 }
 
-template <typename Real>
+template <typename Real, GatherKind K>
 __global__ void acceleration_kernel(VerletArguments<Real> a) {
   const int v = vertex_index();
   if (v >= a.vertex_count) return;
-  kernels::vertex_acceleration(v, a.network, read_only(a.state), a.loads, a.acceleration.x[v], a.acceleration.y[v],
-                               a.acceleration.z[v]);
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), read_only(a.state), a.loads, a.acceleration.x[v],
+                               a.acceleration.y[v], a.acceleration.z[v]);
 }
 
-template <typename Real>
+template <typename Real, GatherKind>
 __global__ void verlet_drift_kernel(VerletArguments<Real> a) {
   const int v = vertex_index();
   if (v >= a.vertex_count) return;
@@ -67,7 +134,7 @@ __global__ void verlet_drift_kernel(VerletArguments<Real> a) {
   kernels::verlet_position_update(a.state.z[v], a.state.vz[v], a.acceleration.z[v], h, a.predicted.z[v]);
 }
 
-template <typename Real>
+template <typename Real, GatherKind K>
 __global__ void verlet_kick_kernel(VerletArguments<Real> a) {
   const int v = vertex_index();
   if (v >= a.vertex_count) return;
@@ -75,7 +142,7 @@ __global__ void verlet_kick_kernel(VerletArguments<Real> a) {
   // Neighbours read x and the predictor only; v and a below are this vertex's own.
   const kernels::StateView<Real> drifted{a.state.x, a.state.y, a.state.z, a.predicted.x, a.predicted.y, a.predicted.z};
   Real ax, ay, az;
-  kernels::vertex_acceleration(v, a.network, drifted, a.loads, ax, ay, az);
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), drifted, a.loads, ax, ay, az);
   kernels::verlet_velocity_update(a.state.vx[v], a.acceleration.x[v], ax, h);
   kernels::verlet_velocity_update(a.state.vy[v], a.acceleration.y[v], ay, h);
   kernels::verlet_velocity_update(a.state.vz[v], a.acceleration.z[v], az, h);
@@ -84,7 +151,7 @@ __global__ void verlet_kick_kernel(VerletArguments<Real> a) {
   a.acceleration.z[v] = az;
 }
 
-template <typename Real>
+template <typename Real, GatherKind K>
 __global__ void runge_kutta4_stage_kernel(RungeKutta4Arguments<Real> a, int stage) {
   const int v = vertex_index();
   if (v >= a.vertex_count) return;
@@ -94,7 +161,7 @@ __global__ void runge_kutta4_stage_kernel(RungeKutta4Arguments<Real> a, int stag
                                                                  a.stage_position[stage].z, a.stage_velocity[stage].x,
                                                                  a.stage_velocity[stage].y, a.stage_velocity[stage].z};
   Real ax, ay, az;
-  kernels::vertex_acceleration(v, a.network, at, a.loads, ax, ay, az);
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), at, a.loads, ax, ay, az);
   if (stage < 3) {
     a.stage_acceleration[stage].x[v] = ax;
     a.stage_acceleration[stage].y[v] = ay;
@@ -110,7 +177,7 @@ __global__ void runge_kutta4_stage_kernel(RungeKutta4Arguments<Real> a, int stag
     a.stage_velocity[next].z[v] = a.state.vz[v] + c * az;
     return;
   }
-  if (a.loads.fixed[v]) return;
+  if (a.loads.fixed[v] == kernels::kAllAxesFixed) return;
   const auto& kv = a.stage_velocity;
   const auto& ka = a.stage_acceleration;
   Real& x = a.state.x[v];
@@ -157,6 +224,16 @@ __device__ double energy_term(const EnergyArguments<Real>& a, EnergyTerm term, i
                                                                                  a.stiffness_per_modulus[i])
                                                : a.stiffness[i];
     return kernels::spring_potential_energy(length, a.rest_length[i], k, a.law);
+  }
+  if (term == EnergyTerm::ElementPotential) {
+    double corners[4][3];
+    for (int c = 0; c < 4; ++c) {
+      const int vertex = a.elements.corners[4 * i + c];
+      corners[c][0] = static_cast<double>(s.x[vertex]);
+      corners[c][1] = static_cast<double>(s.y[vertex]);
+      corners[c][2] = static_cast<double>(s.z[vertex]);
+    }
+    return kernels::tetrahedron_elastic_energy(implicit_material(a.elements, i), corners);
   }
   const double x = static_cast<double>(s.x[i]), y = static_cast<double>(s.y[i]), z = static_cast<double>(s.z[i]);
   double energy = -(a.mass[i] * a.gravity_x * x) - a.mass[i] * a.gravity_y * y - a.mass[i] * a.gravity_z * z;
@@ -235,22 +312,85 @@ __global__ void implicit_spring_blocks_kernel(ImplicitArguments<Real> a) {
   const int s = vertex_index();
   if (s >= a.spring_count) return;
   const int p = a.first[s], q = a.second[s];
-  const kernels::SpringLawParameters<double> law{a.network.law.law, static_cast<double>(a.network.law.k2_over_k1),
-                                                 static_cast<double>(a.network.law.xc)};
+  const kernels::SpringNetworkView<Real>& springs = a.model.springs;
+  const kernels::SpringLawParameters<double> law{springs.law.law, static_cast<double>(springs.law.k2_over_k1),
+                                                 static_cast<double>(springs.law.xc)};
   kernels::implicit_spring_blocks(static_cast<double>(a.state.x[q]) - static_cast<double>(a.state.x[p]),
                                   static_cast<double>(a.state.y[q]) - static_cast<double>(a.state.y[p]),
                                   static_cast<double>(a.state.z[q]) - static_cast<double>(a.state.z[p]),
-                                  a.rest_length[s], static_cast<double>(a.network.stiffness[s]),
-                                  a.network.damping ? static_cast<double>(a.network.damping[s]) : 0.0, law, a.h,
+                                  a.rest_length[s], static_cast<double>(springs.stiffness[s]),
+                                  springs.damping ? static_cast<double>(springs.damping[s]) : 0.0, law, a.h,
                                   a.blocks + 12 * s, a.blocks + 12 * s + 6);
 }
 
+// Element e's share of the implicit system, as the CPU backend's add_element_blocks: its linearisation at the
+// step's start, h^2 K v0 for the right-hand side and the diagonal of (h^2 + h beta) K_aa for the preconditioner.
 template <typename Real>
+__global__ void implicit_element_kernel(ImplicitArguments<Real> a) {
+  const int e = vertex_index();
+  const ImplicitElements& f = a.elements;
+  if (e >= f.count) return;
+  double x[4][3], v[4][3], kv[4][3];
+  for (int c = 0; c < 4; ++c) {
+    const int vertex = f.corners[4 * e + c];
+    x[c][0] = static_cast<double>(a.state.x[vertex]);
+    x[c][1] = static_cast<double>(a.state.y[vertex]);
+    x[c][2] = static_cast<double>(a.state.z[vertex]);
+    v[c][0] = static_cast<double>(a.state.vx[vertex]);
+    v[c][1] = static_cast<double>(a.state.vy[vertex]);
+    v[c][2] = static_cast<double>(a.state.vz[vertex]);
+  }
+  const kernels::TetrahedronMaterial<double> m = implicit_material(f, e);
+  kernels::TetrahedronLinearisation lin;
+  kernels::linearise_tetrahedron(m, x, lin);
+  f.linearisation[e] = lin;
+  kernels::tetrahedron_stiffness_action(m, lin, v, kv);
+  const double scale = a.h * a.h + a.h * m.stiffness_damping;
+  for (int c = 0; c < 4; ++c) {
+    double block[9];
+    kernels::tetrahedron_stiffness_block(m, lin, c, c, block);
+    for (int i = 0; i < 3; ++i) {
+      f.rhs_part[12 * e + 3 * c + i] = a.h * a.h * kv[c][i];
+      f.diagonal_part[12 * e + 3 * c + i] = scale * block[4 * i];
+    }
+  }
+}
+
+// (h^2 + h beta) K p of element e, with the corners at fixed vertices taken as zero (their rows are identity).
+template <typename Real>
+__global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a) {
+  const int e = vertex_index();
+  const ImplicitElements& f = a.elements;
+  if (e >= f.count) return;
+  double p[4][3], kp[4][3];
+  for (int c = 0; c < 4; ++c) {
+    const int vertex = f.corners[4 * e + c];
+    const unsigned char held = a.loads.fixed[vertex];
+    for (int i = 0; i < 3; ++i) p[c][i] = kernels::axis_fixed(held, i) ? 0.0 : a.p[3 * vertex + i];
+  }
+  const kernels::TetrahedronMaterial<double> m = implicit_material(f, e);
+  kernels::tetrahedron_stiffness_action(m, f.linearisation[e], p, kp);
+  const double scale = a.h * a.h + a.h * m.stiffness_damping;
+  for (int c = 0; c < 4; ++c)
+    for (int i = 0; i < 3; ++i) f.product[12 * e + 3 * c + i] = scale * kp[c][i];
+}
+
+// Sum over the corners at v of an element-major array of 3 values per corner (double).
+__device__ void gather_corner_values(int v, const kernels::CornerForceView<double>& corners, const double* values,
+                                     double* out) {
+  for (int k = corners.offset[v]; k < corners.offset[v + 1]; ++k) {
+    const double* value = values + 3 * corners.corner[k];
+    for (int i = 0; i < 3; ++i) out[i] += value[i];
+  }
+}
+
+template <typename Real, GatherKind K>
 __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   const int v = vertex_index();
   if (v >= a.vertex_count) return;
   double* b = a.rhs + 3 * v;
-  if (a.loads.fixed[v]) {
+  const unsigned char held = a.loads.fixed[v];
+  if (held == kernels::kAllAxesFixed) {
     a.diagonal[v] = 1.0;
     for (int c = 0; c < 3; ++c) {
       b[c] = 0.0;
@@ -260,18 +400,22 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   }
   Real acceleration[3];
   const kernels::StateView<Real> state{a.state.x, a.state.y, a.state.z, a.state.vx, a.state.vy, a.state.vz};
-  kernels::vertex_acceleration(v, a.network, state, a.loads, acceleration[0], acceleration[1], acceleration[2]);
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), state, a.loads, acceleration[0], acceleration[1],
+                               acceleration[2]);
   for (int c = 0; c < 3; ++c) b[c] = a.h * a.mass[v] * static_cast<double>(acceleration[c]);
   const double own_velocity[3] = {static_cast<double>(a.state.vx[v]), static_cast<double>(a.state.vy[v]),
                                   static_cast<double>(a.state.vz[v])};
   const double dx = static_cast<double>(a.state.x[v]) - a.rest_position[3 * v];
   const double dy = static_cast<double>(a.state.y[v]) - a.rest_position[3 * v + 1];
   const double dz = static_cast<double>(a.state.z[v]) - a.rest_position[3 * v + 2];
-  const double diagonal = a.mass[v] + a.h * (static_cast<double>(a.loads.gamma0) +
-                                             static_cast<double>(a.loads.gamma1) * sqrt(dx * dx + dy * dy + dz * dz));
+  const double diagonal =
+      a.mass[v] + a.h * (static_cast<double>(a.loads.gamma0) +
+                         static_cast<double>(a.loads.gamma1) * sqrt(dx * dx + dy * dy + dz * dz) +
+                         static_cast<double>(a.loads.mass_damping) * a.mass[v]);
   double jacobi[3] = {diagonal, diagonal, diagonal};
-  for (int e = a.network.adjacency_offset[v]; e < a.network.adjacency_offset[v + 1]; ++e) {
-    const int s = a.network.adjacency_spring[e], o = a.network.adjacency_neighbour[e];
+  const kernels::SpringNetworkView<Real>& springs = a.model.springs;
+  for (int e = springs.adjacency_offset[v]; e < springs.adjacency_offset[v + 1]; ++e) {
+    const int s = springs.adjacency_spring[e], o = springs.adjacency_neighbour[e];
     const double* stiffness = a.blocks + 12 * s;
     const double* system = stiffness + 6;
     const double relative[3] = {own_velocity[0] - static_cast<double>(a.state.vx[o]),
@@ -284,8 +428,25 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
       jacobi[c] += system[kernels::symmetric_index(c, c)];
     }
   }
+  if (a.elements.count > 0) {
+    const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
+    double kv[3] = {0.0, 0.0, 0.0}, element_diagonal[3] = {0.0, 0.0, 0.0};
+    gather_corner_values(v, corners, a.elements.rhs_part, kv);
+    gather_corner_values(v, corners, a.elements.diagonal_part, element_diagonal);
+    for (int c = 0; c < 3; ++c) {
+      b[c] -= kv[c];
+      jacobi[c] += element_diagonal[c];
+    }
+  }
   a.diagonal[v] = diagonal;
-  for (int c = 0; c < 3; ++c) a.inverse_jacobi[3 * v + c] = jacobi[c] != 0.0 ? 1.0 / jacobi[c] : 1.0;
+  for (int c = 0; c < 3; ++c) {
+    // A held axis is an identity row with a zero right-hand side.
+    if (kernels::axis_fixed(held, c)) {
+      b[c] = 0.0;
+      jacobi[c] = 1.0;
+    }
+    a.inverse_jacobi[3 * v + c] = jacobi[c] != 0.0 ? 1.0 / jacobi[c] : 1.0;
+  }
 }
 
 template <typename Real>
@@ -294,21 +455,38 @@ __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
   if (v >= a.vertex_count) return;
   const double* own = a.p + 3 * v;
   double* out = a.ap + 3 * v;
-  if (a.loads.fixed[v]) {
+  const unsigned char held = a.loads.fixed[v];
+  if (held == kernels::kAllAxesFixed) {
     for (int c = 0; c < 3; ++c) out[c] = own[c];
     return;
   }
   double sum[3] = {a.diagonal[v] * own[0], a.diagonal[v] * own[1], a.diagonal[v] * own[2]};
-  for (int e = a.network.adjacency_offset[v]; e < a.network.adjacency_offset[v + 1]; ++e) {
-    const int s = a.network.adjacency_spring[e], o = a.network.adjacency_neighbour[e];
-    const bool other_free = !a.loads.fixed[o];
-    const double relative[3] = {own[0] - (other_free ? a.p[3 * o] : 0.0), own[1] - (other_free ? a.p[3 * o + 1] : 0.0),
-                                own[2] - (other_free ? a.p[3 * o + 2] : 0.0)};
+  const kernels::SpringNetworkView<Real>& springs = a.model.springs;
+  for (int e = springs.adjacency_offset[v]; e < springs.adjacency_offset[v + 1]; ++e) {
+    const int s = springs.adjacency_spring[e], o = springs.adjacency_neighbour[e];
+    const unsigned char other = a.loads.fixed[o];
+    double relative[3];
+    for (int c = 0; c < 3; ++c) relative[c] = own[c] - (kernels::axis_fixed(other, c) ? 0.0 : a.p[3 * o + c]);
     double product[3];
     kernels::symmetric_multiply(a.blocks + 12 * s + 6, relative, product);
     for (int c = 0; c < 3; ++c) sum[c] += product[c];
   }
-  for (int c = 0; c < 3; ++c) out[c] = sum[c];
+  if (a.elements.count > 0) {
+    const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
+    gather_corner_values(v, corners, a.elements.product, sum);
+  }
+  for (int c = 0; c < 3; ++c) out[c] = kernels::axis_fixed(held, c) ? own[c] : sum[c];
+}
+
+template <typename Real>
+__global__ void count_inverted_kernel(const int* corners, int element_count, const int* element_scene,
+                                      kernels::StateView<Real> s, unsigned int* count, int* first) {
+  const int e = vertex_index();
+  if (e >= element_count) return;
+  if (!kernels::tetrahedron_inverted(e, corners, s.x, s.y, s.z)) return;
+  const int scene = element_scene ? element_scene[e] : 0;
+  atomicAdd(count + scene, 1u);
+  atomicMin(first + scene, e);
 }
 
 // Partial sums of first . second (and of third . fourth when third is not null) over [0, count), in the fixed
@@ -394,7 +572,7 @@ __global__ void cg_direction_kernel(ImplicitArguments<Real> a) {
 template <typename Real>
 __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
   const int v = vertex_index();
-  if (v >= a.vertex_count || a.loads.fixed[v]) return;
+  if (v >= a.vertex_count || a.loads.fixed[v] == kernels::kAllAxesFixed) return;
   const Real h = static_cast<Real>(a.h);
   a.state.vx[v] += static_cast<Real>(a.x[3 * v]);
   a.state.vy[v] += static_cast<Real>(a.x[3 * v + 1]);
@@ -407,25 +585,57 @@ __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
 int blocks_for(int count) { return (count + kThreadsPerBlock - 1) / kThreadsPerBlock; }
 
 template <typename Real>
-cudaError_t launch_fused(const FusedStepArguments<Real>& arguments, cudaStream_t stream) {
-  if (arguments.vertex_count <= 0) return cudaSuccess;
-  fused_step_kernel<Real><<<blocks_for(arguments.vertex_count), kThreadsPerBlock, 0, stream>>>(arguments);
+cudaError_t launch_elements(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
+                            cudaStream_t stream) {
+  if (model.kind == GatherKind::Springs || model.field.count <= 0) return cudaSuccess;
+  element_forces_kernel<Real><<<blocks_for(model.field.count), kThreadsPerBlock, 0, stream>>>(model, state);
   return cudaGetLastError();
 }
 
-template <typename Real, typename Kernel>
-cudaError_t launch_per_vertex(Kernel kernel, const VerletArguments<Real>& arguments, cudaStream_t stream) {
+template <typename Real>
+cudaError_t launch_fused(const FusedStepArguments<Real>& arguments, cudaStream_t stream) {
   if (arguments.vertex_count <= 0) return cudaSuccess;
-  kernel<<<blocks_for(arguments.vertex_count), kThreadsPerBlock, 0, stream>>>(arguments);
-  return cudaGetLastError();
+  return with_kind(arguments.model.kind, [&](auto kind) {
+    fused_step_kernel<Real, decltype(kind)::value>
+        <<<blocks_for(arguments.vertex_count), kThreadsPerBlock, 0, stream>>>(arguments);
+    return cudaGetLastError();
+  });
+}
+
+enum class VerletKernel { Acceleration, Drift, Kick };
+
+template <typename Real>
+cudaError_t launch_verlet(VerletKernel which, const VerletArguments<Real>& arguments, cudaStream_t stream) {
+  if (arguments.vertex_count <= 0) return cudaSuccess;
+  return with_kind(arguments.model.kind, [&](auto kind) {
+    constexpr GatherKind K = decltype(kind)::value;
+    const int blocks = blocks_for(arguments.vertex_count);
+    if (which == VerletKernel::Acceleration) acceleration_kernel<Real, K><<<blocks, kThreadsPerBlock, 0, stream>>>(arguments);
+    if (which == VerletKernel::Drift) verlet_drift_kernel<Real, K><<<blocks, kThreadsPerBlock, 0, stream>>>(arguments);
+    if (which == VerletKernel::Kick) verlet_kick_kernel<Real, K><<<blocks, kThreadsPerBlock, 0, stream>>>(arguments);
+    return cudaGetLastError();
+  });
 }
 
 template <typename Real>
 cudaError_t launch_stage(const RungeKutta4Arguments<Real>& arguments, int stage, cudaStream_t stream) {
   if (arguments.vertex_count <= 0) return cudaSuccess;
   if (stage < 0 || stage > 3) return cudaErrorInvalidValue;
-  runge_kutta4_stage_kernel<Real>
-      <<<blocks_for(arguments.vertex_count), kThreadsPerBlock, 0, stream>>>(arguments, stage);
+  return with_kind(arguments.model.kind, [&](auto kind) {
+    runge_kutta4_stage_kernel<Real, decltype(kind)::value>
+        <<<blocks_for(arguments.vertex_count), kThreadsPerBlock, 0, stream>>>(arguments, stage);
+    return cudaGetLastError();
+  });
+}
+
+template <typename Real>
+cudaError_t launch_inverted(const int* corners, int element_count, const int* element_scene,
+                            const kernels::StateView<Real>& state, unsigned int* count, int* first,
+                            cudaStream_t stream) {
+  if (element_count <= 0) return cudaSuccess;
+  count_inverted_kernel<Real><<<blocks_for(element_count), kThreadsPerBlock, 0, stream>>>(corners, element_count,
+                                                                                          element_scene, state, count,
+                                                                                          first);
   return cudaGetLastError();
 }
 
@@ -479,9 +689,21 @@ cudaError_t launch_assemble(const ImplicitArguments<Real>& a, cudaStream_t strea
     const cudaError_t status = cudaGetLastError();
     if (status != cudaSuccess) return status;
   }
+  if (a.elements.count > 0) {
+    // The element pass at the state (f0 in b) and the elements' linearisation, before the per-vertex kernel.
+    cudaError_t status = launch_elements(a.model, kernels::StateView<Real>{a.state.x, a.state.y, a.state.z, a.state.vx,
+                                                                         a.state.vy, a.state.vz},
+                                         stream);
+    if (status != cudaSuccess) return status;
+    implicit_element_kernel<Real><<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a);
+    status = cudaGetLastError();
+    if (status != cudaSuccess) return status;
+  }
   if (a.vertex_count <= 0) return cudaSuccess;
-  implicit_vertex_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
-  return cudaGetLastError();
+  return with_kind(a.model.kind, [&](auto kind) {
+    implicit_vertex_kernel<Real, decltype(kind)::value><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+    return cudaGetLastError();
+  });
 }
 
 template <typename Real>
@@ -496,6 +718,11 @@ cudaError_t launch_start(const ImplicitArguments<Real>& a, cudaStream_t stream) 
 template <typename Real>
 cudaError_t launch_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
   if (a.vertex_count <= 0) return cudaSuccess;
+  if (a.elements.count > 0) {
+    implicit_element_apply_kernel<Real><<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a);
+    const cudaError_t status = cudaGetLastError();
+    if (status != cudaSuccess) return status;
+  }
   implicit_apply_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
   cudaError_t status = cudaGetLastError();
   if (status != cudaSuccess) return status;
@@ -523,6 +750,24 @@ cudaError_t launch_finish(const ImplicitArguments<Real>& a, cudaStream_t stream)
 
 }  // namespace
 
+cudaError_t launch_element_forces(const ForceModelView<float>& model, const kernels::StateView<float>& state,
+                                  cudaStream_t stream) {
+  return launch_elements(model, state, stream);
+}
+cudaError_t launch_element_forces(const ForceModelView<double>& model, const kernels::StateView<double>& state,
+                                  cudaStream_t stream) {
+  return launch_elements(model, state, stream);
+}
+cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
+                                  const kernels::StateView<float>& state, unsigned int* count, int* first,
+                                  cudaStream_t stream) {
+  return launch_inverted(corners, element_count, element_scene, state, count, first, stream);
+}
+cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
+                                  const kernels::StateView<double>& state, unsigned int* count, int* first,
+                                  cudaStream_t stream) {
+  return launch_inverted(corners, element_count, element_scene, state, count, first, stream);
+}
 cudaError_t launch_fused_step(const FusedStepArguments<float>& arguments, cudaStream_t stream) {
   return launch_fused(arguments, stream);
 }
@@ -530,22 +775,22 @@ cudaError_t launch_fused_step(const FusedStepArguments<double>& arguments, cudaS
   return launch_fused(arguments, stream);
 }
 cudaError_t launch_acceleration(const VerletArguments<float>& arguments, cudaStream_t stream) {
-  return launch_per_vertex(acceleration_kernel<float>, arguments, stream);
+  return launch_verlet(VerletKernel::Acceleration, arguments, stream);
 }
 cudaError_t launch_acceleration(const VerletArguments<double>& arguments, cudaStream_t stream) {
-  return launch_per_vertex(acceleration_kernel<double>, arguments, stream);
+  return launch_verlet(VerletKernel::Acceleration, arguments, stream);
 }
 cudaError_t launch_verlet_drift(const VerletArguments<float>& arguments, cudaStream_t stream) {
-  return launch_per_vertex(verlet_drift_kernel<float>, arguments, stream);
+  return launch_verlet(VerletKernel::Drift, arguments, stream);
 }
 cudaError_t launch_verlet_drift(const VerletArguments<double>& arguments, cudaStream_t stream) {
-  return launch_per_vertex(verlet_drift_kernel<double>, arguments, stream);
+  return launch_verlet(VerletKernel::Drift, arguments, stream);
 }
 cudaError_t launch_verlet_kick(const VerletArguments<float>& arguments, cudaStream_t stream) {
-  return launch_per_vertex(verlet_kick_kernel<float>, arguments, stream);
+  return launch_verlet(VerletKernel::Kick, arguments, stream);
 }
 cudaError_t launch_verlet_kick(const VerletArguments<double>& arguments, cudaStream_t stream) {
-  return launch_per_vertex(verlet_kick_kernel<double>, arguments, stream);
+  return launch_verlet(VerletKernel::Kick, arguments, stream);
 }
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<float>& arguments, int stage, cudaStream_t stream) {
   return launch_stage(arguments, stage, stream);

@@ -1,0 +1,103 @@
+#include "runtime/fem/fem_model_builder.h"
+
+#include <cmath>
+#include <string>
+
+#include "diagnostics/number_format.h"
+
+namespace fmpc::sim {
+
+namespace {
+
+// One value per element from a vector of one value or one per element; an error names what was given.
+std::optional<std::vector<double>> per_element(const std::vector<double>& values, std::size_t count, const char* what,
+                                               DiagnosticList& diagnostics) {
+  if (values.size() == 1) return std::vector<double>(count, values.front());
+  if (values.size() == count) return values;
+  diagnostics.error(SourceRange{}, std::string(what) + ": " + std::to_string(values.size()) + " values for " +
+                                       std::to_string(count) + " tetrahedra; give one, or one per tetrahedron");
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::vector<Point3> tetrahedron_centroids(const Mesh& mesh) {
+  std::vector<Point3> out(mesh.tetrahedra.size());
+  for (std::size_t e = 0; e < out.size(); ++e)
+    for (std::size_t i = 0; i < 3; ++i) {
+      double sum = 0.0;
+      for (const auto v : mesh.tetrahedra[e]) sum += mesh.points[static_cast<std::size_t>(v)][i];
+      out[e][i] = sum / 4.0;
+    }
+  return out;
+}
+
+std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelSpec& spec, DiagnosticList& diagnostics) {
+  SourceRange range;
+  range.file = mesh.source;
+  if (!(spec.length_unit > 0.0) || !std::isfinite(spec.length_unit)) {
+    diagnostics.error(range, "the length unit must be a positive number of metres per mesh unit");
+    return std::nullopt;
+  }
+  if (mesh.tetrahedra.empty()) {
+    diagnostics.error(range, "the co-rotational FEM needs tetrahedra; the mesh has none (a surface mesh can only be "
+                             "simulated with springs)");
+    return std::nullopt;
+  }
+  const std::size_t count = mesh.tetrahedra.size();
+  const auto youngs = per_element(spec.youngs_modulus, count, "Young's modulus", diagnostics);
+  const auto poisson = per_element(spec.poisson_ratio, count, "Poisson ratio", diagnostics);
+  if (!youngs || !poisson) return std::nullopt;
+  for (std::size_t e = 0; e < count; ++e) {
+    if (!((*youngs)[e] > 0.0) || !std::isfinite((*youngs)[e])) {
+      diagnostics.error(range, "tetrahedron " + std::to_string(e) + ": Young's modulus " + format_number((*youngs)[e]) +
+                                   " Pa is not a positive, finite number; fix the material value");
+      return std::nullopt;
+    }
+    if (!((*poisson)[e] >= 0.0 && (*poisson)[e] <= 0.499)) {
+      diagnostics.error(range, "tetrahedron " + std::to_string(e) + ": Poisson ratio " + format_number((*poisson)[e]) +
+                                   " is outside [0, 0.499] (0.5 is incompressible, which linear tetrahedra lock on)");
+      return std::nullopt;
+    }
+  }
+  Mesh scaled = mesh;
+  for (Point3& p : scaled.points)
+    for (double& coordinate : p) coordinate *= spec.length_unit;
+  SimulationSetup setup;
+  setup.model = ForceModel::CorotationalFem;
+  setup.rest_positions = scaled.points;
+  setup.tetrahedra = scaled.tetrahedra;
+  setup.springs.vertex_count = scaled.points.size();
+  setup.springs.adjacency_offset.assign(scaled.points.size() + 1, 0);
+  auto field = tetrahedron_geometry(scaled.points, scaled.tetrahedra, kernels::TetrahedronLaw::CorotationalLinear,
+                                    diagnostics);
+  if (!field) return std::nullopt;
+  field->youngs_modulus = *youngs;
+  field->poisson_ratio = *poisson;
+  setup.mass = lumped_masses(scaled, spec.mass, diagnostics);
+  if (setup.mass.empty()) return std::nullopt;
+  if (!(spec.damping_ratio >= 0.0) || !(spec.rayleigh_stiffness >= 0.0)) {
+    diagnostics.error(range, "damping ratio and Rayleigh stiffness damping must be finite and non-negative");
+    return std::nullopt;
+  }
+  assign_element_damping(*field, setup.mass, spec.damping_ratio, spec.rayleigh_stiffness);
+  setup.tetrahedron_field = std::move(*field);
+  return setup;
+}
+
+bool add_volume_term(SimulationSetup& setup, double bulk_modulus, double damping_ratio, double rayleigh_stiffness,
+                     DiagnosticList& diagnostics) {
+  if (setup.tetrahedra.empty()) {
+    diagnostics.error(SourceRange{}, "the volume term acts on tetrahedra; the mesh has none (it is a surface mesh)");
+    return false;
+  }
+  auto field = tetrahedron_geometry(setup.rest_positions, setup.tetrahedra, kernels::TetrahedronLaw::VolumePreservation,
+                                    diagnostics);
+  if (!field) return false;
+  field->bulk_modulus.assign(field->size(), bulk_modulus);
+  assign_element_damping(*field, setup.mass, damping_ratio, rayleigh_stiffness);
+  setup.tetrahedron_field = std::move(*field);
+  return true;
+}
+
+}  // namespace fmpc::sim

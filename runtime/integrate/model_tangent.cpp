@@ -1,0 +1,90 @@
+#include "runtime/integrate/model_tangent.h"
+
+#include "kernels/implicit_math.h"
+#include "kernels/tetrahedron_math.h"
+
+namespace fmpc::sim {
+
+namespace {
+
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+// A spring's symmetric block at its two ends: +block on (a, a) and (b, b), -block on (a, b) and (b, a).
+void add_spring_block(Triplets& out, std::size_t a, std::size_t b, const double* block) {
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      const double entry = block[kernels::symmetric_index(r, c)];
+      const auto ra = static_cast<int>(3 * a) + r, rb = static_cast<int>(3 * b) + r;
+      const auto ca = static_cast<int>(3 * a) + c, cb = static_cast<int>(3 * b) + c;
+      out.emplace_back(ra, ca, entry);
+      out.emplace_back(rb, cb, entry);
+      out.emplace_back(ra, cb, -entry);
+      out.emplace_back(rb, ca, -entry);
+    }
+  }
+}
+
+}  // namespace
+
+ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point3>& positions,
+                           const std::vector<double>& spring_stiffness) {
+  const auto dofs = static_cast<Eigen::Index>(3 * positions.size());
+  Triplets stiffness, damping;
+  const SpringNetwork& net = setup.springs;
+  const std::size_t elements = setup.tetrahedron_field ? setup.tetrahedron_field->size() : 0;
+  stiffness.reserve(36 * net.size() + 144 * elements);
+  damping.reserve(36 * net.size() + 144 * elements);
+  const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
+  for (std::size_t s = 0; s < net.size(); ++s) {
+    const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
+    const double c = net.damping.empty() ? 0.0 : net.damping[s];
+    // h = 1 and c = 0 make implicit_spring_blocks' system block the stiffness block; the dashpot is c u u^T.
+    double k_block[6], unused[6], d_block[6];
+    const double dx = positions[b][0] - positions[a][0], dy = positions[b][1] - positions[a][1],
+                 dz = positions[b][2] - positions[a][2];
+    if (!kernels::implicit_spring_blocks(dx, dy, dz, net.rest_length[s], spring_stiffness[s], 0.0, law, 1.0, k_block,
+                                         unused))
+      continue;
+    add_spring_block(stiffness, a, b, k_block);
+    if (c == 0.0) continue;
+    const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double u[3] = {dx / length, dy / length, dz / length};
+    for (int r = 0; r < 3; ++r)
+      for (int col = r; col < 3; ++col) d_block[kernels::symmetric_index(r, col)] = c * u[r] * u[col];
+    add_spring_block(damping, a, b, d_block);
+  }
+  if (setup.tetrahedron_field) {
+    const TetrahedronField& field = *setup.tetrahedron_field;
+    const kernels::StrainTableView table = setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness)
+                                                                  : kernels::StrainTableView{nullptr, nullptr, 0};
+    for (std::size_t e = 0; e < field.size(); ++e) {
+      kernels::TetrahedronMaterial<double> m = tetrahedron_material(field, e);
+      if (table.strain && m.law == kernels::TetrahedronLaw::CorotationalLinear) m.strain_table = &table;
+      const Tetrahedron& t = setup.tetrahedra[e];
+      double x[4][3];
+      for (std::size_t corner = 0; corner < 4; ++corner)
+        for (std::size_t i = 0; i < 3; ++i) x[corner][i] = positions[static_cast<std::size_t>(t[corner])][i];
+      kernels::TetrahedronLinearisation lin{};
+      kernels::linearise_tetrahedron(m, x, lin);
+      double K[144];
+      kernels::tetrahedron_stiffness_matrix(m, lin, K);
+      for (int row = 0; row < 12; ++row) {
+        for (int column = 0; column < 12; ++column) {
+          const int global_row = 3 * t[static_cast<std::size_t>(row / 3)] + row % 3;
+          const int global_column = 3 * t[static_cast<std::size_t>(column / 3)] + column % 3;
+          const double entry = K[12 * row + column];
+          stiffness.emplace_back(global_row, global_column, entry);
+          if (m.stiffness_damping != 0.0) damping.emplace_back(global_row, global_column, m.stiffness_damping * entry);
+        }
+      }
+    }
+  }
+  ModelTangent tangent;
+  tangent.stiffness.resize(dofs, dofs);
+  tangent.damping.resize(dofs, dofs);
+  tangent.stiffness.setFromTriplets(stiffness.begin(), stiffness.end());
+  tangent.damping.setFromTriplets(damping.begin(), damping.end());
+  return tangent;
+}
+
+}  // namespace fmpc::sim

@@ -1,0 +1,120 @@
+#pragma once
+// CPU and GPU runs side by side: the differences the GPU tests measure and the tolerances they state
+// (docs/simulator.md: after 10,000 steps every position within 1e-5 m in float and 1e-12 m in double). Both sides
+// evaluate the same FMPC_HD functions in the same order and the device code is compiled with --fmad=false, so the
+// expected difference of an explicit integrator is 0; the tests print the measured one.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "runtime/gpu/gpu_simulation.h"
+#include "runtime/integrate/simulation.h"
+#include "tests/gpu/gpu_test_harness.h"
+
+namespace fmpc::gpu_test {
+
+inline const char* name_of(sim::Precision precision) {
+  return precision == sim::Precision::Float ? "float" : "double";
+}
+
+inline double max_difference(const std::vector<sim::Point3>& a, const std::vector<sim::Point3>& b) {
+  if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
+  double worst = 0.0;
+  for (std::size_t v = 0; v < a.size(); ++v) {
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const double d = std::abs(a[v][axis] - b[v][axis]);
+      if (!(d <= worst)) worst = d;  // NaN propagates as a failure
+    }
+  }
+  return worst;
+}
+
+inline bool bitwise_equal(const std::vector<sim::Point3>& a, const std::vector<sim::Point3>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(sim::Point3)) == 0);
+}
+
+inline std::string first_error(const DiagnosticList& diagnostics) {
+  for (const auto& d : diagnostics.items()) {
+    if (d.severity == Severity::Error) return d.message;
+  }
+  return {};
+}
+
+inline std::string describe(const DiagnosticList& diagnostics) {
+  std::string text;
+  for (const auto& d : diagnostics.items()) text += d.message + "; ";
+  return text;
+}
+
+// The largest difference of the positions (m) and, separately, of the velocities (m/s); infinity when a run failed.
+struct Difference {
+  double positions = std::numeric_limits<double>::infinity();
+  double velocities = std::numeric_limits<double>::infinity();
+};
+
+inline Difference cpu_gpu_difference(const sim::SimulationSetup& setup, std::size_t steps,
+                                     const gpu::GpuOptions& options) {
+  DiagnosticList diagnostics;
+  const auto cpu = sim::CpuSimulation::create(setup, diagnostics);
+  const auto device = gpu::GpuSimulation::create(setup, options, diagnostics);
+  if (!cpu || !device || !cpu->advance(steps, diagnostics) || !device->advance(steps, diagnostics)) {
+    note("setup or run failed: " + describe(diagnostics));
+    return {};
+  }
+  Difference difference;
+  difference.positions = max_difference(cpu->positions(), device->positions(diagnostics));
+  difference.velocities = max_difference(cpu->velocities(), device->velocities(diagnostics));
+  if (diagnostics.has_errors()) {
+    note("errors: " + describe(diagnostics));
+    return {};
+  }
+  return difference;
+}
+
+// Velocities are compared at 100 x the position tolerance per second (the scenes move at most ~0.1 m/s).
+inline double position_tolerance(sim::Precision precision) {
+  return precision == sim::Precision::Float ? 1e-5 : 1e-12;
+}
+inline double velocity_tolerance(sim::Precision precision) { return 100.0 * position_tolerance(precision); }
+
+inline constexpr sim::Integrator kGpuIntegrators[] = {sim::Integrator::ForwardEuler, sim::Integrator::SemiImplicitEuler,
+                                                      sim::Integrator::VelocityVerlet, sim::Integrator::RungeKutta4};
+
+// CPU and GPU side by side for `steps` steps: positions, velocities, the probe's reading and the springs' current
+// stiffness; the largest differences.
+struct SceneDifference {
+  Difference state;
+  double probe_force = std::numeric_limits<double>::infinity();
+  double stiffness = std::numeric_limits<double>::infinity();
+};
+
+inline SceneDifference scene_difference(const sim::SimulationSetup& setup, std::size_t steps) {
+  SceneDifference out;
+  DiagnosticList diagnostics;
+  const auto cpu = sim::CpuSimulation::create(setup, diagnostics);
+  const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+  if (!cpu || !device || !cpu->advance(steps, diagnostics) || !device->advance(steps, diagnostics)) {
+    note("setup or run failed: " + describe(diagnostics));
+    return out;
+  }
+  out.state.positions = max_difference(cpu->positions(), device->positions(diagnostics));
+  out.state.velocities = max_difference(cpu->velocities(), device->velocities(diagnostics));
+  const sim::ProbeReading a = cpu->probe_reading(), b = device->probe_reading(diagnostics);
+  out.probe_force = 0.0;
+  for (std::size_t axis = 0; axis < 3; ++axis)
+    out.probe_force = std::max(out.probe_force, std::abs(a.force[axis] - b.force[axis]));
+  const std::vector<double> k_cpu = cpu->current_stiffness(), k_gpu = device->current_stiffness(diagnostics);
+  out.stiffness = k_cpu.size() == k_gpu.size() ? 0.0 : std::numeric_limits<double>::infinity();
+  for (std::size_t s = 0; s < k_cpu.size() && s < k_gpu.size(); ++s)
+    out.stiffness = std::max(out.stiffness, std::abs(k_cpu[s] - k_gpu[s]));
+  if (diagnostics.has_errors()) {
+    note("errors: " + describe(diagnostics));
+    out.state = {};
+  }
+  return out;
+}
+
+}  // namespace fmpc::gpu_test

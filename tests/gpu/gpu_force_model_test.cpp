@@ -1,0 +1,304 @@
+// The force models on the CUDA backend against the CPU loop (the host reference): the co-rotational FEM, springs with
+// the volume term, Rayleigh mass damping, per-axis holds, inversion counting with its exact first step (replay) and
+// on_inversion: stop, on odd mesh sizes (never a multiple of the block size), alone and in a batch.
+//
+// Stated tolerances as for springs (tests/gpu/cpu_gpu_comparison.h): explicit integrators 1e-5 m in float and
+// 1e-12 m in double (expected 0: the element pass is the same FMPC_HD code in the same order, --fmad=false);
+// implicit Euler to the CG tolerance (1e-5 m float, 1e-9 m double), GPU runs bitwise run to run.
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "runtime/fem/fem_model_builder.h"
+#include "runtime/fem/tetrahedron_field.h"
+#include "runtime/gpu/gpu_simulation.h"
+#include "runtime/mesh/generated_mesh.h"
+#include "runtime/scene/spring_model_builder.h"
+#include "tests/gpu/cpu_gpu_comparison.h"
+#include "tests/gpu/gpu_test_harness.h"
+
+using namespace fmpc;
+using namespace fmpc::sim;
+using namespace fmpc::gpu_test;
+
+namespace {
+
+enum class Model { Fem, SpringsWithVolumeTerm };
+
+const char* name_of(Model model) { return model == Model::Fem ? "FEM" : "springs + volume term"; }
+
+Mesh box_mesh(int nx, int ny, int nz) {
+  DiagnosticList diagnostics;
+  BoxSpec box;
+  box.cells_x = nx;
+  box.cells_y = ny;
+  box.cells_z = nz;
+  box.size = {0.1, 0.1, 0.1};
+  return generate_box(box, diagnostics);
+}
+
+// A 0.1 m box of 5 kPa tissue (1060 kg/m^3, nu 0.45, damping ratio 0.9, Rayleigh mass damping 2 /s) hanging from its
+// top face under gravity, with seeded random initial velocities so that every vertex moves.
+SimulationSetup hanging_box(Model model, Precision precision, Integrator integrator, int nx = 3, int ny = 5,
+                            int nz = 2, unsigned seed = 1) {
+  const Mesh mesh = box_mesh(nx, ny, nz);
+  DiagnosticList diagnostics;
+  SimulationSetup out;
+  if (model == Model::Fem) {
+    FemModelSpec spec;
+    spec.youngs_modulus = {5000.0};
+    spec.poisson_ratio = {0.45};
+    spec.mass.value = 1060.0;
+    spec.damping_ratio = 0.9;
+    if (auto setup = build_fem_model(mesh, spec, diagnostics)) out = *setup;
+  } else {
+    const auto unit = calibrate_volume_term(1.0, 0.45, StiffnessMapping::VanGelder1998, SourceRange{}, diagnostics);
+    SpringModelSpec spec;
+    spec.stiffness.mapping = StiffnessMapping::VanGelder1998;
+    spec.stiffness.value = unit ? unit->spring_modulus * 5000.0 : 5000.0;
+    spec.mass.value = 1060.0;
+    spec.damping.ratio = 0.9;
+    if (auto setup = build_spring_model(mesh, spec, diagnostics)) out = *setup;
+    out.tetrahedra = mesh.tetrahedra;
+    if (unit) add_volume_term(out, unit->bulk_modulus * 5000.0, 0.9, 0.0, diagnostics);
+  }
+  if (diagnostics.has_errors()) note("setup: " + describe(diagnostics));
+  out.mass_damping = 2.0;
+  for (std::size_t v = 0; v < out.rest_positions.size(); ++v) {
+    if (out.rest_positions[v][1] > 0.0999) out.fixed_vertices.push_back(static_cast<std::int32_t>(v));
+  }
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> speed(-0.05, 0.05);
+  out.initial_velocities.resize(out.rest_positions.size());
+  for (Point3& v : out.initial_velocities) v = {speed(random), speed(random), speed(random)};
+  out.gravity = {0.0, -9.81, 0.0};
+  out.precision = precision;
+  out.integrator = integrator;
+  return out;
+}
+
+// The hanging box whose bottom face slides on its plane (y held, x and z free: SOFA's PartialFixedConstraint) and
+// whose x = 0 face holds x only.
+SimulationSetup held_box(Model model, Precision precision, Integrator integrator) {
+  SimulationSetup setup = hanging_box(model, precision, integrator, 4, 3, 3, 7);
+  setup.fixed_axes.assign(setup.rest_positions.size(), 0);
+  for (std::size_t v = 0; v < setup.rest_positions.size(); ++v) {
+    if (setup.rest_positions[v][1] < 1e-6) setup.fixed_axes[v] |= 2;
+    if (setup.rest_positions[v][0] < 1e-6) setup.fixed_axes[v] |= 1;
+  }
+  return setup;
+}
+
+// One tetrahedron of springs, corner 3 thrown at 3 m/s towards the centroid of the opposite face: it passes through
+// and stays inverted (tests/unit/fem_simulation_test.cpp finds the step by stepping one at a time on the CPU).
+SimulationSetup thrown_corner(Precision precision, double speed = 3.0) {
+  Mesh mesh;
+  mesh.points = {{0, 0, 0}, {0.01, 0, 0}, {0, 0.01, 0}, {0, 0, 0.01}};
+  mesh.tetrahedra = {{0, 1, 2, 3}};
+  SpringModelSpec spec;
+  spec.stiffness.mapping = StiffnessMapping::VanGelder1998;
+  spec.stiffness.value = 1000.0;
+  spec.mass.value = 1000.0;
+  spec.damping.ratio = 0.0;
+  DiagnosticList diagnostics;
+  auto built = build_spring_model(mesh, spec, diagnostics);
+  SimulationSetup setup = built ? *built : SimulationSetup{};
+  setup.tetrahedra = mesh.tetrahedra;
+  setup.fixed_vertices = {0, 1, 2};
+  const double length = std::sqrt(1.0 / 9 + 1.0 / 9 + 1.0);
+  setup.initial_velocities = {
+      {0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {speed / 3 / length, speed / 3 / length, -speed / length}};
+  setup.precision = precision;
+  setup.time_step = 1e-5;
+  return setup;
+}
+
+const Model kModels[] = {Model::Fem, Model::SpringsWithVolumeTerm};
+
+}  // namespace
+
+FMPC_GPU_TEST(force_models_match_cpu, "FEM and springs with the volume term: every integrator matches the CPU", true) {
+  for (const Model model : kModels) {
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      for (const Integrator integrator : kGpuIntegrators) {
+        for (const bool held : {false, true}) {
+          const SimulationSetup setup =
+              held ? held_box(model, precision, integrator) : hanging_box(model, precision, integrator);
+          const Difference d = cpu_gpu_difference(setup, 2000, gpu::GpuOptions{});
+          std::ostringstream line;
+          line << name_of(model) << (held ? " (per-axis holds)" : "") << ", " << to_string(integrator) << ", "
+               << name_of(precision) << ": max |GPU - CPU| after 2,000 steps: " << d.positions << " m, "
+               << d.velocities << " m/s";
+          note(line.str());
+          FMPC_EXPECT(d.positions <= position_tolerance(precision));
+          FMPC_EXPECT(d.velocities <= velocity_tolerance(precision));
+        }
+      }
+    }
+  }
+}
+
+FMPC_GPU_TEST(force_models_held_axes, "a held axis stays at rest on the GPU, the free axes move", true) {
+  const SimulationSetup setup = held_box(Model::Fem, Precision::Double, Integrator::SemiImplicitEuler);
+  DiagnosticList diagnostics;
+  const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+  FMPC_REQUIRE(run && run->advance(500, diagnostics));
+  const auto positions = run->positions(diagnostics);
+  double moved_free = 0.0;
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      const double moved = std::abs(positions[v][axis] - setup.rest_positions[v][axis]);
+      if (setup.fixed_axes[v] & (1u << axis)) {
+        FMPC_EXPECT(moved == 0.0);
+      } else if (setup.fixed_axes[v] != 0) {
+        moved_free = std::max(moved_free, moved);
+      }
+    }
+  }
+  FMPC_EXPECT(moved_free > 1e-6);
+}
+
+FMPC_GPU_TEST(force_models_implicit, "implicit Euler on the FEM and the volume term: GPU CG agrees with Eigen's", true) {
+  for (const Model model : kModels) {
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      const SimulationSetup setup = hanging_box(model, precision, Integrator::ImplicitEuler);
+      const SceneDifference d = scene_difference(setup, 200);
+      const double tolerance = precision == Precision::Float ? 1e-5 : 1e-9;
+      std::ostringstream line;
+      line << "implicit Euler, " << name_of(model) << ", " << name_of(precision) << ": max |GPU - CPU| after 200 steps "
+           << d.state.positions << " m (tolerance " << tolerance << "), " << d.state.velocities << " m/s";
+      note(line.str());
+      FMPC_EXPECT(d.state.positions <= tolerance);
+      FMPC_EXPECT(d.state.velocities <= 100.0 * tolerance);
+      DiagnosticList diagnostics;
+      const auto first = gpu::GpuSimulation::create(setup, diagnostics);
+      const auto second = gpu::GpuSimulation::create(setup, diagnostics);
+      FMPC_REQUIRE(first && second && first->advance(50, diagnostics) && second->advance(50, diagnostics, 7));
+      FMPC_EXPECT(bitwise_equal(first->positions(diagnostics), second->positions(diagnostics)));
+      note("implicit Euler, " + std::string(name_of(model)) + ", " + name_of(precision) + ": at most " +
+           std::to_string(first->implicit_max_iterations_used()) + " CG iterations per step");
+    }
+  }
+}
+
+FMPC_GPU_TEST(force_models_bitwise, "FEM runs are bitwise identical: run to run, graphs or not, any check interval",
+              true) {
+  for (const Model model : kModels) {
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      for (const Integrator integrator : kGpuIntegrators) {
+        // 8 x 7 x 6 = 336 vertices and 1,260 tetrahedra: blocks partly idle in both passes.
+        const SimulationSetup setup = hanging_box(model, precision, integrator, 7, 6, 5);
+        DiagnosticList diagnostics;
+        gpu::GpuOptions plain;
+        plain.use_graphs = false;
+        const auto reference = gpu::GpuSimulation::create(setup, plain, diagnostics);
+        FMPC_REQUIRE(reference && reference->advance(600, diagnostics, 1));
+        const auto expected = reference->positions(diagnostics);
+        const auto expected_potential = reference->potential_energy(diagnostics);
+        const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+        FMPC_REQUIRE(run && run->advance(1, diagnostics) && run->advance(65, diagnostics, 64) &&
+                     run->advance(534, diagnostics, 0));
+        FMPC_EXPECT(bitwise_equal(run->positions(diagnostics), expected));
+        const auto potential = run->potential_energy(diagnostics);
+        FMPC_EXPECT(potential && expected_potential && *potential == *expected_potential);
+        if (diagnostics.has_errors()) note(describe(diagnostics));
+        FMPC_EXPECT(!diagnostics.has_errors());
+      }
+    }
+  }
+}
+
+FMPC_GPU_TEST(force_models_energy, "the elements' potential energy on the GPU equals the CPU's sum", true) {
+  for (const Model model : kModels) {
+    const SimulationSetup setup = hanging_box(model, Precision::Double, Integrator::RungeKutta4);
+    DiagnosticList diagnostics;
+    const auto cpu = CpuSimulation::create(setup, diagnostics);
+    const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+    FMPC_REQUIRE(cpu && device && cpu->advance(300, diagnostics) && device->advance(300, diagnostics));
+    const auto potential = device->potential_energy(diagnostics);
+    FMPC_REQUIRE(potential);
+    note(std::string(name_of(model)) + ": potential energy GPU " + std::to_string(*potential) + " J, CPU " +
+         std::to_string(cpu->potential_energy()) + " J");
+    FMPC_EXPECT_WITHIN(*potential, cpu->potential_energy(), 1e-10 * std::abs(cpu->potential_energy()) + 1e-12);
+  }
+}
+
+FMPC_GPU_TEST(inversions_match_cpu, "inversions: the GPU finds the CPU's first step, element and count; stop stops",
+              true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    SimulationSetup setup = thrown_corner(precision);
+    DiagnosticList cpu_diagnostics, gpu_diagnostics;
+    const auto cpu = CpuSimulation::create(setup, cpu_diagnostics);
+    const auto device = gpu::GpuSimulation::create(setup, gpu_diagnostics);
+    FMPC_REQUIRE(cpu && device && cpu->advance(1000, cpu_diagnostics) && device->advance(1000, gpu_diagnostics));
+    const InversionReport& a = cpu->inversions();
+    const InversionReport& b = device->inversions();
+    note(std::string("thrown corner, ") + name_of(precision) + ": first inversion at step " +
+         std::to_string(a.first_step) + " (CPU), " + std::to_string(b.first_step) + " (GPU)");
+    FMPC_EXPECT(a.largest_count == 1);
+    FMPC_EXPECT(b.largest_count == a.largest_count);
+    FMPC_EXPECT(b.first_step == a.first_step);
+    FMPC_EXPECT(b.first_element == a.first_element);
+    FMPC_EXPECT(gpu_diagnostics.warning_count() == 1);
+    FMPC_EXPECT(!gpu_diagnostics.items().empty() && gpu_diagnostics.items()[0].code == "inverted-elements");
+    setup.on_inversion = InversionPolicy::Stop;
+    DiagnosticList stopped;
+    const auto stop = gpu::GpuSimulation::create(setup, stopped);
+    FMPC_REQUIRE(stop);
+    FMPC_EXPECT(!stop->advance(1000, stopped));
+    FMPC_EXPECT(stop->steps_taken() == a.first_step);
+    FMPC_EXPECT(stopped.error_count() == 1);
+  }
+  // In a batch, the inversion is the scene's thrown through alone (at 1 m/s the springs throw the corner back).
+  std::vector<SimulationSetup> scenes{thrown_corner(Precision::Double, 1.0), thrown_corner(Precision::Double)};
+  DiagnosticList diagnostics;
+  const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+  FMPC_REQUIRE(batch && batch->advance(1000, diagnostics));
+  FMPC_EXPECT(batch->inversions(0).largest_count == 0);
+  FMPC_EXPECT(batch->inversions(1).largest_count == 1);
+  DiagnosticList single;
+  const auto alone = CpuSimulation::create(scenes[1], single);
+  FMPC_REQUIRE(alone && alone->advance(1000, single));
+  FMPC_EXPECT(batch->inversions(1).first_step == alone->inversions().first_step);
+}
+
+// Every element kernel on tiny scenes for compute-sanitizer: forces, energy, inversion counts, implicit products,
+// batches of FEM and volume-term scenes.
+FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and implicit element kernels", true) {
+  for (const Model model : kModels) {
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      for (const Integrator integrator : {Integrator::ForwardEuler, Integrator::SemiImplicitEuler,
+                                          Integrator::VelocityVerlet, Integrator::RungeKutta4,
+                                          Integrator::ImplicitEuler}) {
+        const SimulationSetup setup = held_box(model, precision, integrator);
+        DiagnosticList diagnostics;
+        const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+        FMPC_REQUIRE(run && run->advance(9, diagnostics, 4));
+        FMPC_EXPECT(run->potential_energy(diagnostics).has_value());
+        FMPC_EXPECT(run->kinetic_energy(diagnostics).has_value());
+        if (diagnostics.has_errors()) note(describe(diagnostics));
+        FMPC_EXPECT(!diagnostics.has_errors());
+      }
+      std::vector<SimulationSetup> scenes{hanging_box(model, precision, Integrator::VelocityVerlet, 1, 1, 1),
+                                          hanging_box(model, precision, Integrator::VelocityVerlet, 2, 3, 1)};
+      DiagnosticList diagnostics;
+      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      FMPC_REQUIRE(batch && batch->advance(30, diagnostics, 16));
+      FMPC_EXPECT(batch->potential_energy(1, diagnostics).has_value());
+      if (diagnostics.has_errors()) note(describe(diagnostics));
+    }
+  }
+  // The inversion count and its replay, a run stopped by on_inversion: stop.
+  for (const InversionPolicy policy : {InversionPolicy::Warn, InversionPolicy::Stop}) {
+    SimulationSetup setup = thrown_corner(Precision::Float);
+    setup.on_inversion = policy;
+    DiagnosticList diagnostics;
+    const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+    FMPC_REQUIRE(run);
+    FMPC_EXPECT(run->advance(600, diagnostics, 64) == (policy == InversionPolicy::Warn));
+    FMPC_EXPECT(run->inversions().largest_count == 1);
+  }
+}
