@@ -90,29 +90,35 @@ std::optional<ResolvedBindings> resolve_bindings(const std::vector<std::string>&
   return resolved;
 }
 
-// The value of every non-strain input for one spring, or nullopt (with an error) when a per-region input has no
-// region and no default at that spring.
-std::optional<double> bound_value(const InputBinding& binding, const Point3& midpoint, std::size_t spring,
-                                  const Scene& scene, DiagnosticList& diagnostics) {
+// "spring 12" or "element 12".
+std::string point_name(MaterialPoint kind, std::size_t index) {
+  return (kind == MaterialPoint::SpringMidpoint ? "spring " : "element ") + std::to_string(index);
+}
+
+// The value of every non-strain input at one material point, or nullopt (with an error) when a per-region input
+// has no region and no default there.
+std::optional<double> bound_value(const InputBinding& binding, const Point3& position, std::size_t index,
+                                  MaterialPoint kind, const Scene& scene, DiagnosticList& diagnostics) {
   if (binding.kind == InputBinding::Kind::Constant) return binding.value;
   for (const RegionValue& region : binding.regions)
-    if (inside(region.box, midpoint)) return region.value;
+    if (inside(region.box, position)) return region.value;
   if (binding.has_default) return binding.value;
   const std::string field = "material.inputs." + binding.input;
   diagnostics.error(scene.range_of(field),
-                    field + ": spring " + std::to_string(spring) + " (midpoint " + format_number(midpoint[0]) + ", " +
-                        format_number(midpoint[1]) + ", " + format_number(midpoint[2]) +
-                        ") lies in no region; add a region that contains it or a 'default'");
+                    field + ": " + point_name(kind, index) +
+                        (kind == MaterialPoint::SpringMidpoint ? " (midpoint " : " (centroid ") +
+                        format_number(position[0]) + ", " + format_number(position[1]) + ", " +
+                        format_number(position[2]) + ") lies in no region; add a region that contains it or a 'default'");
   return std::nullopt;
 }
 
 // Checks and converts the evaluator's outputs (output units) to Pa, and fills the range.
-bool finish(MaterialBinding& binding, const Scene& scene, DiagnosticList& diagnostics) {
+bool finish(MaterialBinding& binding, MaterialPoint kind, const Scene& scene, DiagnosticList& diagnostics) {
   std::vector<double>& values = binding.strain.empty() ? binding.modulus_per_spring : binding.strain_modulus;
   const std::string field = scene.material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!(values[i] > 0.0) || !std::isfinite(values[i])) {
-      const std::string where = binding.strain.empty() ? "spring " + std::to_string(i)
+      const std::string where = binding.strain.empty() ? point_name(kind, i)
                                                        : "strain " + format_number(binding.strain[i]);
       diagnostics.error(scene.range_of(field), field + ": output '" + binding.output + "' is " +
                                                    format_number(values[i]) + " at " + where +
@@ -152,7 +158,8 @@ void report_flags(const EvaluationFlags& flags, const FuzzySystem& system, const
 }  // namespace
 
 std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_index, const Scene& scene,
-                                          const std::vector<Point3>& spring_midpoints, DiagnosticList& diagnostics) {
+                                          const std::vector<Point3>& points, MaterialPoint kind,
+                                          DiagnosticList& diagnostics) {
   std::vector<std::string> names;
   for (const Variable& v : system.inputs) names.push_back(v.name);
   const auto resolved = resolve_bindings(names, "system '" + system.name + "'", scene, diagnostics);
@@ -200,10 +207,10 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
     }
   } else {
     std::map<std::vector<double>, double> cache;
-    binding.modulus_per_spring.resize(spring_midpoints.size());
-    for (std::size_t s = 0; s < spring_midpoints.size(); ++s) {
+    binding.modulus_per_spring.resize(points.size());
+    for (std::size_t s = 0; s < points.size(); ++s) {
       for (std::size_t i = 0; i < inputs.size(); ++i) {
-        const auto value = bound_value(*resolved->by_input[i], spring_midpoints[s], s, scene, diagnostics);
+        const auto value = bound_value(*resolved->by_input[i], points[s], s, kind, scene, diagnostics);
         if (!value) return std::nullopt;
         inputs[i] = *value;
       }
@@ -218,12 +225,13 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
       binding.modulus_per_spring[s] = *value;
     }
   }
-  if (!finish(binding, scene, diagnostics)) return std::nullopt;
+  if (!finish(binding, kind, scene, diagnostics)) return std::nullopt;
   return binding;
 }
 
 std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const Scene& scene,
-                                          const std::vector<Point3>& spring_midpoints, DiagnosticList& diagnostics) {
+                                          const std::vector<Point3>& points, MaterialPoint kind,
+                                          DiagnosticList& diagnostics) {
   std::vector<std::string> names;
   for (const TableAxis& axis : table.axes) names.push_back(axis.input_name);
   const auto resolved = resolve_bindings(names, "table '" + table.system_name + "'", scene, diagnostics);
@@ -257,17 +265,17 @@ std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_i
       binding.strain_modulus.push_back(evaluate(query));
     }
   } else {
-    binding.modulus_per_spring.resize(spring_midpoints.size());
-    for (std::size_t s = 0; s < spring_midpoints.size(); ++s) {
+    binding.modulus_per_spring.resize(points.size());
+    for (std::size_t s = 0; s < points.size(); ++s) {
       for (std::size_t i = 0; i < query.size(); ++i) {
-        const auto value = bound_value(*resolved->by_input[i], spring_midpoints[s], s, scene, diagnostics);
+        const auto value = bound_value(*resolved->by_input[i], points[s], s, kind, scene, diagnostics);
         if (!value) return std::nullopt;
         query[i] = *value;
       }
       binding.modulus_per_spring[s] = evaluate(query);
     }
   }
-  if (!finish(binding, scene, diagnostics)) return std::nullopt;
+  if (!finish(binding, kind, scene, diagnostics)) return std::nullopt;
   return binding;
 }
 

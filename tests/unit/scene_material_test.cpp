@@ -69,7 +69,7 @@ TEST_CASE("constant bindings evaluate the rules once and convert kPa to Pa", "[s
     scene.material.bindings.push_back(constant(name, value));
   DiagnosticList diagnostics;
   const std::vector<Point3> midpoints(5, Point3{0, 0, 0});
-  const auto binding = bind_rules(liver, 0, scene, midpoints, diagnostics);
+  const auto binding = bind_rules(liver, 0, scene, midpoints, MaterialPoint::SpringMidpoint, diagnostics);
   REQUIRE(binding);
   CHECK(diagnostics.empty());
   const double expected = evaluate(liver, {9.7, 9.5, 12, 11, 11.2}).outputs[0] * 1000.0;
@@ -92,7 +92,7 @@ TEST_CASE("per-region bindings pick the first region containing the spring's mid
   scene.material.bindings = {regions};
   DiagnosticList diagnostics;
   const std::vector<Point3> midpoints = {{0.5, 0.5, 0.5}, {1.5, 0.5, 0.5}, {3, 3, 3}, {1, 1, 1}};
-  const auto binding = bind_rules(identity, 0, scene, midpoints, diagnostics);
+  const auto binding = bind_rules(identity, 0, scene, midpoints, MaterialPoint::SpringMidpoint, diagnostics);
   REQUIRE(binding);
   CHECK(binding->evaluations == 3);  // cached per distinct value
   REQUIRE(binding->modulus_per_spring.size() == 4);
@@ -103,9 +103,15 @@ TEST_CASE("per-region bindings pick the first region containing the spring's mid
 
   scene.material.bindings[0].has_default = false;
   DiagnosticList missing;
-  CHECK_FALSE(bind_rules(identity, 0, scene, midpoints, missing));
+  CHECK_FALSE(bind_rules(identity, 0, scene, midpoints, MaterialPoint::SpringMidpoint, missing));
   CHECK(messages(missing) == std::vector<std::string>{"material.inputs.x: spring 2 (midpoint 3, 3, 3) lies in no "
                                                       "region; add a region that contains it or a 'default'"});
+  // The co-rotational FEM (and the springs' volume term) evaluate the material at element centroids.
+  DiagnosticList missing_element;
+  CHECK_FALSE(bind_rules(identity, 0, scene, midpoints, MaterialPoint::ElementCentroid, missing_element));
+  CHECK(messages(missing_element) ==
+        std::vector<std::string>{"material.inputs.x: element 2 (centroid 3, 3, 3) lies in no region; add a region "
+                                 "that contains it or a 'default'"});
 }
 
 TEST_CASE("binding errors name the input and the field", "[scene]") {
@@ -113,7 +119,7 @@ TEST_CASE("binding errors name the input and the field", "[scene]") {
   Scene scene;
   scene.material.bindings = {constant("HCV", 9.7), constant("HBB", 9.5), constant("ALD", 12), constant("CLD", 11)};
   DiagnosticList diagnostics;
-  CHECK_FALSE(bind_rules(liver, 0, scene, {}, diagnostics));
+  CHECK_FALSE(bind_rules(liver, 0, scene, {}, MaterialPoint::SpringMidpoint, diagnostics));
   REQUIRE(diagnostics.items().size() == 3);
   CHECK(diagnostics.items()[0].message == "material.inputs.HBB: 'HBB' is not an input of system 'liver_fibrosis'");
   CHECK(diagnostics.items()[0].notes ==
@@ -129,7 +135,7 @@ TEST_CASE("binding errors name the input and the field", "[scene]") {
   scene.material.bindings = {constant("HCV", 80), constant("HBV", 9.5), constant("ALD", 12), constant("CLD", 11),
                              constant("NAFLD", 11)};
   DiagnosticList range;
-  CHECK(bind_rules(liver, 0, scene, {{0, 0, 0}}, range));
+  CHECK(bind_rules(liver, 0, scene, {{0, 0, 0}}, MaterialPoint::SpringMidpoint, range));
   CHECK(messages(range) ==
         std::vector<std::string>{"material.inputs.HCV: 80 is outside the input's range [0, 75]; evaluated as given"});
 
@@ -143,7 +149,7 @@ rule r1: if x is all then k is c
 )");
   scene.material.bindings = {constant("x", 0.5)};
   DiagnosticList unit;
-  CHECK_FALSE(bind_rules(wrong_unit, 0, scene, {{0, 0, 0}}, unit));
+  CHECK_FALSE(bind_rules(wrong_unit, 0, scene, {{0, 0, 0}}, MaterialPoint::SpringMidpoint, unit));
   CHECK(messages(unit) == std::vector<std::string>{"material.rules: output 'k' of system 's' is in 'mm'; Young's "
                                                    "modulus must be in kPa, Pa or MPa"});
   CHECK(unit.items()[0].notes ==
@@ -159,7 +165,7 @@ TEST_CASE("a strain binding builds modulus(strain) from the interpreter over the
   scene.material.bindings = {strain};
   scene.material.strain_axis = StrainAxis{-0.3, 0.3, 61};
   DiagnosticList diagnostics;
-  const auto binding = bind_rules(stiffening, 0, scene, {}, diagnostics);
+  const auto binding = bind_rules(stiffening, 0, scene, {}, MaterialPoint::SpringMidpoint, diagnostics);
   REQUIRE(binding);
   REQUIRE(binding->strain.size() == 61);
   CHECK(binding->strain.front() == -0.3);
@@ -179,7 +185,7 @@ TEST_CASE("a strain binding builds modulus(strain) from the interpreter over the
   strain.input = "HCV";
   scene.material.bindings = {strain, regions, constant("ALD", 12), constant("CLD", 11), constant("NAFLD", 11)};
   DiagnosticList refused;
-  CHECK_FALSE(bind_rules(liver, 0, scene, {{0, 0, 0}}, refused));
+  CHECK_FALSE(bind_rules(liver, 0, scene, {{0, 0, 0}}, MaterialPoint::SpringMidpoint, refused));
   CHECK(messages(refused) == std::vector<std::string>{"material.inputs: a 'strain' binding cannot be combined with "
                                                       "per-region bindings; bind the other inputs to constants"});
 }

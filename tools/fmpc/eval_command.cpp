@@ -295,6 +295,25 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
   }
 }
 
+// The points' CSV (`--csv FILE`, or standard input without it), parsed; nullopt with an error when it cannot be
+// read or parsed. Its text joins `sources` so that diagnostics can quote it.
+std::optional<CsvTable> read_points_csv(const std::string& csv_option, SourceFiles& sources,
+                                        DiagnosticList& diagnostics) {
+  const std::string csv_path = csv_option.empty() ? "-" : csv_option;
+  std::string error;
+  const std::optional<std::string> text = read_text_file(csv_path, sim::kMaxCsvFileBytes, "CSV file", error);
+  const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
+  if (!text) {
+    diagnostics.error(SourceRange{shown_path, 0, 0, 0, 0}, error);
+    return std::nullopt;
+  }
+  sources.add(shown_path, *text);
+  const std::size_t errors = diagnostics.error_count();
+  CsvTable csv = parse_csv(shown_path, *text, diagnostics);
+  if (diagnostics.error_count() != errors) return std::nullopt;
+  return csv;
+}
+
 // ---- lookup tables (.fzt) ----
 
 // The table as a system for the points' parsing: its axes are the inputs (range: the axis), its outputs the outputs.
@@ -367,33 +386,22 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       varying.push_back(assignment);
     }
     if (auto point = point_from_assignments(varying, interface, diagnostics)) points.push_back(std::move(*point));
-  } else {
-    const std::string csv_path = options.csv.empty() ? "-" : options.csv;
-    std::string error;
-    const std::optional<std::string> text = read_text_file(csv_path, error);
-    const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
-    if (!text) {
-      diagnostics.error(SourceRange{shown_path, 0, 0, 0, 0}, error);
-    } else {
-      sources.add(shown_path, *text);
-      CsvTable csv = parse_csv(shown_path, *text, diagnostics);
-      if (!diagnostics.has_errors()) {
-        // Columns of fixed inputs: checked against the fixed value, then left out.
-        for (std::size_t c = csv.header.size(); c-- > 0;) {
-          bool fixed = false;
-          for (const TableFixedInput& input : table->fixed_inputs) fixed = fixed || input.name == csv.header[c].text;
-          if (!fixed) continue;
-          for (auto& row : csv.rows) {
-            if (c < row.size()) {
-              check_fixed_value(*table, csv.header[c].text, row[c].text, row[c].range, diagnostics);
-              row.erase(row.begin() + static_cast<std::ptrdiff_t>(c));
-            }
-          }
-          csv.header.erase(csv.header.begin() + static_cast<std::ptrdiff_t>(c));
+  } else if (std::optional<CsvTable> read = read_points_csv(options.csv, sources, diagnostics)) {
+    CsvTable& csv = *read;
+    // Columns of fixed inputs: checked against the fixed value, then left out.
+    for (std::size_t c = csv.header.size(); c-- > 0;) {
+      bool fixed = false;
+      for (const TableFixedInput& input : table->fixed_inputs) fixed = fixed || input.name == csv.header[c].text;
+      if (!fixed) continue;
+      for (auto& row : csv.rows) {
+        if (c < row.size()) {
+          check_fixed_value(*table, csv.header[c].text, row[c].text, row[c].range, diagnostics);
+          row.erase(row.begin() + static_cast<std::ptrdiff_t>(c));
         }
-        if (!diagnostics.has_errors()) points = points_from_csv(csv, interface, diagnostics);
       }
+      csv.header.erase(csv.header.begin() + static_cast<std::ptrdiff_t>(c));
     }
+    if (!diagnostics.has_errors()) points = points_from_csv(csv, interface, diagnostics);
   }
   std::ostringstream csv;
   if (!diagnostics.has_errors()) {
@@ -452,7 +460,8 @@ Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<doub
 int run_eval(const EvalOptions& options) {
   {
     std::string error;
-    const std::optional<std::string> bytes = read_text_file(options.file, error);
+    // A file that is not a table, or cannot be read as one, is read as a rule file next (with its own limit).
+    const std::optional<std::string> bytes = read_text_file(options.file, sim::kMaxTableFileBytes, "lookup table", error);
     if (bytes && has_fzt_signature(*bytes)) return run_eval_table(options, *bytes);
   }
   LoadedRuleFile file = load_rule_file_from_disk(options.file);
@@ -472,17 +481,8 @@ int run_eval(const EvalOptions& options) {
       if (auto point = point_from_assignments(options.assignments, *system, diagnostics))
         points.push_back(std::move(*point));
     } else {
-      const std::string csv_path = options.csv.empty() ? "-" : options.csv;
-      std::string error;
-      const std::optional<std::string> text = read_text_file(csv_path, sim::kMaxCsvFileBytes, "CSV file", error);
-      const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
-      if (!text) {
-        diagnostics.error(SourceRange{shown_path, 0, 0, 0, 0}, error);
-      } else {
-        sources.add(shown_path, *text);
-        const CsvTable table = parse_csv(shown_path, *text, diagnostics);
-        if (!diagnostics.has_errors()) points = points_from_csv(table, *system, diagnostics);
-      }
+      if (const std::optional<CsvTable> csv = read_points_csv(options.csv, sources, diagnostics))
+        points = points_from_csv(*csv, *system, diagnostics);
     }
   }
   // --explain prints every sample of each output's aggregated set for every point, and builds the sets in memory

@@ -100,19 +100,16 @@ class DualArithmetic {
     for (int i = 0; i < axes_; ++i) r.g[i] = (a.g[i] - r.v * b.g[i]) / b.v;
     return r;
   }
-  Dual min(const Dual& a, const Dual& b) const {
-    if (a.v.hi <= b.v.lo) return a;
-    if (b.v.hi <= a.v.lo) return b;
+  Dual min(const Dual& a, const Dual& b) const { return extremum(a, b, true); }
+  Dual max(const Dual& a, const Dual& b) const { return extremum(a, b, false); }
+  // The smaller (or larger) of two: the one surely on that side, else the hull of both derivatives (which one is
+  // chosen may switch inside the cell).
+  Dual extremum(const Dual& a, const Dual& b, bool smaller) const {
+    if (a.v.hi <= b.v.lo) return smaller ? a : b;
+    if (b.v.hi <= a.v.lo) return smaller ? b : a;
     Dual r;
-    r.v = {std::min(a.v.lo, b.v.lo), std::min(a.v.hi, b.v.hi)};
-    for (int i = 0; i < axes_; ++i) r.g[i] = hull(a.g[i], b.g[i]);
-    return r;
-  }
-  Dual max(const Dual& a, const Dual& b) const {
-    if (a.v.hi <= b.v.lo) return b;
-    if (b.v.hi <= a.v.lo) return a;
-    Dual r;
-    r.v = {std::max(a.v.lo, b.v.lo), std::max(a.v.hi, b.v.hi)};
+    r.v = smaller ? Interval{std::min(a.v.lo, b.v.lo), std::min(a.v.hi, b.v.hi)}
+                  : Interval{std::max(a.v.lo, b.v.lo), std::max(a.v.hi, b.v.hi)};
     for (int i = 0; i < axes_; ++i) r.g[i] = hull(a.g[i], b.g[i]);
     return r;
   }
