@@ -342,12 +342,11 @@ std::vector<QuadratureInterval> adaptive_integration(const ExactAggregate& aggre
   knots.insert(knots.end(), kinks.begin(), kinks.end());
   sort_unique(knots);
   std::priority_queue<QuadratureInterval> queue;
-  double area = 0.0, moment = 0.0, area_error = 0.0, moment_error = 0.0;
+  double area = 0.0, area_error = 0.0, moment_error = 0.0;
   for (std::size_t k = 0; k + 1 < knots.size(); ++k) {
     if (!(knots[k + 1] > knots[k])) continue;
     QuadratureInterval piece = kronrod15(f, knots[k], knots[k + 1], nullptr);
     area += piece.area;
-    moment += piece.moment;
     area_error += piece.area_error;
     moment_error += piece.moment_error;
     queue.push(piece);
@@ -363,7 +362,6 @@ std::vector<QuadratureInterval> adaptive_integration(const ExactAggregate& aggre
     const QuadratureInterval left = kronrod15(f, worst.a, middle, nullptr);
     const QuadratureInterval right = kronrod15(f, middle, worst.b, nullptr);
     area += left.area + right.area - worst.area;
-    moment += left.moment + right.moment - worst.moment;
     area_error += left.area_error + right.area_error - worst.area_error;
     moment_error += left.moment_error + right.moment_error - worst.moment_error;
     queue.push(left);

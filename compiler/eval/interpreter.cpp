@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "compiler/eval/defuzzify.h"
@@ -326,6 +328,15 @@ struct Interpreter::State {
     return value;
   }
 
+  // KM and EKM end within N + 1 steps (kernels/type_reduction_math.h); reaching their cap is a bug in fmpc,
+  // reported as such rather than returned as a number.
+  void check_reduction(const TypeReducedInterval<double>& reduced, std::size_t output, int points) const {
+    if (!reduced.iteration_cap_hit) return;
+    throw std::logic_error("type reduction (" + std::string(to_string(system.type_reduction)) + ") of output '" +
+                           system.outputs[output].name + "' of system '" + system.name +
+                           "' reached its iteration cap over " + std::to_string(points) + " points");
+  }
+
   static void record_reduction(const TypeReducedInterval<double>& reduced, const double* x_left,
                                const double* x_right, TypeReducedOutput& interval) {
     interval.lower = reduced.left;
@@ -382,6 +393,7 @@ struct Interpreter::State {
     const TypeReducedInterval<double> reduced =
         reduce_type(system.type_reduction, x.data(), aggregate_lower.data(), aggregate.data(),
                     static_cast<int>(x.size()));
+    check_reduction(reduced, o, static_cast<int>(x.size()));
     if (!reduced.fired) return no_fire_type2(o, flags, interval);
     record_reduction(reduced, x.data(), x.data(), interval);
     return (reduced.left + reduced.right) / 2.0;
@@ -475,7 +487,10 @@ struct Interpreter::State {
         w_low[i] = sorted[i].w_low;
         w_high[i] = sorted[i].w_high;
       }
-      return std::make_pair(reduce_type(system.type_reduction, x.data(), w_low.data(), w_high.data(), n), x);
+      const TypeReducedInterval<double> reduced =
+          reduce_type(system.type_reduction, x.data(), w_low.data(), w_high.data(), n);
+      check_reduction(reduced, o, n);
+      return std::make_pair(reduced, x);
     };
     const auto [left, x_left] = reduce_sorted(true);
     if (!left.fired) return no_fire_type2(o, flags, interval);

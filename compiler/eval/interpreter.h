@@ -70,6 +70,8 @@ GradeInterval<double> term_membership(const Term& term, double x);
 
 // Evaluates `system` at `inputs` (one value per input variable, in declaration order).
 // Precondition: the system passed sema without errors and inputs.size() == system.inputs.size().
+// Throws std::logic_error where Karnik-Mendel or EKM type reduction reaches its iteration cap, which their
+// strictly improving steps rule out (kernels/type_reduction_math.h): a bug in fmpc, never a returned number.
 Evaluation evaluate(const FuzzySystem& system, const std::vector<double>& inputs);
 Explanation explain(const FuzzySystem& system, const std::vector<double>& inputs);
 Evaluation evaluate(const FuzzySystem& system, const std::vector<double>& inputs, const EvaluationOptions& options);

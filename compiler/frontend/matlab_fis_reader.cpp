@@ -503,6 +503,10 @@ class SystemBuilder {
                              "version " + format_number(*version) + " is not a known .fis version (1.0 or 2.0); "
                              "reading it as version 2.0");
     }
+    // MATLAB's mamfistype2 / sugfistype2 keep Type 'mamdani' / 'sugeno'; the TypeReductionMethod key, which only
+    // type-2 systems have, marks them (docs/matlab_fis.md). fmpc's earlier 'mamdanitype2' spelling is read too.
+    for (const char* key : {"TypeRedMethod", "TypeReductionMethod"})
+      if (keys.count(key) != 0) system.interval_type2 = true;
     if (system.type == SystemType::Sugeno) system.defuzzifier = Defuzzifier::WeightedAverage;
 
     read_method<TNorm>(keys, "AndMethod", tnorm_from_string, {"min", "prod", "einstein_product"}, system.and_method);
@@ -532,12 +536,6 @@ class SystemBuilder {
       SourceRange range;
       const std::optional<std::string> name = string_value(found->second, &range);
       if (!name) continue;
-      if (!system.interval_type2) {
-        diagnostics_.warning(positions_.token(found->second->key), "type-reduction-ignored",
-                             std::string(key) + " applies to type-2 systems only and is ignored",
-                             {"set Type='mamdanitype2' or 'sugenotype2' to use it"});
-        continue;
-      }
       if (*name == "karnikmendel") {
         system.type_reduction = TypeReduction::KarnikMendel;
       } else if (*name == "ekm") {
@@ -725,8 +723,12 @@ class SystemBuilder {
       if (line->lowerScale != nullptr)
         diagnostics_.warning(positions_.span(line->lowerScale), "lower-mf-ignored",
                              std::string("LowerScale and LowerLag belong to type-2 MFs ") +
-                                 (sugeno_output ? "(a sugenotype2 output is type-1)" : "(this system is type-1)") +
-                                 " and are ignored");
+                                 (sugeno_output ? "(a type-2 Sugeno system's outputs are type-1)"
+                                                : "(this system is type-1)") +
+                                 " and are ignored",
+                             sugeno_output ? std::vector<std::string>{}
+                                           : std::vector<std::string>{"a type-2 system names its type reduction in "
+                                                                      "[System]: TypeReductionMethod='karnikmendel'"});
       return;
     }
     if (line->lowerScale == nullptr) {

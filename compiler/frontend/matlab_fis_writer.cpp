@@ -1,11 +1,15 @@
 // MATLAB .fis writer: the version 2.0 layout of MATLAB's writefis (keys without spaces, MFs as
 // MFk='name':'type',[params], rules as "a b, c (w) : k"), with hedges as Octave's rule fractions.
 // Numbers go through format_number so that reading the file back gives the same bits.
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "compiler/frontend/matlab_fis.h"
 #include "diagnostics/number_format.h"
+#include "kernels/type2_math.h"
 
 namespace fmpc {
 
@@ -54,6 +58,42 @@ std::string columns(const std::vector<Clause>& clauses, std::size_t variable_cou
   return text;
 }
 
+// The closest MATLAB footprint to a term's: LowerScale S in (0, 1] and LowerLag L in [0, 1), lower =
+// S max(0, (upper - L) / (1 - L)) (kernels/type2_math.h), minimising the largest difference from the term's own
+// lower MF over 201 points of the variable's range (grid search, S and L in steps of 0.01), ties to the larger S
+// and the smaller L. The upper MF written is exactly the term's upper MF (writer's upper_mf).
+struct ScaleLagFit {
+  double scale = 1.0, lag = 0.0, largest_difference = 0.0;
+};
+
+ScaleLagFit fit_scale_lag(const Term& term, const Variable& variable) {
+  constexpr int kPoints = 201, kSteps = 100;
+  std::vector<double> upper(kPoints), lower(kPoints);
+  for (int i = 0; i < kPoints; ++i) {
+    const double x = variable.min + (variable.max - variable.min) * i / (kPoints - 1);
+    const Footprint& f = *term.footprint;
+    const GradeInterval<double> mu = footprint_membership(term.mf.kind, term.mf.params.data(), f.kind, f.first,
+                                                          f.second, f.lower.kind, f.lower.params.data(), x);
+    upper[static_cast<std::size_t>(i)] = mu.upper;
+    lower[static_cast<std::size_t>(i)] = mu.lower;
+  }
+  ScaleLagFit best;
+  best.largest_difference = std::numeric_limits<double>::infinity();
+  for (int l = 0; l < kSteps; ++l) {
+    const double lag = static_cast<double>(l) / kSteps;
+    for (int k = kSteps; k >= 1; --k) {
+      const double scale = static_cast<double>(k) / kSteps;
+      double worst = 0.0;
+      for (int i = 0; i < kPoints && worst < best.largest_difference; ++i) {
+        const double raised = std::max(0.0, (upper[static_cast<std::size_t>(i)] - lag) / (1.0 - lag));
+        worst = std::max(worst, std::fabs(scale * raised - lower[static_cast<std::size_t>(i)]));
+      }
+      if (worst < best.largest_difference) best = ScaleLagFit{scale, lag, worst};
+    }
+  }
+  return best;
+}
+
 class Writer {
  public:
   Writer(const FuzzySystem& system, DiagnosticList& diagnostics) : system_(system), diagnostics_(diagnostics) {}
@@ -63,7 +103,9 @@ class Writer {
     std::string out;
     out += "[System]\n";
     out += "Name=" + quoted(system_.name) + "\n";
-    out += "Type=" + quoted(std::string(to_string(system_.type)) + (system_.interval_type2 ? "type2" : "")) + "\n";
+    // A type-2 system is MATLAB's mamfistype2 / sugfistype2: Type stays 'mamdani' / 'sugeno' and the
+    // TypeReductionMethod key, which only type-2 systems have, marks it (docs/matlab_fis.md).
+    out += "Type=" + quoted(to_string(system_.type)) + "\n";
     out += "Version=2.0\n";
     out += "NumInputs=" + std::to_string(system_.inputs.size()) + "\n";
     out += "NumOutputs=" + std::to_string(system_.outputs.size()) + "\n";
@@ -73,7 +115,8 @@ class Writer {
     out += "ImpMethod=" + quoted(to_string(system_.implication)) + "\n";
     out += "AggMethod=" + quoted(to_string(system_.aggregation)) + "\n";
     out += "DefuzzMethod=" + quoted(to_string(system_.defuzzifier)) + "\n";
-    if (system_.interval_type2) out += "TypeRedMethod=" + quoted(matlab_type_reduction(system_.type_reduction)) + "\n";
+    if (system_.interval_type2)
+      out += "TypeReductionMethod=" + quoted(matlab_type_reduction(system_.type_reduction)) + "\n";
     const bool type2 = system_.interval_type2;
     const bool sugeno = system_.type == SystemType::Sugeno;
     for (std::size_t i = 0; i < system_.inputs.size(); ++i) out += variable("Input", i + 1, system_.inputs[i], type2);
@@ -99,13 +142,17 @@ class Writer {
     return "karnikmendel";
   }
 
-  // `,LowerScale,[LowerLag LowerLag]` of a type-2 MF line. Footprints MATLAB cannot hold are written with the
-  // upper MF and zero width (reported by report_what_matlab_cannot_hold).
-  static std::string lower_scale_lag(const Term& term) {
+  // `,LowerScale,[LowerLag LowerLag]` of a type-2 MF line: the footprint's own where it is MATLAB's, 1 and 0 for
+  // zero width, else the closest MATLAB footprint (fit_scale_lag; reported by report_what_matlab_cannot_hold).
+  static std::string lower_scale_lag(const Term& term, const Variable& variable) {
     double scale = 1.0, lag = 0.0;
     if (term.footprint && term.footprint->kind == FootprintKind::ScaleLag) {
       scale = term.footprint->first;
       lag = term.footprint->second;
+    } else if (term.footprint && term.footprint->kind != FootprintKind::None) {
+      const ScaleLagFit fit = fit_scale_lag(term, variable);
+      scale = fit.scale;
+      lag = fit.lag;
     }
     return "," + format_number(scale) + "," + vector_text({lag, lag});
   }
@@ -136,7 +183,7 @@ class Writer {
       const Term& term = variable.terms[k];
       const MembershipFunction mf = type2 ? upper_mf(term) : term.mf;
       out += "MF" + std::to_string(k + 1) + "=" + quoted(term.name) + ":" + quoted(matlab_name(mf.kind)) + "," +
-             vector_text(mf.params) + (type2 ? lower_scale_lag(term) : "") + "\n";
+             vector_text(mf.params) + (type2 ? lower_scale_lag(term, variable) : "") + "\n";
     }
     return out;
   }
@@ -146,8 +193,13 @@ class Writer {
     return system_.range;
   }
 
+  // What MATLAB's format drops without changing what fmpc computes from the file (names, units, descriptions,
+  // Octave's spellings), and what changes the outputs when the file is read back (docs/matlab_fis.md, "Writing").
   void warn(const SourceRange& range, const std::string& message, std::vector<std::string> notes = {}) {
-    diagnostics_.warning(where(range), "matlab-export", message, std::move(notes));
+    diagnostics_.warning(where(range), kMatlabExport, message, std::move(notes));
+  }
+  void lose(const SourceRange& range, const std::string& message, std::vector<std::string> notes = {}) {
+    diagnostics_.warning(where(range), kMatlabLossy, message, std::move(notes));
   }
 
   void report_what_matlab_cannot_hold() {
@@ -155,14 +207,14 @@ class Writer {
     if (!system_.description.empty())
       warn(system_.range, "the description of " + system_name + " has no place in a .fis file and is dropped");
     if (system_.samples != 101)
-      warn(system_.range,
+      lose(system_.range,
            std::string("'samples ") + (system_.samples == 0 ? "exact" : std::to_string(system_.samples)) + "' of " +
                system_name + " is dropped: MATLAB always samples Mamdani outputs at 101 points");
     if (system_.no_fire == NoFirePolicy::Value)
-      warn(system_.range, "the no-fire value " + format_number(system_.no_fire_value) + " of " + system_name +
+      lose(system_.range, "the no-fire value " + format_number(system_.no_fire_value) + " of " + system_name +
                               " is dropped: MATLAB gives the middle of the output range when no rule fires");
     if (system_.no_fire == NoFirePolicy::Error)
-      warn(system_.range, "the no-fire policy 'error' of " + system_name +
+      lose(system_.range, "the no-fire policy 'error' of " + system_name +
                               " is dropped: MATLAB gives the middle of the output range when no rule fires");
     const bool einstein = system_.and_method == TNorm::EinsteinProduct || system_.implication == TNorm::EinsteinProduct ||
                           system_.or_method == SNorm::EinsteinSum || system_.aggregation == SNorm::EinsteinSum;
@@ -171,7 +223,7 @@ class Writer {
                               " are written as Octave's einstein_product/einstein_sum, which MATLAB does not know");
 
     if (system_.interval_type2 && system_.type_reduction == TypeReduction::NieTan)
-      warn(system_.range, "type reduction 'nie_tan' of " + system_name +
+      lose(system_.range, "type reduction 'nie_tan' of " + system_name +
                               " has no MATLAB name and is written as 'karnikmendel'",
            {"MATLAB's TypeReductionMethod is karnikmendel, ekm, iasc or eiasc"});
     for (const auto* variables : {&system_.inputs, &system_.outputs}) {
@@ -181,17 +233,33 @@ class Writer {
           if (!term.footprint) continue;
           const FootprintKind kind = term.footprint->kind;
           const std::string what = "term '" + term.name + "' of " + role + " '" + variable.name + "'";
-          if (kind == FootprintKind::IntervalValue)
-            warn(term.range, "the interval constant of " + what + " has no MATLAB form (sugenotype2 outputs are "
+          if (kind == FootprintKind::IntervalValue) {
+            lose(term.range, "the interval constant of " + what + " has no MATLAB form (sugenotype2 outputs are "
                                                                   "type-1); its midpoint is written");
-          else if (kind != FootprintKind::ScaleLag)
-            warn(term.range, "the footprint of " + what + " has no MATLAB form (MATLAB's lower MF is the upper one "
-                                                          "scaled and lagged); its upper MF is written with zero "
-                                                          "width (LowerScale 1, LowerLag 0)");
+          } else if (kind != FootprintKind::ScaleLag && kind != FootprintKind::None) {
+            const ScaleLagFit fit = fit_scale_lag(term, variable);
+            if (fit.largest_difference > 0.0)
+              lose(term.range, "the footprint of " + what + " has no MATLAB form (MATLAB's lower MF is the upper one "
+                                                          "scaled and lagged); it is written as its upper MF with "
+                                                          "LowerScale " +
+                                 format_number(fit.scale) + " and LowerLag " + format_number(fit.lag) +
+                                 ", whose lower MF is up to " + format_number(fit.largest_difference) +
+                                 " from the original's");
+          }
         }
-        if (!variable.unit.empty())
-          warn(variable.range, std::string("the unit '") + variable.unit + "' of " + role + " '" + variable.name +
-                                   "' has no place in a .fis file and is dropped");
+        if (!variable.unit.empty()) {
+          // Scenes read a unit-less output as kPa (docs/scenes.md): an output in Pa or MPa would change E.
+          const bool changes_modulus = variables == &system_.outputs && (variable.unit == "Pa" || variable.unit == "MPa");
+          if (changes_modulus)
+            lose(variable.range, std::string("the unit '") + variable.unit + "' of output '" + variable.name +
+                                     "' has no place in a .fis file and is dropped; a scene reads an output "
+                                     "without a unit as kPa, " +
+                                     (variable.unit == "Pa" ? "1000 times" : "1000 times less than") +
+                                     " its value in " + variable.unit);
+          else
+            warn(variable.range, std::string("the unit '") + variable.unit + "' of " + role + " '" + variable.name +
+                                     "' has no place in a .fis file and is dropped");
+        }
         if (!variable.description.empty())
           warn(variable.range, std::string("the description of ") + role + " '" + variable.name +
                                    "' has no place in a .fis file and is dropped");
@@ -207,8 +275,8 @@ class Writer {
         for (const Clause& clause : *clauses)
           if (clause.hedge != Hedge::None) ++hedges;
       if (rule.antecedent.empty())
-        warn(rule.range, system_.rule_display_name(r) + " has no antecedent; MATLAB rejects a rule whose inputs are "
-                                                        "all 0");
+        lose(rule.range, system_.rule_display_name(r) + " has no antecedent; MATLAB (and fmpc) reject a rule whose "
+                                                        "inputs are all 0");
       if (system_.type == SystemType::Sugeno)
         for (const Clause& clause : rule.consequent)
           if (clause.negated)

@@ -1,6 +1,8 @@
 #include "compiler/passes/mamdani_to_sugeno.h"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "compiler/eval/defuzzify.h"
 #include "compiler/eval/interpreter.h"
@@ -37,6 +39,9 @@ std::optional<double> type2_term_centroid(const Term& term, double min, double m
   }
   const TypeReducedInterval<double> reduced =
       reduce_type(method, x.data(), lower.data(), upper.data(), static_cast<int>(x.size()));
+  // KM and EKM end within N + 1 steps (kernels/type_reduction_math.h): the cap is a bug, never a centroid.
+  if (reduced.iteration_cap_hit)
+    throw std::logic_error("type reduction reached its iteration cap over " + std::to_string(x.size()) + " points");
   if (!reduced.fired) return std::nullopt;
   return (reduced.left + reduced.right) / 2.0;
 }

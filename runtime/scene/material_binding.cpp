@@ -11,13 +11,33 @@
 namespace fmpc::sim {
 
 std::optional<double> pascals_per_unit(const std::string& unit) {
-  if (unit.empty() || unit == "kPa") return 1000.0;
+  if (unit == "kPa") return 1000.0;
   if (unit == "Pa") return 1.0;
   if (unit == "MPa") return 1e6;
   return std::nullopt;
 }
 
 namespace {
+
+// Pa per unit of the output `name` of `what` ("rules 'liver.fis'", "table 'liver.fzt'") at the scene's `field`
+// (material.rules or material.table): the unit converted, no unit read as kPa with a warning (MATLAB files carry
+// none; the liver rules' unit), any other unit an error.
+std::optional<double> output_unit_scale(const std::string& unit, const std::string& name, const std::string& what,
+                                        const std::string& field, const Scene& scene, DiagnosticList& diagnostics) {
+  if (unit.empty()) {
+    diagnostics.warning(scene.range_of(field), "assumed-unit",
+                        field + ": output '" + name + "' of " + what +
+                            " has no unit (MATLAB .fis files carry none); it is read as Young's modulus in kPa",
+                        {"if it is in Pa or MPa, use a rule file in the fmpc language that says so (fmpc convert "
+                         "--to fmpc, then give the output its unit)"});
+    return 1000.0;
+  }
+  if (const auto scale = pascals_per_unit(unit)) return scale;
+  diagnostics.error(scene.range_of(field), field + ": output '" + name + "' of " + what + " is in '" + unit +
+                                               "'; Young's modulus must be in kPa, Pa or MPa",
+                    {"give the output one of those units in the rule file (and recompile a table)"});
+  return std::nullopt;
+}
 
 bool inside(const SceneBox& box, const Point3& p) {
   for (std::size_t i = 0; i < 3; ++i)
@@ -70,29 +90,35 @@ std::optional<ResolvedBindings> resolve_bindings(const std::vector<std::string>&
   return resolved;
 }
 
-// The value of every non-strain input for one spring, or nullopt (with an error) when a per-region input has no
-// region and no default at that spring.
-std::optional<double> bound_value(const InputBinding& binding, const Point3& midpoint, std::size_t spring,
-                                  const Scene& scene, DiagnosticList& diagnostics) {
+// "spring 12" or "element 12".
+std::string point_name(MaterialPoint kind, std::size_t index) {
+  return (kind == MaterialPoint::SpringMidpoint ? "spring " : "element ") + std::to_string(index);
+}
+
+// The value of every non-strain input at one material point, or nullopt (with an error) when a per-region input
+// has no region and no default there.
+std::optional<double> bound_value(const InputBinding& binding, const Point3& position, std::size_t index,
+                                  MaterialPoint kind, const Scene& scene, DiagnosticList& diagnostics) {
   if (binding.kind == InputBinding::Kind::Constant) return binding.value;
   for (const RegionValue& region : binding.regions)
-    if (inside(region.box, midpoint)) return region.value;
+    if (inside(region.box, position)) return region.value;
   if (binding.has_default) return binding.value;
   const std::string field = "material.inputs." + binding.input;
   diagnostics.error(scene.range_of(field),
-                    field + ": spring " + std::to_string(spring) + " (midpoint " + format_number(midpoint[0]) + ", " +
-                        format_number(midpoint[1]) + ", " + format_number(midpoint[2]) +
-                        ") lies in no region; add a region that contains it or a 'default'");
+                    field + ": " + point_name(kind, index) +
+                        (kind == MaterialPoint::SpringMidpoint ? " (midpoint " : " (centroid ") +
+                        format_number(position[0]) + ", " + format_number(position[1]) + ", " +
+                        format_number(position[2]) + ") lies in no region; add a region that contains it or a 'default'");
   return std::nullopt;
 }
 
 // Checks and converts the evaluator's outputs (output units) to Pa, and fills the range.
-bool finish(MaterialBinding& binding, const Scene& scene, DiagnosticList& diagnostics) {
+bool finish(MaterialBinding& binding, MaterialPoint kind, const Scene& scene, DiagnosticList& diagnostics) {
   std::vector<double>& values = binding.strain.empty() ? binding.modulus_per_spring : binding.strain_modulus;
   const std::string field = scene.material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (!(values[i] > 0.0) || !std::isfinite(values[i])) {
-      const std::string where = binding.strain.empty() ? "spring " + std::to_string(i)
+      const std::string where = binding.strain.empty() ? point_name(kind, i)
                                                        : "strain " + format_number(binding.strain[i]);
       diagnostics.error(scene.range_of(field), field + ": output '" + binding.output + "' is " +
                                                    format_number(values[i]) + " at " + where +
@@ -132,7 +158,8 @@ void report_flags(const EvaluationFlags& flags, const FuzzySystem& system, const
 }  // namespace
 
 std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_index, const Scene& scene,
-                                          const std::vector<Point3>& spring_midpoints, DiagnosticList& diagnostics) {
+                                          const std::vector<Point3>& points, MaterialPoint kind,
+                                          DiagnosticList& diagnostics) {
   std::vector<std::string> names;
   for (const Variable& v : system.inputs) names.push_back(v.name);
   const auto resolved = resolve_bindings(names, "system '" + system.name + "'", scene, diagnostics);
@@ -141,13 +168,9 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
   binding.system = system.name;
   const Variable& output = system.outputs[static_cast<std::size_t>(output_index)];
   binding.output = output.name;
-  const auto scale = pascals_per_unit(output.unit);
-  if (!scale) {
-    diagnostics.error(scene.range_of("material.rules"),
-                      "material.rules: output '" + output.name + "' is in '" + output.unit +
-                          "'; Young's modulus must be in kPa, Pa or MPa (give the output that unit in the rules)");
-    return std::nullopt;
-  }
+  const auto scale = output_unit_scale(output.unit, output.name, "system '" + system.name + "'", "material.rules",
+                                       scene, diagnostics);
+  if (!scale) return std::nullopt;
   binding.pascals_per_output_unit = *scale;
   Interpreter interpreter(system);
   std::vector<bool> warned_range(system.inputs.size(), false);
@@ -184,10 +207,10 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
     }
   } else {
     std::map<std::vector<double>, double> cache;
-    binding.modulus_per_spring.resize(spring_midpoints.size());
-    for (std::size_t s = 0; s < spring_midpoints.size(); ++s) {
+    binding.modulus_per_spring.resize(points.size());
+    for (std::size_t s = 0; s < points.size(); ++s) {
       for (std::size_t i = 0; i < inputs.size(); ++i) {
-        const auto value = bound_value(*resolved->by_input[i], spring_midpoints[s], s, scene, diagnostics);
+        const auto value = bound_value(*resolved->by_input[i], points[s], s, kind, scene, diagnostics);
         if (!value) return std::nullopt;
         inputs[i] = *value;
       }
@@ -202,12 +225,12 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
       binding.modulus_per_spring[s] = *value;
     }
   }
-  if (!finish(binding, scene, diagnostics)) return std::nullopt;
+  if (!finish(binding, kind, scene, diagnostics)) return std::nullopt;
   return binding;
 }
 
-std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const std::string& output_unit,
-                                          const Scene& scene, const std::vector<Point3>& spring_midpoints,
+std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const Scene& scene,
+                                          const std::vector<Point3>& points, MaterialPoint kind,
                                           DiagnosticList& diagnostics) {
   std::vector<std::string> names;
   for (const TableAxis& axis : table.axes) names.push_back(axis.input_name);
@@ -216,12 +239,11 @@ std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_i
   MaterialBinding binding;
   binding.system = table.system_name;
   binding.output = table.output_names[static_cast<std::size_t>(output_index)];
-  const auto scale = pascals_per_unit(output_unit);
-  if (!scale) {
-    diagnostics.error(scene.range_of("material.table"),
-                      "material.table: the output unit '" + output_unit + "' is not kPa, Pa or MPa");
-    return std::nullopt;
-  }
+  const auto unit = static_cast<std::size_t>(output_index);
+  const auto scale = output_unit_scale(unit < table.output_units.size() ? table.output_units[unit] : std::string(),
+                                       binding.output, "table '" + table.system_name + "'", "material.table", scene,
+                                       diagnostics);
+  if (!scale) return std::nullopt;
   binding.pascals_per_output_unit = *scale;
   std::vector<const double*> breakpoints;
   std::vector<int> counts;
@@ -243,17 +265,17 @@ std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_i
       binding.strain_modulus.push_back(evaluate(query));
     }
   } else {
-    binding.modulus_per_spring.resize(spring_midpoints.size());
-    for (std::size_t s = 0; s < spring_midpoints.size(); ++s) {
+    binding.modulus_per_spring.resize(points.size());
+    for (std::size_t s = 0; s < points.size(); ++s) {
       for (std::size_t i = 0; i < query.size(); ++i) {
-        const auto value = bound_value(*resolved->by_input[i], spring_midpoints[s], s, scene, diagnostics);
+        const auto value = bound_value(*resolved->by_input[i], points[s], s, kind, scene, diagnostics);
         if (!value) return std::nullopt;
         query[i] = *value;
       }
       binding.modulus_per_spring[s] = evaluate(query);
     }
   }
-  if (!finish(binding, scene, diagnostics)) return std::nullopt;
+  if (!finish(binding, kind, scene, diagnostics)) return std::nullopt;
   return binding;
 }
 

@@ -1,7 +1,9 @@
 #pragma once
 // From fuzzy rules (or a compiled .fzt table) and a scene's input bindings to Young's modulus per spring, or to a
-// modulus(strain) table looked up every step. The FIS output is Young's modulus in its own unit (kPa for the
-// thesis's liver rules); everything returned here is in Pa (SI inside). The material mapping (Van Gelder 1998)
+// modulus(strain) table looked up every step. The FIS output is Young's modulus in its own unit, which the rule
+// file states and the .fzt table records (kPa for the thesis's liver rules); Pa, kPa and MPa are converted, any
+// other unit is refused at the scene's field, and an output without a unit (MATLAB files have none) is read as
+// kPa with one warning. Everything returned here is in Pa (SI inside). The material mapping (Van Gelder 1998)
 // then turns the modulus into spring constants (runtime/springs/spring_network.h).
 #include <optional>
 #include <string>
@@ -27,18 +29,25 @@ struct MaterialBinding {
   double modulus_min = 0.0, modulus_max = 0.0;  // Pa, over the springs or the strain table
 };
 
-// Pa per unit of a FIS output: kPa (or no unit, as in MATLAB files: kPa assumed), Pa, MPa. nullopt otherwise.
+// Where a material is evaluated, and what messages call each point: one point per spring (its midpoint), or one per
+// tetrahedron (its centroid: the co-rotational FEM, and the springs' volume term).
+enum class MaterialPoint { SpringMidpoint, ElementCentroid };
+
+// Pa per unit of a FIS output: Pa, kPa, MPa. nullopt otherwise (also for no unit: see output_unit_scale).
 std::optional<double> pascals_per_unit(const std::string& unit);
 
-// Evaluates `system`'s output `output_index` for the bindings. `spring_midpoints` (mesh units, one per spring)
-// place springs in regions. Every input must be bound exactly once; a strain binding cannot be combined with
+// Evaluates `system`'s output `output_index` for the bindings. `points` (mesh units, one per spring or element, as
+// `kind` says) place the material points in regions; messages name them "spring N (midpoint ...)" or
+// "element N (centroid ...)". Every input must be bound exactly once; a strain binding cannot be combined with
 // per-region bindings. Errors are located at the scene's fields (scene.range_of("material.inputs.NAME")).
 std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_index, const Scene& scene,
-                                          const std::vector<Point3>& spring_midpoints, DiagnosticList& diagnostics);
+                                          const std::vector<Point3>& points, MaterialPoint kind,
+                                          DiagnosticList& diagnostics);
 
-// The same for a compiled table: its axes are the inputs to bind; the strain axis uses the table's breakpoints.
-std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const std::string& output_unit,
-                                          const Scene& scene, const std::vector<Point3>& spring_midpoints,
+// The same for a compiled table: its axes are the inputs to bind; the strain axis uses the table's breakpoints;
+// the output's unit is the one the table records (.fzt version 2).
+std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const Scene& scene,
+                                          const std::vector<Point3>& points, MaterialPoint kind,
                                           DiagnosticList& diagnostics);
 
 }  // namespace fmpc::sim

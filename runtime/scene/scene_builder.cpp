@@ -296,8 +296,8 @@ std::vector<Point3> spring_midpoints(const SimulationSetup& setup, double length
 
 // The fuzzy material: a modulus per material point (spring midpoints or element centroids, mesh units) or a strain
 // table, from the rules or the compiled table.
-std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std::vector<Point3>& midpoints,
-                                                   BuiltScene& built, DiagnosticList& diagnostics) {
+std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std::vector<Point3>& points,
+                                                   MaterialPoint kind, BuiltScene& built, DiagnosticList& diagnostics) {
   const std::string field =
       scene.material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
   const bool is_table = scene.material.source == SceneMaterial::Source::Table;
@@ -314,7 +314,7 @@ std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std
     if (!table) return std::nullopt;
     const auto output = select_table_output(scene, *table, diagnostics);
     if (!output) return std::nullopt;
-    return bind_table(*table, *output, "kPa", scene, midpoints, diagnostics);
+    return bind_table(*table, *output, scene, points, kind, diagnostics);
   }
   built.sources.emplace_back(scene.material.file, *text);
   DiagnosticList rule_diagnostics;
@@ -329,7 +329,7 @@ std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std
   }
   const auto selection = select_rules(scene, rules, diagnostics);
   if (!selection) return std::nullopt;
-  return bind_rules(*selection->system, selection->output, scene, midpoints, diagnostics);
+  return bind_rules(*selection->system, selection->output, scene, points, kind, diagnostics);
 }
 
 // A regional value at each point (mesh units): the first region containing it, else the default.
@@ -376,7 +376,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
       break;
     case SceneMaterial::Source::Rules:
     case SceneMaterial::Source::Table: {
-      built.material = bind_fuzzy_material(scene, centroids, built, diagnostics);
+      built.material = bind_fuzzy_material(scene, centroids, MaterialPoint::ElementCentroid, built, diagnostics);
       if (!built.material) return std::nullopt;
       const MaterialBinding& binding = *built.material;
       if (binding.strain.empty()) {
@@ -452,7 +452,8 @@ bool add_calibrated_volume_term(const Scene& scene, const BuiltScene& built, Sim
       std::fill(modulus.begin(), modulus.end(), built.material->modulus_min);
     } else {
       BuiltScene scratch;
-      const auto per_element = bind_fuzzy_material(scene, tetrahedron_centroids(built.mesh), scratch, diagnostics);
+      const auto per_element = bind_fuzzy_material(scene, tetrahedron_centroids(built.mesh), MaterialPoint::ElementCentroid,
+                                                    scratch, diagnostics);
       if (!per_element) return false;
       modulus = per_element->modulus_per_spring;
     }
@@ -504,7 +505,8 @@ std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& bui
   if (!setup) return std::nullopt;
   setup->tetrahedra = built.mesh.tetrahedra;
   if (material.source == SceneMaterial::Source::Rules || material.source == SceneMaterial::Source::Table) {
-    built.material = bind_fuzzy_material(scene, spring_midpoints(*setup, scene.mesh.unit), built, diagnostics);
+    built.material = bind_fuzzy_material(scene, spring_midpoints(*setup, scene.mesh.unit), MaterialPoint::SpringMidpoint,
+                                         built, diagnostics);
     if (!built.material) return std::nullopt;
     const std::vector<double> factor = setup->springs.stiffness;
     const MaterialBinding& binding = *built.material;

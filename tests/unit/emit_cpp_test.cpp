@@ -460,6 +460,10 @@ TEST_CASE("the banner names the source and its hash; #line points at rules and b
   CHECK(header->find("// source hash (FNV-1a 64): feedfacecafebeef\n") != std::string::npos);
   CHECK(header->find("// fixed: none\n") != std::string::npos);
   CHECK(header->find("kSourceHash = 0xfeedfacecafebeefull;") != std::string::npos);
+  // The units (issue 11: a compiled artefact must say what its numbers are in).
+  CHECK(header->find("inline constexpr const char* kInputUnits[] = {\"kPa\", \"kPa\", \"kPa\", \"kPa\", "
+                     "\"kPa\"};") != std::string::npos);
+  CHECK(header->find("inline constexpr const char* kOutputUnits[] = {\"kPa\"};") != std::string::npos);
 
   // Each rule's #line names its line in the rule file; each return directive names its own next line.
   fmpc::testing::check_line_directives(*header, "liver_evaluator.h", "rulesets/liver_fibrosis/mamdani.fis", liver);

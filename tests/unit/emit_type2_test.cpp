@@ -23,6 +23,7 @@
 #include "kernels/fuzzy_math.h"
 #include "tests/support/generated_program.h"
 #include "tests/support/random_system.h"
+#include "tests/support/type_reduction_reference.h"
 
 namespace {
 
@@ -407,6 +408,57 @@ TEST_CASE("type-2 headers agree with the interpreter on seeded random type-2 sys
   WARN("random type-2 systems: " << cases.size() << " (" << sugeno << " sugeno), " << tally.points
                                  << " points, float compared on " << tally.float_checked
                                  << "; largest double difference " << tally.worst_double << " of the range");
+}
+
+TEST_CASE("type-2 headers equal the exhaustive search where lower grades are 1e-25", "[emit][type2]") {
+  // The issue's two systems at their points, and 60 seeded one-input systems whose lower grades fall to 1e-25 and
+  // below (tests/support/type_reduction_reference.h), at 15 points each: both ends of the generated double
+  // evaluator's interval within 1e-12 of the points' range of an exhaustive search in long double over the
+  // aggregated sets the interpreter explains.
+  const fs::path golden = fs::path(FMPC_SOURCE_DIR) / "tests" / "golden";
+  std::vector<Case> cases;
+  for (const auto& [folder, x] : {std::make_pair("it2_km_end_of_range", 8.0), std::make_pair("it2_ekm_end_of_range", 0.0)}) {
+    Case c;
+    c.label = folder;
+    c.system = load_single_system(golden / folder / "end_of_range.fis");
+    c.points = {{x}};
+    cases.push_back(std::move(c));
+  }
+  const char* methods[] = {"karnik_mendel", "enhanced_karnik_mendel", "eiasc"};
+  for (std::uint64_t seed = 1; seed <= 60; ++seed) {
+    Case c;
+    c.label = "tail system " + std::to_string(seed);
+    fmpc::DiagnosticList diagnostics;
+    fmpc::RuleFile file =
+        fmpc::load_rule_file(c.label, fmpc::testing::tail_system(seed, methods[seed % 3]), diagnostics);
+    REQUIRE_FALSE(diagnostics.has_errors());
+    c.system = file.systems[0];
+    for (int p = 0; p < 15; ++p) c.points.push_back({p < 10 ? static_cast<double>(p) : 10.0 * (p - 10) / 5.0 + 0.37});
+    if (seed % 2 == 0) c.target = EmitOptions::Target::Cuda;
+    cases.push_back(std::move(c));
+  }
+  const auto results = compile_and_run(cases, "exhaustive");
+  std::size_t compared = 0;
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    for (std::size_t p = 0; p < cases[c].points.size(); ++p) {
+      const fmpc::Explanation explained = fmpc::explain(cases[c].system, cases[c].points[p]);
+      if (!explained.evaluation.flags.outputs_no_rule_fired.empty()) continue;
+      const fmpc::OutputExplanation& set = explained.outputs[0];
+      const auto exact = fmpc::testing::exact_type_reduction(set.x, set.membership_lower, set.membership);
+      const double tolerance = fmpc::testing::type_reduction_tolerance(set.x);
+      const Result& got = results[c][p];
+      INFO(cases[c].label << " at x = " << cases[c].points[p][0] << ": [" << got.low_double[0] << ", "
+                          << got.high_double[0] << "], exhaustive [" << static_cast<double>(exact.left) << ", "
+                          << static_cast<double>(exact.right) << "]");
+      CHECK(got.flags_double == expected_flags(explained.evaluation));
+      CHECK(std::fabs(static_cast<double>(got.low_double[0] - exact.left)) <= tolerance);
+      CHECK(std::fabs(static_cast<double>(got.high_double[0] - exact.right)) <= tolerance);
+      ++compared;
+    }
+  }
+  CHECK(compared > 600);
+  CHECK(results[0][0].high_double[0] == 10.0);  // 9.65 on main at 6bad843
+  CHECK(results[1][0].high_double[0] == 20.0);  // 19.9
 }
 
 TEST_CASE("fmpc compile's pipeline hands type-2 systems to the emitter", "[emit][type2]") {

@@ -21,9 +21,11 @@ LookupTable bilinear_table(TableValueType type = TableValueType::Float64) {
   t.source_path = "demo.fis";
   t.source_hash = fnv1a64(std::string("rules"));
   t.value_type = type;
-  t.axes = {TableAxis{"x", 0, {0.0, 0.5, 2.0, 3.0}}, TableAxis{"y", 2, {-1.0, 1.0, 4.0}}};
+  t.axes = {TableAxis{"x", "kPa", 0, {0.0, 0.5, 2.0, 3.0}}, TableAxis{"y", "", 2, {-1.0, 1.0, 4.0}}};
   t.output_names = {"f", "g"};
-  t.fixed_inputs = {{"z", 7.5}};
+  t.output_units = {"Pa", ""};
+  t.fixed_inputs = {{"z", "mm", 7.5}};
+  t.error_kind = TableErrorKind::Bound;
   for (double x : t.axes[0].breakpoints)
     for (double y : t.axes[1].breakpoints) {
       t.values.push_back(2 * x - 3 * y + 1);
@@ -106,10 +108,14 @@ TEST_CASE(".fzt round trip keeps every field; float32 tables round values to flo
     REQUIRE(back->axes.size() == 2);
     REQUIRE(back->axes[1].input_name == "y");
     REQUIRE(back->axes[1].input_index == 2);
+    REQUIRE(back->axes[0].input_unit == "kPa");
+    REQUIRE(back->axes[1].input_unit.empty());
     REQUIRE(back->axes[0].breakpoints == t.axes[0].breakpoints);
     REQUIRE(back->output_names == t.output_names);
+    REQUIRE(back->output_units == t.output_units);
     REQUIRE(back->fixed_inputs == t.fixed_inputs);
     REQUIRE(back->max_error == t.max_error);
+    REQUIRE(back->error_kind == TableErrorKind::Bound);
     REQUIRE(back->max_error_location == t.max_error_location);
     REQUIRE(back->values.size() == t.values.size());
     for (std::size_t i = 0; i < t.values.size(); ++i)
@@ -140,11 +146,15 @@ TEST_CASE(".fzt loader rejects every truncation and every single-byte corruption
 TEST_CASE(".fzt loader rejects wrong versions, foreign byte order and hostile headers", "[table]") {
   const std::string good = serialize_fzt(bilinear_table());
   // Offsets from the layout in lookup_table.h.
-  constexpr std::size_t kVersion = 8, kByteOrder = 12, kAxes = 32, kOutputs = 36;
+  constexpr std::size_t kVersion = 8, kByteOrder = 12, kAxes = 32, kOutputs = 36, kErrorKind = 48;
 
-  std::string v2 = good;
-  put_u32(v2, kVersion, 2);
-  REQUIRE(first_error(v2) == "the table is .fzt version 2; this fmpc reads version 1");
+  std::string v3 = good;
+  put_u32(v3, kVersion, 3);
+  REQUIRE(first_error(v3) == "the table is .fzt version 3; this fmpc reads version 2");
+  std::string v1 = good;
+  put_u32(v1, kVersion, 1);
+  REQUIRE(first_error(v1) == "the table is .fzt version 1, which records neither the units of its inputs and "
+                             "outputs nor whether its maximum error is a bound; this fmpc reads version 2");
 
   std::string big_endian = good;
   put_u32(big_endian, kByteOrder, 0x04030201U);
@@ -159,9 +169,13 @@ TEST_CASE(".fzt loader rejects wrong versions, foreign byte order and hostile he
   put_u32(no_outputs, kOutputs, 0);
   REQUIRE(first_error(with_valid_checksum(no_outputs)) == "the table has 0 outputs; 1 to 64 are supported");
 
+  std::string unknown_kind = good;
+  put_u32(unknown_kind, kErrorKind, 7);
+  REQUIRE(first_error(with_valid_checksum(unknown_kind)) == "error kind 7 is not a bound (1) or an estimate (2)");
+
   // A huge breakpoint count must be refused before anything is allocated. The first axis count sits after the
-  // fixed header (48 bytes), two strings ("demo", "demo.fis") and the axis name "x" with its index.
-  const std::size_t first_count = 48 + (4 + 4) + (4 + 8) + (4 + 1) + 4;
+  // fixed header (52 bytes), two strings ("demo", "demo.fis"), the axis name "x", its unit "kPa" and its index.
+  const std::size_t first_count = 52 + (4 + 4) + (4 + 8) + (4 + 1) + (4 + 3) + 4;
   std::string huge = good;
   put_u32(huge, first_count, 0xFFFFFFFFU);
   REQUIRE(first_error(with_valid_checksum(huge)) ==
@@ -198,7 +212,7 @@ TEST_CASE("table validation: overflowing grids, NaN and non-monotonic axes, wron
   {
     // Eight axes of 2^4 points each is 2^32 grid points: past the limit, reported without allocating.
     LookupTable t = bilinear_table();
-    t.axes.assign(8, TableAxis{"a", 0, std::vector<double>(16)});
+    t.axes.assign(8, TableAxis{"a", "", 0, std::vector<double>(16)});
     for (TableAxis& axis : t.axes)
       for (std::size_t i = 0; i < 16; ++i) axis.breakpoints[i] = static_cast<double>(i);
     DiagnosticList d;

@@ -2,13 +2,19 @@
 // table looked up every step.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "compiler/backend/table/lookup_table.h"
+#include "compiler/backend/table/table_builder.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/rule_file_loader.h"
+#include "compiler/passes/pipeline.h"
 #include "runtime/scene/material_binding.h"
 #include "runtime/scene/scene_builder.h"
+#include "runtime/scene/scene_file.h"
+#include "tests/support/generated_program.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
@@ -63,7 +69,7 @@ TEST_CASE("constant bindings evaluate the rules once and convert kPa to Pa", "[s
     scene.material.bindings.push_back(constant(name, value));
   DiagnosticList diagnostics;
   const std::vector<Point3> midpoints(5, Point3{0, 0, 0});
-  const auto binding = bind_rules(liver, 0, scene, midpoints, diagnostics);
+  const auto binding = bind_rules(liver, 0, scene, midpoints, MaterialPoint::SpringMidpoint, diagnostics);
   REQUIRE(binding);
   CHECK(diagnostics.empty());
   const double expected = evaluate(liver, {9.7, 9.5, 12, 11, 11.2}).outputs[0] * 1000.0;
@@ -86,7 +92,7 @@ TEST_CASE("per-region bindings pick the first region containing the spring's mid
   scene.material.bindings = {regions};
   DiagnosticList diagnostics;
   const std::vector<Point3> midpoints = {{0.5, 0.5, 0.5}, {1.5, 0.5, 0.5}, {3, 3, 3}, {1, 1, 1}};
-  const auto binding = bind_rules(identity, 0, scene, midpoints, diagnostics);
+  const auto binding = bind_rules(identity, 0, scene, midpoints, MaterialPoint::SpringMidpoint, diagnostics);
   REQUIRE(binding);
   CHECK(binding->evaluations == 3);  // cached per distinct value
   REQUIRE(binding->modulus_per_spring.size() == 4);
@@ -97,9 +103,15 @@ TEST_CASE("per-region bindings pick the first region containing the spring's mid
 
   scene.material.bindings[0].has_default = false;
   DiagnosticList missing;
-  CHECK_FALSE(bind_rules(identity, 0, scene, midpoints, missing));
+  CHECK_FALSE(bind_rules(identity, 0, scene, midpoints, MaterialPoint::SpringMidpoint, missing));
   CHECK(messages(missing) == std::vector<std::string>{"material.inputs.x: spring 2 (midpoint 3, 3, 3) lies in no "
                                                       "region; add a region that contains it or a 'default'"});
+  // The co-rotational FEM (and the springs' volume term) evaluate the material at element centroids.
+  DiagnosticList missing_element;
+  CHECK_FALSE(bind_rules(identity, 0, scene, midpoints, MaterialPoint::ElementCentroid, missing_element));
+  CHECK(messages(missing_element) ==
+        std::vector<std::string>{"material.inputs.x: element 2 (centroid 3, 3, 3) lies in no region; add a region "
+                                 "that contains it or a 'default'"});
 }
 
 TEST_CASE("binding errors name the input and the field", "[scene]") {
@@ -107,7 +119,7 @@ TEST_CASE("binding errors name the input and the field", "[scene]") {
   Scene scene;
   scene.material.bindings = {constant("HCV", 9.7), constant("HBB", 9.5), constant("ALD", 12), constant("CLD", 11)};
   DiagnosticList diagnostics;
-  CHECK_FALSE(bind_rules(liver, 0, scene, {}, diagnostics));
+  CHECK_FALSE(bind_rules(liver, 0, scene, {}, MaterialPoint::SpringMidpoint, diagnostics));
   REQUIRE(diagnostics.items().size() == 3);
   CHECK(diagnostics.items()[0].message == "material.inputs.HBB: 'HBB' is not an input of system 'liver_fibrosis'");
   CHECK(diagnostics.items()[0].notes ==
@@ -123,7 +135,7 @@ TEST_CASE("binding errors name the input and the field", "[scene]") {
   scene.material.bindings = {constant("HCV", 80), constant("HBV", 9.5), constant("ALD", 12), constant("CLD", 11),
                              constant("NAFLD", 11)};
   DiagnosticList range;
-  CHECK(bind_rules(liver, 0, scene, {{0, 0, 0}}, range));
+  CHECK(bind_rules(liver, 0, scene, {{0, 0, 0}}, MaterialPoint::SpringMidpoint, range));
   CHECK(messages(range) ==
         std::vector<std::string>{"material.inputs.HCV: 80 is outside the input's range [0, 75]; evaluated as given"});
 
@@ -137,9 +149,11 @@ rule r1: if x is all then k is c
 )");
   scene.material.bindings = {constant("x", 0.5)};
   DiagnosticList unit;
-  CHECK_FALSE(bind_rules(wrong_unit, 0, scene, {{0, 0, 0}}, unit));
-  CHECK(messages(unit) == std::vector<std::string>{"material.rules: output 'k' is in 'mm'; Young's modulus must be in "
-                                                   "kPa, Pa or MPa (give the output that unit in the rules)"});
+  CHECK_FALSE(bind_rules(wrong_unit, 0, scene, {{0, 0, 0}}, MaterialPoint::SpringMidpoint, unit));
+  CHECK(messages(unit) == std::vector<std::string>{"material.rules: output 'k' of system 's' is in 'mm'; Young's "
+                                                   "modulus must be in kPa, Pa or MPa"});
+  CHECK(unit.items()[0].notes ==
+        std::vector<std::string>{"give the output one of those units in the rule file (and recompile a table)"});
 }
 
 TEST_CASE("a strain binding builds modulus(strain) from the interpreter over the strain axis", "[scene]") {
@@ -151,7 +165,7 @@ TEST_CASE("a strain binding builds modulus(strain) from the interpreter over the
   scene.material.bindings = {strain};
   scene.material.strain_axis = StrainAxis{-0.3, 0.3, 61};
   DiagnosticList diagnostics;
-  const auto binding = bind_rules(stiffening, 0, scene, {}, diagnostics);
+  const auto binding = bind_rules(stiffening, 0, scene, {}, MaterialPoint::SpringMidpoint, diagnostics);
   REQUIRE(binding);
   REQUIRE(binding->strain.size() == 61);
   CHECK(binding->strain.front() == -0.3);
@@ -171,7 +185,7 @@ TEST_CASE("a strain binding builds modulus(strain) from the interpreter over the
   strain.input = "HCV";
   scene.material.bindings = {strain, regions, constant("ALD", 12), constant("CLD", 11), constant("NAFLD", 11)};
   DiagnosticList refused;
-  CHECK_FALSE(bind_rules(liver, 0, scene, {{0, 0, 0}}, refused));
+  CHECK_FALSE(bind_rules(liver, 0, scene, {{0, 0, 0}}, MaterialPoint::SpringMidpoint, refused));
   CHECK(messages(refused) == std::vector<std::string>{"material.inputs: a 'strain' binding cannot be combined with "
                                                       "per-region bindings; bind the other inputs to constants"});
 }
@@ -213,4 +227,131 @@ TEST_CASE("the CPU backend looks k(strain) up every step", "[scene]") {
   CHECK(messages(refused) ==
         std::vector<std::string>{"the strain stiffness table needs at least 2 strictly increasing finite strains, one "
                                  "finite non-negative modulus per strain and one non-negative factor per spring"});
+}
+
+namespace {
+
+// Issue 11, item 3: stiffness in Pa. A .fzt compiled from such a file was read as kPa (the issue's: E = 8.19 kPa
+// from the rules, 8,206 kPa from the table, and a probe force 1000 times too large).
+const char* kPascalRules = R"(system tissue_pa "Young's modulus in Pa"
+  type sugeno
+input HCV "stiffness" in [0, 75] kPa
+  any is gauss(mean 40, sd 1000)
+input HBV "stiffness" in [0, 75] kPa
+  any is gauss(mean 40, sd 1000)
+output E "Young's modulus" in [0, 75000] Pa
+  model is linear(HCV 500, HBV 430)
+rule r1: if HCV is any and HBV is any then E is model
+)";
+
+// The table of `rules` over both inputs at max_error (output units), as `fmpc compile --target table` builds it.
+LookupTable compiled_table(const std::string& rules, double max_error) {
+  const FuzzySystem source = load_system(rules);
+  DiagnosticList diagnostics;
+  PipelineOptions pipeline;
+  const auto compiled = run_pipeline(source, {}, pipeline, diagnostics);
+  REQUIRE(compiled);
+  TableBuildOptions options;
+  options.max_error = max_error;
+  options.source_path = "rules.fis";
+  const auto table = build_table(source, *compiled, options, diagnostics);
+  INFO((diagnostics.empty() ? std::string() : diagnostics.items().front().message));
+  REQUIRE(table);
+  return *table;
+}
+
+std::optional<BuiltScene> build_material_scene(const std::filesystem::path& folder, const std::string& material,
+                                               DiagnosticList& diagnostics) {
+  const std::string path = (folder / "scene.yaml").string();
+  const std::string text = "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [2, 2, 2]}}\nmaterial:\n  " + material +
+                           "\n  inputs: {HCV: 9.7, HBV: 7.8}\nfixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\n"
+                           "backend: cpu\n";
+  testing::write_text_file(path, text);
+  const auto scene = parse_scene(path, text, diagnostics);
+  REQUIRE(scene);
+  return build_scene(*scene, diagnostics);
+}
+
+}  // namespace
+
+TEST_CASE("a rule file in Pa gives the same E as material.rules and as a compiled .fzt", "[scene][units]") {
+  testing::ScratchFolder folder("pascal_table");
+  testing::write_text_file(folder.path() / "tissue_pa.fis", kPascalRules);
+  const LookupTable table = compiled_table(kPascalRules, 10.0);  // 10 Pa
+  REQUIRE(table.output_units == std::vector<std::string>{"Pa"});
+  REQUIRE(table.axes[0].input_unit == "kPa");
+  testing::write_text_file(folder.path() / "tissue_pa.fzt", serialize_fzt(table));
+
+  DiagnosticList from_rules, from_table;
+  const auto rules = build_material_scene(folder.path(), "rules: tissue_pa.fis", from_rules);
+  const auto tabled = build_material_scene(folder.path(), "table: tissue_pa.fzt", from_table);
+  REQUIRE(rules);
+  REQUIRE(tabled);
+  CHECK(from_rules.empty());
+  CHECK(from_table.empty());
+  const double expected = evaluate(load_system(kPascalRules), {9.7, 7.8}).outputs[0];  // Pa
+  CHECK(expected == Approx(8190).margin(300));  // about the issue's 8.19 kPa
+  REQUIRE_FALSE(rules->material->modulus_per_spring.empty());
+  for (std::size_t s = 0; s < rules->material->modulus_per_spring.size(); ++s) {
+    CHECK(rules->material->modulus_per_spring[s] == Approx(expected).epsilon(1e-12));
+    CHECK(std::fabs(tabled->material->modulus_per_spring[s] - expected) <= table.max_error);
+  }
+}
+
+TEST_CASE("table and rule outputs without a unit are read as kPa with one warning; other units are refused",
+          "[scene][units]") {
+  testing::ScratchFolder folder("unit_less_table");
+  // MATLAB's format: no units anywhere.
+  const std::string matlab = R"([System]
+Name='tissue'
+Type='sugeno'
+NumInputs=2
+NumOutputs=1
+NumRules=1
+[Input1]
+Name='HCV'
+Range=[0 75]
+NumMFs=1
+MF1='any':'gaussmf',[100 10]
+[Input2]
+Name='HBV'
+Range=[0 75]
+NumMFs=1
+MF1='any':'gaussmf',[100 10]
+[Output1]
+Name='E'
+Range=[0 75]
+NumMFs=1
+MF1='model':'linear',[0.5 0.5 0]
+[Rules]
+1 1, 1 (1) : 1
+)";
+  testing::write_text_file(folder.path() / "tissue.fis", matlab);
+  LookupTable table = compiled_table(matlab, 0.01);
+  REQUIRE(table.output_units == std::vector<std::string>{""});
+  testing::write_text_file(folder.path() / "tissue.fzt", serialize_fzt(table));
+  for (const std::string& material : {std::string("rules: tissue.fis"), std::string("table: tissue.fzt")}) {
+    DiagnosticList diagnostics;
+    const auto built = build_material_scene(folder.path(), material, diagnostics);
+    INFO(material);
+    REQUIRE(built);
+    REQUIRE(diagnostics.items().size() == 1);
+    const Diagnostic& warning = diagnostics.items()[0];
+    CHECK(warning.severity == Severity::Warning);
+    const std::string field = material.substr(0, material.find(':'));
+    CHECK(warning.message == "material." + field + ": output 'E' of " +
+                                 (field == "rules" ? "system" : "table") +
+                                 " 'tissue' has no unit (MATLAB .fis files carry none); it is read as Young's "
+                                 "modulus in kPa");
+    CHECK(warning.range.line == 3);  // the scene's `material.rules` / `material.table` line
+    CHECK(built->material->modulus_per_spring[0] == Approx((9.7 + 7.8) / 2 * 1000).epsilon(1e-9));
+  }
+  table.output_units = {"mm"};
+  testing::write_text_file(folder.path() / "tissue.fzt", serialize_fzt(table));
+  DiagnosticList refused;
+  CHECK_FALSE(build_material_scene(folder.path(), "table: tissue.fzt", refused));
+  REQUIRE(refused.items().size() == 1);
+  CHECK(refused.items()[0].message ==
+        "material.table: output 'E' of table 'tissue' is in 'mm'; Young's modulus must be in kPa, Pa or MPa");
+  CHECK(refused.items()[0].range.line == 3);
 }

@@ -508,4 +508,18 @@ TEST_CASE("scenes choose the force model; the FEM refuses spring settings, namin
                                  "which linear tetrahedra cannot represent without locking), got 0.5"});
   CHECK(errors_of(base + "material: {youngs_modulus: 3}\nmodel: fem\n").front() ==
         "6:8: model: 'fem' is not a force model; use springs or corotational_fem");
+
+  // A per-region binding that misses part of the body: the FEM evaluates the material per element, and says so.
+  const std::string material = "material: {rules: " + std::string(FMPC_SOURCE_DIR) +
+                               "/rulesets/liver_fibrosis/mamdani.fis, inputs: {HCV: {regions: [{box: {min: [0, 0, 0], "
+                               "max: [0.01, 0.02, 0.02]}, value: 9}]}, HBV: 9.5, ALD: 12, CLD: 11, NAFLD: 11}}\n";
+  for (const bool fem_model : {true, false}) {
+    DiagnosticList missed;
+    CHECK_FALSE(build_scene(parse_text((fem_model ? "model: corotational_fem\n" : "") + base + material), missed));
+    REQUIRE(missed.error_count() == 1);
+    const std::string& message = missed.items().front().message;
+    INFO(message);
+    CHECK(message.rfind(fem_model ? "material.inputs.HCV: element " : "material.inputs.HCV: spring ", 0) == 0);
+    CHECK(message.find(fem_model ? " (centroid " : " (midpoint ") != std::string::npos);
+  }
 }

@@ -118,9 +118,10 @@ LookupTable six_axis_table() {
   t.system_name = "six";
   t.source_path = "six.fis";
   for (int a = 0; a < 6; ++a)
-    t.axes.push_back(TableAxis{"x" + std::to_string(a), static_cast<std::uint32_t>(a),
+    t.axes.push_back(TableAxis{"x" + std::to_string(a), "", static_cast<std::uint32_t>(a),
                                {-1.0 - a, 0.5, 2.0 + 0.25 * a, 7.0 + a}});
   t.output_names = {"f"};
+  t.output_units = {""};
   for (std::uint64_t p = 0; p < t.grid_points(); ++p) {
     double f = 0.0;
     std::uint64_t rest = p;
@@ -288,9 +289,9 @@ bool same_bits_or_both_nan(double a, double b) { return (std::isnan(a) && std::i
 // the fixed inputs at their values.
 std::vector<double> interpreter_inputs(const Case& c, const std::vector<double>& query) {
   std::vector<double> inputs(c.source.inputs.size(), 0.0);
-  for (const auto& [name, value] : c.table.fixed_inputs)
+  for (const fmpc::TableFixedInput& fixed : c.table.fixed_inputs)
     for (std::size_t i = 0; i < c.source.inputs.size(); ++i)
-      if (c.source.inputs[i].name == name) inputs[i] = value;
+      if (c.source.inputs[i].name == fixed.name) inputs[i] = fixed.value;
   for (std::size_t a = 0; a < c.table.axes.size(); ++a) {
     const std::vector<double>& b = c.table.axes[a].breakpoints;
     inputs[c.table.axes[a].input_index] = std::clamp(query[a], b.front(), b.back());
@@ -483,8 +484,11 @@ TEST_CASE("table arrays headers compile with nvcc for sm_90: every packed depth,
       t.source_path = "grid.fis";
       t.value_type = type;
       for (int a = 0; a < axes; ++a)
-        t.axes.push_back(TableAxis{"x" + std::to_string(a), static_cast<std::uint32_t>(a), {0.0, 1.0, 3.0}});
-      for (int o = 0; o < outputs; ++o) t.output_names.push_back("y" + std::to_string(o));
+        t.axes.push_back(TableAxis{"x" + std::to_string(a), "", static_cast<std::uint32_t>(a), {0.0, 1.0, 3.0}});
+      for (int o = 0; o < outputs; ++o) {
+        t.output_names.push_back("y" + std::to_string(o));
+        t.output_units.push_back("");
+      }
       t.values.assign(t.grid_points() * static_cast<std::uint64_t>(outputs), 0.5);
       t.max_error_location.assign(static_cast<std::size_t>(axes), 0.0);
       TableArraysOptions options;

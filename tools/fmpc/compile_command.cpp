@@ -95,13 +95,21 @@ void write_table_report(const LookupTable& table, const TableBuildOptions& optio
   for (const TableAxis& axis : table.axes)
     out << "  " << axis.input_name << ": " << axis.breakpoints.size() << " breakpoints in ["
         << format_number(axis.breakpoints.front()) << ", " << format_number(axis.breakpoints.back()) << "]\n";
-  out << "max error " << with_unit(table.max_error, unit) << " (target " << with_unit(options.max_error, unit)
-      << ") at ";
+  std::string location;
   for (std::size_t a = 0; a < table.axes.size(); ++a)
-    out << (a ? ", " : "") << table.axes[a].input_name << " = " << format_number(table.max_error_location[a]);
-  out << ", over " << stats.held_out_points << " held-out points (seed " << options.seed << ", "
-      << stats.held_out_sets << (stats.held_out_sets == 1 ? " set" : " sets") << ", " << stats.rounds
-      << " rounds)\n";
+    location += (a ? ", " : "") + table.axes[a].input_name + " = " + format_number(table.max_error_location[a]);
+  if (table.error_kind == TableErrorKind::Bound) {
+    out << "max error " << with_unit(table.max_error, unit) << " (target " << with_unit(options.max_error, unit)
+        << "): a bound, |table - interpreter| everywhere on the axes, derived cell by cell from the rules ("
+        << stats.cells << " cells, " << stats.cells_bounded << " cell bounds with subdivisions, " << stats.rounds
+        << " rounds); largest in the cell around " << location << "\n";
+  } else {
+    out << "max error " << with_unit(table.max_error, unit) << " (target " << with_unit(options.max_error, unit)
+        << "): an estimate, the largest error found over " << stats.held_out_points << " held-out points (seed "
+        << options.seed << ", " << stats.held_out_sets << (stats.held_out_sets == 1 ? " set" : " sets") << "), the "
+        << stats.cells << " cell centres and " << stats.local_searches << " local searches (" << stats.rounds
+        << " rounds), at " << location << "; not a bound: " << stats.bound_limitation << "\n";
+  }
 }
 
 bool is_header_path(const std::string& path) {

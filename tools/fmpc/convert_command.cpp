@@ -1,7 +1,9 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "compiler/eval/output_comparison.h"
 #include "compiler/frontend/fmpc_language.h"
+#include "compiler/frontend/rule_file_loader.h"
 #include "compiler/frontend/matlab_fis.h"
 #include "compiler/passes/mamdani_to_sugeno.h"
 #include "compiler/passes/rename_duplicate_terms.h"
@@ -18,7 +20,31 @@ struct ConvertOptions {
   std::string to;
   std::string output = "-";
   std::string system;
+  bool allow_lossy = false;
 };
+
+// The written text read back, system by system, as `fmpc` would read the file (MATLAB's format or the fmpc
+// language), against the systems it was written from: what would change in the outputs (empty: nothing).
+std::vector<std::string> changes_on_reading_back(const std::string& text, bool matlab,
+                                                 const std::vector<FuzzySystem>& intended) {
+  DiagnosticList diagnostics;
+  const RuleFile back = matlab ? read_matlab_fis("converted.fis", text, diagnostics)
+                               : load_rule_file("converted.fis", text, diagnostics);
+  if (diagnostics.has_errors()) {
+    std::vector<std::string> changes{"the written file does not read back"};
+    for (const Diagnostic& d : diagnostics.items())
+      if (d.severity == Severity::Error) changes.push_back("line " + std::to_string(d.range.line) + ": " + d.message);
+    return changes;
+  }
+  if (back.systems.size() != intended.size())
+    return {"the written file holds " + std::to_string(back.systems.size()) + " systems, not " +
+            std::to_string(intended.size())};
+  std::vector<std::string> changes;
+  for (std::size_t k = 0; k < intended.size(); ++k)
+    for (const std::string& change : output_changes(intended[k], back.systems[k]))
+      changes.push_back((intended.size() > 1 ? "system '" + intended[k].name + "': " : std::string()) + change);
+  return changes;
+}
 
 int run_convert(const ConvertOptions& options) {
   LoadedRuleFile file = load_rule_file_from_disk(options.file);
@@ -28,6 +54,9 @@ int run_convert(const ConvertOptions& options) {
   }
   DiagnosticList diagnostics;
   std::string text;
+  std::vector<FuzzySystem> intended;  // what the written text must compute
+  bool matlab_text = options.to == "matlab";
+  std::vector<std::string> approximation;  // --to sugeno: how the Sugeno system differs from the Mamdani one
   if (options.to == "fmpc") {
     RuleFile selected = file.rules;
     if (!options.system.empty()) {
@@ -44,12 +73,17 @@ int run_convert(const ConvertOptions& options) {
                             renames);
     }
     text = write_fmpc(selected);
+    intended = selected.systems;
   } else if (options.to == "sugeno") {
     // The converted system is written in the dialect the file was read in (fmpc text or MATLAB .fis).
     if (const FuzzySystem* system = select_system(file, options.system, diagnostics)) {
       FuzzySystem sugeno = *system;
       convert_mamdani_to_sugeno(sugeno, diagnostics);
       if (!diagnostics.has_errors()) {
+        intended.push_back(sugeno);
+        matlab_text = file.dialect == Dialect::Matlab;
+        // The approximation is what --to sugeno asks for; it is measured and said, not refused.
+        approximation = output_changes(*system, sugeno, {{}, 1000, false});
         if (file.dialect == Dialect::Matlab) {
           text = write_matlab_fis(sugeno, diagnostics);
         } else {
@@ -64,6 +98,40 @@ int run_convert(const ConvertOptions& options) {
     }
   } else if (const FuzzySystem* system = select_system(file, options.system, diagnostics)) {
     text = write_matlab_fis(*system, diagnostics);
+    intended.push_back(*system);
+  }
+  const SourceRange whole_file{options.file, 0, 0, 0, 0};
+  if (!approximation.empty()) {
+    std::vector<std::string> notes = approximation;
+    notes.insert(notes.begin(), "each output term became the constant at its centroid (MATLAB's convertToSugeno), "
+                                "so the outputs are an approximation of the Mamdani system's:");
+    diagnostics.warning(whole_file, "sugeno-approximation", "the Sugeno system computes different outputs", notes);
+  }
+  // A conversion that would change what the system computes is refused unless asked for (issue 11): the text is
+  // read back as fmpc would read the file and evaluated against the system it was written from.
+  if (!diagnostics.has_errors()) {
+    std::vector<std::string> changes = changes_on_reading_back(text, matlab_text, intended);
+    // What the writer itself reports as changing the outputs (an output unit scenes would read otherwise).
+    std::size_t lossy_warnings = 0;
+    for (const Diagnostic& d : diagnostics.items()) lossy_warnings += d.code == kMatlabLossy ? 1 : 0;
+    if (changes.empty() && lossy_warnings > 0)
+      changes.push_back(std::to_string(lossy_warnings) + " of the warnings above (-Wmatlab-lossy) change what the "
+                                                         "file means");
+    if (!changes.empty()) {
+      const std::string target = matlab_text ? "MATLAB's .fis format" : "the fmpc language";
+      if (options.allow_lossy) {
+        diagnostics.warning(whole_file, "lossy-conversion",
+                            "written in " + target + " with --allow-lossy: the file computes different outputs",
+                            changes);
+      } else {
+        std::vector<std::string> notes = changes;
+        notes.push_back("the warnings above say what " + target +
+                        " cannot hold; --allow-lossy writes the file anyway");
+        diagnostics.error(whole_file,
+                          "converting to " + target + " would change what the system computes; nothing written",
+                          notes);
+      }
+    }
   }
   print_diagnostics(diagnostics, file.sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;
@@ -83,12 +151,15 @@ void register_convert_command(CLI::App& app, int& exit_code) {
       "convert",
       "Convert a rule file between the fmpc language and MATLAB's .fis format (versions 1 and 2 read,\n"
       "2.0 written), or a Mamdani system into a Sugeno one (--to sugeno, as MATLAB's convertToSugeno; written\n"
-      "in the file's own dialect). What the target cannot hold is reported as a warning.\n"
+      "in the file's own dialect). What the target cannot hold is reported as a warning; a conversion that\n"
+      "would change what the system computes is refused (nothing written) unless --allow-lossy is given.\n"
       "Exit status: 0 done, 2 errors.");
   command->add_option("file", options->file, "Rule file to convert (fmpc or MATLAB .fis)")->required();
   command->add_option("--to", options->to, "Target format")->required()->check(CLI::IsMember({"fmpc", "matlab", "sugeno"}));
   command->add_option("-o,--output", options->output, "Output file, written atomically (default stdout)");
   command->add_option("--system", options->system, "Which system of the file to convert (MATLAB holds one)");
+  command->add_flag("--allow-lossy", options->allow_lossy,
+                    "Write the file even where the target format changes the outputs (it says by how much)");
   command->callback([options, &exit_code] { exit_code = run_convert(*options); });
 }
 

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "compiler/backend/table/lookup_table.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "diagnostics/number_format.h"
@@ -142,12 +143,175 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
   }
 }
 
+// The points' CSV (`--csv FILE`, or standard input without it), parsed; nullopt with an error when it cannot be
+// read or parsed. Its text joins `sources` so that diagnostics can quote it.
+std::optional<CsvTable> read_points_csv(const std::string& csv_option, SourceFiles& sources,
+                                        DiagnosticList& diagnostics) {
+  const std::string csv_path = csv_option.empty() ? "-" : csv_option;
+  std::string error;
+  const std::optional<std::string> text = read_text_file(csv_path, sim::kMaxCsvFileBytes, "CSV file", error);
+  const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
+  if (!text) {
+    diagnostics.error(SourceRange{shown_path, 0, 0, 0, 0}, error);
+    return std::nullopt;
+  }
+  sources.add(shown_path, *text);
+  const std::size_t errors = diagnostics.error_count();
+  CsvTable csv = parse_csv(shown_path, *text, diagnostics);
+  if (diagnostics.error_count() != errors) return std::nullopt;
+  return csv;
+}
+
+// ---- lookup tables (.fzt) ----
+
+// The table as a system for the points' parsing: its axes are the inputs (range: the axis), its outputs the outputs.
+FuzzySystem table_interface(const LookupTable& table) {
+  FuzzySystem system;
+  system.name = table.system_name;
+  for (const TableAxis& axis : table.axes) {
+    Variable input;
+    input.name = axis.input_name;
+    input.unit = axis.input_unit;
+    input.min = axis.breakpoints.front();
+    input.max = axis.breakpoints.back();
+    system.inputs.push_back(std::move(input));
+  }
+  for (std::size_t o = 0; o < table.output_names.size(); ++o) {
+    Variable output;
+    output.name = table.output_names[o];
+    output.unit = o < table.output_units.size() ? table.output_units[o] : std::string();
+    system.outputs.push_back(std::move(output));
+  }
+  return system;
+}
+
+// Values given for inputs the table fixed at compile time (--fix): accepted where they equal the fixed value, so
+// that the points a rule file takes are taken too; an error otherwise. `named` is the input's name as given.
+bool check_fixed_value(const LookupTable& table, const std::string& named, const std::string& text,
+                       const SourceRange& where, DiagnosticList& diagnostics) {
+  for (const TableFixedInput& fixed : table.fixed_inputs) {
+    if (fixed.name != named) continue;
+    const std::optional<double> value = parse_number(text);
+    if (!value || *value != fixed.value)
+      diagnostics.error(where, "input '" + named + "' is fixed at " + format_number(fixed.value) +
+                                   (fixed.unit.empty() ? "" : " " + fixed.unit) + " in table '" + table.system_name +
+                                   "' (compiled with --fix); it cannot be " + text,
+                        {"evaluate the rule file instead, or compile a table that varies '" + named + "'"});
+    return true;
+  }
+  return false;
+}
+
+int run_eval_table(const EvalOptions& options, const std::string& bytes) {
+  DiagnosticList diagnostics;
+  SourceFiles sources;
+  const std::optional<LookupTable> table = parse_fzt(options.file, bytes, diagnostics);
+  if (table) {
+    if (options.explain)
+      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+                        "--explain needs a rule file; '" + options.file + "' is a lookup table (.fzt)",
+                        {"fmpc eval the rule file the table was compiled from (" + table->source_path + ")"});
+    if (!options.system.empty() && options.system != table->system_name)
+      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+                        "the table holds system '" + table->system_name + "', not '" + options.system + "'");
+  }
+  if (!table || diagnostics.has_errors()) {
+    print_diagnostics(diagnostics, sources, std::cerr);
+    return kExitErrors;
+  }
+  const FuzzySystem interface = table_interface(*table);
+  std::vector<EvaluationPoint> points;
+  if (!options.assignments.empty() && !options.csv.empty()) {
+    diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "give NAME=VALUE inputs or --csv, not both");
+  } else if (!options.assignments.empty()) {
+    std::vector<std::string> varying;
+    for (const std::string& assignment : options.assignments) {
+      const std::size_t eq = assignment.find('=');
+      if (eq != std::string::npos &&
+          check_fixed_value(*table, assignment.substr(0, eq), assignment.substr(eq + 1),
+                            SourceRange{"argument '" + assignment + "'", 0, 0, 0, 0}, diagnostics))
+        continue;
+      varying.push_back(assignment);
+    }
+    if (auto point = point_from_assignments(varying, interface, diagnostics)) points.push_back(std::move(*point));
+  } else if (std::optional<CsvTable> read = read_points_csv(options.csv, sources, diagnostics)) {
+    CsvTable& csv = *read;
+    // Columns of fixed inputs: checked against the fixed value, then left out.
+    for (std::size_t c = csv.header.size(); c-- > 0;) {
+      bool fixed = false;
+      for (const TableFixedInput& input : table->fixed_inputs) fixed = fixed || input.name == csv.header[c].text;
+      if (!fixed) continue;
+      for (auto& row : csv.rows) {
+        if (c < row.size()) {
+          check_fixed_value(*table, csv.header[c].text, row[c].text, row[c].range, diagnostics);
+          row.erase(row.begin() + static_cast<std::ptrdiff_t>(c));
+        }
+      }
+      csv.header.erase(csv.header.begin() + static_cast<std::ptrdiff_t>(c));
+    }
+    if (!diagnostics.has_errors()) points = points_from_csv(csv, interface, diagnostics);
+  }
+  std::ostringstream csv;
+  if (!diagnostics.has_errors()) {
+    std::vector<std::string> header = variable_names(interface.inputs);
+    for (const Variable& v : interface.outputs) header.push_back(v.name);
+    csv << format_csv_row(header);
+    std::vector<const double*> breakpoints;
+    std::vector<int> counts;
+    const TableView<double> view = view_of(*table, breakpoints, counts);
+    std::vector<double> out(interface.outputs.size());
+    DiagnosticList point_diagnostics;
+    for (const EvaluationPoint& point : points) {
+      interpolate_table(view, point.inputs.data(), out.data());
+      // The table clamps inputs to its axes (it never extrapolates), unlike the interpreter: say so.
+      for (std::size_t i = 0; i < interface.inputs.size(); ++i) {
+        const Variable& v = interface.inputs[i];
+        if (point.inputs[i] >= v.min && point.inputs[i] <= v.max) continue;
+        point_diagnostics.warning(point.origins[i], "input-out-of-range",
+                                  "input '" + v.name + "' = " + format_number(point.inputs[i]) +
+                                      " is outside the table's axis [" + format_number(v.min) + ", " +
+                                      format_number(v.max) + "]; the table holds the value at " +
+                                      format_number(point.inputs[i] < v.min ? v.min : v.max));
+      }
+      std::vector<std::string> row;
+      for (double v : point.inputs) row.push_back(format_number(v));
+      for (double v : out) row.push_back(format_number(v));
+      csv << format_csv_row(row);
+    }
+    std::size_t warnings = 0, dropped = 0;
+    for (const Diagnostic& d : point_diagnostics.items()) {
+      if (++warnings > options.max_warnings) {
+        ++dropped;
+        continue;
+      }
+      diagnostics.add(d);
+    }
+    if (dropped > 0)
+      diagnostics.add(Diagnostic{Severity::Note, SourceRange{options.file, 0, 0, 0, 0},
+                                 std::to_string(dropped) + " more warnings not shown (--max-warnings)", {}, {}, {}});
+  }
+  print_diagnostics(diagnostics, sources, std::cerr);
+  if (diagnostics.has_errors()) return kExitErrors;
+  std::string error;
+  if (!write_text_file_atomically(options.output, csv.str(), error)) {
+    std::cerr << options.output << ": error: " << error << '\n';
+    return kExitErrors;
+  }
+  return kExitOk;
+}
+
 Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<double>& inputs, bool with_sets) {
   if (with_sets) return interpreter.explain(inputs);
   return Explanation{interpreter.evaluate(inputs), {}};
 }
 
 int run_eval(const EvalOptions& options) {
+  {
+    std::string error;
+    // A file that is not a table, or cannot be read as one, is read as a rule file next (with its own limit).
+    const std::optional<std::string> bytes = read_text_file(options.file, sim::kMaxTableFileBytes, "lookup table", error);
+    if (bytes && has_fzt_signature(*bytes)) return run_eval_table(options, *bytes);
+  }
   LoadedRuleFile file = load_rule_file_from_disk(options.file);
   if (file.diagnostics.has_errors()) {
     print_diagnostics(file.diagnostics, file.sources, std::cerr);
@@ -165,17 +329,8 @@ int run_eval(const EvalOptions& options) {
       if (auto point = point_from_assignments(options.assignments, *system, diagnostics))
         points.push_back(std::move(*point));
     } else {
-      const std::string csv_path = options.csv.empty() ? "-" : options.csv;
-      std::string error;
-      const std::optional<std::string> text = read_text_file(csv_path, sim::kMaxCsvFileBytes, "CSV file", error);
-      const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
-      if (!text) {
-        diagnostics.error(SourceRange{shown_path, 0, 0, 0, 0}, error);
-      } else {
-        sources.add(shown_path, *text);
-        const CsvTable table = parse_csv(shown_path, *text, diagnostics);
-        if (!diagnostics.has_errors()) points = points_from_csv(table, *system, diagnostics);
-      }
+      if (const std::optional<CsvTable> csv = read_points_csv(options.csv, sources, diagnostics))
+        points = points_from_csv(*csv, *system, diagnostics);
     }
   }
   // --explain prints every sample of each output's aggregated set for every point, and builds the sets in memory
@@ -265,10 +420,11 @@ void register_eval_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<EvalOptions>();
   CLI::App* command = app.add_subcommand(
       "eval",
-      "Evaluate a rule file at points given as NAME=VALUE, or as CSV with a header row (--csv FILE, or on\n"
-      "stdin). Writes CSV (inputs then outputs; interval type-2 outputs add OUTPUT.lower and OUTPUT.upper,\n"
-      "the type-reduced interval). Exit status: 0 done, 2 errors.");
-  command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis)")->required();
+      "Evaluate a rule file, or a compiled lookup table (.fzt), at points given as NAME=VALUE, or as CSV with a\n"
+      "header row (--csv FILE, or on stdin). Writes CSV (inputs then outputs; interval type-2 outputs add\n"
+      "OUTPUT.lower and OUTPUT.upper, the type-reduced interval). A table takes its axes as inputs (values for\n"
+      "inputs it fixed must equal them) and clamps values beyond its axes. Exit status: 0 done, 2 errors.");
+  command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis) or lookup table (.fzt)")->required();
   command->add_option("inputs", options->assignments, "Input values, NAME=VALUE (all inputs)");
   command->add_option("--csv", options->csv, "CSV file of points with a header row naming the inputs; - for stdin");
   command->add_option("-o,--output", options->output, "Where to write the CSV results (default stdout)");

@@ -2,6 +2,7 @@
 
 #include <ostream>
 
+#include "compiler/backend/table/lookup_table.h"
 #include "tools/fmpc/text_files.h"
 
 namespace fmpc::cli {
@@ -13,6 +14,12 @@ LoadedRuleFile load_rule_file_from_disk(const std::string& path) {
   const std::optional<std::string> text = read_text_file(path, sim::kMaxRuleFileBytes, "rule file", error);
   if (!text) {
     file.diagnostics.error(SourceRange{path, 0, 0, 0, 0}, error);
+    return file;
+  }
+  if (has_fzt_signature(*text)) {
+    file.diagnostics.error(SourceRange{path, 0, 0, 0, 0},
+                           "'" + path + "' is a compiled lookup table (.fzt), not a rule file",
+                           {"fmpc eval evaluates tables: fmpc eval " + path + " NAME=VALUE..."});
     return file;
   }
   file.readable = true;

@@ -1198,9 +1198,9 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
   out.line();
   out.line("inline constexpr std::size_t kInputCount = " + std::to_string(system.inputs.size()) + ";");
   out.line("inline constexpr std::size_t kOutputCount = " + std::to_string(system.outputs.size()) + ";");
-  const auto names = [](const std::vector<Variable>& variables) {
+  const auto names = [](const std::vector<Variable>& variables, bool units) {
     std::string list;
-    for (const Variable& v : variables) list += (list.empty() ? "" : ", ") + quoted(v.name);
+    for (const Variable& v : variables) list += (list.empty() ? "" : ", ") + quoted(units ? v.unit : v.name);
     return list.empty() ? std::string("\"\"") : list;
   };
   const auto limits = [](const std::vector<Variable>& variables, bool upper) {
@@ -1209,8 +1209,11 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
     return list.empty() ? std::string("0") : list;
   };
   // Arrays keep one element when there are no inputs, so that the declarations stay valid C++.
-  out.line("inline constexpr const char* kInputNames[] = {" + names(system.inputs) + "};");
-  out.line("inline constexpr const char* kOutputNames[] = {" + names(system.outputs) + "};");
+  out.line("inline constexpr const char* kInputNames[] = {" + names(system.inputs, false) + "};");
+  out.line("inline constexpr const char* kOutputNames[] = {" + names(system.outputs, false) + "};");
+  out.line("// The rule file's units (\"\" where it gives none, as in MATLAB files).");
+  out.line("inline constexpr const char* kInputUnits[] = {" + names(system.inputs, true) + "};");
+  out.line("inline constexpr const char* kOutputUnits[] = {" + names(system.outputs, true) + "};");
   out.line("inline constexpr double kInputMin[] = {" + limits(system.inputs, false) + "};");
   out.line("inline constexpr double kInputMax[] = {" + limits(system.inputs, true) + "};");
   out.line("inline constexpr double kOutputMin[] = {" + limits(system.outputs, false) + "};");
@@ -1222,6 +1225,8 @@ std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitO
   out.line("inline constexpr unsigned kFlagInputOutOfRange = 2u;");
   out.line("inline constexpr unsigned kFlagNoRuleFired = 4u;   // an output took the no-rule-fired value");
   out.line("inline constexpr unsigned kFlagNoFireError = 8u;   // ... and the policy is `error`: it is NaN");
+  if (system.interval_type2)
+    out.line("inline constexpr unsigned kFlagInternalError = 16u;  // type reduction hit its cap (an fmpc bug): NaN");
   out.line();
   out.line("// min and max of grades, which cannot be NaN here (a NaN input returns first): fmpc_math::nan_min's and");
   out.line("// nan_max's values without their NaN branches.");

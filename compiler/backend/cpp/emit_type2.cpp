@@ -350,6 +350,12 @@ class Type2Emitter {
 
   void emit_nan_output(const std::string& indent) { line(indent + "y = yl = yr = fmpc_math::fmpc_quiet_nan<T>();"); }
 
+  // KM and EKM end within N + 1 steps (kernels/type_reduction_math.h): their cap is a bug, flagged, never a number.
+  void emit_internal_error(const std::string& indent) {
+    line(indent + "flags |= kFlagInternalError;");
+    emit_nan_output(indent);
+  }
+
   void emit_output_store(std::size_t o) {
     const std::string os = std::to_string(o);
     line("    outputs[" + os + "] = y;");
@@ -460,7 +466,9 @@ class Type2Emitter {
     line("        const fmpc_math::TypeReducedInterval<T> reduced = fmpc_math::reduce_type(" +
          std::string(type_reduction_enumerator(system_.type_reduction)) + ", points, aggregate_lower, " +
          "aggregate_upper, " + n + ");");
-    line("        if (!reduced.fired) {");
+    line("        if (reduced.iteration_cap_hit) {");
+    emit_internal_error("          ");
+    line("        } else if (!reduced.fired) {");
     emit_no_fire(o, "          ");
     line("        } else {");
     line("          yl = reduced.left;");
@@ -572,7 +580,9 @@ class Type2Emitter {
       const std::string method = type_reduction_enumerator(system_.type_reduction);
       line("      const fmpc_math::TypeReducedInterval<T> left = fmpc_math::reduce_type(" + method +
            ", points, sorted_low, sorted_high, n);");
-      line("      if (!left.fired) {");
+      line("      if (left.iteration_cap_hit) {");
+      emit_internal_error("        ");
+      line("      } else if (!left.fired) {");
       emit_no_fire(o, "        ");
       line("      } else {");
       line("        yl = left.left;");
@@ -582,7 +592,12 @@ class Type2Emitter {
         line("        for (int i = 0; i < n; ++i) crisp_z = crisp_z && z_low[i] == z_high[i];");
         line("        if (!crisp_z) {");
         line("          sort_type2_points(z_high, w_low, w_high, n, points, sorted_low, sorted_high);");
-        line("          yr = fmpc_math::reduce_type(" + method + ", points, sorted_low, sorted_high, n).right;");
+        line("          const fmpc_math::TypeReducedInterval<T> right = fmpc_math::reduce_type(" + method +
+             ", points, sorted_low, sorted_high, n);");
+        line("          yr = right.right;");
+        line("          if (right.iteration_cap_hit) {");
+        emit_internal_error("            ");
+        line("          }");
         line("        }");
       }
       line("        y = (yl + yr) / T(2);");

@@ -118,6 +118,14 @@ SourceRange file_position(const std::string& path) { return SourceRange{path, 0,
 
 }  // namespace
 
+const char* to_string(TableErrorKind kind) {
+  switch (kind) {
+    case TableErrorKind::Bound: return "bound";
+    case TableErrorKind::Estimate: return "estimate";
+  }
+  return "estimate";
+}
+
 std::uint64_t LookupTable::grid_points() const {
   std::uint64_t points = axes.empty() ? 0 : 1;
   for (const TableAxis& axis : axes) points *= axis.breakpoints.size();
@@ -151,6 +159,15 @@ bool validate_table(const LookupTable& table, const std::string& origin, Diagnos
   if (table.output_names.empty() || table.output_names.size() > kMaxFztOutputs)
     diagnostics.error(where, "the table has " + std::to_string(table.output_names.size()) + " outputs; 1 to " +
                                  std::to_string(kMaxFztOutputs) + " are supported");
+  if (table.output_units.size() != table.output_names.size())
+    diagnostics.error(where, "the table has " + std::to_string(table.output_names.size()) + " outputs but " +
+                                 std::to_string(table.output_units.size()) + " output units");
+  if (table.error_kind != TableErrorKind::Bound && table.error_kind != TableErrorKind::Estimate)
+    diagnostics.error(where, "error kind " + std::to_string(static_cast<std::uint32_t>(table.error_kind)) +
+                                 " is not a bound (1) or an estimate (2)");
+  if (!(table.max_error >= 0.0) || std::isinf(table.max_error))
+    diagnostics.error(where, "the maximum error is " + format_number(table.max_error) +
+                                 "; it must be a finite number, 0 or more");
   std::uint64_t points = 1;
   for (std::size_t a = 0; a < table.axes.size(); ++a) {
     const TableAxis& axis = table.axes[a];
@@ -206,6 +223,10 @@ bool validate_table(const LookupTable& table, const std::string& origin, Diagnos
   return true;
 }
 
+bool has_fzt_signature(const std::string& bytes) {
+  return bytes.size() >= sizeof kMagic && std::memcmp(bytes.data(), kMagic, sizeof kMagic) == 0;
+}
+
 std::string serialize_fzt(const LookupTable& table) {
   ByteWriter w;
   w.raw(kMagic, sizeof kMagic);
@@ -217,19 +238,25 @@ std::string serialize_fzt(const LookupTable& table) {
   w.u32(static_cast<std::uint32_t>(table.axes.size()));
   w.u32(static_cast<std::uint32_t>(table.output_names.size()));
   w.f64(table.max_error);
+  w.u32(static_cast<std::uint32_t>(table.error_kind));
   w.str(table.system_name);
   w.str(table.source_path);
   for (const TableAxis& axis : table.axes) {
     w.str(axis.input_name);
+    w.str(axis.input_unit);
     w.u32(axis.input_index);
     w.u32(static_cast<std::uint32_t>(axis.breakpoints.size()));
     for (double b : axis.breakpoints) w.f64(b);
   }
-  for (const std::string& name : table.output_names) w.str(name);
+  for (std::size_t o = 0; o < table.output_names.size(); ++o) {
+    w.str(table.output_names[o]);
+    w.str(o < table.output_units.size() ? table.output_units[o] : std::string());
+  }
   w.u32(static_cast<std::uint32_t>(table.fixed_inputs.size()));
-  for (const auto& [name, value] : table.fixed_inputs) {
-    w.str(name);
-    w.f64(value);
+  for (const TableFixedInput& fixed : table.fixed_inputs) {
+    w.str(fixed.name);
+    w.str(fixed.unit);
+    w.f64(fixed.value);
   }
   for (double c : table.max_error_location) w.f64(c);
   for (double v : table.values) {
@@ -247,7 +274,7 @@ std::string serialize_fzt(const LookupTable& table) {
 std::optional<LookupTable> parse_fzt(const std::string& path, const std::string& bytes, DiagnosticList& diagnostics) {
   const SourceRange where = file_position(path);
   const std::string rebuild = "rebuild it with fmpc compile --target table";
-  if (bytes.size() < sizeof kMagic || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) {
+  if (!has_fzt_signature(bytes)) {
     diagnostics.error(where, "not an .fzt lookup table (the file does not start with the FMPCFZT signature)",
                       {"fmpc compile --target table writes .fzt files"});
     return std::nullopt;
@@ -270,6 +297,13 @@ std::optional<LookupTable> parse_fzt(const std::string& path, const std::string&
                                  ? "the table was written big-endian; fmpc writes and reads little-endian .fzt only"
                                  : "the byte-order mark is damaged: the file is corrupted",
                       {rebuild});
+    return std::nullopt;
+  }
+  if (version == 1) {
+    diagnostics.error(where, "the table is .fzt version 1, which records neither the units of its inputs and "
+                             "outputs nor whether its maximum error is a bound; this fmpc reads version " +
+                                 std::to_string(kFztVersion),
+                      {rebuild + " from this fmpc"});
     return std::nullopt;
   }
   if (version != kFztVersion) {
@@ -298,6 +332,7 @@ std::optional<LookupTable> parse_fzt(const std::string& path, const std::string&
   const std::uint32_t axes = r.u32("the number of axes");
   const std::uint32_t outputs = r.u32("the number of outputs");
   table.max_error = r.f64("the maximum error");
+  table.error_kind = static_cast<TableErrorKind>(r.u32("the error kind"));
   table.system_name = r.str("the system name");
   table.source_path = r.str("the source path");
   if (r.ok()) {
@@ -318,6 +353,7 @@ std::optional<LookupTable> parse_fzt(const std::string& path, const std::string&
   for (std::uint32_t a = 0; a < axes && r.ok(); ++a) {
     TableAxis axis;
     axis.input_name = r.str("an axis name");
+    axis.input_unit = r.str("an axis unit");
     axis.input_index = r.u32("an axis input index");
     const std::uint32_t count = r.u32("an axis breakpoint count");
     if (!r.ok()) break;
@@ -337,13 +373,19 @@ std::optional<LookupTable> parse_fzt(const std::string& path, const std::string&
     for (double& b : axis.breakpoints) b = r.f64("the breakpoints");
     table.axes.push_back(std::move(axis));
   }
-  for (std::uint32_t o = 0; o < outputs && r.ok(); ++o) table.output_names.push_back(r.str("an output name"));
+  for (std::uint32_t o = 0; o < outputs && r.ok(); ++o) {
+    table.output_names.push_back(r.str("an output name"));
+    table.output_units.push_back(r.str("an output unit"));
+  }
   const std::uint32_t fixed = r.ok() ? r.u32("the number of fixed inputs") : 0;
-  if (r.ok() && fixed > r.remaining() / 12) r.fail("the table claims " + std::to_string(fixed) + " fixed inputs");
+  // Each fixed input takes at least 16 bytes (two empty strings and a value).
+  if (r.ok() && fixed > r.remaining() / 16) r.fail("the table claims " + std::to_string(fixed) + " fixed inputs");
   for (std::uint32_t f = 0; f < fixed && r.ok(); ++f) {
-    std::string name = r.str("a fixed input name");
-    const double value = r.f64("a fixed input value");
-    table.fixed_inputs.emplace_back(std::move(name), value);
+    TableFixedInput input;
+    input.name = r.str("a fixed input name");
+    input.unit = r.str("a fixed input unit");
+    input.value = r.f64("a fixed input value");
+    table.fixed_inputs.push_back(std::move(input));
   }
   for (std::uint32_t a = 0; a < axes && r.ok(); ++a)
     table.max_error_location.push_back(r.f64("the location of the maximum error"));

@@ -1,21 +1,22 @@
 #pragma once
-// Builds the `--target table` lookup table of a compiled system (docs/compiler.md, "Table builder"): a grid over
-// the varying inputs whose resolution is chosen so that multilinear interpolation (kernels/table_math.h) stays
-// within an absolute error of the reference interpreter, measured on held-out points.
+// Builds the `--target table` lookup table of a compiled system (docs/compiler.md, "Builder" and "Error
+// statement"): a grid over the varying inputs whose resolution is chosen so that multilinear interpolation
+// (kernels/table_math.h) stays within an absolute error of the reference interpreter, and a statement of that
+// error which is a bound where the rule base admits one.
 //
-// Method. The grid values are the specialised system's outputs (exact passes; their error, if any, is part of
-// what is measured). The reference is the interpreter on the SOURCE system with the fixed inputs plugged in.
-// Starting from a coarse grid, each round measures the error on a seeded training set of points, takes the worst
-// points and, for each, finds the axis along which linear interpolation between its cell's ends misses the most
-// (two evaluations per axis), then refines that axis:
-//   uniform: the axis of the worst point is doubled (n -> 2n - 1, nested, so no point is evaluated twice);
-//   refined: the cell of each of the worst points is split at its midpoint on its own worst axis (several
-//            insertions per round), the initial axis holding the ends and the tops of the input's terms.
-// Once the training error is below 0.8 of the target, a separate held-out set (100,000 points by default, its own
-// seed) is measured; if it is above the target, it joins the training set and a fresh held-out set is drawn, so the
-// reported error always comes from points that took no part in choosing the grid. Axes with a fixed point count
-// (--vary NAME:points) stay uniform at that count. A grid that would exceed the budget stops the build with an
-// error saying what was reached.
+// Method. The grid values are the specialised system's outputs (exact passes; a pass's own bound is added). The
+// reference is the interpreter on the SOURCE system with the fixed inputs plugged in. Starting from a coarse grid,
+// training rounds measure the error on seeded training points and refine the axis (uniform: doubled, nested) or
+// the cells (refined: split at the midpoint) where the worst points' interpolation misses most, until the training
+// error is below 0.8 of the target. Then:
+//   bound (cell_bound.h covers the system): every cell's error is bounded from the rule base's derivatives over
+//     the cell; cells above the target are split along the axis their bound blames, until the largest bound is
+//     below the target; the table states that bound (TableErrorKind::Bound);
+//   estimate (otherwise): a held-out set (100,000 points by default, its own seed), every cell's centre and local
+//     searches from the worst points; where they find the target exceeded, those points join the training set and
+//     refinement goes on; the table states the largest error found (TableErrorKind::Estimate).
+// Axes with a fixed point count (--vary NAME:points) stay uniform at that count. A grid that would exceed the
+// budget stops the build with an error saying what was reached.
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -45,15 +46,30 @@ struct TableBuildOptions {
 
 struct TableBuildStatistics {
   int rounds = 0;
-  int held_out_sets = 0;           // how many held-out sets were drawn (1 when the first one passed)
   std::uint64_t grid_evaluations = 0;
-  std::uint64_t probe_evaluations = 0;  // reference evaluations of training and held-out points, and axis probes
+  // Bound: the cells of the final grid, and how many cell bounds were computed over all rounds. Estimate: the
+  // cells whose centres were measured.
+  std::size_t cells = 0;
+  std::uint64_t cells_bounded = 0;
+  // Why the statement is an estimate (cell_bound_limitation), empty for a bound.
+  std::string bound_limitation;
+  // Estimate only.
+  int held_out_sets = 0;           // how many held-out sets were drawn (1 when the first one passed)
+  std::uint64_t probe_evaluations = 0;  // reference evaluations of training, held-out and centre points, probes
   double training_error = 0.0;
   std::size_t held_out_points = 0;
+  std::size_t local_searches = 0;
 };
 
-// The table, with max_error and max_error_location measured on the last held-out set; nullopt with an error when
-// the target is unreachable within the budget or an output is not finite somewhere (policy `error`).
+// The smallest maximum error a table of `compiled` can state: the stored values' rounding (half an ulp of the
+// value type at the largest |output|), the interpreter's own rounding against which the table is measured (1e-12
+// of the widest output range) and the passes' error bound where it is finite. A --max-error at or below it is
+// refused before anything is evaluated (docs/compiler.md, "Error statement").
+double reachable_error_floor(const CompileResult& compiled, TableValueType value_type);
+
+// The table, with its error statement (max_error, error_kind, max_error_location); nullopt with an error when the
+// target is unreachable within the budget or an output is not finite somewhere (policy `error`). Throws what the
+// interpreter throws (an internal error), from any of its threads.
 std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileResult& compiled,
                                        const TableBuildOptions& options, DiagnosticList& diagnostics,
                                        TableBuildStatistics* statistics = nullptr);

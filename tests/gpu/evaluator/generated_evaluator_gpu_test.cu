@@ -6,9 +6,12 @@
 // the same flags, float to 1e-5 of the range (or of the value, for Sugeno outputs beyond their range). In the
 // FMPC_GPU_ONLY build (no interpreter there) the host path alone is the reference. Interval type-2 systems (the
 // liver's it2.fis, valve_it2.fis) compare float where the CPU's own float carries the computation (see
-// float_comparable). Also the lookup tables' launchers (`--target table`): both layouts of kernels/table_math.h
-// and Automatic, against the header's host loop. Every
-// output and flag must be written and nothing past the n-th point: the buffers carry a guard filled beforehand.
+// float_comparable); two of them (tests/golden/it2_*_end_of_range) are the issue-11 systems where Karnik-Mendel
+// and EKM used to cycle to their cap. Also the lookup tables' launchers (`--target table`): both layouts of
+// kernels/table_math.h and Automatic, against the header's host loop. Every output and flag must be written and
+// nothing past the n-th point: the buffers carry a guard filled beforehand. And kernels/type_reduction_math.h
+// itself on the device: KM, EKM and EIASC over 30,000 seeded adversarial interval sets (ties, zeros, subnormals,
+// equal grades, all mass at one end, lower grades of 1e-25) against an exhaustive search in long double.
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -20,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include "ekm_end_of_range.cuh"
+#include "km_end_of_range.cuh"
 #include "liver_it2.cuh"
 #include "liver_mamdani.cuh"
 #include "liver_sugeno.cuh"
@@ -30,7 +35,9 @@
 #include "sugeno_tip.cuh"
 #include "tipper.cuh"
 #include "valve_it2.cuh"
+#include "kernels/type_reduction_math.h"
 #include "tests/gpu/gpu_test_harness.h"
+#include "tests/support/type_reduction_reference.h"
 #if defined(FMPC_GPU_TEST_HAVE_INTERPRETER)
 #include "tests/gpu/evaluator/evaluator_reference.h"
 #endif
@@ -87,6 +94,8 @@ const std::vector<GeneratedEvaluator>& evaluators() {
       FMPC_GENERATED_EVALUATOR(strain_stiffening, "rulesets/scenes/strain_stiffening.fis", false),
       FMPC_GENERATED_EVALUATOR(liver_it2, "rulesets/liver_fibrosis/it2.fis", true),
       FMPC_GENERATED_EVALUATOR(valve_it2, "tests/golden/compile_type2_cpp/valve_it2.fis", true),
+      FMPC_GENERATED_EVALUATOR(km_end_of_range, "tests/golden/it2_km_end_of_range/end_of_range.fis", true),
+      FMPC_GENERATED_EVALUATOR(ekm_end_of_range, "tests/golden/it2_ekm_end_of_range/end_of_range.fis", true),
   };
   return list;
 }
@@ -388,7 +397,112 @@ void check_table(const GeneratedTable& t) {
   release();
 }
 
+// ---- Type reduction on the device ----
+
+// One thread per set: sets[s] occupies points [offsets[s], offsets[s + 1]). Writes yl, yr and (fired, cap hit).
+template <typename T>
+__global__ void reduce_sets_kernel(fmpc::TypeReduction method, const T* x, const T* lower, const T* upper,
+                                   const int* offsets, int sets, T* ends, int* status) {
+  for (int s = blockIdx.x * blockDim.x + threadIdx.x; s < sets; s += gridDim.x * blockDim.x) {
+    const int first = offsets[s], n = offsets[s + 1] - offsets[s];
+    const fmpc::TypeReducedInterval<T> r = fmpc::reduce_type(method, x + first, lower + first, upper + first, n);
+    ends[2 * s] = r.left;
+    ends[2 * s + 1] = r.right;
+    status[2 * s] = r.fired ? 1 : 0;
+    status[2 * s + 1] = r.iteration_cap_hit ? 1 : 0;
+  }
+}
+
+// The sets' ends on the device in precision T; false (with a failure recorded) when a CUDA call fails.
+template <typename T>
+bool reduce_on_device(fmpc::TypeReduction method, const std::vector<fmpc::testing::IntervalSet>& sets,
+                      std::vector<double>& ends, std::vector<int>& status) {
+  std::vector<T> x, lower, upper;
+  std::vector<int> offsets{0};
+  for (const auto& s : sets) {
+    for (std::size_t i = 0; i < s.x.size(); ++i) {
+      x.push_back(static_cast<T>(s.x[i]));
+      lower.push_back(static_cast<T>(s.lower[i]));
+      upper.push_back(static_cast<T>(s.upper[i]));
+    }
+    offsets.push_back(static_cast<int>(x.size()));
+  }
+  const int count = static_cast<int>(sets.size());
+  T *device_x = nullptr, *device_lower = nullptr, *device_upper = nullptr, *device_ends = nullptr;
+  int *device_offsets = nullptr, *device_status = nullptr;
+  CHECK_CUDA_OR_RETURN(cudaMalloc(&device_x, x.size() * sizeof(T)));
+  CHECK_CUDA_OR_RETURN(cudaMalloc(&device_lower, x.size() * sizeof(T)));
+  CHECK_CUDA_OR_RETURN(cudaMalloc(&device_upper, x.size() * sizeof(T)));
+  CHECK_CUDA_OR_RETURN(cudaMalloc(&device_offsets, offsets.size() * sizeof(int)));
+  CHECK_CUDA_OR_RETURN(cudaMalloc(&device_ends, 2 * sets.size() * sizeof(T)));
+  CHECK_CUDA_OR_RETURN(cudaMalloc(&device_status, 2 * sets.size() * sizeof(int)));
+  CHECK_CUDA_OR_RETURN(cudaMemcpy(device_x, x.data(), x.size() * sizeof(T), cudaMemcpyHostToDevice));
+  CHECK_CUDA_OR_RETURN(cudaMemcpy(device_lower, lower.data(), x.size() * sizeof(T), cudaMemcpyHostToDevice));
+  CHECK_CUDA_OR_RETURN(cudaMemcpy(device_upper, upper.data(), x.size() * sizeof(T), cudaMemcpyHostToDevice));
+  CHECK_CUDA_OR_RETURN(
+      cudaMemcpy(device_offsets, offsets.data(), offsets.size() * sizeof(int), cudaMemcpyHostToDevice));
+  reduce_sets_kernel<T><<<(count + 127) / 128, 128>>>(method, device_x, device_lower, device_upper, device_offsets,
+                                                      count, device_ends, device_status);
+  CHECK_CUDA_OR_RETURN(cudaGetLastError());
+  CHECK_CUDA_OR_RETURN(cudaDeviceSynchronize());
+  std::vector<T> got(2 * sets.size());
+  status.resize(2 * sets.size());
+  CHECK_CUDA_OR_RETURN(cudaMemcpy(got.data(), device_ends, got.size() * sizeof(T), cudaMemcpyDeviceToHost));
+  CHECK_CUDA_OR_RETURN(
+      cudaMemcpy(status.data(), device_status, status.size() * sizeof(int), cudaMemcpyDeviceToHost));
+  for (void* buffer : {static_cast<void*>(device_x), static_cast<void*>(device_lower),
+                       static_cast<void*>(device_upper), static_cast<void*>(device_offsets),
+                       static_cast<void*>(device_ends), static_cast<void*>(device_status)})
+    CHECK_CUDA_OR_RETURN(cudaFree(buffer));
+  ends.assign(got.begin(), got.end());
+  return true;
+}
+
 }  // namespace
+
+FMPC_GPU_TEST(type_reduction_on_the_device, "KM, EKM, EIASC on the device vs exhaustive search (30,000 sets)",
+              true) {
+  using fmpc::testing::AdversarialKind;
+  std::mt19937_64 random(20260517);
+  std::vector<fmpc::testing::IntervalSet> sets;
+  const int kinds = static_cast<int>(AdversarialKind::Count);
+  for (int trial = 0; trial < 30000; ++trial)
+    sets.push_back(fmpc::testing::adversarial_interval_set(random, static_cast<AdversarialKind>(trial % kinds)));
+  std::vector<fmpc::testing::ExactInterval> exact;
+  for (const auto& s : sets) exact.push_back(fmpc::testing::exact_type_reduction(s.x, s.lower, s.upper));
+  for (const fmpc::TypeReduction method : {fmpc::TypeReduction::KarnikMendel,
+                                           fmpc::TypeReduction::EnhancedKarnikMendel, fmpc::TypeReduction::Eiasc}) {
+    std::vector<double> ends, ends_float;
+    std::vector<int> status, status_float;
+    if (!reduce_on_device<double>(method, sets, ends, status)) return;
+    if (!reduce_on_device<float>(method, sets, ends_float, status_float)) return;
+    std::size_t failures = 0, caps = 0;
+    double worst = 0.0;  // largest error / tolerance
+    for (std::size_t s = 0; s < sets.size(); ++s) {
+      caps += static_cast<std::size_t>(status[2 * s + 1] + status_float[2 * s + 1]);
+      if ((status[2 * s] == 1) != exact[s].fired) {
+        ++failures;
+        continue;
+      }
+      if (!exact[s].fired) continue;
+      const double tolerance = fmpc::testing::type_reduction_tolerance(sets[s].x);
+      const double error = std::max(std::fabs(static_cast<double>(ends[2 * s] - exact[s].left)),
+                                    std::fabs(static_cast<double>(ends[2 * s + 1] - exact[s].right)));
+      if (!(error <= tolerance)) ++failures;
+      if (tolerance > 0.0) worst = std::max(worst, error / tolerance);
+    }
+    std::ostringstream summary;
+    summary.precision(3);
+    summary << "type reduction " << static_cast<int>(method) << " on the device: worst error " << worst
+            << " of the tolerance (1e-12 of the range) over " << sets.size() << " sets";
+    note(summary.str());
+    if (failures || caps)
+      record_failure(__FILE__, __LINE__,
+                     "type reduction " + std::to_string(static_cast<int>(method)) + ": " + std::to_string(failures) +
+                         " sets beyond 1e-12 of the range of the exhaustive search, " + std::to_string(caps) +
+                         " iteration caps reached (double and float)");
+  }
+}
 
 FMPC_GPU_TEST(generated_evaluators_on_the_device, "generated CUDA evaluators: batches of 1, 37, 1000003 vs CPU",
               true) {
