@@ -147,9 +147,15 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
                     const std::string& markdown, const std::string& plot, const SceneTradeArguments& arguments) {
   DiagnosticList diagnostics;
   SourceFiles sources;
+  // Errors about the command line (no file) are the command's, as the rule side words them.
   const auto report = [&] {
-    diagnostics.sort_by_position();
-    print_diagnostics(diagnostics, sources, std::cerr);
+    DiagnosticList located;
+    for (Diagnostic d : diagnostics.items()) {
+      if (d.range.file.empty()) d.range.file = "fmpc trade";
+      located.add(std::move(d));
+    }
+    located.sort_by_position();
+    print_diagnostics(located, sources, std::cerr);
   };
   const std::vector<std::string> rule_options = given(command, std::begin(kRuleOptions), std::end(kRuleOptions));
   if (!rule_options.empty()) {
