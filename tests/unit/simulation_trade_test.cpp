@@ -176,7 +176,7 @@ TEST_CASE("fmpc trade SCENE.yaml writes the table, the CSV and the Pareto plot",
   std::ofstream(folder / "tiny.yaml") << kTinyScene;
   const std::string command = std::string(FMPC_BINARY) + " trade " + (folder / "tiny.yaml").string() +
                               " --models springs_volume_term,corotational_fem --precisions double"
-                              " --integrators semi_implicit_euler,implicit_euler:4 --refinements 0 --csv " +
+                              " --integrators semi_implicit_euler,implicit_euler:4 --refinements 0 --duration 0.02 --csv " +
                               (folder / "t.csv").string() + " --plot " + (folder / "t.png").string() + " > " +
                               (folder / "out.md").string() + " 2> " + (folder / "err.txt").string();
   const int status = std::system(command.c_str());
@@ -184,6 +184,7 @@ TEST_CASE("fmpc trade SCENE.yaml writes the table, the CSV and the Pareto plot",
   REQUIRE(status == 0);
   const std::string markdown = read_text(folder / "out.md");
   CHECK(markdown.find("# fmpc trade: scene tiny_indentation") == 0);
+  CHECK(markdown.find("Every run simulates 0.02 s") != std::string::npos);
   CHECK(markdown.find("| springs+volume f64 IE x4 r0 |") != std::string::npos);
   CHECK(markdown.find("mesh: not estimated (the reference is on the scene's own mesh)") != std::string::npos);
   const std::string csv = read_text(folder / "t.csv");
