@@ -16,6 +16,7 @@
 #include "runtime/io/input_file.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_check.h"
+#include "runtime/mesh/mesh_refinement.h"
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/scene/spring_model_builder.h"
 
@@ -637,7 +638,7 @@ double strain_table_rest_modulus(const StrainStiffnessTable& table) {
   return kernels::strain_table_modulus(view, 0.0);
 }
 
-std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics) {
+std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics, unsigned refinements) {
   const std::size_t errors = diagnostics.error_count();
   BuiltScene built;
   auto mesh = load_mesh(scene, diagnostics);
@@ -654,6 +655,7 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
                         notes);
   }
   built.mesh = std::move(*mesh);
+  for (unsigned level = 0; level < refinements; ++level) built.mesh = subdivide_tetrahedra(built.mesh);
   std::optional<SimulationSetup> setup =
       scene.model == ForceModel::CorotationalFem ? build_fem(scene, built, diagnostics) : build_springs(scene, built, diagnostics);
   if (!setup) return std::nullopt;

@@ -26,8 +26,12 @@ struct BuiltScene {
 };
 
 // Builds everything; returns nullopt after appending errors (located at the scene's fields where they come from
-// the scene). Mesh repairs are reported as one warning.
-std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics);
+// the scene). Mesh repairs are reported as one warning. `refinements` > 0 subdivides the repaired mesh that many
+// times (subdivide_tetrahedra, 8 tetrahedra per tetrahedron each time) before anything is built on it: fixed sets,
+// holds, the probe's ray pick and regions are selected on the refined mesh, and the mesh's vertices keep their
+// indices (vertex indices in the scene still name them). The caller bounds the size first (each refinement
+// multiplies the tetrahedra by 8).
+std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics, unsigned refinements = 0);
 
 // The modulus a strain table gives at strain 0 (Pa): what sets the damping coefficients and the summary's E.
 double strain_table_rest_modulus(const StrainStiffnessTable& table);

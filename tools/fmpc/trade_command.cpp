@@ -30,6 +30,7 @@
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/compiled_evaluator.h"
 #include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/scene_trade_command.h"
 #include "tools/fmpc/text_files.h"
 #include "tools/plot/pareto_plot.h"
 
@@ -405,7 +406,7 @@ void register_trade_command(CLI::App& app, int& exit_code) {
       "C++ evaluator in double and float (compiled now with the system compiler and loaded), and lookup tables at\n"
       "several resolutions, each against the exact interpreter on the same held-out points. Prints markdown;\n"
       "--csv, --markdown and --plot (PNG) write files. docs/trade.md explains the columns.");
-  command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis)")->required();
+  command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis), or a scene (.yaml: docs/trade.md)")->required();
   command->add_option("--system", options->system, "Which system of the file");
   command->add_option("--fix", options->fix, "Fold an input in at a value: NAME=VALUE (repeatable)");
   command->add_option("--vary", options->vary, "Vary an input: NAME (the inputs not fixed vary)");
@@ -423,7 +424,15 @@ void register_trade_command(CLI::App& app, int& exit_code) {
   command->add_option("--csv", options->csv, "Write the rows as CSV");
   command->add_option("--markdown", options->markdown, "Write the markdown table");
   command->add_option("--plot", options->plot, "Write the Pareto plot (PNG)");
-  command->callback([options, &exit_code] { exit_code = run_trade(*options); });
+  // A scene file (.yaml) is traded as a simulation (tools/fmpc/scene_trade_command.cpp).
+  const auto scene_arguments = add_scene_trade_options(*command);
+  command->callback([options, scene_arguments, command, &exit_code] {
+    if (is_scene_path(options->file))
+      exit_code = run_scene_trade(*command, options->file, options->csv, options->markdown, options->plot,
+                                  *scene_arguments);
+    else if ((exit_code = refuse_scene_options(*command, options->file)) == kExitOk)
+      exit_code = run_trade(*options);
+  });
 }
 
 }  // namespace fmpc::cli

@@ -109,7 +109,7 @@ RgbImage render_trade_plot(const TradePlot& plot) {
   }
   draw_line(image, kLeft, kTop + kAreaHeight, kLeft + kAreaWidth, kTop + kAreaHeight, kBlack);
   draw_line(image, kLeft, kTop, kLeft, kTop + kAreaHeight, kBlack);
-  const std::string x_label = "evaluations per second (one core)";
+  const std::string& x_label = plot.speed_label;
   draw_text(image, kLeft + (kAreaWidth - text_width(x_label, 2)) / 2, kTop + kAreaHeight + 34, x_label, kBlack, 2);
   const std::string y_label = "max error" + (plot.error_unit.empty() ? "" : " (" + plot.error_unit + ")");
   draw_text(image, 20, kTop + (kAreaHeight + text_width(y_label, 2)) / 2, y_label, kBlack, 2, true);

@@ -19,6 +19,7 @@ struct TradePlot {
   std::vector<TradePoint> points;
   std::string error_unit;  // for the y label
   std::vector<std::string> title;
+  std::string speed_label = "evaluations per second (one core)";  // the x label
 };
 
 // Indices of the points on the Pareto front (faster or equally fast and strictly more accurate than every point
