@@ -174,7 +174,7 @@ TEST_CASE("-Wno-CODE silences, -Werror=CODE fails with status 1, an unknown code
 // The -W flags accept exactly the codes in diagnostics/warning_codes.cpp: every `warning(RANGE, "code", ...)` in the
 // sources must be listed there, or `-Wno-code` would be refused for a warning fmpc prints.
 TEST_CASE("every warning code in the sources is a known -W code", "[cli][docs]") {
-  static const std::regex call(R"(\.warning\(\s*[^;]*?,\s*"([a-z0-9-]+)")");
+  static const std::regex call(R"re(\.warning\(\s*[^;]*?,\s*"([a-z0-9-]+)")re");
   std::set<std::string> found;
   for (const char* tree : {"compiler", "runtime", "tools", "diagnostics"})
     for (const auto& entry : fs::recursive_directory_iterator(fs::path(FMPC_SOURCE_DIR) / tree)) {
