@@ -1,6 +1,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "compiler/frontend/fll.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/frontend/matlab_fis.h"
 #include "compiler/passes/mamdani_to_sugeno.h"
@@ -52,6 +53,10 @@ int run_convert(const ConvertOptions& options) {
       if (!diagnostics.has_errors()) {
         if (file.dialect == Dialect::Matlab) {
           text = write_matlab_fis(sugeno, diagnostics);
+        } else if (file.dialect == Dialect::Fll) {
+          text = write_fll(sugeno, diagnostics);
+        } else if (file.dialect == Dialect::Fcl) {
+          text = write_fcl(sugeno, diagnostics);
         } else {
           RuleFile converted;
           converted.path = file.rules.path;
@@ -63,7 +68,9 @@ int run_convert(const ConvertOptions& options) {
       }
     }
   } else if (const FuzzySystem* system = select_system(file, options.system, diagnostics)) {
-    text = write_matlab_fis(*system, diagnostics);
+    if (options.to == "fll") text = write_fll(*system, diagnostics);
+    else if (options.to == "fcl") text = write_fcl(*system, diagnostics);
+    else text = write_matlab_fis(*system, diagnostics);
   }
   print_diagnostics(diagnostics, file.sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;
@@ -81,12 +88,13 @@ void register_convert_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App* command = app.add_subcommand(
       "convert",
-      "Convert a rule file between the fmpc language and MATLAB's .fis format (versions 1 and 2 read,\n"
-      "2.0 written), or a Mamdani system into a Sugeno one (--to sugeno, as MATLAB's convertToSugeno; written\n"
-      "in the file's own dialect). What the target cannot hold is reported as a warning.\n"
-      "Exit status: 0 done, 2 errors.");
-  command->add_option("file", options->file, "Rule file to convert (fmpc or MATLAB .fis)")->required();
-  command->add_option("--to", options->to, "Target format")->required()->check(CLI::IsMember({"fmpc", "matlab", "sugeno"}));
+      "Convert a rule file between the fmpc language, MATLAB's .fis format (versions 1 and 2 read, 2.0 written),\n"
+      "fuzzylite's FLL and IEC 61131-7 FCL, or a Mamdani system into a Sugeno one (--to sugeno, as MATLAB's\n"
+      "convertToSugeno; written in the file's own format). What the target cannot hold is a warning or an error.");
+  command->add_option("file", options->file, "Rule file to convert (fmpc, MATLAB .fis, FLL or FCL)")->required();
+  command->add_option("--to", options->to, "Target format")
+      ->required()
+      ->check(CLI::IsMember({"fmpc", "matlab", "fll", "fcl", "sugeno"}));
   command->add_option("-o,--output", options->output, "Output file, written atomically (default stdout)");
   command->add_option("--system", options->system, "Which system of the file to convert (MATLAB holds one)");
   command->callback([options, &exit_code] { exit_code = run_convert(*options); });
