@@ -48,21 +48,6 @@ std::vector<Line> lines_of(std::string text) {
   return lines;
 }
 
-std::vector<std::string> words_of(const std::string& text) {
-  std::istringstream in(text);
-  std::vector<std::string> words;
-  for (std::string w; in >> w;) words.push_back(w);
-  return words;
-}
-
-std::optional<double> number_of(const std::string& text) {
-  if (text == "nan" || text == "NaN") return std::nan("");
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0') return std::nullopt;
-  return value;
-}
-
 const std::pair<const char*, TNorm> kFclTNorms[] = {
     {"MIN", TNorm::Minimum}, {"PROD", TNorm::Product}, {"EPROD", TNorm::EinsteinProduct}};
 // fuzzylite's FCL has no abbreviation for the unbounded sum: its exporter writes the class name, and so does fmpc's;
@@ -133,7 +118,7 @@ class FclReader {
 
   void read_line(const Line& line) {
     last_line_ = line.number;
-    const std::vector<std::string> words = words_of(line.text);
+    const std::vector<std::string> words = fuzzylite_words(line.text);
     const std::string& head = words[0];
     if (block_ == Block::None) {
       if (head != "FUNCTION_BLOCK") {
@@ -235,8 +220,8 @@ class FclReader {
         if (c == '(' || c == ')') c = ' ';
       const std::size_t dots = inside.find("..");
       const auto end_of = [&](const std::string& part) {
-        const std::vector<std::string> w = words_of(part);
-        return w.size() == 1 ? number_of(w[0]) : std::nullopt;
+        const std::vector<std::string> w = fuzzylite_words(part);
+        return w.size() == 1 ? fuzzylite_number(w[0]) : std::nullopt;
       };
       const auto lo = dots == std::string::npos ? std::nullopt : end_of(inside.substr(0, dots));
       const auto hi = dots == std::string::npos ? std::nullopt : end_of(inside.substr(dots + 2));
@@ -251,7 +236,7 @@ class FclReader {
     if (head == "TERM") {
       // TERM NAME := Family numbers
       const std::size_t assign = line.text.find(":=");
-      const std::vector<std::string> parts = words_of(value);
+      const std::vector<std::string> parts = fuzzylite_words(value);
       if (assign == std::string::npos || words.size() < 2 || parts.empty()) {
         diagnostics_.error(at(line), "expected 'TERM NAME := FAMILY NUMBERS...;'");
         return;
@@ -264,16 +249,16 @@ class FclReader {
       Term term;
       term.name = words[1];
       term.range = at(line);
-      if (parts.size() == 1 && number_of(parts[0])) {  // "TERM NAME := 5;": an IEC singleton, a Constant
+      if (parts.size() == 1 && fuzzylite_number(parts[0])) {  // "TERM NAME := 5;": an IEC singleton, a Constant
         term.name_range = at(line, line.text.find(words[1], 4), words[1].size());
-        term.mf = MembershipFunction{MfKind::Constant, {*number_of(parts[0])}};
+        term.mf = MembershipFunction{MfKind::Constant, {*fuzzylite_number(parts[0])}};
         current_->terms.push_back(term);
         return;
       }
       term.name_range = at(line, line.text.find(words[1], 4), words[1].size());
       std::vector<double> numbers;
       for (std::size_t k = 1; k < parts.size(); ++k) {
-        const auto n = number_of(parts[k]);
+        const auto n = fuzzylite_number(parts[k]);
         if (!n) {
           diagnostics_.error(at(line, offset), "'" + parts[k] + "' is not a number (term '" + term.name + "')");
           return;
@@ -303,8 +288,8 @@ class FclReader {
       return;
     }
     if (block_ == Block::Defuzzify && head == "DEFAULT") {
-      const std::string number = words_of(value).empty() ? "" : words_of(value)[0];
-      const auto v = number_of(number);
+      const std::string number = fuzzylite_words(value).empty() ? "" : fuzzylite_words(value)[0];
+      const auto v = fuzzylite_number(number);
       if (!v) {
         diagnostics_.error(at(line, offset), "expected 'DEFAULT := NUMBER;' or 'DEFAULT := nan;'");
         return;
@@ -361,14 +346,8 @@ class FclReader {
   }
 
   void finish() {
-    bool sugeno = false, mamdani = false;
-    for (const Variable& output : system_.outputs)
-      for (const Term& term : output.terms)
-        (term.mf.kind == MfKind::Constant || term.mf.kind == MfKind::Linear ? sugeno : mamdani) = true;
-    if (sugeno && mamdani)
-      diagnostics_.error(system_.range, "the function block mixes Constant/Linear output terms (Takagi-Sugeno) with "
-                                        "membership functions (Mamdani); fmpc systems are one or the other");
-    system_.type = sugeno ? SystemType::Sugeno : SystemType::Mamdani;
+    system_.type = fuzzylite_system_type(system_, system_.range, diagnostics_);
+    const bool sugeno = system_.type == SystemType::Sugeno;
     if (method_) {
       system_.defuzzifier = *method_;
       // fuzzylite reads FCL's COG with its default resolution of 100 (FclExporter writes none).
@@ -376,28 +355,11 @@ class FclReader {
     } else if (sugeno) {
       system_.defuzzifier = Defuzzifier::WeightedAverage;
     }
-    // As FLL (fll.cpp read_defaults): NaN is `error`, each output at its mid-range `midrange`, one value `value`.
-    system_.no_fire = NoFirePolicy::Error;
-    if (!defaults_.empty()) {
-      bool all_nan = true, all_midrange = defaults_.size() == system_.outputs.size(), all_equal = true;
-      for (std::size_t k = 0; k < defaults_.size(); ++k) {
-        const double v = defaults_[k].value;
-        const Variable& output = system_.outputs[defaults_[k].output];
-        all_nan = all_nan && std::isnan(v);
-        all_midrange = all_midrange && std::fabs(v - (output.min + output.max) / 2) <=
-                                           1e-12 * std::max(1.0, output.max - output.min);
-        all_equal = all_equal && (v == defaults_[0].value || (std::isnan(v) && std::isnan(defaults_[0].value)));
-      }
-      if (all_midrange && !all_nan) {
-        system_.no_fire = NoFirePolicy::Midrange;
-      } else if (all_equal && !all_nan) {
-        system_.no_fire = NoFirePolicy::Value;
-        system_.no_fire_value = defaults_[0].value;
-      } else if (!all_equal) {
-        diagnostics_.error(defaults_.back().at, "the outputs' DEFAULT values differ and are not each output's "
-                                                    "mid-range; fmpc systems have one no-fire value for all outputs");
-      }
-    }
+    // DEFAULT lines may come in any order of the outputs; an output without one defaults to NaN, as in fuzzylite.
+    std::vector<double> values(system_.outputs.size(), std::nan(""));
+    for (const Default& d : defaults_) values[d.output] = d.value;
+    if (!defaults_.empty()) set_no_fire_from_defaults(system_, values, defaults_.back().at, diagnostics_);
+    else system_.no_fire = NoFirePolicy::Error;
     for (const auto& [text, where] : rules_)
       if (auto rule = parse_fuzzylite_rule(text, where, system_, diagnostics_)) system_.rules.push_back(*rule);
   }

@@ -21,23 +21,6 @@ std::string trimmed(const std::string& text) {
   return text.substr(first, last - first + 1);
 }
 
-std::vector<std::string> split_words(const std::string& text) {
-  std::istringstream in(text);
-  std::vector<std::string> words;
-  for (std::string w; in >> w;) words.push_back(w);
-  return words;
-}
-
-std::optional<double> number_of(const std::string& text) {
-  if (text == "nan" || text == "NaN") return std::nan("");
-  if (text == "inf") return INFINITY;
-  if (text == "-inf") return -INFINITY;
-  char* end = nullptr;
-  const double value = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0') return std::nullopt;
-  return value;
-}
-
 // Per-output settings FLL gives each output and fmpc gives the system: read per output, then reconciled.
 struct OutputSettings {
   std::string aggregation, defuzzifier, default_value;
@@ -161,9 +144,9 @@ class FllReader {
     Variable& variable = *current_variable();
     const bool output = section_ == Section::Output;
     if (key == "range") {
-      const std::vector<std::string> words = split_words(value);
-      const auto lo = words.size() == 2 ? number_of(words[0]) : std::nullopt;
-      const auto hi = words.size() == 2 ? number_of(words[1]) : std::nullopt;
+      const std::vector<std::string> words = fuzzylite_words(value);
+      const auto lo = words.size() == 2 ? fuzzylite_number(words[0]) : std::nullopt;
+      const auto hi = words.size() == 2 ? fuzzylite_number(words[1]) : std::nullopt;
       if (!lo || !hi) {
         diagnostics_.error(value_at, "expected 'range: MIN MAX'");
         return;
@@ -200,7 +183,7 @@ class FllReader {
   }
 
   void read_term(Variable& variable, const std::string& value, const SourceRange& at) {
-    const std::vector<std::string> words = split_words(value);
+    const std::vector<std::string> words = fuzzylite_words(value);
     if (words.size() < 2) {
       diagnostics_.error(at, "expected 'term: NAME FAMILY NUMBERS...'");
       return;
@@ -211,7 +194,7 @@ class FllReader {
     term.name_range = SourceRange{at.file, at.line, at.column, at.line, at.column + static_cast<int>(words[0].size())};
     std::vector<double> numbers;
     for (std::size_t k = 2; k < words.size(); ++k) {
-      const auto n = number_of(words[k]);
+      const auto n = fuzzylite_number(words[k]);
       if (!n) {
         diagnostics_.error(at, "'" + words[k] + "' is not a number (term '" + term.name + "')");
         return;
@@ -268,14 +251,7 @@ class FllReader {
   // Per-output settings into the system's; rules once every variable is known.
   void finish() {
     if (system_.name.empty()) system_.name = "fll";
-    bool sugeno = false, mamdani = false;
-    for (const Variable& output : system_.outputs)
-      for (const Term& term : output.terms)
-        (term.mf.kind == MfKind::Constant || term.mf.kind == MfKind::Linear ? sugeno : mamdani) = true;
-    if (sugeno && mamdani)
-      diagnostics_.error(system_.range, "the engine mixes Constant/Linear output terms (Takagi-Sugeno) with "
-                                        "membership functions (Mamdani); fmpc systems are one or the other");
-    system_.type = sugeno ? SystemType::Sugeno : SystemType::Mamdani;
+    system_.type = fuzzylite_system_type(system_, system_.range, diagnostics_);
     for (std::size_t o = 0; o < outputs_.size(); ++o) {
       const OutputSettings& s = outputs_[o];
       if (o > 0) {
@@ -299,49 +275,25 @@ class FllReader {
       if (auto rule = parse_fuzzylite_rule(line.text, line.at, system_, diagnostics_)) system_.rules.push_back(*rule);
   }
 
-  // fuzzylite gives each output a default for when no rule fires; fmpc has one policy. NaN (fuzzylite's default)
-  // is the `error` policy (fmpc never prints a silent NaN); every output at its own mid-range is `midrange`
-  // (what write_fll writes for it); one value for all outputs is `value`.
+  // Each output's default as a number (NaN where none was given), into the system's one policy.
   void read_defaults() {
-    if (outputs_.empty()) return;
     std::vector<double> values;
     for (const OutputSettings& s : outputs_) {
-      if (s.default_value.empty()) {
-        values.push_back(std::nan(""));
-        continue;
-      }
-      const auto value = number_of(s.default_value);
+      const auto value = s.default_value.empty() ? std::optional<double>(std::nan("")) : fuzzylite_number(s.default_value);
       if (!value) {
         diagnostics_.error(s.default_at, "'" + s.default_value + "' is not a number");
         return;
       }
       values.push_back(*value);
     }
-    bool all_nan = true, all_midrange = true, all_equal = true;
-    for (std::size_t o = 0; o < values.size(); ++o) {
-      const Variable& output = system_.outputs[o];
-      all_nan = all_nan && std::isnan(values[o]);
-      // Within 1e-12 of the range: fuzzylite prints numbers with fixed decimals, so its midpoint may be rounded.
-      all_midrange = all_midrange && std::fabs(values[o] - (output.min + output.max) / 2) <=
-                                         1e-12 * std::max(1.0, output.max - output.min);
-      all_equal = all_equal && (values[o] == values[0] || (std::isnan(values[o]) && std::isnan(values[0])));
-    }
-    if (all_nan) {
-      system_.no_fire = NoFirePolicy::Error;
-    } else if (all_midrange) {
-      system_.no_fire = NoFirePolicy::Midrange;
-    } else if (all_equal) {
-      system_.no_fire = NoFirePolicy::Value;
-      system_.no_fire_value = values[0];
-    } else {
-      diagnostics_.error(outputs_.back().default_at.valid() ? outputs_.back().default_at : system_.range,
-                         "the outputs' defaults differ and are not each output's mid-range; fmpc systems have one "
-                         "no-fire value (or mid-range, or an error) for all outputs");
-    }
+    set_no_fire_from_defaults(system_, values,
+                              !outputs_.empty() && outputs_.back().default_at.valid() ? outputs_.back().default_at
+                                                                                      : system_.range,
+                              diagnostics_);
   }
 
   void read_defuzzifier(const OutputSettings& s) {
-    const std::vector<std::string> words = split_words(s.defuzzifier);
+    const std::vector<std::string> words = fuzzylite_words(s.defuzzifier);
     if (words.empty()) return;
     const std::string& name = words[0];
     struct Named {
@@ -360,7 +312,7 @@ class FllReader {
       if (name != n.name) continue;
       system_.defuzzifier = n.defuzzifier;
       if (n.integral && words.size() >= 2) {
-        const auto resolution = number_of(words[1]);
+        const auto resolution = fuzzylite_number(words[1]);
         if (!resolution || *resolution < 2 || *resolution > 1e6 || *resolution != std::floor(*resolution))
           diagnostics_.error(s.defuzzifier_at, "resolution '" + words[1] + "' is not a whole number from 2 to 10^6");
         else

@@ -1,6 +1,9 @@
 #include "compiler/frontend/fuzzylite_vocabulary.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
+#include <sstream>
 #include <utility>
 
 #include "diagnostics/number_format.h"
@@ -326,6 +329,60 @@ std::string fuzzylite_rule_text(const FuzzySystem& system, const Rule& rule, con
   }
   if (rule.weight != 1.0) text += " with " + format_number(rule.weight);
   return text;
+}
+
+std::vector<std::string> fuzzylite_words(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  return words;
+}
+
+std::optional<double> fuzzylite_number(const std::string& text) {
+  if (text == "nan" || text == "NaN") return std::nan("");
+  if (text == "inf") return HUGE_VAL;
+  if (text == "-inf") return -HUGE_VAL;
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0') return std::nullopt;
+  return value;
+}
+
+SystemType fuzzylite_system_type(const FuzzySystem& system, const SourceRange& where, DiagnosticList& diagnostics) {
+  bool sugeno = false, mamdani = false;
+  for (const Variable& output : system.outputs)
+    for (const Term& term : output.terms)
+      (term.mf.kind == MfKind::Constant || term.mf.kind == MfKind::Linear ? sugeno : mamdani) = true;
+  if (sugeno && mamdani)
+    diagnostics.error(where, "the outputs mix Constant/Linear terms (Takagi-Sugeno) with membership functions "
+                             "(Mamdani); fmpc systems are one or the other");
+  return sugeno ? SystemType::Sugeno : SystemType::Mamdani;
+}
+
+void set_no_fire_from_defaults(FuzzySystem& system, const std::vector<double>& defaults, const SourceRange& where,
+                               DiagnosticList& diagnostics) {
+  system.no_fire = NoFirePolicy::Error;
+  if (defaults.empty()) return;
+  bool all_nan = true, all_midrange = defaults.size() == system.outputs.size(), all_equal = true;
+  for (std::size_t o = 0; o < defaults.size(); ++o) {
+    const double v = defaults[o];
+    all_nan = all_nan && std::isnan(v);
+    if (all_midrange) {
+      const Variable& output = system.outputs[o];
+      all_midrange = std::fabs(v - (output.min + output.max) / 2) <= 1e-12 * std::max(1.0, output.max - output.min);
+    }
+    all_equal = all_equal && (v == defaults[0] || (std::isnan(v) && std::isnan(defaults[0])));
+  }
+  if (all_nan) return;
+  if (all_midrange) {
+    system.no_fire = NoFirePolicy::Midrange;
+  } else if (all_equal) {
+    system.no_fire = NoFirePolicy::Value;
+    system.no_fire_value = defaults[0];
+  } else {
+    diagnostics.error(where, "the outputs' defaults differ and are not each output's mid-range; fmpc systems have "
+                             "one no-fire value (or mid-range, or an error) for all outputs");
+  }
 }
 
 bool looks_like_fll(const std::string& line) {

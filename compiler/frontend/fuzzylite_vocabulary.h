@@ -42,6 +42,22 @@ std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRa
 std::string fuzzylite_rule_text(const FuzzySystem& system, const Rule& rule, const SourceRange& where,
                                 DiagnosticList& diagnostics);
 
+// The words of `text`, split at blanks.
+std::vector<std::string> fuzzylite_words(const std::string& text);
+// A number as fuzzylite writes them ("0.250", "nan", "inf", "-inf"); nullopt for anything else.
+std::optional<double> fuzzylite_number(const std::string& text);
+
+// Sugeno when the outputs' terms are Constant or Linear, Mamdani when they are membership functions; an error at
+// `where` when an engine mixes both.
+SystemType fuzzylite_system_type(const FuzzySystem& system, const SourceRange& where, DiagnosticList& diagnostics);
+
+// The no-fire policy from each output's default (NaN where none was given): all NaN (fuzzylite's default) is
+// `error`, as fmpc never prints a silent NaN; every output at its own mid-range (within 1e-12 of the range, as
+// fuzzylite prints fixed decimals) is `midrange`, which is how fmpc writes it; one value for all is `value`.
+// Anything else is an error at `where`.
+void set_no_fire_from_defaults(FuzzySystem& system, const std::vector<double>& defaults, const SourceRange& where,
+                               DiagnosticList& diagnostics);
+
 // The formats of rule files fmpc can be handed, told apart by content (rule_file_loader.h uses these).
 bool looks_like_fll(const std::string& first_line);  // "Engine:" or another FLL section keyword first
 bool looks_like_fcl(const std::string& first_line);  // "FUNCTION_BLOCK" first

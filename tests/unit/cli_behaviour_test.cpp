@@ -12,34 +12,15 @@
 #include <sstream>
 #include <string>
 
+#include "tests/support/fmpc_process.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
-  int status = -1;
-  std::string out;
-};
-
-// Runs `fmpc ARGUMENTS` with stdin from `input` (a path), stdout and stderr together.
-Run run(const std::string& arguments, const std::string& input = "/dev/null") {
-  Run result;
-  const std::string command = "timeout 20 " + std::string(FMPC_BINARY) + " " + arguments + " 2>&1 < " + input;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) result.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using fmpc::testing::read_file_text;
+using Run = fmpc::testing::FmpcRun;
+using fmpc::testing::run_fmpc;
 
 const fs::path kSource = FMPC_SOURCE_DIR;
 
@@ -52,8 +33,8 @@ TEST_CASE("eval with no points on a terminal says what it expects, with the file
   REQUIRE(::unlockpt(master) == 0);
   const std::string terminal = ::ptsname(master);
   const fs::path tipper = kSource / "tests" / "golden" / "cli_eval_explain" / "tipper.fis";
-  // `timeout` turns a wait on the terminal into status 124 after 20 s: the test fails instead of hanging.
-  const Run eval = run("eval " + tipper.string(), terminal);
+  // `timeout` turns a wait on the terminal into status 124 after 60 s: the test fails instead of hanging.
+  const Run eval = run_fmpc("eval " + tipper.string(), terminal);
   ::close(master);
   CHECK(eval.status == 2);
   CHECK(eval.out.find("no points to evaluate") != std::string::npos);
@@ -65,7 +46,7 @@ TEST_CASE("eval with no points on a terminal says what it expects, with the file
 
 TEST_CASE("eval --summary prints one aligned row per point with 4 significant digits", "[cli]") {
   const fs::path liver = kSource / "rulesets" / "liver_fibrosis";
-  const Run summary = run("eval " + (liver / "mamdani.fis").string() + " --csv " +
+  const Run summary = run_fmpc("eval " + (liver / "mamdani.fis").string() + " --csv " +
                           (liver / "example_patients.csv").string() + " --summary");
   REQUIRE(summary.status == 0);
   std::istringstream lines(summary.out);
@@ -79,9 +60,9 @@ TEST_CASE("eval --summary prints one aligned row per point with 4 significant di
     CHECK(line.size() <= header.size() + 24);
     CHECK(line.find("0000000") == std::string::npos);  // no 17-digit residues
   }
-  const std::string csv = read_text(liver / "example_patients.csv");
+  const std::string csv = read_file_text(liver / "example_patients.csv");
   CHECK(rows + 1 == static_cast<std::size_t>(std::count(csv.begin(), csv.end(), '\n')));
-  CHECK(run("eval " + (liver / "mamdani.fis").string() + " --csv " + (liver / "example_patients.csv").string() +
+  CHECK(run_fmpc("eval " + (liver / "mamdani.fis").string() + " --csv " + (liver / "example_patients.csv").string() +
             " --summary --explain")
             .status == 2);  // one or the other
 }
@@ -91,7 +72,7 @@ TEST_CASE("re-running simulate into a folder removes the earlier run's extra fra
   fs::remove_all(folder);
   fs::create_directories(folder / "out");
   fs::copy_file(kSource / "rulesets" / "scenes" / "strain_stiffening.fis", folder / "strain_stiffening.fis");
-  const std::string scene = read_text(kSource / "rulesets" / "scenes" / "strain_stiffening_block.yaml");
+  const std::string scene = read_file_text(kSource / "rulesets" / "scenes" / "strain_stiffening_block.yaml");
   const auto write_scene = [&](int frames) {
     std::string text = scene;
     const std::string from = "outputs: {frames: 9, samples: 81}";
@@ -105,12 +86,12 @@ TEST_CASE("re-running simulate into a folder removes the earlier run's extra fra
   write_scene(6);
   const std::string command = "simulate " + (folder / "block.yaml").string() + " -o " + (folder / "out").string() +
                               " --steps 40";
-  const Run first = run(command);
+  const Run first = run_fmpc(command);
   INFO(first.out);
   REQUIRE(first.status == 0);
   CHECK(fs::exists(folder / "out" / "frame_00005.vtu"));
   write_scene(3);
-  const Run second = run(command);
+  const Run second = run_fmpc(command);
   INFO(second.out);
   REQUIRE(second.status == 0);
   CHECK(second.out.find("removed 3 stale files of an earlier run") != std::string::npos);

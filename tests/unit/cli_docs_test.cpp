@@ -12,35 +12,17 @@
 #include <sstream>
 #include <string>
 
+#include "tests/support/fmpc_process.h"
+
 #include "diagnostics/warning_codes.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
-  int status = -1;
-  std::string out;  // stdout and stderr together
-};
-
-Run run(const std::string& arguments) {
-  Run result;
-  const std::string command = std::string(FMPC_BINARY) + " " + arguments + " 2>&1 < /dev/null";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  REQUIRE(pipe != nullptr);
-  char buffer[4096];
-  for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) result.out.append(buffer, n);
-  const int status = ::pclose(pipe);
-  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using fmpc::testing::read_file_text;
+using Run = fmpc::testing::FmpcRun;
+using fmpc::testing::run_fmpc;
 
 // Options named in a help text's option lines ("  -o,--output TEXT ...").
 std::set<std::string> help_options(const std::string& help) {
@@ -80,7 +62,7 @@ std::string section(const std::string& markdown, const std::string& heading) {
 }
 
 std::set<std::string> subcommands() {
-  const Run help = run("--help");
+  const Run help = run_fmpc("--help");
   std::set<std::string> names;
   const std::size_t at = help.out.find("Subcommands:");
   REQUIRE(at != std::string::npos);
@@ -100,7 +82,7 @@ std::set<std::string> subcommands() {
 }  // namespace
 
 TEST_CASE("docs/cli.md names every command and option of the CLI, and nothing else", "[cli][docs]") {
-  const std::string docs = read_text(fs::path(FMPC_SOURCE_DIR) / "docs" / "cli.md");
+  const std::string docs = read_file_text(fs::path(FMPC_SOURCE_DIR) / "docs" / "cli.md");
   REQUIRE_FALSE(docs.empty());
   const std::set<std::string> common = documented_options(section(docs, "Options every command takes"));
   REQUIRE(common.count("-W"));
@@ -111,7 +93,7 @@ TEST_CASE("docs/cli.md names every command and option of the CLI, and nothing el
     INFO("fmpc " << command);
     const std::string text = section(docs, "`fmpc " + command);
     REQUIRE_FALSE(text.empty());
-    const Run help = run(command + " --help");
+    const Run help = run_fmpc(command + " --help");
     REQUIRE(help.status == 0);
     const std::set<std::string> listed = help_options(help.out);
     const std::set<std::string> documented = documented_options(text);
@@ -126,15 +108,15 @@ TEST_CASE("docs/cli.md names every command and option of the CLI, and nothing el
   }
 }
 
-TEST_CASE("--help shows defaults and no build path", "[cli][docs]") {
-  const Run help = run("eval --help");
+TEST_CASE("help output shows defaults and no build path", "[cli][docs]") {
+  const Run help = run_fmpc("eval --help");
   CHECK(help.status == 0);
   CHECK(help.out.find("fmpc eval") != std::string::npos);
   CHECK(help.out.find(fs::path(FMPC_BINARY).parent_path().string()) == std::string::npos);
   CHECK(help.out.find("0.001") != std::string::npos);  // --explain-threshold's default
 }
 
-TEST_CASE("-Wno-CODE silences, -Werror=CODE fails with status 1, an unknown code is a usage error", "[cli]") {
+TEST_CASE("warning flags: -Wno-CODE silences, -Werror=CODE fails with status 1, an unknown code is refused", "[cli]") {
   const fs::path folder = fs::temp_directory_path() / "fmpc_cli_docs_test";
   fs::create_directories(folder);
   const fs::path file = folder / "no_unit.fmpc";
@@ -144,27 +126,27 @@ TEST_CASE("-Wno-CODE silences, -Werror=CODE fails with status 1, an unknown code
                          "output z in [0, 1] kPa\n  small is triangle(start 0, peak 0, end 1)\n"
                          "  big is triangle(start 0, peak 1, end 1)\n"
                          "rule r1: if x is low then z is small\nrule r2: if x is high then z is big\n";
-  const Run plain = run("check " + file.string());
+  const Run plain = run_fmpc("check " + file.string());
   CHECK(plain.status == 0);
   CHECK(plain.out.find("[-Wunit]") != std::string::npos);
 
-  const Run silenced = run("check -Wno-unit " + file.string());
+  const Run silenced = run_fmpc("check -Wno-unit " + file.string());
   CHECK(silenced.status == 0);
   CHECK(silenced.out.find("-Wunit") == std::string::npos);
 
-  const Run promoted = run("check -Werror=unit " + file.string());
+  const Run promoted = run_fmpc("check -Werror=unit " + file.string());
   CHECK(promoted.status == 1);
   CHECK(promoted.out.find("error: input 'x' has no unit") != std::string::npos);
   CHECK(promoted.out.find("[-Werror=unit]") != std::string::npos);
 
-  CHECK(run("check -Werror " + file.string()).status == 1);
-  CHECK(run("check --werror " + file.string()).status == 1);
-  CHECK(run("check -Werror -Wno-error=unit " + file.string()).status == 0);
+  CHECK(run_fmpc("check -Werror " + file.string()).status == 1);
+  CHECK(run_fmpc("check --werror " + file.string()).status == 1);
+  CHECK(run_fmpc("check -Werror -Wno-error=unit " + file.string()).status == 0);
   // The same rule in another command: eval reports the out-of-range input as a warning.
-  CHECK(run("eval " + file.string() + " x=2").status == 0);
-  CHECK(run("eval -Werror=input-out-of-range " + file.string() + " x=2").status == 1);
+  CHECK(run_fmpc("eval " + file.string() + " x=2").status == 0);
+  CHECK(run_fmpc("eval -Werror=input-out-of-range " + file.string() + " x=2").status == 1);
 
-  const Run unknown = run("check -Wno-unti " + file.string());
+  const Run unknown = run_fmpc("check -Wno-unti " + file.string());
   CHECK(unknown.status == 2);
   CHECK(unknown.out.find("did you mean 'unit'?") != std::string::npos);
   std::error_code ignored;
@@ -180,7 +162,7 @@ TEST_CASE("every warning code in the sources is a known -W code", "[cli][docs]")
     for (const auto& entry : fs::recursive_directory_iterator(fs::path(FMPC_SOURCE_DIR) / tree)) {
       const std::string extension = entry.path().extension().string();
       if (extension != ".cpp" && extension != ".h" && extension != ".cu") continue;
-      const std::string text = read_text(entry.path());
+      const std::string text = read_file_text(entry.path());
       for (auto it = std::sregex_iterator(text.begin(), text.end(), call); it != std::sregex_iterator(); ++it)
         found.insert((*it)[1].str());
     }

@@ -164,21 +164,25 @@ void Canvas::polygon(const std::vector<std::pair<double, double>>& points, Colou
 }
 
 void Canvas::rectangle(double x, double y, double width, double height, Colour fill) {
-  cairo_t* cr = state_->cr;
-  cairo_save(cr);
-  set_colour(cr, fill);
-  cairo_rectangle(cr, x, y, width, height);
-  cairo_fill(cr);
-  cairo_restore(cr);
+  draw_rectangle(x, y, width, height, fill, 0);
 }
 
 void Canvas::frame(double x, double y, double width, double height, Colour colour, double line_width) {
+  draw_rectangle(x, y, width, height, colour, line_width);
+}
+
+void Canvas::draw_rectangle(double x, double y, double width, double height, Colour colour, double line_width) {
   cairo_t* cr = state_->cr;
   cairo_save(cr);
   set_colour(cr, colour);
-  cairo_set_line_width(cr, line_width);
+  cairo_new_path(cr);
   cairo_rectangle(cr, x, y, width, height);
-  cairo_stroke(cr);
+  if (line_width > 0) {
+    cairo_set_line_width(cr, line_width);
+    cairo_stroke(cr);
+  } else {
+    cairo_fill(cr);
+  }
   cairo_restore(cr);
 }
 

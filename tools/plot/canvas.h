@@ -73,6 +73,8 @@ class Canvas {
   std::string finish();
 
  private:
+  // Filled when line_width is 0, else outlined.
+  void draw_rectangle(double x, double y, double width, double height, Colour colour, double line_width);
   struct State;
   std::unique_ptr<State> state_;
   int width_;
