@@ -1,31 +1,96 @@
 #include "compiler/frontend/rule_file_loader.h"
 
 #include <algorithm>
+#include <cctype>
 
+#include "compiler/frontend/fll.h"
 #include "compiler/frontend/fmpc_language.h"
+#include "compiler/frontend/fuzzylite_vocabulary.h"
 #include "compiler/frontend/matlab_fis.h"
 #include "compiler/sema/check.h"
 
 namespace fmpc {
 
-Dialect detect_dialect(const std::string& text) {
+namespace {
+
+// The first line that is not blank or a comment, without its leading blanks.
+std::string first_content_line(const std::string& text) {
   std::size_t pos = 0;
   while (pos < text.size()) {
     const std::size_t end = std::min(text.find('\n', pos), text.size());
-    std::size_t first = text.find_first_not_of(" \t\r", pos);
+    const std::size_t first = text.find_first_not_of(" \t\r", pos);
     if (first < end) {
       const char c = text[first];
-      if (c != '%' && c != '#') return text.compare(first, 8, "[System]") == 0 ? Dialect::Matlab : Dialect::Fmpc;
+      if (text.compare(first, 2, "(*") == 0) {  // FCL block comment, possibly over several lines
+        const std::size_t close = text.find("*)", first + 2);
+        if (close == std::string::npos) return {};
+        pos = close + 2;
+        continue;
+      }
+      if (c != '%' && c != '#' && text.compare(first, 2, "//") != 0) return text.substr(first, end - first);
     }
     pos = end + 1;
   }
+  return {};
+}
+
+}  // namespace
+
+Dialect detect_dialect(const std::string& text) {
+  const std::string line = first_content_line(text);
+  if (line.compare(0, 8, "[System]") == 0) return Dialect::Matlab;
+  if (looks_like_fll(line)) return Dialect::Fll;
+  if (looks_like_fcl(line)) return Dialect::Fcl;
   return Dialect::Fmpc;
+}
+
+const char* dialect_name(Dialect dialect) {
+  switch (dialect) {
+    case Dialect::Fmpc: return "fmpc";
+    case Dialect::Matlab: return "MATLAB .fis";
+    case Dialect::Fll: return "fuzzylite FLL";
+    case Dialect::Fcl: return "IEC 61131-7 FCL";
+  }
+  return "?";
+}
+
+std::string foreign_format(const std::string& text) {
+  const std::string line = first_content_line(text);
+  if (line.empty()) return {};
+  if (line[0] == '<')
+    return "an XML file (JFML or another XML format); fmpc reads its own language, MATLAB .fis, fuzzylite FLL and "
+           "IEC 61131-7 FCL";
+  if (line[0] == '{')
+    return "a JSON file; fmpc reads its own language, MATLAB .fis, fuzzylite FLL and IEC 61131-7 FCL";
+  // "key: value" at the start of the first line: YAML, which fmpc reads only as scene files.
+  std::size_t k = 0;
+  while (k < line.size() && (std::isalnum(static_cast<unsigned char>(line[k])) || line[k] == '_')) ++k;
+  if (k > 0 && k < line.size() && line[k] == ':' && (k + 1 == line.size() || line[k + 1] == ' '))
+    return "a YAML file (a scene?); scenes are run with `fmpc simulate`, rule files are fmpc, MATLAB .fis, FLL or FCL";
+  // A header of comma-separated names and nothing else: CSV data.
+  if (line.find(',') != std::string::npos && line.find(' ') == std::string::npos &&
+      line.find('(') == std::string::npos)
+    return "CSV data (a header of comma-separated names); points to evaluate are given with `fmpc eval FILE --csv "
+           "POINTS.csv`";
+  return {};
 }
 
 RuleFile load_rule_file(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
   const Dialect dialect = detect_dialect(text);
-  RuleFile file = dialect == Dialect::Matlab ? read_matlab_fis(path, text, diagnostics)
-                                             : read_fmpc(path, text, diagnostics);
+  if (dialect == Dialect::Fmpc) {
+    const std::string foreign = foreign_format(text);
+    if (!foreign.empty()) {
+      diagnostics.error(SourceRange{path, 0, 0, 0, 0}, "this is not a rule file: it looks like " + foreign);
+      return RuleFile{path, {}};
+    }
+  }
+  RuleFile file;
+  switch (dialect) {
+    case Dialect::Matlab: file = read_matlab_fis(path, text, diagnostics); break;
+    case Dialect::Fll: file = read_fll(path, text, diagnostics); break;
+    case Dialect::Fcl: file = read_fcl(path, text, diagnostics); break;
+    case Dialect::Fmpc: file = read_fmpc(path, text, diagnostics); break;
+  }
   // MATLAB rules name terms by number, so two terms of one variable may share a name there (juggler.fis does);
   // in the fmpc language rules name terms by name, and a duplicate would be ambiguous.
   CheckOptions options;
@@ -35,7 +100,8 @@ RuleFile load_rule_file(const std::string& path, const std::string& text, Diagno
   if (file.systems.empty() && !diagnostics.has_errors())
     diagnostics.error(SourceRange{path, 0, 0, 0, 0},
                       "the file defines no system (it is empty or holds only comments); a rule file starts with "
-                      "'system NAME' (docs/language.md) or, in MATLAB's format, '[System]'");
+                      "'system NAME' (docs/language.md), '[System]' (MATLAB), 'Engine:' (FLL) or 'FUNCTION_BLOCK' "
+                      "(FCL)");
   diagnostics.sort_by_position();
   return file;
 }

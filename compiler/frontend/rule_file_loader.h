@@ -1,6 +1,5 @@
 #pragma once
-// One entry point for every reader: picks the dialect from the text (a file whose first non-comment line is
-// "[System]" is MATLAB's), parses, lowers and checks. Returns what it could build; errors are in `diagnostics`.
+// One entry point for every reader: picks the dialect from the text (detect_dialect), parses, lowers and checks. Returns what it could build; errors are in `diagnostics`.
 #include <optional>
 #include <string>
 
@@ -9,9 +8,16 @@
 
 namespace fmpc {
 
-enum class Dialect { Fmpc, Matlab };
+enum class Dialect { Fmpc, Matlab, Fll, Fcl };
 
+// Told apart by the first line that is not blank or a comment (%, #, //, (* ... *)): "[System]" is MATLAB's,
+// "Engine:" (or another FLL section) fuzzylite's FLL, "FUNCTION_BLOCK" IEC 61131-7 FCL, anything else fmpc's.
 Dialect detect_dialect(const std::string& text);
+const char* dialect_name(Dialect dialect);  // "fmpc", "MATLAB .fis", "fuzzylite FLL", "IEC 61131-7 FCL"
+
+// A format fmpc does not read, named from its first line (XML, JSON, a YAML scene, CSV data), with what to do; empty
+// when the text does not look like one of them.
+std::string foreign_format(const std::string& text);
 
 // Parses `text` (the contents of `path`), resolves names and checks parameters (sema). The result holds every
 // system that could be built; when diagnostics.has_errors() it must not be evaluated.

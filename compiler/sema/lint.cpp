@@ -74,10 +74,10 @@ class SystemLinter {
  private:
   void lint_variable(const Variable& variable, const char* role) {
     if (options_.require_units && variable.unit.empty())
-      diagnostics_.warning(variable.name_range, "no-unit",
+      diagnostics_.warning(variable.name_range, "unit",
                            std::string(role) + " " + quoted(variable.name) +
-                               " has no unit; write one after its range (e.g. 'in [0, 75] kPa'), or '1' for a "
-                               "dimensionless quantity");
+                               " has no unit; write one after its range (e.g. 'in [0, 75] kPa'), or 'dimensionless' "
+                               "for a pure number");
     if (!has_usable_range(variable)) return;
     const double span = variable.max - variable.min;
     for (const Term& term : variable.terms) {

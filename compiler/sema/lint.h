@@ -13,11 +13,11 @@ struct LintOptions {
   int coverage_points_per_input = 101;  // grid for the per-input check
   long coverage_grid_budget = 200000;   // total points for the joint (all inputs) check
   double near_zero_width_fraction = 1e-6;  // of the variable's range
-  bool require_units = true;  // no-unit warnings; off for MATLAB files, whose format has no units
+  bool require_units = true;  // unit warnings; off for MATLAB files, whose format has no units
 };
 
 // Codes: unused-term, rule-never-fires, duplicate-rule, conflicting-rules, coverage-hole, term-out-of-range,
-// terms-out-of-order, near-zero-width, no-unit, lower-exceeds-upper (interval type-2 explicit lower MFs).
+// terms-out-of-order, near-zero-width, unit, lower-exceeds-upper (interval type-2 explicit lower MFs).
 void lint_system(const FuzzySystem& system, const LintOptions& options, DiagnosticList& diagnostics);
 
 }  // namespace fmpc

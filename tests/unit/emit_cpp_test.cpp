@@ -282,7 +282,18 @@ void compare_with_interpreter(const Case& c, const std::vector<Result>& results,
       CHECK(same_or_both_nan(got.outputs_batch_double[o], expected.outputs[o], 1e-12 * range));
       // A Sugeno output may lie far outside its declared range (linear consequents): float's own resolution is
       // relative to the value, so the float tolerance is 1e-5 of the range or of the value, whichever is larger.
-      const double float_scale = std::max(range, std::fabs(expected.outputs[o]));
+      // A linear consequent c0 + sum c_j x_j that cancels (juggler's, near 0) carries float's rounding of its
+      // largest term, not of its result: the scale includes the largest sum of |terms| over the output's terms.
+      double consequent_magnitude = 0.0;
+      for (const fmpc::Term& term : c.system.outputs[o].terms) {
+        if (term.mf.kind != fmpc::MfKind::Linear) continue;
+        const std::vector<double>& k = term.mf.params;
+        double magnitude = k.empty() ? 0.0 : std::fabs(k.back());
+        for (std::size_t j = 0; j + 1 < k.size() && j < c.points[p].size(); ++j)
+          magnitude += std::fabs(k[j] * c.points[p][j]);
+        consequent_magnitude = std::max(consequent_magnitude, magnitude);
+      }
+      const double float_scale = std::max({range, std::fabs(expected.outputs[o]), consequent_magnitude});
       if (float_comparable) {
         CHECK(same_or_both_nan(got.outputs_float[o], expected.outputs[o], 1e-5 * float_scale));
         CHECK(got.flags_batch_float == got.flags_float);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "diagnostics/number_format.h"
+#include "compiler/frontend/rule_file_loader.h"
 #include "compiler/sema/check.h"
 #include "compiler/sema/coverage.h"
 #include "compiler/sema/lint.h"
@@ -67,15 +68,31 @@ TEST_CASE("a clean system gives no warnings", "[lint]") {
   CHECK(diagnostics.empty());
 }
 
-TEST_CASE("no-unit", "[lint]") {
+// The warning's advice must be something the parser takes: the suggested unit, written as the advice says, gives a
+// file with no error and no unit warning.
+TEST_CASE("unit: the advice 'dimensionless' is valid syntax", "[lint]") {
+  const std::string text =
+      "system s\n  type mamdani\n"
+      "input x in [0, 1] dimensionless\n  low is triangle(start 0, peak 0, end 1)\n"
+      "output z in [0, 1] dimensionless\n  small is triangle(start 0, peak 0, end 1)\n"
+      "rule r1: if x is low then z is small\n";
+  DiagnosticList diagnostics;
+  const RuleFile file = load_rule_file("advice.fmpc", text, diagnostics);
+  REQUIRE_FALSE(diagnostics.has_errors());
+  REQUIRE(file.systems.size() == 1);
+  CHECK(file.systems[0].inputs[0].unit == "dimensionless");
+  CHECK(with_code(linted(file.systems[0]), "unit").empty());
+}
+
+TEST_CASE("unit (a variable without one)", "[lint]") {
   FuzzySystem s = clean_mamdani();
   s.inputs[1].unit.clear();
-  const Diagnostic d = only_warning(s, "no-unit");
+  const Diagnostic d = only_warning(s, "unit");
   require_position(d, 5, 7);
-  CHECK(d.message == "input 'y' has no unit; write one after its range (e.g. 'in [0, 75] kPa'), or '1' for a "
-                     "dimensionless quantity");
+  CHECK(d.message == "input 'y' has no unit; write one after its range (e.g. 'in [0, 75] kPa'), or "
+                     "'dimensionless' for a pure number");
   s.outputs[0].unit.clear();
-  CHECK(with_code(linted(s), "no-unit").size() == 2);
+  CHECK(with_code(linted(s), "unit").size() == 2);
   LintOptions matlab;
   matlab.require_units = false;
   CHECK(linted(s, matlab).empty());
@@ -563,7 +580,7 @@ TEST_CASE("the thesis liver ruleset", "[lint]") {
   CHECK(holes.size() >= 5);
   CHECK(with_code(diagnostics, "unused-term").empty());
   CHECK(with_code(diagnostics, "term-out-of-range").empty());
-  CHECK(with_code(diagnostics, "no-unit").empty());
+  CHECK(with_code(diagnostics, "unit").empty());
 }
 
 }  // namespace

@@ -1,153 +1,142 @@
-// PNG writer, bitmap font and heat maps (tools/plot/): the file is checked byte by byte against the PNG
-// specification with an independent CRC and zlib's own inflate.
+// Pictures (tools/plot/, cairo and pango): ticks and log axes, contours, heat-map colours read back from the PNG,
+// trade-plot labels that never overlap or leave the plot, SVG output, and figures of every kind that decode.
+#include <cairo.h>
 #include <catch2/catch.hpp>
-#include <zlib.h>
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
-#include "tools/plot/bitmap_font.h"
+#include "tools/plot/axes.h"
 #include "tools/plot/heat_map.h"
-#include "tools/plot/png_image.h"
+#include "tools/plot/line_chart.h"
+#include "tools/plot/pareto_plot.h"
+#include "tools/plot/rule_view.h"
 
 using namespace fmpc::plot;
 
 namespace {
 
-std::uint32_t read_u32(const std::string& s, std::size_t at) {
-  return (static_cast<std::uint32_t>(static_cast<unsigned char>(s.at(at))) << 24) |
-         (static_cast<std::uint32_t>(static_cast<unsigned char>(s.at(at + 1))) << 16) |
-         (static_cast<std::uint32_t>(static_cast<unsigned char>(s.at(at + 2))) << 8) |
-         static_cast<std::uint32_t>(static_cast<unsigned char>(s.at(at + 3)));
-}
-
-// Bit-at-a-time CRC-32 (reflected 0xEDB88320), written independently of the table-driven one under test.
-std::uint32_t slow_crc32(const std::string& bytes) {
-  std::uint32_t crc = 0xFFFFFFFFu;
-  for (char ch : bytes) {
-    crc ^= static_cast<unsigned char>(ch);
-    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
-  }
-  return ~crc;
-}
-
-struct Chunk {
-  std::string type;
-  std::string data;
-  std::uint32_t crc = 0;
+struct Decoded {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint32_t> pixels;  // 0x00RRGGBB
+  std::uint32_t at(int x, int y) const { return pixels[static_cast<std::size_t>(y) * width + x] & 0xFFFFFFu; }
 };
 
-std::vector<Chunk> chunks_of(const std::string& png) {
-  std::vector<Chunk> chunks;
-  std::size_t at = 8;
-  while (at + 12 <= png.size()) {
-    const std::uint32_t length = read_u32(png, at);
-    Chunk chunk;
-    chunk.type = png.substr(at + 4, 4);
-    chunk.data = png.substr(at + 8, length);
-    chunk.crc = read_u32(png, at + 8 + length);
-    chunks.push_back(chunk);
-    at += 12 + length;
-  }
-  CHECK(at == png.size());
-  return chunks;
+struct PngReader {
+  const std::string* bytes;
+  std::size_t at = 0;
+};
+
+cairo_status_t read_png_bytes(void* closure, unsigned char* data, unsigned int length) {
+  auto* reader = static_cast<PngReader*>(closure);
+  if (reader->at + length > reader->bytes->size()) return CAIRO_STATUS_READ_ERROR;
+  std::memcpy(data, reader->bytes->data() + reader->at, length);
+  reader->at += length;
+  return CAIRO_STATUS_SUCCESS;
+}
+
+// Decodes a PNG with cairo's reader (libpng): the bytes must be a valid PNG.
+Decoded decode(const std::string& png) {
+  PngReader reader{&png};
+  cairo_surface_t* surface = cairo_image_surface_create_from_png_stream(read_png_bytes, &reader);
+  REQUIRE(cairo_surface_status(surface) == CAIRO_STATUS_SUCCESS);
+  Decoded image;
+  image.width = cairo_image_surface_get_width(surface);
+  image.height = cairo_image_surface_get_height(surface);
+  const int stride = cairo_image_surface_get_stride(surface);
+  const unsigned char* data = cairo_image_surface_get_data(surface);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      std::uint32_t pixel;
+      std::memcpy(&pixel, data + static_cast<std::ptrdiff_t>(y) * stride + 4 * x, 4);
+      image.pixels.push_back(pixel);
+    }
+  cairo_surface_destroy(surface);
+  return image;
+}
+
+std::uint32_t rgb_of(Colour c) {
+  const auto byte = [](double v) { return static_cast<std::uint32_t>(std::lround(v * 255)); };
+  return (byte(c.r) << 16) | (byte(c.g) << 8) | byte(c.b);
+}
+
+bool close_colour(std::uint32_t a, std::uint32_t b, int tolerance = 2) {
+  for (int shift : {0, 8, 16})
+    if (std::abs(static_cast<int>((a >> shift) & 0xFF) - static_cast<int>((b >> shift) & 0xFF)) > tolerance)
+      return false;
+  return true;
 }
 
 }  // namespace
 
-TEST_CASE("png_crc32 gives the CRC-32 check value", "[plot]") {
-  const std::string check = "123456789";
-  CHECK(png_crc32(reinterpret_cast<const std::uint8_t*>(check.data()), check.size()) == 0xCBF43926u);
-  CHECK(png_crc32(nullptr, 0) == 0u);
-  // Continuing from a previous CRC equals one pass.
-  const auto* p = reinterpret_cast<const std::uint8_t*>(check.data());
-  CHECK(png_crc32(p + 4, 5, png_crc32(p, 4)) == 0xCBF43926u);
-}
-
-TEST_CASE("encode_png writes a valid truecolour PNG", "[plot]") {
-  RgbImage image(3, 2, Rgb{10, 20, 30});
-  image.set(0, 0, Rgb{255, 0, 0});
-  image.set(2, 1, Rgb{0, 0, 255});
-  image.set(-1, 0, Rgb{1, 1, 1});  // outside: ignored
-  image.set(3, 5, Rgb{1, 1, 1});
-  const std::string png = encode_png(image);
-
-  REQUIRE(png.size() > 8);
-  CHECK(png.substr(0, 8) == std::string("\x89PNG\r\n\x1a\n", 8));
-  const std::vector<Chunk> chunks = chunks_of(png);
-  REQUIRE(chunks.size() == 3);
-  CHECK(chunks[0].type == "IHDR");
-  CHECK(chunks[1].type == "IDAT");
-  CHECK(chunks[2].type == "IEND");
-  for (const Chunk& chunk : chunks) CHECK(chunk.crc == slow_crc32(chunk.type + chunk.data));
-
-  const std::string& ihdr = chunks[0].data;
-  REQUIRE(ihdr.size() == 13);
-  CHECK(read_u32(ihdr, 0) == 3);
-  CHECK(read_u32(ihdr, 4) == 2);
-  CHECK(ihdr[8] == 8);   // bit depth
-  CHECK(ihdr[9] == 2);   // truecolour
-  CHECK(ihdr[10] == 0);  // deflate
-  CHECK(ihdr[11] == 0);  // filter method
-  CHECK(ihdr[12] == 0);  // no interlace
-  CHECK(chunks[2].data.empty());
-
-  // zlib stream: header CMF/FLG valid (multiple of 31), and inflating it gives filter byte 0 + RGB per row.
-  const std::string& idat = chunks[1].data;
-  REQUIRE(idat.size() > 6);
-  CHECK((static_cast<unsigned char>(idat[0]) & 0x0F) == 8);  // deflate
-  CHECK((static_cast<unsigned>(static_cast<unsigned char>(idat[0])) * 256 + static_cast<unsigned char>(idat[1])) % 31 == 0);
-  std::vector<unsigned char> raw(2 * (1 + 3 * 3));
-  uLongf raw_size = raw.size();
-  REQUIRE(uncompress(raw.data(), &raw_size, reinterpret_cast<const Bytef*>(idat.data()), idat.size()) == Z_OK);
-  REQUIRE(raw_size == raw.size());
-  const std::vector<unsigned char> expected = {0, 255, 0, 0, 10, 20, 30, 10, 20, 30,
-                                               0, 10, 20, 30, 10, 20, 30, 0, 0, 255};
-  CHECK(raw == expected);
-  // Adler-32 of the raw data closes the zlib stream (RFC 1950).
-  CHECK(read_u32(idat, idat.size() - 4) == adler32(1, raw.data(), static_cast<uInt>(raw.size())));
-}
-
-TEST_CASE("degenerate image sizes become 1 x 1", "[plot]") {
-  RgbImage image(0, -3, Rgb{1, 2, 3});
-  CHECK(image.width() == 1);
-  CHECK(image.height() == 1);
-  CHECK(image.at(0, 0) == Rgb{1, 2, 3});
-}
-
-TEST_CASE("text draws inside its measured box", "[plot]") {
-  RgbImage image(100, 30, Rgb{255, 255, 255});
-  const std::string text = "F4 (kPa) 7.5";
-  draw_text(image, 2, 3, text, Rgb{0, 0, 0}, 1);
-  const int w = text_width(text, 1);
-  CHECK(w == 12 * 6 - 1);
-  int inked = 0;
-  for (int y = 0; y < image.height(); ++y)
-    for (int x = 0; x < image.width(); ++x) {
-      if (image.at(x, y) == Rgb{255, 255, 255}) continue;
-      ++inked;
-      CHECK(x >= 2);
-      CHECK(x < 2 + w);
-      CHECK(y >= 3);
-      CHECK(y < 3 + text_height(1));
-    }
-  CHECK(inked > 50);
-  CHECK(text_width("", 2) == 0);
-}
-
-TEST_CASE("viridis and ticks", "[plot]") {
-  CHECK(viridis(0.0) == Rgb{68, 1, 84});
-  CHECK(viridis(1.0) == Rgb{253, 231, 37});
-  CHECK(viridis(-3.0) == viridis(0.0));
-  CHECK(viridis(7.0) == viridis(1.0));
-  CHECK(viridis(std::nan("")) == Rgb{160, 160, 160});
+TEST_CASE("ticks: round linear steps, decades on log axes, never a 0 on a log axis", "[plot]") {
   CHECK(nice_ticks(0, 75, 6) == std::vector<double>{0, 10, 20, 30, 40, 50, 60, 70});
   CHECK(nice_ticks(5.3, 22.9, 6) == std::vector<double>{6, 8, 10, 12, 14, 16, 18, 20, 22});
   CHECK(nice_ticks(3, 3, 6) == std::vector<double>{3});
   CHECK(nice_ticks(0, std::numeric_limits<double>::infinity(), 6) == std::vector<double>{0});
+  for (double v : nice_ticks(-0.3, 0.3, 6)) CHECK(tick_label(v, false) != "-0");
+  CHECK(log_ticks(1e-4, 1e2) == std::vector<double>{1e-4, 1e-3, 1e-2, 1e-1, 1, 10, 100});
+  CHECK(log_ticks(2, 30).size() >= 2);
+  CHECK(log_ticks(0, 10).empty());
+  CHECK(tick_label(1e-3, true) == "10⁻³");
+  CHECK(tick_label(1e6, true) == "10⁶");
+  CHECK(tick_label(1, true) == "1");
+  CHECK(tick_label(10, true) == "10");
+  // Seeded: every log tick inside the range, positive, and in increasing order.
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> exponent(-12, 12);
+  for (int k = 0; k < 2000; ++k) {
+    double a = std::pow(10, exponent(random)), b = std::pow(10, exponent(random));
+    if (a > b) std::swap(a, b);
+    const std::vector<double> ticks = log_ticks(a, b);
+    for (std::size_t i = 0; i < ticks.size(); ++i) {
+      CHECK(ticks[i] > 0);
+      CHECK(ticks[i] >= a * (1 - 1e-9));
+      CHECK(ticks[i] <= b * (1 + 1e-9));
+      if (i) CHECK(ticks[i] > ticks[i - 1]);
+    }
+    const Axis r = rounded(Axis{a, b, true, ""});
+    CHECK(r.lo <= a);
+    CHECK(r.hi >= b);
+    CHECK(log_ticks(r.lo, r.hi).size() >= 2);
+  }
+}
+
+TEST_CASE("viridis ends and NaN", "[plot]") {
+  CHECK(rgb_of(viridis(0.0)) == 0x440154u);
+  CHECK(rgb_of(viridis(1.0)) == 0xFDE725u);
+  CHECK(rgb_of(viridis(-3.0)) == rgb_of(viridis(0.0)));
+  CHECK(rgb_of(viridis(7.0)) == rgb_of(viridis(1.0)));
+  CHECK(rgb_of(viridis(std::nan(""))) == rgb_of(Colour{0.6, 0.6, 0.6, 1}));
+}
+
+TEST_CASE("contours of a plane are straight lines at the level", "[plot]") {
+  HeatMap map;
+  map.x = {0, 1, 2, 3};
+  map.y = {0, 1, 2};
+  for (double y : map.y)
+    for (double x : map.x) map.z.push_back(x + 0 * y);  // z = x
+  const auto segments = contour_segments(map, 1.5);
+  REQUIRE(segments.size() == 2);  // one per row of cells
+  for (const auto& [p, q] : segments) {
+    CHECK(p.first == Approx(1.5));
+    CHECK(q.first == Approx(1.5));
+  }
+  CHECK(contour_segments(map, 7).empty());
+  map.z[0] = std::nan("");
+  CHECK(contour_segments(map, 0.5).size() == 1);  // of the two crossing cells, one has a NaN corner
+  // A saddle gives two segments, not four.
+  HeatMap saddle;
+  saddle.x = {0, 1};
+  saddle.y = {0, 1};
+  saddle.z = {1, 0, 0, 1};
+  CHECK(contour_segments(saddle, 0.5).size() == 2);
 }
 
 TEST_CASE("a heat map colours each grid cell by its value on the shared scale", "[plot]") {
@@ -157,16 +146,139 @@ TEST_CASE("a heat map colours each grid cell by its value on the shared scale", 
   map.z = {0.0, 1.0, 2.0, std::nan("")};  // row 0 (bottom): 0, 1; row 1 (top): 2, NaN
   map.z_min = 0;
   map.z_max = 4;  // a wider scale than the data: 2 is mid-scale
-  map.x_label = "x";
+  map.contours = false;
+  map.x_label = "x (µm)";
   map.y_label = "y";
-  map.z_label = "z";
-  const RgbImage image = render_heat_map(map);
-  CHECK(image.width() == 640);
-  CHECK(image.height() == 540);
-  const int q1 = kPlotLeft + kPlotSize / 4, q3 = kPlotLeft + 3 * kPlotSize / 4;
-  const int top = kPlotTop + kPlotSize / 4, bottom = kPlotTop + 3 * kPlotSize / 4;
-  CHECK(image.at(q1, bottom) == viridis(0.0));
-  CHECK(image.at(q3, bottom) == viridis(0.25));
-  CHECK(image.at(q1, top) == viridis(0.5));
-  CHECK(image.at(q3, top) == viridis(std::nan("")));
+  map.z_label = "z (kPa)";
+  map.title = {"a title", "fixed: w = 3 kPa"};
+  const Decoded image = decode(render_heat_map(map, ImageFormat::Png));
+  CHECK(image.width == 760);
+  CHECK(image.height == 600);
+  // Find the plot area: the largest run of the bottom-left cell's colour along the middle of the lower half.
+  const std::uint32_t bottom_left = rgb_of(viridis(0.0));
+  int left = -1, right = -1, row = -1;
+  for (int y = image.height / 2; y < image.height && row < 0; ++y)
+    for (int x = 0; x < image.width; ++x)
+      if (image.at(x, y) == bottom_left) {
+        row = y;
+        left = x;
+        while (x < image.width && image.at(x, y) == bottom_left) ++x;
+        right = x;
+        break;
+      }
+  REQUIRE(row > 0);
+  const int cell = right - left;  // one cell's width
+  CHECK(close_colour(image.at(left + cell + cell / 2, row), rgb_of(viridis(0.25))));
+  // Up one cell: find the top row's colours above.
+  int up = row;
+  while (up > 0 && image.at(left + cell / 2, up) == bottom_left) --up;
+  CHECK(close_colour(image.at(left + cell / 2, up - 5), rgb_of(viridis(0.5))));
+  CHECK(close_colour(image.at(left + cell + cell / 2, up - 5), rgb_of(viridis(std::nan("")))));
+}
+
+TEST_CASE("trade-plot labels never overlap each other or a marker, and stay inside", "[plot]") {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> exponent(0, 1);
+  for (int trial = 0; trial < 20; ++trial) {
+    TradePlot plot;
+    plot.error_unit = "kPa";
+    plot.title = {"trial " + std::to_string(trial)};
+    const int n = 3 + trial;
+    for (int k = 0; k < n; ++k)
+      plot.points.push_back({"variant number " + std::to_string(k), std::pow(10, 3 + 4 * exponent(random)),
+                             k % 5 == 0 ? 0.0 : std::pow(10, -6 + 5 * exponent(random)),
+                             k % 3 == 0 ? "table" : "compiled C++"});
+    LabelPlacement placement;
+    const Decoded image = decode(render_trade_plot(plot, ImageFormat::Png, &placement));
+    CHECK(image.width == 860);
+    REQUIRE(placement.boxes.size() == plot.points.size());
+    std::size_t placed = 0;
+    for (std::size_t i = 0; i < placement.boxes.size(); ++i) {
+      if (!placement.placed[i]) continue;
+      ++placed;
+      const Box& a = placement.boxes[i];
+      CHECK(a.x >= 0);
+      CHECK(a.y >= 0);
+      CHECK(a.x + a.width <= image.width);
+      CHECK(a.y + a.height <= image.height);
+      for (std::size_t j = i + 1; j < placement.boxes.size(); ++j)
+        if (placement.placed[j]) CHECK_FALSE(a.overlaps(placement.boxes[j]));
+    }
+    CHECK(placed > 0);
+  }
+  CHECK(decode(render_trade_plot({}, ImageFormat::Png)).width == 860);  // no points: axes only
+}
+
+TEST_CASE("SVG output is an SVG document", "[plot]") {
+  LineChart chart;
+  chart.title = {"terms of 'x' (µm)"};
+  chart.x = Axis{0, 10, false, "x (µm)"};
+  chart.y = Axis{0, 1, false, "degree of membership"};
+  chart.series.push_back(Series{"low", {0, 5, 10}, {1, 0.5, 0}, {}, categorical_colour(0), 2, {}, false});
+  const std::string svg = render_line_chart(chart, ImageFormat::Svg);
+  CHECK(svg.rfind("<?xml", 0) == 0);
+  CHECK(svg.find("<svg") != std::string::npos);
+  CHECK(svg.find("</svg>") != std::string::npos);
+  CHECK(image_format_for("a/b.SVG") == ImageFormat::Svg);
+  CHECK(image_format_for("a/b.png") == ImageFormat::Png);
+  CHECK(image_format_for("svg") == ImageFormat::Png);
+}
+
+TEST_CASE("a line chart draws its curve, its band and text in anti-aliased colour", "[plot]") {
+  LineChart chart;
+  chart.title = {"membership functions", "E = 9.8 kPa, σ ≈ 0.2 µm"};
+  chart.x = Axis{0, 10, false, "x (µm)"};
+  chart.y = Axis{0, 1, false, "degree of membership"};
+  Series band{"type-2", {0, 5, 10}, {0.2, 1, 0.2}, {0.1, 0.6, 0.1}, categorical_colour(1), 2, {}, false};
+  chart.series.push_back(band);
+  chart.notes = {"a note"};
+  const Decoded image = decode(render_line_chart(chart, ImageFormat::Png));
+  CHECK(image.width == 760);
+  CHECK(image.height == 520);
+  std::size_t grey_levels = 0, curve = 0;
+  const std::uint32_t orange = rgb_of(categorical_colour(1));
+  for (std::uint32_t p : image.pixels) {
+    const std::uint32_t c = p & 0xFFFFFFu;
+    const int r = c >> 16 & 0xFF, g = c >> 8 & 0xFF, b = c & 0xFF;
+    if (r == g && g == b && r > 0 && r < 255) ++grey_levels;  // anti-aliased text and lines
+    if (close_colour(c, orange, 8)) ++curve;
+  }
+  CHECK(grey_levels > 200);
+  CHECK(curve > 100);
+}
+
+TEST_CASE("a rule view has one row per rule plus the aggregate", "[plot]") {
+  RuleView view;
+  view.title = {"rules"};
+  view.input_titles = {"x = 3"};
+  view.output_titles = {"z = 0.4 kPa"};
+  view.input_ranges = {{0, 10}};
+  view.output_ranges = {{0, 1}};
+  for (int r = 0; r < 12; ++r) {
+    view.rule_titles.push_back("r" + std::to_string(r + 1) + ": 0.5");
+    RulePanel in;
+    in.present = r % 2 == 0;
+    in.x = {0, 5, 10};
+    in.membership = {0, 1, 0};
+    in.filled = {0, 0.5, 0};
+    in.grade = 0.5;
+    in.marker = 3;
+    RulePanel out = in;
+    out.marker = std::nan("");
+    view.inputs.push_back({in});
+    view.outputs.push_back({out});
+  }
+  RulePanel aggregate;
+  aggregate.present = true;
+  aggregate.x = {0, 0.5, 1};
+  aggregate.membership = aggregate.filled = {0.2, 0.5, 0.2};
+  aggregate.marker = 0.4;
+  view.aggregate = {aggregate};
+  const Decoded small = decode(render_rule_view(view, ImageFormat::Png));
+  view.rule_titles.resize(2);
+  view.inputs.resize(2);
+  view.outputs.resize(2);
+  const Decoded two = decode(render_rule_view(view, ImageFormat::Png));
+  CHECK(small.height > two.height);  // the figure grows with the rules
+  CHECK(two.width >= 560);
 }

@@ -302,11 +302,41 @@ TEST_CASE("uniform tables double axes, fixed counts stay, float values are round
   CHECK(single->max_error_location == table->max_error_location);
 }
 
+TEST_CASE("a target far beyond the budget is refused after two rounds, with the estimate", "[table-builder]") {
+  const FuzzySystem source = tipper();
+  const CompileResult compiled = compile(source, Bindings{});
+  TableBuildOptions options = fast_options(1e-9);
+  options.max_grid_points = 2000;
+  std::vector<TableBuildProgress> rounds;
+  options.progress = [&](const TableBuildProgress& p) { rounds.push_back(p); };
+  DiagnosticList diagnostics;
+  TableBuildStatistics stats;
+  CHECK_FALSE(build_table(source, compiled, options, diagnostics, &stats));
+  REQUIRE(diagnostics.error_count() == 1);
+  CHECK(stats.rounds == kEarlyRefusalRounds);
+  REQUIRE(rounds.size() == static_cast<std::size_t>(kEarlyRefusalRounds));
+  CHECK(rounds.back().estimated_grid_points > 16 * 2000.0);
+  CHECK(rounds.back().budget == 2000);
+  CHECK(rounds.front().round == 1);
+  const std::string& message = diagnostics.items()[0].message;
+  CHECK(message.find("after 2 rounds") != std::string::npos);
+  CHECK(message.find("an estimate") != std::string::npos);
+
+  // Off, the build refines up to the budget and fails there (the test below).
+  options.early_refusal_factor = 0;
+  rounds.clear();
+  DiagnosticList late;
+  CHECK_FALSE(build_table(source, compiled, options, late, &stats));
+  CHECK(stats.rounds > kEarlyRefusalRounds);
+  CHECK(late.items()[0].message.find("an estimate") == std::string::npos);
+}
+
 TEST_CASE("an unreachable --max-error stops at the grid budget with what was reached", "[table-builder]") {
   const FuzzySystem source = tipper();
   const CompileResult compiled = compile(source, Bindings{});
   TableBuildOptions options = fast_options(1e-6);
   options.max_grid_points = 2000;
+  options.early_refusal_factor = 0;
   DiagnosticList diagnostics;
   CHECK_FALSE(build_table(source, compiled, options, diagnostics));
   REQUIRE(diagnostics.error_count() == 1);

@@ -4,6 +4,7 @@
 #include "compiler/sema/lint.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/warning_policy.h"
 
 namespace fmpc::cli {
 
@@ -17,8 +18,8 @@ struct CheckOptions {
 };
 
 int run_check(const CheckOptions& options) {
+  if (options.werror) process_warning_policy().all_errors = true;
   bool any_error = false;
-  bool any_warning = false;
   for (const std::string& path : options.files) {
     LoadedRuleFile file = load_rule_file_from_disk(path);
     if (file.readable && !file.diagnostics.has_errors() && !options.no_lint) {
@@ -31,11 +32,9 @@ int run_check(const CheckOptions& options) {
     }
     print_diagnostics(file.diagnostics, file.sources, std::cerr);
     any_error = any_error || file.diagnostics.has_errors();
-    any_warning = any_warning || file.diagnostics.warning_count() > 0;
   }
-  if (any_error) return kExitErrors;
-  if (any_warning && options.werror) return kExitWarnings;
-  return kExitOk;
+  // --werror is -Werror (warning_policy.h): the warnings were printed as errors and main() exits 1.
+  return any_error ? kExitErrors : kExitOk;
 }
 
 }  // namespace
@@ -44,10 +43,9 @@ void register_check_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<CheckOptions>();
   CLI::App* command =
       app.add_subcommand("check",
-                         "Check rule files (fmpc or MATLAB .fis): every error and lint warning, compiler-style.\n"
-                         "Exit status: 0 clean, 1 warnings with --werror, 2 errors.");
+                         "Check rule files (fmpc or MATLAB .fis): every error and lint warning, compiler-style.");
   command->add_option("files", options->files, "Rule files to check")->required();
-  command->add_flag("--werror", options->werror, "Exit with status 1 when there are warnings");
+  command->add_flag("--werror", options->werror, "The same as -Werror: warnings print as errors and the exit status is 1");
   command->add_flag("--no-lint", options->no_lint, "Report errors only");
   command
       ->add_option("--coverage-threshold", options->coverage_threshold,

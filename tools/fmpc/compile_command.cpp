@@ -17,6 +17,7 @@
 #include "compiler/passes/pipeline.h"
 #include "tools/fmpc/binding_arguments.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 
@@ -179,8 +180,19 @@ int run_compile(const CompileOptions& options) {
     table_options.evaluation.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
     table_options.source_path = options.file;
     table_options.source_hash = source_hash;
+    ProgressLine progress("compile");
+    table_options.progress = [&](const TableBuildProgress& p) {
+      // Time left, at the rate of grid points built so far, to the optimistic size estimate: a lower bound.
+      const double rate = static_cast<double>(p.grid_points) / std::max(progress.elapsed_seconds(), 1e-3);
+      const double left = std::max(0.0, p.estimated_grid_points - static_cast<double>(p.grid_points)) / rate;
+      progress.show("round " + std::to_string(p.round) + ", " + std::to_string(p.grid_points) + " grid points (budget " +
+                    std::to_string(p.budget) + "), error " + format_number(p.training_error) + " (target " +
+                    format_number(p.target) + "); estimated " + format_number(std::round(p.estimated_grid_points)) +
+                    " points, at least " + duration_text(left) + " more");
+    };
     TableBuildStatistics stats;
     const std::optional<LookupTable> table = build_table(*system, *compiled, table_options, diagnostics, &stats);
+    progress.finish();
     if (!table) {
       print_diagnostics(diagnostics, file.sources, std::cerr);
       return kExitErrors;
@@ -230,7 +242,7 @@ void register_compile_command(CLI::App& app, int& exit_code) {
       "compile",
       "Specialise a rule file for fixed inputs and compile it into an evaluator header (--target cpp|cuda) or a\n"
       "lookup table over the varying inputs (--target table: .fzt, or C++/CUDA arrays for -o NAME.h).\n"
-      "Inputs neither fixed nor varied vary. Exit status: 0 done, 2 errors. docs/compiler.md has the details.");
+      "Inputs neither fixed nor varied vary. docs/compiler.md has the details.");
   command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis)")->required();
   command->add_option("--target", options->target, "What to produce")
       ->required()

@@ -2,6 +2,7 @@
 #include <iostream>
 
 #include "compiler/eval/output_comparison.h"
+#include "compiler/frontend/fll.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/frontend/rule_file_loader.h"
 #include "compiler/frontend/matlab_fis.h"
@@ -86,6 +87,10 @@ int run_convert(const ConvertOptions& options) {
         approximation = output_changes(*system, sugeno, {{}, 1000, false});
         if (file.dialect == Dialect::Matlab) {
           text = write_matlab_fis(sugeno, diagnostics);
+        } else if (file.dialect == Dialect::Fll) {
+          text = write_fll(sugeno, diagnostics);
+        } else if (file.dialect == Dialect::Fcl) {
+          text = write_fcl(sugeno, diagnostics);
         } else {
           RuleFile converted;
           converted.path = file.rules.path;
@@ -97,7 +102,9 @@ int run_convert(const ConvertOptions& options) {
       }
     }
   } else if (const FuzzySystem* system = select_system(file, options.system, diagnostics)) {
-    text = write_matlab_fis(*system, diagnostics);
+    if (options.to == "fll") text = write_fll(*system, diagnostics);
+    else if (options.to == "fcl") text = write_fcl(*system, diagnostics);
+    else text = write_matlab_fis(*system, diagnostics);
     intended.push_back(*system);
   }
   const SourceRange whole_file{options.file, 0, 0, 0, 0};
@@ -118,7 +125,15 @@ int run_convert(const ConvertOptions& options) {
       changes.push_back(std::to_string(lossy_warnings) + " of the warnings above (-Wmatlab-lossy) change what the "
                                                          "file means");
     if (!changes.empty()) {
-      const std::string target = matlab_text ? "MATLAB's .fis format" : "the fmpc language";
+      const Dialect written = options.to == "fll"   ? Dialect::Fll
+                              : options.to == "fcl" ? Dialect::Fcl
+                              : options.to == "sugeno" ? file.dialect
+                              : matlab_text         ? Dialect::Matlab
+                                                    : Dialect::Fmpc;
+      const std::string target = written == Dialect::Matlab ? "MATLAB's .fis format"
+                                 : written == Dialect::Fll  ? "fuzzylite's FLL"
+                                 : written == Dialect::Fcl  ? "FCL (IEC 61131-7)"
+                                                            : "the fmpc language";
       if (options.allow_lossy) {
         diagnostics.warning(whole_file, "lossy-conversion",
                             "written in " + target + " with --allow-lossy: the file computes different outputs",
@@ -149,13 +164,15 @@ void register_convert_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App* command = app.add_subcommand(
       "convert",
-      "Convert a rule file between the fmpc language and MATLAB's .fis format (versions 1 and 2 read,\n"
-      "2.0 written), or a Mamdani system into a Sugeno one (--to sugeno, as MATLAB's convertToSugeno; written\n"
-      "in the file's own dialect). What the target cannot hold is reported as a warning; a conversion that\n"
-      "would change what the system computes is refused (nothing written) unless --allow-lossy is given.\n"
-      "Exit status: 0 done, 2 errors.");
-  command->add_option("file", options->file, "Rule file to convert (fmpc or MATLAB .fis)")->required();
-  command->add_option("--to", options->to, "Target format")->required()->check(CLI::IsMember({"fmpc", "matlab", "sugeno"}));
+      "Convert a rule file between the fmpc language, MATLAB's .fis format (versions 1 and 2 read, 2.0 written),\n"
+      "fuzzylite's FLL and IEC 61131-7 FCL, or a Mamdani system into a Sugeno one (--to sugeno, as MATLAB's\n"
+      "convertToSugeno; written in the file's own format). What the target cannot hold is reported as a warning;\n"
+      "a conversion that would change what the system computes is refused (nothing written) unless --allow-lossy\n"
+      "is given.");
+  command->add_option("file", options->file, "Rule file to convert (fmpc, MATLAB .fis, FLL or FCL)")->required();
+  command->add_option("--to", options->to, "Target format")
+      ->required()
+      ->check(CLI::IsMember({"fmpc", "matlab", "fll", "fcl", "sugeno"}));
   command->add_option("-o,--output", options->output, "Output file, written atomically (default stdout)");
   command->add_option("--system", options->system, "Which system of the file to convert (MATLAB holds one)");
   command->add_flag("--allow-lossy", options->allow_lossy,

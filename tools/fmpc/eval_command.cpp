@@ -1,4 +1,6 @@
 #include <CLI/CLI.hpp>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -9,6 +11,7 @@
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "diagnostics/number_format.h"
+#include "kernels/type2_math.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
@@ -30,6 +33,7 @@ struct EvalOptions {
   std::string output = "-";
   std::string system;
   bool explain = false;
+  bool summary = false;
   double explain_threshold = 1e-3;
   std::size_t max_warnings = 20;
   std::string semantics = "matlab";
@@ -68,6 +72,34 @@ void report_flags(const FuzzySystem& system, const EvaluationPoint& point, const
   }
 }
 
+// Four significant digits: what a reader compares at a glance (the CSV keeps every digit).
+std::string four_digits(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+
+// Each antecedent clause's grade at `inputs` (hedge, then negation: MATLAB's order, as the interpreter), so that
+// --explain shows why a rule fired as strongly as it did. Interval type-2 clauses show [lower, upper].
+std::string clause_grades(const FuzzySystem& system, std::size_t rule_index, const std::vector<double>& inputs) {
+  const Rule& rule = system.rules[rule_index];
+  std::string text;
+  for (const Clause& clause : rule.antecedent) {
+    const Variable& input = system.inputs[static_cast<std::size_t>(clause.variable)];
+    const Term& term = input.terms[static_cast<std::size_t>(clause.term)];
+    GradeInterval<double> grade = interval_hedge(term_membership(term, inputs[static_cast<std::size_t>(clause.variable)]),
+                                                 hedge_exponent(clause.hedge));
+    if (clause.negated) grade = interval_not(grade);
+    const std::string hedge = to_string(clause.hedge);
+    text += (text.empty() ? "" : ", ") + input.name + " is " + (clause.negated ? "not " : "") +
+            (hedge.empty() ? "" : hedge + " ") + term.name + " = " +
+            (grade.lower == grade.upper ? four_digits(grade.upper)
+                                        : "[" + four_digits(grade.lower) + ", " + four_digits(grade.upper) + "]");
+  }
+  if (rule.antecedent.empty()) text = "none (the rule always fires)";
+  return text;
+}
+
 void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, const Explanation& explanation,
                        double threshold, std::ostream& out) {
   out << point.label << ":";
@@ -98,6 +130,8 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
     else
       std::snprintf(strength, sizeof strength, "%.6f", strengths[r]);
     rules << "    " << name << ' ' << strength << "  " << format_rule_body(system, r) << '\n';
+    rules << "    " << std::string(name.size(), ' ') << " clause grades: " << clause_grades(system, r, point.inputs)
+          << '\n';
   }
   out << "  rules fired (firing strength " << (type2 ? "[lower, upper], upper " : "") << ">= "
       << format_number(threshold) << "): " << shown << " of " << strengths.size() << '\n'
@@ -299,6 +333,50 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
   }
   return kExitOk;
 }
+// One row per point: its inputs and outputs to four significant digits and the rule that fired most strongly,
+// in aligned columns (units in the header). The exact numbers are in the CSV (-o) and --explain.
+class SummaryTable {
+ public:
+  explicit SummaryTable(const FuzzySystem& system) {
+    std::vector<std::string> header{"point"};
+    for (const auto* variables : {&system.inputs, &system.outputs})
+      for (const Variable& v : *variables)
+        header.push_back(v.unit.empty() || v.unit == "dimensionless" ? v.name : v.name + " (" + v.unit + ")");
+    header.push_back("strongest rule");
+    rows_.push_back(std::move(header));
+  }
+  void add(const FuzzySystem& system, const EvaluationPoint& point, const Evaluation& evaluation) {
+    std::vector<std::string> row{std::to_string(rows_.size())};
+    for (double v : point.inputs) row.push_back(four_digits(v));
+    for (double v : evaluation.outputs) row.push_back(four_digits(v));
+    std::size_t best = evaluation.firing_strengths.size();
+    for (std::size_t r = 0; r < evaluation.firing_strengths.size(); ++r)
+      if (evaluation.firing_strengths[r] > 0 &&
+          (best == evaluation.firing_strengths.size() || evaluation.firing_strengths[r] > evaluation.firing_strengths[best]))
+        best = r;
+    row.push_back(best == evaluation.firing_strengths.size()
+                      ? "none fired"
+                      : system.rule_display_name(best) + " (" + four_digits(evaluation.firing_strengths[best]) + ")");
+    rows_.push_back(std::move(row));
+  }
+  void write(std::ostream& out) const {
+    std::vector<std::size_t> widths(rows_.front().size(), 0);
+    for (const auto& row : rows_)
+      for (std::size_t c = 0; c < row.size(); ++c) widths[c] = std::max(widths[c], row[c].size());
+    for (const auto& row : rows_) {
+      std::string line;
+      for (std::size_t c = 0; c < row.size(); ++c) {
+        // Numbers right-aligned, the rule name (last) left-aligned; no trailing spaces.
+        const std::string pad(widths[c] - row[c].size(), ' ');
+        line += (c ? "  " : "") + (c + 1 == row.size() ? row[c] : pad + row[c]);
+      }
+      out << line << '\n';
+    }
+  }
+
+ private:
+  std::vector<std::vector<std::string>> rows_;
+};
 
 Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<double>& inputs, bool with_sets) {
   if (with_sets) return interpreter.explain(inputs);
@@ -328,6 +406,20 @@ int run_eval(const EvalOptions& options) {
     } else if (!options.assignments.empty()) {
       if (auto point = point_from_assignments(options.assignments, *system, diagnostics))
         points.push_back(std::move(*point));
+    } else if (options.csv.empty() && ::isatty(STDIN_FILENO) == 1) {
+      // Reading CSV from a terminal would wait with no sign of what it waits for: say what it needs instead.
+      const std::vector<std::string> names = variable_names(system->inputs);
+      std::string header, example;
+      for (std::size_t i = 0; i < names.size(); ++i) {
+        header += (i ? "," : "") + names[i];
+        example += (i ? " " : "") + names[i] + "=" +
+                   format_number((system->inputs[i].min + system->inputs[i].max) / 2.0);
+      }
+      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+                        "no points to evaluate: give every input of '" + system->name + "' as NAME=VALUE, or a CSV file",
+                        {"for example: fmpc eval " + options.file + " " + example,
+                         "or: fmpc eval " + options.file + " --csv points.csv (header row: " + header + ")",
+                         "or pipe the CSV on standard input (--csv - reads a terminal too, ending with Ctrl-D)"});
     } else {
       if (const std::optional<CsvTable> csv = read_points_csv(options.csv, sources, diagnostics))
         points = points_from_csv(*csv, *system, diagnostics);
@@ -365,6 +457,7 @@ int run_eval(const EvalOptions& options) {
     EvaluationOptions evaluation_options;
     evaluation_options.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
     Interpreter interpreter(*system, evaluation_options);
+    SummaryTable summary(*system);
     for (const EvaluationPoint& point : points) {
       const Explanation explanation = explain_or_evaluate(interpreter, point.inputs, options.explain);
       report_flags(*system, point, explanation.evaluation, point_diagnostics);
@@ -380,7 +473,9 @@ int run_eval(const EvalOptions& options) {
       }
       csv << format_csv_row(row);
       if (options.explain) write_explanation(*system, point, explanation, options.explain_threshold, explanation_text);
+      if (options.summary) summary.add(*system, point, evaluation);
     }
+    if (options.summary) summary.write(explanation_text);
     // A large CSV out of range everywhere would bury the terminal: keep the first warnings and count the rest.
     std::size_t warnings = 0, dropped = 0;
     for (const Diagnostic& d : point_diagnostics.items()) {
@@ -401,7 +496,7 @@ int run_eval(const EvalOptions& options) {
   print_diagnostics(diagnostics, sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;
   std::string error;
-  if (options.explain) {
+  if (options.explain || options.summary) {
     std::cout << explanation_text.str();
     if (options.output != "-" && !write_text_file_atomically(options.output, csv.str(), error)) {
       std::cerr << options.output << ": error: " << error << '\n';
@@ -423,8 +518,9 @@ void register_eval_command(CLI::App& app, int& exit_code) {
       "Evaluate a rule file, or a compiled lookup table (.fzt), at points given as NAME=VALUE, or as CSV with a\n"
       "header row (--csv FILE, or on stdin). Writes CSV (inputs then outputs; interval type-2 outputs add\n"
       "OUTPUT.lower and OUTPUT.upper, the type-reduced interval). A table takes its axes as inputs (values for\n"
-      "inputs it fixed must equal them) and clamps values beyond its axes. Exit status: 0 done, 2 errors.");
-  command->add_option("file", options->file, "Rule file (fmpc or MATLAB .fis) or lookup table (.fzt)")->required();
+      "inputs it fixed must equal them) and clamps values beyond its axes.");
+  command->add_option("file", options->file, "Rule file (fmpc, MATLAB .fis, FLL or FCL) or lookup table (.fzt)")
+      ->required();
   command->add_option("inputs", options->assignments, "Input values, NAME=VALUE (all inputs)");
   command->add_option("--csv", options->csv, "CSV file of points with a header row naming the inputs; - for stdin");
   command->add_option("-o,--output", options->output, "Where to write the CSV results (default stdout)");
@@ -432,6 +528,11 @@ void register_eval_command(CLI::App& app, int& exit_code) {
   command->add_flag("--explain", options->explain,
                     "Print every point's outputs, the rules that fired with their strengths, and the aggregated "
                     "output set (the CSV then goes only to -o)");
+  command
+      ->add_flag("--summary", options->summary,
+                 "Print one aligned row per point instead of CSV: inputs and outputs to 4 significant digits and the "
+                 "strongest rule (the CSV then goes only to -o; --explain gives the full account)")
+      ->excludes("--explain");
   command
       ->add_option("--explain-threshold", options->explain_threshold,
                    "Smallest firing strength --explain lists (0 lists every rule)")

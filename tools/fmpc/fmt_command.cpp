@@ -27,8 +27,9 @@ int run_fmt(const FmtOptions& options) {
     const std::optional<std::string> text = read_text_file(path, sim::kMaxRuleFileBytes, "rule file", error);
     if (!text) {
       diagnostics.error(SourceRange{path, 0, 0, 0, 0}, error);
-    } else if (detect_dialect(*text) == Dialect::Matlab) {
-      diagnostics.error(SourceRange{path, 1, 1, 1, 9}, "this is a MATLAB .fis file; fmt lays out fmpc files only",
+    } else if (const Dialect dialect = detect_dialect(*text); dialect != Dialect::Fmpc) {
+      diagnostics.error(SourceRange{path, 1, 1, 1, 9},
+                        std::string("this is a ") + dialect_name(dialect) + " file; fmt lays out fmpc files only",
                         {"convert it first: fmpc convert " + path + " --to fmpc -o NEW.fis"});
     }
     std::optional<std::string> formatted;
@@ -73,7 +74,7 @@ void register_fmt_command(CLI::App& app, int& exit_code) {
   CLI::App* command =
       app.add_subcommand("fmt",
                          "Rewrite fmpc rule files in the canonical layout (comments kept; idempotent; atomic writes).\n"
-                         "Exit status: 0 done, 1 with --check when a file is not in canonical layout, 2 errors.");
+                         "--check exits 1 when a file is not in canonical layout.");
   command->add_option("files", options->files, "fmpc rule files to lay out in place")->required();
   auto* check = command->add_flag("--check", options->check,
                                   "Change nothing; list files that are not in canonical layout and exit 1");

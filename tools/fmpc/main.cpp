@@ -5,11 +5,15 @@
 
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/warning_policy.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"fmpc: fuzzy mass-spring parameter compiler (rule files -> evaluators, tables, simulations)"};
+  // Named here, not from argv[0], so that help never shows where the binary was built.
+  CLI::App app{"fmpc: fuzzy mass-spring parameter compiler (rule files -> evaluators, tables, simulations)", "fmpc"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "fmpc 0.1.0");
+  // Every option's default shows in --help.
+  app.option_defaults()->always_capture_default();
   int exit_code = fmpc::cli::kExitOk;
   fmpc::cli::register_check_command(app, exit_code);
   fmpc::cli::register_fmt_command(app, exit_code);
@@ -20,6 +24,17 @@ int main(int argc, char** argv) {
   fmpc::cli::register_plot_command(app, exit_code);
   fmpc::cli::register_trade_command(app, exit_code);
   fmpc::cli::register_thesis_benchmark_command(app, exit_code);
+  const char* exit_rule =
+      "Exit status (every command, docs/cli.md): 0 done; 1 done, but warnings made errors by -Werror (or files\n"
+      "`fmt --check` would change); 2 errors in the input or the command line; 70 an internal error in fmpc.";
+  app.footer(exit_rule);
+  for (CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
+    fmpc::cli::add_warning_options(*command);
+    command->footer(exit_rule);
+    // An empty list has no default worth showing ("=[]").
+    for (CLI::Option* option : command->get_options())
+      if (option->get_default_str() == "[]") option->default_str("");
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -29,5 +44,7 @@ int main(int argc, char** argv) {
     std::cerr << "fmpc: internal error: " << e.what() << "\nplease report this with the input that caused it\n";
     return 70;  // EX_SOFTWARE: a bug in fmpc, not in the user's input
   }
+  // One rule for every command (docs/cli.md): warnings that -Werror turned into errors make a finished command exit 1.
+  if (exit_code == fmpc::cli::kExitOk && fmpc::cli::promoted_warning_count() > 0) return fmpc::cli::kExitWarnings;
   return exit_code;
 }

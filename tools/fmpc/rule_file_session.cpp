@@ -4,6 +4,7 @@
 
 #include "compiler/backend/table/lookup_table.h"
 #include "tools/fmpc/text_files.h"
+#include "tools/fmpc/warning_policy.h"
 
 namespace fmpc::cli {
 
@@ -29,7 +30,9 @@ LoadedRuleFile load_rule_file_from_disk(const std::string& path) {
   return file;
 }
 
-void print_diagnostics(const DiagnosticList& diagnostics, const SourceFiles& sources, std::ostream& err) {
+void print_diagnostics(const DiagnosticList& reported, const SourceFiles& sources, std::ostream& err) {
+  const DiagnosticList diagnostics =
+      with_warning_policy(reported, process_warning_policy(), promoted_warning_count());
   if (diagnostics.empty()) return;
   err << render_all(diagnostics, sources);
   const std::size_t errors = diagnostics.error_count();

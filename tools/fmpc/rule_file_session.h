@@ -22,7 +22,8 @@ struct LoadedRuleFile {
 
 LoadedRuleFile load_rule_file_from_disk(const std::string& path);
 
-// Prints the diagnostics to `err` compiler-style and, when there are any, a summary line.
+// Prints the diagnostics to `err` compiler-style and, when there are any, a summary line; the -W flags
+// (warning_policy.h) apply here, so every command honours them alike.
 void print_diagnostics(const DiagnosticList& diagnostics, const SourceFiles& sources, std::ostream& err);
 
 // Picks the system named `name`, or the only one when `name` is empty. Reports a located error otherwise.

@@ -202,12 +202,13 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
                     format_number(result->duration) + " s, CPU, one thread, against the FEM reference"};
     for (const sim::SimulationTradeRow& row : result->rows)
       if (row.completed && row.steps_per_second > 0.0)
-        figure.points.push_back({row.variant, row.steps_per_second, row.errors.displacement_max});
+        figure.points.push_back(
+            {row.variant, row.steps_per_second, row.errors.displacement_max, sim::trade_model_name(row.model)});
     // Only the front is labelled: the dominated variants crowd together (the CSV names every point).
     const std::vector<std::size_t> front = plot::pareto_front(figure.points);
     for (std::size_t i = 0; i < figure.points.size(); ++i)
       if (std::find(front.begin(), front.end(), i) == front.end()) figure.points[i].label.clear();
-    writes.emplace_back(plot, plot::encode_png(plot::render_trade_plot(figure)));
+    writes.emplace_back(plot, plot::render_trade_plot(figure, plot::image_format_for(plot)));
   }
   std::string error;
   if (!write_text_files_atomically(writes, error)) {

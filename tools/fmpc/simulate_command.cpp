@@ -1,15 +1,15 @@
 // fmpc simulate SCENE: loads a scene file, builds the spring model (fuzzy stiffness included), runs it and writes
 // frames, a CSV time series, a JSON summary and, with a probe, a force-displacement PNG (docs/scenes.md).
 #include <CLI/CLI.hpp>
-#include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <regex>
+#include <sstream>
 
 #include "runtime/io/atomic_file.h"
 #include "runtime/scene/scene_builder.h"
@@ -17,11 +17,10 @@
 #include "runtime/scene/scene_run.h"
 #include "diagnostics/number_format.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
-#include "tools/plot/bitmap_font.h"
-#include "tools/plot/heat_map.h"
-#include "tools/plot/png_image.h"
+#include "tools/plot/line_chart.h"
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
 #include "runtime/gpu/gpu_simulation.h"
 #endif
@@ -48,85 +47,129 @@ std::string six_digits(double value) {
   return text;
 }
 
-// Force (N) against probe displacement (mm): 640 x 480, plot area 480 x 340, ticks from nice_ticks.
-plot::RgbImage render_force_displacement(const std::vector<sim::ProbeCurvePoint>& curve, const std::string& title) {
-  const int width = 640, height = 480, left = 100, top = 60, plot_width = 500, plot_height = 340;
-  const plot::Rgb white{255, 255, 255}, black{0, 0, 0}, grey{200, 200, 200}, blue{31, 119, 180};
-  plot::RgbImage image(width, height, white);
-  double x_min = 0.0, x_max = 0.0, y_min = 0.0, y_max = 0.0;
-  for (const auto& p : curve) {
-    x_min = std::min(x_min, p.displacement * 1000.0);
-    x_max = std::max(x_max, p.displacement * 1000.0);
-    y_min = std::min(y_min, p.force);
-    y_max = std::max(y_max, p.force);
-  }
-  if (!(x_max > x_min)) x_max = x_min + 1.0;
-  if (!(y_max > y_min)) y_max = y_min + 1.0;
-  const std::vector<double> x_ticks = plot::nice_ticks(x_min, x_max, 6);
-  const std::vector<double> y_ticks = plot::nice_ticks(y_min, y_max, 6);
-  x_min = std::min(x_min, x_ticks.front());
-  x_max = std::max(x_max, x_ticks.back());
-  y_min = std::min(y_min, y_ticks.front());
-  y_max = std::max(y_max, y_ticks.back());
-  const auto px = [&](double x) { return left + static_cast<int>(std::lround((x - x_min) / (x_max - x_min) * plot_width)); };
-  const auto py = [&](double y) {
-    return top + plot_height - static_cast<int>(std::lround((y - y_min) / (y_max - y_min) * plot_height));
-  };
-  for (const double x : x_ticks) {
-    image.fill_rect(px(x), top, 1, plot_height, grey);
-    const std::string label = six_digits(x);
-    plot::draw_text(image, px(x) - plot::text_width(label, 2) / 2, top + plot_height + 8, label, black, 2);
-  }
-  for (const double y : y_ticks) {
-    image.fill_rect(left, py(y), plot_width, 1, grey);
-    const std::string label = six_digits(y);
-    plot::draw_text(image, left - 8 - plot::text_width(label, 2), py(y) - plot::text_height(2) / 2, label, black, 2);
-  }
-  image.fill_rect(left, top, 1, plot_height + 1, black);
-  image.fill_rect(left, top + plot_height, plot_width + 1, 1, black);
-  // Segments drawn densely enough to leave no gaps (one dot per pixel of the longer side), 3 pixels thick.
-  for (std::size_t i = 1; i < curve.size(); ++i) {
-    const double x0 = px(curve[i - 1].displacement * 1000.0), y0 = py(curve[i - 1].force);
-    const double x1 = px(curve[i].displacement * 1000.0), y1 = py(curve[i].force);
-    const int n = std::max(1, static_cast<int>(std::max(std::abs(x1 - x0), std::abs(y1 - y0))));
-    for (int k = 0; k <= n; ++k) {
-      const double t = static_cast<double>(k) / n;
-      image.fill_rect(static_cast<int>(std::lround(x0 + t * (x1 - x0))) - 1,
-                      static_cast<int>(std::lround(y0 + t * (y1 - y0))) - 1, 3, 3, blue);
+// Force (N) against probe displacement (mm), the ramp and the hold drawn apart: while the probe holds still the
+// tissue settles and the force relaxes (a vertical drop at the final displacement), which the notes explain.
+std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& curve, const sim::Scene& scene,
+                                      const sim::BuiltScene& built, plot::ImageFormat format) {
+  plot::LineChart chart;
+  chart.title.push_back(scene.name + ": probe force against displacement");
+  // The description carries E in full precision; four significant digits read better in a picture.
+  std::string subtitle;
+  {
+    static const std::regex long_number(R"([0-9]+\.[0-9]{5,})");
+    const std::string& text = built.stiffness_description;
+    std::size_t last = 0;
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), long_number); it != std::sregex_iterator(); ++it) {
+      char short_form[32];
+      std::snprintf(short_form, sizeof short_form, "%.4g", std::stod(it->str()));
+      subtitle += text.substr(last, static_cast<std::size_t>(it->position()) - last) + short_form;
+      last = static_cast<std::size_t>(it->position() + it->length());
     }
+    subtitle += text.substr(last);
   }
-  const std::string x_label = "probe displacement (mm)", y_label = "probe force (N)";
-  plot::draw_text(image, left + plot_width / 2 - plot::text_width(x_label, 2) / 2, height - 40, x_label, black, 2);
-  plot::draw_text(image, 8, top + plot_height / 2 + plot::text_width(y_label, 2) / 2, y_label, black, 2, true);
-  const int title_scale = plot::text_width(title, 2) <= width - 20 ? 2 : 1;
-  plot::draw_text(image, (width - plot::text_width(title, title_scale)) / 2, 20, title, black, title_scale);
-  return image;
+  if (!scene.material.patient.empty()) subtitle = scene.material.patient + "; " + subtitle;
+  chart.title.push_back(subtitle);
+  const double ramp = scene.probe ? scene.probe->ramp : 0.0;
+  plot::Series ramp_series, hold_series;
+  ramp_series.name = ramp > 0 ? "ramp (0 to " + six_digits(ramp) + " s)" : "loading";
+  ramp_series.colour = plot::categorical_colour(0);
+  hold_series.name = "hold (probe still)";
+  hold_series.colour = plot::categorical_colour(1);
+  double x_lo = 0, x_hi = 0, y_lo = 0, y_hi = 0;
+  for (const sim::ProbeCurvePoint& p : curve) {
+    const double x = p.displacement * 1000.0;
+    x_lo = std::min(x_lo, x);
+    x_hi = std::max(x_hi, x);
+    y_lo = std::min(y_lo, p.force);
+    y_hi = std::max(y_hi, p.force);
+    const bool in_hold = ramp > 0 && p.time > ramp;
+    plot::Series& series = in_hold ? hold_series : ramp_series;
+    if (in_hold && series.x.empty() && !ramp_series.x.empty()) {  // join the phases
+      series.x.push_back(ramp_series.x.back());
+      series.y.push_back(ramp_series.y.back());
+    }
+    series.x.push_back(x);
+    series.y.push_back(p.force);
+  }
+  chart.x = plot::Axis{x_lo, x_hi > x_lo ? x_hi : x_lo + 1, false, "probe displacement (mm)"};
+  chart.y = plot::Axis{y_lo, y_hi > y_lo ? y_hi : y_lo + 1, false, "probe force (N)"};
+  chart.series.push_back(ramp_series);
+  if (hold_series.x.size() > 1) {
+    chart.series.push_back(hold_series);
+    const double force_at_stop = ramp_series.y.back(), force_at_end = hold_series.y.back();
+    char change[64];
+    std::snprintf(change, sizeof change, "%+.3g%%", 100.0 * (force_at_end - force_at_stop) / std::fabs(force_at_stop));
+    chart.notes.push_back("the probe stops at " + six_digits(ramp_series.x.back()) + " mm, t = " + six_digits(ramp) +
+                          " s");
+    chart.notes.push_back("force then: " + six_digits(force_at_stop) + " N");
+    chart.notes.push_back("after the hold: " + six_digits(force_at_end) + " N (" + change + ")");
+    chart.notes.push_back("while the probe holds still the");
+    chart.notes.push_back("tissue settles: the force moves");
+    chart.notes.push_back("along the vertical line");
+    chart.markers.push_back(plot::VerticalMarker{ramp_series.x.back(), "probe stops", plot::categorical_colour(1)});
+  }
+  chart.notes.push_back("duration " + six_digits(curve.back().time) + " s");
+  return plot::render_line_chart(chart, format);
 }
 
-// A progress bar on stderr, drawn only on a terminal and only once the run has taken a second.
-class ProgressBar {
- public:
-  ProgressBar() : enabled_(::isatty(STDERR_FILENO) == 1), start_(std::chrono::steady_clock::now()) {}
-  void update(std::size_t done, std::size_t total) {
-    if (!enabled_ || total == 0) return;
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    if (elapsed < 1.0) return;
-    const int width = 40;
-    const int filled = static_cast<int>(static_cast<double>(width) * static_cast<double>(done) / static_cast<double>(total));
-    std::cerr << "\r[" << std::string(static_cast<std::size_t>(filled), '#')
-              << std::string(static_cast<std::size_t>(width - filled), '.') << "] " << 100 * done / total << "% step "
-              << done << "/" << total << std::flush;
-    drawn_ = true;
+// Files an earlier `fmpc simulate` left in `directory`: every .pvd there that is exactly what fmpc writes
+// (runtime/io/vtk_xml.cpp pvd_document: one DataSet line per frame_NNNNN.vtu) and the frames it lists. Anything
+// else, a user's file included, is never a candidate.
+std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> files;
+  std::error_code error;
+  if (!fs::is_directory(directory, error)) return files;
+  static const std::regex frame_line(
+      R"re(    <DataSet timestep="[-+0-9.eE]+" group="" part="0" file="(frame_[0-9]{5}\.vtu)"/>)re");
+  const std::string head =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+      "  <Collection>\n";
+  const std::string tail = "  </Collection>\n</VTKFile>\n";
+  for (const fs::directory_entry& entry : fs::directory_iterator(directory, error)) {
+    if (entry.path().extension() != ".pvd" || !entry.is_regular_file(error)) continue;
+    std::string read_error;
+    const std::optional<std::string> text = read_text_file(entry.path().string(), sim::kMaxSceneFileBytes, "pvd", read_error);
+    if (!text || text->compare(0, head.size(), head) != 0 || text->size() < head.size() + tail.size() ||
+        text->compare(text->size() - tail.size(), tail.size(), tail) != 0)
+      continue;
+    std::vector<fs::path> frames;
+    std::istringstream lines(text->substr(head.size(), text->size() - head.size() - tail.size()));
+    bool fmpc_wrote_it = true;
+    for (std::string line; std::getline(lines, line);) {
+      std::smatch match;
+      if (!std::regex_match(line, match, frame_line)) {
+        fmpc_wrote_it = false;
+        break;
+      }
+      frames.push_back(directory / match[1].str());
+    }
+    if (!fmpc_wrote_it) continue;
+    files.push_back(entry.path());
+    for (const fs::path& frame : frames)
+      if (fs::is_regular_file(frame, error)) files.push_back(frame);
   }
-  void finish() {
-    if (drawn_) std::cerr << "\r" << std::string(72, ' ') << "\r" << std::flush;
-  }
+  return files;
+}
 
- private:
-  bool enabled_;
-  bool drawn_ = false;
-  std::chrono::steady_clock::time_point start_;
-};
+// Removes what an earlier run wrote and this one did not (frames past the new count, a .pvd under another scene
+// name), so that the folder holds one run. Returns how many files went.
+std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier, const std::vector<std::string>& written,
+                               DiagnosticList& diagnostics) {
+  std::size_t removed = 0;
+  for (const std::filesystem::path& path : earlier) {
+    bool rewritten = false;
+    for (const std::string& file : written)
+      rewritten = rewritten || std::filesystem::path(file).lexically_normal() == path.lexically_normal();
+    if (rewritten) continue;
+    std::error_code error;
+    if (std::filesystem::remove(path, error)) ++removed;
+    else if (error)
+      diagnostics.error(SourceRange{path.string(), 0, 0, 0, 0},
+                        "cannot remove this file of an earlier run: " + error.message());
+  }
+  return removed;
+}
 
 // Applies the command-line overrides; errors name the option and what is allowed.
 bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, DiagnosticList& diagnostics) {
@@ -230,19 +273,24 @@ int run_simulate(const SimulateOptions& options) {
   run_options.output_directory = !options.output_directory.empty()      ? options.output_directory
                                  : !scene->outputs.directory.empty() ? scene->outputs.directory
                                                                      : scene->name + "_output";
-  ProgressBar progress;
-  run_options.progress = [&](std::size_t done, std::size_t total) { progress.update(done, total); };
+  const std::vector<std::filesystem::path> earlier = earlier_run_files(run_options.output_directory);
+  ProgressLine progress("simulate");
+  run_options.progress = [&](std::size_t done, std::size_t total) { progress.show_fraction(done, total, "step"); };
   const std::optional<sim::SceneRunResult> result = sim::run_scene(*scene, *built, run_options, diagnostics);
   progress.finish();
   std::string plot_path;
   if (result && built->setup.probe && scene->outputs.plot && result->probe_curve.size() >= 2) {
-    std::string title = scene->name;
-    if (!scene->material.patient.empty()) title += ": " + scene->material.patient;
     plot_path = (std::filesystem::path(run_options.output_directory) / "force_displacement.png").string();
-    if (!sim::write_file_atomically(plot_path,
-                                    plot::encode_png(render_force_displacement(result->probe_curve, title)),
-                                    diagnostics))
+    if (!sim::write_file_atomically(
+            plot_path, render_force_displacement(result->probe_curve, *scene, *built, plot::ImageFormat::Png),
+            diagnostics))
       plot_path.clear();
+  }
+  std::size_t stale = 0;
+  if (result) {
+    std::vector<std::string> written = result->files;
+    if (!plot_path.empty()) written.push_back(plot_path);
+    stale = remove_stale_files(earlier, written, diagnostics);
   }
   report(diagnostics, sources);
   if (!result) return kExitErrors;
@@ -274,7 +322,9 @@ int run_simulate(const SimulateOptions& options) {
     std::cout << " (probe force " << six_digits(precision.probe_force_difference) << ", largest displacement "
               << six_digits(precision.displacement_difference) << " relative)";
   std::cout << "\n  wrote " << result->files.size() + (plot_path.empty() ? 0 : 1) << " files to "
-            << run_options.output_directory << (plot_path.empty() ? "" : " (plot: force_displacement.png)") << "\n";
+            << run_options.output_directory << (plot_path.empty() ? "" : " (plot: force_displacement.png)");
+  if (stale > 0) std::cout << "; removed " << stale << " stale file" << (stale == 1 ? "" : "s") << " of an earlier run";
+  std::cout << "\n";
   return result->completed ? kExitOk : kExitErrors;
 }
 

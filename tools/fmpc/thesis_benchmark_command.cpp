@@ -15,7 +15,7 @@
 #include "tools/fmpc/evaluation_points.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
-#include "tools/plot/line_plot.h"
+#include "tools/plot/line_chart.h"
 
 namespace fmpc::cli {
 
@@ -112,14 +112,24 @@ std::vector<std::pair<std::string, std::string>> plot_files(const sim::LiverBenc
   std::vector<std::pair<std::string, std::string>> files;
   for (const std::string& group : groups) {
     for (const bool velocity : {false, true}) {
-      plot::LinePlot figure;
-      figure.title = (velocity ? "velocity, " : "displacement, ") + group + " (step of 1 N at t = 0)";
-      figure.x_label = "time (s)";
-      figure.y_label = velocity ? "velocity (mm/s)" : "displacement (mm)";
+      plot::LineChart figure;
+      figure.title = {(velocity ? "velocity, " : "displacement, ") + group, "a step of 1 N at t = 0"};
+      figure.x.title = "time (s)";
+      figure.y.title = velocity ? "velocity (mm/s)" : "displacement (mm)";
+      double x_hi = 0.0, y_lo = 0.0, y_hi = 0.0;  // the axes always include 0
       const auto add = [&](const std::string& label, const sim::MassPointResponse& response) {
         const sim::Curve& curve = velocity ? response.velocity : response.displacement;
-        plot::LineSeries series{label, curve.time, curve.value, plot::series_colour(figure.series.size())};
-        for (double& y : series.y) y *= 1000.0;
+        plot::Series series;
+        series.name = label;
+        series.x = curve.time;
+        series.y = curve.value;
+        series.colour = plot::categorical_colour(figure.series.size());
+        for (double& y : series.y) {
+          y *= 1000.0;
+          y_lo = std::min(y_lo, y);
+          y_hi = std::max(y_hi, y);
+        }
+        for (const double t : series.x) x_hi = std::max(x_hi, t);
         figure.series.push_back(std::move(series));
       };
       add("benchmark (Basafa-Farahmand, K1 0.05 N)", report.reference);
@@ -129,10 +139,14 @@ std::vector<std::pair<std::string, std::string>> plot_files(const sim::LiverBenc
         add(name + ", benchmark law", run.benchmark_response);
         add(name + ", thesis MSM", run.thesis_response);
       }
+      figure.x.lo = 0.0;
+      figure.x.hi = x_hi > 0.0 ? x_hi : 1.0;
+      figure.y.lo = y_lo;
+      figure.y.hi = y_hi > y_lo ? y_hi : y_lo + 1.0;
       const std::string path = (std::filesystem::path(directory) /
                                 (file_stem(group) + (velocity ? "_velocity.png" : "_displacement.png")))
                                    .string();
-      files.emplace_back(path, plot::encode_png(plot::render_line_plot(figure)));
+      files.emplace_back(path, plot::render_line_chart(figure, plot::ImageFormat::Png));
     }
   }
   return files;

@@ -29,6 +29,7 @@
 #include "tools/fmpc/binding_arguments.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/compiled_evaluator.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/scene_trade_command.h"
 #include "tools/fmpc/text_files.h"
@@ -217,6 +218,11 @@ int run_trade(const TradeOptions& options) {
   };
 
   std::vector<Row> rows;
+  // Every variant measures for at least --min-seconds: with the compile, a run takes seconds to minutes.
+  const std::size_t planned = 1 + (system.type == SystemType::Mamdani && !system.interval_type2 && system.samples > 0) +
+                              2 + (d > 0 ? options.resolutions.size() : 0);
+  ProgressLine progress("trade");
+  const auto measured = [&] { progress.show_fraction(rows.size(), planned, "variant"); };
   // The reference: the interpreter with `samples exact` (Mamdani); a Sugeno system has no sampling to remove, and an
   // interval type-2 Mamdani system is type-reduced over its samples (there is no exact mode): its reference is the
   // interpreter as the file says, and the sampled row below is left out.
@@ -241,6 +247,7 @@ int run_trade(const TradeOptions& options) {
     row.memory_bytes = interpreter_bytes(exact_system);
     row.memory_note = "IR data";
     rows.push_back(row);
+    measured();
   }
   if (exact_mode && system.samples > 0) {
     Interpreter sampled(system);
@@ -257,6 +264,7 @@ int run_trade(const TradeOptions& options) {
     row.memory_bytes = interpreter_bytes(system);
     row.memory_note = "IR data + sampled terms";
     rows.push_back(row);
+    measured();
   }
 
   // The generated evaluator, compiled as a user would compile it.
@@ -275,6 +283,7 @@ int run_trade(const TradeOptions& options) {
     std::cerr << "fmpc trade: the compiled C++ and table rows are left out\n";
   } else {
     std::string error;
+    progress.show("compiling the generated evaluator (" + compiler + " " + options.flags + ")");
     evaluator = CompiledEvaluator::build(*header, emit.namespace_name, compiler, options.flags, error);
     if (!evaluator) std::cerr << "fmpc trade: " << error << "\nfmpc trade: the compiled C++ and table rows are left out\n";
   }
@@ -288,6 +297,7 @@ int run_trade(const TradeOptions& options) {
     row.memory_bytes = static_cast<double>(evaluator->shared_object_bytes());
     row.memory_note = "shared object";
     rows.push_back(row);
+    measured();
 
     std::vector<float> points_float(points.begin(), points.end()), got_float(n * m);
     evaluator->batch_float()(points_float.data(), got_float.data(), n);
@@ -299,6 +309,7 @@ int run_trade(const TradeOptions& options) {
     row.memory_bytes = static_cast<double>(evaluator->shared_object_bytes());
     row.memory_note = "shared object";
     rows.push_back(row);
+    measured();
 
     // Uniform tables, their grid values from the compiled double evaluator (which agrees with the sampled
     // interpreter to 1e-12 of the range; tests/unit/emit_cpp_test.cpp).
@@ -342,9 +353,11 @@ int run_trade(const TradeOptions& options) {
       row.memory_bytes = 8.0 * static_cast<double>(table.values.size() + static_cast<std::size_t>(resolution) * d);
       row.memory_note = "values + breakpoints";
       rows.push_back(row);
+    measured();
     }
   }
 
+  progress.finish();
   const std::string unit = output_unit(system);
   std::ostringstream markdown;
   markdown << "# fmpc trade: " << system.name << " (" << options.file << ")\n\n";
@@ -381,12 +394,14 @@ int run_trade(const TradeOptions& options) {
   if (!options.plot.empty()) {
     plot::TradePlot figure;
     figure.error_unit = unit;
-    figure.title = {"fmpc trade: " + system.name, std::to_string(n) + " held-out points, one core"};
+    figure.title = {"fmpc trade: " + system.name,
+                    std::to_string(n) + " held-out points (seed " + std::to_string(options.seed) +
+                        "), errors against the exact interpreter, speed on one core of this machine"};
     for (const Row& row : rows)
       if (row.evaluations_per_second > 0 && std::isfinite(row.max_error))
         figure.points.push_back({row.variant + " " + row.detail.substr(0, row.detail.find(',')),
-                                 row.evaluations_per_second, row.max_error});
-    writes.emplace_back(options.plot, plot::encode_png(plot::render_trade_plot(figure)));
+                                 row.evaluations_per_second, row.max_error, row.variant});
+    writes.emplace_back(options.plot, plot::render_trade_plot(figure, plot::image_format_for(options.plot)));
   }
   std::string error;
   if (!write_text_files_atomically(writes, error)) {
@@ -423,7 +438,7 @@ void register_trade_command(CLI::App& app, int& exit_code) {
   command->add_option("--cxx-flags", options->flags, "Its flags (default: -std=c++17 -O2)");
   command->add_option("--csv", options->csv, "Write the rows as CSV");
   command->add_option("--markdown", options->markdown, "Write the markdown table");
-  command->add_option("--plot", options->plot, "Write the Pareto plot (PNG)");
+  command->add_option("--plot", options->plot, "Write the Pareto plot (PNG, or SVG for NAME.svg)");
   // A scene file (.yaml) is traded as a simulation (tools/fmpc/scene_trade_command.cpp).
   const auto scene_arguments = add_scene_trade_options(*command);
   command->callback([options, scene_arguments, command, &exit_code] {

@@ -1,9 +1,11 @@
 #pragma once
-// A control surface drawn as a heat map: z over a grid of (x, y), with axes, ticks, labels and a colour bar.
+// A control surface drawn as a heat map with contour lines: z over a grid of (x, y), axes, a colour bar in the
+// output's unit, and a title block naming the inputs held fixed (with their units).
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "tools/plot/png_image.h"
+#include "tools/plot/canvas.h"
 
 namespace fmpc::plot {
 
@@ -16,22 +18,20 @@ struct HeatMap {
   std::string x_label;
   std::string y_label;
   std::string z_label;
-  std::vector<std::string> title;  // lines above the plot
+  std::vector<std::string> title;  // the first line in bold, the rest (fixed inputs) below it
+  bool contours = true;            // iso-lines at the colour bar's ticks
 };
 
 // Viridis (van der Walt & Smith, matplotlib 2.0 default): perceptually uniform and readable in grey and by
 // colour-blind readers. t in [0, 1], clamped; NaN gives grey.
-Rgb viridis(double t);
+Colour viridis(double t);
 
-// About `count` evenly spaced round values (1, 2 or 5 times a power of ten) covering [lo, hi].
-std::vector<double> nice_ticks(double lo, double hi, int count);
+// Line segments where z crosses `level` (marching squares over the grid cells, linear interpolation along the
+// edges; a saddle cell is split by its centre value). Cells with a NaN corner give none.
+std::vector<std::pair<std::pair<double, double>, std::pair<double, double>>> contour_segments(const HeatMap& map,
+                                                                                             double level);
 
-// The figure: 640 x 540 pixels, plot area 400 x 400.
-RgbImage render_heat_map(const HeatMap& map);
-
-// Geometry of render_heat_map, for tests: the plot area's top-left corner and size.
-inline constexpr int kPlotLeft = 100;
-inline constexpr int kPlotTop = 70;
-inline constexpr int kPlotSize = 400;
+// The figure, 760 x 600, as PNG or SVG bytes.
+std::string render_heat_map(const HeatMap& map, ImageFormat format);
 
 }  // namespace fmpc::plot

@@ -2,51 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
+#include <map>
 
-#include "tools/plot/bitmap_font.h"
+#include "tools/plot/axes.h"
 
 namespace fmpc::plot {
 
 namespace {
 
-constexpr int kWidth = 720;
-constexpr int kHeight = 540;
-constexpr int kLeft = 110;
-constexpr int kTop = 70;
-constexpr int kAreaWidth = 560;
-constexpr int kAreaHeight = 380;
-const Rgb kBlack{0, 0, 0};
-const Rgb kGrey{200, 200, 200};
-const Rgb kFront{200, 40, 40};
-const Rgb kPoint{30, 90, 180};
-
-// Bresenham's line (integer, all octants).
-void draw_line(RgbImage& image, int x0, int y0, int x1, int y1, Rgb colour) {
-  const int dx = std::abs(x1 - x0), dy = -std::abs(y1 - y0);
-  const int sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
-  int error = dx + dy;
-  while (true) {
-    image.set(x0, y0, colour);
-    if (x0 == x1 && y0 == y1) return;
-    const int twice = 2 * error;
-    if (twice >= dy) {
-      error += dy;
-      x0 += sx;
-    }
-    if (twice <= dx) {
-      error += dx;
-      y0 += sy;
-    }
-  }
-}
-
-std::string power_of_ten(int exponent) {
-  char text[16];
-  std::snprintf(text, sizeof text, "1e%d", exponent);
-  return text;
-}
+constexpr int kWidth = 860;
+constexpr int kHeight = 600;
+constexpr double kExactStrip = 34;  // height of the "0 (exact)" strip below the log axis
+constexpr double kMarker = 5;
+const Colour kFront{0.84, 0.15, 0.16, 1};
 
 }  // namespace
 
@@ -69,68 +37,145 @@ std::vector<std::size_t> pareto_front(const std::vector<TradePoint>& points) {
   return front;
 }
 
-RgbImage render_trade_plot(const TradePlot& plot) {
-  RgbImage image(kWidth, kHeight, Rgb{255, 255, 255});
-  // Decades spanning the data; errors of 0 sit on the floor, one decade below the smallest non-zero error.
+std::string render_trade_plot(const TradePlot& plot, ImageFormat format, LabelPlacement* placement) {
+  Canvas canvas(kWidth, kHeight, format);
+  const Font title_font{15, true}, info_font{12, false}, tick_font{12, false}, axis_font{13, false},
+      label_font{11, false}, legend_font{12, false};
+  const double top = draw_title_block(canvas, 16, 12, kWidth - 32, plot.title, title_font, info_font) + 8;
+
+  // Legend groups in order of first appearance, each with a colour.
+  std::vector<std::string> kinds;
+  for (const TradePoint& p : plot.points) {
+    const std::string kind = p.kind.empty() ? "other" : p.kind;
+    if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end()) kinds.push_back(kind);
+  }
+  const auto colour_of = [&](const TradePoint& p) {
+    const std::string kind = p.kind.empty() ? "other" : p.kind;
+    return categorical_colour(static_cast<std::size_t>(std::find(kinds.begin(), kinds.end(), kind) - kinds.begin()));
+  };
+  const double legend_width = 200;
+
   double speed_lo = 1e300, speed_hi = 0, error_lo = 1e300, error_hi = 0;
+  bool any_exact = false;
   for (const TradePoint& p : plot.points) {
     speed_lo = std::min(speed_lo, p.evaluations_per_second);
     speed_hi = std::max(speed_hi, p.evaluations_per_second);
     if (p.max_error > 0) {
       error_lo = std::min(error_lo, p.max_error);
       error_hi = std::max(error_hi, p.max_error);
+    } else {
+      any_exact = true;
     }
   }
   if (!(speed_hi > 0)) speed_lo = speed_hi = 1;
   if (!(error_hi > 0)) error_lo = error_hi = 1;
-  const int x_lo = static_cast<int>(std::floor(std::log10(speed_lo)));
-  const int x_hi = std::max(x_lo + 1, static_cast<int>(std::ceil(std::log10(speed_hi))));
-  const int y_lo = static_cast<int>(std::floor(std::log10(error_lo))) - 1;
-  const int y_hi = std::max(y_lo + 1, static_cast<int>(std::ceil(std::log10(error_hi))));
-  const auto px = [&](double speed) {
-    return kLeft + static_cast<int>(std::lround((std::log10(speed) - x_lo) / (x_hi - x_lo) * kAreaWidth));
-  };
-  const auto py = [&](double error) {
-    const double decade = error > 0 ? std::max(std::log10(error), static_cast<double>(y_lo)) : y_lo;
-    return kTop + kAreaHeight - static_cast<int>(std::lround((decade - y_lo) / (y_hi - y_lo) * kAreaHeight));
-  };
-
-  for (int e = x_lo; e <= x_hi; ++e) {
-    const int x = kLeft + (e - x_lo) * kAreaWidth / (x_hi - x_lo);
-    draw_line(image, x, kTop, x, kTop + kAreaHeight, kGrey);
-    const std::string label = power_of_ten(e);
-    draw_text(image, x - text_width(label, 2) / 2, kTop + kAreaHeight + 8, label, kBlack, 2);
+  // Half a decade of room around the data so that markers and labels stay inside the frame.
+  const Axis x_axis = rounded(Axis{speed_lo / 3, speed_hi * 3, true, plot.speed_label});
+  const Axis y_axis = rounded(Axis{error_lo / 3, error_hi * 3, true,
+                                   "max error" + (plot.error_unit.empty() ? "" : " (" + plot.error_unit + ")")});
+  const double strip = any_exact ? kExactStrip : 0;
+  PlotArea area = layout_plot(canvas, Box{12, top, kWidth - 12 - legend_width - 16, kHeight - top - 10 - strip},
+                              x_axis, y_axis, tick_font, axis_font);
+  // The strip for exact variants sits below the log area, inside the frame, with its own label; the x tick labels
+  // move below it.
+  const Box log_box = area.box;
+  PlotArea drawn = area;
+  drawn.box.height += strip;
+  draw_axes(canvas, area, tick_font, axis_font, !any_exact);
+  if (any_exact) {
+    // The x tick labels and title go below the strip.
+    const double strip_top = log_box.y + log_box.height;
+    canvas.rectangle(log_box.x, strip_top, log_box.width, strip, Colour{0.96, 0.96, 0.96, 1});
+    canvas.line(log_box.x, strip_top, log_box.x + log_box.width, strip_top, kBlack, 1, {4, 3});
+    canvas.frame(log_box.x, log_box.y, log_box.width, log_box.height + strip, kBlack);
+    canvas.text(log_box.x - 8, strip_top + strip / 2, "0 (exact)", tick_font, Align::End, Align::Centre);
+    double label_bottom = strip_top + strip;
+    for (double v : log_ticks(x_axis.lo, x_axis.hi)) {
+      const double px = area.px(v);
+      canvas.line(px, strip_top + strip, px, strip_top + strip + 5, kBlack);
+      const Box b = canvas.text(px, strip_top + strip + 7, tick_label(v, true), tick_font, Align::Centre, Align::Start);
+      label_bottom = std::max(label_bottom, b.y + b.height);
+    }
+    canvas.text(log_box.x + log_box.width / 2, label_bottom + 3, x_axis.title, axis_font, Align::Centre, Align::Start);
   }
-  for (int e = y_lo; e <= y_hi; ++e) {
-    const int y = kTop + kAreaHeight - (e - y_lo) * kAreaHeight / (y_hi - y_lo);
-    draw_line(image, kLeft, y, kLeft + kAreaWidth, y, kGrey);
-    const std::string label = e == y_lo ? "0" : power_of_ten(e);
-    draw_text(image, kLeft - 8 - text_width(label, 2), y - text_height(2) / 2, label, kBlack, 2);
-  }
-  draw_line(image, kLeft, kTop + kAreaHeight, kLeft + kAreaWidth, kTop + kAreaHeight, kBlack);
-  draw_line(image, kLeft, kTop, kLeft, kTop + kAreaHeight, kBlack);
-  const std::string& x_label = plot.speed_label;
-  draw_text(image, kLeft + (kAreaWidth - text_width(x_label, 2)) / 2, kTop + kAreaHeight + 34, x_label, kBlack, 2);
-  const std::string y_label = "max error" + (plot.error_unit.empty() ? "" : " (" + plot.error_unit + ")");
-  draw_text(image, 20, kTop + (kAreaHeight + text_width(y_label, 2)) / 2, y_label, kBlack, 2, true);
-  for (std::size_t line = 0; line < plot.title.size(); ++line)
-    draw_text(image, kLeft, 14 + static_cast<int>(line) * 20, plot.title[line], kBlack, 2);
+  const auto point_xy = [&](const TradePoint& p) {
+    const double x = area.px(p.evaluations_per_second);
+    const double y = p.max_error > 0 ? area.py(p.max_error) : log_box.y + log_box.height + strip / 2;
+    return std::pair<double, double>{x, y};
+  };
 
   const std::vector<std::size_t> front = pareto_front(plot.points);
-  for (std::size_t k = 0; k + 1 < front.size(); ++k) {
-    const TradePoint& a = plot.points[front[k]];
-    const TradePoint& b = plot.points[front[k + 1]];
-    draw_line(image, px(a.evaluations_per_second), py(a.max_error), px(b.evaluations_per_second),
-              py(b.max_error), kFront);
+  std::vector<std::pair<double, double>> front_line;
+  for (std::size_t i : front) front_line.push_back(point_xy(plot.points[i]));
+  canvas.polyline(front_line, kFront, 2, {6, 4});
+
+  // Labels: for each point, the first of eight positions around it whose box stays inside the plot and overlaps no
+  // marker and no label placed before; points are taken from the most crowded first so that they get the choice.
+  LabelPlacement local;
+  LabelPlacement& labels = placement ? *placement : local;
+  labels.boxes.assign(plot.points.size(), Box{});
+  labels.placed.assign(plot.points.size(), false);
+  std::vector<Box> markers;
+  for (const TradePoint& p : plot.points) {
+    const auto [x, y] = point_xy(p);
+    markers.push_back(Box{x - kMarker - 1, y - kMarker - 1, 2 * kMarker + 2, 2 * kMarker + 2});
   }
+  std::vector<Box> taken;
+  const Box inside = drawn.box;
   for (std::size_t i = 0; i < plot.points.size(); ++i) {
-    const TradePoint& p = plot.points[i];
-    const bool on_front = std::find(front.begin(), front.end(), i) != front.end();
-    const int x = px(p.evaluations_per_second), y = py(p.max_error);
-    image.fill_rect(x - 3, y - 3, 7, 7, on_front ? kFront : kPoint);
-    draw_text(image, x + 6, y - 10 - static_cast<int>(i % 2) * 10, p.label, kBlack, 1);
+    const auto [x, y] = point_xy(plot.points[i]);
+    const auto [w, h] = canvas.measure(plot.points[i].label, label_font);
+    const double d = kMarker + 3;
+    const Box candidates[] = {{x + d, y - h / 2, w, h},         {x - d - w, y - h / 2, w, h},
+                              {x - w / 2, y - d - h, w, h},     {x - w / 2, y + d, w, h},
+                              {x + d, y - d - h, w, h},         {x - d - w, y - d - h, w, h},
+                              {x + d, y + d, w, h},             {x - d - w, y + d, w, h}};
+    for (const Box& candidate : candidates) {
+      if (!candidate.inside(inside)) continue;
+      bool clear = true;
+      for (const Box& m : markers) clear = clear && !candidate.overlaps(m);
+      for (const Box& t : taken) clear = clear && !candidate.overlaps(t, 2);
+      if (!clear) continue;
+      labels.boxes[i] = candidate;
+      labels.placed[i] = true;
+      taken.push_back(candidate);
+      break;
+    }
   }
-  return image;
+  // Markers, then labels (or numbers, listed in the legend).
+  int numbered = 0;
+  std::vector<std::pair<int, std::size_t>> numbers;
+  for (std::size_t i = 0; i < plot.points.size(); ++i) {
+    const auto [x, y] = point_xy(plot.points[i]);
+    const bool on_front = std::find(front.begin(), front.end(), i) != front.end();
+    canvas.circle(x, y, kMarker, colour_of(plot.points[i]), on_front ? kFront : kBlack, on_front ? 2 : 0.8);
+    if (labels.placed[i]) {
+      canvas.text(labels.boxes[i].x, labels.boxes[i].y, plot.points[i].label, label_font, Align::Start, Align::Start);
+    } else {
+      numbers.push_back({++numbered, i});
+      canvas.text(x + kMarker + 1, y - kMarker - 1, std::to_string(numbered), label_font, Align::Start, Align::End);
+    }
+  }
+
+  // Legend: the kinds, the front, then any numbered labels.
+  double ly = log_box.y;
+  const double lx = kWidth - legend_width - 8;
+  for (std::size_t k = 0; k < kinds.size(); ++k) {
+    canvas.circle(lx + 8, ly + 8, kMarker, categorical_colour(k), kBlack, 0.8);
+    ly += canvas.text(lx + 20, ly + 8, kinds[k], legend_font, Align::Start, Align::Centre).height + 6;
+  }
+  canvas.line(lx, ly + 8, lx + 16, ly + 8, kFront, 2, {6, 4});
+  ly += canvas.text(lx + 20, ly + 8, "Pareto front", legend_font, Align::Start, Align::Centre).height + 6;
+  canvas.circle(lx + 8, ly + 8, kMarker, kWhite, kFront, 2);
+  ly += canvas.text(lx + 20, ly + 8, "on the front", legend_font, Align::Start, Align::Centre).height + 10;
+  for (const auto& [number, index] : numbers) {
+    const std::string text = std::to_string(number) + ": " + plot.points[index].label;
+    Font font = label_font;
+    const double w = canvas.measure(text, font).first;
+    if (w > legend_width) font.size = std::max(8.0, font.size * legend_width / w);
+    ly += canvas.text(lx, ly, text, font, Align::Start, Align::Start).height + 3;
+  }
+  return canvas.finish();
 }
 
 }  // namespace fmpc::plot

@@ -1,18 +1,20 @@
 #pragma once
 // The speed/accuracy trade of `fmpc trade` as a scatter plot: evaluations per second (log x) against the maximum
-// error (log y), one labelled point per variant, the Pareto front (no other variant is both faster and more
-// accurate) joined by a line.
+// error (log y), one labelled point per variant coloured by its kind, the Pareto front (no other variant is both
+// faster and more accurate) joined by a line, and a legend. Exact variants (error 0, which a log axis cannot show)
+// sit in a strip below the axis marked "0 (exact)".
 #include <string>
 #include <vector>
 
-#include "tools/plot/png_image.h"
+#include "tools/plot/canvas.h"
 
 namespace fmpc::plot {
 
 struct TradePoint {
-  std::string label;
+  std::string label;                    // "table 17x17"
   double evaluations_per_second = 0.0;  // > 0
-  double max_error = 0.0;               // >= 0; 0 is drawn at the floor of the error axis
+  double max_error = 0.0;               // >= 0
+  std::string kind;                     // legend group: "interpreter", "compiled C++", "table"; empty: "other"
 };
 
 struct TradePlot {
@@ -26,7 +28,13 @@ struct TradePlot {
 // they are compared with, or the reverse), sorted by speed.
 std::vector<std::size_t> pareto_front(const std::vector<TradePoint>& points);
 
-// The figure: 720 x 540 pixels.
-RgbImage render_trade_plot(const TradePlot& plot);
+// Where each point's label went: its box, or none (then the point carries a number and the legend the label).
+struct LabelPlacement {
+  std::vector<Box> boxes;
+  std::vector<bool> placed;
+};
+
+// The figure, 860 x 600, as PNG or SVG bytes; `placement` (optional) receives where the labels went, for tests.
+std::string render_trade_plot(const TradePlot& plot, ImageFormat format, LabelPlacement* placement = nullptr);
 
 }  // namespace fmpc::plot

@@ -928,6 +928,35 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
       ++stats.rounds;
       training.measured = measure(table, training.points, threads);
       stats.training_error = training.measured.max_error;
+      if (options.progress || options.early_refusal_factor > 0) {
+        TableBuildProgress progress;
+        progress.round = stats.rounds;
+        progress.grid_points = grid_size(axes);
+        progress.budget = options.max_grid_points;
+        progress.training_error = training.measured.max_error;
+        progress.target = options.max_error;
+        // Optimistic: the interpolation error falls as h^2 on every axis at once.
+        const double ratio = std::max(1.0, training.measured.max_error / options.max_error);
+        progress.estimated_grid_points =
+            static_cast<double>(progress.grid_points) * std::pow(ratio, 0.5 * static_cast<double>(axes.size()));
+        if (options.progress) options.progress(progress);
+        const bool refinable_axis = std::find(refinable.begin(), refinable.end(), true) != refinable.end();
+        if (options.early_refusal_factor > 0 && refinable_axis && stats.rounds >= kEarlyRefusalRounds &&
+            progress.estimated_grid_points >
+                options.early_refusal_factor * static_cast<double>(options.max_grid_points)) {
+          diagnostics.error(where,
+                            "cannot reach --max-error " + format_number(options.max_error) + " within " +
+                                std::to_string(options.max_grid_points) + " grid points: after " +
+                                std::to_string(stats.rounds) + " rounds the grid, " + counts_text(axes) +
+                                ", has a maximum error of " + format_number(training.measured.max_error) +
+                                ", and even if the error falls as h^2 the target needs about " +
+                                format_number(std::round(progress.estimated_grid_points)) +
+                                " grid points (an estimate; refused now instead of refining on)",
+                            {"raise --max-error or --max-grid-points, or fix more inputs (--fix NAME=VALUE), or use "
+                             "--target cpp for an evaluator without interpolation error"});
+          return false;
+        }
+      }
       if (training.measured.max_error <= threshold || training.grid_final) return true;
       const std::vector<Refinement> refinements =
           worst_axes(table, training.points, training.measured, refinable, threshold, evaluators, options, stats);

@@ -16,8 +16,11 @@
 //     searches from the worst points; where they find the target exceeded, those points join the training set and
 //     refinement goes on; the table states the largest error found (TableErrorKind::Estimate).
 // Axes with a fixed point count (--vary NAME:points) stay uniform at that count. A grid that would exceed the
-// budget stops the build with an error saying what was reached.
+// budget stops the build with an error saying what was reached; so does a grid whose optimistic size estimate
+// (TableBuildProgress) is far over the budget after a few rounds, so that an unreachable target is refused early
+// rather than after minutes.
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -29,6 +32,19 @@
 namespace fmpc {
 
 enum class BreakpointSpacing { Uniform, Refined };
+
+// Where a build stands after each round, for a caller that shows progress (the library prints nothing).
+struct TableBuildProgress {
+  int round = 0;
+  std::uint64_t grid_points = 0;
+  std::uint64_t budget = 0;       // max_grid_points
+  double training_error = 0.0;    // max error on the training points this round
+  double target = 0.0;            // max_error
+  // Grid points the target needs if the error keeps falling as h^2 (multilinear interpolation of a smooth
+  // function, h the spacing): grid_points * (training_error / target)^(axes / 2). An estimate, and an optimistic
+  // one: near a kink of a membership function the error falls only as h.
+  double estimated_grid_points = 0.0;
+};
 
 struct TableBuildOptions {
   double max_error = 0.0;  // absolute, in output units, for every output; > 0
@@ -42,7 +58,14 @@ struct TableBuildOptions {
   EvaluationOptions evaluation;
   std::string source_path;
   std::uint64_t source_hash = 0;
+  // Called after each round's measurement; null for none.
+  std::function<void(const TableBuildProgress&)> progress;
+  // Stop with an error, instead of refining on, once round >= kEarlyRefusalRounds and even the optimistic estimate
+  // above needs more than early_refusal_factor x max_grid_points (0 turns the early refusal off).
+  double early_refusal_factor = 16.0;
 };
+
+inline constexpr int kEarlyRefusalRounds = 2;
 
 struct TableBuildStatistics {
   int rounds = 0;
