@@ -117,4 +117,24 @@ inline SceneDifference scene_difference(const sim::SimulationSetup& setup, std::
   return out;
 }
 
+// Implicit Euler: the same preconditioned CG as Eigen's, summed in another order, so GPU and CPU agree to the
+// solver's tolerance (1e-5 m in float, 1e-9 m in double after 200 steps) rather than bitwise; two GPU runs with
+// different check intervals repeat bitwise. `what` names the case in the notes.
+inline void check_implicit_against_cpu(const sim::SimulationSetup& setup, const std::string& what) {
+  const SceneDifference d = scene_difference(setup, 200);
+  const double tolerance = setup.precision == sim::Precision::Float ? 1e-5 : 1e-9;
+  note("implicit Euler, " + what + ": max |GPU - CPU| after 200 steps " + std::to_string(d.state.positions) +
+       " m (tolerance " + std::to_string(tolerance) + "), " + std::to_string(d.state.velocities) + " m/s");
+  FMPC_EXPECT(d.state.positions <= tolerance);
+  FMPC_EXPECT(d.state.velocities <= 100.0 * tolerance);
+  DiagnosticList diagnostics;
+  const auto first = gpu::GpuSimulation::create(setup, diagnostics);
+  const auto second = gpu::GpuSimulation::create(setup, diagnostics);
+  FMPC_REQUIRE(first && second && first->advance(50, diagnostics) && second->advance(50, diagnostics, 7));
+  FMPC_EXPECT(bitwise_equal(first->positions(diagnostics), second->positions(diagnostics)));
+  FMPC_EXPECT(first->implicit_max_iterations_used() > 0);
+  note("implicit Euler, " + what + ": at most " + std::to_string(first->implicit_max_iterations_used()) +
+       " CG iterations per step");
+}
+
 }  // namespace fmpc::gpu_test

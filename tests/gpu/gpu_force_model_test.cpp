@@ -165,21 +165,7 @@ FMPC_GPU_TEST(force_models_implicit, "implicit Euler on the FEM and the volume t
   for (const Model model : kModels) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       const SimulationSetup setup = hanging_box(model, precision, Integrator::ImplicitEuler);
-      const SceneDifference d = scene_difference(setup, 200);
-      const double tolerance = precision == Precision::Float ? 1e-5 : 1e-9;
-      std::ostringstream line;
-      line << "implicit Euler, " << name_of(model) << ", " << name_of(precision) << ": max |GPU - CPU| after 200 steps "
-           << d.state.positions << " m (tolerance " << tolerance << "), " << d.state.velocities << " m/s";
-      note(line.str());
-      FMPC_EXPECT(d.state.positions <= tolerance);
-      FMPC_EXPECT(d.state.velocities <= 100.0 * tolerance);
-      DiagnosticList diagnostics;
-      const auto first = gpu::GpuSimulation::create(setup, diagnostics);
-      const auto second = gpu::GpuSimulation::create(setup, diagnostics);
-      FMPC_REQUIRE(first && second && first->advance(50, diagnostics) && second->advance(50, diagnostics, 7));
-      FMPC_EXPECT(bitwise_equal(first->positions(diagnostics), second->positions(diagnostics)));
-      note("implicit Euler, " + std::string(name_of(model)) + ", " + name_of(precision) + ": at most " +
-           std::to_string(first->implicit_max_iterations_used()) + " CG iterations per step");
+      check_implicit_against_cpu(setup, std::string(name_of(model)) + ", " + name_of(precision));
     }
   }
 }

@@ -490,23 +490,7 @@ FMPC_GPU_TEST(implicit_matches_cpu, "implicit Euler: GPU CG agrees with Eigen's,
     for (const bool with_probe : {false, true}) {
       SimulationSetup setup = with_probe ? probed_box(precision, Integrator::ImplicitEuler, ProbeLoad::Mode::Displacement)
                                          : hanging_box(BoxScene{3, 5, 2, 5000.0, precision, Integrator::ImplicitEuler});
-      const SceneDifference d = scene_difference(setup, 200);
-      const double tolerance = precision == Precision::Float ? 1e-5 : 1e-9;
-      std::ostringstream line;
-      line << "implicit Euler" << (with_probe ? " with a probe" : "") << ", " << name_of(precision)
-           << ": max |GPU - CPU| after 200 steps " << d.state.positions << " m (tolerance " << tolerance << "), "
-           << d.state.velocities << " m/s";
-      note(line.str());
-      FMPC_EXPECT(d.state.positions <= tolerance);
-      FMPC_EXPECT(d.state.velocities <= 100.0 * tolerance);
-      DiagnosticList diagnostics;
-      const auto first = gpu::GpuSimulation::create(setup, diagnostics);
-      const auto second = gpu::GpuSimulation::create(setup, diagnostics);
-      FMPC_REQUIRE(first && second && first->advance(50, diagnostics) && second->advance(50, diagnostics, 7));
-      FMPC_EXPECT(bitwise_equal(first->positions(diagnostics), second->positions(diagnostics)));
-      FMPC_EXPECT(first->implicit_max_iterations_used() > 0);
-      note("implicit Euler, " + std::string(name_of(precision)) + ": at most " +
-           std::to_string(first->implicit_max_iterations_used()) + " CG iterations per step");
+      check_implicit_against_cpu(setup, std::string(with_probe ? "with a probe, " : "") + name_of(precision));
     }
   }
 }
