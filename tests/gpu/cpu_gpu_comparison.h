@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -123,8 +124,10 @@ inline SceneDifference scene_difference(const sim::SimulationSetup& setup, std::
 inline void check_implicit_against_cpu(const sim::SimulationSetup& setup, const std::string& what) {
   const SceneDifference d = scene_difference(setup, 200);
   const double tolerance = setup.precision == sim::Precision::Float ? 1e-5 : 1e-9;
-  note("implicit Euler, " + what + ": max |GPU - CPU| after 200 steps " + std::to_string(d.state.positions) +
-       " m (tolerance " + std::to_string(tolerance) + "), " + std::to_string(d.state.velocities) + " m/s");
+  std::ostringstream line;  // std::to_string would print 1e-9 as 0.000000
+  line << "implicit Euler, " << what << ": max |GPU - CPU| after 200 steps " << d.state.positions << " m (tolerance "
+       << tolerance << "), " << d.state.velocities << " m/s";
+  note(line.str());
   FMPC_EXPECT(d.state.positions <= tolerance);
   FMPC_EXPECT(d.state.velocities <= 100.0 * tolerance);
   DiagnosticList diagnostics;
