@@ -403,7 +403,7 @@ class Subdivision {
  public:
   Subdivision(const LookupTable& table, Evaluators& evaluators, CellBounder& bounder, int thread, const double* lo,
               const double* hi, const std::vector<double>& corners)
-      : table_(table), evaluators_(evaluators), bounder_(bounder), thread_(thread), d_(table.axes.size()),
+      : evaluators_(evaluators), bounder_(bounder), thread_(thread), d_(table.axes.size()),
         m_(table.output_names.size()), lo_(lo, lo + d_), hi_(hi, hi + d_), corners_(corners) {}
 
   // The bound over the region [lo, hi] of the cell; stops splitting once below `goal` or after `depth` halvings.
@@ -462,7 +462,6 @@ class Subdivision {
     return value;
   }
 
-  const LookupTable& table_;
   Evaluators& evaluators_;
   CellBounder& bounder_;
   int thread_;
