@@ -52,6 +52,7 @@ struct TetrahedronFieldView {
   TetrahedronLaw law;
   int count;
   const int* corners;          // 4 per element
+  const int* corner_slot;      // 4 per element: where each corner's force goes (CornerForceView's order)
   const Real* rest_inverse;    // 9 per element
   const Real* rest_volume;
   const Real* youngs_modulus;  // CorotationalLinear (Pa)
@@ -75,24 +76,31 @@ FMPC_HD TetrahedronMaterial<Real> tetrahedron_material(const TetrahedronFieldVie
   return m;
 }
 
-// The element pass: element e's four corner forces into force[12 e .. 12 e + 12) (the layout CornerForceView reads).
+// The element pass: element e's four corner forces into force[3 corner_slot[4 e + a] ..] (the vertex-major layout
+// CornerForceView reads). Velocities are read only where a stiffness damping array exists: tetrahedron_forces
+// reads them for nothing else, and they are half the pass's gathered bytes.
 template <typename Real>
 FMPC_HD void tetrahedron_corner_forces(int e, const TetrahedronFieldView<Real>& f, const StateView<Real>& s,
                                        Real* force) {
-  Real x[4][3], v[4][3], out[4][3];
+  Real x[4][3], v[4][3] = {}, out[4][3];
+  const bool damped = f.stiffness_damping != nullptr;
   for (int a = 0; a < 4; ++a) {
     const int vertex = f.corners[4 * e + a];
     x[a][0] = s.x[vertex];
     x[a][1] = s.y[vertex];
     x[a][2] = s.z[vertex];
-    v[a][0] = s.vx[vertex];
-    v[a][1] = s.vy[vertex];
-    v[a][2] = s.vz[vertex];
+    if (damped) {
+      v[a][0] = s.vx[vertex];
+      v[a][1] = s.vy[vertex];
+      v[a][2] = s.vz[vertex];
+    }
   }
   const TetrahedronMaterial<Real> m = tetrahedron_material(f, e);
   tetrahedron_forces(m, x, v, out);
-  for (int a = 0; a < 4; ++a)
-    for (int i = 0; i < 3; ++i) force[12 * e + 3 * a + i] = out[a][i];
+  for (int a = 0; a < 4; ++a) {
+    Real* slot = force + 3 * f.corner_slot[4 * e + a];
+    for (int i = 0; i < 3; ++i) slot[i] = out[a][i];
+  }
 }
 
 // Whether element e of `corners` is inverted or flat at positions s (signed volume <= 0), for the inversion count.

@@ -81,6 +81,16 @@ __global__ void __launch_bounds__(kThreadsPerBlock, ElementOccupancy<Real>::min_
 }
 
 template <typename Real>
+__global__ void spring_incidence_kernel(kernels::SpringNetworkView<Real> net, int entries,
+                                        kernels::SpringIncidence<Real>* incidence) {
+  const int e = vertex_index();
+  if (e >= entries) return;
+  const int spring = net.adjacency_spring[e];
+  incidence[e] = {net.adjacency_neighbour[e], net.rest_length[spring], net.stiffness[spring],
+                  net.damping != nullptr ? net.damping[spring] : Real(0)};
+}
+
+template <typename Real>
 __device__ Real step_of(const StepSize<Real>& step, int v) {
   return step.vertex_scene == nullptr ? step.h : step.scene_h[step.vertex_scene[v]];
 }
@@ -593,6 +603,14 @@ cudaError_t launch_elements(const ForceModelView<Real>& model, const kernels::St
 }
 
 template <typename Real>
+cudaError_t launch_incidence(const kernels::SpringNetworkView<Real>& network, int entries,
+                             kernels::SpringIncidence<Real>* incidence, cudaStream_t stream) {
+  if (entries <= 0) return cudaSuccess;
+  spring_incidence_kernel<Real><<<blocks_for(entries), kThreadsPerBlock, 0, stream>>>(network, entries, incidence);
+  return cudaGetLastError();
+}
+
+template <typename Real>
 cudaError_t launch_fused(const FusedStepArguments<Real>& arguments, cudaStream_t stream) {
   if (arguments.vertex_count <= 0) return cudaSuccess;
   return with_kind(arguments.model.kind, [&](auto kind) {
@@ -757,6 +775,14 @@ cudaError_t launch_element_forces(const ForceModelView<float>& model, const kern
 cudaError_t launch_element_forces(const ForceModelView<double>& model, const kernels::StateView<double>& state,
                                   cudaStream_t stream) {
   return launch_elements(model, state, stream);
+}
+cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<float>& network, int entries,
+                                   kernels::SpringIncidence<float>* incidence, cudaStream_t stream) {
+  return launch_incidence(network, entries, incidence, stream);
+}
+cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<double>& network, int entries,
+                                   kernels::SpringIncidence<double>* incidence, cudaStream_t stream) {
+  return launch_incidence(network, entries, incidence, stream);
 }
 cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
                                   const kernels::StateView<float>& state, unsigned int* count, int* first,

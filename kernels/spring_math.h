@@ -152,6 +152,18 @@ FMPC_HD void spring_force_on_vertex(Real dx, Real dy, Real dz, Real dvx, Real dv
   fz = along * uz;
 }
 
+// One spring as seen from one of its ends, at that end's CSR entry: the other end and the spring's parameters
+// (damping 0 without dashpots). The GPU backend derives these from the arrays below when the stiffness stays fixed
+// (no strain table), so a vertex's gather reads one aligned record per spring (16 bytes in float) instead of two
+// indices and three values scattered by spring index: same values, same arithmetic, same bits.
+template <typename Real>
+struct alignas(4 * sizeof(Real)) SpringIncidence {
+  int neighbour;
+  Real rest_length;
+  Real stiffness;
+  Real damping;
+};
+
 // The spring network and state as raw arrays (structure of arrays), for the gather below.
 template <typename Real>
 struct SpringNetworkView {
@@ -162,6 +174,7 @@ struct SpringNetworkView {
   const Real* stiffness;
   const Real* damping;  // null: no dashpots (a scene without damping allocates no array)
   SpringLawParameters<Real> law;
+  const SpringIncidence<Real>* incidence = nullptr;  // per CSR entry; null: read through the arrays above
 };
 
 template <typename Real>
@@ -181,6 +194,23 @@ FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, cons
   Real sx = Real(0), sy = Real(0), sz = Real(0);
   const Real x = s.x[v], y = s.y[v], z = s.z[v];
   const Real vx = s.vx[v], vy = s.vy[v], vz = s.vz[v];
+  if (net.incidence != nullptr) {
+    FMPC_UNROLL_GATHER
+    for (int e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
+      const SpringIncidence<Real> r = net.incidence[e];
+      Real f0, f1, f2;
+      spring_force_on_vertex(s.x[r.neighbour] - x, s.y[r.neighbour] - y, s.z[r.neighbour] - z,
+                             s.vx[r.neighbour] - vx, s.vy[r.neighbour] - vy, s.vz[r.neighbour] - vz, r.rest_length,
+                             r.stiffness, r.damping, net.law, f0, f1, f2);
+      sx += f0;
+      sy += f1;
+      sz += f2;
+    }
+    fx = sx;
+    fy = sy;
+    fz = sz;
+    return;
+  }
   FMPC_UNROLL_GATHER
   for (int e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
     const int spring = net.adjacency_spring[e];

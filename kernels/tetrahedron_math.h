@@ -455,7 +455,8 @@ FMPC_HD void tetrahedron_forces(const TetrahedronMaterial<Real>& m, const Real x
 // ---- the gather: corner forces summed per vertex ------------------------------------------------------------------
 
 // The corners of the elements at each vertex, as CSR: entries corner[offset[v] .. offset[v+1]) are 4 e + c (element
-// e's corner c), increasing; force holds 3 values per corner (element-major: [e][corner][axis]).
+// e's corner c), increasing; force holds 3 values per entry in the same order (vertex-major: force[3 k ..] is entry
+// k's, written by the element pass through TetrahedronFieldView::corner_slot), so a vertex reads one contiguous run.
 template <typename Real>
 struct CornerForceView {
   const int* offset;
@@ -469,7 +470,7 @@ FMPC_HD void gather_corner_force(int v, const CornerForceView<Real>& view, Real&
   Real sx = Real(0), sy = Real(0), sz = Real(0);
   FMPC_UNROLL_GATHER
   for (int k = view.offset[v]; k < view.offset[v + 1]; ++k) {
-    const Real* f = view.force + 3 * view.corner[k];
+    const Real* f = view.force + 3 * k;
     sx += f[0];
     sy += f[1];
     sz += f[2];

@@ -64,11 +64,14 @@ std::optional<TetrahedronField> tetrahedron_geometry(const std::vector<Point3>& 
     for (const std::int32_t v : t) ++field.corner_offset[static_cast<std::size_t>(v) + 1];
   for (std::size_t v = 0; v < points.size(); ++v) field.corner_offset[v + 1] += field.corner_offset[v];
   field.corner_index.resize(4 * count);
+  field.corner_slot.resize(4 * count);
   std::vector<std::int32_t> next(field.corner_offset.begin(), field.corner_offset.end() - 1);
   for (std::size_t e = 0; e < count; ++e)
-    for (std::size_t c = 0; c < 4; ++c)
-      field.corner_index[static_cast<std::size_t>(next[static_cast<std::size_t>(tetrahedra[e][c])]++)] =
-          static_cast<std::int32_t>(4 * e + c);
+    for (std::size_t c = 0; c < 4; ++c) {
+      const std::int32_t slot = next[static_cast<std::size_t>(tetrahedra[e][c])]++;
+      field.corner_index[static_cast<std::size_t>(slot)] = static_cast<std::int32_t>(4 * e + c);
+      field.corner_slot[4 * e + c] = slot;
+    }
   return field;
 }
 

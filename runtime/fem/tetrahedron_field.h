@@ -25,6 +25,10 @@ struct TetrahedronField {
   // The corners at each vertex as CSR: corner_index[corner_offset[v] .. corner_offset[v+1]) are 4 e + c, increasing.
   std::vector<std::int32_t> corner_offset;
   std::vector<std::int32_t> corner_index;
+  // The inverse of corner_index: corner_slot[4 e + c] = k where corner_index[k] = 4 e + c. The element pass writes
+  // corner forces at their slots, so each vertex's gather reads one contiguous run (no 12-byte reads scattered over
+  // element-major memory: docs/performance.md).
+  std::vector<std::int32_t> corner_slot;
 
   std::size_t size() const { return rest_volume.size(); }
 };

@@ -31,6 +31,13 @@ struct ForceModelView {
   Real* corner_force;                      // 12 per element
 };
 
+// The springs' incidence records (kernels::SpringIncidence) of every CSR entry, from the network's arrays; run once
+// after upload, and only where the stiffness stays fixed during the run (no strain table).
+cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<float>& network, int entries,
+                                   kernels::SpringIncidence<float>* incidence, cudaStream_t stream);
+cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<double>& network, int entries,
+                                   kernels::SpringIncidence<double>* incidence, cudaStream_t stream);
+
 // The element pass at `state`: every element's corner forces (kernels::tetrahedron_corner_forces); nothing for
 // GatherKind::Springs. Enqueued before every per-vertex kernel that gathers at that state.
 cudaError_t launch_element_forces(const ForceModelView<float>& model, const kernels::StateView<float>& state,

@@ -128,7 +128,7 @@ struct ConcatenatedScenes {
   bool has_damping = false;  // false: no scene has dashpots, and no damping array is uploaded
   // Tetrahedra (every scene's, for inversion counts) and, when the scenes have a tetrahedron field, its arrays and
   // the corner CSR (each scene's corners point at its own elements).
-  std::vector<int> corners, element_scene, corner_offset, corner_index;
+  std::vector<int> corners, element_scene, corner_offset, corner_index, corner_slot;
   std::vector<double> rest_inverse, rest_volume, youngs_modulus, poisson_ratio, bulk_modulus, stiffness_damping;
   bool has_field = false;
   bool has_element_damping = false;
@@ -164,6 +164,7 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
       for (std::size_t v = 0; v < setup.rest_positions.size(); ++v)
         c.corner_offset.push_back(corner_entries + field.corner_offset[v]);
       for (const auto corner : field.corner_index) c.corner_index.push_back(4 * element_base + corner);
+      for (const auto slot : field.corner_slot) c.corner_slot.push_back(corner_entries + slot);
       corner_entries += static_cast<int>(field.corner_index.size());
       c.rest_inverse.insert(c.rest_inverse.end(), field.rest_inverse.begin(), field.rest_inverse.end());
       c.rest_volume.insert(c.rest_volume.end(), field.rest_volume.begin(), field.rest_volume.end());
@@ -354,6 +355,13 @@ class GpuBatchImpl final : public GpuBatchSimulation {
                       stiffness_.data(),
                       c.has_damping ? damping_.data() : nullptr,
                       {common.law, static_cast<Real>(common.basafa_k2_over_k1), static_cast<Real>(common.basafa_xc)}};
+    if (!common.strain_stiffness && c.offset.back() > 0) {
+      FMPC_CUDA_CHECK(incidence_.allocate(static_cast<std::size_t>(c.offset.back())), diagnostics, false);
+      FMPC_CUDA_CHECK(launch_spring_incidence(model_.springs, c.offset.back(), incidence_.data(), stream_), diagnostics,
+                      false);
+      FMPC_CUDA_CHECK(cudaStreamSynchronize(stream_), diagnostics, false);
+      model_.springs.incidence = incidence_.data();
+    }
     loads_ = {mass_.data(),
               fixed_.data(),
               rest_x_.data(),
@@ -384,6 +392,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     const bool corotational = law == kernels::TetrahedronLaw::CorotationalLinear;
     FMPC_CUDA_CHECK(corner_offset_.upload(c.corner_offset), diagnostics, false);
     FMPC_CUDA_CHECK(corner_index_.upload(c.corner_index), diagnostics, false);
+    FMPC_CUDA_CHECK(corner_slot_.upload(c.corner_slot), diagnostics, false);
     FMPC_CUDA_CHECK(field_rest_inverse_.upload(convert<Real>(c.rest_inverse)), diagnostics, false);
     FMPC_CUDA_CHECK(field_rest_volume_.upload(convert<Real>(c.rest_volume)), diagnostics, false);
     FMPC_CUDA_CHECK(field_rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
@@ -409,6 +418,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     model_.field = {law,
                     element_count_,
                     corners_.data(),
+                    corner_slot_.data(),
                     field_rest_inverse_.data(),
                     field_rest_volume_.data(),
                     data(field_youngs_),
@@ -1140,7 +1150,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   ImplicitElements elements_{};
   std::vector<int> element_begin_;
   int element_count_ = 0;
-  DeviceArray<int> corners_, element_scene_, corner_offset_, corner_index_, inverted_first_;
+  DeviceArray<int> corners_, element_scene_, corner_offset_, corner_index_, corner_slot_, inverted_first_;
+  DeviceArray<kernels::SpringIncidence<Real>> incidence_;
   DeviceArray<unsigned int> inverted_count_;
   DeviceArray<Real> field_rest_inverse_, field_rest_volume_, field_youngs_, field_poisson_, field_bulk_, field_damping_,
       corner_force_;

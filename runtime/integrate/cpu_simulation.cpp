@@ -105,6 +105,7 @@ class CpuSimulationImpl final : public CpuSimulation {
       field_view_.law = field.law;
       field_view_.count = static_cast<int>(field.size());
       field_view_.corners = corners_.data();
+      field_view_.corner_slot = field.corner_slot.data();
       field_view_.rest_inverse = field_rest_inverse_.data();
       field_view_.rest_volume = field_rest_volume_.data();
       field_view_.youngs_modulus = data_or_null(field_youngs_modulus_);

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "kernels/integrator_math.h"
+#include "kernels/internal_force_math.h"
 #include "runtime/fem/fem_model_builder.h"
 #include "runtime/integrate/static_equilibrium.h"
 #include "runtime/mesh/generated_mesh.h"
@@ -126,6 +127,89 @@ Uniaxial stretch(SimulationSetup setup, const Mesh& mesh, const Point3& size, do
 }
 
 }  // namespace
+
+TEST_CASE("the corner CSR: slots invert it, and the vertex gather sums each vertex's corners in element order",
+          "[fem][sim]") {
+  // Shuffled elements and renumbered corners (seeded) so that the CSR is not the generator's order; the gather
+  // (kernels::gather_corner_force over forces the element pass wrote at corner_slot) must give the same bits as a
+  // plain element-major sum in increasing element order.
+  std::mt19937 random(20261124);
+  Mesh mesh = box_mesh({0.03, 0.02, 0.05}, 3, 2, 5);
+  std::shuffle(mesh.tetrahedra.begin(), mesh.tetrahedra.end(), random);
+  for (Tetrahedron& t : mesh.tetrahedra)
+    if (random() % 2 == 0) std::swap(t[0], t[1]), std::swap(t[2], t[3]);  // an even permutation keeps the sign
+  const SimulationSetup setup = fem_setup(mesh, 5000.0, 0.45, 0.3);
+  const TetrahedronField& field = *setup.tetrahedron_field;
+  const std::size_t corners = 4 * field.size();
+  REQUIRE(field.corner_index.size() == corners);
+  REQUIRE(field.corner_slot.size() == corners);
+  for (std::size_t k = 0; k < corners; ++k)
+    REQUIRE(field.corner_slot[static_cast<std::size_t>(field.corner_index[k])] == static_cast<std::int32_t>(k));
+  for (std::size_t v = 0; v < mesh.points.size(); ++v)
+    for (auto k = field.corner_offset[v]; k < field.corner_offset[v + 1]; ++k) {
+      const auto corner = field.corner_index[static_cast<std::size_t>(k)];
+      REQUIRE(mesh.tetrahedra[static_cast<std::size_t>(corner / 4)][static_cast<std::size_t>(corner % 4)] ==
+              static_cast<std::int32_t>(v));
+      if (k > field.corner_offset[v]) REQUIRE(corner > field.corner_index[static_cast<std::size_t>(k - 1)]);
+    }
+
+  // Positions and velocities perturbed from rest (seeded), float as on the GPU.
+  std::uniform_real_distribution<double> jitter(-2e-4, 2e-4);
+  std::vector<float> x[3], v[3];
+  for (const Point3& p : mesh.points)
+    for (int axis = 0; axis < 3; ++axis) {
+      x[axis].push_back(static_cast<float>(p[static_cast<std::size_t>(axis)] + jitter(random)));
+      v[axis].push_back(static_cast<float>(jitter(random) * 100.0));
+    }
+  std::vector<float> rest_inverse(field.rest_inverse.begin(), field.rest_inverse.end());
+  std::vector<float> rest_volume(field.rest_volume.begin(), field.rest_volume.end());
+  std::vector<float> modulus(field.youngs_modulus.begin(), field.youngs_modulus.end());
+  std::vector<float> ratio(field.poisson_ratio.begin(), field.poisson_ratio.end());
+  std::vector<float> damping(field.stiffness_damping.begin(), field.stiffness_damping.end());
+  REQUIRE(!damping.empty());
+  std::vector<int> element_corners;
+  for (const Tetrahedron& t : mesh.tetrahedra) element_corners.insert(element_corners.end(), t.begin(), t.end());
+  kernels::TetrahedronFieldView<float> view{};
+  view.law = field.law;
+  view.count = static_cast<int>(field.size());
+  view.corners = element_corners.data();
+  view.corner_slot = field.corner_slot.data();
+  view.rest_inverse = rest_inverse.data();
+  view.rest_volume = rest_volume.data();
+  view.youngs_modulus = modulus.data();
+  view.poisson_ratio = ratio.data();
+  view.stiffness_damping = damping.data();
+  const kernels::StateView<float> state{x[0].data(), x[1].data(), x[2].data(), v[0].data(), v[1].data(), v[2].data()};
+  std::vector<float> slotted(3 * corners);
+  for (int e = 0; e < view.count; ++e) kernels::tetrahedron_corner_forces(e, view, state, slotted.data());
+  const kernels::CornerForceView<float> gather{field.corner_offset.data(), field.corner_index.data(), slotted.data()};
+
+  std::vector<float> sum(3 * mesh.points.size(), 0.0f);
+  for (int e = 0; e < view.count; ++e) {
+    float xe[4][3], ve[4][3], fe[4][3];
+    for (int a = 0; a < 4; ++a)
+      for (int axis = 0; axis < 3; ++axis) {
+        xe[a][axis] = x[axis][static_cast<std::size_t>(element_corners[static_cast<std::size_t>(4 * e + a)])];
+        ve[a][axis] = v[axis][static_cast<std::size_t>(element_corners[static_cast<std::size_t>(4 * e + a)])];
+      }
+    kernels::TetrahedronMaterial<float> m = kernels::tetrahedron_material(view, e);
+    kernels::tetrahedron_forces(m, xe, ve, fe);
+    for (int a = 0; a < 4; ++a)
+      for (int axis = 0; axis < 3; ++axis)
+        sum[3 * static_cast<std::size_t>(element_corners[static_cast<std::size_t>(4 * e + a)]) +
+            static_cast<std::size_t>(axis)] += fe[a][axis];
+  }
+  float largest = 0.0f;
+  for (std::size_t vertex = 0; vertex < mesh.points.size(); ++vertex) {
+    float f[3];
+    kernels::gather_corner_force(static_cast<int>(vertex), gather, f[0], f[1], f[2]);
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      REQUIRE(std::memcmp(&f[axis], &sum[3 * vertex + axis], sizeof(float)) == 0);
+      largest = std::max(largest, std::abs(f[axis]));
+    }
+  }
+  REQUIRE(largest > 0.0f);  // the perturbation loads the elements: a zero field would pass vacuously
+}
 
 TEST_CASE("co-rotational FEM under uniaxial stress is exact: E and nu come back to rounding", "[fem][sim]") {
   // Linear tetrahedra represent a uniform strain exactly, so the sliding block's response is the material's.
