@@ -11,10 +11,12 @@
 #   simulator   gpu-labelled tests (CPU vs CUDA after 10,000 steps, bitwise reruns, batches, NaN location),
 #               compute-sanitizer memcheck/racecheck/initcheck/synccheck on the small GPU test,
 #               bench/sim (CPU threads vs CUDA float/double, graphs on/off, 1k..1M springs, batch of scenes)
-#   scenes      the carried fmpc (built here with CUDA, statically linked: --prepare copies $FMPC to
-#               build-gpu-carry/bin/fmpc) runs the README's demo scene with backend auto (CUDA) and cpu, and SOFA's
-#               liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as liver-CUDA.scn) on CUDA and
-#               on the CPU; outputs under $OUT/scenes, compared in summary
+#   scenes      the carried fmpc (a CUDA build of the build machine with its libraries and fonts: --prepare bundles
+#               $FMPC into build-gpu-carry/programs.tar.xz) runs the README's demo scene with backend auto (CUDA)
+#               and cpu, and SOFA's liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as
+#               liver-CUDA.scn) on CUDA and on the CPU; outputs under $OUT/scenes, compared in summary
+#   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
+#               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540)
 #   evaluator   bench/gpu/evaluator_gpu_bench.cu (nvcc alone): the generated CUDA evaluators (type-1 and interval
 #               type-2, float and double) and table lookups (2-D double and float; 5-D double and float at 9^5,
 #               7^5, 5^5; each in the grid and the sector-packed layout) on the liver rule base, each checked
@@ -26,7 +28,7 @@
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
 # device.txt, summary.md. Options: --skip-sanitizers, --quick (shorter benchmark), --evaluator-only (that section
-# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, evaluator; the build
+# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, evaluator, fuzz; the build
 # runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses it). Exit status: 0
 # when every step passed.
 set -u -o pipefail
@@ -92,22 +94,66 @@ prepare_evaluator_headers() {
   echo "generated the evaluator section's headers in $dir with $fmpc"
 }
 
-# The scenes section's fmpc and data: $FMPC (a CUDA build, e.g. -DFMPC_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90, whose
-# third-party libraries are linked statically) and SOFA's liver mesh when ../shared/data/sofa-liver exists.
+# Programs built here and run on the GPU machine, which has none of the Debian libraries they link: each goes into
+# build-gpu-carry/programs with every shared library ldd names (glibc and its loader included, so the GPU machine's
+# own glibc version does not matter; the CUDA driver's libcuda is the GPU machine's and is not carried) and a
+# wrapper bin/NAME that starts it through the carried loader. DejaVu fonts and a fontconfig file come along for
+# cairo and pango. The folder is packed into build-gpu-carry/programs.tar.xz (the carry limit is 64 MiB in all).
+PROGRAMS="$CARRY/programs"
+bundle_program() {  # bundle_program BINARY [NAME]
+  local binary=$1 name=${2:-$(basename "$1")}
+  mkdir -p "$PROGRAMS/libexec" "$PROGRAMS/lib" "$PROGRAMS/bin"
+  cp "$binary" "$PROGRAMS/libexec/$name" && strip --strip-debug "$PROGRAMS/libexec/$name" || return 1
+  local library
+  for library in $(ldd "$binary" | awk '$2 == "=>" && $3 ~ /^\// { print $3 } $1 ~ /^\/.*ld-linux/ { print $1 }'); do
+    case "$(basename "$library")" in libcuda.so*) continue ;; esac
+    [[ -f "$PROGRAMS/lib/$(basename "$library")" ]] || cp -L "$library" "$PROGRAMS/lib/" || return 1
+  done
+  cat > "$PROGRAMS/bin/$name" <<WRAPPER
+#!/bin/sh
+# $name built on the build machine, with its libraries (bench/run_gpu.sh, bundle_program).
+here=\$(cd "\$(dirname "\$0")/.." && pwd)
+if [ -d "\$here/fonts" ]; then
+  mkdir -p "\${TMPDIR:-/tmp}/fmpc-fontconfig"
+  printf '<fontconfig><dir>%s/fonts</dir><cachedir>%s</cachedir></fontconfig>\\n' "\$here" \\
+    "\${TMPDIR:-/tmp}/fmpc-fontconfig" > "\${TMPDIR:-/tmp}/fmpc-fontconfig/fonts.conf"
+  export FONTCONFIG_FILE="\${TMPDIR:-/tmp}/fmpc-fontconfig/fonts.conf"
+fi
+exec "\$here/lib/$(basename "$(ls "$PROGRAMS"/lib/ld-linux* | head -1)")" --library-path "\$here/lib" "\$here/libexec/$name" "\$@"
+WRAPPER
+  chmod +x "$PROGRAMS/bin/$name"
+}
+
+# The scenes section's fmpc (a CUDA build: $FMPC, e.g. -DFMPC_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90) with its fonts,
+# and SOFA's liver mesh when ../shared/data/sofa-liver exists.
 prepare_scenes() {
   local fmpc="${FMPC:-}"
   [[ -n "$fmpc" && -x "$fmpc" ]] || { echo "set FMPC=path/to/a CUDA build's fmpc for the scenes section" >&2; return 1; }
-  mkdir -p "$CARRY/bin"
-  cp "$fmpc" "$CARRY/bin/fmpc" && strip "$CARRY/bin/fmpc" || return 1
-  if ldd "$CARRY/bin/fmpc" | grep -Eq 'antlr|yaml|fuzzylite|libz\.so'; then
-    echo "$CARRY/bin/fmpc links a Debian library dynamically; the GPU machine lacks it" >&2
-    return 1
-  fi
+  bundle_program "$fmpc" fmpc || return 1
+  mkdir -p "$PROGRAMS/fonts"
+  cp /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf /usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf \
+    "$PROGRAMS/fonts/" || { echo "no DejaVu fonts (Debian fonts-dejavu-core)" >&2; return 1; }
   if [[ -d "$ROOT/../shared/data/sofa-liver" ]]; then
     mkdir -p "$CARRY/sofa-liver"
     cp "$ROOT/../shared/data/sofa-liver/liver.msh" "$CARRY/sofa-liver/"
   fi
-  echo "copied $fmpc to $CARRY/bin/fmpc ($(du -sh "$CARRY/bin/fmpc" | cut -f1))"
+  echo "bundled $fmpc as $PROGRAMS/bin/fmpc"
+}
+
+# The fuzz section's libFuzzer targets from $FUZZ_BUILD (default build-asan: CC=clang CXX=clang++ -DFMPC_FUZZ=ON
+# -DFMPC_SANITIZE=ON) and their seeds (tests/fuzz/copy_seeds.cmake, here where ../shared/data is).
+prepare_fuzz() {
+  local build="${FUZZ_BUILD:-$ROOT/build-asan}" name count=0
+  for name in fmpc_language matlab_fis scene_yaml gmsh obj vtk fzt csv; do
+    [[ -x "$build/tests/fuzz/fuzz_$name" ]] || continue
+    bundle_program "$build/tests/fuzz/fuzz_$name" || return 1
+    mkdir -p "$PROGRAMS/seeds/$name"
+    cmake -DNAME="$name" -DSOURCE_DIR="$ROOT" -DSHARED_DATA="$ROOT/../shared/data" -DOUT="$PROGRAMS/seeds/$name" \
+      -P "$ROOT/tests/fuzz/copy_seeds.cmake" || return 1
+    count=$((count + 1))
+  done
+  [[ $count -gt 0 ]] || { echo "no fuzz targets in $build/tests/fuzz: the fuzz section will not run" >&2; return 0; }
+  echo "bundled $count fuzz targets from $build"
 }
 
 if [[ "${1:-}" == "--prepare" ]]; then
@@ -116,7 +162,13 @@ if [[ "${1:-}" == "--prepare" ]]; then
   cp -r /usr/include/eigen3/Eigen "$CARRY/eigen3/" || exit 1
   echo "copied Eigen headers to $CARRY/eigen3 ($(du -sh "$CARRY" | cut -f1)); carry build-gpu-carry to the GPU machine"
   prepare_evaluator_headers || exit 1
+  rm -rf "$PROGRAMS" "$PROGRAMS.tar.xz"
   prepare_scenes || exit 1
+  prepare_fuzz || exit 1
+  tar -C "$CARRY" -cJf "$PROGRAMS.tar.xz" programs && rm -rf "$PROGRAMS" || exit 1
+  size=$(du -sm "$CARRY" | cut -f1)
+  echo "build-gpu-carry: $size MiB (programs.tar.xz $(du -sh "$PROGRAMS.tar.xz" | cut -f1))"
+  [[ $size -lt 64 ]] || { echo "build-gpu-carry is over the carry limit of 64 MiB" >&2; exit 1; }
   exit 0
 fi
 
@@ -136,8 +188,8 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | scenes | evaluator) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator)" >&2; exit 2 ;;
+          tests | sanitizers | bench | scenes | evaluator | fuzz) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator, fuzz)" >&2; exit 2 ;;
         esac
       done
       ;;
@@ -152,6 +204,7 @@ wanted() { [[ ",$ONLY," == *",$1,"* ]]; }
 OUT="${OUT:-$ROOT/out/gpu}"
 mkdir -p "$OUT"
 BUILD="${FMPC_GPU_BUILD:-$ROOT/build-gpu-device}"
+UNPACKED="$BUILD/programs"
 SUMMARY="$OUT/summary.md"
 JOBS=$(nproc 2>/dev/null || echo 4)
 FAILED=0
@@ -262,7 +315,7 @@ simulator_section() {
 run_scene() {
   local scene="$1" backend="$2" name="$3"
   shift 3
-  "$CARRY/bin/fmpc" simulate "$scene" --backend "$backend" "$@" -o "$BUILD/scenes/$name" > "$OUT/scenes/$name.log" 2>&1
+  "$UNPACKED/bin/fmpc" simulate "$scene" --backend "$backend" "$@" -o "$BUILD/scenes/$name" > "$OUT/scenes/$name.log" 2>&1
   local status=$?
   mkdir -p "$OUT/scenes/$name"
   cp "$BUILD/scenes/$name"/{summary.json,time_series.csv,force_displacement.png} "$OUT/scenes/$name/" 2>/dev/null
@@ -275,8 +328,8 @@ json_field() { grep -o "\"$2\": *[^,}]*" "$1" | head -1 | sed -E 's/.*: *//; s/"
 
 scenes_section() {
   section "scenes: fmpc simulate on CUDA and on the CPU"
-  if [[ ! -x "$CARRY/bin/fmpc" ]]; then
-    fail "no $CARRY/bin/fmpc: run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare' on the build machine"
+  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc" ]]; then
+    fail "no fmpc in $CARRY/programs.tar.xz: run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare' on the build machine"
     return 1
   fi
   mkdir -p "$OUT/scenes" "$BUILD/scenes"
@@ -297,6 +350,21 @@ scenes_section() {
       record "$sofa: skipped (no liver.msh)"
     fi
   done
+  # Large meshes end to end (issues 10 and 13): the stepping rate from summary.json, no frames.
+  run_scene "$ROOT/bench/scenes/large_box_springs.yaml" cuda large_box_springs --steps "${LARGE_STEPS:-1000}" ||
+    fail "large_box_springs on CUDA (see scenes/large_box_springs.log)"
+  run_scene "$ROOT/bench/scenes/large_box_fem.yaml" cuda large_box_fem --steps "${LARGE_STEPS:-1000}" ||
+    fail "large_box_fem on CUDA (see scenes/large_box_fem.log)"
+  local large
+  for large in large_box_springs large_box_fem; do
+    local summary="$OUT/scenes/$large/summary.json"
+    [[ -f "$summary" ]] || continue
+    local rate springs tetrahedra
+    rate=$(json_field "$summary" steps_per_second)
+    springs=$(json_field "$summary" springs)
+    tetrahedra=$(json_field "$summary" tetrahedra)
+    record "$large: $(json_field "$summary" vertices) vertices, ${springs:-0} springs, ${tetrahedra:-0} tetrahedra, $(json_field "$summary" steps) steps, $rate steps/s = $(awk -v r="$rate" -v s="${springs:-0}" 'BEGIN { printf "%.3g", r * s }') spring-steps/s, $(awk -v r="$rate" -v t="${tetrahedra:-0}" 'BEGIN { printf "%.3g", r * t }') tetrahedron-steps/s; setup and wall time in scenes/$large.log"
+  done
   record "| run | backend | model | steps | wall s | steps/s | max displacement m | probe force N | inverted | files |"
   record "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
   local run
@@ -307,6 +375,39 @@ scenes_section() {
     record "| $run | $(json_field "$summary" backend) | $(json_field "$summary" model) | $(json_field "$summary" steps) | $(json_field "$summary" wall_time_s) | $(json_field "$summary" steps_per_second) | $(json_field "$summary" max_displacement_m) | $(json_field "$summary" final_force_N) | $(json_field "$summary" inverted_elements) | $(cat "$OUT/scenes/$run/file_count.txt") |"
   done
   [[ -f "$OUT/scenes/demo_auto/force_displacement.png" ]] || fail "the CUDA demo wrote no force_displacement.png"
+}
+
+# build-gpu-carry/programs.tar.xz (bundle_program) unpacked once into $UNPACKED.
+unpack_programs() {
+  [[ -f "$CARRY/programs.tar.xz" ]] || return 1
+  if [[ ! -d "$UNPACKED" || "$CARRY/programs.tar.xz" -nt "$UNPACKED" ]]; then
+    rm -rf "$UNPACKED" && mkdir -p "$BUILD" && tar -C "$BUILD" -xJf "$CARRY/programs.tar.xz" || return 1
+    touch "$UNPACKED"
+  fi
+}
+
+# Long fuzzing runs of the carried libFuzzer targets (tests/fuzz/run_fuzzers.sh), FUZZ_SECONDS (default 540) with
+# FUZZ_JOBS processes per target (default: the machine's cores over the 8 targets); the corpora stay in
+# $BUILD/fuzz-corpus, so runs on a warm machine add up (the CPU seconds per target, over all runs, in the report).
+fuzz_section() {
+  section "fuzz: libFuzzer targets (ASan+UBSan, built on the build machine)"
+  if ! unpack_programs || ! ls "$UNPACKED"/bin/fuzz_* > /dev/null 2>&1; then
+    fail "no fuzz targets in $CARRY/programs.tar.xz: build build-asan (tools/run sanitize) and run --prepare"
+    return 1
+  fi
+  local jobs=${FUZZ_JOBS:-$(( JOBS / 8 > 0 ? JOBS / 8 : 1 ))}
+  FMPC_FUZZ_BINARIES="$UNPACKED/bin" FMPC_FUZZ_SEEDS="$UNPACKED/seeds" \
+    bash "$ROOT/tests/fuzz/run_fuzzers.sh" --jobs "$jobs" "$BUILD" "${FUZZ_SECONDS:-540}" > "$OUT/fuzz.log" 2>&1
+  local status=$?
+  grep -E '^fuzz_|^finding' "$OUT/fuzz.log" | tee -a "$SUMMARY"
+  mkdir -p "$OUT/fuzz"
+  cp "$BUILD"/fuzz-corpus/*.0.log "$OUT/fuzz/" 2>/dev/null
+  local findings
+  findings=$(find "$BUILD/fuzz-corpus" -path '*-findings/*' -type f 2>/dev/null)
+  if [[ -n "$findings" ]]; then
+    mkdir -p "$OUT/fuzz/findings" && cp $findings "$OUT/fuzz/findings/"
+  fi
+  [[ $status -eq 0 ]] || fail "fuzzing (exit $status; see fuzz.log and fuzz/findings)"
 }
 
 # The generated CUDA evaluator and table lookups (bench/gpu/evaluator_gpu_bench.cu): built with nvcc alone, so
@@ -365,6 +466,7 @@ if wanted tests || wanted sanitizers || wanted bench; then
 fi
 wanted scenes && scenes_section
 wanted evaluator && evaluator_section
+wanted fuzz && fuzz_section
 
 echo
 echo "================ summary ($OUT/summary.md)"
