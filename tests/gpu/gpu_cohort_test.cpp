@@ -3,6 +3,8 @@
 // readings of its run alone and of the CPU loop (the same FMPC_HD functions in the same order, --fmad=false).
 #include "runtime/gpu/gpu_simulation.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <sstream>

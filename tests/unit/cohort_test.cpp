@@ -232,9 +232,9 @@ TEST_CASE("fmpc simulate --patients checks the whole patients file before runnin
     std::string message;
   };
   const std::vector<Case> cases = {
-      {"", "the patients file is empty"},
+      {"", "no header row: the CSV is empty"},
       {header, "has a header but no patients"},
-      {"\n\n", "the patients file is empty"},
+      {"\n\n", "no header row: the CSV is empty"},
       {header + "P1,1,2,3,4,5\nP1,1,2,3,4,5\n", "label 'P1' is given twice"},
       {header + "p1,1,2,3,4,5\nP1,1,2,3,4,5\n", "label 'P1' is given twice"},
       {header + "P1,nan,2,3,4,5\n", "input 'HCV' is NaN"},
@@ -260,9 +260,9 @@ TEST_CASE("fmpc simulate --patients checks the whole patients file before runnin
   }
   // Every bad row is reported, with its line and column, not just the first.
   const auto many = run_with(header + "P1,nan,2,3,4,5\nP2,1,2,3,4,5\nP1,1,2,3,4,x\n");
-  CHECK(many.out.find("patients.csv:2:8: error: input 'HCV' is NaN") != std::string::npos);
+  CHECK(many.out.find("patients.csv:2:4: error: input 'HCV' is NaN") != std::string::npos);
   CHECK(many.out.find("patients.csv:4:1: error: label 'P1' is given twice") != std::string::npos);
-  CHECK(many.out.find("patients.csv:4:17: error: 'x' is not a number") != std::string::npos);
+  CHECK(many.out.find("patients.csv:4:12: error: 'x' is not a number") != std::string::npos);
   // Out of range is a warning, evaluated as given (as fmpc eval); bad shards are refused before the file is read.
   const auto shard = run_with(header + "P1,1,2,3,4,5\n", " --shard 2/2");
   CHECK(shard.status == 2);

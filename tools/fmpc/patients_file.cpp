@@ -93,11 +93,6 @@ std::optional<PatientsFile> read_patients_file(const std::string& path, const si
                     SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics);
   if (!read) return std::nullopt;
   const CsvTable& table = *read;
-  if (table.header.empty()) {
-    diagnostics.error(SourceRange{path, 1, 1, 1, 1}, "the patients file is empty",
-                      {"give a header row 'label,INPUT,...' and one row per patient"});
-    return std::nullopt;
-  }
   PatientsFile file;
   std::size_t label_column = 0;
   std::vector<int> column_input;

@@ -9,9 +9,12 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <thread>
 
 #include "diagnostics/number_format.h"
 #include "runtime/io/atomic_file.h"
+#include "runtime/integrate/worker_pool.h"
+#include "runtime/io/input_file.h"
 #include "runtime/scene/cohort.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
@@ -166,16 +169,35 @@ int run_cohort_command(const SimulateOptions& options) {
     report(diagnostics, sources);
     return kExitErrors;
   }
-  const LoadedRuleFile rules = load_rule_file_from_disk(scene->material.file);
-  if (!rules.readable || rules.diagnostics.has_errors()) {
-    diagnostics.append(rules.diagnostics);
-    diagnostics.error(scene->range_of("material.rules"),
-                      "material.rules: '" + scene->material.file + "' has errors (above); fix them with fmpc check");
-    print_diagnostics(diagnostics, rules.sources, std::cerr);
-    return kExitErrors;
+  // The rules are read and loaded once for every patient (build_scene then parses nothing).
+  sim::LoadedRules rules;
+  {
+    std::string read_error;
+    const auto text = sim::read_input_file(scene->material.file, sim::kMaxRuleFileBytes, "rule file", read_error);
+    if (text) {
+      rules.path = scene->material.file;
+      rules.text = *text;
+      sources.add(rules.path, rules.text);
+      DiagnosticList rule_diagnostics;
+      rules.rules = load_rule_file(rules.path, rules.text, rule_diagnostics);
+      for (const Diagnostic& diagnostic : rule_diagnostics.items())
+        if (diagnostic.severity == Severity::Error) diagnostics.add(diagnostic);
+    }
+    if (!text || diagnostics.has_errors()) {
+      // The scene's own build says what is wrong with the file, located at material.rules.
+      sim::build_scene(*scene, diagnostics);
+      report(diagnostics, sources);
+      return kExitErrors;
+    }
   }
-  const FuzzySystem* system = select_system(rules, scene->material.system, diagnostics);
-  if (system == nullptr || diagnostics.has_errors()) {
+  const FuzzySystem* system = nullptr;
+  for (const FuzzySystem& candidate : rules.rules.systems)
+    if (candidate.name == scene->material.system || (scene->material.system.empty() && rules.rules.systems.size() == 1))
+      system = &candidate;
+  if (system == nullptr) {
+    sim::build_scene(*scene, diagnostics, 0, &rules);  // names the systems the file holds, located at the scene
+    if (!diagnostics.has_errors())
+      diagnostics.error(scene->range_of("material.rules"), "material.rules: no system of the rule file is selected");
     report(diagnostics, sources);
     return kExitErrors;
   }
@@ -210,36 +232,61 @@ int run_cohort_command(const SimulateOptions& options) {
   std::vector<std::size_t> order = {rows.front()};
   for (std::size_t row = 0; row < file->patients.size(); ++row)
     if (row != rows.front() && (in_run[row] || automatic_dt)) order.push_back(row);
-  bool first = true;
-  for (const std::size_t row : order) {
+  // The first patient alone, for the size limit; then the others side by side (the rules are shared and read-only).
+  const auto build = [&](std::size_t row, DiagnosticList& build_diagnostics) {
     const PatientRow& patient = file->patients[row];
-    sim::Scene patient_scene = sim::patient_scene(*scene, patient.label, file->inputs, patient.values);
+    CohortMember member{row, sim::patient_scene(*scene, patient.label, file->inputs, patient.values), nullptr};
+    auto built = sim::build_scene(member.scene, build_diagnostics, 0, &rules);
+    if (built) member.built = std::make_unique<sim::BuiltScene>(std::move(*built));
+    return member;
+  };
+  {
     DiagnosticList build_diagnostics;
-    std::optional<sim::BuiltScene> built = sim::build_scene(patient_scene, build_diagnostics);
-    if (first && built)
-      for (const auto& [path, source] : built->sources) sources.add(path, source);
-    append_build_diagnostics(build_diagnostics, patient.label, first, diagnostics);
-    if (first && built) {
-      const double size = model_size(built->setup) * static_cast<double>(rows.size());
-      if (size > sim::kMaxCohortSprings) {
-        diagnostics.error(SourceRange{"argument --patients", 0, 0, 0, 0},
-                          "the run's " + std::to_string(rows.size()) + " patients have " + format_number(size) +
-                              " springs (or tetrahedra) together; at most " + format_number(sim::kMaxCohortSprings) +
-                              " in one run (docs/limits.md)",
-                          {"spread the cohort over runs with --shard I/N"});
-        report(diagnostics, sources);
-        return kExitErrors;
-      }
+    CohortMember first = build(order.front(), build_diagnostics);
+    append_build_diagnostics(build_diagnostics, file->patients[order.front()].label, true, diagnostics);
+    if (first.built)
+      for (const auto& [path, source] : first.built->sources) sources.add(path, source);
+    if (!first.built) {
+      report(diagnostics, sources);
+      return kExitErrors;
     }
-    first = false;
-    if (!built) continue;
-    if (in_run[row]) {
-      members.push_back(CohortMember{row, std::move(patient_scene), std::make_unique<sim::BuiltScene>(std::move(*built))});
-      continue;
+    const double size = model_size(first.built->setup) * static_cast<double>(rows.size());
+    if (size > sim::kMaxCohortSprings) {
+      diagnostics.error(SourceRange{"argument --patients", 0, 0, 0, 0},
+                        "the run's " + std::to_string(rows.size()) + " patients have " + format_number(size) +
+                            " springs (or tetrahedra) together; at most " + format_number(sim::kMaxCohortSprings) +
+                            " in one run (docs/limits.md)",
+                        {"spread the cohort over runs with --shard I/N"});
+      report(diagnostics, sources);
+      return kExitErrors;
     }
-    DiagnosticList ignored;  // this patient runs in another shard, which reports its problems
-    if (const auto report = sim::check_stability(built->setup, ignored))
-      smallest_elsewhere = smallest_elsewhere ? std::min(*smallest_elsewhere, report->time_step) : report->time_step;
+    members.push_back(std::move(first));
+  }
+  std::vector<CohortMember> others(order.size() - 1);
+  std::vector<DiagnosticList> others_diagnostics(others.size());
+  std::vector<double> others_step(others.size(), INFINITY);  // the automatic step of a patient another shard runs
+  {
+    const unsigned threads = scene->threads != 0 ? scene->threads : std::max(1u, std::thread::hardware_concurrency());
+    sim::WorkerPool pool(static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(others.size(), 1))));
+    pool.run(
+        others.size(),
+        [&](std::size_t begin, std::size_t end) {
+          for (std::size_t i = begin; i < end; ++i) {
+            others[i] = build(order[i + 1], others_diagnostics[i]);
+            if (!others[i].built || in_run[order[i + 1]]) continue;
+            DiagnosticList ignored;  // this patient runs in another shard, which reports its problems
+            if (const auto report = sim::check_stability(others[i].built->setup, ignored))
+              others_step[i] = report->time_step;
+            others[i].built.reset();
+          }
+        },
+        1);
+  }
+  for (std::size_t i = 0; i < others.size(); ++i) {
+    append_build_diagnostics(others_diagnostics[i], file->patients[order[i + 1]].label, false, diagnostics);
+    if (std::isfinite(others_step[i]))
+      smallest_elsewhere = smallest_elsewhere ? std::min(*smallest_elsewhere, others_step[i]) : others_step[i];
+    if (others[i].built) members.push_back(std::move(others[i]));
   }
   if (diagnostics.has_errors()) {
     report(diagnostics, sources);
