@@ -76,7 +76,7 @@ TEST_CASE("shards: every patient in exactly one shard, every N-th from the I-th"
   }
 }
 
-TEST_CASE("--shard parses I/N with 0 <= I < N and refuses everything else", "[cohort]") {
+TEST_CASE("shards parse as I/N with 0 <= I < N; everything else is refused", "[cohort]") {
   std::string error;
   const auto shard = parse_cohort_shard("2/5", error);
   REQUIRE(shard);
