@@ -10,11 +10,13 @@
 #   build       configure + build, Release, sm_90, FMPC_GPU_ONLY=ON
 #   simulator   gpu-labelled tests (CPU vs CUDA after 10,000 steps, bitwise reruns, batches, NaN location),
 #               compute-sanitizer memcheck/racecheck/initcheck/synccheck on the small GPU test,
-#               bench/sim (CPU threads vs CUDA float/double, graphs on/off, 1k..1M springs, batch of scenes)
+#               bench/sim (CPU threads vs CUDA float/double, graphs on/off, 1k..1M springs, batch of scenes,
+#               a cohort of 1,000 demo-scene patients with their probes in one launch: row cuda-cohort)
 #   scenes      the carried fmpc (a CUDA build of the build machine with its libraries and fonts: --prepare bundles
 #               $FMPC into build-gpu-carry/programs.tar.xz) runs the README's demo scene with backend auto (CUDA)
 #               and cpu, and SOFA's liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as
-#               liver-CUDA.scn) on CUDA and on the CPU; outputs under $OUT/scenes, compared in summary
+#               liver-CUDA.scn) on CUDA and on the CPU; the demo's 12-patient cohort (--patients) on both,
+#               cohort.csv compared; large boxes (240^3 springs, 120^3 FEM) end to end; outputs under $OUT/scenes
 #   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
 #               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540)
 #   evaluator   bench/gpu/evaluator_gpu_bench.cu (nvcc alone): the generated CUDA evaluators (type-1 and interval
@@ -375,6 +377,22 @@ scenes_section() {
     record "| $run | $(json_field "$summary" backend) | $(json_field "$summary" model) | $(json_field "$summary" steps) | $(json_field "$summary" wall_time_s) | $(json_field "$summary" steps_per_second) | $(json_field "$summary" max_displacement_m) | $(json_field "$summary" final_force_N) | $(json_field "$summary" inverted_elements) | $(cat "$OUT/scenes/$run/file_count.txt") |"
   done
   [[ -f "$OUT/scenes/demo_auto/force_displacement.png" ]] || fail "the CUDA demo wrote no force_displacement.png"
+  # A cohort (docs/cohorts.md): the demo's 12 patients in one CUDA batch and side by side on the CPU. The backends
+  # give the same bits, so cohort.csv agrees in every column but the last (steps_per_second).
+  local backend patients="$ROOT/rulesets/scenes/liver_indentation_patients.csv"
+  for backend in cuda cpu; do
+    "$UNPACKED/bin/fmpc" simulate "$demo" --backend "$backend" --patients "$patients" -o "$BUILD/scenes/cohort_$backend" \
+      > "$OUT/scenes/cohort_$backend.log" 2>&1 || fail "cohort on $backend (see scenes/cohort_$backend.log)"
+    mkdir -p "$OUT/scenes/cohort_$backend"
+    cp "$BUILD/scenes/cohort_$backend"/{cohort.csv,cohort_force_displacement.png} "$OUT/scenes/cohort_$backend/" 2>/dev/null
+    record "cohort on $backend: $(grep -o 'wall time .*' "$OUT/scenes/cohort_$backend.log")"
+  done
+  if [[ -f "$OUT/scenes/cohort_cuda/cohort.csv" ]] &&
+      cmp -s <(cut -d, -f1-15 "$OUT/scenes/cohort_cuda/cohort.csv") <(cut -d, -f1-15 "$OUT/scenes/cohort_cpu/cohort.csv"); then
+    record "cohort: CUDA and CPU cohort.csv equal in every column but steps_per_second (12 patients)"
+  else
+    fail "cohort: CUDA and CPU cohort.csv differ (scenes/cohort_{cuda,cpu}/cohort.csv)"
+  fi
 }
 
 # build-gpu-carry/programs.tar.xz (bundle_program) unpacked once into $UNPACKED.

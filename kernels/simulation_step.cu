@@ -289,20 +289,21 @@ __global__ void apply_probe_kernel(ProbeArguments<Real> a, int offset, bool befo
   const int i = vertex_index();
   if (i >= a.count) return;
   const int v = a.vertices[i];
-  const double t = static_cast<double>(*a.step_base + static_cast<unsigned long long>(offset + (before_step ? 0 : 1))) * a.h;
-  if (a.force_mode) {
+  const ProbeScene p = a.scenes[a.entry_scene[i]];
+  const double t = static_cast<double>(*a.step_base + static_cast<unsigned long long>(offset + (before_step ? 0 : 1))) * p.h;
+  if (p.force_mode) {
     if (!before_step) return;
-    const double share = kernels::probe_ramp_share(t, a.ramp_time);
-    const double count = static_cast<double>(a.count);
-    const bool based = a.base_force_x != nullptr;
-    a.force.x[v] = static_cast<Real>((based ? a.base_force_x[i] : 0.0) + share * a.target_x / count);
-    a.force.y[v] = static_cast<Real>((based ? a.base_force_y[i] : 0.0) + share * a.target_y / count);
-    a.force.z[v] = static_cast<Real>((based ? a.base_force_z[i] : 0.0) + share * a.target_z / count);
+    const double share = kernels::probe_ramp_share(t, p.ramp_time);
+    const double count = static_cast<double>(p.count);
+    const bool based = p.has_base_force;
+    a.force.x[v] = static_cast<Real>((based ? a.base_force_x[i] : 0.0) + share * p.target_x / count);
+    a.force.y[v] = static_cast<Real>((based ? a.base_force_y[i] : 0.0) + share * p.target_y / count);
+    a.force.z[v] = static_cast<Real>((based ? a.base_force_z[i] : 0.0) + share * p.target_z / count);
     return;
   }
-  kernels::probe_prescribed_state(a.start_x[i], a.target_x, t, a.ramp_time, before_step, a.state.x[v], a.state.vx[v]);
-  kernels::probe_prescribed_state(a.start_y[i], a.target_y, t, a.ramp_time, before_step, a.state.y[v], a.state.vy[v]);
-  kernels::probe_prescribed_state(a.start_z[i], a.target_z, t, a.ramp_time, before_step, a.state.z[v], a.state.vz[v]);
+  kernels::probe_prescribed_state(a.start_x[i], p.target_x, t, p.ramp_time, before_step, a.state.x[v], a.state.vx[v]);
+  kernels::probe_prescribed_state(a.start_y[i], p.target_y, t, p.ramp_time, before_step, a.state.y[v], a.state.vy[v]);
+  kernels::probe_prescribed_state(a.start_z[i], p.target_z, t, p.ramp_time, before_step, a.state.z[v], a.state.vz[v]);
 }
 
 template <typename Real>

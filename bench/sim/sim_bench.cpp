@@ -1,16 +1,21 @@
 // Simulation benchmark: steps per second of the CPU backend (1 and N threads) and the CUDA backend (float/double,
 // with and without CUDA graphs, every GPU integrator), on hanging boxes from ~1k to ~1M springs, plus a batch of
-// small scenes in one launch against the same scenes run one by one; then the co-rotational FEM (tetrahedron-steps/s)
+// small scenes in one launch against the same scenes run one by one, a cohort of demo-scene patients with their
+// probes in one launch; then the co-rotational FEM (tetrahedron-steps/s)
 // from ~8k to ~10M tetrahedra and springs with the volume term. Writes a CSV and prints a table.
 //
 //   fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only]
+//                  [--cohort PATIENTS]
 //
+// --cohort N: the cohort row's patients (default 1,000; 64 with --quick): the demo scene's block with its probe, one
+// batch (fmpc simulate --patients), aggregate spring-steps/s.
 // --fem-only: the element rows alone; with --fem-cells N > 52, only the N^3 box on the GPU (for profilers).
 //
 // Every run checks for NaN/Inf every 64 steps (the default of advance), and the time includes that check's
 // synchronisation. Scene creation and upload are not timed; one warm-up chunk (graph capture) is excluded.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -40,6 +45,7 @@ struct Options {
   double min_seconds = 0.5;
   int fem_cells = 120;  // the largest FEM box, GPU only: 120^3 cells = 10,368,000 tetrahedra
   bool fem_only = false;
+  std::size_t cohort = 1000;  // patients of the demo scene in the cohort row
 };
 
 struct Row {
@@ -263,6 +269,67 @@ std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, c
   return rows;
 }
 
+// The demo's block (rulesets/scenes/liver_indentation.yaml: 4 x 4 x 2 cm, 8 x 8 x 4 cells, base fixed, damping ratio
+// 0.9, float) for `count` patients with Young's modulus spread over 5 to 40 kPa, each pressed 4 mm over 1 s by its
+// own displacement probe on the top face's centre vertex and its 4 neighbours, all at the smallest automatic step:
+// what `fmpc simulate SCENE --patients FILE` runs in one launch (issue 13: 5e10 spring-steps/s at 1,000 patients).
+Row cohort_row(std::size_t count, const Options& options) {
+  std::vector<SimulationSetup> patients;
+  BoxSpec box;
+  box.cells_x = box.cells_y = 8;
+  box.cells_z = 4;
+  box.size = {0.04, 0.04, 0.02};
+  DiagnosticList diagnostics;
+  const Mesh mesh = generate_box(box, diagnostics);
+  double smallest = 1.0;
+  for (std::size_t p = 0; p < count; ++p) {
+    SpringModelSpec model;
+    model.stiffness.mapping = StiffnessMapping::VanGelder1998;
+    model.stiffness.value = 5000.0 + 35000.0 * static_cast<double>(p) / static_cast<double>(std::max<std::size_t>(count - 1, 1));
+    model.mass.value = 1060.0;
+    model.damping.ratio = 0.9;
+    auto setup = build_spring_model(mesh, model, diagnostics);
+    if (!setup) break;
+    ProbeLoad probe;
+    for (std::size_t v = 0; v < setup->rest_positions.size(); ++v) {
+      const Point3& x = setup->rest_positions[v];
+      if (x[2] < 1e-9) setup->fixed_vertices.push_back(static_cast<std::int32_t>(v));
+      if (x[2] > 0.02 - 1e-9 && std::abs(x[0] - 0.02) + std::abs(x[1] - 0.02) < 0.0051)
+        probe.vertices.push_back(static_cast<std::int32_t>(v));
+    }
+    probe.target = {0.0, 0.0, -0.004};
+    probe.ramp_time = 1.0;
+    setup->probe = probe;
+    setup->precision = Precision::Float;
+    const auto report = check_stability(*setup, diagnostics);
+    if (!report) break;
+    smallest = std::min(smallest, report->time_step);
+    patients.push_back(std::move(*setup));
+  }
+  Row row;
+  row.variant = "cuda-cohort";
+  row.backend = "cuda";
+  row.precision = "float";
+  row.integrator = to_string(Integrator::SemiImplicitEuler);
+  row.graphs = "yes";
+  row.scenes = count;
+  for (SimulationSetup& patient : patients) {
+    patient.time_step = smallest;
+    row.vertices += patient.rest_positions.size();
+    row.springs += patient.springs.size();
+  }
+  if (patients.size() != count) {
+    row.status = failure_text(diagnostics);
+    return row;
+  }
+  const auto batch = gpu::GpuBatchSimulation::create(patients, gpu::GpuOptions{}, diagnostics);
+  if (!batch ||
+      !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, row)) {
+    row.status = failure_text(diagnostics);
+  }
+  return row;
+}
+
 std::string format(double value, int precision) {
   char text[64];
   std::snprintf(text, sizeof(text), "%.*f", precision, value);
@@ -312,12 +379,15 @@ bool parse(int argc, char** argv, Options& options) {
       options.threads = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
     } else if (arg == "--min-seconds" && i + 1 < argc) {
       options.min_seconds = std::strtod(argv[++i], nullptr);
+    } else if (arg == "--cohort" && i + 1 < argc) {
+      options.cohort = static_cast<std::size_t>(std::strtoul(argv[++i], nullptr, 10));
     } else if (arg == "--fem-only") {
       options.fem_only = true;
     } else if (arg == "--fem-cells" && i + 1 < argc) {
       options.fem_cells = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
     } else {
-      std::cerr << "usage: fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only]\n";
+      std::cerr << "usage: fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only] "
+                   "[--cohort PATIENTS]\n";
       return false;
     }
   }
@@ -366,6 +436,12 @@ int main(int argc, char** argv) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       for (Row& row : batch_rows(5, scenes, precision, options)) rows.push_back(row);
     }
+  }
+
+  if (have_device && !options.fem_only) {
+    const std::size_t patients = options.quick ? 64 : options.cohort;
+    std::cout << "cohort: " << patients << " patients of the demo scene, each with its own probe\n" << std::flush;
+    rows.push_back(cohort_row(patients, options));
   }
 
   // The force models with an element pass. CPU rows up to 52^3 cells (843,648 tetrahedra); the largest box on the

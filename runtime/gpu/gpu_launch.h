@@ -128,25 +128,33 @@ struct RungeKutta4Arguments {
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<float>& arguments, int stage, cudaStream_t stream);
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<double>& arguments, int stage, cudaStream_t stream);
 
-// A probe on one scene's vertices, applied around every step exactly as the CPU backend does (kernels/
+// Probes on a batch's vertices, applied around every step exactly as the CPU backend does (kernels/
 // integrator_math.h): before a step at t = (step_base + offset) h, displacement probes set their vertices' positions
 // and ramp velocity and force probes their share of the force; after it (t + h) displacement probes set the
 // positions again with zero velocity. step_base (device memory) is written before every chunk, so a captured graph
-// replays with the right times; offset is the step's index within the chunk.
-template <typename Real>
-struct ProbeArguments {
-  const int* vertices;
-  int count;
-  const double* start_x;  // the probe vertices' start positions (m)
-  const double* start_y;
-  const double* start_z;
-  const double* base_force_x;  // force probes: the vertices' own external force (N), null: none
-  const double* base_force_y;
-  const double* base_force_z;
+// replays with the right times; offset is the step's index within the chunk. Every scene of a batch may have its own
+// probe (ProbeScene): each probe vertex is written by one thread from its own scene's values, so a scene's probe is
+// bitwise the one it has when run alone.
+struct ProbeScene {
   double target_x, target_y, target_z;
   double ramp_time;
   double h;
+  int count;            // the scene's probe vertices (a force probe shares its target equally among them)
   bool force_mode;
+  bool has_base_force;  // force probes: whether base_force_* hold the vertices' own external force
+};
+template <typename Real>
+struct ProbeArguments {
+  const int* vertices;     // every probing scene's probe vertices, concatenated (batch vertex indices)
+  const int* entry_scene;  // per entry: its scene's index in `scenes`
+  int count;               // entries
+  const double* start_x;   // the probe vertices' start positions (m)
+  const double* start_y;
+  const double* start_z;
+  const double* base_force_x;  // force probes: the vertices' own external force (N), read where has_base_force
+  const double* base_force_y;
+  const double* base_force_z;
+  const ProbeScene* scenes;
   const unsigned long long* step_base;
   MutableStateView<Real> state;    // displacement probes write here
   MutableVector3View<Real> force;  // force probes write here

@@ -345,7 +345,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     }
     if (c.has_field && !upload_field(c, diagnostics)) return false;
 
-    if (!upload_single_scene_features(diagnostics)) return false;
+    if (!upload_probes(diagnostics) || !upload_single_scene_features(diagnostics)) return false;
 
     model_.kind = gather_kind(common);
     model_.springs = {offset_.data(),
@@ -452,31 +452,51 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  // The probe, the strain table and implicit Euler's buffers (a batch of one scene only; create() refuses them in
-  // larger batches). Nothing is allocated for what the scene does not use.
-  bool upload_single_scene_features(DiagnosticList& diagnostics) {
-    const sim::SimulationSetup& setup = scenes_.front();
-    const auto count = static_cast<std::size_t>(n_);
-    if (setup.probe) {
+  // Every scene's probe: its vertices (batch indices), start positions and own external forces, concatenated, and
+  // one ProbeScene each. Nothing is allocated when no scene has a probe.
+  bool upload_probes(DiagnosticList& diagnostics) {
+    std::vector<int> vertices, entry_scene;
+    std::vector<double> start[3], base[3];
+    std::vector<ProbeScene> probes;
+    bool any_base = false;
+    for (std::size_t s = 0; s < scenes_.size(); ++s) {
+      const sim::SimulationSetup& setup = scenes_[s];
+      if (!setup.probe) continue;
       const sim::ProbeLoad& probe = *setup.probe;
-      std::vector<double> start[3], base[3];
+      const bool based = force_probe(setup) && !setup.external_forces.empty();
+      any_base = any_base || based;
+      probes.push_back(ProbeScene{probe.target[0], probe.target[1], probe.target[2], probe.ramp_time,
+                                  stability_[s].time_step, static_cast<int>(probe.vertices.size()), force_probe(setup),
+                                  based});
       for (const auto v : probe.vertices) {
+        vertices.push_back(vertex_begin_[s] + v);
+        entry_scene.push_back(static_cast<int>(probes.size() - 1));
         const sim::Point3& point = sim::start_position(setup, static_cast<std::size_t>(v));
         for (std::size_t axis = 0; axis < 3; ++axis) {
           start[axis].push_back(point[axis]);
-          if (!setup.external_forces.empty()) base[axis].push_back(setup.external_forces[static_cast<std::size_t>(v)][axis]);
+          base[axis].push_back(based ? setup.external_forces[static_cast<std::size_t>(v)][axis] : 0.0);
         }
       }
-      FMPC_CUDA_CHECK(probe_vertices_.upload(std::vector<int>(probe.vertices.begin(), probe.vertices.end())),
-                      diagnostics, false);
-      DeviceArray<double>* start_arrays[3] = {&probe_start_x_, &probe_start_y_, &probe_start_z_};
-      DeviceArray<double>* base_arrays[3] = {&probe_base_x_, &probe_base_y_, &probe_base_z_};
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        FMPC_CUDA_CHECK(start_arrays[axis]->upload(start[axis]), diagnostics, false);
-        FMPC_CUDA_CHECK(base_arrays[axis]->upload(base[axis]), diagnostics, false);
-      }
-      FMPC_CUDA_CHECK(step_base_.allocate(1), diagnostics, false);
     }
+    if (probes.empty()) return true;
+    FMPC_CUDA_CHECK(probe_vertices_.upload(vertices), diagnostics, false);
+    FMPC_CUDA_CHECK(probe_entry_scene_.upload(entry_scene), diagnostics, false);
+    FMPC_CUDA_CHECK(probe_scenes_.upload(probes), diagnostics, false);
+    DeviceArray<double>* start_arrays[3] = {&probe_start_x_, &probe_start_y_, &probe_start_z_};
+    DeviceArray<double>* base_arrays[3] = {&probe_base_x_, &probe_base_y_, &probe_base_z_};
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      FMPC_CUDA_CHECK(start_arrays[axis]->upload(start[axis]), diagnostics, false);
+      if (any_base) FMPC_CUDA_CHECK(base_arrays[axis]->upload(base[axis]), diagnostics, false);
+    }
+    FMPC_CUDA_CHECK(step_base_.allocate(1), diagnostics, false);
+    return true;
+  }
+
+  // The strain table and implicit Euler's buffers (a batch of one scene only; create() refuses them in larger
+  // batches). Nothing is allocated for what the scene does not use.
+  bool upload_single_scene_features(DiagnosticList& diagnostics) {
+    const sim::SimulationSetup& setup = scenes_.front();
+    const auto count = static_cast<std::size_t>(n_);
     if (setup.strain_stiffness) {
       const sim::StrainStiffnessTable& table = *setup.strain_stiffness;
       FMPC_CUDA_CHECK(table_strain_.upload(table.strain), diagnostics, false);
@@ -536,6 +556,24 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   std::vector<sim::Point3> velocities(std::size_t scene, DiagnosticList& diagnostics) const override {
     const DeviceState<Real>& s = state_[current_];
     return download(scene, s.vx, s.vy, s.vz, diagnostics);
+  }
+
+  bool scene_states(std::vector<std::vector<sim::Point3>>& positions, std::vector<std::vector<sim::Point3>>* velocities,
+                    DiagnosticList& diagnostics) const override {
+    const DeviceState<Real>& s = state_[current_];
+    const auto split = [&](const std::vector<sim::Point3>& all, std::vector<std::vector<sim::Point3>>& out) {
+      out.assign(scenes_.size(), {});
+      for (std::size_t scene = 0; scene < scenes_.size(); ++scene)
+        out[scene].assign(all.begin() + vertex_begin_[scene], all.begin() + vertex_begin_[scene + 1]);
+    };
+    std::vector<sim::Point3> all = download_range(0, static_cast<std::size_t>(n_), s.x, s.y, s.z, diagnostics);
+    if (all.size() != static_cast<std::size_t>(n_)) return false;
+    split(all, positions);
+    if (velocities == nullptr) return true;
+    all = download_range(0, static_cast<std::size_t>(n_), s.vx, s.vy, s.vz, diagnostics);
+    if (all.size() != static_cast<std::size_t>(n_)) return false;
+    split(all, *velocities);
+    return true;
   }
 
   std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const override {
@@ -751,24 +789,18 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   bool enqueue_probe(int offset, bool before_step, const DeviceState<Real>& state, DiagnosticList& diagnostics) {
-    const sim::SimulationSetup& setup = scenes_.front();
-    if (!setup.probe) return true;
-    const sim::ProbeLoad& probe = *setup.probe;
+    if (probe_scenes_.size() == 0) return true;
     ProbeArguments<Real> a{};
     a.vertices = probe_vertices_.data();
-    a.count = static_cast<int>(probe.vertices.size());
+    a.entry_scene = probe_entry_scene_.data();
+    a.count = static_cast<int>(probe_vertices_.size());
     a.start_x = probe_start_x_.data();
     a.start_y = probe_start_y_.data();
     a.start_z = probe_start_z_.data();
     a.base_force_x = probe_base_x_.data();
     a.base_force_y = probe_base_y_.data();
     a.base_force_z = probe_base_z_.data();
-    a.target_x = probe.target[0];
-    a.target_y = probe.target[1];
-    a.target_z = probe.target[2];
-    a.ramp_time = probe.ramp_time;
-    a.h = stability_.front().time_step;
-    a.force_mode = force_probe(setup);
+    a.scenes = probe_scenes_.data();
     a.step_base = step_base_.data();
     a.state = state.mutable_view();
     a.force = {force_x_.data(), force_y_.data(), force_z_.data()};
@@ -793,7 +825,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   // The probe kernels' time origin for the chunk about to be enqueued or replayed.
   bool set_step_base(DiagnosticList& diagnostics) {
-    if (!scenes_.front().probe) return true;
+    if (probe_scenes_.size() == 0) return true;
     step_base_host_ = steps_taken_;
     FMPC_CUDA_CHECK(cudaMemcpyAsync(step_base_.data(), &step_base_host_, sizeof step_base_host_,
                                     cudaMemcpyHostToDevice, stream_),
@@ -1073,7 +1105,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
                                     const DeviceArray<Real>& z, DiagnosticList& diagnostics) const {
     if (!scene_exists(scene, diagnostics)) return {};
     const auto begin = static_cast<std::size_t>(vertex_begin_[scene]);
-    const auto count = static_cast<std::size_t>(vertex_begin_[scene + 1]) - begin;
+    return download_range(begin, static_cast<std::size_t>(vertex_begin_[scene + 1]) - begin, x, y, z, diagnostics);
+  }
+
+  std::vector<sim::Point3> download_range(std::size_t begin, std::size_t count, const DeviceArray<Real>& x,
+                                          const DeviceArray<Real>& y, const DeviceArray<Real>& z,
+                                          DiagnosticList& diagnostics) const {
     std::vector<Real> host[3];
     const DeviceArray<Real>* device[3] = {&x, &y, &z};
     for (std::size_t axis = 0; axis < 3; ++axis) {
@@ -1133,7 +1170,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceArray<double> energy_mass_, energy_rest_length_, energy_stiffness_;
   DeviceArray<double> energy_force_x_, energy_force_y_, energy_force_z_, energy_partial_, energy_result_;
   DeviceArray<unsigned char> fixed_;
-  DeviceArray<int> probe_vertices_;
+  DeviceArray<int> probe_vertices_, probe_entry_scene_;
+  DeviceArray<ProbeScene> probe_scenes_;
   DeviceArray<double> probe_start_x_, probe_start_y_, probe_start_z_, probe_base_x_, probe_base_y_, probe_base_z_;
   DeviceArray<unsigned long long> step_base_;
   DeviceArray<double> table_strain_, table_modulus_, stiffness_per_modulus_;
@@ -1218,7 +1256,6 @@ const char* single_scene_feature(const sim::SimulationSetup& setup) {
     return "implicit Euler runs one scene at a time on the GPU (its conjugate gradient solves one system); run the "
            "scene as its own GpuSimulation";
   }
-  if (setup.probe) return "a scene with a probe runs on its own on the GPU; run it as its own GpuSimulation";
   if (setup.strain_stiffness) {
     return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as its own GpuSimulation";
   }

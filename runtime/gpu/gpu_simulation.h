@@ -69,8 +69,10 @@ class GpuSimulation {
 // Many scenes advanced together, one launch per kernel for all of them: the scenes' vertices, springs and CSR
 // entries are concatenated (offset arrays), each scene keeps its own time step. The scenes must share the
 // integrator, the precision, the spring law and its parameters, gravity and the nodal damping (an error names the
-// first scene that differs); sizes, materials, fixed vertices, forces and initial states may differ. Implicit Euler,
-// probes and strain tables need a batch of one scene. A NaN/Inf in any scene stops the whole batch.
+// first scene that differs); sizes, materials, fixed vertices, forces, probes and initial states may differ. Each
+// scene's probe is applied by its own threads from its own values (no atomics), so a scene's probe and force curve
+// are bitwise those it has when run alone. Implicit Euler and strain tables need a batch of one scene. A NaN/Inf in
+// any scene stops the whole batch.
 class GpuBatchSimulation {
  public:
   static std::unique_ptr<GpuBatchSimulation> create(const std::vector<sim::SimulationSetup>& scenes,
@@ -82,6 +84,10 @@ class GpuBatchSimulation {
   virtual std::size_t steps_taken() const = 0;
   virtual std::vector<sim::Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual std::vector<sim::Point3> velocities(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  // Every scene's positions (and, given, velocities) now, in one download per array instead of one per scene (what
+  // a cohort reads at every output event); false after a CUDA error (appended to diagnostics).
+  virtual bool scene_states(std::vector<std::vector<sim::Point3>>& positions,
+                            std::vector<std::vector<sim::Point3>>* velocities, DiagnosticList& diagnostics) const = 0;
   virtual const sim::StabilityReport& stability(std::size_t scene) const = 0;
   virtual std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;

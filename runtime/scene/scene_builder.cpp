@@ -298,10 +298,17 @@ std::vector<Point3> spring_midpoints(const SimulationSetup& setup, double length
 // The fuzzy material: a modulus per material point (spring midpoints or element centroids, mesh units) or a strain
 // table, from the rules or the compiled table.
 std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std::vector<Point3>& points,
-                                                   MaterialPoint kind, BuiltScene& built, DiagnosticList& diagnostics) {
+                                                   MaterialPoint kind, BuiltScene& built, const LoadedRules* loaded,
+                                                   DiagnosticList& diagnostics) {
   const std::string field =
       scene.material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
   const bool is_table = scene.material.source == SceneMaterial::Source::Table;
+  if (!is_table && loaded != nullptr && loaded->path == scene.material.file) {
+    built.sources.emplace_back(loaded->path, loaded->text);
+    const auto selection = select_rules(scene, loaded->rules, diagnostics);
+    if (!selection) return std::nullopt;
+    return bind_rules(*selection->system, selection->output, scene, points, kind, diagnostics);
+  }
   std::string read_error;
   const auto text = read_input_file(scene.material.file, is_table ? kMaxTableFileBytes : kMaxRuleFileBytes,
                                     is_table ? "table file" : "rule file", read_error);
@@ -357,7 +364,8 @@ std::optional<std::vector<double>> regional_values(const RegionalValue& value, c
 
 // The co-rotational FEM: Young's modulus per element from the material source (at each element's centroid for
 // regions), the Poisson ratio, masses and damping.
-std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, DiagnosticList& diagnostics) {
+std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, const LoadedRules* loaded,
+                                         DiagnosticList& diagnostics) {
   const SceneMaterial& material = scene.material;
   const std::vector<Point3> centroids = tetrahedron_centroids(built.mesh);
   FemModelSpec spec;
@@ -377,7 +385,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
       break;
     case SceneMaterial::Source::Rules:
     case SceneMaterial::Source::Table: {
-      built.material = bind_fuzzy_material(scene, centroids, MaterialPoint::ElementCentroid, built, diagnostics);
+      built.material = bind_fuzzy_material(scene, centroids, MaterialPoint::ElementCentroid, built, loaded, diagnostics);
       if (!built.material) return std::nullopt;
       const MaterialBinding& binding = *built.material;
       if (binding.strain.empty()) {
@@ -415,8 +423,8 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
 // Springs with the volume term reaching the scene's Poisson ratio (calibrate_volume_term): the springs' stiffness is
 // scaled to the calibrated E_s / E, and each element gets kappa = (kappa / E) E at its centroid (one value for a
 // constant material).
-bool add_calibrated_volume_term(const Scene& scene, const BuiltScene& built, SimulationSetup& setup,
-                                std::string& description, DiagnosticList& diagnostics) {
+bool add_calibrated_volume_term(const Scene& scene, const BuiltScene& built, const LoadedRules* loaded,
+                                SimulationSetup& setup, std::string& description, DiagnosticList& diagnostics) {
   const SceneMaterial& material = scene.material;
   const SourceRange where = scene.range_of("springs");
   if (built.mesh.tetrahedra.empty()) {
@@ -454,7 +462,7 @@ bool add_calibrated_volume_term(const Scene& scene, const BuiltScene& built, Sim
     } else {
       BuiltScene scratch;
       const auto per_element = bind_fuzzy_material(scene, tetrahedron_centroids(built.mesh), MaterialPoint::ElementCentroid,
-                                                    scratch, diagnostics);
+                                                    scratch, loaded, diagnostics);
       if (!per_element) return false;
       modulus = per_element->modulus_per_spring;
     }
@@ -469,7 +477,8 @@ bool add_calibrated_volume_term(const Scene& scene, const BuiltScene& built, Sim
   return true;
 }
 
-std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& built, DiagnosticList& diagnostics) {
+std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& built, const LoadedRules* loaded,
+                                             DiagnosticList& diagnostics) {
   const SceneMaterial& material = scene.material;
   SpringModelSpec model;
   model.length_unit = scene.mesh.unit;
@@ -507,7 +516,7 @@ std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& bui
   setup->tetrahedra = built.mesh.tetrahedra;
   if (material.source == SceneMaterial::Source::Rules || material.source == SceneMaterial::Source::Table) {
     built.material = bind_fuzzy_material(scene, spring_midpoints(*setup, scene.mesh.unit), MaterialPoint::SpringMidpoint,
-                                         built, diagnostics);
+                                         built, loaded, diagnostics);
     if (!built.material) return std::nullopt;
     const std::vector<double> factor = setup->springs.stiffness;
     const MaterialBinding& binding = *built.material;
@@ -540,7 +549,8 @@ std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& bui
     if (!assign_damping(setup->springs, setup->mass, scene.damping, diagnostics)) return std::nullopt;
   }
   if (scene.volume_term) {
-    if (!add_calibrated_volume_term(scene, built, *setup, built.stiffness_description, diagnostics)) return std::nullopt;
+    if (!add_calibrated_volume_term(scene, built, loaded, *setup, built.stiffness_description, diagnostics))
+      return std::nullopt;
     // The springs were scaled to the calibrated modulus: their dashpots follow.
     if (!assign_damping(setup->springs, setup->mass, scene.damping, diagnostics)) return std::nullopt;
   }
@@ -638,7 +648,8 @@ double strain_table_rest_modulus(const StrainStiffnessTable& table) {
   return kernels::strain_table_modulus(view, 0.0);
 }
 
-std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics, unsigned refinements) {
+std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics, unsigned refinements,
+                                      const LoadedRules* rules) {
   const std::size_t errors = diagnostics.error_count();
   BuiltScene built;
   auto mesh = load_mesh(scene, diagnostics);
@@ -657,7 +668,8 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
   built.mesh = std::move(*mesh);
   for (unsigned level = 0; level < refinements; ++level) built.mesh = subdivide_tetrahedra(built.mesh);
   std::optional<SimulationSetup> setup =
-      scene.model == ForceModel::CorotationalFem ? build_fem(scene, built, diagnostics) : build_springs(scene, built, diagnostics);
+      scene.model == ForceModel::CorotationalFem ? build_fem(scene, built, rules, diagnostics)
+                                                 : build_springs(scene, built, rules, diagnostics);
   if (!setup) return std::nullopt;
   return finish_scene(scene, repair, std::move(built), std::move(*setup), errors, diagnostics);
 }

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "compiler/frontend/rule_file_loader.h"
 #include "diagnostics/diagnostic.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/mesh/mesh.h"
@@ -25,13 +26,22 @@ struct BuiltScene {
   std::vector<std::pair<std::string, std::string>> sources;
 };
 
+// A rule file read and loaded once for many builds (a cohort's patients share it): build_scene then reads and parses
+// nothing for a scene whose material.rules is `path`. The caller checked that it loaded without errors.
+struct LoadedRules {
+  std::string path;
+  std::string text;
+  RuleFile rules;
+};
+
 // Builds everything; returns nullopt after appending errors (located at the scene's fields where they come from
 // the scene). Mesh repairs are reported as one warning. `refinements` > 0 subdivides the repaired mesh that many
 // times (subdivide_tetrahedra, 8 tetrahedra per tetrahedron each time) before anything is built on it: fixed sets,
 // holds, the probe's ray pick and regions are selected on the refined mesh, and the mesh's vertices keep their
 // indices (vertex indices in the scene still name them). The caller bounds the size first (each refinement
 // multiplies the tetrahedra by 8).
-std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics, unsigned refinements = 0);
+std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagnostics, unsigned refinements = 0,
+                                      const LoadedRules* rules = nullptr);
 
 // The modulus a strain table gives at strain 0 (Pa): what sets the damping coefficients and the summary's E.
 double strain_table_rest_modulus(const StrainStiffnessTable& table);

@@ -5,13 +5,17 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
+#include <regex>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "diagnostics/number_format.h"
 #include "runtime/io/atomic_file.h"
 #include "runtime/io/json_writer.h"
 #include "runtime/io/vtk_xml.h"
+#include "runtime/integrate/worker_pool.h"
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
 #include "runtime/gpu/gpu_simulation.h"
 #endif
@@ -42,12 +46,10 @@ std::vector<std::size_t> spread(int count, std::size_t total) {
 
 double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-// The run's simulation behind one interface, whichever backend steps it (called per output event, never per
-// element).
-class SceneStepper {
+// A run's state as the outputs read it, whichever backend holds it (called per output event, never per element).
+class SceneState {
  public:
-  virtual ~SceneStepper() = default;
-  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics) = 0;
+  virtual ~SceneState() = default;
   virtual std::size_t steps_taken() const = 0;
   virtual double time() const = 0;
   virtual const StabilityReport& stability() const = 0;
@@ -56,6 +58,12 @@ class SceneStepper {
   virtual ProbeReading probe_reading(DiagnosticList& diagnostics) const = 0;
   virtual std::vector<double> current_stiffness(DiagnosticList& diagnostics) const = 0;
   virtual const InversionReport& inversions() const = 0;
+};
+
+// A run that steps itself (one scene alone).
+class SceneStepper : public SceneState {
+ public:
+  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics) = 0;
 };
 
 class CpuStepper final : public SceneStepper {
@@ -132,46 +140,49 @@ double relative_difference(double a, double b) {
   return scale > 0.0 ? std::abs(a - b) / scale : 0.0;
 }
 
-// The scene again in the other precision, to its last step, compared with the run's final answers.
-PrecisionCheckResult check_precision(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
-                                     const SceneRunResult& run, DiagnosticList& diagnostics) {
-  PrecisionCheckResult check;
-  const SimulationSetup& setup = built.setup;
-  check.other = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
+// Why the precision check does not run for this run, or nullopt when it does (outputs.precision_check, and `auto`'s
+// limit on the vertex-steps).
+std::optional<std::string> precision_check_skipped(const Scene& scene, const SimulationSetup& setup,
+                                                   const SceneRunResult& run) {
   const double work = static_cast<double>(setup.rest_positions.size()) * static_cast<double>(run.steps_taken);
-  if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Off) {
-    check.reason = "off (outputs.precision_check)";
-    return check;
-  }
-  if (!run.completed) {
-    check.reason = "the run did not complete";
-    return check;
-  }
+  if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Off) return std::string("off (outputs.precision_check)");
+  if (!run.completed) return std::string("the run did not complete");
   if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Auto && work > kPrecisionCheckWork) {
-    check.reason = "skipped: " + format_number(work) + " vertex-steps is above the automatic limit of " +
-                   format_number(kPrecisionCheckWork) + " (outputs.precision_check: on forces it)";
-    return check;
+    return "skipped: " + format_number(work) + " vertex-steps is above the automatic limit of " +
+           format_number(kPrecisionCheckWork) + " (outputs.precision_check: on forces it)";
   }
+  return std::nullopt;
+}
+
+// The setup of the rerun: the other precision at the run's step.
+SimulationSetup precision_check_setup(const SimulationSetup& setup, const SceneRunResult& run) {
   SimulationSetup other = setup;
-  other.precision = check.other;
+  other.precision = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
   other.time_step = run.stability.time_step;  // the same step, not the other precision's automatic one
+  return other;
+}
+
+// The rerun's final state (null: it did not complete) against the run's final answers, warned about when they differ.
+PrecisionCheckResult compare_precision(const Scene& scene, const SimulationSetup& setup, const SceneRunResult& run,
+                                       const SceneState* other_run, DiagnosticList& diagnostics) {
+  PrecisionCheckResult check;
+  check.other = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
   DiagnosticList ignored;  // the main run reported everything the scene says
-  const auto simulation = create_stepper(other, options.backend, ignored);
-  if (!simulation || !simulation->advance(run.steps_taken, ignored)) {
+  if (other_run == nullptr) {
     check.reason = "the rerun in the other precision did not complete";
     check.agrees = false;
   } else {
     check.ran = true;
     const std::vector<Point3>& start = setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
     check.displacement_difference =
-        relative_difference(largest_displacement(simulation->positions(ignored), start), run.final_max_displacement);
+        relative_difference(largest_displacement(other_run->positions(ignored), start), run.final_max_displacement);
     if (setup.probe && !run.probe_curve.empty()) {
-      const ProbeReading reading = simulation->probe_reading(ignored);
+      const ProbeReading reading = other_run->probe_reading(ignored);
       const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
       const double force = length > 0.0 ? dot(reading.force, setup.probe->target) / length : 0.0;
       check.probe_force_difference = relative_difference(force, run.probe_curve.back().force);
     }
-    check.other_inverted = simulation->inversions().largest_count;
+    check.other_inverted = other_run->inversions().largest_count;
     check.agrees = check.displacement_difference <= kPrecisionTolerance &&
                    check.probe_force_difference <= kPrecisionTolerance &&
                    (check.other_inverted == 0) == (run.inversions.largest_count == 0);
@@ -195,62 +206,77 @@ PrecisionCheckResult check_precision(const Scene& scene, const BuiltScene& built
   return check;
 }
 
+// The scene again in the other precision, to its last step, compared with the run's final answers.
+PrecisionCheckResult check_precision(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
+                                     const SceneRunResult& run, DiagnosticList& diagnostics) {
+  const SimulationSetup& setup = built.setup;
+  if (const auto skipped = precision_check_skipped(scene, setup, run)) {
+    PrecisionCheckResult check;
+    check.other = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
+    check.reason = *skipped;
+    return check;
+  }
+  DiagnosticList ignored;
+  const auto simulation = create_stepper(precision_check_setup(setup, run), options.backend, ignored);
+  const bool completed = simulation && simulation->advance(run.steps_taken, ignored);
+  return compare_precision(scene, setup, run, completed ? simulation.get() : nullptr, diagnostics);
+}
+
 std::string frame_name(std::size_t index) {
   char name[32];
   std::snprintf(name, sizeof name, "frame_%05zu.vtu", index);
   return name;
 }
 
-}  // namespace
-
-std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
-                                        DiagnosticList& diagnostics) {
-  const SimulationSetup& setup = built.setup;
-  const auto simulation = create_stepper(setup, options.backend, diagnostics);
-  if (!simulation) return std::nullopt;
-  if (!ensure_directory(options.output_directory, diagnostics)) return std::nullopt;
-  SceneRunResult result;
-  result.stability = simulation->stability();
-  const double dt = result.stability.time_step;
-  const auto planned = planned_step_count(scene, dt, diagnostics);
-  if (!planned) return std::nullopt;
-  result.steps_planned = *planned;
-  const std::size_t total = result.steps_planned;
-  const std::vector<std::size_t> frame_steps = scene.outputs.frames > 0 ? spread(scene.outputs.frames, total)
-                                                                        : std::vector<std::size_t>{};
-  const bool write_csv = scene.outputs.csv && scene.outputs.samples > 0;
-  const std::vector<std::size_t> sample_steps =
-      write_csv || setup.probe ? spread(std::max(scene.outputs.samples, 2), total) : std::vector<std::size_t>{};
-  std::set<std::size_t> events(frame_steps.begin(), frame_steps.end());
-  events.insert(sample_steps.begin(), sample_steps.end());
-  for (int i = 1; i <= 100; ++i) events.insert(total * static_cast<std::size_t>(i) / 100);
-  events.insert(total);
-
-  const std::filesystem::path directory(options.output_directory);
-  const bool with_probe = setup.probe.has_value();
-  Point3 probe_axis{0.0, 0.0, 0.0};
-  if (with_probe) {
-    const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
-    if (length > 0.0)
-      for (std::size_t i = 0; i < 3; ++i) probe_axis[i] = setup.probe->target[i] / length;
+// The outputs of one run, recorded at its events (frames, samples and about 100 progress points, the same for every
+// run of the scene with the same step count) and written at its end: what run_scene writes for a scene alone and
+// run_cohort for each patient.
+class SceneRecorder {
+ public:
+  SceneRecorder(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options, std::size_t total)
+      : scene_(scene), built_(built), options_(options), directory_(options.output_directory) {
+    const SimulationSetup& setup = built.setup;
+    result_.steps_planned = total;
+    frame_steps_ = scene.outputs.frames > 0 ? spread(scene.outputs.frames, total) : std::vector<std::size_t>{};
+    write_csv_ = scene.outputs.csv && scene.outputs.samples > 0;
+    with_probe_ = setup.probe.has_value();
+    sample_steps_ = write_csv_ || with_probe_ ? spread(std::max(scene.outputs.samples, 2), total)
+                                              : std::vector<std::size_t>{};
+    events_.insert(frame_steps_.begin(), frame_steps_.end());
+    events_.insert(sample_steps_.begin(), sample_steps_.end());
+    for (int i = 1; i <= 100; ++i) events_.insert(total * static_cast<std::size_t>(i) / 100);
+    events_.insert(total);
+    if (with_probe_) {
+      const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
+      if (length > 0.0)
+        for (std::size_t i = 0; i < 3; ++i) probe_axis_[i] = setup.probe->target[i] / length;
+    }
+    if (write_csv_) {
+      const auto columns = time_series_columns(with_probe_);
+      for (std::size_t i = 0; i < columns.size(); ++i) csv_ += (i ? "," : "") + columns[i];
+      csv_ += "\n";
+    }
+    vtu_options_.format = scene.outputs.vtu;
   }
-  const std::vector<Point3>& rest = setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
 
-  std::string csv;
-  if (write_csv) {
-    const auto columns = time_series_columns(with_probe);
-    for (std::size_t i = 0; i < columns.size(); ++i) csv += (i ? "," : "") + columns[i];
-    csv += "\n";
+  const std::set<std::size_t>& events() const { return events_; }
+  bool is_frame(std::size_t step) const { return std::binary_search(frame_steps_.begin(), frame_steps_.end(), step); }
+  bool is_sample(std::size_t step) const {
+    return std::binary_search(sample_steps_.begin(), sample_steps_.end(), step);
   }
-  std::vector<PvdFrame> frames;
-  VtuOptions vtu_options;
-  vtu_options.format = scene.outputs.vtu;
-  std::optional<VtuCells> vtu_cells;  // the cells are the same in every frame: encoded once, at the first
-  bool outputs_ok = true;
-  const auto record = [&](bool frame, bool sample) {
-    const std::vector<Point3> positions = simulation->positions(diagnostics);
+  // Whether the event needs velocities (a frame or a sample) besides the positions.
+  bool needs_velocities(std::size_t step) const { return is_frame(step) || is_sample(step); }
+  bool records_at_end() const { return scene_.outputs.frames > 0; }
+  bool samples_at_end() const { return write_csv_ || with_probe_; }
+
+  // The state at an event: the largest displacement always, a frame and a CSV row (with the probe curve's point)
+  // where asked.
+  void record(const SceneState& state, bool frame, bool sample, DiagnosticList& diagnostics) {
+    const SimulationSetup& setup = built_.setup;
+    const std::vector<Point3>& rest = start_positions();
+    const std::vector<Point3> positions = state.positions(diagnostics);
     if (positions.size() != rest.size()) {  // a device error, already reported
-      outputs_ok = false;
+      outputs_ok_ = false;
       return;
     }
     std::vector<Point3> displacement(positions.size());
@@ -259,86 +285,84 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
       for (std::size_t i = 0; i < 3; ++i) displacement[v][i] = positions[v][i] - rest[v][i];
       largest = std::max(largest, std::sqrt(dot(displacement[v], displacement[v])));
     }
-    result.max_displacement = std::max(result.max_displacement, largest);
-    const double time = simulation->time();
-    if (frame && outputs_ok) {
-      const std::string name = frame_name(frames.size());
-      const std::vector<Point3> velocities = simulation->velocities(diagnostics);
-      if (!vtu_cells) vtu_cells = encode_vtu_cells(built.mesh, vtu_options, diagnostics);
+    result_.max_displacement = std::max(result_.max_displacement, largest);
+    const double time = state.time();
+    if (frame && outputs_ok_) {
+      const std::string name = frame_name(frames_.size());
+      const std::vector<Point3> velocities = state.velocities(diagnostics);
+      if (!vtu_cells_) vtu_cells_ = encode_vtu_cells(built_.mesh, vtu_options_, diagnostics);
       // Element stresses as cell data where the cells are the elements: the FEM's von Mises stress, or the volume
       // term's pressure magnitude (springs carry no continuum stress).
       std::vector<double> stress;
       std::vector<VtuArray> cell_data;
-      if (setup.tetrahedron_field && vtu_cells && vtu_cells->size() == setup.tetrahedra.size()) {
+      if (setup.tetrahedron_field && vtu_cells_ && vtu_cells_->size() == setup.tetrahedra.size()) {
         stress = element_von_mises_stress(setup, positions);
         cell_data.push_back(vtu_scalars(
             setup.model == ForceModel::CorotationalFem ? "von_mises_stress_Pa" : "volume_term_pressure_Pa", stress));
       }
-      const auto vtu = vtu_cells ? vtu_document(positions, *vtu_cells,
-                                                {vtu_vectors("displacement", displacement),
-                                                 vtu_vectors("velocity", velocities)},
-                                                cell_data, vtu_options, diagnostics)
-                                 : std::nullopt;
-      outputs_ok = vtu && write_file_atomically((directory / name).string(), *vtu, diagnostics);
-      frames.push_back({time, name});
-      result.files.push_back((directory / name).string());
+      const auto vtu = vtu_cells_ ? vtu_document(positions, *vtu_cells_,
+                                                 {vtu_vectors("displacement", displacement),
+                                                  vtu_vectors("velocity", velocities)},
+                                                 cell_data, vtu_options_, diagnostics)
+                                  : std::nullopt;
+      outputs_ok_ = vtu && write_file_atomically((directory_ / name).string(), *vtu, diagnostics);
+      frames_.push_back({time, name});
+      result_.files.push_back((directory_ / name).string());
     }
     if (!sample) return;
-    const std::vector<Point3> velocities = simulation->velocities(diagnostics);
+    const std::vector<Point3> velocities = state.velocities(diagnostics);
     const double kinetic = kinetic_energy(setup, velocities);
     const double elastic = elastic_energy(setup, positions);
     std::vector<double> row = {time};
-    if (with_probe) {
-      const ProbeReading reading = simulation->probe_reading(diagnostics);
-      const ProbeCurvePoint point{time, dot(reading.displacement, probe_axis), dot(reading.force, probe_axis)};
-      result.probe_curve.push_back(point);
+    if (with_probe_) {
+      const ProbeReading reading = state.probe_reading(diagnostics);
+      const ProbeCurvePoint point{time, dot(reading.displacement, probe_axis_), dot(reading.force, probe_axis_)};
+      result_.probe_curve.push_back(point);
       row.insert(row.end(), {point.displacement, point.force, reading.displacement[0], reading.displacement[1],
                              reading.displacement[2], reading.force[0], reading.force[1], reading.force[2]});
     }
     row.insert(row.end(), {kinetic, elastic, largest});
-    if (write_csv) {
-      for (std::size_t i = 0; i < row.size(); ++i) csv += (i ? "," : "") + format_number(row[i]);
-      csv += "\n";
+    if (write_csv_) {
+      for (std::size_t i = 0; i < row.size(); ++i) csv_ += (i ? "," : "") + format_number(row[i]);
+      csv_ += "\n";
     }
-  };
+  }
 
-  const auto start = std::chrono::steady_clock::now();
-  const auto is_frame = [&](std::size_t step) { return std::binary_search(frame_steps.begin(), frame_steps.end(), step); };
-  const auto is_sample = [&](std::size_t step) {
-    return std::binary_search(sample_steps.begin(), sample_steps.end(), step);
-  };
-  if (is_frame(0) || is_sample(0)) record(is_frame(0), is_sample(0));
-  bool running = true;
-  for (const std::size_t event : events) {
-    if (event == 0) continue;
-    running = simulation->advance(event - simulation->steps_taken(), diagnostics);
-    if (!running) break;
-    if (is_frame(event) || is_sample(event)) record(is_frame(event), is_sample(event));
-    else record(false, false);  // the largest displacement is followed at every event (about 100 per run)
-    if (options.progress) options.progress(event, total);
-  }
-  if (!running) record(scene.outputs.frames > 0, write_csv || with_probe);  // the last finite state
-  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  result.completed = running;
-  result.steps_taken = simulation->steps_taken();
-  result.steps_per_second =
-      result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
-  result.inversions = simulation->inversions();
-  result.final_max_displacement = largest_displacement(simulation->positions(diagnostics), rest);
-  result.precision_check = check_precision(scene, built, options, result, diagnostics);
-
-  if (outputs_ok && !frames.empty()) {
-    const std::string pvd = (directory / (scene.name + ".pvd")).string();
-    outputs_ok = write_file_atomically(pvd, pvd_document(frames), diagnostics);
-    result.files.push_back(pvd);
-  }
-  if (outputs_ok && write_csv) {
-    result.csv_path = (directory / "time_series.csv").string();
-    outputs_ok = write_file_atomically(result.csv_path, csv, diagnostics);
-    result.files.push_back(result.csv_path);
-  }
+  // The run's end: its totals, then the precision check (check(result) gives it), the .pvd, the CSV and the summary.
+  std::optional<SceneRunResult> finish(const SceneState& state, bool completed, double wall_seconds,
+                                       const std::function<PrecisionCheckResult(const SceneRunResult&)>& check,
+                                       DiagnosticList& diagnostics) {
+    const SimulationSetup& setup = built_.setup;
+    SceneRunResult& result = result_;
+    result.stability = state.stability();
+    result.wall_seconds = wall_seconds;
+    result.completed = completed;
+    result.steps_taken = state.steps_taken();
+    result.steps_per_second =
+        result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
+    result.inversions = state.inversions();
+    result.final_max_displacement = largest_displacement(state.positions(diagnostics), start_positions());
+    result.precision_check = check(result);
+    const Scene& scene = scene_;
+    const BuiltScene& built = built_;
+    const SceneRunOptions& options = options_;
+    const std::filesystem::path& directory = directory_;
+    const std::vector<PvdFrame>& frames = frames_;
+    const bool write_csv = write_csv_, with_probe = with_probe_;
+    const double dt = result.stability.time_step;
+    bool outputs_ok = outputs_ok_;
+    if (outputs_ok && !frames.empty()) {
+      const std::string pvd = (directory / (scene.name + ".pvd")).string();
+      outputs_ok = write_file_atomically(pvd, pvd_document(frames), diagnostics);
+      result.files.push_back(pvd);
+    }
+    if (outputs_ok && write_csv) {
+      result.csv_path = (directory / "time_series.csv").string();
+      outputs_ok = write_file_atomically(result.csv_path, csv_, diagnostics);
+      result.files.push_back(result.csv_path);
+    }
   if (outputs_ok && scene.outputs.summary) {
-    const std::vector<double> stiffness = simulation->current_stiffness(diagnostics);
+    const std::vector<double> stiffness = state.current_stiffness(diagnostics);
     double k_min = 0.0, k_max = 0.0, k_sum = 0.0;
     if (!stiffness.empty()) {
       k_min = *std::min_element(stiffness.begin(), stiffness.end());
@@ -360,7 +384,7 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
         .value("critical_dt_s", result.stability.critical_time_step)
         .value("steps", result.steps_taken)
         .value("steps_planned", result.steps_planned)
-        .value("simulated_time_s", simulation->time())
+        .value("simulated_time_s", state.time())
         .value("wall_time_s", result.wall_seconds)
         .value("steps_per_second", result.steps_per_second)
         .value("threads", static_cast<std::size_t>(setup.threads))
@@ -443,8 +467,316 @@ std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& bu
     outputs_ok = write_file_atomically(summary, json.str(), diagnostics);
     result.files.push_back(summary);
   }
-  if (!outputs_ok) return std::nullopt;
+    if (!outputs_ok) return std::nullopt;
+    return result;
+  }
+
+ private:
+  const std::vector<Point3>& start_positions() const {
+    const SimulationSetup& setup = built_.setup;
+    return setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
+  }
+
+  const Scene& scene_;
+  const BuiltScene& built_;
+  const SceneRunOptions& options_;
+  const std::filesystem::path directory_;
+  SceneRunResult result_;
+  std::vector<std::size_t> frame_steps_, sample_steps_;
+  std::set<std::size_t> events_;
+  bool write_csv_ = false, with_probe_ = false;
+  Point3 probe_axis_{0.0, 0.0, 0.0};
+  std::string csv_;
+  std::vector<PvdFrame> frames_;
+  VtuOptions vtu_options_;
+  std::optional<VtuCells> vtu_cells_;  // the cells are the same in every frame: encoded once, at the first
+  bool outputs_ok_ = true;
+};
+
+// A patient's messages as its own: "patient 'P7': " before each (given `patient`), or a GPU batch's "scene N: ..."
+// and "... in scene N" named by the patient they are about (a batch of one names no scene).
+void append_for_patients(const DiagnosticList& from, const std::vector<CohortPatient>& patients,
+                         std::optional<std::size_t> patient, DiagnosticList& to) {
+  static const std::regex batch_scene(R"(^scene ([0-9]+): |in scene ([0-9]+))");
+  const auto named = [&](std::size_t p) { return "patient '" + patients[p].label + "'"; };
+  for (Diagnostic diagnostic : from.items()) {
+    std::smatch match;
+    if (patient) {
+      diagnostic.message = named(*patient) + ": " + diagnostic.message;
+    } else if (std::regex_search(diagnostic.message, match, batch_scene)) {
+      const std::size_t who = std::stoull(match[1].matched ? match[1].str() : match[2].str());
+      if (who < patients.size()) {
+        diagnostic.message = match[1].matched ? named(who) + ": " + match.suffix().str()
+                                              : match.prefix().str() + "in " + named(who) + match.suffix().str();
+      }
+    } else if (patients.size() == 1) {
+      diagnostic.message = named(0) + ": " + diagnostic.message;
+    }
+    to.add(std::move(diagnostic));
+  }
+}
+
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+// One patient of a GPU batch as the recorder reads it: the state downloaded at the event for every patient at once
+// (GpuBatchSimulation::scene_states), the probe read on the host from it exactly as GpuBatchSimulation::probe_reading
+// reads it (sim::read_probe on the same positions, velocities and stiffness), so each patient's outputs are those of
+// its run alone.
+class BatchMemberState final : public SceneState {
+ public:
+  BatchMemberState(const gpu::GpuBatchSimulation& batch, std::size_t index, const SimulationSetup& setup)
+      : batch_(batch), index_(index), setup_(setup) {}
+  // The springs' stiffness is constant without a strain table: read once.
+  bool read_stiffness(DiagnosticList& diagnostics) {
+    if (setup_.strain_stiffness) return true;
+    stiffness_ = batch_.current_stiffness(index_, diagnostics);
+    return stiffness_.size() == setup_.springs.size();
+  }
+  void set_state(std::vector<Point3>* positions, std::vector<Point3>* velocities) {
+    positions_ = positions;
+    velocities_ = velocities;
+  }
+  std::size_t steps_taken() const override { return batch_.steps_taken(); }
+  double time() const override { return static_cast<double>(steps_taken()) * stability().time_step; }
+  const StabilityReport& stability() const override { return batch_.stability(index_); }
+  std::vector<Point3> positions(DiagnosticList&) const override { return positions_ ? *positions_ : std::vector<Point3>{}; }
+  std::vector<Point3> velocities(DiagnosticList&) const override {
+    return velocities_ ? *velocities_ : std::vector<Point3>{};
+  }
+  ProbeReading probe_reading(DiagnosticList& diagnostics) const override {
+    if (!setup_.probe || !positions_ || !velocities_) return {};
+    return read_probe(setup_, time(), *positions_, *velocities_, current_stiffness(diagnostics));
+  }
+  std::vector<double> current_stiffness(DiagnosticList& diagnostics) const override {
+    if (setup_.strain_stiffness) return batch_.current_stiffness(index_, diagnostics);
+    return stiffness_;
+  }
+  const InversionReport& inversions() const override { return batch_.inversions(index_); }
+
+ private:
+  const gpu::GpuBatchSimulation& batch_;
+  std::size_t index_;
+  const SimulationSetup& setup_;
+  std::vector<double> stiffness_;
+  std::vector<Point3>* positions_ = nullptr;
+  std::vector<Point3>* velocities_ = nullptr;
+};
+
+// Every patient's state now, one download per array for the whole batch.
+bool read_members(const gpu::GpuBatchSimulation& batch, bool with_velocities, std::vector<std::vector<Point3>>& positions,
+                  std::vector<std::vector<Point3>>& velocities, std::vector<BatchMemberState>& members,
+                  DiagnosticList& diagnostics) {
+  if (!batch.scene_states(positions, with_velocities ? &velocities : nullptr, diagnostics)) return false;
+  for (std::size_t p = 0; p < members.size(); ++p)
+    members[p].set_state(&positions[p], with_velocities ? &velocities[p] : nullptr);
+  return true;
+}
+
+std::optional<CohortRunResult> run_cohort_on_gpu(const std::vector<CohortPatient>& patients,
+                                                 const CohortRunOptions& options, DiagnosticList& diagnostics) {
+  std::vector<SimulationSetup> setups;
+  for (const CohortPatient& patient : patients) setups.push_back(patient.built->setup);
+  DiagnosticList batch_diagnostics;
+  const auto batch = gpu::GpuBatchSimulation::create(setups, gpu::GpuOptions{}, batch_diagnostics);
+  append_for_patients(batch_diagnostics, patients, std::nullopt, diagnostics);
+  if (!batch) return std::nullopt;
+  std::vector<BatchMemberState> members;
+  for (std::size_t p = 0; p < patients.size(); ++p) members.emplace_back(*batch, p, patients[p].built->setup);
+  for (BatchMemberState& member : members)
+    if (!member.read_stiffness(diagnostics)) return std::nullopt;
+  const Scene& scene = *patients.front().scene;
+  const auto planned = planned_step_count(scene, batch->stability(0).time_step, diagnostics);
+  if (!planned) return std::nullopt;
+  const std::size_t total = *planned;
+  std::vector<SceneRunOptions> run_options(patients.size());
+  std::vector<std::unique_ptr<SceneRecorder>> recorders;
+  for (std::size_t p = 0; p < patients.size(); ++p) {
+    run_options[p].output_directory = patients[p].output_directory;
+    run_options[p].backend = "cuda";
+    recorders.push_back(std::make_unique<SceneRecorder>(*patients[p].scene, *patients[p].built, run_options[p], total));
+  }
+  // Every patient has the same events (same scene outputs, same step count): the first recorder's.
+  const SceneRecorder& plan = *recorders.front();
+  std::vector<std::vector<Point3>> positions, velocities;
+  std::vector<DiagnosticList> patient_diagnostics(patients.size());
+  const auto record_all = [&](bool frame, bool sample) {
+    if (!read_members(*batch, frame || sample, positions, velocities, members, diagnostics)) return false;
+    for (std::size_t p = 0; p < patients.size(); ++p) recorders[p]->record(members[p], frame, sample, patient_diagnostics[p]);
+    return true;
+  };
+  const auto start = std::chrono::steady_clock::now();
+  bool running = true;
+  if (plan.is_frame(0) || plan.is_sample(0)) running = record_all(plan.is_frame(0), plan.is_sample(0));
+  DiagnosticList run_diagnostics;
+  for (const std::size_t event : plan.events()) {
+    if (!running || event == 0) continue;
+    running = batch->advance(event - batch->steps_taken(), run_diagnostics);
+    if (!running) break;
+    if (!record_all(plan.is_frame(event), plan.is_sample(event))) {
+      append_for_patients(run_diagnostics, patients, std::nullopt, diagnostics);
+      return std::nullopt;
+    }
+    if (options.progress) options.progress(event, total);
+  }
+  append_for_patients(run_diagnostics, patients, std::nullopt, diagnostics);
+  if (!running) record_all(plan.records_at_end(), plan.samples_at_end());
+  CohortRunResult result;
+  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  // The precision check: every patient again in the other precision, in a second batch at the same step.
+  SceneRunResult provisional;
+  provisional.completed = running;
+  provisional.steps_taken = batch->steps_taken();
+  std::vector<SimulationSetup> other_setups;  // outlives other_members, which refer to it
+  std::unique_ptr<gpu::GpuBatchSimulation> other;
+  std::vector<BatchMemberState> other_members;
+  std::vector<std::vector<Point3>> other_positions, other_velocities;
+  if (!precision_check_skipped(scene, setups.front(), provisional)) {
+    provisional.stability = batch->stability(0);
+    for (const SimulationSetup& setup : setups) other_setups.push_back(precision_check_setup(setup, provisional));
+    DiagnosticList ignored;  // the main run reported everything the scene says
+    other = gpu::GpuBatchSimulation::create(other_setups, gpu::GpuOptions{}, ignored);
+    if (other && other->advance(provisional.steps_taken, ignored)) {
+      for (std::size_t p = 0; p < patients.size(); ++p) other_members.emplace_back(*other, p, other_setups[p]);
+      bool read = read_members(*other, true, other_positions, other_velocities, other_members, ignored);
+      for (BatchMemberState& member : other_members) read = read && member.read_stiffness(ignored);
+      if (!read) other_members.clear();
+    }
+  }
+  for (std::size_t p = 0; p < patients.size(); ++p) {
+    const SceneState* other_state = other_members.empty() ? nullptr : &other_members[p];
+    const SimulationSetup& setup = patients[p].built->setup;
+    result.patients.push_back(recorders[p]->finish(
+        members[p], running, result.wall_seconds,
+        [&](const SceneRunResult& run) {
+          if (const auto skipped = precision_check_skipped(*patients[p].scene, setup, run)) {
+            PrecisionCheckResult check;
+            check.other = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
+            check.reason = *skipped;
+            return check;
+          }
+          return compare_precision(*patients[p].scene, setup, run, other_state, patient_diagnostics[p]);
+        },
+        patient_diagnostics[p]));
+    append_for_patients(patient_diagnostics[p], patients, p, diagnostics);
+    result.spring_steps += static_cast<double>(setup.springs.size()) * static_cast<double>(batch->steps_taken());
+  }
   return result;
+}
+#endif
+
+std::optional<CohortRunResult> run_cohort_on_cpu(const std::vector<CohortPatient>& patients,
+                                                 const CohortRunOptions& options, DiagnosticList& diagnostics) {
+  CohortRunResult result;
+  result.patients.resize(patients.size());
+  std::vector<DiagnosticList> patient_diagnostics(patients.size());
+  std::mutex progress_lock;
+  std::size_t done = 0;
+  const unsigned threads = options.threads != 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  WorkerPool pool(static_cast<unsigned>(std::min<std::size_t>(threads, patients.size())));
+  const auto start = std::chrono::steady_clock::now();
+  // One patient per index: chunks of whole patients, each run exactly as run_scene runs it alone.
+  pool.run(
+      patients.size(),
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t p = begin; p < end; ++p) {
+          SceneRunOptions run_options;
+          run_options.output_directory = patients[p].output_directory;
+          run_options.backend = "cpu";
+          result.patients[p] = run_scene(*patients[p].scene, *patients[p].built, run_options, patient_diagnostics[p]);
+          const std::lock_guard<std::mutex> lock(progress_lock);
+          ++done;
+          if (options.progress) options.progress(done, patients.size());
+        }
+      },
+      1);
+  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (std::size_t p = 0; p < patients.size(); ++p) {
+    append_for_patients(patient_diagnostics[p], patients, p, diagnostics);
+    if (result.patients[p])
+      result.spring_steps += static_cast<double>(patients[p].built->setup.springs.size()) *
+                             static_cast<double>(result.patients[p]->steps_taken);
+  }
+  return result;
+}
+
+}  // namespace
+
+std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
+                                        DiagnosticList& diagnostics) {
+  const SimulationSetup& setup = built.setup;
+  const auto simulation = create_stepper(setup, options.backend, diagnostics);
+  if (!simulation) return std::nullopt;
+  if (!ensure_directory(options.output_directory, diagnostics)) return std::nullopt;
+  const auto planned = planned_step_count(scene, simulation->stability().time_step, diagnostics);
+  if (!planned) return std::nullopt;
+  const std::size_t total = *planned;
+  SceneRecorder recorder(scene, built, options, total);
+  const auto start = std::chrono::steady_clock::now();
+  if (recorder.is_frame(0) || recorder.is_sample(0))
+    recorder.record(*simulation, recorder.is_frame(0), recorder.is_sample(0), diagnostics);
+  bool running = true;
+  for (const std::size_t event : recorder.events()) {
+    if (event == 0) continue;
+    running = simulation->advance(event - simulation->steps_taken(), diagnostics);
+    if (!running) break;
+    // The largest displacement is followed at every event (about 100 per run).
+    recorder.record(*simulation, recorder.is_frame(event), recorder.is_sample(event), diagnostics);
+    if (options.progress) options.progress(event, total);
+  }
+  if (!running) recorder.record(*simulation, recorder.records_at_end(), recorder.samples_at_end(), diagnostics);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return recorder.finish(
+      *simulation, running, wall,
+      [&](const SceneRunResult& run) { return check_precision(scene, built, options, run, diagnostics); },
+      diagnostics);
+}
+
+std::optional<double> prepare_cohort(const std::vector<BuiltScene*>& patients, const std::vector<std::string>& labels,
+                                     std::optional<double> smallest_elsewhere, DiagnosticList& diagnostics) {
+  if (patients.empty()) {
+    diagnostics.error(SourceRange{}, "a cohort needs at least one patient");
+    return std::nullopt;
+  }
+  std::vector<CohortPatient> named(patients.size());
+  for (std::size_t p = 0; p < patients.size() && p < labels.size(); ++p) named[p].label = labels[p];
+  std::optional<double> smallest = smallest_elsewhere;
+  const bool automatic = !patients.front()->setup.time_step.has_value();
+  for (std::size_t p = 0; p < patients.size(); ++p) {
+    DiagnosticList patient_diagnostics;
+    const auto report = check_stability(patients[p]->setup, patient_diagnostics);
+    // Only the errors: the run's own check repeats the warnings.
+    DiagnosticList errors;
+    for (const Diagnostic& diagnostic : patient_diagnostics.items())
+      if (diagnostic.severity == Severity::Error) errors.add(diagnostic);
+    append_for_patients(errors, named, p, diagnostics);
+    if (!report) continue;
+    smallest = smallest ? std::min(*smallest, report->time_step) : report->time_step;
+  }
+  if (diagnostics.has_errors() || !smallest) return std::nullopt;
+  for (BuiltScene* patient : patients) {
+    if (automatic) patient->setup.time_step = *smallest;
+    patient->setup.threads = 1;
+  }
+  return smallest;
+}
+
+std::optional<CohortRunResult> run_cohort(const std::vector<CohortPatient>& patients, const CohortRunOptions& options,
+                                          DiagnosticList& diagnostics) {
+  if (patients.empty()) {
+    diagnostics.error(SourceRange{}, "a cohort needs at least one patient");
+    return std::nullopt;
+  }
+  for (const CohortPatient& patient : patients)
+    if (!ensure_directory(patient.output_directory, diagnostics)) return std::nullopt;
+  if (options.backend == "cuda") {
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+    return run_cohort_on_gpu(patients, options, diagnostics);
+#else
+    diagnostics.error(SourceRange{}, "this fmpc was built without CUDA; run the cohort with backend cpu or auto");
+    return std::nullopt;
+#endif
+  }
+  return run_cohort_on_cpu(patients, options, diagnostics);
 }
 
 }  // namespace fmpc::sim

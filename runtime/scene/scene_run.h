@@ -67,6 +67,45 @@ struct SceneRunResult {
 std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
                                         DiagnosticList& diagnostics);
 
+// A cohort (fmpc simulate --patients, docs/cohorts.md): one scene for many patients, each with its own Scene (its
+// material inputs) and BuiltScene, all at one time step (prepare_cohort) and so one step count and the same output
+// times, each writing what run_scene writes into its own folder.
+struct CohortPatient {
+  std::string label;  // names the patient in messages ("patient 'P7': ...")
+  const Scene* scene = nullptr;
+  const BuiltScene* built = nullptr;
+  std::string output_directory;
+};
+
+struct CohortRunOptions {
+  std::string backend = "cpu";  // "cuda": every patient in one GpuBatchSimulation; "cpu": patients side by side
+  unsigned threads = 0;         // CPU workers, each running whole patients one at a time (0: every hardware thread)
+  // (done, total): patients on the CPU, steps on CUDA; called under a lock, from any thread.
+  std::function<void(std::size_t, std::size_t)> progress;
+};
+
+struct CohortRunResult {
+  // Per patient, in the order given: nullopt when it could not start or its outputs could not be written (errors
+  // appended). On CUDA a non-finite state in one patient stops the batch: every patient then has completed: false.
+  std::vector<std::optional<SceneRunResult>> patients;
+  double wall_seconds = 0.0;  // all patients: stepping and recording (outputs and the precision check excluded)
+  double spring_steps = 0.0;  // the sum over patients of springs x steps taken
+};
+
+// Checks every patient's setup (the stability check included) and gives them one time step: the scene's dt when
+// given, else the smallest automatic step of all of them and of `smallest_elsewhere` (the smallest automatic step of
+// the cohort's patients that another shard runs, so that a patient's result does not depend on the sharding). Every
+// patient then runs the same steps (one batch on the GPU) and its result is bitwise the one run_scene gives its
+// setup at that step. Also sets each setup's CPU threads to 1 (run_cohort runs patients side by side; results do
+// not depend on the threads). Errors name the patient; returns the time step.
+std::optional<double> prepare_cohort(const std::vector<BuiltScene*>& patients, const std::vector<std::string>& labels,
+                                     std::optional<double> smallest_elsewhere, DiagnosticList& diagnostics);
+
+// Runs the patients (prepared by prepare_cohort), writing each one's outputs into its own folder (created when
+// missing). nullopt when nothing could start (errors appended).
+std::optional<CohortRunResult> run_cohort(const std::vector<CohortPatient>& patients, const CohortRunOptions& options,
+                                          DiagnosticList& diagnostics);
+
 // The CSV's header for a scene with or without a probe (docs/scenes.md lists the columns).
 std::vector<std::string> time_series_columns(bool with_probe);
 

@@ -144,8 +144,7 @@ SimulationSetup strain_table_box(Precision precision, Integrator integrator) {
 
 }  // namespace
 
-FMPC_GPU_TEST(single_scene_refused, "implicit Euler, probes and strain tables refuse a batch of several scenes",
-              false) {
+FMPC_GPU_TEST(single_scene_refused, "implicit Euler and strain tables refuse a batch of several scenes", false) {
   {
     std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
     for (SimulationSetup& scene : scenes) scene.integrator = Integrator::ImplicitEuler;
@@ -153,15 +152,6 @@ FMPC_GPU_TEST(single_scene_refused, "implicit Euler, probes and strain tables re
     FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics));
     FMPC_REQUIRE(diagnostics.error_count() == 1);
     FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 0: implicit Euler runs one scene at a time", 0) == 0);
-  }
-  {
-    std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
-    scenes[1].probe = ProbeLoad{};
-    scenes[1].probe->vertices = {0};
-    DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics));
-    FMPC_REQUIRE(diagnostics.error_count() == 1);
-    FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 1: a scene with a probe runs on its own", 0) == 0);
   }
   {
     std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));

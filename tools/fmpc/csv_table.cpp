@@ -1,5 +1,7 @@
 #include "tools/fmpc/csv_table.h"
 
+#include "tools/fmpc/text_files.h"
+
 #include <algorithm>
 
 namespace fmpc::cli {
@@ -111,6 +113,22 @@ std::string format_csv_row(const std::vector<std::string>& fields) {
     line += '"';
   }
   return line + '\n';
+}
+
+std::optional<CsvTable> read_csv_file(const std::string& path, const std::string& name, std::size_t limit,
+                                      const std::string& what, const SourceRange& unreadable, SourceFiles& sources,
+                                      DiagnosticList& diagnostics) {
+  std::string error;
+  const std::optional<std::string> text = read_text_file(path, limit, what, error);
+  if (!text) {
+    diagnostics.error(unreadable, error);
+    return std::nullopt;
+  }
+  sources.add(name, *text);
+  const std::size_t errors_before = diagnostics.error_count();
+  CsvTable table = parse_csv(name, *text, diagnostics);
+  if (diagnostics.error_count() > errors_before) return std::nullopt;
+  return table;
 }
 
 }  // namespace fmpc::cli

@@ -1,6 +1,7 @@
 #pragma once
 // RFC 4180 CSV as the CLI reads and writes it: a header row, comma separators, double-quoted fields with ""
 // escapes, LF or CRLF line ends. Every cell keeps its position so that errors point at it.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,13 @@ struct CsvTable {
 inline constexpr std::size_t kMaxCsvCells = std::size_t{1} << 20;  // 1,048,576
 
 CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
+
+// Reads the file at `path` ("-": standard input; at most `limit` bytes, `what` names it in the error when it cannot
+// be read, located at `unreadable`), keeps its text in `sources` under `name` (what the cells' positions say) and
+// parses it; nullopt after errors.
+std::optional<CsvTable> read_csv_file(const std::string& path, const std::string& name, std::size_t limit,
+                                      const std::string& what, const SourceRange& unreadable, SourceFiles& sources,
+                                      DiagnosticList& diagnostics);
 
 // One CSV line (with its '\n'); fields are quoted only when they need it.
 std::string format_csv_row(const std::vector<std::string>& fields);

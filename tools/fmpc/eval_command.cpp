@@ -182,18 +182,9 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
 std::optional<CsvTable> read_points_csv(const std::string& csv_option, SourceFiles& sources,
                                         DiagnosticList& diagnostics) {
   const std::string csv_path = csv_option.empty() ? "-" : csv_option;
-  std::string error;
-  const std::optional<std::string> text = read_text_file(csv_path, sim::kMaxCsvFileBytes, "CSV file", error);
   const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
-  if (!text) {
-    diagnostics.error(SourceRange{shown_path, 0, 0, 0, 0}, error);
-    return std::nullopt;
-  }
-  sources.add(shown_path, *text);
-  const std::size_t errors = diagnostics.error_count();
-  CsvTable csv = parse_csv(shown_path, *text, diagnostics);
-  if (diagnostics.error_count() != errors) return std::nullopt;
-  return csv;
+  return read_csv_file(csv_path, shown_path, sim::kMaxCsvFileBytes, "CSV file", SourceRange{shown_path, 0, 0, 0, 0},
+                       sources, diagnostics);
 }
 
 // ---- lookup tables (.fzt) ----

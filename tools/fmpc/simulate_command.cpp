@@ -19,6 +19,7 @@
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/simulate_command.h"
 #include "tools/fmpc/text_files.h"
 #include "tools/plot/line_chart.h"
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
@@ -27,28 +28,13 @@
 
 namespace fmpc::cli {
 
-namespace {
-
-struct SimulateOptions {
-  std::string scene;
-  std::string backend;
-  std::string precision;
-  std::optional<std::size_t> steps;
-  std::optional<double> duration;
-  std::string output_directory;
-};
-
-const SourceRange kCommandLine{"command line", 0, 0, 0, 0};
-
-// Tick labels and the run's report: six significant digits (hiding residues such as 0.6000000000000001).
 std::string six_digits(double value) {
   char text[32];
   std::snprintf(text, sizeof text, "%.6g", std::abs(value) < 1e-12 ? 0.0 : value);
   return text;
 }
 
-// Force (N) against probe displacement (mm), the ramp and the hold drawn apart: while the probe holds still the
-// tissue settles and the force relaxes (a vertical drop at the final displacement), which the notes explain.
+// While the probe holds still the tissue settles and the force relaxes (a vertical drop at the final displacement), which the notes explain.
 std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& curve, const sim::Scene& scene,
                                       const sim::BuiltScene& built, plot::ImageFormat format) {
   plot::LineChart chart;
@@ -112,9 +98,8 @@ std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& c
   return plot::render_line_chart(chart, format);
 }
 
-// Files an earlier `fmpc simulate` left in `directory`: every .pvd there that is exactly what fmpc writes
-// (runtime/io/vtk_xml.cpp pvd_document: one DataSet line per frame_NNNNN.vtu) and the frames it lists. Anything
-// else, a user's file included, is never a candidate.
+// Every .pvd that is exactly what fmpc writes (runtime/io/vtk_xml.cpp pvd_document: one DataSet line per
+// frame_NNNNN.vtu) and the frames it lists.
 std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory) {
   namespace fs = std::filesystem;
   std::vector<fs::path> files;
@@ -152,8 +137,7 @@ std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path
   return files;
 }
 
-// Removes what an earlier run wrote and this one did not (frames past the new count, a .pvd under another scene
-// name), so that the folder holds one run. Returns how many files went.
+// Frames past the new count, a .pvd under another scene name: the folder holds one run.
 std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier, const std::vector<std::string>& written,
                                DiagnosticList& diagnostics) {
   std::size_t removed = 0;
@@ -171,7 +155,6 @@ std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier
   return removed;
 }
 
-// Applies the command-line overrides; errors name the option and what is allowed.
 bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, DiagnosticList& diagnostics) {
   if (!options.backend.empty()) {
     if (options.backend == "auto") scene.backend = sim::SceneBackend::Auto;
@@ -205,8 +188,20 @@ bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, Diagnost
   return !diagnostics.has_errors();
 }
 
-// The backend that runs: `auto` takes CUDA when a device can be used and says which it took; `cuda` without a
-// usable device is an error that says why.
+std::optional<sim::Scene> read_scene(const SimulateOptions& options, SourceFiles& sources, DiagnosticList& diagnostics) {
+  std::string read_error;
+  const std::optional<std::string> text = read_text_file(options.scene, sim::kMaxSceneFileBytes, "scene file", read_error);
+  if (!text) {
+    diagnostics.error(SourceRange{options.scene, 0, 0, 0, 0}, read_error);
+    return std::nullopt;
+  }
+  sources.add(options.scene, *text);
+  std::optional<sim::Scene> scene = sim::parse_scene(options.scene, *text, diagnostics);
+  if (!scene || !apply_overrides(options, *scene, diagnostics)) return std::nullopt;
+  return scene;
+}
+
+// `cuda` without a usable device is an error that says why.
 std::optional<std::string> choose_backend(const sim::Scene& scene, DiagnosticList& diagnostics) {
   std::string device;
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
@@ -234,25 +229,25 @@ std::optional<std::string> choose_backend(const sim::Scene& scene, DiagnosticLis
   return std::nullopt;
 }
 
-// Diagnostics in file order, as a reader of the scene meets them.
+// In file order, as a reader of the scene meets them.
 void report(DiagnosticList& diagnostics, const SourceFiles& sources) {
   diagnostics.sort_by_position();
   print_diagnostics(diagnostics, sources, std::cerr);
 }
 
+namespace {
+
 int run_simulate(const SimulateOptions& options) {
+  if (!options.patients.empty()) return run_cohort_command(options);
   DiagnosticList diagnostics;
-  SourceFiles sources;
-  std::string read_error;
-  const std::optional<std::string> text = read_text_file(options.scene, sim::kMaxSceneFileBytes, "scene file", read_error);
-  if (!text) {
-    diagnostics.error(SourceRange{options.scene, 0, 0, 0, 0}, read_error);
-    report(diagnostics, sources);
+  if (!options.shard.empty()) {
+    diagnostics.error(kCommandLine, "--shard: a shard is a share of a cohort; give the patients with --patients FILE");
+    report(diagnostics, SourceFiles{});
     return kExitErrors;
   }
-  sources.add(options.scene, *text);
-  std::optional<sim::Scene> scene = sim::parse_scene(options.scene, *text, diagnostics);
-  if (!scene || !apply_overrides(options, *scene, diagnostics)) {
+  SourceFiles sources;
+  std::optional<sim::Scene> scene = read_scene(options, sources, diagnostics);
+  if (!scene) {
     report(diagnostics, sources);
     return kExitErrors;
   }
@@ -340,7 +335,13 @@ void register_simulate_command(CLI::App& app, int& exit_code) {
   auto* duration = command->add_option("--duration", options->duration, "Simulated time in seconds");
   steps->excludes(duration);
   command->add_option("-o,--output", options->output_directory,
-                      "Output directory (default: the scene's outputs.directory, else NAME_output)");
+                      "Output directory (default: the scene's outputs.directory, else NAME_output); with "
+                      "--patients, one folder per patient in it");
+  command->add_option("--patients", options->patients,
+                      "Cohort: a CSV with a label column and one column per rule input the scene binds; every "
+                      "patient runs in one batch (docs/cohorts.md)");
+  command->add_option("--shard", options->shard,
+                      "With --patients: I/N runs every N-th patient from the I-th (0-based)");
   command->callback([options, &exit_code] { exit_code = run_simulate(*options); });
 }
 

@@ -36,17 +36,12 @@ constexpr std::size_t kPatientFileLimit = std::size_t{1} << 20;
 // "patient 1", "patient 2", ... in row order.
 std::optional<std::vector<sim::LiverPatient>> read_patients(const std::string& path, const FuzzySystem& system,
                                                             SourceFiles& sources, DiagnosticList& diagnostics) {
-  std::string error;
-  const auto text = read_text_file(path, kPatientFileLimit, "patient table", error);
-  if (!text) {
-    diagnostics.error(SourceRange{"argument --patients", 0, 0, 0, 0}, error);
-    return std::nullopt;
-  }
-  sources.add(path, *text);
+  const std::optional<CsvTable> table =
+      read_csv_file(path, path, kPatientFileLimit, "patient table",
+                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics);
+  if (!table) return std::nullopt;
   const std::size_t errors_before = diagnostics.error_count();
-  const CsvTable table = parse_csv(path, *text, diagnostics);
-  if (diagnostics.error_count() > errors_before) return std::nullopt;
-  const std::vector<EvaluationPoint> points = points_from_csv(table, system, diagnostics);
+  const std::vector<EvaluationPoint> points = points_from_csv(*table, system, diagnostics);
   if (diagnostics.error_count() > errors_before) return std::nullopt;
   if (points.empty()) {
     diagnostics.error(SourceRange{path, 1, 1, 1, 1}, "the patient table has no rows");

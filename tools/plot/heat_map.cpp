@@ -12,8 +12,39 @@ namespace {
 constexpr int kWidth = 760;
 constexpr int kHeight = 600;
 constexpr Colour kNanGrey{0.6, 0.6, 0.6, 1};
+constexpr double kBarGap = 24;
+constexpr double kBarWidth = 20;
 
 }  // namespace
+
+double colour_bar_width(Canvas& canvas, const ColourBar& bar, const Font& tick_font, const Font& title_font) {
+  double label_width = 0;
+  for (double v : nice_ticks(bar.lo, bar.hi, 6))
+    label_width = std::max(label_width, canvas.measure(tick_label(v, false), tick_font).first);
+  return kBarGap + kBarWidth + 6 + label_width + 8 + canvas.measure(bar.title, title_font).second + 12;
+}
+
+void draw_colour_bar(Canvas& canvas, double plot_right, double y, double height, const ColourBar& bar,
+                     const Font& tick_font, const Font& title_font) {
+  const std::vector<double> ticks = nice_ticks(bar.lo, bar.hi, 6);
+  double label_width = 0;
+  for (double v : ticks) label_width = std::max(label_width, canvas.measure(tick_label(v, false), tick_font).first);
+  const double x = plot_right + kBarGap;
+  const int steps = 256;
+  std::vector<Colour> cells(steps);
+  for (int k = 0; k < steps; ++k) cells[static_cast<std::size_t>(k)] = viridis(1.0 - (k + 0.5) / steps);
+  canvas.raster(x, y, kBarWidth, height, 1, steps, cells);
+  canvas.frame(x, y, kBarWidth, height, kBlack);
+  const double span = bar.hi - bar.lo;
+  if (span > 0)
+    for (double v : ticks) {
+      const double py = y + height - (v - bar.lo) / span * height;
+      canvas.line(x, py, x + kBarWidth + 4, py, kBlack);
+      canvas.text(x + kBarWidth + 6, py, tick_label(v, false), tick_font, Align::Start, Align::Centre);
+    }
+  canvas.text(x + kBarWidth + 6 + label_width + 8, y + height / 2, bar.title, title_font, Align::Centre, Align::Start,
+              kBlack, true);
+}
 
 Colour viridis(double t) {
   // Nine samples of matplotlib's viridis table (_cm_listed.py, entries 0, 32, ..., 255), linearly interpolated.
@@ -80,13 +111,9 @@ std::string render_heat_map(const HeatMap& map, ImageFormat format) {
   const double top = draw_title_block(canvas, 16, 12, kWidth - 32, map.title, title_font, info_font) + 8;
   const std::size_t nx = map.x.size(), ny = map.y.size();
 
-  // The colour bar's width: its tick labels and its upright title.
+  const ColourBar colour_bar{map.z_min, map.z_max, map.z_label};
+  const double bar_block = colour_bar_width(canvas, colour_bar, tick_font, axis_font);
   const std::vector<double> z_ticks = nice_ticks(map.z_min, map.z_max, 6);
-  double z_label_width = 0;
-  for (double v : z_ticks) z_label_width = std::max(z_label_width, canvas.measure(tick_label(v, false), tick_font).first);
-  const double z_title_height = canvas.measure(map.z_label, axis_font).second;
-  const double bar_width = 20;
-  const double bar_block = 24 + bar_width + 6 + z_label_width + 8 + z_title_height + 12;
 
   Axis x_axis{nx ? map.x.front() : 0, nx ? map.x.back() : 1, false, map.x_label};
   Axis y_axis{ny ? map.y.front() : 0, ny ? map.y.back() : 1, false, map.y_label};
@@ -138,21 +165,8 @@ std::string render_heat_map(const HeatMap& map, ImageFormat format) {
   canvas.text(b.x + b.width / 2, x_title_y, map.x_label, axis_font, Align::Centre, Align::Start);
   canvas.text(label_left - 4, b.y + b.height / 2, map.y_label, axis_font, Align::Centre, Align::End, kBlack, true);
 
-  // Colour bar, z_min at the bottom, with the contour levels marked.
-  const double bar_x = b.x + b.width + 24;
-  const int steps = 256;
-  std::vector<Colour> bar(steps);
-  for (int k = 0; k < steps; ++k) bar[static_cast<std::size_t>(k)] = viridis(1.0 - (k + 0.5) / steps);
-  canvas.raster(bar_x, b.y, bar_width, b.height, 1, steps, bar);
-  canvas.frame(bar_x, b.y, bar_width, b.height, kBlack);
-  if (span > 0)
-    for (double v : z_ticks) {
-      const double py = b.y + b.height - (v - map.z_min) / span * b.height;
-      canvas.line(bar_x, py, bar_x + bar_width + 4, py, kBlack);
-      canvas.text(bar_x + bar_width + 6, py, tick_label(v, false), tick_font, Align::Start, Align::Centre);
-    }
-  canvas.text(bar_x + bar_width + 6 + z_label_width + 8, b.y + b.height / 2, map.z_label, axis_font, Align::Centre,
-              Align::Start, kBlack, true);
+  // Colour bar, z_min at the bottom, its ticks at the contour levels.
+  draw_colour_bar(canvas, b.x + b.width, b.y, b.height, colour_bar, tick_font, axis_font);
   return canvas.finish();
 }
 

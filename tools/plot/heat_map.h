@@ -26,6 +26,19 @@ struct HeatMap {
 // colour-blind readers. t in [0, 1], clamped; NaN gives grey.
 Colour viridis(double t);
 
+// A vertical viridis colour bar beside a plot: lo at the bottom, round ticks, an upright title.
+struct ColourBar {
+  double lo = 0.0;
+  double hi = 1.0;
+  std::string title;
+};
+
+// The width the bar takes to the right of a plot: the gap, the bar, its tick labels and its title.
+double colour_bar_width(Canvas& canvas, const ColourBar& bar, const Font& tick_font, const Font& title_font);
+// Draws the bar from (plot_right, y) down over `height`, after the gap colour_bar_width counts.
+void draw_colour_bar(Canvas& canvas, double plot_right, double y, double height, const ColourBar& bar,
+                     const Font& tick_font, const Font& title_font);
+
 // Line segments where z crosses `level` (marching squares over the grid cells, linear interpolation along the
 // edges; a saddle cell is split by its centre value). Cells with a NaN corner give none.
 std::vector<std::pair<std::pair<double, double>, std::pair<double, double>>> contour_segments(const HeatMap& map,

@@ -17,7 +17,8 @@ std::string render_line_chart(const LineChart& chart, ImageFormat format) {
     if (!s.name.empty()) column = std::max(column, 28 + canvas.measure(s.name, legend_font).first);
   for (const std::string& note : chart.notes) column = std::max(column, canvas.measure(note, legend_font).first + 12);
   column = std::min(column, chart.width / 3.0);
-  const double right = column > 0 ? column + 20 : 0;
+  const double bar = chart.colour_bar ? colour_bar_width(canvas, *chart.colour_bar, tick_font, axis_font) : 0;
+  const double right = (column > 0 ? column + 20 : 0) + bar;
 
   const Axis x = chart.round_axes ? rounded(chart.x) : chart.x;
   const Axis y = chart.round_axes ? rounded(chart.y) : chart.y;
@@ -61,6 +62,8 @@ std::string render_line_chart(const LineChart& chart, ImageFormat format) {
     canvas.rectangle(lx - 1, b.y + 3, w + 2, legend_font.size + 4, background);
     canvas.text(lx, b.y + 3, m.label, legend_font, Align::Start, Align::Start, m.colour);
   }
+
+  if (chart.colour_bar) draw_colour_bar(canvas, b.x + b.width, b.y, b.height, *chart.colour_bar, tick_font, axis_font);
 
   // Legend and notes to the right of the plot.
   double ly = b.y;

@@ -1,13 +1,15 @@
 #pragma once
 // Curves over one x axis, with a legend beside the plot (never over the data), optional shaded bands (interval
 // type-2 footprints), phases (shaded x ranges with a name) and notes: membership-function plots (`fmpc plot
-// --terms`) and the force-displacement curve of `fmpc simulate`.
+// --terms`), the force-displacement curve of `fmpc simulate` and a cohort's curves (coloured by a value, with a
+// colour bar in place of a legend when they are too many to name).
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "tools/plot/axes.h"
 #include "tools/plot/canvas.h"
+#include "tools/plot/heat_map.h"
 
 namespace fmpc::plot {
 
@@ -37,6 +39,8 @@ struct LineChart {
   std::vector<Series> series;
   std::vector<VerticalMarker> markers;
   std::vector<std::string> notes;  // lines in a box under the legend
+  // A colour bar right of the plot, for series coloured by viridis over [lo, hi] (drawn left of any legend).
+  std::optional<ColourBar> colour_bar;
   int width = 760;
   int height = 520;
 };

@@ -1,0 +1,291 @@
+// Cohorts (fmpc simulate --patients, docs/cohorts.md): shards, labels, one time step for every patient, and each
+// patient of a CPU cohort run side by side bitwise equal to its run alone. The patients file's checks run through
+// the binary (tests/unit/cli_behaviour_test.cpp style) at the end.
+#include <catch2/catch.hpp>
+#include <sys/wait.h>
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "runtime/scene/cohort.h"
+#include "runtime/scene/scene_builder.h"
+#include "runtime/scene/scene_file.h"
+#include "runtime/scene/scene_run.h"
+#include "tests/support/fmpc_process.h"
+
+using namespace fmpc;
+using namespace fmpc::sim;
+
+namespace {
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::filesystem::path temporary_directory(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / ("fmpc_cohort_test_" + name);
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+const std::string kDemo = std::string(FMPC_SOURCE_DIR) + "/rulesets/scenes/liver_indentation.yaml";
+const std::vector<std::string> kInputs = {"HCV", "HBV", "ALD", "CLD", "NAFLD"};
+
+Scene demo_scene(std::size_t steps) {
+  DiagnosticList diagnostics;
+  auto scene = parse_scene(kDemo, read_text(kDemo), diagnostics);
+  REQUIRE(scene);
+  scene->steps = steps;
+  scene->outputs.frames = 2;
+  scene->outputs.samples = 20;
+  return *scene;
+}
+
+}  // namespace
+
+TEST_CASE("shards: every patient in exactly one shard, every N-th from the I-th", "[cohort]") {
+  CHECK(shard_patients(7, {0, 3}) == std::vector<std::size_t>{0, 3, 6});
+  CHECK(shard_patients(7, {2, 3}) == std::vector<std::size_t>{2, 5});
+  CHECK(shard_patients(3, {0, 1}) == std::vector<std::size_t>{0, 1, 2});
+  CHECK(shard_patients(3, {5, 8}).empty());  // more shards than patients: some hold none
+  CHECK(shard_patients(0, {0, 1}).empty());
+  for (std::size_t patients = 0; patients <= 40; ++patients) {
+    for (std::size_t count = 1; count <= 12; ++count) {
+      std::vector<int> seen(patients, 0);
+      for (std::size_t index = 0; index < count; ++index) {
+        const auto members = shard_patients(patients, {index, count});
+        CHECK(std::is_sorted(members.begin(), members.end()));
+        // Shards differ in size by at most one patient.
+        CHECK(members.size() * count + count >= patients);
+        CHECK(members.size() * count <= patients + count);
+        for (const std::size_t p : members) {
+          REQUIRE(p < patients);
+          CHECK(p % count == index);
+          ++seen[p];
+        }
+      }
+      for (const int times : seen) CHECK(times == 1);
+    }
+  }
+}
+
+TEST_CASE("shards parse as I/N with 0 <= I < N; everything else is refused", "[cohort]") {
+  std::string error;
+  const auto shard = parse_cohort_shard("2/5", error);
+  REQUIRE(shard);
+  CHECK(shard->index == 2);
+  CHECK(shard->count == 5);
+  CHECK(parse_cohort_shard("0/1", error));
+  for (const char* bad : {"", "3", "/3", "3/", "1/0", "0/0", "3/3", "4/3", "-1/3", "1/-3", "1.5/3", " 1/3", "1/3 ",
+                          "1/3/4", "a/b", "0x1/3", "1234567890/1234567891"}) {
+    error.clear();
+    INFO(bad);
+    CHECK_FALSE(parse_cohort_shard(bad, error));
+    CHECK_FALSE(error.empty());
+  }
+  parse_cohort_shard("3/3", error);
+  CHECK(error.find("below N") != std::string::npos);
+  parse_cohort_shard("1/0", error);
+  CHECK(error.find("at least 1") != std::string::npos);
+}
+
+TEST_CASE("labels must name a folder on every file system", "[cohort]") {
+  for (const char* good : {"P1", "patient_07", "a.b-c", "F4", "x"}) CHECK_FALSE(unsafe_patient_label(good));
+  const std::string long_label(kMaxPatientLabelBytes + 1, 'a');
+  for (const std::string& bad : {std::string(), std::string(".."), std::string("."), std::string(".hidden"),
+                                 std::string("-rf"), std::string("a/b"), std::string("a\\b"), std::string("a b"),
+                                 std::string("caf\xc3\xa9"), std::string("a\nb"), std::string("a:b"), long_label,
+                                 std::string("cohort.csv"), std::string("COHORT.CSV"),
+                                 std::string("cohort_force_displacement.png"), std::string(1, '\0')}) {
+    INFO(bad);
+    CHECK(unsafe_patient_label(bad));
+  }
+  CHECK_FALSE(unsafe_patient_label(std::string(kMaxPatientLabelBytes, 'a')));
+  CHECK(folded_label("Patient-A") == folded_label("PATIENT-a"));
+}
+
+TEST_CASE("a patient's scene replaces the constant bindings it names and nothing else", "[cohort]") {
+  const Scene scene = demo_scene(10);
+  const Scene patient = patient_scene(scene, "P9", {"HCV", "NAFLD"}, {1.5, 2.5});
+  CHECK(patient.material.patient == "P9");
+  REQUIRE(patient.material.bindings.size() == scene.material.bindings.size());
+  for (std::size_t b = 0; b < patient.material.bindings.size(); ++b) {
+    const InputBinding& binding = patient.material.bindings[b];
+    const double expected = binding.input == "HCV"     ? 1.5
+                            : binding.input == "NAFLD" ? 2.5
+                                                       : scene.material.bindings[b].value;
+    CHECK(binding.value == expected);
+  }
+}
+
+TEST_CASE("a CPU cohort gives every patient its single run's bits, at the smallest automatic step", "[cohort]") {
+  // Five patients of the demo with different fibrosis inputs (hence different E and automatic steps), 300 steps.
+  const std::vector<std::vector<double>> values = {
+      {9.7, 9.5, 12, 11, 11.2}, {5, 5, 5, 5, 5}, {20, 18, 25, 22, 19}, {7.2, 6.1, 8.8, 9.4, 5.5}, {14, 3, 17, 6, 21}};
+  const Scene scene = demo_scene(300);
+  std::vector<Scene> scenes;
+  std::vector<BuiltScene> built;
+  std::vector<std::string> labels;
+  for (std::size_t p = 0; p < values.size(); ++p) {
+    labels.push_back("P" + std::to_string(p));
+    scenes.push_back(patient_scene(scene, labels.back(), kInputs, values[p]));
+    DiagnosticList diagnostics;
+    auto one = build_scene(scenes.back(), diagnostics);
+    REQUIRE(one);
+    built.push_back(std::move(*one));
+  }
+  // The automatic steps differ; the cohort takes the smallest, also when a patient of another shard has it.
+  std::vector<double> automatic;
+  for (const BuiltScene& b : built) {
+    DiagnosticList diagnostics;
+    const auto report = check_stability(b.setup, diagnostics);
+    REQUIRE(report);
+    automatic.push_back(report->time_step);
+  }
+  const double smallest = *std::min_element(automatic.begin(), automatic.end());
+  CHECK(*std::max_element(automatic.begin(), automatic.end()) > smallest);
+  {
+    std::vector<BuiltScene> copies = {built[0], built[1]};
+    std::vector<BuiltScene*> pointers = {&copies[0], &copies[1]};
+    DiagnosticList diagnostics;
+    const auto dt = prepare_cohort(pointers, {"a", "b"}, smallest / 2, diagnostics);
+    REQUIRE(dt);
+    CHECK(*dt == smallest / 2);
+    CHECK(*copies[1].setup.time_step == smallest / 2);
+  }
+  std::vector<BuiltScene*> pointers;
+  for (BuiltScene& b : built) pointers.push_back(&b);
+  DiagnosticList diagnostics;
+  const auto dt = prepare_cohort(pointers, labels, std::nullopt, diagnostics);
+  REQUIRE(dt);
+  CHECK(*dt == smallest);
+  for (const BuiltScene& b : built) {
+    CHECK(*b.setup.time_step == smallest);
+    CHECK(b.setup.threads == 1);
+  }
+
+  const auto dir = temporary_directory("cpu");
+  std::vector<CohortPatient> patients;
+  for (std::size_t p = 0; p < built.size(); ++p)
+    patients.push_back(CohortPatient{labels[p], &scenes[p], &built[p], (dir / "cohort" / labels[p]).string()});
+  for (const unsigned threads : {1u, 2u, 3u}) {
+    CohortRunOptions options;
+    options.threads = threads;
+    std::size_t calls = 0;
+    options.progress = [&](std::size_t done, std::size_t total) {
+      ++calls;
+      CHECK(done <= total);
+    };
+    const auto run = run_cohort(patients, options, diagnostics);
+    REQUIRE(run);
+    CHECK_FALSE(diagnostics.has_errors());
+    CHECK(calls == patients.size());
+    REQUIRE(run->patients.size() == patients.size());
+    CHECK(run->spring_steps == Approx(300.0 * static_cast<double>(built[0].setup.springs.size()) * 5));
+    for (std::size_t p = 0; p < patients.size(); ++p) {
+      INFO("patient " << p << ", " << threads << " threads");
+      REQUIRE(run->patients[p]);
+      const SceneRunResult& cohort = *run->patients[p];
+      SceneRunOptions alone_options;
+      alone_options.output_directory = (dir / "alone" / labels[p]).string();
+      const auto alone = run_scene(scenes[p], built[p], alone_options, diagnostics);
+      REQUIRE(alone);
+      CHECK(cohort.completed);
+      CHECK(cohort.steps_taken == 300);
+      REQUIRE(cohort.probe_curve.size() == alone->probe_curve.size());
+      for (std::size_t i = 0; i < cohort.probe_curve.size(); ++i) {
+        CHECK(cohort.probe_curve[i].force == alone->probe_curve[i].force);
+        CHECK(cohort.probe_curve[i].displacement == alone->probe_curve[i].displacement);
+      }
+      CHECK(cohort.max_displacement == alone->max_displacement);
+      CHECK(cohort.final_max_displacement == alone->final_max_displacement);
+      // Every digit of the time series and the frames.
+      for (const char* file : {"time_series.csv", "frame_00000.vtu", "frame_00001.vtu", "liver_indentation.pvd"})
+        CHECK(read_text(dir / "cohort" / labels[p] / file) == read_text(dir / "alone" / labels[p] / file));
+    }
+    // The patients' answers differ (different E): the cohort did not run one patient five times.
+    CHECK(run->patients[1]->probe_curve.back().force != run->patients[2]->probe_curve.back().force);
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("fmpc simulate --patients checks the whole patients file before running anything", "[cohort][cli]") {
+  const auto dir = temporary_directory("cli");
+  const auto run_with = [&](const std::string& csv, const std::string& extra = "") {
+    {
+      std::ofstream out(dir / "patients.csv", std::ios::binary);
+      out << csv;
+    }
+    return fmpc::testing::run_fmpc("simulate " + kDemo + " --backend cpu --steps 20 -o " + (dir / "out").string() +
+                                   " --patients " + (dir / "patients.csv").string() + extra);
+  };
+  const std::string header = "label,HCV,HBV,ALD,CLD,NAFLD\n";
+  struct Case {
+    std::string csv;
+    std::string message;
+  };
+  const std::vector<Case> cases = {
+      {"", "no header row: the CSV is empty"},
+      {header, "has a header but no patients"},
+      {"\n\n", "no header row: the CSV is empty"},
+      {header + "P1,1,2,3,4,5\nP1,1,2,3,4,5\n", "label 'P1' is given twice"},
+      {header + "p1,1,2,3,4,5\nP1,1,2,3,4,5\n", "label 'P1' is given twice"},
+      {header + "P1,nan,2,3,4,5\n", "input 'HCV' is NaN"},
+      {header + "P1,1,inf,3,4,5\n", "input 'HBV' is inf"},
+      {header + "P1,1,2,-inf,4,5\n", "input 'ALD' is -inf"},
+      {header + "P1,1,2,x,4,5\n", "'x' is not a number (input 'ALD')"},
+      {header + "P1,1,2,3,4\n", "this row has 5 fields, the header 6"},
+      {header + "../escape,1,2,3,4,5\n", "label '../escape'"},
+      {header + ",1,2,3,4,5\n", "the label is empty"},
+      {header + "cohort.csv,1,2,3,4,5\n", "is the name of a file the cohort writes"},
+      {"HCV,HBV,ALD,CLD,NAFLD\n1,2,3,4,5\n", "the header has no 'label' column"},
+      {"label,HCV,HBV,ALD,CLD\nP1,1,2,3,4\n", "the header has no column for input 'NAFLD'"},
+      {"label,HCV,HBV,ALD,CLD,NAFLD,HCVV\nP1,1,2,3,4,5,6\n", "'HCVV' is not an input of system"},
+      {"label,HCV,HBV,ALD,CLD,NAFLD,HCV\nP1,1,2,3,4,5,6\n", "column 'HCV' appears twice"},
+      {"label,label,HCV,HBV,ALD,CLD,NAFLD\nP1,P2,1,2,3,4,5\n", "column 'label' appears twice"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.csv);
+    const auto run = run_with(c.csv);
+    CHECK(run.status == 2);
+    CHECK(run.out.find(c.message) != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir / "out"));  // nothing written
+  }
+  // Every bad row is reported, with its line and column, not just the first.
+  const auto many = run_with(header + "P1,nan,2,3,4,5\nP2,1,2,3,4,5\nP1,1,2,3,4,x\n");
+  CHECK(many.out.find("patients.csv:2:4: error: input 'HCV' is NaN") != std::string::npos);
+  CHECK(many.out.find("patients.csv:4:1: error: label 'P1' is given twice") != std::string::npos);
+  CHECK(many.out.find("patients.csv:4:12: error: 'x' is not a number") != std::string::npos);
+  // Out of range is a warning, evaluated as given (as fmpc eval); bad shards are refused before the file is read.
+  const auto shard = run_with(header + "P1,1,2,3,4,5\n", " --shard 2/2");
+  CHECK(shard.status == 2);
+  CHECK(shard.out.find("--shard: '2/2': I counts from 0") != std::string::npos);
+  const auto empty_shard = run_with(header + "P1,1,2,3,4,5\n", " --shard 1/2");
+  CHECK(empty_shard.status == 0);
+  CHECK(empty_shard.out.find("holds none") != std::string::npos);
+  const auto no_patients = fmpc::testing::run_fmpc("simulate " + kDemo + " --shard 0/2");
+  CHECK(no_patients.status == 2);
+  CHECK(no_patients.out.find("--shard: a shard is a share of a cohort") != std::string::npos);
+
+  // A good cohort with a value out of range: two folders, cohort.csv and the overlay.
+  const auto good = run_with(header + "A,9.7,9.5,12,11,11.2\nB,200,5,5,5,5\n");
+  CHECK(good.status == 0);
+  CHECK(good.out.find("warning: input 'HCV' = 200 is outside its range") != std::string::npos);
+  for (const char* file : {"A/time_series.csv", "A/summary.json", "A/force_displacement.png", "B/time_series.csv",
+                           "cohort.csv", "cohort_force_displacement.png"})
+    CHECK(std::filesystem::exists(dir / "out" / file));
+  const std::string table = read_text(dir / "out" / "cohort.csv");
+  CHECK(table.rfind("label,HCV,HBV,ALD,CLD,NAFLD,E_kPa,E_max_kPa,completed,final_probe_displacement_m,"
+                    "final_probe_force_N,max_displacement_m,inverted_elements,steps,dt_s,steps_per_second\nA,9.7,9.5,"
+                    "12,11,11.2,",
+                    0) == 0);
+  CHECK(table.find("\nB,200,5,5,5,5,") != std::string::npos);
+  std::filesystem::remove_all(dir);
+}

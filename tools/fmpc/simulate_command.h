@@ -1,0 +1,63 @@
+#pragma once
+// What `fmpc simulate` and its cohort mode (--patients, tools/fmpc/simulate_cohort.cpp) share: the options, the
+// command-line overrides, the backend choice, the force-displacement picture and the cleaning of an earlier run's
+// files in an output folder.
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "diagnostics/diagnostic.h"
+#include "runtime/scene/scene_builder.h"
+#include "runtime/scene/scene_file.h"
+#include "runtime/scene/scene_run.h"
+#include "tools/plot/canvas.h"
+
+namespace fmpc::cli {
+
+struct SimulateOptions {
+  std::string scene;
+  std::string backend;
+  std::string precision;
+  std::optional<std::size_t> steps;
+  std::optional<double> duration;
+  std::string output_directory;
+  std::string patients;  // a cohort's patients file (CSV); empty: the scene alone
+  std::string shard;     // I/N: every N-th patient from the I-th (0-based); empty: all
+};
+
+inline const SourceRange kCommandLine{"command line", 0, 0, 0, 0};
+
+// Six significant digits (hiding residues such as 0.6000000000000001): tick labels and the run's report.
+std::string six_digits(double value);
+
+// Force (N) against probe displacement (mm) of one run, the ramp and the hold drawn apart.
+std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& curve, const sim::Scene& scene,
+                                      const sim::BuiltScene& built, plot::ImageFormat format);
+
+// Files an earlier `fmpc simulate` left in `directory` (its .pvd files in fmpc's exact layout and the frames they
+// list); anything else, a user's file included, is never a candidate.
+std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory);
+
+// Removes what an earlier run wrote and this one did not; returns how many files went.
+std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier, const std::vector<std::string>& written,
+                               DiagnosticList& diagnostics);
+
+// The scene file read (its text kept in `sources`), parsed and with the command-line overrides applied; nullopt
+// after errors.
+std::optional<sim::Scene> read_scene(const SimulateOptions& options, SourceFiles& sources, DiagnosticList& diagnostics);
+
+// Applies the command-line overrides; errors name the option and what is allowed.
+bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, DiagnosticList& diagnostics);
+
+// The backend that runs: `auto` takes CUDA when a device can be used and says which it took (on stderr).
+std::optional<std::string> choose_backend(const sim::Scene& scene, DiagnosticList& diagnostics);
+
+// Diagnostics in file order, printed.
+void report(DiagnosticList& diagnostics, const SourceFiles& sources);
+
+// fmpc simulate SCENE --patients FILE [--shard I/N] (docs/cohorts.md).
+int run_cohort_command(const SimulateOptions& options);
+
+}  // namespace fmpc::cli
