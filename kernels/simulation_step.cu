@@ -251,17 +251,51 @@ __device__ double energy_term(const EnergyArguments<Real>& a, EnergyTerm term, i
   return energy;
 }
 
-// The fixed tree of one block: thread t adds elements t, t + stride, ... in order, then pairs are summed halving
-// the width. Deterministic because the shape depends only on the launch size, never on timing.
-__device__ double block_tree_sum(double value, double* cache) {
+// The fixed tree of one block: thread t combines elements t, t + stride, ... in order, then pairs are combined
+// halving the width. Deterministic because the shape depends only on the launch size, never on timing.
+template <typename Combine>
+__device__ double block_tree_reduce(double value, double* cache, Combine combine) {
   const int t = static_cast<int>(threadIdx.x);
   cache[t] = value;
   __syncthreads();
   for (int width = kEnergyThreads / 2; width > 0; width /= 2) {
-    if (t < width) cache[t] += cache[t + width];
+    if (t < width) cache[t] = combine(cache[t], cache[t + width]);
     __syncthreads();
   }
   return cache[0];
+}
+
+__device__ double block_tree_sum(double value, double* cache) {
+  return block_tree_reduce(value, cache, [](double a, double b) { return a + b; });
+}
+
+// A maximum that skips NaN as the host's std::max(largest, d) does (a NaN d never replaces largest).
+__device__ double larger(double a, double b) { return a < b ? b : a; }
+
+// The largest |x - start| over vertices [begin, end), in double with mesh.cpp's distance() operations (compiled
+// with --fmad=false: the host's bits); a maximum is exact in any order.
+template <typename Real>
+__global__ void largest_displacement_partial_kernel(kernels::StateView<Real> s, StartPositions start, int begin,
+                                                    int end, double* partial) {
+  __shared__ double cache[kEnergyThreads];
+  double largest = 0.0;
+  const long long stride = static_cast<long long>(kEnergyBlocks) * kEnergyThreads;
+  for (long long i = begin + static_cast<long long>(blockIdx.x) * kEnergyThreads + threadIdx.x; i < end; i += stride) {
+    const double dx = start.x[i] - static_cast<double>(s.x[i]);
+    const double dy = start.y[i] - static_cast<double>(s.y[i]);
+    const double dz = start.z[i] - static_cast<double>(s.z[i]);
+    largest = larger(largest, sqrt(dx * dx + dy * dy + dz * dz));
+  }
+  const double block = block_tree_reduce(largest, cache, larger);
+  if (threadIdx.x == 0) partial[blockIdx.x] = block;
+}
+
+__global__ void largest_displacement_final_kernel(const double* partial, double* result) {
+  __shared__ double cache[kEnergyThreads];
+  double largest = 0.0;
+  for (int i = static_cast<int>(threadIdx.x); i < kEnergyBlocks; i += kEnergyThreads) largest = larger(largest, partial[i]);
+  const double total = block_tree_reduce(largest, cache, larger);
+  if (threadIdx.x == 0) *result = total;
 }
 
 template <typename Real>
@@ -604,6 +638,17 @@ cudaError_t launch_elements(const ForceModelView<Real>& model, const kernels::St
 }
 
 template <typename Real>
+cudaError_t launch_largest(const kernels::StateView<Real>& state, const StartPositions& start, int begin, int end,
+                           double* partial, double* result, cudaStream_t stream) {
+  largest_displacement_partial_kernel<Real><<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(state, start, begin, end,
+                                                                                         partial);
+  cudaError_t status = cudaGetLastError();
+  if (status != cudaSuccess) return status;
+  largest_displacement_final_kernel<<<1, kEnergyThreads, 0, stream>>>(partial, result);
+  return cudaGetLastError();
+}
+
+template <typename Real>
 cudaError_t launch_incidence(const kernels::SpringNetworkView<Real>& network, int entries,
                              kernels::SpringIncidence<Real>* incidence, cudaStream_t stream) {
   if (entries <= 0) return cudaSuccess;
@@ -776,6 +821,14 @@ cudaError_t launch_element_forces(const ForceModelView<float>& model, const kern
 cudaError_t launch_element_forces(const ForceModelView<double>& model, const kernels::StateView<double>& state,
                                   cudaStream_t stream) {
   return launch_elements(model, state, stream);
+}
+cudaError_t launch_largest_displacement(const kernels::StateView<float>& state, const StartPositions& start,
+                                       int begin, int end, double* partial, double* result, cudaStream_t stream) {
+  return launch_largest(state, start, begin, end, partial, result, stream);
+}
+cudaError_t launch_largest_displacement(const kernels::StateView<double>& state, const StartPositions& start,
+                                       int begin, int end, double* partial, double* result, cudaStream_t stream) {
+  return launch_largest(state, start, begin, end, partial, result, stream);
 }
 cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<float>& network, int entries,
                                    kernels::SpringIncidence<float>* incidence, cudaStream_t stream) {

@@ -308,6 +308,20 @@ enum class EnergyTerm : int {
 };
 
 // Sums the term over [begin, end) into *result (device memory); `partial` holds kEnergyBlocks doubles.
+// The vertices' start positions in double (the setup's initial positions, or its rest positions).
+struct StartPositions {
+  const double* x;
+  const double* y;
+  const double* z;
+};
+
+// The largest distance of a vertex in [begin, end) from its start, into *result (double), with partial[kEnergyBlocks]
+// as scratch: the same bits as the host's sim::largest_displacement on the downloaded state.
+cudaError_t launch_largest_displacement(const kernels::StateView<float>& state, const StartPositions& start,
+                                       int begin, int end, double* partial, double* result, cudaStream_t stream);
+cudaError_t launch_largest_displacement(const kernels::StateView<double>& state, const StartPositions& start,
+                                       int begin, int end, double* partial, double* result, cudaStream_t stream);
+
 cudaError_t launch_energy_sum(const EnergyArguments<float>& arguments, EnergyTerm term, int begin, int end,
                               double* partial, double* result, cudaStream_t stream);
 cudaError_t launch_energy_sum(const EnergyArguments<double>& arguments, EnergyTerm term, int begin, int end,

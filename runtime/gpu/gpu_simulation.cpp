@@ -314,6 +314,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     const std::vector<DeviceArray<Real>*> first_state = state_[0].arrays();
     for (std::size_t i = 0; i < 6; ++i)
       FMPC_CUDA_CHECK(first_state[i]->upload(convert<Real>(*start[i])), diagnostics, false);
+    DeviceArray<double>* start_positions[3] = {&start_x_, &start_y_, &start_z_};
+    for (std::size_t axis = 0; axis < 3; ++axis)
+      FMPC_CUDA_CHECK(start_positions[axis]->upload(c.position[axis]), diagnostics, false);
     const sim::Integrator scheme = common.integrator;
     if (scheme == sim::Integrator::ForwardEuler || scheme == sim::Integrator::SemiImplicitEuler) {
       for (DeviceArray<Real>* array : state_[1].arrays()) FMPC_CUDA_CHECK(array->allocate(count), diagnostics, false);
@@ -601,6 +604,18 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     return energy_sum(EnergyTerm::Kinetic, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
+  }
+  std::optional<double> largest_displacement(std::size_t scene, DiagnosticList& diagnostics) const override {
+    const StartPositions start{start_x_.data(), start_y_.data(), start_z_.data()};
+    FMPC_CUDA_CHECK(launch_largest_displacement(state_[current_].view(), start, vertex_begin_.at(scene),
+                                                vertex_begin_.at(scene + 1), energy_partial_.data(),
+                                                energy_result_.data(), stream_),
+                    diagnostics, std::nullopt);
+    double result = 0.0;
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(&result, energy_result_.data(), sizeof(double), cudaMemcpyDeviceToHost, stream_),
+                    diagnostics, std::nullopt);
+    if (!synchronize(diagnostics)) return std::nullopt;
+    return result;
   }
   std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     const auto springs =
@@ -1190,6 +1205,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   int element_count_ = 0;
   DeviceArray<int> corners_, element_scene_, corner_offset_, corner_index_, corner_slot_, inverted_first_;
   DeviceArray<kernels::SpringIncidence<Real>> incidence_;
+  DeviceArray<double> start_x_, start_y_, start_z_;  // the start positions, for largest_displacement
   DeviceArray<unsigned int> inverted_count_;
   DeviceArray<Real> field_rest_inverse_, field_rest_volume_, field_youngs_, field_poisson_, field_bulk_, field_damping_,
       corner_force_;
@@ -1231,6 +1247,9 @@ class GpuSimulationImpl final : public GpuSimulation {
   double time() const override { return static_cast<double>(steps_taken()) * stability().time_step; }
   std::optional<double> kinetic_energy(DiagnosticList& diagnostics) const override {
     return batch_->kinetic_energy(0, diagnostics);
+  }
+  std::optional<double> largest_displacement(DiagnosticList& diagnostics) const override {
+    return batch_->largest_displacement(0, diagnostics);
   }
   std::optional<double> potential_energy(DiagnosticList& diagnostics) const override {
     return batch_->potential_energy(0, diagnostics);

@@ -58,6 +58,10 @@ class SceneState {
   virtual ProbeReading probe_reading(DiagnosticList& diagnostics) const = 0;
   virtual std::vector<double> current_stiffness(DiagnosticList& diagnostics) const = 0;
   virtual const InversionReport& inversions() const = 0;
+  // The largest distance of a vertex from `start` (its start positions): from positions() here; a backend whose
+  // state lives elsewhere reduces it there (what every progress event asks, so it must not move the state).
+  virtual std::optional<double> largest_displacement(const std::vector<Point3>& start,
+                                                     DiagnosticList& diagnostics) const;
 };
 
 // A run that steps itself (one scene alone).
@@ -104,6 +108,9 @@ class CudaStepper final : public SceneStepper {
     return simulation_->current_stiffness(diagnostics);
   }
   const InversionReport& inversions() const override { return simulation_->inversions(); }
+  std::optional<double> largest_displacement(const std::vector<Point3>&, DiagnosticList& diagnostics) const override {
+    return simulation_->largest_displacement(diagnostics);
+  }
 
  private:
   std::unique_ptr<gpu::GpuSimulation> simulation_;
@@ -133,6 +140,13 @@ double largest_displacement(const std::vector<Point3>& positions, const std::vec
   for (std::size_t v = 0; v < positions.size() && v < start.size(); ++v)
     largest = std::max(largest, distance(positions[v], start[v]));
   return largest;
+}
+
+std::optional<double> SceneState::largest_displacement(const std::vector<Point3>& start,
+                                                       DiagnosticList& diagnostics) const {
+  const std::vector<Point3> now = positions(diagnostics);
+  if (now.size() != start.size()) return std::nullopt;  // a device error, already reported
+  return sim::largest_displacement(now, start);
 }
 
 double relative_difference(double a, double b) {
@@ -274,6 +288,12 @@ class SceneRecorder {
   void record(const SceneState& state, bool frame, bool sample, DiagnosticList& diagnostics) {
     const SimulationSetup& setup = built_.setup;
     const std::vector<Point3>& rest = start_positions();
+    if (!frame && !sample) {  // a progress event: the largest displacement alone, reduced where the state lives
+      const std::optional<double> largest = state.largest_displacement(rest, diagnostics);
+      if (largest) result_.max_displacement = std::max(result_.max_displacement, *largest);
+      else outputs_ok_ = false;
+      return;
+    }
     const std::vector<Point3> positions = state.positions(diagnostics);
     if (positions.size() != rest.size()) {  // a device error, already reported
       outputs_ok_ = false;

@@ -302,6 +302,43 @@ FMPC_GPU_TEST(energy_matches_cpu, "device energy reductions match the CPU's sums
   }
 }
 
+FMPC_GPU_TEST(largest_displacement_matches_host,
+              "the largest displacement reduced on the device equals the host's on the downloaded state, bitwise",
+              true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    std::vector<SimulationSetup> scenes;
+    scenes.push_back(single_tetrahedron(precision, Integrator::SemiImplicitEuler));
+    scenes.push_back(hanging_box(BoxScene{3, 5, 2, 5000.0, precision, Integrator::SemiImplicitEuler, 3}));
+    scenes.push_back(hanging_box(BoxScene{7, 6, 5, 9000.0, precision, Integrator::SemiImplicitEuler, 4}));
+    // Initial positions away from rest: the displacement is measured from them, not from the rest shape.
+    SimulationSetup moved = hanging_box(BoxScene{5, 3, 4, 3000.0, precision, Integrator::SemiImplicitEuler, 2});
+    moved.initial_positions = moved.rest_positions;
+    for (std::size_t v = 0; v < moved.initial_positions.size(); ++v)
+      moved.initial_positions[v][0] += 1e-4 * static_cast<double>((v * 7919) % 13) / 13.0;
+    scenes.push_back(moved);
+    for (SimulationSetup& scene : scenes) scene.gravity = {0.0, -9.81, 0.0};
+    DiagnosticList diagnostics;
+    const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+    FMPC_REQUIRE(batch && batch->advance(333, diagnostics, 100));
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      const std::vector<Point3> positions = batch->positions(s, diagnostics);
+      const std::vector<Point3>& start =
+          scenes[s].initial_positions.empty() ? scenes[s].rest_positions : scenes[s].initial_positions;
+      double host = 0.0;
+      for (std::size_t v = 0; v < positions.size(); ++v) host = std::max(host, distance(positions[v], start[v]));
+      const auto device = batch->largest_displacement(s, diagnostics);
+      FMPC_REQUIRE(device.has_value());
+      FMPC_EXPECT(std::memcmp(&*device, &host, sizeof(double)) == 0);
+      FMPC_EXPECT(host > 0.0);
+      const auto single = gpu::GpuSimulation::create(scenes[s], diagnostics);
+      FMPC_REQUIRE(single && single->advance(333, diagnostics, 100));
+      const auto alone = single->largest_displacement(diagnostics);
+      FMPC_REQUIRE(alone.has_value());
+      FMPC_EXPECT(std::memcmp(&*alone, &host, sizeof(double)) == 0);
+    }
+  }
+}
+
 FMPC_GPU_TEST(batch_equals_single, "a batch of odd-sized scenes gives each scene's single-run bits", true) {
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     for (const Integrator integrator : kGpuIntegrators) {
@@ -402,6 +439,7 @@ FMPC_GPU_TEST(sanitizer_smoke, "sanitizer smoke: every kernel on tiny scenes", t
       FMPC_REQUIRE(batch && batch->advance(20, diagnostics, 8));
       FMPC_EXPECT(batch->kinetic_energy(1, diagnostics).has_value());
       FMPC_EXPECT(batch->potential_energy(1, diagnostics).has_value());
+      FMPC_EXPECT(batch->largest_displacement(1, diagnostics).has_value());
       const Difference difference = cpu_gpu_difference(scenes[1], 20, gpu::GpuOptions{});
       FMPC_EXPECT(difference.positions <= position_tolerance(precision));
       if (diagnostics.has_errors()) note(describe(diagnostics));
