@@ -6,6 +6,8 @@ find_package(CLI11 REQUIRED CONFIG)
 find_package(yaml-cpp REQUIRED CONFIG)
 find_package(Eigen3 REQUIRED CONFIG)
 find_package(Threads REQUIRED)
+# JSON (the run summary; runtime/io/json_text.h): header-only.
+find_package(nlohmann_json 3 REQUIRED CONFIG)
 
 if(TARGET antlr4_static)
   set(FMPC_ANTLR4_LIBRARY antlr4_static)

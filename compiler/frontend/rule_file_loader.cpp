@@ -106,4 +106,30 @@ RuleFile load_rule_file(const std::string& path, const std::string& text, Diagno
   return file;
 }
 
+const FuzzySystem* select_system(const RuleFile& rules, const std::string& path, const std::string& name,
+                                 DiagnosticList& diagnostics) {
+  const auto& systems = rules.systems;
+  if (name.empty()) {
+    if (systems.size() == 1) return &systems.front();
+    if (systems.empty()) {
+      diagnostics.error(SourceRange{path, 0, 0, 0, 0}, "the file defines no system");
+      return nullptr;
+    }
+    std::string names;
+    for (const FuzzySystem& s : systems) names += (names.empty() ? "" : ", ") + s.name;
+    diagnostics.error(SourceRange{path, 0, 0, 0, 0}, "the file defines " + std::to_string(systems.size()) +
+                                                         " systems (" + names + "); choose one with --system NAME");
+    return nullptr;
+  }
+  std::vector<std::string> names;
+  for (const FuzzySystem& s : systems) {
+    if (s.name == name) return &s;
+    names.push_back(s.name);
+  }
+  std::vector<std::string> notes;
+  if (auto suggestion = closest_name(name, names)) notes.push_back("did you mean '" + *suggestion + "'?");
+  diagnostics.error(SourceRange{path, 0, 0, 0, 0}, "no system named '" + name + "' in the file", notes);
+  return nullptr;
+}
+
 }  // namespace fmpc

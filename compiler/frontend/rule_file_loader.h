@@ -23,4 +23,9 @@ std::string foreign_format(const std::string& text);
 // system that could be built; when diagnostics.has_errors() it must not be evaluated.
 RuleFile load_rule_file(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
 
+// The system of `rules` (read from `path`) named `name`, or the only one when `name` is empty. Reports an error
+// naming the file otherwise (with the names defined, or the closest one).
+const FuzzySystem* select_system(const RuleFile& rules, const std::string& path, const std::string& name,
+                                 DiagnosticList& diagnostics);
+
 }  // namespace fmpc

@@ -13,7 +13,8 @@
 
 #include "diagnostics/number_format.h"
 #include "runtime/io/atomic_file.h"
-#include "runtime/io/json_writer.h"
+#include "runtime/io/input_file.h"
+#include "runtime/io/json_text.h"
 #include "runtime/io/vtk_xml.h"
 #include "runtime/integrate/worker_pool.h"
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
@@ -361,7 +362,8 @@ class SceneRecorder {
     result.steps_per_second =
         result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
     result.inversions = state.inversions();
-    result.final_max_displacement = largest_displacement(state.positions(diagnostics), start_positions());
+    result.final_positions = state.positions(diagnostics);
+    result.final_max_displacement = largest_displacement(result.final_positions, start_positions());
     result.precision_check = check(result);
     const Scene& scene = scene_;
     const BuiltScene& built = built_;
@@ -381,7 +383,7 @@ class SceneRecorder {
       outputs_ok = write_file_atomically(result.csv_path, csv_, diagnostics);
       result.files.push_back(result.csv_path);
     }
-  if (outputs_ok && scene.outputs.summary) {
+  {
     const std::vector<double> stiffness = state.current_stiffness(diagnostics);
     double k_min = 0.0, k_max = 0.0, k_sum = 0.0;
     if (!stiffness.empty()) {
@@ -389,102 +391,96 @@ class SceneRecorder {
       k_max = *std::max_element(stiffness.begin(), stiffness.end());
       for (const double k : stiffness) k_sum += k;
     }
-    JsonWriter json;
-    json.begin_object()
-        .value("scene", scene.name)
-        .value("scene_file", scene.path)
-        .value("completed", result.completed)
-        .value("model", scene_name(setup.model))
-        .value("inverted_elements", result.inversions.largest_count)
-        .value("backend", options.backend)
-        .value("precision", setup.precision == Precision::Float ? "float" : "double")
-        .value("integrator", scene_name(setup.integrator))
-        .value("dt_s", dt)
-        .value("dt_auto", result.stability.automatic)
-        .value("critical_dt_s", result.stability.critical_time_step)
-        .value("steps", result.steps_taken)
-        .value("steps_planned", result.steps_planned)
-        .value("simulated_time_s", state.time())
-        .value("wall_time_s", result.wall_seconds)
-        .value("steps_per_second", result.steps_per_second)
-        .value("threads", static_cast<std::size_t>(setup.threads))
-        .value("max_displacement_m", result.max_displacement)
-        .begin_object("mesh")
-        .value("source", built.mesh.source)
-        .value("vertices", built.mesh.points.size())
-        .value("tetrahedra", built.mesh.tetrahedra.size())
-        .value("triangles", built.mesh.triangles.size())
-        .value("springs", setup.springs.size())
-        .value("volume_term", setup.model == ForceModel::Springs && setup.tetrahedron_field.has_value())
-        .value("fixed_vertices", setup.fixed_vertices.size())
-        .value("metres_per_unit", scene.mesh.unit)
-        .end_object()
-        .begin_object("stiffness")
-        .value("description", built.stiffness_description)
-        .value("k_min_N_per_m", k_min)
-        .value("k_mean_N_per_m", stiffness.empty() ? 0.0 : k_sum / static_cast<double>(stiffness.size()))
-        .value("k_max_N_per_m", k_max)
-        .value("strain_table", setup.strain_stiffness.has_value());
+    JsonDocument json;
+    json["scene"] = scene.name;
+    json["scene_file"] = scene.path;
+    json["completed"] = result.completed;
+    json["model"] = scene_name(setup.model);
+    json["inverted_elements"] = result.inversions.largest_count;
+    json["backend"] = options.backend;
+    json["precision"] = setup.precision == Precision::Float ? "float" : "double";
+    json["integrator"] = scene_name(setup.integrator);
+    json["dt_s"] = dt;
+    json["dt_auto"] = result.stability.automatic;
+    json["critical_dt_s"] = result.stability.critical_time_step;
+    json["steps"] = result.steps_taken;
+    json["steps_planned"] = result.steps_planned;
+    json["simulated_time_s"] = state.time();
+    json["wall_time_s"] = result.wall_seconds;
+    json["steps_per_second"] = result.steps_per_second;
+    json["threads"] = static_cast<std::size_t>(setup.threads);
+    json["max_displacement_m"] = result.max_displacement;
+    JsonDocument& mesh = json["mesh"];
+    mesh["source"] = built.mesh.source;
+    mesh["vertices"] = built.mesh.points.size();
+    mesh["tetrahedra"] = built.mesh.tetrahedra.size();
+    mesh["triangles"] = built.mesh.triangles.size();
+    mesh["springs"] = setup.springs.size();
+    mesh["volume_term"] = setup.model == ForceModel::Springs && setup.tetrahedron_field.has_value();
+    mesh["fixed_vertices"] = setup.fixed_vertices.size();
+    mesh["metres_per_unit"] = scene.mesh.unit;
+    JsonDocument& material = json["stiffness"];
+    material["description"] = built.stiffness_description;
+    material["k_min_N_per_m"] = k_min;
+    material["k_mean_N_per_m"] = stiffness.empty() ? 0.0 : k_sum / static_cast<double>(stiffness.size());
+    material["k_max_N_per_m"] = k_max;
+    material["strain_table"] = setup.strain_stiffness.has_value();
     if (built.material) {
-      json.value("rules", scene.material.file)
-          .value("system", built.material->system)
-          .value("output", built.material->output)
-          .value("patient", scene.material.patient)
-          .value("youngs_modulus_min_kPa", built.material->modulus_min / 1000.0)
-          .value("youngs_modulus_max_kPa", built.material->modulus_max / 1000.0)
-          .value("evaluations", built.material->evaluations);
-      json.begin_object("inputs");
+      material["rules"] = scene.material.file;
+      material["system"] = built.material->system;
+      material["output"] = built.material->output;
+      material["patient"] = scene.material.patient;
+      material["youngs_modulus_min_kPa"] = built.material->modulus_min / 1000.0;
+      material["youngs_modulus_max_kPa"] = built.material->modulus_max / 1000.0;
+      material["evaluations"] = built.material->evaluations;
+      JsonDocument& inputs = material["inputs"] = JsonDocument::object();
       for (const InputBinding& binding : scene.material.bindings) {
-        if (binding.kind == InputBinding::Kind::Constant) json.value(binding.input, binding.value);
-        else json.value(binding.input, binding.kind == InputBinding::Kind::Strain ? "strain" : "per region");
+        if (binding.kind == InputBinding::Kind::Constant) inputs[binding.input] = binding.value;
+        else inputs[binding.input] = binding.kind == InputBinding::Kind::Strain ? "strain" : "per region";
       }
-      json.end_object();
     }
-    json.end_object();
     if (with_probe) {
       double max_force = 0.0;
       for (const ProbeCurvePoint& point : result.probe_curve) max_force = std::max(max_force, std::abs(point.force));
-      json.begin_object("probe")
-          .value("mode", setup.probe->mode == ProbeLoad::Mode::Displacement ? "displacement" : "force")
-          .value("vertices", setup.probe->vertices.size())
-          .value("final_displacement_m", result.probe_curve.empty() ? 0.0 : result.probe_curve.back().displacement)
-          .value("final_force_N", result.probe_curve.empty() ? 0.0 : result.probe_curve.back().force)
-          .value("max_abs_force_N", max_force)
-          .end_object();
+      JsonDocument& probe = json["probe"];
+      probe["mode"] = setup.probe->mode == ProbeLoad::Mode::Displacement ? "displacement" : "force";
+      probe["vertices"] = setup.probe->vertices.size();
+      probe["final_displacement_m"] = result.probe_curve.empty() ? 0.0 : result.probe_curve.back().displacement;
+      probe["final_force_N"] = result.probe_curve.empty() ? 0.0 : result.probe_curve.back().force;
+      probe["max_abs_force_N"] = max_force;
     }
-    json.begin_object("inversions")
-        .value("largest_count", result.inversions.largest_count)
-        .value("final_count", result.inversions.current_count)
-        .value("checked_every_steps", kCheckEvery)
-        .value("policy", setup.on_inversion == InversionPolicy::Stop ? "stop" : "warn");
+    JsonDocument& inversions = json["inversions"];
+    inversions["largest_count"] = result.inversions.largest_count;
+    inversions["final_count"] = result.inversions.current_count;
+    inversions["checked_every_steps"] = kCheckEvery;
+    inversions["policy"] = setup.on_inversion == InversionPolicy::Stop ? "stop" : "warn";
     if (result.inversions.largest_count > 0) {
-      json.value("first_step", result.inversions.first_step)
-          .value("first_time_s", result.inversions.first_time)
-          .value("first_element", static_cast<std::size_t>(result.inversions.first_element));
+      inversions["first_step"] = result.inversions.first_step;
+      inversions["first_time_s"] = result.inversions.first_time;
+      inversions["first_element"] = static_cast<std::size_t>(result.inversions.first_element);
     }
-    json.end_object();
     const PrecisionCheckResult& precision = result.precision_check;
-    json.begin_object("precision_check")
-        .value("ran", precision.ran)
-        .value("other_precision", precision.other == Precision::Float ? "float" : "double")
-        .value("result", precision.reason)
-        .value("tolerance", kPrecisionTolerance);
+    JsonDocument& precision_json = json["precision_check"];
+    precision_json["ran"] = precision.ran;
+    precision_json["other_precision"] = precision.other == Precision::Float ? "float" : "double";
+    precision_json["result"] = precision.reason;
+    precision_json["tolerance"] = kPrecisionTolerance;
     if (precision.ran) {
-      json.value("probe_force_relative_difference", precision.probe_force_difference)
-          .value("max_displacement_relative_difference", precision.displacement_difference)
-          .value("other_inverted_elements", precision.other_inverted)
-          .value("agrees", precision.agrees);
+      precision_json["probe_force_relative_difference"] = precision.probe_force_difference;
+      precision_json["max_displacement_relative_difference"] = precision.displacement_difference;
+      precision_json["other_inverted_elements"] = precision.other_inverted;
+      precision_json["agrees"] = precision.agrees;
     }
-    json.end_object();
-    json.begin_object("outputs")
-        .value("directory", options.output_directory)
-        .value("frames", frames.size())
-        .value("pvd", frames.empty() ? std::string() : scene.name + ".pvd")
-        .value("csv", write_csv ? std::string("time_series.csv") : std::string())
-        .end_object();
-    json.end_object();
+    JsonDocument& outputs = json["outputs"];
+    outputs["directory"] = options.output_directory;
+    outputs["frames"] = frames.size();
+    outputs["pvd"] = frames.empty() ? std::string() : scene.name + ".pvd";
+    outputs["csv"] = write_csv ? std::string("time_series.csv") : std::string();
+    result.summary_json = json_text(json);
+  }
+  if (outputs_ok && scene.outputs.summary) {
     const std::string summary = (directory / "summary.json").string();
-    outputs_ok = write_file_atomically(summary, json.str(), diagnostics);
+    outputs_ok = write_file_atomically(summary, result.summary_json, diagnostics);
     result.files.push_back(summary);
   }
     if (!outputs_ok) return std::nullopt;
@@ -720,6 +716,87 @@ std::optional<CohortRunResult> run_cohort_on_cpu(const std::vector<CohortPatient
 }
 
 }  // namespace
+
+std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> files;
+  std::error_code error;
+  if (!fs::is_directory(directory, error)) return files;
+  static const std::regex frame_line(
+      R"re(    <DataSet timestep="[-+0-9.eE]+" group="" part="0" file="(frame_[0-9]{5}\.vtu)"/>)re");
+  const std::string head =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+      "  <Collection>\n";
+  const std::string tail = "  </Collection>\n</VTKFile>\n";
+  for (const fs::directory_entry& entry : fs::directory_iterator(directory, error)) {
+    if (entry.path().extension() != ".pvd" || !entry.is_regular_file(error)) continue;
+    std::string read_error;
+    const std::optional<std::string> text = read_input_file(entry.path().string(), kMaxSceneFileBytes, "pvd", read_error);
+    if (!text || text->compare(0, head.size(), head) != 0 || text->size() < head.size() + tail.size() ||
+        text->compare(text->size() - tail.size(), tail.size(), tail) != 0)
+      continue;
+    std::vector<fs::path> frames;
+    std::istringstream lines(text->substr(head.size(), text->size() - head.size() - tail.size()));
+    bool fmpc_wrote_it = true;
+    for (std::string line; std::getline(lines, line);) {
+      std::smatch match;
+      if (!std::regex_match(line, match, frame_line)) {
+        fmpc_wrote_it = false;
+        break;
+      }
+      frames.push_back(directory / match[1].str());
+    }
+    if (!fmpc_wrote_it) continue;
+    files.push_back(entry.path());
+    for (const fs::path& frame : frames)
+      if (fs::is_regular_file(frame, error)) files.push_back(frame);
+  }
+  return files;
+}
+
+std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier, const std::vector<std::string>& written,
+                               DiagnosticList& diagnostics) {
+  std::size_t removed = 0;
+  for (const std::filesystem::path& path : earlier) {
+    bool rewritten = false;
+    for (const std::string& file : written)
+      rewritten = rewritten || std::filesystem::path(file).lexically_normal() == path.lexically_normal();
+    if (rewritten) continue;
+    std::error_code error;
+    if (std::filesystem::remove(path, error)) ++removed;
+    else if (error)
+      diagnostics.error(SourceRange{path.string(), 0, 0, 0, 0},
+                        "cannot remove this file of an earlier run: " + error.message());
+  }
+  return removed;
+}
+
+std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& diagnostics) {
+  std::string device;
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+  const bool have_device = gpu::cuda_device_available(device);
+#else
+  const bool have_device = false;
+  device = "this fmpc was built without CUDA";
+#endif
+  switch (scene.backend) {
+    case SceneBackend::Cpu:
+      return BackendChoice{"cpu", ""};
+    case SceneBackend::Auto:
+      if (have_device) return BackendChoice{"cuda", "backend auto: running on CUDA (" + device + ")"};
+      return BackendChoice{"cpu", "backend auto: no GPU (" + device + "); running on the CPU"};
+    case SceneBackend::Cuda:
+      if (have_device) return BackendChoice{"cuda", ""};
+      diagnostics.error(scene.range_of("backend"),
+                        "backend: 'cuda' cannot run here: " + device + "; use backend cpu or auto");
+      return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+std::string default_output_directory(const Scene& scene) {
+  return !scene.outputs.directory.empty() ? scene.outputs.directory : scene.name + "_output";
+}
 
 std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
                                         DiagnosticList& diagnostics) {

@@ -3,6 +3,7 @@
 // and their .pvd collection, a CSV time series (probe displacement and force, kinetic and elastic energy) and a JSON
 // summary, each written atomically. Nothing is printed: progress goes to a callback the caller may draw.
 #include <cstddef>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -58,9 +59,33 @@ struct SceneRunResult {
   InversionReport inversions;
   double final_max_displacement = 0.0;  // m, at the last step
   PrecisionCheckResult precision_check;
+  std::vector<Point3> final_positions;       // m, every vertex at the last step (the last finite state if stopped)
+  // The run summary (docs/scenes.md, "Outputs"), as written to summary.json when the scene asks for it; built for
+  // every run so that callers without files (the Python module) get the same fields.
+  std::string summary_json;
   std::vector<std::string> files;            // written, in order
   std::string csv_path;                      // empty when no CSV was written
 };
+
+// The backend a scene runs on: `cpu`; `cuda` when a device can be used (an error saying why otherwise); `auto` the
+// device when there is one, the CPU otherwise, with `note` saying which it took and why ("backend auto: no GPU
+// (this fmpc was built without CUDA); running on the CPU") for the caller to show.
+struct BackendChoice {
+  std::string backend;  // "cpu" or "cuda", as SceneRunOptions::backend takes it
+  std::string note;     // empty unless the scene said `auto`
+};
+std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& diagnostics);
+
+// Files an earlier run left in `directory`: every .pvd there that is exactly what run_scene writes (one DataSet
+// line per frame_NNNNN.vtu) and the frames it lists. Anything else, a user's file included, is never a candidate.
+std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory);
+// Removes those of `earlier` that this run did not write again (`written`: frames past the new count, a .pvd under
+// another scene name), so that the folder holds one run. Returns how many files went.
+std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier,
+                               const std::vector<std::string>& written, DiagnosticList& diagnostics);
+
+// Where a run writes when its caller names no folder: the scene's outputs.directory, else SCENE-NAME_output.
+std::string default_output_directory(const Scene& scene);
 
 // Steps: scene.steps when set, else ceil(duration / dt) (dt from the stability check when `auto`).
 // Returns nullopt when the simulation could not start or an output could not be written (errors appended).

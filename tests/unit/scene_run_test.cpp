@@ -2,12 +2,16 @@
 // the strain-table scene and SOFA's liver scenes (skipped visibly without ../shared/data).
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <regex>
 #include <sstream>
 
-#include "runtime/io/json_writer.h"
+#include "diagnostics/number_format.h"
+#include "runtime/io/json_text.h"
 #include "runtime/io/vtk_xml.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
@@ -105,23 +109,53 @@ TEST_CASE("VTU frames and the PVD collection are well-formed with the right coun
   CHECK(pvd.find("<DataSet timestep=\"0.25\" group=\"\" part=\"0\" file=\"a&amp;b.vtu\"/>") != std::string::npos);
 }
 
-TEST_CASE("the JSON writer escapes text and writes null for non-finite numbers", "[scene]") {
-  JsonWriter json;
-  json.begin_object()
-      .value("text", "a \"quoted\"\\ line\n\x01")
-      .value("nan", std::nan(""))
-      .value("inf", HUGE_VAL)
-      .value("count", std::size_t{3})
-      .value("flag", false)
-      .begin_array("list")
-      .element(0.1)
-      .element(2.0)
-      .end_array()
-      .begin_object("empty")
-      .end_object()
-      .end_object();
-  CHECK(json.str() == "{\n  \"text\": \"a \\\"quoted\\\"\\\\ line\\n\\u0001\",\n  \"nan\": null,\n  \"inf\": null,\n"
-                      "  \"count\": 3,\n  \"flag\": false,\n  \"list\": [\n    0.1,\n    2\n  ],\n  \"empty\": {}\n}\n");
+TEST_CASE("JSON text: the library's layout and escaping, fmpc's numbers, null for non-finite numbers", "[scene]") {
+  JsonDocument json;
+  json["text"] = "a \"quoted\"\\ line\n\x01";
+  json["nan"] = std::nan("");
+  json["inf"] = HUGE_VAL;
+  json["count"] = std::size_t{3};
+  json["flag"] = false;
+  json["list"] = {0.1, 2.0};
+  json["empty"] = JsonDocument::object();
+  const std::string text = json_text(json);
+  CHECK(text == "{\n  \"text\": \"a \\\"quoted\\\"\\\\ line\\n\\u0001\",\n  \"nan\": null,\n  \"inf\": null,\n"
+                "  \"count\": 3,\n  \"flag\": false,\n  \"list\": [\n    0.1,\n    2\n  ],\n  \"empty\": {}\n}\n");
+  // Valid JSON, read back by the library.
+  const JsonDocument read = JsonDocument::parse(text);
+  CHECK(read["nan"].is_null());
+  CHECK(read["list"][1].get<double>() == 2.0);
+  // Without floating-point numbers the text is exactly nlohmann's own dump(2).
+  JsonDocument plain;
+  plain["name"] = "\xce\xbcm \t tab";
+  plain["nested"] = {{"a", 1}, {"b", JsonDocument::array()}, {"c", {true, nullptr, -4}}};
+  CHECK(json_text(plain) == plain.dump(2) + "\n");
+  // Invalid UTF-8 (a file name, say) becomes U+FFFD instead of an invalid document or an exception.
+  JsonDocument bad;
+  bad["path"] = std::string("a\xff" "b");
+  CHECK(json_text(bad) == "{\n  \"path\": \"a\xef\xbf\xbd" "b\"\n}\n");
+}
+
+TEST_CASE("JSON text writes every finite double as format_number does, and it reads back exactly", "[scene]") {
+  std::mt19937_64 random(20240611);
+  std::uniform_int_distribution<std::uint64_t> bits;
+  std::size_t checked = 0;
+  for (int i = 0; i < 20000; ++i) {
+    double value = 0.0;
+    const std::uint64_t b = bits(random);
+    std::memcpy(&value, &b, sizeof value);
+    if (i % 4 == 1) value = std::ldexp(static_cast<double>(b >> 11), -53) * 1000.0;  // plain magnitudes
+    if (i % 4 == 2) value = static_cast<double>(static_cast<std::int64_t>(b >> 20)) - 1e12;  // whole numbers
+    if (i % 4 == 3) value = std::nextafter(0.0, 1.0) * static_cast<double>(b >> 40);  // subnormals
+    if (!std::isfinite(value)) continue;
+    JsonDocument array = JsonDocument::array();
+    array.push_back(value);
+    const std::string text = json_text(array);
+    REQUIRE(text == "[\n  " + format_number(value) + "\n]\n");
+    CHECK(JsonDocument::parse(text)[0].get<double>() == (value == 0.0 ? 0.0 : value));
+    ++checked;
+  }
+  CHECK(checked > 15000);
 }
 
 TEST_CASE("rays hit triangles (Moller-Trumbore), and probes are picked by ray", "[scene]") {

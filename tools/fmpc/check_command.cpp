@@ -1,9 +1,9 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
-#include "compiler/sema/lint.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/rule_file_session.h"
+#include "runtime/io/rule_file_input.h"
 #include "tools/fmpc/warning_policy.h"
 
 namespace fmpc::cli {
@@ -22,13 +22,10 @@ int run_check(const CheckOptions& options) {
   bool any_error = false;
   for (const std::string& path : options.files) {
     LoadedRuleFile file = load_rule_file_from_disk(path);
-    if (file.readable && !file.diagnostics.has_errors() && !options.no_lint) {
+    if (!options.no_lint) {
       LintOptions lint_options;
       lint_options.coverage_threshold = options.coverage_threshold;
-      // MATLAB's format has no units, so asking for them there would only be noise.
-      lint_options.require_units = file.dialect == Dialect::Fmpc;
-      for (const FuzzySystem& system : file.rules.systems) lint_system(system, lint_options, file.diagnostics);
-      file.diagnostics.sort_by_position();
+      lint_rule_file(file, lint_options);
     }
     print_diagnostics(file.diagnostics, file.sources, std::cerr);
     any_error = any_error || file.diagnostics.has_errors();

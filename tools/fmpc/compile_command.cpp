@@ -166,11 +166,7 @@ int run_compile(const CompileOptions& options) {
   if (options.target == "table") {
     TableBuildOptions table_options;
     table_options.max_error = options.max_error;
-    if (table_options.max_error == 0.0) {
-      double narrowest = std::numeric_limits<double>::infinity();
-      for (const Variable& output : system->outputs) narrowest = std::min(narrowest, output.max - output.min);
-      table_options.max_error = 0.01 * narrowest;
-    }
+    if (table_options.max_error == 0.0) table_options.max_error = default_table_max_error(*system);
     table_options.spacing = options.spacing == "uniform" ? BreakpointSpacing::Uniform : BreakpointSpacing::Refined;
     table_options.value_type = options.precision == "float" ? TableValueType::Float32 : TableValueType::Float64;
     table_options.max_grid_points = options.max_grid_points;

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "compiler/backend/table/lookup_table.h"
+#include "compiler/eval/evaluation_report.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "diagnostics/number_format.h"
@@ -39,38 +40,7 @@ struct EvalOptions {
   std::string semantics = "matlab";
 };
 
-std::string with_unit(double value, const Variable& variable) {
-  return format_number(value) + (variable.unit.empty() || variable.unit == "dimensionless" ? "" : " " + variable.unit);
-}
-
-// Turns what the interpreter flagged into located messages. NaN inputs and the `error` policy are errors.
-void report_flags(const FuzzySystem& system, const EvaluationPoint& point, const Evaluation& result,
-                  DiagnosticList& diagnostics) {
-  for (int i : result.flags.inputs_nan)
-    diagnostics.error(point.origins[static_cast<std::size_t>(i)],
-                      "input '" + system.inputs[static_cast<std::size_t>(i)].name + "' is NaN",
-                      {"give a number within [" + format_number(system.inputs[static_cast<std::size_t>(i)].min) + ", " +
-                       format_number(system.inputs[static_cast<std::size_t>(i)].max) + "]"});
-  for (int i : result.flags.inputs_out_of_range) {
-    const Variable& v = system.inputs[static_cast<std::size_t>(i)];
-    diagnostics.warning(point.origins[static_cast<std::size_t>(i)], "input-out-of-range",
-                        "input '" + v.name + "' = " + format_number(point.inputs[static_cast<std::size_t>(i)]) +
-                            " is outside its range [" + format_number(v.min) + ", " + format_number(v.max) +
-                            "]; evaluated as given");
-  }
-  for (int o : result.flags.outputs_no_rule_fired) {
-    const Variable& v = system.outputs[static_cast<std::size_t>(o)];
-    const SourceRange& where = point.where;
-    if (result.flags.no_fire_error)
-      diagnostics.error(where, "no rule fired for output '" + v.name + "' (policy: error)",
-                        {"add rules covering this point or choose another 'when no rule fires' policy"});
-    else
-      diagnostics.warning(where, "no-rule-fired",
-                          "no rule fired for output '" + v.name + "'; output set to " +
-                              with_unit(result.outputs[static_cast<std::size_t>(o)], v) +
-                              (system.no_fire == NoFirePolicy::Midrange ? " (mid-range)" : " (policy value)"));
-  }
-}
+std::string with_unit(double value, const Variable& variable) { return value_with_unit(value, variable.unit); }
 
 // Four significant digits: what a reader compares at a glance (the CSV keeps every digit).
 std::string four_digits(double value) {
@@ -189,27 +159,6 @@ std::optional<CsvTable> read_points_csv(const std::string& csv_option, SourceFil
 
 // ---- lookup tables (.fzt) ----
 
-// The table as a system for the points' parsing: its axes are the inputs (range: the axis), its outputs the outputs.
-FuzzySystem table_interface(const LookupTable& table) {
-  FuzzySystem system;
-  system.name = table.system_name;
-  for (const TableAxis& axis : table.axes) {
-    Variable input;
-    input.name = axis.input_name;
-    input.unit = axis.input_unit;
-    input.min = axis.breakpoints.front();
-    input.max = axis.breakpoints.back();
-    system.inputs.push_back(std::move(input));
-  }
-  for (std::size_t o = 0; o < table.output_names.size(); ++o) {
-    Variable output;
-    output.name = table.output_names[o];
-    output.unit = o < table.output_units.size() ? table.output_units[o] : std::string();
-    system.outputs.push_back(std::move(output));
-  }
-  return system;
-}
-
 // Values given for inputs the table fixed at compile time (--fix): accepted where they equal the fixed value, so
 // that the points a rule file takes are taken too; an error otherwise. `named` is the input's name as given.
 bool check_fixed_value(const LookupTable& table, const std::string& named, const std::string& text,
@@ -288,16 +237,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
     DiagnosticList point_diagnostics;
     for (const EvaluationPoint& point : points) {
       interpolate_table(view, point.inputs.data(), out.data());
-      // The table clamps inputs to its axes (it never extrapolates), unlike the interpreter: say so.
-      for (std::size_t i = 0; i < interface.inputs.size(); ++i) {
-        const Variable& v = interface.inputs[i];
-        if (point.inputs[i] >= v.min && point.inputs[i] <= v.max) continue;
-        point_diagnostics.warning(point.origins[i], "input-out-of-range",
-                                  "input '" + v.name + "' = " + format_number(point.inputs[i]) +
-                                      " is outside the table's axis [" + format_number(v.min) + ", " +
-                                      format_number(v.max) + "]; the table holds the value at " +
-                                      format_number(point.inputs[i] < v.min ? v.min : v.max));
-      }
+      report_table_inputs(interface, point.inputs, point.origins, point_diagnostics);
       std::vector<std::string> row;
       for (double v : point.inputs) row.push_back(format_number(v));
       for (double v : out) row.push_back(format_number(v));
@@ -451,7 +391,8 @@ int run_eval(const EvalOptions& options) {
     SummaryTable summary(*system);
     for (const EvaluationPoint& point : points) {
       const Explanation explanation = explain_or_evaluate(interpreter, point.inputs, options.explain);
-      report_flags(*system, point, explanation.evaluation, point_diagnostics);
+      report_evaluation_flags(*system, point.inputs, point.origins, point.where, explanation.evaluation,
+                              point_diagnostics);
       std::vector<std::string> row;
       for (double v : point.inputs) row.push_back(format_number(v));
       const Evaluation& evaluation = explanation.evaluation;

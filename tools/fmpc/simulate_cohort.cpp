@@ -216,7 +216,8 @@ int run_cohort_command(const SimulateOptions& options) {
               << " patients holds none; nothing to run\n";
     return kExitOk;
   }
-  const std::optional<std::string> backend = choose_backend(*scene, diagnostics);
+  const std::optional<sim::BackendChoice> backend = sim::choose_backend(*scene, diagnostics);
+  if (backend && !backend->note.empty()) std::cerr << "fmpc simulate: " << backend->note << '\n';
   if (!backend) {
     report(diagnostics, sources);
     return kExitErrors;
@@ -305,22 +306,21 @@ int run_cohort_command(const SimulateOptions& options) {
     return kExitErrors;
   }
 
-  const std::filesystem::path root = !options.output_directory.empty()      ? options.output_directory
-                                     : !scene->outputs.directory.empty() ? scene->outputs.directory
-                                                                         : scene->name + "_output";
+  const std::filesystem::path root =
+      !options.output_directory.empty() ? options.output_directory : sim::default_output_directory(*scene);
   std::vector<sim::CohortPatient> patients;
   std::vector<std::vector<std::filesystem::path>> earlier;
   for (const CohortMember& member : members) {
     const std::string& label = file->patients[member.row].label;
     patients.push_back(sim::CohortPatient{label, &member.scene, member.built.get(), (root / label).string()});
-    earlier.push_back(earlier_run_files(root / label));
+    earlier.push_back(sim::earlier_run_files(root / label));
   }
   sim::CohortRunOptions run_options;
-  run_options.backend = *backend;
+  run_options.backend = backend->backend;
   run_options.threads = scene->threads;
   ProgressLine progress("simulate");
   run_options.progress = [&](std::size_t done, std::size_t total) {
-    progress.show_fraction(done, total, *backend == "cuda" ? "step" : "patient");
+    progress.show_fraction(done, total, backend->backend == "cuda" ? "step" : "patient");
   };
   const std::optional<sim::CohortRunResult> run = sim::run_cohort(patients, run_options, diagnostics);
   progress.finish();
@@ -351,7 +351,7 @@ int run_cohort_command(const SimulateOptions& options) {
         every_patient = false;
     }
     files += written.size();
-    stale += remove_stale_files(earlier[m], written, diagnostics);
+    stale += sim::remove_stale_files(earlier[m], written, diagnostics);
   }
   // cohort.csv and the overlay together, only when every patient's outputs were written.
   std::vector<std::pair<std::string, std::string>> cohort_files;
@@ -389,7 +389,7 @@ int run_cohort_command(const SimulateOptions& options) {
                                    std::to_string(file->patients.size()) + " patients)"
                              : "")
             << ", " << sim::scene_name(setup.integrator) << ", "
-            << (setup.precision == sim::Precision::Float ? "float" : "double") << ", " << *backend << "\n"
+            << (setup.precision == sim::Precision::Float ? "float" : "double") << ", " << backend->backend << "\n"
             << "  model: " << sim::scene_name(setup.model) << "; per patient " << members.front().built->mesh.points.size()
             << " vertices, " << setup.springs.size() << " springs\n";
   if (e_hi >= e_lo) std::cout << "  E from the rules: " << six_digits(e_lo) << " to " << six_digits(e_hi) << " kPa\n";

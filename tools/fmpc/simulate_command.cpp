@@ -98,63 +98,7 @@ std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& c
   return plot::render_line_chart(chart, format);
 }
 
-// Every .pvd that is exactly what fmpc writes (runtime/io/vtk_xml.cpp pvd_document: one DataSet line per
-// frame_NNNNN.vtu) and the frames it lists.
-std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory) {
-  namespace fs = std::filesystem;
-  std::vector<fs::path> files;
-  std::error_code error;
-  if (!fs::is_directory(directory, error)) return files;
-  static const std::regex frame_line(
-      R"re(    <DataSet timestep="[-+0-9.eE]+" group="" part="0" file="(frame_[0-9]{5}\.vtu)"/>)re");
-  const std::string head =
-      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
-      "  <Collection>\n";
-  const std::string tail = "  </Collection>\n</VTKFile>\n";
-  for (const fs::directory_entry& entry : fs::directory_iterator(directory, error)) {
-    if (entry.path().extension() != ".pvd" || !entry.is_regular_file(error)) continue;
-    std::string read_error;
-    const std::optional<std::string> text = read_text_file(entry.path().string(), sim::kMaxSceneFileBytes, "pvd", read_error);
-    if (!text || text->compare(0, head.size(), head) != 0 || text->size() < head.size() + tail.size() ||
-        text->compare(text->size() - tail.size(), tail.size(), tail) != 0)
-      continue;
-    std::vector<fs::path> frames;
-    std::istringstream lines(text->substr(head.size(), text->size() - head.size() - tail.size()));
-    bool fmpc_wrote_it = true;
-    for (std::string line; std::getline(lines, line);) {
-      std::smatch match;
-      if (!std::regex_match(line, match, frame_line)) {
-        fmpc_wrote_it = false;
-        break;
-      }
-      frames.push_back(directory / match[1].str());
-    }
-    if (!fmpc_wrote_it) continue;
-    files.push_back(entry.path());
-    for (const fs::path& frame : frames)
-      if (fs::is_regular_file(frame, error)) files.push_back(frame);
-  }
-  return files;
-}
-
-// Frames past the new count, a .pvd under another scene name: the folder holds one run.
-std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier, const std::vector<std::string>& written,
-                               DiagnosticList& diagnostics) {
-  std::size_t removed = 0;
-  for (const std::filesystem::path& path : earlier) {
-    bool rewritten = false;
-    for (const std::string& file : written)
-      rewritten = rewritten || std::filesystem::path(file).lexically_normal() == path.lexically_normal();
-    if (rewritten) continue;
-    std::error_code error;
-    if (std::filesystem::remove(path, error)) ++removed;
-    else if (error)
-      diagnostics.error(SourceRange{path.string(), 0, 0, 0, 0},
-                        "cannot remove this file of an earlier run: " + error.message());
-  }
-  return removed;
-}
-
+// Applies the command-line overrides; errors name the option and what is allowed.
 bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, DiagnosticList& diagnostics) {
   if (!options.backend.empty()) {
     if (options.backend == "auto") scene.backend = sim::SceneBackend::Auto;
@@ -201,35 +145,7 @@ std::optional<sim::Scene> read_scene(const SimulateOptions& options, SourceFiles
   return scene;
 }
 
-// `cuda` without a usable device is an error that says why.
-std::optional<std::string> choose_backend(const sim::Scene& scene, DiagnosticList& diagnostics) {
-  std::string device;
-#if defined(FMPC_RUNTIME_HAVE_CUDA)
-  const bool have_device = gpu::cuda_device_available(device);
-#else
-  const bool have_device = false;
-  device = "this fmpc was built without CUDA";
-#endif
-  switch (scene.backend) {
-    case sim::SceneBackend::Cpu:
-      return std::string("cpu");
-    case sim::SceneBackend::Auto:
-      if (have_device) {
-        std::cerr << "fmpc simulate: backend auto: running on CUDA (" << device << ")\n";
-        return std::string("cuda");
-      }
-      std::cerr << "fmpc simulate: backend auto: no GPU (" << device << "); running on the CPU\n";
-      return std::string("cpu");
-    case sim::SceneBackend::Cuda:
-      if (have_device) return std::string("cuda");
-      diagnostics.error(scene.range_of("backend"),
-                        "backend: 'cuda' cannot run here: " + device + "; use backend cpu or auto");
-      return std::nullopt;
-  }
-  return std::nullopt;
-}
-
-// In file order, as a reader of the scene meets them.
+// Diagnostics in file order, as a reader of the scene meets them.
 void report(DiagnosticList& diagnostics, const SourceFiles& sources) {
   diagnostics.sort_by_position();
   print_diagnostics(diagnostics, sources, std::cerr);
@@ -251,7 +167,8 @@ int run_simulate(const SimulateOptions& options) {
     report(diagnostics, sources);
     return kExitErrors;
   }
-  const std::optional<std::string> backend = choose_backend(*scene, diagnostics);
+  const std::optional<sim::BackendChoice> backend = sim::choose_backend(*scene, diagnostics);
+  if (backend && !backend->note.empty()) std::cerr << "fmpc simulate: " << backend->note << '\n';
   if (!backend) {
     report(diagnostics, sources);
     return kExitErrors;
@@ -264,11 +181,10 @@ int run_simulate(const SimulateOptions& options) {
     return kExitErrors;
   }
   sim::SceneRunOptions run_options;
-  run_options.backend = *backend;
-  run_options.output_directory = !options.output_directory.empty()      ? options.output_directory
-                                 : !scene->outputs.directory.empty() ? scene->outputs.directory
-                                                                     : scene->name + "_output";
-  const std::vector<std::filesystem::path> earlier = earlier_run_files(run_options.output_directory);
+  run_options.backend = backend->backend;
+  run_options.output_directory =
+      !options.output_directory.empty() ? options.output_directory : sim::default_output_directory(*scene);
+  const std::vector<std::filesystem::path> earlier = sim::earlier_run_files(run_options.output_directory);
   ProgressLine progress("simulate");
   run_options.progress = [&](std::size_t done, std::size_t total) { progress.show_fraction(done, total, "step"); };
   const std::optional<sim::SceneRunResult> result = sim::run_scene(*scene, *built, run_options, diagnostics);
@@ -285,14 +201,14 @@ int run_simulate(const SimulateOptions& options) {
   if (result) {
     std::vector<std::string> written = result->files;
     if (!plot_path.empty()) written.push_back(plot_path);
-    stale = remove_stale_files(earlier, written, diagnostics);
+    stale = sim::remove_stale_files(earlier, written, diagnostics);
   }
   report(diagnostics, sources);
   if (!result) return kExitErrors;
   const sim::SimulationSetup& setup = built->setup;
   std::cout << scene->name << ": " << result->steps_taken << " steps of " << six_digits(result->stability.time_step)
             << " s" << (result->stability.automatic ? " (auto)" : "") << ", " << sim::scene_name(setup.integrator)
-            << ", " << (setup.precision == sim::Precision::Float ? "float" : "double") << ", " << *backend << "\n"
+            << ", " << (setup.precision == sim::Precision::Float ? "float" : "double") << ", " << backend->backend << "\n"
             << "  model: " << sim::scene_name(setup.model) << "; mesh: " << built->mesh.points.size() << " vertices, "
             << built->mesh.tetrahedra.size() << " tetrahedra, " << setup.springs.size() << " springs, "
             << setup.fixed_vertices.size() << " fixed\n"

@@ -1,7 +1,7 @@
 #pragma once
 // What `fmpc simulate` and its cohort mode (--patients, tools/fmpc/simulate_cohort.cpp) share: the options, the
-// command-line overrides, the backend choice, the force-displacement picture and the cleaning of an earlier run's
-// files in an output folder.
+// command-line overrides and the force-displacement picture (the backend choice and the cleaning of an earlier
+// run's files are the library's: runtime/scene/scene_run.h).
 #include <cstddef>
 #include <filesystem>
 #include <optional>
@@ -36,23 +36,12 @@ std::string six_digits(double value);
 std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& curve, const sim::Scene& scene,
                                       const sim::BuiltScene& built, plot::ImageFormat format);
 
-// Files an earlier `fmpc simulate` left in `directory` (its .pvd files in fmpc's exact layout and the frames they
-// list); anything else, a user's file included, is never a candidate.
-std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory);
-
-// Removes what an earlier run wrote and this one did not; returns how many files went.
-std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier, const std::vector<std::string>& written,
-                               DiagnosticList& diagnostics);
-
 // The scene file read (its text kept in `sources`), parsed and with the command-line overrides applied; nullopt
 // after errors.
 std::optional<sim::Scene> read_scene(const SimulateOptions& options, SourceFiles& sources, DiagnosticList& diagnostics);
 
 // Applies the command-line overrides; errors name the option and what is allowed.
 bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, DiagnosticList& diagnostics);
-
-// The backend that runs: `auto` takes CUDA when a device can be used and says which it took (on stderr).
-std::optional<std::string> choose_backend(const sim::Scene& scene, DiagnosticList& diagnostics);
 
 // Diagnostics in file order, printed.
 void report(DiagnosticList& diagnostics, const SourceFiles& sources);

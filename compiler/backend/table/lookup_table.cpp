@@ -409,4 +409,24 @@ std::optional<LookupTable> parse_fzt(const std::string& path, const std::string&
   return table;
 }
 
+FuzzySystem table_interface(const LookupTable& table) {
+  FuzzySystem system;
+  system.name = table.system_name;
+  for (const TableAxis& axis : table.axes) {
+    Variable input;
+    input.name = axis.input_name;
+    input.unit = axis.input_unit;
+    input.min = axis.breakpoints.front();
+    input.max = axis.breakpoints.back();
+    system.inputs.push_back(std::move(input));
+  }
+  for (std::size_t o = 0; o < table.output_names.size(); ++o) {
+    Variable output;
+    output.name = table.output_names[o];
+    output.unit = o < table.output_units.size() ? table.output_units[o] : std::string();
+    system.outputs.push_back(std::move(output));
+  }
+  return system;
+}
+
 }  // namespace fmpc

@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "compiler/ir/fuzzy_system.h"
 #include "diagnostics/diagnostic.h"
 #include "kernels/table_math.h"
 
@@ -81,6 +82,10 @@ TableView<double> view_of(const LookupTable& table, std::vector<const double*>& 
 // counts >= 2, finite strictly increasing breakpoints, values.size() == grid_points() * outputs, finite values,
 // one unit per output, a known error kind. Errors name the field.
 bool validate_table(const LookupTable& table, const std::string& origin, DiagnosticList& diagnostics);
+
+// The table as a system's interface, for reading and checking points: its axes are the inputs (range: the axis),
+// its outputs the outputs (names and units; no terms, no rules).
+FuzzySystem table_interface(const LookupTable& table);
 
 std::string serialize_fzt(const LookupTable& table);
 

@@ -1103,4 +1103,10 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
   }
 }
 
+double default_table_max_error(const FuzzySystem& source) {
+  double narrowest = std::numeric_limits<double>::infinity();
+  for (const Variable& output : source.outputs) narrowest = std::min(narrowest, output.max - output.min);
+  return 0.01 * narrowest;
+}
+
 }  // namespace fmpc

@@ -84,6 +84,10 @@ struct TableBuildStatistics {
   std::size_t local_searches = 0;
 };
 
+// The error target when the caller names none (`fmpc compile --target table` without --max-error, the Python
+// module's compile_table without max_error): 1% of the narrowest output range.
+double default_table_max_error(const FuzzySystem& source);
+
 // The smallest maximum error a table of `compiled` can state: the stored values' rounding (half an ulp of the
 // value type at the largest |output|), the interpreter's own rounding against which the table is measured (1e-12
 // of the widest output range) and the passes' error bound where it is finite. A --max-error at or below it is
