@@ -18,7 +18,8 @@
 #               liver-CUDA.scn) on CUDA and on the CPU; the demo's 12-patient cohort (--patients) on both,
 #               cohort.csv compared; large boxes (240^3 springs, 120^3 FEM) end to end; outputs under $OUT/scenes
 #   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
-#               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540)
+#               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540); the
+#               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run
 #   evaluator   bench/gpu/evaluator_gpu_bench.cu (nvcc alone): the generated CUDA evaluators (type-1 and interval
 #               type-2, float and double) and table lookups (2-D double and float; 5-D double and float at 9^5,
 #               7^5, 5^5; each in the grid and the sector-packed layout) on the liver rule base, each checked
@@ -167,6 +168,11 @@ if [[ "${1:-}" == "--prepare" ]]; then
   rm -rf "$PROGRAMS" "$PROGRAMS.tar.xz"
   prepare_scenes || exit 1
   prepare_fuzz || exit 1
+  rm -f "$CARRY/fuzz-corpus.tar.xz"
+  if [[ -n "${FUZZ_CORPUS:-}" ]]; then
+    cp "$FUZZ_CORPUS" "$CARRY/fuzz-corpus.tar.xz" || exit 1
+    echo "carrying the fuzz corpus $FUZZ_CORPUS"
+  fi
   tar -C "$CARRY" -cJf "$PROGRAMS.tar.xz" programs && rm -rf "$PROGRAMS" || exit 1
   size=$(du -sm "$CARRY" | cut -f1)
   echo "build-gpu-carry: $size MiB (programs.tar.xz $(du -sh "$PROGRAMS.tar.xz" | cut -f1))"
@@ -413,6 +419,11 @@ fuzz_section() {
     fail "no fuzz targets in $CARRY/programs.tar.xz: build build-asan (tools/run sanitize) and run --prepare"
     return 1
   fi
+  # An earlier run's corpora and CPU-second totals (its $OUT/fuzz-corpus.tar.xz, put into build-gpu-carry by
+  # --prepare with FUZZ_CORPUS=...): this run goes on from them.
+  if [[ -f "$CARRY/fuzz-corpus.tar.xz" && ! -d "$BUILD/fuzz-corpus" ]]; then
+    mkdir -p "$BUILD" && tar -C "$BUILD" -xJf "$CARRY/fuzz-corpus.tar.xz" || fail "unpacking the carried fuzz corpus"
+  fi
   local jobs=${FUZZ_JOBS:-$(( JOBS / 8 > 0 ? JOBS / 8 : 1 ))}
   FMPC_FUZZ_BINARIES="$UNPACKED/bin" FMPC_FUZZ_SEEDS="$UNPACKED/seeds" \
     bash "$ROOT/tests/fuzz/run_fuzzers.sh" --jobs "$jobs" "$BUILD" "${FUZZ_SECONDS:-540}" > "$OUT/fuzz.log" 2>&1
@@ -425,6 +436,8 @@ fuzz_section() {
   if [[ -n "$findings" ]]; then
     mkdir -p "$OUT/fuzz/findings" && cp $findings "$OUT/fuzz/findings/"
   fi
+  tar -C "$BUILD" -cJf "$OUT/fuzz-corpus.tar.xz" --exclude='*.log' --exclude='*-seeds' fuzz-corpus ||
+    fail "packing the fuzz corpus"
   [[ $status -eq 0 ]] || fail "fuzzing (exit $status; see fuzz.log and fuzz/findings)"
 }
 

@@ -617,7 +617,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     if (!synchronize(diagnostics)) return std::nullopt;
     return result;
   }
-  std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
+  std::optional<double> elastic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     const auto springs =
         energy_sum(EnergyTerm::SpringPotential, spring_begin_.at(scene), spring_begin_.at(scene + 1), diagnostics);
     if (!springs) return std::nullopt;
@@ -626,10 +626,15 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       elements =
           energy_sum(EnergyTerm::ElementPotential, element_begin_.at(scene), element_begin_.at(scene + 1), diagnostics);
     if (!elements) return std::nullopt;
+    return *springs + *elements;
+  }
+  std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
+    const auto elastic = elastic_energy(scene, diagnostics);
+    if (!elastic) return std::nullopt;
     const auto loads =
         energy_sum(EnergyTerm::LoadPotential, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
     if (!loads) return std::nullopt;
-    return *springs + *elements + *loads;
+    return *elastic + *loads;
   }
 
  private:
@@ -1250,6 +1255,9 @@ class GpuSimulationImpl final : public GpuSimulation {
   }
   std::optional<double> largest_displacement(DiagnosticList& diagnostics) const override {
     return batch_->largest_displacement(0, diagnostics);
+  }
+  std::optional<double> elastic_energy(DiagnosticList& diagnostics) const override {
+    return batch_->elastic_energy(0, diagnostics);
   }
   std::optional<double> potential_energy(DiagnosticList& diagnostics) const override {
     return batch_->potential_energy(0, diagnostics);

@@ -57,6 +57,8 @@ class GpuSimulation {
   // The largest distance of a vertex from its start (initial or rest positions), reduced on the device: the same
   // bits as the host's computation on positions(), without moving the state to the host; nullopt after a CUDA error.
   virtual std::optional<double> largest_displacement(DiagnosticList& diagnostics) const = 0;
+  // The springs' and the elements' energy (sim::elastic_energy's terms, without the loads'), on the device.
+  virtual std::optional<double> elastic_energy(DiagnosticList& diagnostics) const = 0;
   virtual const std::optional<sim::NonFiniteReport>& non_finite() const = 0;
   // Inverted tetrahedra as the CPU backend counts them (sim::InversionReport): at every check (check_every steps and
   // the end of every advance), the first step exact by replay.
@@ -95,6 +97,7 @@ class GpuBatchSimulation {
   virtual std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual std::optional<double> largest_displacement(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  virtual std::optional<double> elastic_energy(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual const std::optional<GpuNonFiniteReport>& non_finite() const = 0;
   virtual const sim::InversionReport& inversions(std::size_t scene) const = 0;
   virtual std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const = 0;

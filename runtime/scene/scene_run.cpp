@@ -9,6 +9,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
+#include <utility>
 #include <thread>
 
 #include "diagnostics/number_format.h"
@@ -63,6 +64,13 @@ class SceneState {
   // state lives elsewhere reduces it there (what every progress event asks, so it must not move the state).
   virtual std::optional<double> largest_displacement(const std::vector<Point3>& start,
                                                      DiagnosticList& diagnostics) const;
+  // The kinetic and the elastic energy of the state whose positions and velocities are given (a sample's CSV row):
+  // summed here from them; a backend whose state lives elsewhere sums there (on CUDA: in another order, so the
+  // last bits may differ from the CPU's sums).
+  virtual std::optional<std::pair<double, double>> energies(const SimulationSetup& setup,
+                                                            const std::vector<Point3>& positions,
+                                                            const std::vector<Point3>& velocities,
+                                                            DiagnosticList& diagnostics) const;
 };
 
 // A run that steps itself (one scene alone).
@@ -112,6 +120,14 @@ class CudaStepper final : public SceneStepper {
   std::optional<double> largest_displacement(const std::vector<Point3>&, DiagnosticList& diagnostics) const override {
     return simulation_->largest_displacement(diagnostics);
   }
+  std::optional<std::pair<double, double>> energies(const SimulationSetup&, const std::vector<Point3>&,
+                                                    const std::vector<Point3>&,
+                                                    DiagnosticList& diagnostics) const override {
+    const auto kinetic = simulation_->kinetic_energy(diagnostics);
+    const auto elastic = simulation_->elastic_energy(diagnostics);
+    if (!kinetic || !elastic) return std::nullopt;
+    return std::make_pair(*kinetic, *elastic);
+  }
 
  private:
   std::unique_ptr<gpu::GpuSimulation> simulation_;
@@ -141,6 +157,13 @@ double largest_displacement(const std::vector<Point3>& positions, const std::vec
   for (std::size_t v = 0; v < positions.size() && v < start.size(); ++v)
     largest = std::max(largest, distance(positions[v], start[v]));
   return largest;
+}
+
+std::optional<std::pair<double, double>> SceneState::energies(const SimulationSetup& setup,
+                                                              const std::vector<Point3>& positions,
+                                                              const std::vector<Point3>& velocities,
+                                                              DiagnosticList&) const {
+  return std::make_pair(kinetic_energy(setup, velocities), elastic_energy(setup, positions));
 }
 
 std::optional<double> SceneState::largest_displacement(const std::vector<Point3>& start,
@@ -332,8 +355,12 @@ class SceneRecorder {
     }
     if (!sample) return;
     const std::vector<Point3> velocities = state.velocities(diagnostics);
-    const double kinetic = kinetic_energy(setup, velocities);
-    const double elastic = elastic_energy(setup, positions);
+    const auto energies = state.energies(setup, positions, velocities, diagnostics);
+    if (!energies) {  // a device error, already reported
+      outputs_ok_ = false;
+      return;
+    }
+    const auto [kinetic, elastic] = *energies;
     std::vector<double> row = {time};
     if (with_probe_) {
       const ProbeReading reading = state.probe_reading(diagnostics);

@@ -298,6 +298,12 @@ FMPC_GPU_TEST(energy_matches_cpu, "device energy reductions match the CPU's sums
       FMPC_EXPECT_WITHIN(*kinetic, cpu->kinetic_energy(), 1e-10 * std::abs(cpu->kinetic_energy()) + 1e-300);
       FMPC_EXPECT_WITHIN(*potential, cpu->potential_energy(), 1e-10 * std::abs(cpu->potential_energy()) + 1e-12);
       FMPC_EXPECT(*kinetic > 0.0);
+      // The elastic part alone (what a scene's time_series.csv reports) against the host's sum on the CPU state.
+      const auto elastic = device->elastic_energy(diagnostics);
+      FMPC_REQUIRE(elastic.has_value());
+      const double host_elastic = sim::elastic_energy(setup, cpu->positions());
+      FMPC_EXPECT_WITHIN(*elastic, host_elastic, 1e-10 * std::abs(host_elastic) + 1e-300);
+      FMPC_EXPECT(host_elastic > 0.0);
     }
   }
 }
