@@ -146,7 +146,7 @@ TEST_CASE("round trip: random system -> MATLAB -> IR keeps the IR and the output
   }
 }
 
-TEST_CASE("round trip: fmpc -> MATLAB -> fmpc keeps the IR and the outputs", "[round-trip]") {
+TEST_CASE("round trip: fmpc -> MATLAB -> fmpc keeps the IR and the outputs", "[heavy][round-trip]") {
   const testing::RandomSystemOptions options = testing::RandomSystemOptions::matlab_fis();
   for (std::uint64_t seed = 1; seed <= kRandomSystems; ++seed) {
     INFO("random_system(" << seed << ", matlab_fis())");

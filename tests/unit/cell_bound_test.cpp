@@ -102,7 +102,7 @@ double measured_error(Interpreter& interpreter, const Cell& cell, const std::vec
 
 }  // namespace
 
-TEST_CASE("the cell bound is never below the error measured densely in the cell", "[table][bound]") {
+TEST_CASE("the cell bound is never below the error measured densely in the cell", "[heavy][table][bound]") {
   // 400 random systems x 8 cells = 3,200 cells (about 1,100 evaluations each).
   const testing::RandomSystemOptions options = bounded_options();
   std::mt19937_64 random(1106);
@@ -147,7 +147,7 @@ TEST_CASE("the cell bound is never below the error measured densely in the cell"
              << value_bounded << " by their value range; loosest bound / error " << loosest);
 }
 
-TEST_CASE("a block's bound with the cells' widths holds for every cell inside it", "[table][bound]") {
+TEST_CASE("a block's bound with the cells' widths holds for every cell inside it", "[heavy][table][bound]") {
   const testing::RandomSystemOptions options = bounded_options();
   std::mt19937_64 random(77);
   std::size_t blocks = 0;

@@ -445,7 +445,7 @@ TEST_CASE("inversions are counted, the first step is exact, and on_inversion sto
   CHECK(kept.positions[3][2] > 0.0);
 }
 
-TEST_CASE("resting blocks: the FEM holds a soft block above its base, springs let it fold through", "[fem][sim]") {
+TEST_CASE("resting blocks: the FEM holds a soft block above its base, springs let it fold through", "[heavy][fem][sim]") {
   // Issue 10: a 0.1 m cube of 5 kPa tissue and a 2 cm cube of 1 kPa, base fixed, under gravity (semi-implicit Euler,
   // dt auto, damping ratio 0.9), and a 0.1 m cube of 3 kPa, which folds the springs through their base. At 6^3 cells
   // for the test suite's time; docs/simulator.md has the 20^3 runs.
@@ -483,7 +483,7 @@ TEST_CASE("resting blocks: the FEM holds a soft block above its base, springs le
   }
 }
 
-TEST_CASE("dt auto never diverges: seeded scenes over damping, modulus, law, model, loads and integrator", "[sim][stability]") {
+TEST_CASE("dt auto never diverges: seeded scenes over damping, modulus, law, model, loads and integrator", "[heavy][sim][stability]") {
   // Issue 11: forward Euler's automatic step diverged for damping ratios above 1. Every automatic step must either
   // run bounded or be refused before the run (forward Euler without mass or nodal damping, docs/simulator.md).
   std::mt19937_64 rng(1124);

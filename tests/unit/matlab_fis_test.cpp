@@ -659,7 +659,7 @@ TEST_CASE("MATLAB .fis writer: warns naming every field MATLAB cannot hold", "[m
 }
 
 TEST_CASE("MATLAB .fis writer: no loss is silent: a file that reads back computing otherwise carries -Wmatlab-lossy",
-          "[matlab-fis]") {
+          "[heavy][matlab-fis]") {
   // 1,000 random systems with every fmpc feature a .fis cannot hold (units, sample counts, no-fire policies,
   // labels, type-2 footprints of every kind, Nie-Tan, interval constants): where the writer says nothing with
   // matlab-lossy, the written file, read back, computes the same settings and outputs at every probe point of

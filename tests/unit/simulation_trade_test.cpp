@@ -48,7 +48,7 @@ const SimulationTradeRow& row_named(const SimulationTradeResult& result, const s
 
 }  // namespace
 
-TEST_CASE("the simulation trade: the reference has no error, the FEM is closer to it than springs", "[trade][scene]") {
+TEST_CASE("the simulation trade: the reference has no error, the FEM is closer to it than springs", "[heavy][trade][scene]") {
   SimulationTradeOptions options;
   options.models = {TradeModel::SpringsVanGelder, TradeModel::SpringsLloyd, TradeModel::CorotationalFem};
   options.precisions = {Precision::Float, Precision::Double};

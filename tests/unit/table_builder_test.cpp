@@ -195,7 +195,7 @@ TEST_CASE("the issue's liver table: the stated bound holds at its point and on 1
                                  << ", largest found over 1e6 points and local searches " << found);
 }
 
-TEST_CASE("bounds and estimates hold on 1e6 held-out points plus local searches", "[table-builder]") {
+TEST_CASE("bounds and estimates hold on 1e6 held-out points plus local searches", "[heavy][table-builder]") {
   const FuzzySystem source = tipper();
   struct Variant {
     const char* label;

@@ -58,7 +58,7 @@ IntervalSet mass_on_last_sample() {
 
 }  // namespace
 
-TEST_CASE("KM, EKM and EIASC equal the exhaustive switch-point search on adversarial sets", "[type-reduction]") {
+TEST_CASE("KM, EKM and EIASC equal the exhaustive switch-point search on adversarial sets", "[heavy][type-reduction]") {
   // 30,000 sets, 3,000 of each kind of fmpc::testing::AdversarialKind, to 1e-12 of the points' range.
   std::mt19937_64 rng(20260517);
   const int kinds = static_cast<int>(AdversarialKind::Count);
