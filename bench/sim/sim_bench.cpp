@@ -7,8 +7,8 @@
 //   fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only]
 //                  [--cohort PATIENTS]
 //
-// --cohort N: the cohort row's patients (default 1,000; 64 with --quick): the demo scene's block with its probe, one
-// batch (fmpc simulate --patients), aggregate spring-steps/s.
+// --cohort N: the cohort row's patients (default 1,000; 64 with --quick unless --cohort is given): the demo scene's
+// block with its probe, one batch (fmpc simulate --patients), aggregate spring-steps/s.
 // --fem-only: the element rows alone; with --fem-cells N > 52, only the N^3 box on the GPU (for profilers).
 //
 // Every run checks for NaN/Inf every 64 steps (the default of advance), and the time includes that check's
@@ -46,6 +46,7 @@ struct Options {
   int fem_cells = 120;  // the largest FEM box, GPU only: 120^3 cells = 10,368,000 tetrahedra
   bool fem_only = false;
   std::size_t cohort = 1000;  // patients of the demo scene in the cohort row
+  bool cohort_given = false;  // --cohort N also holds with --quick
 };
 
 struct Row {
@@ -381,6 +382,7 @@ bool parse(int argc, char** argv, Options& options) {
       options.min_seconds = std::strtod(argv[++i], nullptr);
     } else if (arg == "--cohort" && i + 1 < argc) {
       options.cohort = static_cast<std::size_t>(std::strtoul(argv[++i], nullptr, 10));
+      options.cohort_given = true;
     } else if (arg == "--fem-only") {
       options.fem_only = true;
     } else if (arg == "--fem-cells" && i + 1 < argc) {
@@ -439,7 +441,7 @@ int main(int argc, char** argv) {
   }
 
   if (have_device && !options.fem_only) {
-    const std::size_t patients = options.quick ? 64 : options.cohort;
+    const std::size_t patients = options.quick && !options.cohort_given ? 64 : options.cohort;
     std::cout << "cohort: " << patients << " patients of the demo scene, each with its own probe\n" << std::flush;
     rows.push_back(cohort_row(patients, options));
   }
