@@ -187,38 +187,21 @@ struct StateView {
   const Real* vz;
 };
 
-// Sum of the spring forces on vertex v, in CSR order (deterministic; no atomics).
-template <typename Real>
-FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s, Real& fx,
-                                 Real& fy, Real& fz) {
+// Sum of the spring forces on vertex v over its CSR entries, in order (deterministic; no atomics); entry(e) gives
+// entry e as a SpringIncidence.
+template <typename Real, typename Entry>
+FMPC_HD void sum_spring_forces(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s, Entry entry,
+                               Real& fx, Real& fy, Real& fz) {
   Real sx = Real(0), sy = Real(0), sz = Real(0);
   const Real x = s.x[v], y = s.y[v], z = s.z[v];
   const Real vx = s.vx[v], vy = s.vy[v], vz = s.vz[v];
-  if (net.incidence != nullptr) {
-    FMPC_UNROLL_GATHER
-    for (int e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
-      const SpringIncidence<Real> r = net.incidence[e];
-      Real f0, f1, f2;
-      spring_force_on_vertex(s.x[r.neighbour] - x, s.y[r.neighbour] - y, s.z[r.neighbour] - z,
-                             s.vx[r.neighbour] - vx, s.vy[r.neighbour] - vy, s.vz[r.neighbour] - vz, r.rest_length,
-                             r.stiffness, r.damping, net.law, f0, f1, f2);
-      sx += f0;
-      sy += f1;
-      sz += f2;
-    }
-    fx = sx;
-    fy = sy;
-    fz = sz;
-    return;
-  }
   FMPC_UNROLL_GATHER
   for (int e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
-    const int spring = net.adjacency_spring[e];
-    const int other = net.adjacency_neighbour[e];
+    const SpringIncidence<Real> r = entry(e);
     Real f0, f1, f2;
-    spring_force_on_vertex(s.x[other] - x, s.y[other] - y, s.z[other] - z, s.vx[other] - vx, s.vy[other] - vy,
-                           s.vz[other] - vz, net.rest_length[spring], net.stiffness[spring],
-                           net.damping ? net.damping[spring] : Real(0), net.law, f0, f1, f2);
+    spring_force_on_vertex(s.x[r.neighbour] - x, s.y[r.neighbour] - y, s.z[r.neighbour] - z, s.vx[r.neighbour] - vx,
+                           s.vy[r.neighbour] - vy, s.vz[r.neighbour] - vz, r.rest_length, r.stiffness, r.damping,
+                           net.law, f0, f1, f2);
     sx += f0;
     sy += f1;
     sz += f2;
@@ -226,6 +209,25 @@ FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, cons
   fx = sx;
   fy = sy;
   fz = sz;
+}
+
+// Sum of the spring forces on vertex v, in CSR order: from the incidence records where there are some, else read
+// through the spring indices (the same values, so the same bits).
+template <typename Real>
+FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s, Real& fx,
+                                 Real& fy, Real& fz) {
+  if (net.incidence != nullptr) {
+    sum_spring_forces(v, net, s, [&](int e) { return net.incidence[e]; }, fx, fy, fz);
+    return;
+  }
+  sum_spring_forces(
+      v, net, s,
+      [&](int e) {
+        const int spring = net.adjacency_spring[e];
+        return SpringIncidence<Real>{net.adjacency_neighbour[e], net.rest_length[spring], net.stiffness[spring],
+                                     net.damping ? net.damping[spring] : Real(0)};
+      },
+      fx, fy, fz);
 }
 
 }  // namespace fmpc::kernels
