@@ -3,6 +3,9 @@
 // only its own entries; each element thread writes only its own corners. A run gives the same bits every time and,
 // compiled with --fmad=false, the same bits as the CPU loop. The per-vertex kernels are templates over the force
 // model (GatherKind -> a struct of kernels/internal_force_math.h), dispatched once per launch.
+#include <cooperative_groups.h>
+
+#include <algorithm>
 #include <type_traits>
 
 #include "runtime/gpu/gpu_launch.h"
@@ -100,15 +103,16 @@ __device__ kernels::StateView<Real> read_only(const MutableStateView<Real>& s) {
   return {s.x, s.y, s.z, s.vx, s.vy, s.vz};
 }
 
-template <typename Real, GatherKind K>
-__global__ void fused_step_kernel(FusedStepArguments<Real> a) {
-  const int v = vertex_index();
-  if (v >= a.vertex_count) return;
+// One vertex's forward or semi-implicit Euler step from `in` into `out`: the fused kernel's body, and the persistent
+// kernel's for each vertex it owns (the same function, so the same bits).
+template <typename Real, typename Forces>
+__device__ void fused_vertex_step(const FusedStepArguments<Real>& a, const Forces& forces, int v,
+                                  const kernels::StateView<Real>& in, const MutableStateView<Real>& out) {
   const Real h = step_of(a.step, v);
   Real ax, ay, az;
-  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), a.in, a.loads, ax, ay, az);
-  Real x = a.in.x[v], y = a.in.y[v], z = a.in.z[v];
-  Real vx = a.in.vx[v], vy = a.in.vy[v], vz = a.in.vz[v];
+  kernels::vertex_acceleration(v, forces, in, a.loads, ax, ay, az);
+  Real x = in.x[v], y = in.y[v], z = in.z[v];
+  Real vx = in.vx[v], vy = in.vy[v], vz = in.vz[v];
   if (a.scheme == FusedScheme::ForwardEuler) {
     kernels::forward_euler_update(x, vx, ax, h);
     kernels::forward_euler_update(y, vy, ay, h);
@@ -118,12 +122,19 @@ __global__ void fused_step_kernel(FusedStepArguments<Real> a) {
     kernels::semi_implicit_euler_update(y, vy, ay, h);
     kernels::semi_implicit_euler_update(z, vz, az, h);
   }
-  a.out.x[v] = x;
-  a.out.y[v] = y;
-  a.out.z[v] = z;
-  a.out.vx[v] = vx;
-  a.out.vy[v] = vy;
-  a.out.vz[v] = vz;
+  out.x[v] = x;
+  out.y[v] = y;
+  out.z[v] = z;
+  out.vx[v] = vx;
+  out.vy[v] = vy;
+  out.vz[v] = vz;
+}
+
+template <typename Real, GatherKind K>
+__global__ void fused_step_kernel(FusedStepArguments<Real> a) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count) return;
+  fused_vertex_step(a, forces_of<Real, K>(a.model), v, a.in, a.out);
 }
 
 template <typename Real, GatherKind K>
@@ -206,14 +217,27 @@ __global__ void runge_kutta4_stage_kernel(RungeKutta4Arguments<Real> a, int stag
 }
 
 template <typename Real>
+__device__ bool non_finite_vertex(const kernels::StateView<Real>& s, int v) {
+  // Each value on its own: a sum of large finite values could overflow and be mistaken for one.
+  return !(isfinite(s.x[v]) && isfinite(s.y[v]) && isfinite(s.z[v]) && isfinite(s.vx[v]) && isfinite(s.vy[v]) &&
+           isfinite(s.vz[v]));
+}
+
+template <typename Real>
 __global__ void find_non_finite_kernel(kernels::StateView<Real> s, int vertex_count, int* first_vertex) {
   const int v = vertex_index();
   if (v >= vertex_count) return;
-  // Each value on its own: a sum of large finite values could overflow and be mistaken for one.
-  if (!(isfinite(s.x[v]) && isfinite(s.y[v]) && isfinite(s.z[v]) && isfinite(s.vx[v]) && isfinite(s.vy[v]) &&
-        isfinite(s.vz[v]))) {
-    atomicMin(first_vertex, v);
-  }
+  if (non_finite_vertex(s, v)) atomicMin(first_vertex, v);
+}
+
+// Element e counted into its scene's inversion count and first inverted element where it is inverted at s.
+template <typename Real>
+__device__ void count_if_inverted(const int* corners, int e, const int* element_scene, const kernels::StateView<Real>& s,
+                                  unsigned int* count, int* first) {
+  if (!kernels::tetrahedron_inverted(e, corners, s.x, s.y, s.z)) return;
+  const int scene = element_scene ? element_scene[e] : 0;
+  atomicAdd(count + scene, 1u);
+  atomicMin(first + scene, e);
 }
 
 template <typename Real>
@@ -318,10 +342,11 @@ __global__ void energy_final_kernel(const double* partial, double* result) {
   if (threadIdx.x == 0) *result = total;
 }
 
+// Probe entry i before or after the step at `offset` in the chunk, on `state`: the probe kernel's body, and the
+// persistent kernel's for the probe vertices it owns.
 template <typename Real>
-__global__ void apply_probe_kernel(ProbeArguments<Real> a, int offset, bool before_step) {
-  const int i = vertex_index();
-  if (i >= a.count) return;
+__device__ void apply_probe_entry(const ProbeArguments<Real>& a, int i, int offset, bool before_step,
+                                  const MutableStateView<Real>& state) {
   const int v = a.vertices[i];
   const ProbeScene p = a.scenes[a.entry_scene[i]];
   const double t = static_cast<double>(*a.step_base + static_cast<unsigned long long>(offset + (before_step ? 0 : 1))) * p.h;
@@ -335,9 +360,204 @@ __global__ void apply_probe_kernel(ProbeArguments<Real> a, int offset, bool befo
     a.force.z[v] = static_cast<Real>((based ? a.base_force_z[i] : 0.0) + share * p.target_z / count);
     return;
   }
-  kernels::probe_prescribed_state(a.start_x[i], p.target_x, t, p.ramp_time, before_step, a.state.x[v], a.state.vx[v]);
-  kernels::probe_prescribed_state(a.start_y[i], p.target_y, t, p.ramp_time, before_step, a.state.y[v], a.state.vy[v]);
-  kernels::probe_prescribed_state(a.start_z[i], p.target_z, t, p.ramp_time, before_step, a.state.z[v], a.state.vz[v]);
+  kernels::probe_prescribed_state(a.start_x[i], p.target_x, t, p.ramp_time, before_step, state.x[v], state.vx[v]);
+  kernels::probe_prescribed_state(a.start_y[i], p.target_y, t, p.ramp_time, before_step, state.y[v], state.vy[v]);
+  kernels::probe_prescribed_state(a.start_z[i], p.target_z, t, p.ramp_time, before_step, state.z[v], state.vz[v]);
+}
+
+template <typename Real>
+__global__ void apply_probe_kernel(ProbeArguments<Real> a, int offset, bool before_step) {
+  const int i = vertex_index();
+  if (i >= a.count) return;
+  apply_probe_entry(a, i, offset, before_step, a.state);
+}
+
+// A vertex's internal forces summed beforehand by its lanes (the persistent kernel): what vertex_acceleration reads
+// through `gather`.
+template <typename Real>
+struct GatheredForces {
+  Real fx, fy, fz;
+  __device__ void gather(int, const kernels::StateView<Real>&, Real& x, Real& y, Real& z) const {
+    x = fx;
+    y = fy;
+    z = fz;
+  }
+};
+
+// `lanes` consecutive threads of a warp (mask) share a vertex: lane l computes the terms of entries begin + l,
+// begin + l + lanes, ..., and every lane adds all terms in entry order from the lanes' shuffles. The sums have the
+// sequential loop's order, hence its bits (kernels::sum_spring_forces, kernels::gather_corner_force), while a
+// vertex's loads and square roots run side by side: one thread per vertex walks a chain of dependent L2 loads per
+// entry, which bounds a small mesh's step, not the bandwidth.
+template <typename Real, typename Term>
+__device__ void lane_ordered_sum(unsigned mask, int lane, int lanes, int begin, int end, Term term, Real& fx, Real& fy,
+                                 Real& fz) {
+  Real sx = Real(0), sy = Real(0), sz = Real(0);
+  for (int base = begin; base < end; base += lanes) {
+    Real t0 = Real(0), t1 = Real(0), t2 = Real(0);
+    if (base + lane < end) term(base + lane, t0, t1, t2);
+    const int count = min(lanes, end - base);
+    for (int j = 0; j < count; ++j) {
+      sx += __shfl_sync(mask, t0, j, lanes);
+      sy += __shfl_sync(mask, t1, j, lanes);
+      sz += __shfl_sync(mask, t2, j, lanes);
+    }
+  }
+  fx = sx;
+  fy = sy;
+  fz = sz;
+}
+
+// What a vertex's lane keeps in registers for the whole launch (the CSR never changes during a run): its vertex's
+// spring and corner ranges and its own first spring record. Every step then starts its loads at the neighbours'
+// positions instead of behind two dependent loads of read-only data.
+template <typename Real>
+struct LaneCache {
+  int spring_begin = 0, spring_end = 0;
+  int corner_begin = 0, corner_end = 0;
+  kernels::SpringIncidence<Real> first{};  // entry spring_begin + lane, where there is one
+};
+
+template <typename Real, GatherKind K>
+__device__ LaneCache<Real> lane_cache(const ForceModelView<Real>& m, int v, int lane) {
+  LaneCache<Real> c;
+  if constexpr (K != GatherKind::Elements) {
+    const kernels::SpringNetworkView<Real>& net = m.springs;
+    c.spring_begin = net.adjacency_offset[v];
+    c.spring_end = net.adjacency_offset[v + 1];
+    const int e = c.spring_begin + lane;
+    if (e < c.spring_end) c.first = net.incidence != nullptr ? net.incidence[e] : kernels::incidence_from_arrays(net, e);
+  }
+  if constexpr (K != GatherKind::Springs) {
+    c.corner_begin = m.corners.offset[v];
+    c.corner_end = m.corners.offset[v + 1];
+  }
+  return c;
+}
+
+// The model's internal forces on vertex v from its lanes, in the order of forces_of<Real, K>'s gather: springs,
+// then corners (SpringAndElementForces adds the corner sum to the spring sum).
+template <typename Real, GatherKind K>
+__device__ GatheredForces<Real> lanes_gather(const ForceModelView<Real>& m, int v, const LaneCache<Real>& cache,
+                                             const kernels::StateView<Real>& s, unsigned mask, int lane, int lanes) {
+  GatheredForces<Real> f{Real(0), Real(0), Real(0)};
+  if constexpr (K != GatherKind::Elements) {
+    const kernels::SpringNetworkView<Real>& net = m.springs;
+    const Real x = s.x[v], y = s.y[v], z = s.z[v], vx = s.vx[v], vy = s.vy[v], vz = s.vz[v];
+    const int first = cache.spring_begin + lane;
+    lane_ordered_sum(
+        mask, lane, lanes, cache.spring_begin, cache.spring_end,
+        [&](int e, Real& t0, Real& t1, Real& t2) {
+          const kernels::SpringIncidence<Real> r =
+              e == first ? cache.first
+                         : (net.incidence != nullptr ? net.incidence[e] : kernels::incidence_from_arrays(net, e));
+          kernels::entry_spring_force(net, s, r, x, y, z, vx, vy, vz, t0, t1, t2);
+        },
+        f.fx, f.fy, f.fz);
+  }
+  if constexpr (K != GatherKind::Springs) {
+    Real cx, cy, cz;
+    lane_ordered_sum(
+        mask, lane, lanes, cache.corner_begin, cache.corner_end,
+        [&](int k, Real& t0, Real& t1, Real& t2) {
+          const Real* corner = m.corners.force + 3 * k;
+          t0 = corner[0];
+          t1 = corner[1];
+          t2 = corner[2];
+        },
+        cx, cy, cz);
+    if constexpr (K == GatherKind::Elements) {
+      f = {cx, cy, cz};
+    } else {
+      f.fx += cx;
+      f.fy += cy;
+      f.fz += cz;
+    }
+  }
+  return f;
+}
+
+// launch_persistent_euler's kernel (gpu_launch.h): `steps` steps, a.lanes threads per vertex (all threads share the
+// element pass with a grid stride), a grid barrier after each pass whose writes other threads read. Lane 0 of a
+// vertex updates it and applies its probe entry. Plain loads and stores: the barrier orders them at device scope,
+// and nothing here reads through the non-coherent read-only path.
+// State buffer 0 or 1 by selection: indexing the kernel parameter's array with a run-time index would copy it to
+// local memory.
+template <typename Real>
+__device__ MutableStateView<Real> buffer(const PersistentEulerArguments<Real>& a, int parity) {
+  return parity == 0 ? a.state[0] : a.state[1];
+}
+
+// Blocks per multiprocessor the persistent kernel is compiled for (registers per thread <= 65536 / (256 x this)),
+// hence how many lanes per vertex fit a mesh. Unbounded, the float springs kernel takes 102 registers (2 blocks: a
+// 9,261-vertex mesh gets 4 lanes); bounded to 3 blocks it takes 80 with 24 bytes of spills and gets 8 lanes (290
+// blocks), which measured 7.4 us per step against 9.1 with 4 (H100). Bounding it to 5 blocks (16 lanes) spills 240
+// bytes; the element pass spills already at 80 registers (ptxas -v), so the kinds with elements keep 2 blocks.
+template <typename Real, GatherKind K>
+struct PersistentOccupancy {
+  static constexpr bool springs_only = K == GatherKind::Springs;
+  static constexpr int min_blocks = std::is_same_v<Real, float> ? (springs_only ? 3 : 2) : (springs_only ? 2 : 1);
+};
+
+template <typename Real, GatherKind K>
+__global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real, K>::min_blocks))
+    persistent_euler_kernel(PersistentEulerArguments<Real> a) {
+  cooperative_groups::grid_group grid = cooperative_groups::this_grid();
+  const int thread = vertex_index();
+  const int stride = static_cast<int>(gridDim.x) * static_cast<int>(blockDim.x);
+  const int lanes = a.lanes;
+  const int lane = thread % lanes;
+  const int warp_lane = static_cast<int>(threadIdx.x) % 32;
+  const unsigned mask = lanes == 32 ? 0xffffffffu : ((1u << lanes) - 1u) << (warp_lane - warp_lane % lanes);
+  const int n = a.step.vertex_count;
+  const bool probed = a.probe_entry != nullptr;
+  // One vertex per `lanes` threads: the launch has blocks * 256 >= lanes * n threads.
+  const int v = thread / lanes;
+  const bool owner = v < n;
+  const LaneCache<Real> cache = owner ? lane_cache<Real, K>(a.step.model, v, lane) : LaneCache<Real>{};
+  const int probe_entry = owner && probed ? a.probe_entry[v] : -1;
+  int parity = a.first_parity;
+  const PersistentChecks& c = a.checks;
+  if (c.first_non_finite != nullptr) {
+    // Reset here, published by the first step's barrier, counted after the last.
+    if (thread == 0) *c.first_non_finite = n;
+    for (int scene = thread; scene < c.scene_count; scene += stride) {
+      c.inverted_count[scene] = 0u;
+      c.inverted_first[scene] = c.element_count;
+    }
+  }
+  if (probed) {
+    for (int v = thread; v < n; v += stride)
+      if (a.probe_entry[v] >= 0) apply_probe_entry(a.probe, a.probe_entry[v], 0, true, buffer(a, parity));
+    grid.sync();
+  }
+  for (int step = 0; step < a.steps; ++step) {
+    const MutableStateView<Real> out = buffer(a, 1 - parity);
+    const kernels::StateView<Real> in = read_only(buffer(a, parity));
+    if constexpr (K != GatherKind::Springs) {
+      for (int e = thread; e < a.step.model.field.count; e += stride)
+        kernels::tetrahedron_corner_forces(e, a.step.model.field, in, a.step.model.corner_force);
+      grid.sync();
+    }
+    if (owner) {
+      const GatheredForces<Real> forces = lanes_gather<Real, K>(a.step.model, v, cache, in, mask, lane, lanes);
+      if (lane == 0) {
+        fused_vertex_step(a.step, forces, v, in, out);
+        if (probe_entry >= 0) {
+          apply_probe_entry(a.probe, probe_entry, step, false, out);
+          if (step + 1 < a.steps) apply_probe_entry(a.probe, probe_entry, step + 1, true, out);
+        }
+      }
+    }
+    grid.sync();
+    parity = 1 - parity;
+  }
+  if (c.first_non_finite == nullptr) return;
+  const kernels::StateView<Real> end = read_only(buffer(a, parity));
+  for (int v = thread; v < n; v += stride)
+    if (non_finite_vertex(end, v)) atomicMin(c.first_non_finite, v);
+  for (int e = thread; e < c.element_count; e += stride)
+    count_if_inverted(c.corners, e, c.element_scene, end, c.inverted_count, c.inverted_first);
 }
 
 template <typename Real>
@@ -528,10 +748,7 @@ __global__ void count_inverted_kernel(const int* corners, int element_count, con
                                       kernels::StateView<Real> s, unsigned int* count, int* first) {
   const int e = vertex_index();
   if (e >= element_count) return;
-  if (!kernels::tetrahedron_inverted(e, corners, s.x, s.y, s.z)) return;
-  const int scene = element_scene ? element_scene[e] : 0;
-  atomicAdd(count + scene, 1u);
-  atomicMin(first + scene, e);
+  count_if_inverted(corners, e, element_scene, s, count, first);
 }
 
 // Partial sums of first . second (and of third . fourth when third is not null) over [0, count), in the fixed
@@ -663,6 +880,43 @@ cudaError_t launch_fused(const FusedStepArguments<Real>& arguments, cudaStream_t
     fused_step_kernel<Real, decltype(kind)::value>
         <<<blocks_for(arguments.vertex_count), kThreadsPerBlock, 0, stream>>>(arguments);
     return cudaGetLastError();
+  });
+}
+
+template <typename Real>
+cudaError_t persistent_block_limit(GatherKind kind, int& blocks) {
+  blocks = 0;
+  int device = 0, cooperative = 0, multiprocessors = 0;
+  cudaError_t status = cudaGetDevice(&device);
+  if (status == cudaSuccess) status = cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device);
+  if (status == cudaSuccess)
+    status = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
+  if (status != cudaSuccess || cooperative == 0) return status;
+  return with_kind(kind, [&](auto k) {
+    int per_multiprocessor = 0;
+    const cudaError_t occupancy = cudaOccupancyMaxActiveBlocksPerMultiprocessor(
+        &per_multiprocessor, persistent_euler_kernel<Real, decltype(k)::value>, kPersistentThreads, 0);
+    blocks = per_multiprocessor * multiprocessors;
+    return occupancy;
+  });
+}
+
+template <typename Real>
+cudaError_t launch_persistent(const PersistentEulerArguments<Real>& arguments, cudaStream_t stream) {
+  if (arguments.step.vertex_count <= 0 || arguments.steps <= 0) return cudaSuccess;
+  if (arguments.blocks <= 0 || arguments.lanes <= 0 || arguments.lanes > 32 ||
+      (arguments.lanes & (arguments.lanes - 1)) != 0 || kPersistentThreads % arguments.lanes != 0 ||
+      static_cast<long long>(arguments.blocks) * kPersistentThreads <
+          static_cast<long long>(arguments.lanes) * arguments.step.vertex_count) {
+    return cudaErrorInvalidValue;
+  }
+  const unsigned blocks = static_cast<unsigned>(arguments.blocks);
+  return with_kind(arguments.step.model.kind, [&](auto kind) {
+    PersistentEulerArguments<Real> copy = arguments;
+    void* parameters[] = {&copy};
+    return cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(persistent_euler_kernel<Real, decltype(kind)::value>),
+                                       dim3(blocks), dim3(kPersistentThreads), parameters, 0,
+                                       stream);
   });
 }
 
@@ -932,6 +1186,15 @@ cudaError_t launch_cg_direction(const ImplicitArguments<float>& arguments, cudaS
 }
 cudaError_t launch_cg_direction(const ImplicitArguments<double>& arguments, cudaStream_t stream) {
   return launch_direction(arguments, stream);
+}
+cudaError_t persistent_euler_block_limit(GatherKind kind, bool double_precision, int& blocks) {
+  return double_precision ? persistent_block_limit<double>(kind, blocks) : persistent_block_limit<float>(kind, blocks);
+}
+cudaError_t launch_persistent_euler(const PersistentEulerArguments<float>& arguments, cudaStream_t stream) {
+  return launch_persistent(arguments, stream);
+}
+cudaError_t launch_persistent_euler(const PersistentEulerArguments<double>& arguments, cudaStream_t stream) {
+  return launch_persistent(arguments, stream);
 }
 cudaError_t launch_implicit_finish(const ImplicitArguments<float>& arguments, cudaStream_t stream) {
   return launch_finish(arguments, stream);

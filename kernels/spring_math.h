@@ -187,8 +187,27 @@ struct StateView {
   const Real* vz;
 };
 
+// CSR entry e read through the spring indices (what the incidence records hold, for networks without them).
+template <typename Real>
+FMPC_HD SpringIncidence<Real> incidence_from_arrays(const SpringNetworkView<Real>& net, int e) {
+  const int spring = net.adjacency_spring[e];
+  return {net.adjacency_neighbour[e], net.rest_length[spring], net.stiffness[spring],
+          net.damping ? net.damping[spring] : Real(0)};
+}
+
+// The force of entry r's spring on a vertex at (x, v) = (x, y, z, vx, vy, vz): one term of the gather below.
+template <typename Real>
+FMPC_HD void entry_spring_force(const SpringNetworkView<Real>& net, const StateView<Real>& s,
+                                const SpringIncidence<Real>& r, Real x, Real y, Real z, Real vx, Real vy, Real vz,
+                                Real& fx, Real& fy, Real& fz) {
+  spring_force_on_vertex(s.x[r.neighbour] - x, s.y[r.neighbour] - y, s.z[r.neighbour] - z, s.vx[r.neighbour] - vx,
+                         s.vy[r.neighbour] - vy, s.vz[r.neighbour] - vz, r.rest_length, r.stiffness, r.damping,
+                         net.law, fx, fy, fz);
+}
+
 // Sum of the spring forces on vertex v over its CSR entries, in order (deterministic; no atomics); entry(e) gives
-// entry e as a SpringIncidence.
+// entry e as a SpringIncidence. The persistent CUDA kernel computes the terms on several threads and adds them in
+// this order on one (kernels/simulation_step.cu), so its sums have these bits.
 template <typename Real, typename Entry>
 FMPC_HD void sum_spring_forces(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s, Entry entry,
                                Real& fx, Real& fy, Real& fz) {
@@ -197,11 +216,8 @@ FMPC_HD void sum_spring_forces(int v, const SpringNetworkView<Real>& net, const 
   const Real vx = s.vx[v], vy = s.vy[v], vz = s.vz[v];
   FMPC_UNROLL_GATHER
   for (int e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
-    const SpringIncidence<Real> r = entry(e);
     Real f0, f1, f2;
-    spring_force_on_vertex(s.x[r.neighbour] - x, s.y[r.neighbour] - y, s.z[r.neighbour] - z, s.vx[r.neighbour] - vx,
-                           s.vy[r.neighbour] - vy, s.vz[r.neighbour] - vz, r.rest_length, r.stiffness, r.damping,
-                           net.law, f0, f1, f2);
+    entry_spring_force(net, s, entry(e), x, y, z, vx, vy, vz, f0, f1, f2);
     sx += f0;
     sy += f1;
     sz += f2;
@@ -220,14 +236,7 @@ FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, cons
     sum_spring_forces(v, net, s, [&](int e) { return net.incidence[e]; }, fx, fy, fz);
     return;
   }
-  sum_spring_forces(
-      v, net, s,
-      [&](int e) {
-        const int spring = net.adjacency_spring[e];
-        return SpringIncidence<Real>{net.adjacency_neighbour[e], net.rest_length[spring], net.stiffness[spring],
-                                     net.damping ? net.damping[spring] : Real(0)};
-      },
-      fx, fy, fz);
+  sum_spring_forces(v, net, s, [&](int e) { return incidence_from_arrays(net, e); }, fx, fy, fz);
 }
 
 }  // namespace fmpc::kernels

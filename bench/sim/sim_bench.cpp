@@ -1,5 +1,6 @@
 // Simulation benchmark: steps per second of the CPU backend (1 and N threads) and the CUDA backend (float/double,
-// with and without CUDA graphs, every GPU integrator), on hanging boxes from ~1k to ~1M springs, plus a batch of
+// one launch per kernel, CUDA graphs, or one persistent launch per chunk (column `graphs`: no, yes, persistent),
+// every GPU integrator), on hanging boxes from ~1k to ~1M springs, plus a batch of
 // small scenes in one launch against the same scenes run one by one, a cohort of demo-scene patients with their
 // probes in one launch; then the co-rotational FEM (tetrahedron-steps/s)
 // from ~8k to ~10M tetrahedra and springs with the volume term. Writes a CSV and prints a table.
@@ -191,8 +192,25 @@ Row cpu_row(const SimulationSetup& base, unsigned threads, Precision precision, 
   return row;
 }
 
-Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, bool graphs,
-            const Options& options) {
+// How the GPU rows launch their steps: one launch per kernel, CUDA graphs, or the persistent cooperative launch
+// (GpuOptions::persistent; only where the mesh qualifies, else the row says graphs).
+enum class Launch { Kernels, Graphs, Persistent };
+
+const char* launch_name(Launch launch) {
+  return launch == Launch::Kernels ? "no" : launch == Launch::Graphs ? "yes" : "persistent";
+}
+
+gpu::GpuOptions gpu_options_for(Launch launch) {
+  gpu::GpuOptions options;
+  options.use_graphs = launch != Launch::Kernels;
+  options.persistent = launch == Launch::Persistent;
+  return options;
+}
+
+// lanes: GpuOptions::persistent_lanes (0: automatic); check_every: advance's NaN/Inf check interval (0: at the end
+// of each timed chunk only, to separate the checks' cost from the steps').
+Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, Launch launch,
+            const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery) {
   SimulationSetup setup = base;
   setup.precision = precision;
   setup.integrator = integrator;
@@ -206,15 +224,19 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   row.backend = "cuda";
   row.precision = precision_name(precision);
   row.integrator = to_string(integrator);
-  row.graphs = graphs ? "yes" : "no";
   row.vertices = setup.rest_positions.size();
   row.springs = setup.springs.size();
-  gpu::GpuOptions gpu_options;
-  gpu_options.use_graphs = graphs;
   DiagnosticList diagnostics;
+  gpu::GpuOptions gpu_options = gpu_options_for(launch);
+  gpu_options.persistent_lanes = lanes;
   const auto simulation = gpu::GpuSimulation::create(setup, gpu_options, diagnostics);
-  if (!simulation ||
-      !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics); }, 64, options.min_seconds, row)) {
+  row.graphs = launch_name(simulation && launch == Launch::Persistent && !simulation->persistent_launch()
+                               ? Launch::Graphs
+                               : launch);
+  if (lanes > 0 && launch == Launch::Persistent) row.graphs += " lanes " + std::to_string(lanes);
+  if (check_every != kCheckEvery) row.graphs += check_every == 0 ? " checks per chunk" : " checks every " + std::to_string(check_every);
+  if (!simulation || !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics, check_every); }, 64,
+                                 options.min_seconds, row)) {
     row.status = failure_text(diagnostics);
   }
   return row;
@@ -246,7 +268,7 @@ std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, c
     row.springs = springs;
     DiagnosticList diagnostics;
     if (batched) {
-      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu_options_for(Launch::Graphs), diagnostics);
       if (!batch ||
           !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, row)) {
         row.status = failure_text(diagnostics);
@@ -254,7 +276,7 @@ std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, c
     } else {
       std::vector<std::unique_ptr<gpu::GpuSimulation>> singles;
       for (const auto& scene : scenes) {
-        singles.push_back(gpu::GpuSimulation::create(scene, diagnostics));
+        singles.push_back(gpu::GpuSimulation::create(scene, gpu_options_for(Launch::Graphs), diagnostics));
         if (!singles.back()) break;
       }
       const auto advance_all = [&](std::size_t n) {
@@ -274,7 +296,7 @@ std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, c
 // 0.9, float) for `count` patients with Young's modulus spread over 5 to 40 kPa, each pressed 4 mm over 1 s by its
 // own displacement probe on the top face's centre vertex and its 4 neighbours, all at the smallest automatic step:
 // what `fmpc simulate SCENE --patients FILE` runs in one launch (issue 13: 5e10 spring-steps/s at 1,000 patients).
-Row cohort_row(std::size_t count, const Options& options) {
+std::vector<Row> cohort_rows(std::size_t count, const Options& options) {
   std::vector<SimulationSetup> patients;
   BoxSpec box;
   box.cells_x = box.cells_y = 8;
@@ -321,14 +343,21 @@ Row cohort_row(std::size_t count, const Options& options) {
   }
   if (patients.size() != count) {
     row.status = failure_text(diagnostics);
-    return row;
+    return {row};
   }
-  const auto batch = gpu::GpuBatchSimulation::create(patients, gpu::GpuOptions{}, diagnostics);
-  if (!batch ||
-      !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, row)) {
-    row.status = failure_text(diagnostics);
+  std::vector<Row> rows;
+  for (const Launch launch : {Launch::Graphs, Launch::Persistent}) {
+    const auto batch = gpu::GpuBatchSimulation::create(patients, gpu_options_for(launch), diagnostics);
+    if (launch == Launch::Persistent && batch && !batch->persistent_launch()) continue;  // too large for one grid
+    Row timed = row;
+    timed.graphs = launch_name(launch);
+    if (!batch ||
+        !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, timed)) {
+      timed.status = failure_text(diagnostics);
+    }
+    rows.push_back(timed);
   }
-  return row;
+  return rows;
 }
 
 std::string format(double value, int precision) {
@@ -407,8 +436,9 @@ int main(int argc, char** argv) {
   const bool have_device = gpu::cuda_device_available(device);
   std::cout << "CPU threads: " << threads << "; CUDA: " << (have_device ? device : "skipped (" + device + ")") << "\n";
 
-  // cells^3 boxes, 3n(n+1)^2 + 3n^2(n+1) + n^3 springs: 5 -> 1,115, 11 -> 10,439, 24 -> 102,024, 52 -> 1,008,748.
-  std::vector<int> sizes = options.quick ? std::vector<int>{5, 11} : std::vector<int>{5, 11, 24, 52};
+  // cells^3 boxes, 3n(n+1)^2 + 3n^2(n+1) + n^3 springs: 5 -> 1,115, 11 -> 10,439, 20 -> 59,660 (9,261 vertices, the
+  // issue 13 small mesh), 24 -> 102,024, 52 -> 1,008,748.
+  std::vector<int> sizes = options.quick ? std::vector<int>{5, 11, 20} : std::vector<int>{5, 11, 20, 24, 52};
   if (options.fem_only) sizes.clear();
   std::vector<Row> rows;
   for (const int cells : sizes) {
@@ -423,12 +453,18 @@ int main(int argc, char** argv) {
     }
     if (!have_device) continue;
     for (const Precision precision : {Precision::Float, Precision::Double}) {
-      for (const bool graphs : {false, true}) {
-        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, graphs, options));
+      for (const Launch launch : {Launch::Kernels, Launch::Graphs, Launch::Persistent})
+        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, launch, options));
+      // The small mesh of issue 13 (300,000 steps/s): threads per vertex, and the checks' share.
+      if (cells == 20 && precision == Precision::Float) {
+        for (const int lanes : {1, 4, 8, 32})
+          rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Persistent, options, lanes));
+        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Persistent, options, 0, 0));
+        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0, 0));
       }
       for (const Integrator integrator :
            {Integrator::ForwardEuler, Integrator::VelocityVerlet, Integrator::RungeKutta4}) {
-        rows.push_back(gpu_row(base, precision, integrator, true, options));
+        rows.push_back(gpu_row(base, precision, integrator, Launch::Graphs, options));
       }
     }
   }
@@ -443,7 +479,7 @@ int main(int argc, char** argv) {
   if (have_device && !options.fem_only) {
     const std::size_t patients = options.quick && !options.cohort_given ? 64 : options.cohort;
     std::cout << "cohort: " << patients << " patients of the demo scene, each with its own probe\n" << std::flush;
-    rows.push_back(cohort_row(patients, options));
+    for (Row& row : cohort_rows(patients, options)) rows.push_back(row);
   }
 
   // The force models with an element pass. CPU rows up to 52^3 cells (843,648 tetrahedra); the largest box on the
@@ -476,8 +512,11 @@ int main(int argc, char** argv) {
       }
       if (!have_device) continue;
       for (const Precision precision : {Precision::Float, Precision::Double})
-        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, true, options));
-      if (!largest && cells == 24) rows.push_back(gpu_row(base, Precision::Float, Integrator::ImplicitEuler, true, options));
+        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options));
+      if (!largest && cells <= 24)
+        rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Persistent, options));
+      if (!largest && cells == 24)
+        rows.push_back(gpu_row(base, Precision::Float, Integrator::ImplicitEuler, Launch::Graphs, options));
     }
   }
 

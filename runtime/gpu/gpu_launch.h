@@ -164,6 +164,49 @@ cudaError_t launch_apply_probe(const ProbeArguments<float>& arguments, int offse
 cudaError_t launch_apply_probe(const ProbeArguments<double>& arguments, int offset, bool before_step,
                                cudaStream_t stream);
 
+// Forward or semi-implicit Euler for `steps` steps in one cooperative launch (issue 13, small meshes): the grid stays
+// resident and a grid-wide barrier separates the steps instead of a kernel boundary, which removes the launch gaps.
+// A small mesh's step is otherwise bound by one thread's chain of dependent loads over its vertex's entries, so
+// `lanes` threads share a vertex: they compute its springs' (and corners') terms side by side and add them in CSR
+// order, then lane 0 runs the fused step's per-vertex function and the probe's per-entry function in the per-step
+// order (probe before the step, element pass, gather and update, probe after): the results are bitwise those of
+// launch_fused_step with launch_apply_probe around it. The probe before step k + 1 is applied right after the probe after step k by the
+// vertex's own thread, before the barrier that publishes the step: one barrier per step for springs, two with
+// elements (the element pass reads the state the gather then reads its corner forces of). No strain table (its
+// lookup needs a third barrier; those runs take the per-step path).
+// The checks advance makes after a chunk, made by the persistent kernel at its end on the final state (one
+// download then instead of two kernels and their copies): what launch_find_non_finite and launch_count_inverted
+// compute, with their presets written by the kernel itself. first_non_finite null: no checks.
+struct PersistentChecks {
+  int* first_non_finite;
+  const int* corners;  // 4 per element
+  int element_count;
+  const int* element_scene;  // null: every element is scene 0's
+  int scene_count;
+  unsigned int* inverted_count;  // per scene
+  int* inverted_first;           // per scene
+};
+
+template <typename Real>
+struct PersistentEulerArguments {
+  FusedStepArguments<Real> step;   // in and out are ignored: the kernel alternates state[0] and state[1]
+  MutableStateView<Real> state[2];
+  int first_parity;                // the buffer holding the state at the chunk's start
+  int steps;
+  ProbeArguments<Real> probe;      // count 0: no probe; probe.state is ignored (the kernel passes the buffer)
+  const int* probe_entry;          // per vertex: its probe entry, -1 for none; null when probe.count is 0
+  int blocks;                      // grid size: at most persistent_euler_block_limit's
+  int lanes;                       // threads per vertex: 1, 2, 4, 8, 16 or 32 (blocks * 256 >= lanes * vertices)
+  PersistentChecks checks;         // the last piece of a chunk
+};
+constexpr int kPersistentThreads = 256;  // per block
+// The most blocks of kPersistentThreads threads a persistent launch may use, every block resident at once
+// (cudaOccupancyMaxActiveBlocksPerMultiprocessor x multiprocessors); 0 where the device cannot launch cooperative
+// kernels. Asked once per simulation; a launch with more blocks fails (cudaErrorCooperativeLaunchTooLarge).
+cudaError_t persistent_euler_block_limit(GatherKind kind, bool double_precision, int& blocks);
+cudaError_t launch_persistent_euler(const PersistentEulerArguments<float>& arguments, cudaStream_t stream);
+cudaError_t launch_persistent_euler(const PersistentEulerArguments<double>& arguments, cudaStream_t stream);
+
 // k(strain) for every spring from the positions in `state` (kernels/strain_table_math.h), before every step.
 template <typename Real>
 struct StrainStiffnessArguments {

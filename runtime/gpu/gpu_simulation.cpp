@@ -73,6 +73,36 @@ class DeviceArray {
   std::size_t size_ = 0;
 };
 
+// Page-locked host memory owned by one object (device-to-host copies into it are asynchronous); freed on destruction.
+template <typename T>
+class PinnedArray {
+ public:
+  PinnedArray() = default;
+  PinnedArray(const PinnedArray&) = delete;
+  PinnedArray& operator=(const PinnedArray&) = delete;
+  ~PinnedArray() {
+    if (data_ != nullptr) cudaFreeHost(data_);
+  }
+  cudaError_t allocate(std::size_t size) {
+    if (data_ != nullptr) cudaFreeHost(data_);
+    data_ = nullptr;
+    size_ = 0;
+    if (size == 0) return cudaSuccess;
+    void* raw = nullptr;
+    const cudaError_t status = cudaMallocHost(&raw, size * sizeof(T));
+    if (status != cudaSuccess) return status;
+    data_ = static_cast<T*>(raw);
+    size_ = size;
+    return cudaSuccess;
+  }
+  T* data() const { return data_; }
+  std::size_t size() const { return size_; }
+
+ private:
+  T* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
 template <typename Real>
 struct DeviceVector3 {
   DeviceArray<Real> x, y, z;
@@ -380,6 +410,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
               static_cast<Real>(common.nodal_damping_gamma1),
               static_cast<Real>(common.mass_damping)};
     step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
+    if (!choose_persistent(diagnostics)) return false;
     // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
     // stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
@@ -492,7 +523,65 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       if (any_base) FMPC_CUDA_CHECK(base_arrays[axis]->upload(base[axis]), diagnostics, false);
     }
     FMPC_CUDA_CHECK(step_base_.allocate(1), diagnostics, false);
+    // The persistent kernel applies each probe vertex's entry from the vertex's own thread; a vertex listed twice
+    // (never from a scene file) keeps the per-step path.
+    std::vector<int> entry_of(static_cast<std::size_t>(n_), -1);
+    probe_vertices_unique_ = true;
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+      int& entry = entry_of[static_cast<std::size_t>(vertices[i])];
+      probe_vertices_unique_ = probe_vertices_unique_ && entry < 0;
+      entry = static_cast<int>(i);
+    }
+    if (probe_vertices_unique_) FMPC_CUDA_CHECK(probe_entry_.upload(entry_of), diagnostics, false);
     return true;
+  }
+
+  // Whether chunks of forward or semi-implicit Euler run as one cooperative launch each (launch_persistent_euler):
+  // where every vertex gets its own thread with all blocks resident, no strain table is looked up between steps
+  // and the device can launch cooperative kernels. Larger meshes keep one launch per kernel: their steps are long
+  // enough that launches cost little, and a thread per vertex keeps the memory system busiest.
+  bool choose_persistent(DiagnosticList& diagnostics) {
+    persistent_blocks_ = 0;
+    const sim::Integrator scheme = scenes_.front().integrator;
+    if (!options_.persistent || n_ <= 0 || scenes_.front().strain_stiffness || !probe_vertices_unique_) return true;
+    if (scheme != sim::Integrator::ForwardEuler && scheme != sim::Integrator::SemiImplicitEuler) return true;
+    int limit = 0;
+    FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, std::is_same_v<Real, double>, limit), diagnostics, false);
+    const auto blocks_for_lanes = [&](int lanes) {
+      return (static_cast<long long>(n_) * lanes + kPersistentThreads - 1) / kPersistentThreads;
+    };
+    // The most lanes per vertex, up to 16 (most vertices of the generated meshes have at most 16 springs, so one
+    // round of lanes covers them with their records in registers), whose grid fits.
+    const int asked = options_.persistent_lanes;
+    const bool valid = asked > 0 && asked <= 32 && (asked & (asked - 1)) == 0;
+    const int first = valid ? asked : 16;
+    for (int lanes = first; lanes >= 1; lanes /= 2) {
+      if (blocks_for_lanes(lanes) > limit) continue;
+      persistent_blocks_ = static_cast<int>(blocks_for_lanes(lanes));
+      persistent_lanes_ = lanes;
+      break;
+    }
+    if (persistent_blocks_ == 0) return true;
+    // The end-of-chunk checks' results: the first non-finite vertex, then per scene the inversion count and first.
+    const std::size_t results = 1 + (element_count_ > 0 ? 2 * scenes_.size() : 0);
+    FMPC_CUDA_CHECK(check_results_.allocate(results), diagnostics, false);
+    FMPC_CUDA_CHECK(check_results_host_.allocate(results), diagnostics, false);
+    return true;
+  }
+
+  PersistentChecks persistent_checks() const {
+    PersistentChecks c{};
+    unsigned int* results = check_results_.data();
+    c.first_non_finite = reinterpret_cast<int*>(results);
+    if (element_count_ > 0) {
+      c.corners = corners_.data();
+      c.element_count = element_count_;
+      c.element_scene = scenes_.size() > 1 ? element_scene_.data() : nullptr;
+      c.scene_count = static_cast<int>(scenes_.size());
+      c.inverted_count = results + 1;
+      c.inverted_first = reinterpret_cast<int*>(results + 1 + scenes_.size());
+    }
+    return c;
   }
 
   // The strain table and implicit Euler's buffers (a batch of one scene only; create() refuses them in larger
@@ -601,6 +690,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
+  bool persistent_launch() const override { return persistent_blocks_ > 0; }
 
   std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     return energy_sum(EnergyTerm::Kinetic, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
@@ -653,6 +743,19 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // Inverted elements per scene now: counts and each scene's smallest inverted element (local index, -1: none).
   bool count_inverted(std::vector<unsigned int>& counts, std::vector<int>& firsts, DiagnosticList& diagnostics) {
     const std::size_t scenes = scenes_.size();
+    if (checks_pending_) {
+      // The persistent kernel counted at the state now held (its copy was synchronised by first_non_finite_vertex).
+      if (!synchronize(diagnostics)) return false;
+      checks_pending_ = false;
+      const unsigned int* results = check_results_host_.data();
+      counts.assign(results + 1, results + 1 + scenes);
+      firsts.resize(scenes);
+      for (std::size_t scene = 0; scene < scenes; ++scene) {
+        const int first = static_cast<int>(results[1 + scenes + scene]);
+        firsts[scene] = counts[scene] > 0 ? first - element_begin_[scene] : -1;
+      }
+      return true;
+    }
     counts.assign(scenes, 0u);
     firsts.assign(scenes, element_count_);
     FMPC_CUDA_CHECK(cudaMemcpyAsync(inverted_count_.data(), counts.data(), scenes * sizeof(unsigned int),
@@ -810,6 +913,11 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   bool enqueue_probe(int offset, bool before_step, const DeviceState<Real>& state, DiagnosticList& diagnostics) {
     if (probe_scenes_.size() == 0) return true;
+    FMPC_CUDA_CHECK(launch_apply_probe(probe_arguments(state), offset, before_step, stream_), diagnostics, false);
+    return true;
+  }
+
+  ProbeArguments<Real> probe_arguments(const DeviceState<Real>& state) const {
     ProbeArguments<Real> a{};
     a.vertices = probe_vertices_.data();
     a.entry_scene = probe_entry_scene_.data();
@@ -824,8 +932,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     a.step_base = step_base_.data();
     a.state = state.mutable_view();
     a.force = {force_x_.data(), force_y_.data(), force_z_.data()};
-    FMPC_CUDA_CHECK(launch_apply_probe(a, offset, before_step, stream_), diagnostics, false);
-    return true;
+    return a;
   }
 
   bool enqueue_strain_lookup(const DeviceState<Real>& state, DiagnosticList& diagnostics) {
@@ -949,10 +1056,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   bool run_steps(std::size_t count, bool allow_graph, DiagnosticList& diagnostics) {
+    checks_pending_ = false;
     if (count == 0 || n_ == 0) {
       steps_taken_ += count;
       return true;
     }
+    if (persistent_blocks_ > 0) return run_persistent(count, diagnostics);
     // Velocity Verlet's first step computes a(x0, v0) and implicit Euler reads the residual every CG iteration:
     // those steps are enqueued directly, never captured.
     const bool direct = !allow_graph || count < 2 || scheme() == sim::Integrator::ImplicitEuler;
@@ -969,6 +1078,44 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       if (!launch_graph(piece, diagnostics)) return false;
       done += piece;
     }
+    return true;
+  }
+
+  // `count` steps in cooperative launches of at most kMaxStepsPerGraph steps each (probe times from step_base).
+  bool run_persistent(std::size_t count, DiagnosticList& diagnostics) {
+    for (std::size_t done = 0; done < count;) {
+      const std::size_t piece = std::min(count - done, kMaxStepsPerGraph);
+      if (!set_step_base(diagnostics)) return false;
+      PersistentEulerArguments<Real> a{};
+      a.step.model = model_;
+      a.step.loads = loads_;
+      a.step.vertex_count = n_;
+      a.step.scheme =
+          scheme() == sim::Integrator::ForwardEuler ? FusedScheme::ForwardEuler : FusedScheme::SemiImplicitEuler;
+      a.step.step = step_;
+      a.state[0] = state_[0].mutable_view();
+      a.state[1] = state_[1].mutable_view();
+      a.first_parity = current_;
+      a.steps = static_cast<int>(piece);
+      if (probe_scenes_.size() > 0) {
+        a.probe = probe_arguments(state_[current_]);
+        a.probe_entry = probe_entry_.data();
+      }
+      a.blocks = persistent_blocks_;
+      a.lanes = persistent_lanes_;
+      const bool last = done + piece == count;
+      if (last) a.checks = persistent_checks();
+      FMPC_CUDA_CHECK(launch_persistent_euler(a, stream_), diagnostics, false);
+      if (last) {
+        FMPC_CUDA_CHECK(cudaMemcpyAsync(check_results_host_.data(), check_results_.data(),
+                                        check_results_.size() * sizeof(unsigned int), cudaMemcpyDeviceToHost, stream_),
+                        diagnostics, false);
+      }
+      if (piece % 2 == 1) current_ = 1 - current_;
+      steps_taken_ += piece;
+      done += piece;
+    }
+    checks_pending_ = true;
     return true;
   }
 
@@ -1027,6 +1174,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   bool restore_checkpoint(DiagnosticList& diagnostics) {
+    checks_pending_ = false;
     const std::vector<const DeviceArray<Real>*> from = std::as_const(checkpoint_).arrays();
     const std::vector<DeviceArray<Real>*> to = state_[current_].arrays();
     for (std::size_t i = 0; i < from.size(); ++i)
@@ -1043,6 +1191,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   // The smallest vertex index with a non-finite position or velocity, n_ when there is none.
   std::optional<int> first_non_finite_vertex(DiagnosticList& diagnostics) {
+    if (checks_pending_) {
+      if (!synchronize(diagnostics)) return std::nullopt;
+      return static_cast<int>(check_results_host_.data()[0]);
+    }
     int first = n_;
     FMPC_CUDA_CHECK(cudaMemcpyAsync(first_non_finite_.data(), &first, sizeof(int), cudaMemcpyHostToDevice, stream_),
                     diagnostics, std::nullopt);
@@ -1190,7 +1342,15 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceArray<double> energy_mass_, energy_rest_length_, energy_stiffness_;
   DeviceArray<double> energy_force_x_, energy_force_y_, energy_force_z_, energy_partial_, energy_result_;
   DeviceArray<unsigned char> fixed_;
-  DeviceArray<int> probe_vertices_, probe_entry_scene_;
+  DeviceArray<int> probe_vertices_, probe_entry_scene_, probe_entry_;
+  bool probe_vertices_unique_ = true;
+  int persistent_blocks_ = 0;  // > 0: run_steps uses launch_persistent_euler with this many blocks
+  int persistent_lanes_ = 1;
+  DeviceArray<unsigned int> check_results_;     // PersistentChecks' results (persistent runs)
+  PinnedArray<unsigned int> check_results_host_;
+  // Whether check_results_host_ holds (once the stream is synchronised) the checks at the state now held: set by a
+  // persistent chunk, cleared by anything that moves the state and once the inversion count has been read.
+  bool checks_pending_ = false;
   DeviceArray<ProbeScene> probe_scenes_;
   DeviceArray<double> probe_start_x_, probe_start_y_, probe_start_z_, probe_base_x_, probe_base_y_, probe_base_z_;
   DeviceArray<unsigned long long> step_base_;
@@ -1271,6 +1431,7 @@ class GpuSimulationImpl final : public GpuSimulation {
     return batch_->current_stiffness(0, diagnostics);
   }
   int implicit_max_iterations_used() const override { return batch_->implicit_max_iterations_used(); }
+  bool persistent_launch() const override { return batch_->persistent_launch(); }
 
  private:
   std::unique_ptr<GpuBatchSimulation> batch_;

@@ -24,6 +24,13 @@ struct GpuOptions {
   // Capture the steps between two NaN/Inf checks into a CUDA graph once and replay it (saves the launch overhead
   // that dominates small meshes). The results are bitwise the same either way.
   bool use_graphs = true;
+  // Forward and semi-implicit Euler on meshes small enough for one thread per vertex with every block resident: each
+  // chunk of steps in one cooperative launch with a grid barrier between steps (launch_persistent_euler) instead of
+  // a few kernels per step. The results are bitwise the same either way; use_graphs then has no effect.
+  bool persistent = true;
+  // Threads per vertex in the persistent launch (1, 2, 4, 8, 16 or 32; 0: the most of 16, 8, 4, 2, 1 whose grid is
+  // resident). A setting whose grid does not fit falls back to fewer.
+  int persistent_lanes = 0;
 };
 
 // Where a GPU run became non-finite. `step` is exact: the run keeps a copy of the state at every check that
@@ -69,6 +76,8 @@ class GpuSimulation {
   virtual std::vector<double> current_stiffness(DiagnosticList& diagnostics) const = 0;
   // The most conjugate-gradient iterations one implicit step needed (0 for the explicit schemes).
   virtual int implicit_max_iterations_used() const = 0;
+  // Whether steps run as persistent cooperative launches (GpuOptions::persistent and the mesh qualified).
+  virtual bool persistent_launch() const = 0;
 };
 
 // Many scenes advanced together, one launch per kernel for all of them: the scenes' vertices, springs and CSR
@@ -103,6 +112,7 @@ class GpuBatchSimulation {
   virtual std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual sim::ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual int implicit_max_iterations_used() const = 0;
+  virtual bool persistent_launch() const = 0;
 };
 
 }  // namespace fmpc::gpu

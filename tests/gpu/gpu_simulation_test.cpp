@@ -249,9 +249,10 @@ FMPC_GPU_TEST(bitwise_reproducible, "runs are bitwise identical: run to run, gra
       scene.integrator = integrator;
       const SimulationSetup setup = hanging_box(scene);
       DiagnosticList diagnostics;
-      // Reference: no graphs, a check after every step.
+      // Reference: no graphs, no persistent launch, a check after every step.
       gpu::GpuOptions plain;
       plain.use_graphs = false;
+      plain.persistent = false;
       const auto reference = gpu::GpuSimulation::create(setup, plain, diagnostics);
       FMPC_REQUIRE(reference && reference->advance(1000, diagnostics, 1));
       const auto expected_x = reference->positions(diagnostics);
@@ -377,6 +378,58 @@ FMPC_GPU_TEST(batch_equals_single, "a batch of odd-sized scenes gives each scene
   }
 }
 
+// The persistent launch (GpuOptions::persistent) against the per-step kernels with graphs, for forward and
+// semi-implicit Euler: displacement and force probes (probe vertices applied by their own threads), a 20^3-cell box
+// (9,261 vertices: 37 blocks, the last partly idle) and a batch of odd sizes with per-scene steps, in uneven
+// chunks (1, 3 checked every 2, 65 every 64, 931 at the end: pieces of 256 steps). Bitwise, probe force included.
+FMPC_GPU_TEST(persistent_equals_per_step,
+              "persistent launches give the per-step kernels' bits: probes, batches, sizes, lanes", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const Integrator integrator : {Integrator::ForwardEuler, Integrator::SemiImplicitEuler}) {
+      std::vector<std::vector<SimulationSetup>> cases;
+      cases.push_back({probed_box(precision, integrator, ProbeLoad::Mode::Displacement)});
+      cases.push_back({probed_box(precision, integrator, ProbeLoad::Mode::Force)});
+      cases.push_back({hanging_box(BoxScene{20, 20, 20, 5000.0, precision, integrator, 6})});
+      cases.push_back({single_tetrahedron(precision, integrator),
+                       probed_box(precision, integrator, ProbeLoad::Mode::Displacement),
+                       hanging_box(BoxScene{7, 6, 5, 9000.0, precision, integrator, 4})});
+      for (std::size_t c = 0; c < cases.size(); ++c) {
+        const std::vector<SimulationSetup>& scenes = cases[c];
+        DiagnosticList diagnostics;
+        gpu::GpuOptions per_step;
+        per_step.persistent = false;
+        const auto reference = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
+        FMPC_REQUIRE(reference && reference->advance(1000, diagnostics));
+        FMPC_EXPECT(!reference->persistent_launch());
+        // Threads per vertex: automatic (16), one, two (several rounds), and a whole warp.
+        for (const int lanes : {0, 1, 2, 32}) {
+          gpu::GpuOptions options;
+          options.persistent_lanes = lanes;
+          const auto run = gpu::GpuBatchSimulation::create(scenes, options, diagnostics);
+          FMPC_REQUIRE(run);
+          FMPC_EXPECT(run->persistent_launch());
+          FMPC_REQUIRE(run->advance(1, diagnostics) && run->advance(3, diagnostics, 2) &&
+                       run->advance(65, diagnostics, 64) && run->advance(931, diagnostics, 0));
+          for (std::size_t s = 0; s < scenes.size(); ++s) {
+            const bool same = bitwise_equal(run->positions(s, diagnostics), reference->positions(s, diagnostics)) &&
+                              bitwise_equal(run->velocities(s, diagnostics), reference->velocities(s, diagnostics));
+            const ProbeReading a = run->probe_reading(s, diagnostics), b = reference->probe_reading(s, diagnostics);
+            const bool same_probe = std::memcmp(&a.force, &b.force, sizeof a.force) == 0 &&
+                                    std::memcmp(&a.displacement, &b.displacement, sizeof a.displacement) == 0;
+            if (!same || !same_probe)
+              note(std::string(name_of(precision)) + ", " + to_string(integrator) + ", case " + std::to_string(c) +
+                   ", scene " + std::to_string(s) + ", lanes " + std::to_string(lanes) +
+                   ": differs from the per-step path");
+            FMPC_EXPECT(same && same_probe);
+          }
+        }
+        if (diagnostics.has_errors()) note(describe(diagnostics));
+        FMPC_EXPECT(!diagnostics.has_errors());
+      }
+    }
+  }
+}
+
 FMPC_GPU_TEST(non_finite_located, "NaN/Inf stops the run naming the exact step, vertex and spring", true) {
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     BoxScene scene;
@@ -443,6 +496,11 @@ FMPC_GPU_TEST(sanitizer_smoke, "sanitizer smoke: every kernel on tiny scenes", t
       DiagnosticList diagnostics;
       const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
       FMPC_REQUIRE(batch && batch->advance(20, diagnostics, 8));
+      // The Euler schemes run persistent by default; their per-step kernels too.
+      gpu::GpuOptions per_step;
+      per_step.persistent = false;
+      const auto stepped = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
+      FMPC_REQUIRE(stepped && stepped->advance(20, diagnostics, 8));
       FMPC_EXPECT(batch->kinetic_energy(1, diagnostics).has_value());
       FMPC_EXPECT(batch->potential_energy(1, diagnostics).has_value());
       FMPC_EXPECT(batch->largest_displacement(1, diagnostics).has_value());
