@@ -63,8 +63,8 @@ double clause_grade_of_term_grade(const Clause& clause, double term_grade) {
   return clause.negated ? fuzzy_not(hedged) : hedged;
 }
 
-GradeBounds clause_grade_bounds(const Term& term, const Clause& clause, double lo, double hi, int samples) {
-  GradeBounds bounds{kInfinity, -kInfinity};
+SampledGradeRange clause_grade_bounds(const Term& term, const Clause& clause, double lo, double hi, int samples) {
+  SampledGradeRange bounds{kInfinity, -kInfinity};
   auto visit = [&](double x) {
     const double grade = clause_grade(term, clause, x);
     bounds.lowest = std::min(bounds.lowest, grade);

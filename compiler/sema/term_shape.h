@@ -20,14 +20,15 @@ double clause_grade(const Term& term, const Clause& clause, double x);
 // The same from the term's grade at x, for callers that have it already.
 double clause_grade_of_term_grade(const Clause& clause, double term_grade);
 
-struct GradeBounds {
+// Sampled, not proven (passes/prune_rules.h has the proven GradeBounds): an estimate of the range.
+struct SampledGradeRange {
   double lowest = 0.0;
   double highest = 0.0;
 };
 
 // Smallest and largest clause grade on [lo, hi], from `samples` evenly spaced points plus the MF's breakpoints
 // and centres inside the interval (so that narrow peaks are never stepped over).
-GradeBounds clause_grade_bounds(const Term& term, const Clause& clause, double lo, double hi, int samples);
+SampledGradeRange clause_grade_bounds(const Term& term, const Clause& clause, double lo, double hi, int samples);
 
 // Where the term is "on": the points of grade 1 for a peaked shape (triangle peak, trapezoid shoulders, gaussian
 // mean, ...), the half-line of grade >= 0.5 for a one-sided shape (zmf, smf, linsmf, linzmf, sigmf). Bounds may be

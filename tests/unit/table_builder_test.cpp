@@ -164,7 +164,7 @@ std::string source_text(const std::string& relative) {
 
 }  // namespace
 
-TEST_CASE("the issue's liver table: the stated bound holds at its point and on 1e6 held-out points", "[table-builder]") {
+TEST_CASE("the issue's liver table: the stated bound holds at its point and on 1e6 held-out points", "[table-builder][heavy]") {
   // fmpc compile rulesets/liver_fibrosis/mamdani.fis --target table --fix ALD=12 --fix CLD=9 --fix NAFLD=8
   //   --max-error 0.1 --spacing uniform: on main at 6bad843 it stated 0.0699 kPa from held-out points, and the
   // table was 0.1203 kPa from the interpreter at HCV = 10.019762901974728, HBV = 7.810095226429762.

@@ -287,7 +287,7 @@ TEST_CASE("validation: hanging and compressed cubes against converged C3D10", "[
   WARN("cubes, error against C3D10 on 8^3 cells:" << table.str());
 }
 
-TEST_CASE("validation: Hayes et al. 1972 indentation of a bonded layer", "[validation]") {
+TEST_CASE("validation: Hayes et al. 1972 indentation of a bonded layer", "[validation][heavy]") {
   // kappa's own checks: the half-space limit (Sneddon) and the thin-layer limit (confined compression).
   CHECK(hayes_kappa(1e-4, 0.3) == Approx(1.0).epsilon(1e-3));
   const double nu_thin = 0.3, M = (1 - nu_thin) / ((1 + nu_thin) * (1 - 2 * nu_thin));

@@ -1,10 +1,15 @@
 #pragma once
 // Each command registers itself on the CLI11 app; its callback stores the process exit code in `exit_code`.
+#include "diagnostics/source_range.h"
+
 namespace CLI {
 class App;
 }
 
 namespace fmpc::cli {
+
+// Where an error in the command line's options is reported.
+inline const SourceRange kCommandLine{"command line", 0, 0, 0, 0};
 
 void register_check_command(CLI::App& app, int& exit_code);
 void register_fmt_command(CLI::App& app, int& exit_code);

@@ -131,9 +131,9 @@ int run_compile(const CompileOptions& options) {
   const FuzzySystem* system = select_system(file, options.system, diagnostics);
   const Bindings bindings = parse_binding_arguments(options.fix, options.vary, diagnostics);
   if (options.outputs.empty())
-    diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "no output file", {"add -o FILE"});
+    diagnostics.error(kCommandLine, "no output file", {"add -o FILE"});
   if (options.target != "table" && options.outputs.size() > 1)
-    diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+    diagnostics.error(kCommandLine,
                       "--target " + options.target + " writes one header; " + std::to_string(options.outputs.size()) +
                           " -o files were given");
   std::optional<CompileResult> compiled;

@@ -182,11 +182,11 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
   const std::optional<LookupTable> table = parse_fzt(options.file, bytes, diagnostics);
   if (table) {
     if (options.explain)
-      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+      diagnostics.error(kCommandLine,
                         "--explain needs a rule file; '" + options.file + "' is a lookup table (.fzt)",
                         {"fmpc eval the rule file the table was compiled from (" + table->source_path + ")"});
     if (!options.system.empty() && options.system != table->system_name)
-      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+      diagnostics.error(kCommandLine,
                         "the table holds system '" + table->system_name + "', not '" + options.system + "'");
   }
   if (!table || diagnostics.has_errors()) {
@@ -196,7 +196,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
   const FuzzySystem interface = table_interface(*table);
   std::vector<EvaluationPoint> points;
   if (!options.assignments.empty() && !options.csv.empty()) {
-    diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "give NAME=VALUE inputs or --csv, not both");
+    diagnostics.error(kCommandLine, "give NAME=VALUE inputs or --csv, not both");
   } else if (!options.assignments.empty()) {
     std::vector<std::string> varying;
     for (const std::string& assignment : options.assignments) {
@@ -333,7 +333,7 @@ int run_eval(const EvalOptions& options) {
   std::vector<EvaluationPoint> points;
   if (system) {
     if (!options.assignments.empty() && !options.csv.empty()) {
-      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "give NAME=VALUE inputs or --csv, not both");
+      diagnostics.error(kCommandLine, "give NAME=VALUE inputs or --csv, not both");
     } else if (!options.assignments.empty()) {
       if (auto point = point_from_assignments(options.assignments, *system, diagnostics))
         points.push_back(std::move(*point));
@@ -346,7 +346,7 @@ int run_eval(const EvalOptions& options) {
         example += (i ? " " : "") + names[i] + "=" +
                    format_number((system->inputs[i].min + system->inputs[i].max) / 2.0);
       }
-      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0},
+      diagnostics.error(kCommandLine,
                         "no points to evaluate: give every input of '" + system->name + "' as NAME=VALUE, or a CSV file",
                         {"for example: fmpc eval " + options.file + " " + example,
                          "or: fmpc eval " + options.file + " --csv points.csv (header row: " + header + ")",

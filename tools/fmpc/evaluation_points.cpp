@@ -1,4 +1,5 @@
 #include "tools/fmpc/evaluation_points.h"
+#include "tools/fmpc/commands.h"
 
 #include <cerrno>
 #include <cmath>
@@ -60,7 +61,7 @@ std::optional<EvaluationPoint> point_from_assignments(const std::vector<std::str
                                                       const FuzzySystem& system, DiagnosticList& diagnostics) {
   EvaluationPoint point;
   point.label = "point 1 (command line)";
-  point.where = SourceRange{"command line", 0, 0, 0, 0};
+  point.where = kCommandLine;
   point.inputs.assign(system.inputs.size(), std::nan(""));
   point.origins.assign(system.inputs.size(), SourceRange{});
   std::vector<bool> given(system.inputs.size(), false);
@@ -87,7 +88,7 @@ std::optional<EvaluationPoint> point_from_assignments(const std::vector<std::str
   }
   for (std::size_t i = 0; i < system.inputs.size(); ++i)
     if (!given[i])
-      diagnostics.error(SourceRange{"command line", 0, 0, 0, 0}, "no value for input '" + system.inputs[i].name + "'",
+      diagnostics.error(kCommandLine, "no value for input '" + system.inputs[i].name + "'",
                         {"add " + system.inputs[i].name + "=VALUE (range [" + format_number(system.inputs[i].min) +
                          ", " + format_number(system.inputs[i].max) + "])"});
   if (diagnostics.has_errors()) return std::nullopt;

@@ -39,8 +39,6 @@ struct PlotOptions {
   std::string image;
 };
 
-const SourceRange kCommandLine{"command line", 0, 0, 0, 0};
-
 // The most rule rows the rule viewer draws before it keeps only the rules that fire.
 constexpr std::size_t kMaxRuleRows = 40;
 

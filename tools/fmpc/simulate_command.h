@@ -12,6 +12,7 @@
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
 #include "runtime/scene/scene_run.h"
+#include "tools/fmpc/commands.h"
 #include "tools/plot/canvas.h"
 
 namespace fmpc::cli {
@@ -26,8 +27,6 @@ struct SimulateOptions {
   std::string patients;  // a cohort's patients file (CSV); empty: the scene alone
   std::string shard;     // I/N: every N-th patient from the I-th (0-based); empty: all
 };
-
-inline const SourceRange kCommandLine{"command line", 0, 0, 0, 0};
 
 // Six significant digits (hiding residues such as 0.6000000000000001): tick labels and the run's report.
 std::string six_digits(double value);

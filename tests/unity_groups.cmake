@@ -1,0 +1,60 @@
+# Unity groups of the test suite (FMPC_UNITY_BUILD, set by tools/run): files whose file-scope helpers (anonymous
+# namespaces, statics) have no name in common, so that each group compiles as one file. A file in no group compiles
+# alone, as every file does without FMPC_UNITY_BUILD; a new test file needs no entry here.
+fmpc_test_unity_group(tests_0
+  unit/matlab_fis_test.cpp
+  unit/fmpc_language_test.cpp
+  support/setup_reference.cpp
+  unit/interpreter_test.cpp
+  unit/tetrahedron_math_test.cpp
+  unit/validation_test.cpp
+  unit/hostile_input_test.cpp)
+fmpc_test_unity_group(tests_1
+  unit/type2_test.cpp
+  unit/spring_mapping_test.cpp
+  support/random_system.cpp
+  unit/sim_mesh_test.cpp
+  unit/sim_integrate_test.cpp
+  unit/scene_file_test.cpp
+  unit/sim_springs_test.cpp)
+fmpc_test_unity_group(tests_2
+  unit/emit_type2_test.cpp
+  unit/fem_simulation_test.cpp
+  unit/passes_test.cpp
+  unit/cohort_test.cpp
+  unit/liver_benchmark_test.cpp
+  support/system_comparison.cpp
+  unit/spring_scene_test.cpp)
+fmpc_test_unity_group(tests_3
+  unit/emit_cpp_test.cpp
+  differential/fuzzylite_formats_test.cpp
+  unit/sim_gpu_test.cpp
+  support/fmpc_process.cpp)
+fmpc_test_unity_group(tests_4
+  unit/type2_compile_test.cpp
+  unit/lint_test.cpp
+  support/elastic_problem.cpp
+  unit/trade_test.cpp)
+fmpc_test_unity_group(tests_5
+  unit/scene_run_test.cpp
+  unit/check_test.cpp
+  differential/fuzzylite_test.cpp
+  unit/mamdani_to_sugeno_test.cpp
+  unit/simulation_trade_test.cpp
+  unit/cli_docs_test.cpp)
+fmpc_test_unity_group(tests_6
+  unit/table_arrays_test.cpp
+  unit/curve_similarity_test.cpp
+  differential/round_trip_test.cpp)
+fmpc_test_unity_group(tests_7
+  unit/setup_equivalence_test.cpp
+  unit/type_reduction_test.cpp
+  differential/matlab_golden_test.cpp
+  unit/cli_behaviour_test.cpp)
+fmpc_test_unity_group(tests_8
+  unit/table_builder_test.cpp
+  support/generated_program.cpp)
+fmpc_test_unity_group(tests_9
+  unit/vtk_xml_test.cpp
+  unit/scene_material_test.cpp
+  unit/lookup_table_test.cpp)
