@@ -6,6 +6,7 @@
 #include <cooperative_groups.h>
 
 #include <algorithm>
+#include <limits>
 #include <type_traits>
 
 #include "runtime/gpu/gpu_launch.h"
@@ -488,6 +489,21 @@ __device__ MutableStateView<Real> buffer(const PersistentEulerArguments<Real>& a
   return parity == 0 ? a.state[0] : a.state[1];
 }
 
+// The fused step with `lanes` threads per vertex (FusedStepArguments::lanes > 1).
+template <typename Real, GatherKind K>
+__global__ void fused_step_lanes_kernel(FusedStepArguments<Real> a) {
+  const int thread = vertex_index();
+  const int lanes = a.lanes;
+  const int v = thread / lanes;
+  if (v >= a.vertex_count) return;  // a vertex's lanes leave together
+  const int lane = thread % lanes;
+  const int warp_lane = static_cast<int>(threadIdx.x) % 32;
+  const unsigned mask = lanes == 32 ? 0xffffffffu : ((1u << lanes) - 1u) << (warp_lane - warp_lane % lanes);
+  const GatheredForces<Real> forces =
+      lanes_gather<Real, K>(a.model, v, lane_cache<Real, K>(a.model, v, lane), a.in, mask, lane, lanes);
+  if (lane == 0) fused_vertex_step(a, forces, v, a.in, a.out);
+}
+
 // Blocks per multiprocessor the persistent kernel is compiled for (registers per thread <= 65536 / (256 x this)),
 // hence how many lanes per vertex fit a mesh. Unbounded, the float springs kernel takes 102 registers (2 blocks: a
 // 9,261-vertex mesh gets 4 lanes); bounded to 3 blocks it takes 80 with 24 bytes of spills and gets 8 lanes (290
@@ -876,6 +892,18 @@ cudaError_t launch_incidence(const kernels::SpringNetworkView<Real>& network, in
 template <typename Real>
 cudaError_t launch_fused(const FusedStepArguments<Real>& arguments, cudaStream_t stream) {
   if (arguments.vertex_count <= 0) return cudaSuccess;
+  const int lanes = arguments.lanes;
+  if (lanes > 1) {
+    if (lanes > 32 || (lanes & (lanes - 1)) != 0 ||
+        static_cast<long long>(arguments.vertex_count) * lanes > std::numeric_limits<int>::max() - kThreadsPerBlock) {
+      return cudaErrorInvalidValue;
+    }
+    return with_kind(arguments.model.kind, [&](auto kind) {
+      fused_step_lanes_kernel<Real, decltype(kind)::value>
+          <<<blocks_for(arguments.vertex_count * lanes), kThreadsPerBlock, 0, stream>>>(arguments);
+      return cudaGetLastError();
+    });
+  }
   return with_kind(arguments.model.kind, [&](auto kind) {
     fused_step_kernel<Real, decltype(kind)::value>
         <<<blocks_for(arguments.vertex_count), kThreadsPerBlock, 0, stream>>>(arguments);

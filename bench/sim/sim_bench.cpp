@@ -207,7 +207,7 @@ gpu::GpuOptions gpu_options_for(Launch launch) {
   return options;
 }
 
-// lanes: GpuOptions::persistent_lanes (0: automatic); check_every: advance's NaN/Inf check interval (0: at the end
+// lanes: GpuOptions::persistent_lanes or gather_lanes (0: automatic); check_every: advance's NaN/Inf check interval (0: at the end
 // of each timed chunk only, to separate the checks' cost from the steps').
 Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, Launch launch,
             const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery) {
@@ -228,12 +228,12 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   row.springs = setup.springs.size();
   DiagnosticList diagnostics;
   gpu::GpuOptions gpu_options = gpu_options_for(launch);
-  gpu_options.persistent_lanes = lanes;
+  (launch == Launch::Persistent ? gpu_options.persistent_lanes : gpu_options.gather_lanes) = lanes;
   const auto simulation = gpu::GpuSimulation::create(setup, gpu_options, diagnostics);
   row.graphs = launch_name(simulation && launch == Launch::Persistent && !simulation->persistent_launch()
                                ? Launch::Graphs
                                : launch);
-  if (lanes > 0 && launch == Launch::Persistent) row.graphs += " lanes " + std::to_string(lanes);
+  if (lanes > 0) row.graphs += " lanes " + std::to_string(lanes);
   if (check_every != kCheckEvery) row.graphs += check_every == 0 ? " checks per chunk" : " checks every " + std::to_string(check_every);
   if (!simulation || !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics, check_every); }, 64,
                                  options.min_seconds, row)) {
@@ -461,6 +461,11 @@ int main(int argc, char** argv) {
           rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Persistent, options, lanes));
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Persistent, options, 0, 0));
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0, 0));
+      }
+      // The per-step gather's threads per vertex (default 4) where the mesh is large enough to be bandwidth-bound.
+      if (cells >= 20 && precision == Precision::Float) {
+        for (const int lanes : {1, 2, 8})
+          rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, lanes));
       }
       for (const Integrator integrator :
            {Integrator::ForwardEuler, Integrator::VelocityVerlet, Integrator::RungeKutta4}) {

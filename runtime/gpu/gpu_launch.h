@@ -81,10 +81,13 @@ struct FusedStepArguments {
   int vertex_count;
   FusedScheme scheme;
   StepSize<Real> step;
+  int lanes;  // threads per vertex: 0 or 1 (one thread walks its vertex's entries), 2, 4, 8, 16 or 32
 };
 
 // One fused kernel per step: gather the model's forces (springs over their CSR adjacency, elements' corner forces
-// from the element pass launched before it), add the loads, update the vertex.
+// from the element pass launched before it), add the loads, update the vertex. With lanes > 1, that many threads
+// share a vertex's entries and add the terms in CSR order (as the persistent kernel): the same bits, more loads in
+// flight per vertex (the gather of a large mesh is latency-bound with one thread walking about 14 entries).
 cudaError_t launch_fused_step(const FusedStepArguments<float>& arguments, cudaStream_t stream);
 cudaError_t launch_fused_step(const FusedStepArguments<double>& arguments, cudaStream_t stream);
 

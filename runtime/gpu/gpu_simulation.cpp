@@ -410,7 +410,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
               static_cast<Real>(common.nodal_damping_gamma1),
               static_cast<Real>(common.mass_damping)};
     step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
-    if (!choose_persistent(diagnostics)) return false;
+    if (!choose_launches(diagnostics)) return false;
     // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
     // stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
@@ -536,11 +536,16 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  // Whether chunks of forward or semi-implicit Euler run as one cooperative launch each (launch_persistent_euler):
+  // The per-step fused kernel's lanes, and whether chunks of forward or semi-implicit Euler run as one cooperative
+  // launch each (launch_persistent_euler):
   // where every vertex gets its own thread with all blocks resident, no strain table is looked up between steps
   // and the device can launch cooperative kernels. Larger meshes keep one launch per kernel: their steps are long
   // enough that launches cost little, and a thread per vertex keeps the memory system busiest.
-  bool choose_persistent(DiagnosticList& diagnostics) {
+  bool choose_launches(DiagnosticList& diagnostics) {
+    // The per-step kernel's lanes (GpuOptions::gather_lanes), where the grid's thread count fits an int.
+    const int gather = options_.gather_lanes;
+    gather_lanes_ = gather > 0 && gather <= 32 && (gather & (gather - 1)) == 0 ? gather : 4;
+    while (gather_lanes_ > 1 && static_cast<long long>(n_) * gather_lanes_ > (1LL << 30)) gather_lanes_ /= 2;
     persistent_blocks_ = 0;
     const sim::Integrator scheme = scenes_.front().integrator;
     if (!options_.persistent || n_ <= 0 || scenes_.front().strain_stiffness || !probe_vertices_unique_) return true;
@@ -868,6 +873,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
           a.scheme =
               scheme() == sim::Integrator::ForwardEuler ? FusedScheme::ForwardEuler : FusedScheme::SemiImplicitEuler;
           a.step = step_;
+          a.lanes = gather_lanes_;
           FMPC_CUDA_CHECK(launch_fused_step(a, stream_), diagnostics, false);
           parity = 1 - parity;
           break;
@@ -1346,6 +1352,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool probe_vertices_unique_ = true;
   int persistent_blocks_ = 0;  // > 0: run_steps uses launch_persistent_euler with this many blocks
   int persistent_lanes_ = 1;
+  int gather_lanes_ = 1;  // the per-step fused kernel's threads per vertex
   DeviceArray<unsigned int> check_results_;     // PersistentChecks' results (persistent runs)
   PinnedArray<unsigned int> check_results_host_;
   // Whether check_results_host_ holds (once the stream is synchronised) the checks at the state now held: set by a

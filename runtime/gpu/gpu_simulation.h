@@ -31,6 +31,9 @@ struct GpuOptions {
   // Threads per vertex in the persistent launch (1, 2, 4, 8, 16 or 32; 0: the most of 16, 8, 4, 2, 1 whose grid is
   // resident). A setting whose grid does not fit falls back to fewer.
   int persistent_lanes = 0;
+  // Threads per vertex in the per-step fused kernel of forward and semi-implicit Euler (1, 2, 4, 8, 16 or 32;
+  // 0: 4): more loads of a vertex's entries in flight. Bitwise the same results for any value.
+  int gather_lanes = 0;
 };
 
 // Where a GPU run became non-finite. `step` is exact: the run keeps a copy of the state at every check that

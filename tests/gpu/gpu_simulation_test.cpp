@@ -396,18 +396,23 @@ FMPC_GPU_TEST(persistent_equals_per_step,
       for (std::size_t c = 0; c < cases.size(); ++c) {
         const std::vector<SimulationSetup>& scenes = cases[c];
         DiagnosticList diagnostics;
+        // Reference: the per-step kernels with one thread per vertex.
         gpu::GpuOptions per_step;
         per_step.persistent = false;
+        per_step.gather_lanes = 1;
         const auto reference = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
         FMPC_REQUIRE(reference && reference->advance(1000, diagnostics));
         FMPC_EXPECT(!reference->persistent_launch());
-        // Threads per vertex: automatic (16), one, two (several rounds), and a whole warp.
-        for (const int lanes : {0, 1, 2, 32}) {
+        // Threads per vertex, persistent (0: automatic, 16 where it fits) and per step (negative: -lanes; -4 is the
+        // default): one, two (several rounds over a vertex's entries), a whole warp.
+        for (const int lanes : {0, 1, 2, 32, -2, -4, -32}) {
           gpu::GpuOptions options;
-          options.persistent_lanes = lanes;
+          options.persistent = lanes >= 0;
+          options.persistent_lanes = std::max(lanes, 0);
+          options.gather_lanes = lanes < 0 ? -lanes : 0;
           const auto run = gpu::GpuBatchSimulation::create(scenes, options, diagnostics);
           FMPC_REQUIRE(run);
-          FMPC_EXPECT(run->persistent_launch());
+          FMPC_EXPECT(run->persistent_launch() == (lanes >= 0));
           FMPC_REQUIRE(run->advance(1, diagnostics) && run->advance(3, diagnostics, 2) &&
                        run->advance(65, diagnostics, 64) && run->advance(931, diagnostics, 0));
           for (std::size_t s = 0; s < scenes.size(); ++s) {
