@@ -542,9 +542,21 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // and the device can launch cooperative kernels. Larger meshes keep one launch per kernel: their steps are long
   // enough that launches cost little, and a thread per vertex keeps the memory system busiest.
   bool choose_launches(DiagnosticList& diagnostics) {
-    // The per-step kernel's lanes (GpuOptions::gather_lanes), where the grid's thread count fits an int.
+    // The per-step kernel's lanes (GpuOptions::gather_lanes; automatic from what an H100 measured, docs/
+    // performance.md, sixth run): springs on a 20^3 box (9,261 vertices) step in 7.4 us with 8 lanes, 9.5 with 4 and
+    // 17.0 with 1, while the 240^3 box (14M vertices) ran at 166 steps/s with 4 lanes and 207 with 1. Lanes pay
+    // while a thread per vertex cannot fill the GPU (about 2^18 resident threads), so the automatic choice is the
+    // most of 8, 4, 2, 1 that keeps vertices x lanes within 2^18. Elements alone gather contiguous corner forces,
+    // which lanes read coalesced: 4 lanes (the 120^3 FEM box: 812 steps/s against 769 with 1).
     const int gather = options_.gather_lanes;
-    gather_lanes_ = gather > 0 && gather <= 32 && (gather & (gather - 1)) == 0 ? gather : 4;
+    if (gather > 0 && gather <= 32 && (gather & (gather - 1)) == 0) {
+      gather_lanes_ = gather;
+    } else if (model_.kind == GatherKind::Elements) {
+      gather_lanes_ = 4;
+    } else {
+      gather_lanes_ = 8;
+      while (gather_lanes_ > 1 && static_cast<long long>(n_) * gather_lanes_ > (1LL << 18)) gather_lanes_ /= 2;
+    }
     while (gather_lanes_ > 1 && static_cast<long long>(n_) * gather_lanes_ > (1LL << 30)) gather_lanes_ /= 2;
     persistent_blocks_ = 0;
     const sim::Integrator scheme = scenes_.front().integrator;

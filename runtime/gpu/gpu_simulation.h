@@ -32,7 +32,8 @@ struct GpuOptions {
   // resident). A setting whose grid does not fit falls back to fewer.
   int persistent_lanes = 0;
   // Threads per vertex in the per-step fused kernel of forward and semi-implicit Euler (1, 2, 4, 8, 16 or 32;
-  // 0: 4): more loads of a vertex's entries in flight. Bitwise the same results for any value.
+  // 0: automatic, by the mesh's size and model): more loads of a vertex's entries in flight. Bitwise the same
+  // results for any value.
   int gather_lanes = 0;
 };
 

@@ -403,9 +403,9 @@ FMPC_GPU_TEST(persistent_equals_per_step,
         const auto reference = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
         FMPC_REQUIRE(reference && reference->advance(1000, diagnostics));
         FMPC_EXPECT(!reference->persistent_launch());
-        // Threads per vertex, persistent (0: automatic, 16 where it fits) and per step (negative: -lanes; -4 is the
-        // default): one, two (several rounds over a vertex's entries), a whole warp.
-        for (const int lanes : {0, 1, 2, 32, -2, -4, -32}) {
+        // Threads per vertex, persistent (0: automatic, 16 where it fits) and per step (negative: -lanes): one, two
+        // (several rounds over a vertex's entries), eight, a whole warp.
+        for (const int lanes : {0, 1, 2, 32, -2, -8, -32}) {
           gpu::GpuOptions options;
           options.persistent = lanes >= 0;
           options.persistent_lanes = std::max(lanes, 0);
