@@ -409,6 +409,12 @@ __device__ void lane_ordered_sum(unsigned mask, int lane, int lanes, int begin, 
   fz = sz;
 }
 
+// The shuffle mask of this thread's vertex: its `lanes` (valid_lanes) threads, an aligned part of the warp.
+__device__ unsigned lane_mask(int lanes) {
+  const int warp_lane = static_cast<int>(threadIdx.x) % 32;
+  return lanes == 32 ? 0xffffffffu : ((1u << lanes) - 1u) << (warp_lane - warp_lane % lanes);
+}
+
 // What a vertex's lane keeps in registers for the whole launch (the CSR never changes during a run): its vertex's
 // spring and corner ranges and its own first spring record. Every step then starts its loads at the neighbours'
 // positions instead of behind two dependent loads of read-only data.
@@ -427,7 +433,7 @@ __device__ LaneCache<Real> lane_cache(const ForceModelView<Real>& m, int v, int 
     c.spring_begin = net.adjacency_offset[v];
     c.spring_end = net.adjacency_offset[v + 1];
     const int e = c.spring_begin + lane;
-    if (e < c.spring_end) c.first = net.incidence != nullptr ? net.incidence[e] : kernels::incidence_from_arrays(net, e);
+    if (e < c.spring_end) c.first = kernels::spring_incidence(net, e);
   }
   if constexpr (K != GatherKind::Springs) {
     c.corner_begin = m.corners.offset[v];
@@ -449,9 +455,7 @@ __device__ GatheredForces<Real> lanes_gather(const ForceModelView<Real>& m, int 
     lane_ordered_sum(
         mask, lane, lanes, cache.spring_begin, cache.spring_end,
         [&](int e, Real& t0, Real& t1, Real& t2) {
-          const kernels::SpringIncidence<Real> r =
-              e == first ? cache.first
-                         : (net.incidence != nullptr ? net.incidence[e] : kernels::incidence_from_arrays(net, e));
+          const kernels::SpringIncidence<Real> r = e == first ? cache.first : kernels::spring_incidence(net, e);
           kernels::entry_spring_force(net, s, r, x, y, z, vx, vy, vz, t0, t1, t2);
         },
         f.fx, f.fy, f.fz);
@@ -478,10 +482,6 @@ __device__ GatheredForces<Real> lanes_gather(const ForceModelView<Real>& m, int 
   return f;
 }
 
-// launch_persistent_euler's kernel (gpu_launch.h): `steps` steps, a.lanes threads per vertex (all threads share the
-// element pass with a grid stride), a grid barrier after each pass whose writes other threads read. Lane 0 of a
-// vertex updates it and applies its probe entry. Plain loads and stores: the barrier orders them at device scope,
-// and nothing here reads through the non-coherent read-only path.
 // State buffer 0 or 1 by selection: indexing the kernel parameter's array with a run-time index would copy it to
 // local memory.
 template <typename Real>
@@ -497,8 +497,7 @@ __global__ void fused_step_lanes_kernel(FusedStepArguments<Real> a) {
   const int v = thread / lanes;
   if (v >= a.vertex_count) return;  // a vertex's lanes leave together
   const int lane = thread % lanes;
-  const int warp_lane = static_cast<int>(threadIdx.x) % 32;
-  const unsigned mask = lanes == 32 ? 0xffffffffu : ((1u << lanes) - 1u) << (warp_lane - warp_lane % lanes);
+  const unsigned mask = lane_mask(lanes);
   const GatheredForces<Real> forces =
       lanes_gather<Real, K>(a.model, v, lane_cache<Real, K>(a.model, v, lane), a.in, mask, lane, lanes);
   if (lane == 0) fused_vertex_step(a, forces, v, a.in, a.out);
@@ -515,6 +514,10 @@ struct PersistentOccupancy {
   static constexpr int min_blocks = std::is_same_v<Real, float> ? (springs_only ? 3 : 2) : (springs_only ? 2 : 1);
 };
 
+// launch_persistent_euler's kernel (gpu_launch.h): `steps` steps, a.lanes threads per vertex (all threads share the
+// element pass with a grid stride), a grid barrier after each pass whose writes other threads read. Lane 0 of a
+// vertex updates it and applies its probe entry. Plain loads and stores: the barrier orders them at device scope,
+// and nothing here reads through the non-coherent read-only path.
 template <typename Real, GatherKind K>
 __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real, K>::min_blocks))
     persistent_euler_kernel(PersistentEulerArguments<Real> a) {
@@ -523,8 +526,7 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
   const int stride = static_cast<int>(gridDim.x) * static_cast<int>(blockDim.x);
   const int lanes = a.lanes;
   const int lane = thread % lanes;
-  const int warp_lane = static_cast<int>(threadIdx.x) % 32;
-  const unsigned mask = lanes == 32 ? 0xffffffffu : ((1u << lanes) - 1u) << (warp_lane - warp_lane % lanes);
+  const unsigned mask = lane_mask(lanes);
   const int n = a.step.vertex_count;
   const bool probed = a.probe_entry != nullptr;
   // One vertex per `lanes` threads: the launch has blocks * 256 >= lanes * n threads.
@@ -894,7 +896,7 @@ cudaError_t launch_fused(const FusedStepArguments<Real>& arguments, cudaStream_t
   if (arguments.vertex_count <= 0) return cudaSuccess;
   const int lanes = arguments.lanes;
   if (lanes > 1) {
-    if (lanes > 32 || (lanes & (lanes - 1)) != 0 ||
+    if (!valid_lanes(lanes) ||
         static_cast<long long>(arguments.vertex_count) * lanes > std::numeric_limits<int>::max() - kThreadsPerBlock) {
       return cudaErrorInvalidValue;
     }
@@ -932,8 +934,7 @@ cudaError_t persistent_block_limit(GatherKind kind, int& blocks) {
 template <typename Real>
 cudaError_t launch_persistent(const PersistentEulerArguments<Real>& arguments, cudaStream_t stream) {
   if (arguments.step.vertex_count <= 0 || arguments.steps <= 0) return cudaSuccess;
-  if (arguments.blocks <= 0 || arguments.lanes <= 0 || arguments.lanes > 32 ||
-      (arguments.lanes & (arguments.lanes - 1)) != 0 || kPersistentThreads % arguments.lanes != 0 ||
+  if (arguments.blocks <= 0 || !valid_lanes(arguments.lanes) ||
       static_cast<long long>(arguments.blocks) * kPersistentThreads <
           static_cast<long long>(arguments.lanes) * arguments.step.vertex_count) {
     return cudaErrorInvalidValue;

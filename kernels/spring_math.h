@@ -195,6 +195,12 @@ FMPC_HD SpringIncidence<Real> incidence_from_arrays(const SpringNetworkView<Real
           net.damping ? net.damping[spring] : Real(0)};
 }
 
+// CSR entry e as a record: the GPU's incidence records where there are some, else read through the spring indices.
+template <typename Real>
+FMPC_HD SpringIncidence<Real> spring_incidence(const SpringNetworkView<Real>& net, int e) {
+  return net.incidence != nullptr ? net.incidence[e] : incidence_from_arrays(net, e);
+}
+
 // The force of entry r's spring on a vertex at (x, v) = (x, y, z, vx, vy, vz): one term of the gather below.
 template <typename Real>
 FMPC_HD void entry_spring_force(const SpringNetworkView<Real>& net, const StateView<Real>& s,

@@ -81,8 +81,12 @@ struct FusedStepArguments {
   int vertex_count;
   FusedScheme scheme;
   StepSize<Real> step;
-  int lanes;  // threads per vertex: 0 or 1 (one thread walks its vertex's entries), 2, 4, 8, 16 or 32
+  int lanes;  // threads per vertex: 0 or 1 (one thread walks its vertex's entries), or valid_lanes
 };
+
+// Threads per vertex the lane kernels take: a power of two up to a warp, so a vertex's lanes are one aligned part of
+// a warp (their shuffles' width).
+constexpr bool valid_lanes(int lanes) { return lanes > 0 && lanes <= 32 && (lanes & (lanes - 1)) == 0; }
 
 // One fused kernel per step: gather the model's forces (springs over their CSR adjacency, elements' corner forces
 // from the element pass launched before it), add the loads, update the vertex. With lanes > 1, that many threads
@@ -167,16 +171,6 @@ cudaError_t launch_apply_probe(const ProbeArguments<float>& arguments, int offse
 cudaError_t launch_apply_probe(const ProbeArguments<double>& arguments, int offset, bool before_step,
                                cudaStream_t stream);
 
-// Forward or semi-implicit Euler for `steps` steps in one cooperative launch (issue 13, small meshes): the grid stays
-// resident and a grid-wide barrier separates the steps instead of a kernel boundary, which removes the launch gaps.
-// A small mesh's step is otherwise bound by one thread's chain of dependent loads over its vertex's entries, so
-// `lanes` threads share a vertex: they compute its springs' (and corners') terms side by side and add them in CSR
-// order, then lane 0 runs the fused step's per-vertex function and the probe's per-entry function in the per-step
-// order (probe before the step, element pass, gather and update, probe after): the results are bitwise those of
-// launch_fused_step with launch_apply_probe around it. The probe before step k + 1 is applied right after the probe after step k by the
-// vertex's own thread, before the barrier that publishes the step: one barrier per step for springs, two with
-// elements (the element pass reads the state the gather then reads its corner forces of). No strain table (its
-// lookup needs a third barrier; those runs take the per-step path).
 // The checks advance makes after a chunk, made by the persistent kernel at its end on the final state (one
 // download then instead of two kernels and their copies): what launch_find_non_finite and launch_count_inverted
 // compute, with their presets written by the kernel itself. first_non_finite null: no checks.
@@ -190,6 +184,17 @@ struct PersistentChecks {
   int* inverted_first;           // per scene
 };
 
+// Forward or semi-implicit Euler for `steps` steps in one cooperative launch (issue 13, small meshes): the grid stays
+// resident and a grid-wide barrier separates the steps instead of a kernel boundary, which removes the launch gaps.
+// A small mesh's step is otherwise bound by one thread's chain of dependent loads over its vertex's entries, so
+// `lanes` threads share a vertex: they compute its springs' (and corners') terms side by side and add them in CSR
+// order, then lane 0 runs the fused step's per-vertex function and the probe's per-entry function in the per-step
+// order (probe before the step, element pass, gather and update, probe after): the results are bitwise those of
+// launch_fused_step with launch_apply_probe around it. The probe before step k + 1 is applied right after the probe
+// after step k by the vertex's own thread, before the barrier that publishes the step: one barrier per step for
+// springs, two with elements (the element pass reads the state the gather then reads its corner forces of). No
+// strain table (its lookup needs a third barrier; those runs take the per-step path).
+
 template <typename Real>
 struct PersistentEulerArguments {
   FusedStepArguments<Real> step;   // in and out are ignored: the kernel alternates state[0] and state[1]
@@ -199,7 +204,7 @@ struct PersistentEulerArguments {
   ProbeArguments<Real> probe;      // count 0: no probe; probe.state is ignored (the kernel passes the buffer)
   const int* probe_entry;          // per vertex: its probe entry, -1 for none; null when probe.count is 0
   int blocks;                      // grid size: at most persistent_euler_block_limit's
-  int lanes;                       // threads per vertex: 1, 2, 4, 8, 16 or 32 (blocks * 256 >= lanes * vertices)
+  int lanes;                       // threads per vertex, valid_lanes (blocks * 256 >= lanes * vertices)
   PersistentChecks checks;         // the last piece of a chunk
 };
 constexpr int kPersistentThreads = 256;  // per block

@@ -80,13 +80,9 @@ class PinnedArray {
   PinnedArray() = default;
   PinnedArray(const PinnedArray&) = delete;
   PinnedArray& operator=(const PinnedArray&) = delete;
-  ~PinnedArray() {
-    if (data_ != nullptr) cudaFreeHost(data_);
-  }
+  ~PinnedArray() { release(); }
   cudaError_t allocate(std::size_t size) {
-    if (data_ != nullptr) cudaFreeHost(data_);
-    data_ = nullptr;
-    size_ = 0;
+    release();
     if (size == 0) return cudaSuccess;
     void* raw = nullptr;
     const cudaError_t status = cudaMallocHost(&raw, size * sizeof(T));
@@ -99,6 +95,11 @@ class PinnedArray {
   std::size_t size() const { return size_; }
 
  private:
+  void release() {
+    if (data_ != nullptr) cudaFreeHost(data_);
+    data_ = nullptr;
+    size_ = 0;
+  }
   T* data_ = nullptr;
   std::size_t size_ = 0;
 };
@@ -537,10 +538,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   // The per-step fused kernel's lanes, and whether chunks of forward or semi-implicit Euler run as one cooperative
-  // launch each (launch_persistent_euler):
-  // where every vertex gets its own thread with all blocks resident, no strain table is looked up between steps
-  // and the device can launch cooperative kernels. Larger meshes keep one launch per kernel: their steps are long
-  // enough that launches cost little, and a thread per vertex keeps the memory system busiest.
+  // launch each (launch_persistent_euler): where every vertex gets its own group of lanes with all blocks resident,
+  // no strain table is looked up between steps and the device can launch cooperative kernels. Larger meshes keep
+  // one launch per kernel: their steps are long enough that launches cost little.
   bool choose_launches(DiagnosticList& diagnostics) {
     // The per-step kernel's lanes (GpuOptions::gather_lanes; automatic from what an H100 measured, docs/
     // performance.md, sixth run): springs on a 20^3 box (9,261 vertices) step in 7.4 us with 8 lanes, 9.5 with 4 and
@@ -548,9 +548,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     // while a thread per vertex cannot fill the GPU (about 2^18 resident threads), so the automatic choice is the
     // most of 8, 4, 2, 1 that keeps vertices x lanes within 2^18. Elements alone gather contiguous corner forces,
     // which lanes read coalesced: 4 lanes (the 120^3 FEM box: 812 steps/s against 769 with 1).
-    const int gather = options_.gather_lanes;
-    if (gather > 0 && gather <= 32 && (gather & (gather - 1)) == 0) {
-      gather_lanes_ = gather;
+    if (valid_lanes(options_.gather_lanes)) {
+      gather_lanes_ = options_.gather_lanes;
     } else if (model_.kind == GatherKind::Elements) {
       gather_lanes_ = 4;
     } else {
@@ -569,9 +568,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     };
     // The most lanes per vertex, up to 16 (most vertices of the generated meshes have at most 16 springs, so one
     // round of lanes covers them with their records in registers), whose grid fits.
-    const int asked = options_.persistent_lanes;
-    const bool valid = asked > 0 && asked <= 32 && (asked & (asked - 1)) == 0;
-    const int first = valid ? asked : 16;
+    const int first = valid_lanes(options_.persistent_lanes) ? options_.persistent_lanes : 16;
     for (int lanes = first; lanes >= 1; lanes /= 2) {
       if (blocks_for_lanes(lanes) > limit) continue;
       persistent_blocks_ = static_cast<int>(blocks_for_lanes(lanes));
@@ -876,15 +873,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         case sim::Integrator::ForwardEuler:
         case sim::Integrator::SemiImplicitEuler: {
           FMPC_CUDA_CHECK(launch_element_forces(model_, state_[parity].view(), stream_), diagnostics, false);
-          FusedStepArguments<Real> a{};
-          a.model = model_;
-          a.loads = loads_;
+          FusedStepArguments<Real> a = fused_arguments();
           a.in = state_[parity].view();
           a.out = state_[1 - parity].mutable_view();
-          a.vertex_count = n_;
-          a.scheme =
-              scheme() == sim::Integrator::ForwardEuler ? FusedScheme::ForwardEuler : FusedScheme::SemiImplicitEuler;
-          a.step = step_;
           a.lanes = gather_lanes_;
           FMPC_CUDA_CHECK(launch_fused_step(a, stream_), diagnostics, false);
           parity = 1 - parity;
@@ -1099,18 +1090,24 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
+  // Forward or semi-implicit Euler's arguments but the state buffers and the lanes.
+  FusedStepArguments<Real> fused_arguments() const {
+    FusedStepArguments<Real> a{};
+    a.model = model_;
+    a.loads = loads_;
+    a.vertex_count = n_;
+    a.scheme = scheme() == sim::Integrator::ForwardEuler ? FusedScheme::ForwardEuler : FusedScheme::SemiImplicitEuler;
+    a.step = step_;
+    return a;
+  }
+
   // `count` steps in cooperative launches of at most kMaxStepsPerGraph steps each (probe times from step_base).
   bool run_persistent(std::size_t count, DiagnosticList& diagnostics) {
     for (std::size_t done = 0; done < count;) {
       const std::size_t piece = std::min(count - done, kMaxStepsPerGraph);
       if (!set_step_base(diagnostics)) return false;
       PersistentEulerArguments<Real> a{};
-      a.step.model = model_;
-      a.step.loads = loads_;
-      a.step.vertex_count = n_;
-      a.step.scheme =
-          scheme() == sim::Integrator::ForwardEuler ? FusedScheme::ForwardEuler : FusedScheme::SemiImplicitEuler;
-      a.step.step = step_;
+      a.step = fused_arguments();
       a.state[0] = state_[0].mutable_view();
       a.state[1] = state_[1].mutable_view();
       a.first_parity = current_;

@@ -24,9 +24,10 @@ struct GpuOptions {
   // Capture the steps between two NaN/Inf checks into a CUDA graph once and replay it (saves the launch overhead
   // that dominates small meshes). The results are bitwise the same either way.
   bool use_graphs = true;
-  // Forward and semi-implicit Euler on meshes small enough for one thread per vertex with every block resident: each
-  // chunk of steps in one cooperative launch with a grid barrier between steps (launch_persistent_euler) instead of
-  // a few kernels per step. The results are bitwise the same either way; use_graphs then has no effect.
+  // Forward and semi-implicit Euler on meshes small enough for a group of threads per vertex with every block
+  // resident: each chunk of steps in one cooperative launch with a grid barrier between steps
+  // (launch_persistent_euler) instead of a few kernels per step. The results are bitwise the same either way;
+  // use_graphs then has no effect.
   bool persistent = true;
   // Threads per vertex in the persistent launch (1, 2, 4, 8, 16 or 32; 0: the most of 16, 8, 4, 2, 1 whose grid is
   // resident). A setting whose grid does not fit falls back to fewer.
