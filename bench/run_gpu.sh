@@ -17,6 +17,12 @@
 #               and cpu, and SOFA's liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as
 #               liver-CUDA.scn) on CUDA and on the CPU; the demo's 12-patient cohort (--patients) on both,
 #               cohort.csv compared; large boxes (240^3 springs, 120^3 FEM) end to end; outputs under $OUT/scenes
+#   setup       (only when asked: --only setup) bench/setup's fmpc_setup_bench on the GPU machine's cores: boxes of
+#               60^3, 120^3 and 240^3 cells (issue 13: 100M springs set up in 20 s, 64 bytes per spring at peak)
+#               with the model builder's breakdown and the simulators' peak, then 120^3 on one thread (same checksum)
+#   profile     (only when asked: --only profile) Nsight Compute (ncu) on the kernels that bound the goals: the FEM
+#               120^3 element and vertex passes (fmpc_sim_bench --fem-only), the carried fmpc's 240^3 springs box
+#               and 20^3 small box; reports as text in $OUT/profile_*.txt
 #   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
 #               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540); the
 #               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run
@@ -196,8 +202,9 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | scenes | evaluator | fuzz) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator, fuzz)" >&2; exit 2 ;;
+          tests | sanitizers | bench | scenes | evaluator | fuzz | setup | profile) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator, fuzz, setup, profile)" >&2
+             exit 2 ;;
         esac
       done
       ;;
@@ -416,6 +423,45 @@ unpack_programs() {
   fi
 }
 
+# Host setup of large boxes on this machine's cores (bench/setup; docs/performance.md "Host setup and frames").
+setup_section() {
+  section "setup: fmpc_setup_bench (host setup, peak bytes per spring)"
+  local bench="$BUILD/bench/setup/fmpc_setup_bench"
+  [[ -x "$bench" ]] || { fail "no $bench (the build section builds it)"; return 1; }
+  if "$bench" --cells "${SETUP_CELLS:-60,120,240}" --breakdown --simulator --out "$OUT" > "$OUT/setup_bench.log" 2>&1 &&
+      "$bench" --cells 120 --threads 1 > "$OUT/setup_bench_1thread.log" 2>&1; then
+    record "setup_bench: ok (setup_bench.log, setup_bench_1thread.log)"
+  else
+    tail -5 "$OUT/setup_bench.log" "$OUT/setup_bench_1thread.log"
+    fail "setup_bench (see setup_bench*.log)"
+  fi
+}
+
+# ncu on the kernels behind issue 10's and 13's goals. Sections: throughput, memory, occupancy, warp states.
+profile_section() {
+  section "profile: Nsight Compute"
+  local ncu
+  ncu=$(command -v ncu || ls /usr/local/cuda/bin/ncu 2>/dev/null | head -1)
+  [[ -n "$ncu" ]] || { fail "ncu not found"; return 1; }
+  local sections=(--section SpeedOfLight --section MemoryWorkloadAnalysis --section Occupancy --section LaunchStats
+    --section WarpStateStats --section SchedulerStats --section ComputeWorkloadAnalysis)
+  "$ncu" "${sections[@]}" --kernel-name regex:'element_forces|fused_step' --launch-skip 8 --launch-count 4 \
+    "$BUILD/bench/sim/fmpc_sim_bench" --fem-only --fem-cells 120 --min-seconds 0.02 > "$OUT/profile_fem.txt" 2>&1 ||
+    fail "ncu on the FEM bench (see profile_fem.txt)"
+  if unpack_programs && [[ -x "$UNPACKED/bin/fmpc" ]]; then
+    mkdir -p "$BUILD/scenes"
+    "$ncu" "${sections[@]}" --kernel-name regex:'fused_step' --launch-skip 4 --launch-count 2 \
+      "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/large_box_springs.yaml" --backend cuda --steps 20 \
+      -o "$BUILD/scenes/profile_large" > "$OUT/profile_large_springs.txt" 2>&1 ||
+      fail "ncu on large_box_springs (see profile_large_springs.txt)"
+    "$ncu" "${sections[@]}" --kernel-name regex:'persistent|fused_step' --launch-skip 4 --launch-count 2 \
+      "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/small_box_springs.yaml" --backend cuda --steps 3000 \
+      -o "$BUILD/scenes/profile_small" > "$OUT/profile_small_springs.txt" 2>&1 ||
+      fail "ncu on small_box_springs (see profile_small_springs.txt)"
+  fi
+  record "profile: $(ls "$OUT"/profile_*.txt 2>/dev/null | wc -l) reports"
+}
+
 # Long fuzzing runs of the carried libFuzzer targets (tests/fuzz/run_fuzzers.sh), FUZZ_SECONDS (default 540) with
 # FUZZ_JOBS processes per target (default: the machine's cores over the 8 targets); the corpora stay in
 # $BUILD/fuzz-corpus, so runs on a warm machine add up (the CPU seconds per target, over all runs, in the report).
@@ -496,9 +542,11 @@ evaluator_section() {
 }
 
 device_info
-if wanted tests || wanted sanitizers || wanted bench; then
+if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted profile; then
   if build_section; then
     simulator_section
+    wanted setup && setup_section
+    wanted profile && profile_section
   fi
 fi
 wanted scenes && scenes_section

@@ -76,12 +76,12 @@ FMPC_HD TetrahedronMaterial<Real> tetrahedron_material(const TetrahedronFieldVie
   return m;
 }
 
-// The element pass: element e's four corner forces into force[3 corner_slot[4 e + a] ..] (the vertex-major layout
+// The element pass: element e's four corner forces into force[corner_slot[4 e + a]] (the vertex-major layout
 // CornerForceView reads). Velocities are read only where a stiffness damping array exists: tetrahedron_forces
 // reads them for nothing else, and they are half the pass's gathered bytes.
 template <typename Real>
 FMPC_HD void tetrahedron_corner_forces(int e, const TetrahedronFieldView<Real>& f, const StateView<Real>& s,
-                                       Real* force) {
+                                       CornerForce<Real>* force) {
   Real x[4][3], v[4][3] = {}, out[4][3];
   const bool damped = f.stiffness_damping != nullptr;
   for (int a = 0; a < 4; ++a) {
@@ -97,10 +97,7 @@ FMPC_HD void tetrahedron_corner_forces(int e, const TetrahedronFieldView<Real>& 
   }
   const TetrahedronMaterial<Real> m = tetrahedron_material(f, e);
   tetrahedron_forces(m, x, v, out);
-  for (int a = 0; a < 4; ++a) {
-    Real* slot = force + 3 * f.corner_slot[4 * e + a];
-    for (int i = 0; i < 3; ++i) slot[i] = out[a][i];
-  }
+  for (int a = 0; a < 4; ++a) force[f.corner_slot[4 * e + a]] = {out[a][0], out[a][1], out[a][2], Real(0)};
 }
 
 // Whether element e of `corners` is inverted or flat at positions s (signed volume <= 0), for the inversion count.

@@ -465,10 +465,10 @@ __device__ GatheredForces<Real> lanes_gather(const ForceModelView<Real>& m, int 
     lane_ordered_sum(
         mask, lane, lanes, cache.corner_begin, cache.corner_end,
         [&](int k, Real& t0, Real& t1, Real& t2) {
-          const Real* corner = m.corners.force + 3 * k;
-          t0 = corner[0];
-          t1 = corner[1];
-          t2 = corner[2];
+          const kernels::CornerForce<Real> corner = m.corners.force[k];
+          t0 = corner.x;
+          t1 = corner.y;
+          t2 = corner.z;
         },
         cx, cy, cz);
     if constexpr (K == GatherKind::Elements) {

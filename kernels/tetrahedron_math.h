@@ -454,14 +454,22 @@ FMPC_HD void tetrahedron_forces(const TetrahedronMaterial<Real>& m, const Real x
 
 // ---- the gather: corner forces summed per vertex ------------------------------------------------------------------
 
+// One corner's force, padded to four values: the element pass writes it with one aligned vector store and the gather
+// reads it with one aligned load. With three scalar stores per corner (12 per element, each to its own 32-byte
+// sector) the element pass was bound by L2 throughput (94% of it at 120^3 on an H100, ncu; docs/performance.md).
+template <typename Real>
+struct alignas(4 * sizeof(Real)) CornerForce {
+  Real x, y, z, unused;
+};
+
 // The corners of the elements at each vertex, as CSR: entries corner[offset[v] .. offset[v+1]) are 4 e + c (element
-// e's corner c), increasing; force holds 3 values per entry in the same order (vertex-major: force[3 k ..] is entry
+// e's corner c), increasing; force holds one CornerForce per entry in the same order (vertex-major: force[k] is entry
 // k's, written by the element pass through TetrahedronFieldView::corner_slot), so a vertex reads one contiguous run.
 template <typename Real>
 struct CornerForceView {
   const int* offset;
   const int* corner;
-  const Real* force;
+  const CornerForce<Real>* force;
 };
 
 // Sum of the corner forces at vertex v, in CSR order (deterministic; no atomics).
@@ -470,10 +478,10 @@ FMPC_HD void gather_corner_force(int v, const CornerForceView<Real>& view, Real&
   Real sx = Real(0), sy = Real(0), sz = Real(0);
   FMPC_UNROLL_GATHER
   for (int k = view.offset[v]; k < view.offset[v + 1]; ++k) {
-    const Real* f = view.force + 3 * k;
-    sx += f[0];
-    sy += f[1];
-    sz += f[2];
+    const CornerForce<Real> f = view.force[k];
+    sx += f.x;
+    sy += f.y;
+    sz += f.z;
   }
   fx = sx;
   fy = sy;

@@ -28,7 +28,7 @@ struct ForceModelView {
   kernels::SpringNetworkView<Real> springs;
   kernels::TetrahedronFieldView<Real> field;
   kernels::CornerForceView<Real> corners;  // corners.force == corner_force
-  Real* corner_force;                      // 12 per element
+  kernels::CornerForce<Real>* corner_force;  // 4 per element
 };
 
 // The springs' incidence records (kernels::SpringIncidence) of every CSR entry, from the network's arrays; run once

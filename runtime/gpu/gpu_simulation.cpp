@@ -445,7 +445,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       FMPC_CUDA_CHECK(field_damping_.upload(convert<Real>(c.stiffness_damping)), diagnostics, false);
       FMPC_CUDA_CHECK(field_damping_d_.upload(c.stiffness_damping), diagnostics, false);
     }
-    FMPC_CUDA_CHECK(corner_force_.allocate(12 * static_cast<std::size_t>(element_count_)), diagnostics, false);
+    FMPC_CUDA_CHECK(corner_force_.allocate(4 * static_cast<std::size_t>(element_count_)), diagnostics, false);
     const auto data = [](const DeviceArray<Real>& array) -> const Real* { return array.size() ? array.data() : nullptr; };
     const auto data_d = [](const DeviceArray<double>& array) -> const double* {
       return array.size() ? array.data() : nullptr;
@@ -1388,8 +1388,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceArray<kernels::SpringIncidence<Real>> incidence_;
   DeviceArray<double> start_x_, start_y_, start_z_;  // the start positions, for largest_displacement
   DeviceArray<unsigned int> inverted_count_;
-  DeviceArray<Real> field_rest_inverse_, field_rest_volume_, field_youngs_, field_poisson_, field_bulk_, field_damping_,
-      corner_force_;
+  DeviceArray<Real> field_rest_inverse_, field_rest_volume_, field_youngs_, field_poisson_, field_bulk_, field_damping_;
+  DeviceArray<kernels::CornerForce<Real>> corner_force_;
   DeviceArray<double> field_rest_inverse_d_, field_rest_volume_d_, field_youngs_d_, field_poisson_d_, field_bulk_d_,
       field_damping_d_;
   DeviceArray<kernels::TetrahedronLinearisation> element_linearisation_;

@@ -100,7 +100,7 @@ class CpuSimulationImpl final : public CpuSimulation {
       field_poisson_ratio_ = convert(field.poisson_ratio);
       field_bulk_modulus_ = convert(field.bulk_modulus);
       field_damping_ = convert(field.stiffness_damping);
-      corner_force_.assign(12 * field.size(), Real(0));
+      corner_force_.assign(4 * field.size(), kernels::CornerForce<Real>{});
       const auto data_or_null = [](const std::vector<Real>& values) { return values.empty() ? nullptr : values.data(); };
       field_view_.law = field.law;
       field_view_.count = static_cast<int>(field.size());
@@ -610,7 +610,8 @@ class CpuSimulationImpl final : public CpuSimulation {
   kernels::VertexLoads<Real> loads_{};
   std::vector<int> corners_;  // 4 per tetrahedron
   std::vector<Real> field_rest_inverse_, field_rest_volume_, field_youngs_modulus_, field_poisson_ratio_,
-      field_bulk_modulus_, field_damping_, corner_force_;
+      field_bulk_modulus_, field_damping_;
+  std::vector<kernels::CornerForce<Real>> corner_force_;
   kernels::TetrahedronFieldView<Real> field_view_{};
   kernels::CornerForceView<Real> corner_view_{};
   Real h_ = Real(0);

@@ -180,7 +180,7 @@ TEST_CASE("the corner CSR: slots invert it, and the vertex gather sums each vert
   view.poisson_ratio = ratio.data();
   view.stiffness_damping = damping.data();
   const kernels::StateView<float> state{x[0].data(), x[1].data(), x[2].data(), v[0].data(), v[1].data(), v[2].data()};
-  std::vector<float> slotted(3 * corners);
+  std::vector<kernels::CornerForce<float>> slotted(corners);
   for (int e = 0; e < view.count; ++e) kernels::tetrahedron_corner_forces(e, view, state, slotted.data());
   const kernels::CornerForceView<float> gather{field.corner_offset.data(), field.corner_index.data(), slotted.data()};
 
