@@ -346,11 +346,17 @@ std::vector<Row> cohort_rows(std::size_t count, const Options& options) {
     return {row};
   }
   std::vector<Row> rows;
-  for (const Launch launch : {Launch::Graphs, Launch::Persistent}) {
-    const auto batch = gpu::GpuBatchSimulation::create(patients, gpu_options_for(launch), diagnostics);
+  // The per-step gather's threads per vertex (0: the automatic choice) on the cohort's many short CSR rows.
+  const std::pair<Launch, int> variants[] = {
+      {Launch::Graphs, 0}, {Launch::Graphs, 2}, {Launch::Graphs, 4}, {Launch::Graphs, 8}, {Launch::Persistent, 0}};
+  for (const auto& [launch, lanes] : variants) {
+    gpu::GpuOptions gpu_options = gpu_options_for(launch);
+    gpu_options.gather_lanes = lanes;
+    const auto batch = gpu::GpuBatchSimulation::create(patients, gpu_options, diagnostics);
     if (launch == Launch::Persistent && batch && !batch->persistent_launch()) continue;  // too large for one grid
     Row timed = row;
     timed.graphs = launch_name(launch);
+    if (lanes > 0) timed.graphs += " lanes " + std::to_string(lanes);
     if (!batch ||
         !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, timed)) {
       timed.status = failure_text(diagnostics);
