@@ -180,6 +180,39 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     c.has_element_damping =
         c.has_element_damping || (setup.tetrahedron_field && !setup.tetrahedron_field->stiffness_damping.empty());
   }
+  // Every array at its final size first: grown by doubling, a 97M-spring box's arrays were copied about twice over
+  // and held at up to twice their size.
+  std::size_t vertices = 0, entries_total = 0, springs = 0, elements = 0, corner_total = 0;
+  for (const auto& setup : scenes) {
+    vertices += setup.rest_positions.size();
+    entries_total += setup.springs.adjacency_spring.size();
+    springs += setup.springs.size();
+    elements += setup.tetrahedra.size();
+    if (setup.tetrahedron_field) corner_total += setup.tetrahedron_field->corner_index.size();
+  }
+  for (auto* array : {&c.offset, &c.vertex_scene}) array->reserve(vertices + 1);
+  for (auto* array : {&c.spring, &c.neighbour}) array->reserve(entries_total);
+  for (auto* array : {&c.first, &c.second}) array->reserve(springs);
+  for (auto* array : {&c.rest_length, &c.stiffness}) array->reserve(springs);
+  if (c.has_damping) c.damping.reserve(springs);
+  c.mass.reserve(vertices);
+  c.fixed.reserve(vertices);
+  for (std::size_t axis = 0; axis < 3; ++axis) {
+    c.rest[axis].reserve(vertices);
+    c.position[axis].reserve(vertices);
+    c.velocity[axis].reserve(vertices);
+    if (c.has_forces) c.force[axis].reserve(vertices);
+  }
+  c.corners.reserve(4 * elements);
+  c.element_scene.reserve(elements);
+  if (c.has_field) {
+    c.corner_offset.reserve(vertices + 1);
+    c.corner_index.reserve(corner_total);
+    c.corner_slot.reserve(corner_total);
+    c.rest_inverse.reserve(9 * elements);
+    for (auto* array : {&c.rest_volume, &c.youngs_modulus, &c.poisson_ratio, &c.bulk_modulus}) array->reserve(elements);
+    if (c.has_element_damping) c.stiffness_damping.reserve(elements);
+  }
   int entries = 0, corner_entries = 0;
   for (std::size_t s = 0; s < scenes.size(); ++s) {
     const sim::SimulationSetup& setup = scenes[s];
@@ -1488,8 +1521,20 @@ bool cuda_device_available(std::string& description) {
   return true;
 }
 
+namespace {
+std::unique_ptr<GpuBatchSimulation> create_batch(std::vector<sim::SimulationSetup> scenes, const GpuOptions& options,
+                                                 DiagnosticList& diagnostics);
+}  // namespace
+
 std::unique_ptr<GpuBatchSimulation> GpuBatchSimulation::create(const std::vector<sim::SimulationSetup>& scenes,
                                                                const GpuOptions& options, DiagnosticList& diagnostics) {
+  return create_batch(scenes, options, diagnostics);
+}
+
+namespace {
+// The batch keeps its scenes (probes, messages, the displacement bound): moved in, not copied again.
+std::unique_ptr<GpuBatchSimulation> create_batch(std::vector<sim::SimulationSetup> scenes, const GpuOptions& options,
+                                                 DiagnosticList& diagnostics) {
   if (scenes.empty()) {
     diagnostics.error(SourceRange{}, "a GPU batch needs at least one scene");
     return nullptr;
@@ -1531,16 +1576,17 @@ std::unique_ptr<GpuBatchSimulation> GpuBatchSimulation::create(const std::vector
   }
   std::unique_ptr<GpuBatchSimulation> batch;
   if (scenes.front().precision == sim::Precision::Float) {
-    auto impl = std::make_unique<GpuBatchImpl<float>>(scenes, std::move(stability), options);
+    auto impl = std::make_unique<GpuBatchImpl<float>>(std::move(scenes), std::move(stability), options);
     if (!impl->upload(diagnostics)) return nullptr;
     batch = std::move(impl);
   } else {
-    auto impl = std::make_unique<GpuBatchImpl<double>>(scenes, std::move(stability), options);
+    auto impl = std::make_unique<GpuBatchImpl<double>>(std::move(scenes), std::move(stability), options);
     if (!impl->upload(diagnostics)) return nullptr;
     batch = std::move(impl);
   }
   return batch;
 }
+}  // namespace
 
 std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup& setup, DiagnosticList& diagnostics) {
   return create(setup, GpuOptions{}, diagnostics);
@@ -1548,7 +1594,9 @@ std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup&
 
 std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup& setup, const GpuOptions& options,
                                                      DiagnosticList& diagnostics) {
-  auto batch = GpuBatchSimulation::create({setup}, options, diagnostics);
+  std::vector<sim::SimulationSetup> one;
+  one.push_back(setup);
+  auto batch = create_batch(std::move(one), options, diagnostics);
   if (!batch) return nullptr;
   return std::make_unique<GpuSimulationImpl>(std::move(batch));
 }

@@ -47,6 +47,15 @@ struct PrecisionCheckResult {
   bool agrees = true;
 };
 
+// Where a run's time went (s), for summary.json's `timing`: what the wall time (the stepping rate) includes and what
+// it leaves out.
+struct SceneRunTiming {
+  double simulator = 0.0;      // creating the simulator: copies, conversions, the upload to the device (not in wall)
+  double first_advance = 0.0;  // the first advance (in stepping): also graph capture and the first kernel loads
+  double stepping = 0.0;       // every advance, with the NaN/Inf and inversion checks
+  double recording = 0.0;      // the events: largest displacement, frames and samples (downloads, energies, files)
+};
+
 struct SceneRunResult {
   bool completed = false;  // false: stopped by a non-finite state (the error says where)
   std::size_t steps_planned = 0;
@@ -54,6 +63,7 @@ struct SceneRunResult {
   StabilityReport stability;
   double wall_seconds = 0.0;
   double steps_per_second = 0.0;
+  SceneRunTiming timing;
   double max_displacement = 0.0;  // m, over every vertex at the recorded times (frames and samples)
   std::vector<ProbeCurvePoint> probe_curve;  // at the samples; empty without a probe
   InversionReport inversions;

@@ -1,5 +1,6 @@
 // fmpc simulate SCENE: loads a scene file, builds the spring model (fuzzy stiffness included), runs it and writes
 // frames, a CSV time series, a JSON summary and, with a probe, a force-displacement PNG (docs/scenes.md).
+#include <chrono>
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
@@ -173,7 +174,10 @@ int run_simulate(const SimulateOptions& options) {
     report(diagnostics, sources);
     return kExitErrors;
   }
+  const auto build_start = std::chrono::steady_clock::now();
   std::optional<sim::BuiltScene> built = sim::build_scene(*scene, diagnostics);
+  const double build_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - build_start).count();
   if (built)
     for (const auto& [path, source] : built->sources) sources.add(path, source);
   if (!built) {
@@ -214,7 +218,11 @@ int run_simulate(const SimulateOptions& options) {
             << setup.fixed_vertices.size() << " fixed\n"
             << "  stiffness: " << built->stiffness_description << "\n"
             << "  wall time " << six_digits(result->wall_seconds) << " s (" << six_digits(result->steps_per_second)
-            << " steps/s), max displacement " << six_digits(result->max_displacement * 1000.0) << " mm\n";
+            << " steps/s), max displacement " << six_digits(result->max_displacement * 1000.0) << " mm\n"
+            << "  time: scene setup " << six_digits(build_seconds) << " s, simulator " << six_digits(result->timing.simulator)
+            << " s, stepping " << six_digits(result->timing.stepping) << " s (first call "
+            << six_digits(result->timing.first_advance) << " s), recording " << six_digits(result->timing.recording)
+            << " s\n";
   if (!result->probe_curve.empty()) {
     const sim::ProbeCurvePoint& last = result->probe_curve.back();
     std::cout << "  probe: " << setup.probe->vertices.size() << " vertices, displacement "
