@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "runtime/gpu/gpu_launch.h"
+#include "runtime/integrate/worker_pool.h"
 
 // Checks a CUDA call; on failure appends an error naming the call and CUDA's reason, and returns `failure` from
 // the enclosing function. Never exits.
@@ -41,7 +42,8 @@ class DeviceArray {
   DeviceArray(const DeviceArray&) = delete;
   DeviceArray& operator=(const DeviceArray&) = delete;
   ~DeviceArray() { release(); }
-  cudaError_t upload(const std::vector<T>& host) {
+  template <typename Allocator>
+  cudaError_t upload(const std::vector<T, Allocator>& host) {
     const cudaError_t status = allocate(host.size());
     if (status != cudaSuccess || size_ == 0) return status;
     return cudaMemcpy(data_, host.data(), size_ * sizeof(T), cudaMemcpyHostToDevice);
@@ -148,19 +150,40 @@ cudaError_t copy_async(DeviceArray<Real>& to, const DeviceArray<Real>& from, cud
   return cudaMemcpyAsync(to.data(), from.data(), from.size() * sizeof(Real), cudaMemcpyDeviceToDevice, stream);
 }
 
+// Host arrays whose resize leaves trivial values uninitialised, so that the pool's workers touch their pages first:
+// std::vector's zero fill ran on one thread, page faults included (GpuSimulation::create of a 97M-spring box took
+// 29.8 s on the H100 machine's 16 cores, most of it copying on one thread).
+template <typename T>
+struct UninitialisedAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = UninitialisedAllocator<U>;
+  };
+  UninitialisedAllocator() = default;
+  template <typename U>
+  UninitialisedAllocator(const UninitialisedAllocator<U>&) {}
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
+    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <typename T>
+using HostArray = std::vector<T, UninitialisedAllocator<T>>;
+
 // The host-side concatenation of a batch (see gpu_launch.h): everything in double, converted on upload.
 struct ConcatenatedScenes {
   std::vector<int> vertex_begin{0}, spring_begin{0}, element_begin{0};  // scene_count + 1 entries each
-  std::vector<int> offset, spring, neighbour, first, second, vertex_scene;
-  std::vector<double> rest_length, stiffness, damping, mass;
-  std::vector<unsigned char> fixed;
-  std::vector<double> rest[3], position[3], velocity[3], force[3];
+  HostArray<int> offset, spring, neighbour, first, second, vertex_scene;
+  HostArray<double> rest_length, stiffness, damping, mass;
+  HostArray<unsigned char> fixed;
+  HostArray<double> rest[3], position[3], velocity[3], force[3];
   bool has_forces = false;
   bool has_damping = false;  // false: no scene has dashpots, and no damping array is uploaded
   // Tetrahedra (every scene's, for inversion counts) and, when the scenes have a tetrahedron field, its arrays and
   // the corner CSR (each scene's corners point at its own elements).
-  std::vector<int> corners, element_scene, corner_offset, corner_index, corner_slot;
-  std::vector<double> rest_inverse, rest_volume, youngs_modulus, poisson_ratio, bulk_modulus, stiffness_damping;
+  HostArray<int> corners, element_scene, corner_offset, corner_index, corner_slot;
+  HostArray<double> rest_inverse, rest_volume, youngs_modulus, poisson_ratio, bulk_modulus, stiffness_damping;
   bool has_field = false;
   bool has_element_damping = false;
 };
@@ -169,124 +192,132 @@ bool force_probe(const sim::SimulationSetup& setup) {
   return setup.probe && setup.probe->mode == sim::ProbeLoad::Mode::Force;
 }
 
+// out[at + i] = value(i) for i in [0, count), on the pool.
+template <typename T, typename Value>
+void fill(sim::WorkerPool& pool, HostArray<T>& out, std::size_t at, std::size_t count, const Value& value) {
+  T* to = out.data() + at;
+  pool.run(
+      count, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) to[i] = value(i);
+      },
+      1 << 16);
+}
+
 ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) {
   ConcatenatedScenes c;
+  std::size_t vertices = 0, entries = 0, springs = 0, elements = 0, corners = 0;
   for (const auto& setup : scenes) {
     c.has_forces = c.has_forces || !setup.external_forces.empty() || force_probe(setup);
     c.has_damping = c.has_damping || !setup.springs.damping.empty();
-  }
-  for (const auto& setup : scenes) {
     c.has_field = c.has_field || setup.tetrahedron_field.has_value();
     c.has_element_damping =
         c.has_element_damping || (setup.tetrahedron_field && !setup.tetrahedron_field->stiffness_damping.empty());
-  }
-  // Every array at its final size first: grown by doubling, a 97M-spring box's arrays were copied about twice over
-  // and held at up to twice their size.
-  std::size_t vertices = 0, entries_total = 0, springs = 0, elements = 0, corner_total = 0;
-  for (const auto& setup : scenes) {
     vertices += setup.rest_positions.size();
-    entries_total += setup.springs.adjacency_spring.size();
+    entries += setup.springs.adjacency_spring.size();
     springs += setup.springs.size();
     elements += setup.tetrahedra.size();
-    if (setup.tetrahedron_field) corner_total += setup.tetrahedron_field->corner_index.size();
+    if (setup.tetrahedron_field) corners += setup.tetrahedron_field->corner_index.size();
   }
-  for (auto* array : {&c.offset, &c.vertex_scene}) array->reserve(vertices + 1);
-  for (auto* array : {&c.spring, &c.neighbour}) array->reserve(entries_total);
-  for (auto* array : {&c.first, &c.second}) array->reserve(springs);
-  for (auto* array : {&c.rest_length, &c.stiffness}) array->reserve(springs);
-  if (c.has_damping) c.damping.reserve(springs);
-  c.mass.reserve(vertices);
-  c.fixed.reserve(vertices);
+  for (auto* array : {&c.offset, &c.vertex_scene}) array->resize(vertices);
+  c.offset.reserve(vertices + 1);
+  for (auto* array : {&c.spring, &c.neighbour}) array->resize(entries);
+  for (auto* array : {&c.first, &c.second}) array->resize(springs);
+  for (auto* array : {&c.rest_length, &c.stiffness, &c.mass}) array->resize(array == &c.mass ? vertices : springs);
+  if (c.has_damping) c.damping.resize(springs);
+  c.fixed.resize(vertices);
   for (std::size_t axis = 0; axis < 3; ++axis) {
-    c.rest[axis].reserve(vertices);
-    c.position[axis].reserve(vertices);
-    c.velocity[axis].reserve(vertices);
-    if (c.has_forces) c.force[axis].reserve(vertices);
+    for (auto* array : {&c.rest[axis], &c.position[axis], &c.velocity[axis]}) array->resize(vertices);
+    if (c.has_forces) c.force[axis].resize(vertices);
   }
-  c.corners.reserve(4 * elements);
-  c.element_scene.reserve(elements);
+  c.corners.resize(4 * elements);
+  c.element_scene.resize(elements);
   if (c.has_field) {
+    c.corner_offset.resize(vertices);
     c.corner_offset.reserve(vertices + 1);
-    c.corner_index.reserve(corner_total);
-    c.corner_slot.reserve(corner_total);
-    c.rest_inverse.reserve(9 * elements);
-    for (auto* array : {&c.rest_volume, &c.youngs_modulus, &c.poisson_ratio, &c.bulk_modulus}) array->reserve(elements);
-    if (c.has_element_damping) c.stiffness_damping.reserve(elements);
+    c.corner_index.resize(corners);
+    c.corner_slot.resize(corners);
+    c.rest_inverse.resize(9 * elements);
+    for (auto* array : {&c.rest_volume, &c.youngs_modulus, &c.poisson_ratio, &c.bulk_modulus}) array->resize(elements);
+    if (c.has_element_damping) c.stiffness_damping.resize(elements);
   }
-  int entries = 0, corner_entries = 0;
+  sim::WorkerPool pool(sim::resolve_thread_count(0, entries + 4 * elements + vertices));
+  int entry_base = 0, corner_base = 0;
   for (std::size_t s = 0; s < scenes.size(); ++s) {
     const sim::SimulationSetup& setup = scenes[s];
     const sim::SpringNetwork& net = setup.springs;
     const int vertex_base = c.vertex_begin.back(), spring_base = c.spring_begin.back();
     const int element_base = c.element_begin.back();
-    for (const sim::Tetrahedron& t : setup.tetrahedra) {
-      for (const auto v : t) c.corners.push_back(vertex_base + v);
-      c.element_scene.push_back(static_cast<int>(s));
-    }
+    const auto scene = static_cast<int>(s);
+    const auto vb = static_cast<std::size_t>(vertex_base), sb = static_cast<std::size_t>(spring_base);
+    const auto eb = static_cast<std::size_t>(element_base);
+    const std::size_t n = setup.rest_positions.size(), m = setup.tetrahedra.size();
+    fill(pool, c.corners, 4 * eb, 4 * m,
+         [&](std::size_t i) { return vertex_base + setup.tetrahedra[i / 4][i % 4]; });
+    fill(pool, c.element_scene, eb, m, [&](std::size_t) { return scene; });
     if (setup.tetrahedron_field) {
       const sim::TetrahedronField& field = *setup.tetrahedron_field;
-      for (std::size_t v = 0; v < setup.rest_positions.size(); ++v)
-        c.corner_offset.push_back(corner_entries + field.corner_offset[v]);
-      for (const auto corner : field.corner_index) c.corner_index.push_back(4 * element_base + corner);
-      for (const auto slot : field.corner_slot) c.corner_slot.push_back(corner_entries + slot);
-      corner_entries += static_cast<int>(field.corner_index.size());
-      c.rest_inverse.insert(c.rest_inverse.end(), field.rest_inverse.begin(), field.rest_inverse.end());
-      c.rest_volume.insert(c.rest_volume.end(), field.rest_volume.begin(), field.rest_volume.end());
-      const auto append_or_zero = [&](std::vector<double>& to, const std::vector<double>& from) {
-        if (from.empty()) to.insert(to.end(), field.size(), 0.0);
-        else to.insert(to.end(), from.begin(), from.end());
+      const int cb = corner_base;
+      const auto cbase = static_cast<std::size_t>(corner_base);
+      fill(pool, c.corner_offset, vb, n, [&](std::size_t v) { return cb + field.corner_offset[v]; });
+      fill(pool, c.corner_index, cbase, field.corner_index.size(),
+           [&](std::size_t k) { return 4 * element_base + field.corner_index[k]; });
+      fill(pool, c.corner_slot, cbase, field.corner_slot.size(), [&](std::size_t k) { return cb + field.corner_slot[k]; });
+      corner_base += static_cast<int>(field.corner_index.size());
+      fill(pool, c.rest_inverse, 9 * eb, 9 * m, [&](std::size_t i) { return field.rest_inverse[i]; });
+      fill(pool, c.rest_volume, eb, m, [&](std::size_t e) { return field.rest_volume[e]; });
+      const auto copy_or_zero = [&](HostArray<double>& to, const std::vector<double>& from) {
+        fill(pool, to, eb, m, [&](std::size_t e) { return from.empty() ? 0.0 : from[e]; });
       };
-      append_or_zero(c.youngs_modulus, field.youngs_modulus);
-      append_or_zero(c.poisson_ratio, field.poisson_ratio);
-      append_or_zero(c.bulk_modulus, field.bulk_modulus);
-      if (c.has_element_damping) append_or_zero(c.stiffness_damping, field.stiffness_damping);
+      copy_or_zero(c.youngs_modulus, field.youngs_modulus);
+      copy_or_zero(c.poisson_ratio, field.poisson_ratio);
+      copy_or_zero(c.bulk_modulus, field.bulk_modulus);
+      if (c.has_element_damping) copy_or_zero(c.stiffness_damping, field.stiffness_damping);
     }
-    const std::size_t n = setup.rest_positions.size();
-    for (std::size_t v = 0; v < n; ++v) c.offset.push_back(entries + net.adjacency_offset[v]);
-    for (std::size_t e = 0; e < net.adjacency_spring.size(); ++e) {
-      c.spring.push_back(spring_base + net.adjacency_spring[e]);
-      c.neighbour.push_back(vertex_base + net.adjacency_neighbour[e]);
-    }
-    entries += static_cast<int>(net.adjacency_spring.size());
-    for (std::size_t k = 0; k < net.size(); ++k) {
-      c.first.push_back(vertex_base + net.first[k]);
-      c.second.push_back(vertex_base + net.second[k]);
-    }
-    c.rest_length.insert(c.rest_length.end(), net.rest_length.begin(), net.rest_length.end());
-    c.stiffness.insert(c.stiffness.end(), net.stiffness.begin(), net.stiffness.end());
-    if (c.has_damping) {
-      if (net.damping.empty()) c.damping.insert(c.damping.end(), net.size(), 0.0);
-      else c.damping.insert(c.damping.end(), net.damping.begin(), net.damping.end());
-    }
-    c.mass.insert(c.mass.end(), setup.mass.begin(), setup.mass.end());
+    const int eb_entries = entry_base;
+    const auto entry_at = static_cast<std::size_t>(entry_base);
+    fill(pool, c.offset, vb, n, [&](std::size_t v) { return eb_entries + net.adjacency_offset[v]; });
+    fill(pool, c.spring, entry_at, net.adjacency_spring.size(),
+         [&](std::size_t e) { return spring_base + net.adjacency_spring[e]; });
+    fill(pool, c.neighbour, entry_at, net.adjacency_neighbour.size(),
+         [&](std::size_t e) { return vertex_base + net.adjacency_neighbour[e]; });
+    entry_base += static_cast<int>(net.adjacency_spring.size());
+    fill(pool, c.first, sb, net.size(), [&](std::size_t k) { return vertex_base + net.first[k]; });
+    fill(pool, c.second, sb, net.size(), [&](std::size_t k) { return vertex_base + net.second[k]; });
+    fill(pool, c.rest_length, sb, net.size(), [&](std::size_t k) { return net.rest_length[k]; });
+    fill(pool, c.stiffness, sb, net.size(), [&](std::size_t k) { return net.stiffness[k]; });
+    if (c.has_damping)
+      fill(pool, c.damping, sb, net.size(), [&](std::size_t k) { return net.damping.empty() ? 0.0 : net.damping[k]; });
+    fill(pool, c.mass, vb, n, [&](std::size_t v) { return setup.mass[v]; });
     // Held axes at the start (a displacement probe's vertices are held only after the initial velocities are taken,
     // as in the CPU backend), then the full mask.
     std::vector<unsigned char> fixed(n, 0);
     for (std::size_t v = 0; v < n && setup.fixed_axes.size() == n; ++v) fixed[v] = setup.fixed_axes[v];
     for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
     const std::vector<unsigned char> held = sim::held_axes(setup);
-    c.fixed.insert(c.fixed.end(), held.begin(), held.end());
+    fill(pool, c.fixed, vb, n, [&](std::size_t v) { return held[v]; });
     const std::vector<sim::Point3>& start =
         setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
-    for (std::size_t v = 0; v < n; ++v) {
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        c.rest[axis].push_back(setup.rest_positions[v][axis]);
-        c.position[axis].push_back(start[v][axis]);
-        // As the CPU backend: held axes start at rest.
-        c.velocity[axis].push_back(setup.initial_velocities.empty() || kernels::axis_fixed(fixed[v], static_cast<int>(axis))
-                                       ? 0.0
-                                       : setup.initial_velocities[v][axis]);
-        if (c.has_forces) c.force[axis].push_back(setup.external_forces.empty() ? 0.0 : setup.external_forces[v][axis]);
-      }
-      c.vertex_scene.push_back(static_cast<int>(s));
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      fill(pool, c.rest[axis], vb, n, [&](std::size_t v) { return setup.rest_positions[v][axis]; });
+      fill(pool, c.position[axis], vb, n, [&](std::size_t v) { return start[v][axis]; });
+      // As the CPU backend: held axes start at rest.
+      fill(pool, c.velocity[axis], vb, n, [&](std::size_t v) {
+        return setup.initial_velocities.empty() || kernels::axis_fixed(fixed[v], static_cast<int>(axis))
+                   ? 0.0
+                   : setup.initial_velocities[v][axis];
+      });
+      if (c.has_forces)
+        fill(pool, c.force[axis], vb, n,
+             [&](std::size_t v) { return setup.external_forces.empty() ? 0.0 : setup.external_forces[v][axis]; });
     }
+    fill(pool, c.vertex_scene, vb, n, [&](std::size_t) { return scene; });
 
     c.vertex_begin.push_back(vertex_base + static_cast<int>(n));
     c.spring_begin.push_back(spring_base + static_cast<int>(net.size()));
-    c.element_begin.push_back(element_base + static_cast<int>(setup.tetrahedra.size()));
+    c.element_begin.push_back(element_base + static_cast<int>(m));
   }
-  c.offset.push_back(entries);
-  if (c.has_field) c.corner_offset.push_back(corner_entries);
+  c.offset.push_back(entry_base);
+  if (c.has_field) c.corner_offset.push_back(corner_base);
   return c;
 }
 
@@ -296,10 +327,11 @@ GatherKind gather_kind(const sim::SimulationSetup& setup) {
   return setup.tetrahedron_field ? GatherKind::SpringsAndElements : GatherKind::Springs;
 }
 
-template <typename Real>
-std::vector<Real> convert(const std::vector<double>& values) {
-  std::vector<Real> out(values.size());
-  for (std::size_t i = 0; i < values.size(); ++i) out[i] = static_cast<Real>(values[i]);
+template <typename Real, typename Allocator>
+HostArray<Real> convert(const std::vector<double, Allocator>& values) {
+  HostArray<Real> out(values.size());
+  sim::WorkerPool pool(sim::resolve_thread_count(0, values.size()));
+  fill(pool, out, 0, values.size(), [&](std::size_t i) { return static_cast<Real>(values[i]); });
   return out;
 }
 
@@ -373,8 +405,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       FMPC_CUDA_CHECK(scene_h_.upload(convert<Real>(scene_h)), diagnostics, false);
     }
     const auto count = static_cast<std::size_t>(n_);
-    const std::vector<double>* start[6] = {&c.position[0], &c.position[1], &c.position[2],
-                                           &c.velocity[0], &c.velocity[1], &c.velocity[2]};
+    const HostArray<double>* start[6] = {&c.position[0], &c.position[1], &c.position[2],
+                                         &c.velocity[0], &c.velocity[1], &c.velocity[2]};
     const std::vector<DeviceArray<Real>*> first_state = state_[0].arrays();
     for (std::size_t i = 0; i < 6; ++i)
       FMPC_CUDA_CHECK(first_state[i]->upload(convert<Real>(*start[i])), diagnostics, false);
