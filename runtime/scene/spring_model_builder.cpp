@@ -1,6 +1,7 @@
 #include "runtime/scene/spring_model_builder.h"
 
 #include <cmath>
+#include <utility>
 
 #include "runtime/integrate/worker_pool.h"
 #include "runtime/mesh/mesh_check.h"
@@ -52,16 +53,16 @@ std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const Spring
   DiagnosticList mass_diagnostics;
   std::vector<double> mass;
   {
-    const VertexElements at = elements_at_vertices(mesh, &pool);
+    VertexElements at = elements_at_vertices(mesh, &pool);
     mass = lumped_masses(mesh, metres, spec.mass, mass_diagnostics, &pool, &at);
     setup.springs = mesh.tetrahedra.empty()
-                        ? springs_from_triangles(mesh, metres, spec.triangle_springs, diagnostics, &pool, &at)
-                        : springs_from_tetrahedra(mesh, metres, diagnostics, &pool, &at);
+                        ? springs_from_triangles(mesh, metres, spec.triangle_springs, diagnostics, &pool, std::move(at))
+                        : springs_from_tetrahedra(mesh, metres, diagnostics, &pool, std::move(at));
   }
   if (diagnostics.has_errors()) return std::nullopt;
   if (!compute_rest_lengths(setup.springs, metres, diagnostics, 1e-9, &pool)) return std::nullopt;
-  if (!assign_stiffness(setup.springs, spec.stiffness, diagnostics, &pool)) return std::nullopt;
-  std::vector<double>().swap(setup.springs.element_measure);
+  if (!assign_stiffness(setup.springs, spec.stiffness, diagnostics, &pool, ElementMeasures::Release))
+    return std::nullopt;
   diagnostics.append(mass_diagnostics);
   setup.mass = std::move(mass);
   if (setup.mass.empty() && !mesh.points.empty()) return std::nullopt;
