@@ -203,7 +203,7 @@ Row run_size(int cells, const Options& options) {
     compute_rest_lengths(network, metres, steps, 1e-9, &pool);
     row.rest_lengths = seconds_since(start);
     start = std::chrono::steady_clock::now();
-    assign_stiffness(network, model.stiffness, steps, &pool);
+    assign_stiffness(network, model.stiffness, steps, &pool, ElementMeasures::Release);  // as the builder
     row.stiffness = seconds_since(start);
     start = std::chrono::steady_clock::now();
     assign_damping(network, mass, model.damping, steps, &pool);

@@ -1,11 +1,29 @@
 #include "runtime/scene/spring_model_builder.h"
 
 #include <cmath>
+#include <utility>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "runtime/integrate/worker_pool.h"
 #include "runtime/mesh/mesh_check.h"
 
 namespace fmpc::sim {
+
+namespace {
+
+// glibc serves blocks under its dynamic mmap threshold (up to 32 MiB: the per-vertex arrays of meshes of up to about
+// 8M vertices, such as the repair's maps and the CSR's counters) from the heap, and keeps the pages of those freed in
+// its middle: 2.4 bytes per spring at 160^3 cells (docs/performance.md, "Host setup"). Handing them back before the
+// setup's last arrays are allocated keeps them out of its peak.
+void return_free_heap_pages() {
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+}
+
+}  // namespace
 
 std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const SpringModelSpec& spec,
                                                   DiagnosticList& diagnostics, WorkerPool* given_pool) {
@@ -52,16 +70,17 @@ std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const Spring
   DiagnosticList mass_diagnostics;
   std::vector<double> mass;
   {
-    const VertexElements at = elements_at_vertices(mesh, &pool);
+    VertexElements at = elements_at_vertices(mesh, &pool);
     mass = lumped_masses(mesh, metres, spec.mass, mass_diagnostics, &pool, &at);
     setup.springs = mesh.tetrahedra.empty()
-                        ? springs_from_triangles(mesh, metres, spec.triangle_springs, diagnostics, &pool, &at)
-                        : springs_from_tetrahedra(mesh, metres, diagnostics, &pool, &at);
+                        ? springs_from_triangles(mesh, metres, spec.triangle_springs, diagnostics, &pool, std::move(at))
+                        : springs_from_tetrahedra(mesh, metres, diagnostics, &pool, std::move(at));
   }
   if (diagnostics.has_errors()) return std::nullopt;
+  return_free_heap_pages();
   if (!compute_rest_lengths(setup.springs, metres, diagnostics, 1e-9, &pool)) return std::nullopt;
-  if (!assign_stiffness(setup.springs, spec.stiffness, diagnostics, &pool)) return std::nullopt;
-  std::vector<double>().swap(setup.springs.element_measure);
+  if (!assign_stiffness(setup.springs, spec.stiffness, diagnostics, &pool, ElementMeasures::Release))
+    return std::nullopt;
   diagnostics.append(mass_diagnostics);
   setup.mass = std::move(mass);
   if (setup.mass.empty() && !mesh.points.empty()) return std::nullopt;

@@ -25,10 +25,11 @@ struct SpringModelSpec {
 };
 
 // Scales the points to metres, builds the springs, rest lengths, stiffness, lumped masses and damping. Returns
-// nullopt after appending errors (mesh defects must be repaired first: see repair_mesh). The springs'
-// element_measure is released once the stiffness is set (it is only the mappings' input). The mesh is not copied:
-// the largest transient is the vertex-to-tetrahedron grouping (4 bytes per tetrahedron corner) while the springs are
-// found; the peak is the returned setup itself (docs/performance.md, "Host setup").
+// nullopt after appending errors (mesh defects must be repaired first: see repair_mesh). The mesh is not copied, and
+// the build's large temporaries make way for what follows them: the grouping of the elements by vertex (4 bytes per
+// tetrahedron corner) is released before the CSR is built, the stiffness is written over the springs' element
+// measures (left empty: they are only the mappings' input), and the heap's freed pages go back to the system before
+// the last arrays are allocated. The peak is the returned setup beside the mesh (docs/performance.md, "Host setup").
 std::optional<SimulationSetup> build_spring_model(const Mesh& mesh, const SpringModelSpec& spec,
                                                   DiagnosticList& diagnostics, WorkerPool* pool = nullptr);
 

@@ -100,6 +100,13 @@ struct GroupingLease {
   const VertexElements& at;
 };
 
+// The grouping handed to springs_from_* (no offsets: not given), or one built here.
+template <std::size_t N>
+VertexElements given_or_grouped(VertexElements given, std::size_t vertex_count,
+                                const std::vector<std::array<std::int32_t, N>>& elements, WorkerPool& pool) {
+  return given.offset.empty() ? group_at_vertices(vertex_count, elements, pool) : std::move(given);
+}
+
 // A triangle side met from its smaller endpoint.
 struct EdgeVisit {
   std::int32_t other;     // the larger endpoint
@@ -318,7 +325,7 @@ SpringNetwork springs_from_tetrahedra(const Mesh& mesh, DiagnosticList& diagnost
 }
 
 SpringNetwork springs_from_tetrahedra(const Mesh& mesh, const std::vector<Point3>& points, DiagnosticList& diagnostics,
-                                     WorkerPool* given_pool, const VertexElements* given_at) {
+                                     WorkerPool* given_pool, VertexElements given_at) {
   PoolLease lease(given_pool, 0, mesh.points.size() + mesh.tetrahedra.size());
   WorkerPool& pool = lease.pool();
   SpringNetwork network;
@@ -335,8 +342,10 @@ SpringNetwork springs_from_tetrahedra(const Mesh& mesh, const std::vector<Point3
   });
   std::vector<std::int64_t> begin;
   {
-    const GroupingLease grouping(given_at, mesh.points.size(), mesh.tetrahedra, pool);
-    if (!element_edge_springs(mesh, mesh.tetrahedra, grouping.at, volume, SpringKind::TetrahedronEdge, network, begin,
+    // Released before the CSR is built: the grouping and the CSR are the two largest arrays of the build after the
+    // springs themselves, and are never held together.
+    const VertexElements at = given_or_grouped(std::move(given_at), mesh.points.size(), mesh.tetrahedra, pool);
+    if (!element_edge_springs(mesh, mesh.tetrahedra, at, volume, SpringKind::TetrahedronEdge, network, begin,
                               diagnostics, pool))
       return empty_network(mesh.points.size());
   }
@@ -353,7 +362,7 @@ SpringNetwork springs_from_triangles(const Mesh& mesh, const TriangleSpringOptio
 
 SpringNetwork springs_from_triangles(const Mesh& mesh, const std::vector<Point3>& points,
                                      const TriangleSpringOptions& options, DiagnosticList& diagnostics,
-                                     WorkerPool* given_pool, const VertexElements* given_at) {
+                                     WorkerPool* given_pool, VertexElements given_at) {
   PoolLease lease(given_pool, 0, mesh.points.size() + mesh.triangles.size());
   WorkerPool& pool = lease.pool();
   SpringNetwork network;
@@ -367,8 +376,7 @@ SpringNetwork springs_from_triangles(const Mesh& mesh, const std::vector<Point3>
                               points[static_cast<std::size_t>(t[2])]);
     }
   });
-  const GroupingLease grouping(given_at, mesh.points.size(), mesh.triangles, pool);
-  const KeyGroups& at = grouping.at;
+  VertexElements at = given_or_grouped(std::move(given_at), mesh.points.size(), mesh.triangles, pool);
   // Structural springs (every triangle edge once), and for each edge the pairs of vertices opposite it in two of
   // its triangles (`across`): the flexion candidates.
   SpringNetwork structural;
@@ -423,6 +431,11 @@ SpringNetwork springs_from_triangles(const Mesh& mesh, const std::vector<Point3>
                                                " a network can index (int32 adjacency); use a coarser mesh");
     return empty_network(mesh.points.size());
   }
+  // Not held with the CSR (see springs_from_tetrahedra).
+  at = VertexElements{};
+  structural = SpringNetwork{};
+  std::vector<std::int64_t>().swap(begin);
+  std::vector<std::uint64_t>().swap(across);
   build_adjacency(network, &pool);
   return network;
 }
@@ -484,25 +497,38 @@ void build_adjacency(SpringNetwork& network, WorkerPool* given_pool) {
 }
 
 bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, DiagnosticList& diagnostics,
-                      WorkerPool* given_pool) {
+                      WorkerPool* given_pool, ElementMeasures measures) {
   PoolLease lease(given_pool, 0, network.size());
   WorkerPool& pool = lease.pool();
   SourceRange range;
+  const auto refuse = [&](const std::string& message) {
+    diagnostics.error(range, message);
+    if (measures == ElementMeasures::Release) std::vector<double>().swap(network.element_measure);
+    return false;
+  };
   if (!spec.per_spring.empty() && spec.per_spring.size() != network.size()) {
-    diagnostics.error(range, "per-spring stiffness values: " + std::to_string(spec.per_spring.size()) + " given for " +
-                                 std::to_string(network.size()) + " springs; give one per spring");
-    return false;
+    return refuse("per-spring stiffness values: " + std::to_string(spec.per_spring.size()) + " given for " +
+                  std::to_string(network.size()) + " springs; give one per spring");
   }
-  if (network.rest_length.size() != network.size()) {
-    diagnostics.error(range, "rest lengths are missing; call compute_rest_lengths first");
-    return false;
-  }
+  if (network.rest_length.size() != network.size())
+    return refuse("rest lengths are missing; call compute_rest_lengths first");
   const bool modulus = is_modulus_mapping(spec.mapping);
   if (modulus && !(spec.thickness > 0.0 && std::isfinite(spec.thickness))) {
-    diagnostics.error(range, std::string("the membrane thickness must be a positive number for the ") +
-                                 mapping_citation(spec.mapping) + " mapping");
-    return false;
+    return refuse(std::string("the membrane thickness must be a positive number for the ") +
+                  mapping_citation(spec.mapping) + " mapping");
   }
+  if (modulus && network.element_measure.size() != network.size()) {
+    return refuse(std::string("the ") + mapping_citation(spec.mapping) +
+                  " mapping needs the springs' element measures; build the network with springs_from_tetrahedra or "
+                  "springs_from_triangles");
+  }
+  // Release: each spring's stiffness is written over its own measure once that was read, so the two arrays are
+  // never held together. Without measures (a mapping that needs none) the stiffness gets an array of its own.
+  const bool in_place = measures == ElementMeasures::Release && network.element_measure.size() == network.size();
+  if (in_place) network.stiffness.swap(network.element_measure);
+  if (measures == ElementMeasures::Release) std::vector<double>().swap(network.element_measure);
+  if (!in_place) resize_large(network.stiffness, network.size());
+  const std::vector<double>& measure = in_place ? network.stiffness : network.element_measure;
   const auto spring_name = [&](std::size_t s) {
     return "spring " + std::to_string(s) + " (vertices " + std::to_string(network.first[s]) + " and " +
            std::to_string(network.second[s]) + ")";
@@ -521,7 +547,7 @@ bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, Diagnos
     }
     const SpringKind kind = network.kind[s];
     const bool element_spring = kind == SpringKind::TetrahedronEdge || kind == SpringKind::Structural;
-    if (modulus && element_spring && !(network.element_measure[s] > 0.0)) {
+    if (modulus && element_spring && !(measure[s] > 0.0)) {
       return spring_name(s) + " belongs only to elements of zero " +
              (kind == SpringKind::Structural ? "area" : "volume") +
              ", so the mapping gives it no stiffness; repair the mesh (repair_mesh drops degenerate elements)";
@@ -532,40 +558,46 @@ bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, Diagnos
     const double value = spec.per_spring.empty() ? spec.value : spec.per_spring[s];
     const double length = network.rest_length[s];
     const SpringKind kind = network.kind[s];
-    const double measure =
-        kind == SpringKind::Structural ? spec.thickness * network.element_measure[s] : network.element_measure[s];
+    // Read only by the modulus mappings: a network built by hand may have no measures.
+    const auto element = [&] { return kind == SpringKind::Structural ? spec.thickness * measure[s] : measure[s]; };
     switch (spec.mapping) {
       case StiffnessMapping::Uniform:
         return value;
       case StiffnessMapping::StiffnessOverLength:
         return value / length;
       case StiffnessMapping::VanGelder1998:
-        return value * measure / (length * length);
+        return value * element() / (length * length);
       case StiffnessMapping::LloydSzekelyHarders2007: {
         // Lloyd et al. 2007: k = (2 sqrt 2 / 25) E l on a regular tetrahedron = (24/25) E V / l^2; the equilateral
         // triangle's k = (sqrt 3 / 4) E h = E h A / l^2 (see StiffnessMapping).
         const double factor = kind == SpringKind::TetrahedronEdge ? 24.0 / 25.0 : 1.0;
-        return factor * value * measure / (length * length);
+        return factor * value * element() / (length * length);
       }
     }
     return 0.0;
   };
-  resize_large(network.stiffness, network.size());
   // The springs before the first bad one get their stiffness and the rest 0, as a loop that stops there would leave
-  // them.
+  // them. Each part keeps its first error's message: in place, the bad spring's measure is gone once it is read.
   std::vector<std::size_t> bad(pool.parts(network.size()), network.size());
+  std::vector<std::string> bad_message(bad.size());
   pool.run_parts(network.size(), [&](unsigned part, std::size_t first, std::size_t last) {
     for (std::size_t s = first; s < last; ++s) {
-      if (bad[part] == network.size() && spring_error(s)) bad[part] = s;
+      if (bad[part] == network.size()) {
+        if (auto error = spring_error(s)) {
+          bad[part] = s;
+          bad_message[part] = std::move(*error);
+        }
+      }
       network.stiffness[s] = bad[part] == network.size() ? stiffness_of(s) : 0.0;
     }
   });
-  const std::size_t first_bad = *std::min_element(bad.begin(), bad.end());
+  const auto worst = std::min_element(bad.begin(), bad.end());
+  const std::size_t first_bad = *worst;
   if (first_bad < network.size()) {
     pool.run(network.size() - first_bad, [&](std::size_t first, std::size_t last) {
       for (std::size_t s = first_bad + first; s < first_bad + last; ++s) network.stiffness[s] = 0.0;
     });
-    diagnostics.error(range, *spring_error(first_bad));
+    diagnostics.error(range, bad_message[static_cast<std::size_t>(worst - bad.begin())]);
     return false;
   }
   if (modulus) {

@@ -56,9 +56,10 @@ VertexElements elements_at_vertices(const Mesh& mesh, WorkerPool* pool = nullptr
 // collects the edges it starts.
 SpringNetwork springs_from_tetrahedra(const Mesh& mesh, DiagnosticList& diagnostics, WorkerPool* pool = nullptr);
 // The same with the tetrahedra placed at `points` (one per mesh vertex, e.g. the mesh's points scaled to metres)
-// instead of mesh.points, without copying the mesh; `at`: elements_at_vertices(mesh), or null to build it here.
+// instead of mesh.points, without copying the mesh; `at`: elements_at_vertices(mesh) handed over (std::move), or
+// empty to build it here. It is released before the CSR is built, so the two are never held together.
 SpringNetwork springs_from_tetrahedra(const Mesh& mesh, const std::vector<Point3>& points, DiagnosticList& diagnostics,
-                                     WorkerPool* pool = nullptr, const VertexElements* at = nullptr);
+                                     WorkerPool* pool = nullptr, VertexElements at = {});
 
 struct TriangleSpringOptions {
   bool structural = true;
@@ -77,7 +78,7 @@ SpringNetwork springs_from_triangles(const Mesh& mesh, const TriangleSpringOptio
                                      DiagnosticList& diagnostics, WorkerPool* pool = nullptr);
 SpringNetwork springs_from_triangles(const Mesh& mesh, const std::vector<Point3>& points,
                                      const TriangleSpringOptions& options, DiagnosticList& diagnostics,
-                                     WorkerPool* pool = nullptr, const VertexElements* at = nullptr);
+                                     WorkerPool* pool = nullptr, VertexElements at = {});
 
 // Rest lengths from the positions. A spring shorter than min_relative_length x the mean length is an error naming
 // the spring and its vertices (a force direction cannot be defined for it): merge the duplicate vertices first.
@@ -125,9 +126,14 @@ struct StiffnessSpec {
   double flexion_fraction = 0.1;
 };
 
+// What assign_stiffness leaves of element_measure (the mappings' only input): Keep, or Release it (left empty
+// whatever the result), its storage becoming the stiffness so that the two arrays are never held together (the
+// model builder's peak, docs/performance.md "Host setup").
+enum class ElementMeasures { Keep, Release };
+
 // On an error (naming the first spring that cannot get a stiffness) the springs before it keep theirs, the rest 0.
 bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, DiagnosticList& diagnostics,
-                      WorkerPool* pool = nullptr);
+                      WorkerPool* pool = nullptr, ElementMeasures measures = ElementMeasures::Keep);
 
 struct MassSpec {
   enum class Source { Density, TotalMass } source = Source::Density;

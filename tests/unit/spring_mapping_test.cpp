@@ -437,6 +437,73 @@ TEST_CASE("mapping errors: zero and NaN modulus, zero-measure springs, degenerat
   CHECK_THAT(uniform.items().back().message, Catch::StartsWith("vertex 4 gets no mass"));
 }
 
+TEST_CASE("stiffness written over the element measures: the same springs, the measures released on every path",
+          "[springs]") {
+  DiagnosticList diagnostics;
+  const Mesh mesh = regular_tetrahedron(0.7);
+  SpringNetwork kept = springs_from_tetrahedra(mesh, diagnostics);
+  REQUIRE(compute_rest_lengths(kept, mesh.points, diagnostics));
+  const SpringNetwork measured = kept;
+  StiffnessSpec spec;
+  spec.mapping = StiffnessMapping::VanGelder1998;
+  spec.value = 3000.0;
+  SpringNetwork released = measured;
+  REQUIRE(assign_stiffness(kept, spec, diagnostics));
+  REQUIRE(assign_stiffness(released, spec, diagnostics, nullptr, ElementMeasures::Release));
+  CHECK(released.element_measure.empty());
+  CHECK(kept.element_measure == measured.element_measure);
+  CHECK(released.stiffness == kept.stiffness);  // exact: the same formula on the same measures
+  CHECK(released.stiffness[0] == 3000.0 * measured.element_measure[0] / (0.7 * 0.7));
+
+  // A bad value at spring 4: the springs before it keep their stiffness, the rest 0, with the same message.
+  spec.per_spring.assign(6, 2000.0);
+  spec.per_spring[4] = -1.0;
+  kept = measured;
+  released = measured;
+  DiagnosticList kept_errors, released_errors;
+  CHECK_FALSE(assign_stiffness(kept, spec, kept_errors));
+  CHECK_FALSE(assign_stiffness(released, spec, released_errors, nullptr, ElementMeasures::Release));
+  REQUIRE(released_errors.error_count() == 1);
+  CHECK(released_errors.items()[0].message == kept_errors.items()[0].message);
+  CHECK_THAT(released_errors.items()[0].message, Catch::StartsWith("spring 4 (vertices 1 and 3): Young's modulus -1"));
+  CHECK(released.stiffness == kept.stiffness);
+  CHECK(released.stiffness[3] > 0.0);
+  CHECK(released.stiffness[4] == 0.0);
+  CHECK(released.stiffness[5] == 0.0);
+  CHECK(released.element_measure.empty());
+
+  // Refused before any spring (no rest lengths): the measures are released all the same.
+  released = measured;
+  released.rest_length.clear();
+  CHECK_FALSE(assign_stiffness(released, spec, released_errors, nullptr, ElementMeasures::Release));
+  CHECK(released_errors.items().back().message == "rest lengths are missing; call compute_rest_lengths first");
+  CHECK(released.element_measure.empty());
+
+  // A network built by hand without measures, under a mapping that needs none: a stiffness array of its own.
+  SpringNetwork bare;
+  bare.vertex_count = 2;
+  bare.first = {0};
+  bare.second = {1};
+  bare.kind = {SpringKind::TetrahedronEdge};
+  bare.rest_length = {0.5};
+  StiffnessSpec over_length;
+  over_length.mapping = StiffnessMapping::StiffnessOverLength;
+  over_length.value = 2.0;
+  REQUIRE(assign_stiffness(bare, over_length, diagnostics, nullptr, ElementMeasures::Release));
+  CHECK(bare.stiffness == std::vector<double>{4.0});
+  CHECK(bare.element_measure.empty());
+  // A modulus mapping without measures is refused (it would read past them), whatever happens to them.
+  for (const ElementMeasures measures : {ElementMeasures::Keep, ElementMeasures::Release}) {
+    spec.per_spring.clear();
+    DiagnosticList refused;
+    CHECK_FALSE(assign_stiffness(bare, spec, refused, nullptr, measures));
+    REQUIRE(refused.error_count() == 1);
+    CHECK(refused.items()[0].message ==
+          "the Van Gelder 1998 mapping needs the springs' element measures; build the network with "
+          "springs_from_tetrahedra or springs_from_triangles");
+  }
+}
+
 TEST_CASE("mapping names for summaries", "[springs]") {
   CHECK(std::string(mapping_citation(StiffnessMapping::VanGelder1998)) == "Van Gelder 1998");
   CHECK(std::string(mapping_citation(StiffnessMapping::LloydSzekelyHarders2007)) == "Lloyd, Szekely & Harders 2007");
