@@ -61,23 +61,12 @@ __device__ kernels::TetrahedronMaterial<double> implicit_material(const Implicit
   return m;
 }
 
-// The element pass needs 88 registers per thread in float unbounded, which leaves 2 blocks of 256 per SM (25%
-// occupancy) and the kernel latency-bound at 41% of DRAM bandwidth on an H100 (ncu, docs/performance.md). Bounding
-// it to FMPC_ELEMENT_MIN_BLOCKS blocks per SM trades registers for occupancy; double keeps its registers.
-#ifndef FMPC_ELEMENT_MIN_BLOCKS
-#define FMPC_ELEMENT_MIN_BLOCKS 3
-#endif
-template <typename Real>
-struct ElementOccupancy {
-  static constexpr int min_blocks = 1;
-};
-template <>
-struct ElementOccupancy<float> {
-  static constexpr int min_blocks = FMPC_ELEMENT_MIN_BLOCKS;
-};
-
-template <typename Real>
-__global__ void __launch_bounds__(kThreadsPerBlock, ElementOccupancy<Real>::min_blocks)
+// The element pass needs 91 registers per thread in float unbounded (ptxas, sm_90), which leaves 2 blocks of 256 per
+// SM; bounded to 3 blocks it gets 80 registers and spills 20 bytes (ncu: the spills' local stores became the pass's
+// largest L2 traffic once the corner forces were written as vectors). ForceModelView::element_blocks picks the
+// instance; double keeps its registers (1).
+template <typename Real, int MinBlocks>
+__global__ void __launch_bounds__(kThreadsPerBlock, MinBlocks)
     element_forces_kernel(ForceModelView<Real> m, kernels::StateView<Real> state) {
   const int e = vertex_index();
   if (e >= m.field.count) return;
@@ -868,7 +857,15 @@ template <typename Real>
 cudaError_t launch_elements(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
                             cudaStream_t stream) {
   if (model.kind == GatherKind::Springs || model.field.count <= 0) return cudaSuccess;
-  element_forces_kernel<Real><<<blocks_for(model.field.count), kThreadsPerBlock, 0, stream>>>(model, state);
+  if constexpr (std::is_same_v<Real, float>) {
+    if (model.element_blocks == 2) {
+      element_forces_kernel<Real, 2><<<blocks_for(model.field.count), kThreadsPerBlock, 0, stream>>>(model, state);
+      return cudaGetLastError();
+    }
+    element_forces_kernel<Real, 3><<<blocks_for(model.field.count), kThreadsPerBlock, 0, stream>>>(model, state);
+  } else {
+    element_forces_kernel<Real, 1><<<blocks_for(model.field.count), kThreadsPerBlock, 0, stream>>>(model, state);
+  }
   return cudaGetLastError();
 }
 

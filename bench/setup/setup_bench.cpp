@@ -116,8 +116,7 @@ double data_bytes_of(const Mesh& mesh, const SimulationSetup& setup) {
   return bytes_of(mesh.points) + bytes_of(mesh.tetrahedra) + bytes_of(mesh.triangles) + bytes_of(mesh.tetrahedron_lines) +
          bytes_of(mesh.triangle_lines) + bytes_of(setup.rest_positions) + bytes_of(setup.mass) + bytes_of(n.first) +
          bytes_of(n.second) + bytes_of(n.kind) + bytes_of(n.element_measure) + bytes_of(n.rest_length) +
-         bytes_of(n.stiffness) + bytes_of(n.damping) + bytes_of(n.adjacency_offset) + bytes_of(n.adjacency_spring) +
-         bytes_of(n.adjacency_neighbour);
+         bytes_of(n.stiffness) + bytes_of(n.damping) + bytes_of(n.adjacency_offset) + bytes_of(n.adjacency_spring);
 }
 
 std::uint64_t checksum_of(const Mesh& mesh, const SimulationSetup& setup) {
@@ -135,7 +134,6 @@ std::uint64_t checksum_of(const Mesh& mesh, const SimulationSetup& setup) {
   sum.add(n.damping);
   sum.add(n.adjacency_offset);
   sum.add(n.adjacency_spring);
-  sum.add(n.adjacency_neighbour);
   return sum.value;
 }
 

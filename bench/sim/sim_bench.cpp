@@ -210,7 +210,7 @@ gpu::GpuOptions gpu_options_for(Launch launch) {
 // lanes: GpuOptions::persistent_lanes or gather_lanes (0: automatic); check_every: advance's NaN/Inf check interval (0: at the end
 // of each timed chunk only, to separate the checks' cost from the steps').
 Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, Launch launch,
-            const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery) {
+            const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery, int element_blocks = 0) {
   SimulationSetup setup = base;
   setup.precision = precision;
   setup.integrator = integrator;
@@ -229,11 +229,13 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   DiagnosticList diagnostics;
   gpu::GpuOptions gpu_options = gpu_options_for(launch);
   (launch == Launch::Persistent ? gpu_options.persistent_lanes : gpu_options.gather_lanes) = lanes;
+  gpu_options.element_blocks_per_sm = element_blocks;
   const auto simulation = gpu::GpuSimulation::create(setup, gpu_options, diagnostics);
   row.graphs = launch_name(simulation && launch == Launch::Persistent && !simulation->persistent_launch()
                                ? Launch::Graphs
                                : launch);
   if (lanes > 0) row.graphs += " lanes " + std::to_string(lanes);
+  if (element_blocks > 0) row.graphs += " element pass " + std::to_string(element_blocks) + " blocks/SM";
   if (check_every != kCheckEvery) row.graphs += check_every == 0 ? " checks per chunk" : " checks every " + std::to_string(check_every);
   if (!simulation || !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics, check_every); }, 64,
                                  options.min_seconds, row)) {
@@ -524,6 +526,10 @@ int main(int argc, char** argv) {
       if (!have_device) continue;
       for (const Precision precision : {Precision::Float, Precision::Double})
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options));
+      // The element pass's register bound: 2 blocks per SM (no spills) against the default 3.
+      if (largest || cells >= 52)
+        rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0,
+                               kCheckEvery, 2));
       if (!largest && cells <= 24)
         rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Persistent, options));
       if (!largest && cells == 24)

@@ -29,6 +29,7 @@ struct ForceModelView {
   kernels::TetrahedronFieldView<Real> field;
   kernels::CornerForceView<Real> corners;  // corners.force == corner_force
   kernels::CornerForce<Real>* corner_force;  // 4 per element
+  int element_blocks = 3;  // float: the element pass's register bound, 2 or 3 blocks per SM (GpuOptions)
 };
 
 // The springs' incidence records (kernels::SpringIncidence) of every CSR entry, from the network's arrays; run once

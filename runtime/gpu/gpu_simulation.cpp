@@ -278,8 +278,14 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     fill(pool, c.offset, vb, n, [&](std::size_t v) { return eb_entries + net.adjacency_offset[v]; });
     fill(pool, c.spring, entry_at, net.adjacency_spring.size(),
          [&](std::size_t e) { return spring_base + net.adjacency_spring[e]; });
-    fill(pool, c.neighbour, entry_at, net.adjacency_neighbour.size(),
-         [&](std::size_t e) { return vertex_base + net.adjacency_neighbour[e]; });
+    pool.run(
+        n, [&](std::size_t begin, std::size_t end) {
+          for (std::size_t v = begin; v < end; ++v)
+            for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e)
+              c.neighbour[entry_at + static_cast<std::size_t>(e)] =
+                  vertex_base + sim::adjacency_neighbour(net, v, static_cast<std::size_t>(e));
+        },
+        1 << 14);
     entry_base += static_cast<int>(net.adjacency_spring.size());
     fill(pool, c.first, sb, net.size(), [&](std::size_t k) { return vertex_base + net.first[k]; });
     fill(pool, c.second, sb, net.size(), [&](std::size_t k) { return vertex_base + net.second[k]; });
@@ -447,6 +453,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     if (!upload_probes(diagnostics) || !upload_single_scene_features(diagnostics)) return false;
 
     model_.kind = gather_kind(common);
+    model_.element_blocks = options_.element_blocks_per_sm == 2 ? 2 : 3;
     model_.springs = {offset_.data(),
                       spring_.data(),
                       neighbour_.data(),

@@ -36,6 +36,9 @@ struct GpuOptions {
   // 0: automatic, by the mesh's size and model): more loads of a vertex's entries in flight. Bitwise the same
   // results for any value.
   int gather_lanes = 0;
+  // The float element pass's register bound, in blocks of 256 threads per multiprocessor: 3 (80 registers, 20 bytes
+  // spilled) or 2 (91 registers, no spills); 0: the default, 3. The same bits either way.
+  int element_blocks_per_sm = 0;
 };
 
 // Where a GPU run became non-finite. `step` is exact: the run keeps a copy of the state at every check that

@@ -84,7 +84,8 @@ class CpuSimulationImpl final : public CpuSimulation {
     }
     network_view_.adjacency_offset = net.adjacency_offset.data();
     network_view_.adjacency_spring = net.adjacency_spring.data();
-    network_view_.adjacency_neighbour = net.adjacency_neighbour.data();
+    neighbour_ = adjacency_neighbours(net, &pool_);
+    network_view_.adjacency_neighbour = neighbour_.data();
     network_view_.rest_length = rest_length_.data();
     network_view_.stiffness = stiffness_.data();
     network_view_.damping = damping_.empty() ? nullptr : damping_.data();
@@ -609,6 +610,7 @@ class CpuSimulationImpl final : public CpuSimulation {
   kernels::SpringNetworkView<Real> network_view_{};
   kernels::VertexLoads<Real> loads_{};
   std::vector<int> corners_;  // 4 per tetrahedron
+  std::vector<std::int32_t> neighbour_;  // the other endpoint of each CSR entry (adjacency_neighbours)
   std::vector<Real> field_rest_inverse_, field_rest_volume_, field_youngs_modulus_, field_poisson_ratio_,
       field_bulk_modulus_, field_damping_;
   std::vector<kernels::CornerForce<Real>> corner_force_;

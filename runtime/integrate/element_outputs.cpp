@@ -49,7 +49,7 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
     const auto v = static_cast<std::size_t>(vertices[i]);
     for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
       const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
-      const auto o = static_cast<std::size_t>(net.adjacency_neighbour[static_cast<std::size_t>(e)]);
+      const auto o = static_cast<std::size_t>(adjacency_neighbour(net, v, static_cast<std::size_t>(e)));
       double f[3];
       kernels::spring_force_on_vertex(positions[o][0] - positions[v][0], positions[o][1] - positions[v][1],
                                       positions[o][2] - positions[v][2], velocities[o][0] - velocities[v][0],

@@ -67,8 +67,7 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                       "assign_damping");
     return false;
   }
-  if (net.adjacency_offset.size() != net.vertex_count + 1 || net.adjacency_spring.size() != 2 * m ||
-      net.adjacency_neighbour.size() != 2 * m) {
+  if (net.adjacency_offset.size() != net.vertex_count + 1 || net.adjacency_spring.size() != 2 * m) {
     diagnostics.error(range, "the spring adjacency is missing; call build_adjacency");
     return false;
   }
@@ -92,6 +91,28 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                                    " and damping " + std::to_string(damping) +
                                    "; both must be finite and non-negative");
       return false;
+    }
+  }
+  // Every CSR entry of vertex v names a spring at v: the gathers take the entry's other endpoint from the spring.
+  if (net.adjacency_offset.front() != 0 || static_cast<std::size_t>(net.adjacency_offset.back()) != 2 * m) {
+    diagnostics.error(range, "the spring adjacency's offsets do not span its 2 x springs entries; call build_adjacency");
+    return false;
+  }
+  for (std::size_t v = 0; v < net.vertex_count; ++v) {
+    const auto begin = net.adjacency_offset[v], end = net.adjacency_offset[v + 1];
+    if (end < begin) {
+      diagnostics.error(range, "the spring adjacency's offsets decrease at vertex " + std::to_string(v));
+      return false;
+    }
+    for (auto e = begin; e < end; ++e) {
+      const auto s = net.adjacency_spring[static_cast<std::size_t>(e)];
+      if (s < 0 || static_cast<std::size_t>(s) >= m ||
+          (static_cast<std::size_t>(net.first[static_cast<std::size_t>(s)]) != v &&
+           static_cast<std::size_t>(net.second[static_cast<std::size_t>(s)]) != v)) {
+        diagnostics.error(range, "the spring adjacency of vertex " + std::to_string(v) + " lists spring " +
+                                     std::to_string(s) + ", which does not end at it; call build_adjacency");
+        return false;
+      }
     }
   }
   for (const auto v : setup.fixed_vertices) {

@@ -484,16 +484,20 @@ void build_adjacency(SpringNetwork& network, WorkerPool* given_pool) {
   });
   std::vector<std::int64_t>().swap(groups.offset);
   network.adjacency_spring = std::move(groups.item);
-  resize_large(network.adjacency_neighbour, network.adjacency_spring.size());
-  pool.run(n, [&](std::size_t first, std::size_t last) {
-    for (std::size_t v = first; v < last; ++v) {
-      for (auto e = network.adjacency_offset[v]; e < network.adjacency_offset[v + 1]; ++e) {
-        const auto s = static_cast<std::size_t>(network.adjacency_spring[static_cast<std::size_t>(e)]);
-        network.adjacency_neighbour[static_cast<std::size_t>(e)] =
-            static_cast<std::size_t>(network.first[s]) == v ? network.second[s] : network.first[s];
-      }
-    }
+}
+
+std::vector<std::int32_t> adjacency_neighbours(const SpringNetwork& network, WorkerPool* given_pool) {
+  const std::size_t n = network.vertex_count;
+  std::vector<std::int32_t> out;
+  if (network.adjacency_offset.size() != n + 1) return out;
+  resize_large(out, network.adjacency_spring.size());
+  PoolLease lease(given_pool, 0, out.size());
+  lease.pool().run(n, [&](std::size_t first, std::size_t last) {
+    for (std::size_t v = first; v < last; ++v)
+      for (auto e = network.adjacency_offset[v]; e < network.adjacency_offset[v + 1]; ++e)
+        out[static_cast<std::size_t>(e)] = adjacency_neighbour(network, v, static_cast<std::size_t>(e));
   });
+  return out;
 }
 
 bool assign_stiffness(SpringNetwork& network, const StiffnessSpec& spec, DiagnosticList& diagnostics,

@@ -36,13 +36,21 @@ struct SpringNetwork {
   std::vector<double> damping;      // N s/m, along the spring (dashpot); empty: no dashpots
 
   // CSR: the springs at vertex v are adjacency_spring[adjacency_offset[v] .. adjacency_offset[v+1]), in increasing
-  // spring order; adjacency_neighbour holds the other endpoint of each.
+  // spring order. The other endpoint of each is not kept (adjacency_neighbour gives it; the simulators build their
+  // own per-entry copy): 8 bytes per spring, what kept a 97M-spring setup above 64 bytes per spring at its peak.
   std::vector<std::int32_t> adjacency_offset;
   std::vector<std::int32_t> adjacency_spring;
-  std::vector<std::int32_t> adjacency_neighbour;
 
   std::size_t size() const { return first.size(); }
 };
+
+// The other endpoint of CSR entry e of vertex v (a spring at v: validate_setup checks that every entry's is).
+inline std::int32_t adjacency_neighbour(const SpringNetwork& network, std::size_t v, std::size_t e) {
+  const auto s = static_cast<std::size_t>(network.adjacency_spring[e]);
+  return static_cast<std::size_t>(network.first[s]) == v ? network.second[s] : network.first[s];
+}
+// Every entry's other endpoint, in CSR order: what the simulators' gathers read. Null pool: one of its own.
+std::vector<std::int32_t> adjacency_neighbours(const SpringNetwork& network, WorkerPool* pool = nullptr);
 
 // The elements at every vertex (the tetrahedra, or without them the triangles), each vertex's in increasing order:
 // what springs_from_* and lumped_masses group the mesh by. Built once and passed to both, it saves a pass over the

@@ -479,15 +479,14 @@ void build_adjacency(SpringNetwork& network) {
   for (std::size_t v = 0; v < n; ++v) count[v + 1] += count[v];
   network.adjacency_offset = count;
   network.adjacency_spring.assign(2 * network.size(), 0);
-  network.adjacency_neighbour.assign(2 * network.size(), 0);
   std::vector<std::int32_t> next(count.begin(), count.end() - 1);
   for (std::size_t s = 0; s < network.size(); ++s) {
     const auto a = static_cast<std::size_t>(network.first[s]);
     const auto b = static_cast<std::size_t>(network.second[s]);
     network.adjacency_spring[static_cast<std::size_t>(next[a])] = static_cast<std::int32_t>(s);
-    network.adjacency_neighbour[static_cast<std::size_t>(next[a]++)] = network.second[s];
+    ++next[a];
     network.adjacency_spring[static_cast<std::size_t>(next[b])] = static_cast<std::int32_t>(s);
-    network.adjacency_neighbour[static_cast<std::size_t>(next[b]++)] = network.first[s];
+    ++next[b];
   }
 }
 

@@ -82,7 +82,6 @@ void check_same_network(const SpringNetwork& a, const SpringNetwork& b, bool mea
   CHECK(same_bits(a.damping, b.damping));
   CHECK(a.adjacency_offset == b.adjacency_offset);
   CHECK(a.adjacency_spring == b.adjacency_spring);
-  CHECK(a.adjacency_neighbour == b.adjacency_neighbour);
 }
 
 std::vector<std::string> messages(const DiagnosticList& diagnostics) {

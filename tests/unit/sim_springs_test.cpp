@@ -31,7 +31,8 @@ TEST_CASE("tetrahedron edges: one spring per edge, CSR adjacency in spring order
   for (const double measure : net.element_measure) CHECK(measure == Approx(1.0 / 6.0));
   CHECK(net.adjacency_offset == std::vector<std::int32_t>{0, 3, 6, 9, 12});
   CHECK(net.adjacency_spring == std::vector<std::int32_t>{0, 1, 2, 0, 3, 4, 1, 3, 5, 2, 4, 5});
-  CHECK(net.adjacency_neighbour == std::vector<std::int32_t>{1, 2, 3, 0, 2, 3, 0, 1, 3, 0, 1, 2});
+  CHECK(adjacency_neighbours(net) == std::vector<std::int32_t>{1, 2, 3, 0, 2, 3, 0, 1, 3, 0, 1, 2});
+  CHECK(adjacency_neighbour(net, 2, 7) == 1);
   REQUIRE(compute_rest_lengths(net, mesh.points, diagnostics));
   CHECK(net.rest_length[0] == 1.0);
   CHECK(net.rest_length[3] == Approx(std::sqrt(2.0)));
