@@ -191,6 +191,24 @@ TEST_CASE("setup errors: sizes, indices and masses are named", "[sim]") {
   DiagnosticList missing;
   CHECK_FALSE(validate_setup(no_adjacency, missing));
   CHECK(missing.items()[0].message == "the spring adjacency is missing; call build_adjacency");
+  // The gathers take an entry's other end from its spring, so every entry must name a spring at its vertex.
+  SimulationSetup foreign = single_spring(1.0, 100.0, 0.0, 0.1);
+  foreign.springs.vertex_count = 3;
+  foreign.springs.adjacency_offset = {0, 1, 1, 2};
+  foreign.mass.push_back(1.0);
+  foreign.rest_positions.push_back({2.0, 0.0, 0.0});
+  foreign.initial_positions.push_back({2.0, 0.0, 0.0});
+  DiagnosticList wrong;
+  CHECK_FALSE(validate_setup(foreign, wrong));
+  REQUIRE(wrong.error_count() == 1);
+  CHECK(wrong.items()[0].message ==
+        "the spring adjacency of vertex 2 lists spring 0, which does not end at it; call build_adjacency");
+  SimulationSetup short_offsets = single_spring(1.0, 100.0, 0.0, 0.1);
+  short_offsets.springs.adjacency_offset = {0, 1, 1};
+  DiagnosticList span;
+  CHECK_FALSE(validate_setup(short_offsets, span));
+  CHECK(span.items()[0].message ==
+        "the spring adjacency's offsets do not span its 2 x springs entries; call build_adjacency");
 }
 
 namespace {
