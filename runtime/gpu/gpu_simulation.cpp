@@ -164,8 +164,10 @@ struct UninitialisedAllocator : std::allocator<T> {
   UninitialisedAllocator(const UninitialisedAllocator<U>&) {}
   template <typename U, typename... Args>
   void construct(U* p, Args&&... args) {
-    if constexpr (sizeof...(Args) == 0) ::new (static_cast<void*>(p)) U;
-    else ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    if constexpr (sizeof...(Args) == 0)
+      ::new (static_cast<void*>(p)) U;
+    else
+      ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
   }
 };
 template <typename T>
@@ -194,10 +196,11 @@ bool force_probe(const sim::SimulationSetup& setup) {
 
 // out[at + i] = value(i) for i in [0, count), on the pool.
 template <typename T, typename Value>
-void fill(sim::WorkerPool& pool, HostArray<T>& out, std::size_t at, std::size_t count, const Value& value) {
+void fill_on_pool(sim::WorkerPool& pool, HostArray<T>& out, std::size_t at, std::size_t count, const Value& value) {
   T* to = out.data() + at;
   pool.run(
-      count, [&](std::size_t begin, std::size_t end) {
+      count,
+      [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) to[i] = value(i);
       },
       1 << 16);
@@ -218,8 +221,8 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     elements += setup.tetrahedra.size();
     if (setup.tetrahedron_field) corners += setup.tetrahedron_field->corner_index.size();
   }
+  c.offset.reserve(vertices + 1);  // and the end offset, pushed last
   for (auto* array : {&c.offset, &c.vertex_scene}) array->resize(vertices);
-  c.offset.reserve(vertices + 1);
   for (auto* array : {&c.spring, &c.neighbour}) array->resize(entries);
   for (auto* array : {&c.first, &c.second}) array->resize(springs);
   for (auto* array : {&c.rest_length, &c.stiffness, &c.mass}) array->resize(array == &c.mass ? vertices : springs);
@@ -232,8 +235,8 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
   c.corners.resize(4 * elements);
   c.element_scene.resize(elements);
   if (c.has_field) {
-    c.corner_offset.resize(vertices);
     c.corner_offset.reserve(vertices + 1);
+    c.corner_offset.resize(vertices);
     c.corner_index.resize(corners);
     c.corner_slot.resize(corners);
     c.rest_inverse.resize(9 * elements);
@@ -251,35 +254,38 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     const auto vb = static_cast<std::size_t>(vertex_base), sb = static_cast<std::size_t>(spring_base);
     const auto eb = static_cast<std::size_t>(element_base);
     const std::size_t n = setup.rest_positions.size(), m = setup.tetrahedra.size();
-    fill(pool, c.corners, 4 * eb, 4 * m,
-         [&](std::size_t i) { return vertex_base + setup.tetrahedra[i / 4][i % 4]; });
-    fill(pool, c.element_scene, eb, m, [&](std::size_t) { return scene; });
+    fill_on_pool(pool, c.corners, 4 * eb, 4 * m,
+                 [&](std::size_t i) { return vertex_base + setup.tetrahedra[i / 4][i % 4]; });
+    fill_on_pool(pool, c.element_scene, eb, m, [&](std::size_t) { return scene; });
     if (setup.tetrahedron_field) {
       const sim::TetrahedronField& field = *setup.tetrahedron_field;
-      const int cb = corner_base;
+      const int corners_before = corner_base;
       const auto cbase = static_cast<std::size_t>(corner_base);
-      fill(pool, c.corner_offset, vb, n, [&](std::size_t v) { return cb + field.corner_offset[v]; });
-      fill(pool, c.corner_index, cbase, field.corner_index.size(),
-           [&](std::size_t k) { return 4 * element_base + field.corner_index[k]; });
-      fill(pool, c.corner_slot, cbase, field.corner_slot.size(), [&](std::size_t k) { return cb + field.corner_slot[k]; });
+      fill_on_pool(pool, c.corner_offset, vb, n,
+                   [&](std::size_t v) { return corners_before + field.corner_offset[v]; });
+      fill_on_pool(pool, c.corner_index, cbase, field.corner_index.size(),
+                   [&](std::size_t k) { return 4 * element_base + field.corner_index[k]; });
+      fill_on_pool(pool, c.corner_slot, cbase, field.corner_slot.size(),
+                   [&](std::size_t k) { return corners_before + field.corner_slot[k]; });
       corner_base += static_cast<int>(field.corner_index.size());
-      fill(pool, c.rest_inverse, 9 * eb, 9 * m, [&](std::size_t i) { return field.rest_inverse[i]; });
-      fill(pool, c.rest_volume, eb, m, [&](std::size_t e) { return field.rest_volume[e]; });
+      fill_on_pool(pool, c.rest_inverse, 9 * eb, 9 * m, [&](std::size_t i) { return field.rest_inverse[i]; });
+      fill_on_pool(pool, c.rest_volume, eb, m, [&](std::size_t e) { return field.rest_volume[e]; });
       const auto copy_or_zero = [&](HostArray<double>& to, const std::vector<double>& from) {
-        fill(pool, to, eb, m, [&](std::size_t e) { return from.empty() ? 0.0 : from[e]; });
+        fill_on_pool(pool, to, eb, m, [&](std::size_t e) { return from.empty() ? 0.0 : from[e]; });
       };
       copy_or_zero(c.youngs_modulus, field.youngs_modulus);
       copy_or_zero(c.poisson_ratio, field.poisson_ratio);
       copy_or_zero(c.bulk_modulus, field.bulk_modulus);
       if (c.has_element_damping) copy_or_zero(c.stiffness_damping, field.stiffness_damping);
     }
-    const int eb_entries = entry_base;
+    const int entries_before = entry_base;
     const auto entry_at = static_cast<std::size_t>(entry_base);
-    fill(pool, c.offset, vb, n, [&](std::size_t v) { return eb_entries + net.adjacency_offset[v]; });
-    fill(pool, c.spring, entry_at, net.adjacency_spring.size(),
-         [&](std::size_t e) { return spring_base + net.adjacency_spring[e]; });
+    fill_on_pool(pool, c.offset, vb, n, [&](std::size_t v) { return entries_before + net.adjacency_offset[v]; });
+    fill_on_pool(pool, c.spring, entry_at, net.adjacency_spring.size(),
+                 [&](std::size_t e) { return spring_base + net.adjacency_spring[e]; });
     pool.run(
-        n, [&](std::size_t begin, std::size_t end) {
+        n,
+        [&](std::size_t begin, std::size_t end) {
           for (std::size_t v = begin; v < end; ++v)
             for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e)
               c.neighbour[entry_at + static_cast<std::size_t>(e)] =
@@ -287,36 +293,38 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
         },
         1 << 14);
     entry_base += static_cast<int>(net.adjacency_spring.size());
-    fill(pool, c.first, sb, net.size(), [&](std::size_t k) { return vertex_base + net.first[k]; });
-    fill(pool, c.second, sb, net.size(), [&](std::size_t k) { return vertex_base + net.second[k]; });
-    fill(pool, c.rest_length, sb, net.size(), [&](std::size_t k) { return net.rest_length[k]; });
-    fill(pool, c.stiffness, sb, net.size(), [&](std::size_t k) { return net.stiffness[k]; });
+    fill_on_pool(pool, c.first, sb, net.size(), [&](std::size_t k) { return vertex_base + net.first[k]; });
+    fill_on_pool(pool, c.second, sb, net.size(), [&](std::size_t k) { return vertex_base + net.second[k]; });
+    fill_on_pool(pool, c.rest_length, sb, net.size(), [&](std::size_t k) { return net.rest_length[k]; });
+    fill_on_pool(pool, c.stiffness, sb, net.size(), [&](std::size_t k) { return net.stiffness[k]; });
     if (c.has_damping)
-      fill(pool, c.damping, sb, net.size(), [&](std::size_t k) { return net.damping.empty() ? 0.0 : net.damping[k]; });
-    fill(pool, c.mass, vb, n, [&](std::size_t v) { return setup.mass[v]; });
+      fill_on_pool(pool, c.damping, sb, net.size(),
+                   [&](std::size_t k) { return net.damping.empty() ? 0.0 : net.damping[k]; });
+    fill_on_pool(pool, c.mass, vb, n, [&](std::size_t v) { return setup.mass[v]; });
     // Held axes at the start (a displacement probe's vertices are held only after the initial velocities are taken,
     // as in the CPU backend), then the full mask.
     std::vector<unsigned char> fixed(n, 0);
     for (std::size_t v = 0; v < n && setup.fixed_axes.size() == n; ++v) fixed[v] = setup.fixed_axes[v];
     for (const auto v : setup.fixed_vertices) fixed[static_cast<std::size_t>(v)] = kernels::kAllAxesFixed;
     const std::vector<unsigned char> held = sim::held_axes(setup);
-    fill(pool, c.fixed, vb, n, [&](std::size_t v) { return held[v]; });
+    fill_on_pool(pool, c.fixed, vb, n, [&](std::size_t v) { return held[v]; });
     const std::vector<sim::Point3>& start =
         setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      fill(pool, c.rest[axis], vb, n, [&](std::size_t v) { return setup.rest_positions[v][axis]; });
-      fill(pool, c.position[axis], vb, n, [&](std::size_t v) { return start[v][axis]; });
+      fill_on_pool(pool, c.rest[axis], vb, n, [&](std::size_t v) { return setup.rest_positions[v][axis]; });
+      fill_on_pool(pool, c.position[axis], vb, n, [&](std::size_t v) { return start[v][axis]; });
       // As the CPU backend: held axes start at rest.
-      fill(pool, c.velocity[axis], vb, n, [&](std::size_t v) {
+      fill_on_pool(pool, c.velocity[axis], vb, n, [&](std::size_t v) {
         return setup.initial_velocities.empty() || kernels::axis_fixed(fixed[v], static_cast<int>(axis))
                    ? 0.0
                    : setup.initial_velocities[v][axis];
       });
       if (c.has_forces)
-        fill(pool, c.force[axis], vb, n,
-             [&](std::size_t v) { return setup.external_forces.empty() ? 0.0 : setup.external_forces[v][axis]; });
+        fill_on_pool(pool, c.force[axis], vb, n, [&](std::size_t v) {
+          return setup.external_forces.empty() ? 0.0 : setup.external_forces[v][axis];
+        });
     }
-    fill(pool, c.vertex_scene, vb, n, [&](std::size_t) { return scene; });
+    fill_on_pool(pool, c.vertex_scene, vb, n, [&](std::size_t) { return scene; });
 
     c.vertex_begin.push_back(vertex_base + static_cast<int>(n));
     c.spring_begin.push_back(spring_base + static_cast<int>(net.size()));
@@ -337,7 +345,7 @@ template <typename Real, typename Allocator>
 HostArray<Real> convert(const std::vector<double, Allocator>& values) {
   HostArray<Real> out(values.size());
   sim::WorkerPool pool(sim::resolve_thread_count(0, values.size()));
-  fill(pool, out, 0, values.size(), [&](std::size_t i) { return static_cast<Real>(values[i]); });
+  fill_on_pool(pool, out, 0, values.size(), [&](std::size_t i) { return static_cast<Real>(values[i]); });
   return out;
 }
 
