@@ -58,3 +58,11 @@ fmpc_test_unity_group(tests_9
   unit/vtk_xml_test.cpp
   unit/scene_material_test.cpp
   unit/lookup_table_test.cpp)
+fmpc_test_unity_group(tests_10
+  unit/fuzzy_math_test.cpp
+  unit/cell_bound_test.cpp)
+fmpc_test_unity_group(tests_11
+  unit/mesh_refinement_test.cpp
+  unit/plot_test.cpp
+  unit/sim_loads_test.cpp
+  unit/packed_table_test.cpp)
