@@ -188,6 +188,8 @@ struct ConcatenatedScenes {
   HostArray<double> rest_inverse, rest_volume, youngs_modulus, poisson_ratio, bulk_modulus, stiffness_damping;
   bool has_field = false;
   bool has_element_damping = false;
+  // The staging's threads, which also convert the arrays on upload (one pool, not one per array).
+  std::unique_ptr<sim::WorkerPool> pool;
 };
 
 bool force_probe(const sim::SimulationSetup& setup) {
@@ -225,8 +227,9 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
   for (auto* array : {&c.offset, &c.vertex_scene}) array->resize(vertices);
   for (auto* array : {&c.spring, &c.neighbour}) array->resize(entries);
   for (auto* array : {&c.first, &c.second}) array->resize(springs);
-  for (auto* array : {&c.rest_length, &c.stiffness, &c.mass}) array->resize(array == &c.mass ? vertices : springs);
+  for (auto* array : {&c.rest_length, &c.stiffness}) array->resize(springs);
   if (c.has_damping) c.damping.resize(springs);
+  c.mass.resize(vertices);
   c.fixed.resize(vertices);
   for (std::size_t axis = 0; axis < 3; ++axis) {
     for (auto* array : {&c.rest[axis], &c.position[axis], &c.velocity[axis]}) array->resize(vertices);
@@ -243,7 +246,8 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     for (auto* array : {&c.rest_volume, &c.youngs_modulus, &c.poisson_ratio, &c.bulk_modulus}) array->resize(elements);
     if (c.has_element_damping) c.stiffness_damping.resize(elements);
   }
-  sim::WorkerPool pool(sim::resolve_thread_count(0, entries + 4 * elements + vertices));
+  c.pool = std::make_unique<sim::WorkerPool>(sim::resolve_thread_count(0, entries + 4 * elements + vertices));
+  sim::WorkerPool& pool = *c.pool;
   int entry_base = 0, corner_base = 0;
   for (std::size_t s = 0; s < scenes.size(); ++s) {
     const sim::SimulationSetup& setup = scenes[s];
@@ -283,15 +287,7 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     fill_on_pool(pool, c.offset, vb, n, [&](std::size_t v) { return entries_before + net.adjacency_offset[v]; });
     fill_on_pool(pool, c.spring, entry_at, net.adjacency_spring.size(),
                  [&](std::size_t e) { return spring_base + net.adjacency_spring[e]; });
-    pool.run(
-        n,
-        [&](std::size_t begin, std::size_t end) {
-          for (std::size_t v = begin; v < end; ++v)
-            for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e)
-              c.neighbour[entry_at + static_cast<std::size_t>(e)] =
-                  vertex_base + sim::adjacency_neighbour(net, v, static_cast<std::size_t>(e));
-        },
-        1 << 14);
+    sim::write_adjacency_neighbours(net, vertex_base, c.neighbour.data() + entry_at, pool);
     entry_base += static_cast<int>(net.adjacency_spring.size());
     fill_on_pool(pool, c.first, sb, net.size(), [&](std::size_t k) { return vertex_base + net.first[k]; });
     fill_on_pool(pool, c.second, sb, net.size(), [&](std::size_t k) { return vertex_base + net.second[k]; });
@@ -342,9 +338,8 @@ GatherKind gather_kind(const sim::SimulationSetup& setup) {
 }
 
 template <typename Real, typename Allocator>
-HostArray<Real> convert(const std::vector<double, Allocator>& values) {
+HostArray<Real> convert(const std::vector<double, Allocator>& values, sim::WorkerPool& pool) {
   HostArray<Real> out(values.size());
-  sim::WorkerPool pool(sim::resolve_thread_count(0, values.size()));
   fill_on_pool(pool, out, 0, values.size(), [&](std::size_t i) { return static_cast<Real>(values[i]); });
   return out;
 }
@@ -394,10 +389,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     FMPC_CUDA_CHECK(neighbour_.upload(c.neighbour), diagnostics, false);
     FMPC_CUDA_CHECK(first_.upload(c.first), diagnostics, false);
     FMPC_CUDA_CHECK(second_.upload(c.second), diagnostics, false);
-    FMPC_CUDA_CHECK(rest_length_.upload(convert<Real>(c.rest_length)), diagnostics, false);
-    FMPC_CUDA_CHECK(stiffness_.upload(convert<Real>(c.stiffness)), diagnostics, false);
-    if (c.has_damping) FMPC_CUDA_CHECK(damping_.upload(convert<Real>(c.damping)), diagnostics, false);
-    FMPC_CUDA_CHECK(mass_.upload(convert<Real>(c.mass)), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_length_.upload(convert<Real>(c.rest_length, *c.pool)), diagnostics, false);
+    FMPC_CUDA_CHECK(stiffness_.upload(convert<Real>(c.stiffness, *c.pool)), diagnostics, false);
+    if (c.has_damping) FMPC_CUDA_CHECK(damping_.upload(convert<Real>(c.damping, *c.pool)), diagnostics, false);
+    FMPC_CUDA_CHECK(mass_.upload(convert<Real>(c.mass, *c.pool)), diagnostics, false);
     FMPC_CUDA_CHECK(energy_mass_.upload(c.mass), diagnostics, false);
     FMPC_CUDA_CHECK(energy_rest_length_.upload(c.rest_length), diagnostics, false);
     FMPC_CUDA_CHECK(energy_stiffness_.upload(c.stiffness), diagnostics, false);
@@ -406,9 +401,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     DeviceArray<Real>* force[3] = {&force_x_, &force_y_, &force_z_};
     DeviceArray<double>* energy_force[3] = {&energy_force_x_, &energy_force_y_, &energy_force_z_};
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      FMPC_CUDA_CHECK(rest[axis]->upload(convert<Real>(c.rest[axis])), diagnostics, false);
+      FMPC_CUDA_CHECK(rest[axis]->upload(convert<Real>(c.rest[axis], *c.pool)), diagnostics, false);
       if (c.has_forces) {
-        FMPC_CUDA_CHECK(force[axis]->upload(convert<Real>(c.force[axis])), diagnostics, false);
+        FMPC_CUDA_CHECK(force[axis]->upload(convert<Real>(c.force[axis], *c.pool)), diagnostics, false);
         FMPC_CUDA_CHECK(energy_force[axis]->upload(c.force[axis]), diagnostics, false);
       }
     }
@@ -416,14 +411,14 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     for (const auto& report : stability_) scene_h.push_back(report.time_step);
     if (scenes_.size() > 1) {
       FMPC_CUDA_CHECK(vertex_scene_.upload(c.vertex_scene), diagnostics, false);
-      FMPC_CUDA_CHECK(scene_h_.upload(convert<Real>(scene_h)), diagnostics, false);
+      FMPC_CUDA_CHECK(scene_h_.upload(convert<Real>(scene_h, *c.pool)), diagnostics, false);
     }
     const auto count = static_cast<std::size_t>(n_);
     const HostArray<double>* start[6] = {&c.position[0], &c.position[1], &c.position[2],
                                          &c.velocity[0], &c.velocity[1], &c.velocity[2]};
     const std::vector<DeviceArray<Real>*> first_state = state_[0].arrays();
     for (std::size_t i = 0; i < 6; ++i)
-      FMPC_CUDA_CHECK(first_state[i]->upload(convert<Real>(*start[i])), diagnostics, false);
+      FMPC_CUDA_CHECK(first_state[i]->upload(convert<Real>(*start[i], *c.pool)), diagnostics, false);
     DeviceArray<double>* start_positions[3] = {&start_x_, &start_y_, &start_z_};
     for (std::size_t axis = 0; axis < 3; ++axis)
       FMPC_CUDA_CHECK(start_positions[axis]->upload(c.position[axis]), diagnostics, false);
@@ -508,21 +503,21 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     FMPC_CUDA_CHECK(corner_offset_.upload(c.corner_offset), diagnostics, false);
     FMPC_CUDA_CHECK(corner_index_.upload(c.corner_index), diagnostics, false);
     FMPC_CUDA_CHECK(corner_slot_.upload(c.corner_slot), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_inverse_.upload(convert<Real>(c.rest_inverse)), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_volume_.upload(convert<Real>(c.rest_volume)), diagnostics, false);
+    FMPC_CUDA_CHECK(field_rest_inverse_.upload(convert<Real>(c.rest_inverse, *c.pool)), diagnostics, false);
+    FMPC_CUDA_CHECK(field_rest_volume_.upload(convert<Real>(c.rest_volume, *c.pool)), diagnostics, false);
     FMPC_CUDA_CHECK(field_rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
     FMPC_CUDA_CHECK(field_rest_volume_d_.upload(c.rest_volume), diagnostics, false);
     if (corotational) {
-      FMPC_CUDA_CHECK(field_youngs_.upload(convert<Real>(c.youngs_modulus)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_poisson_.upload(convert<Real>(c.poisson_ratio)), diagnostics, false);
+      FMPC_CUDA_CHECK(field_youngs_.upload(convert<Real>(c.youngs_modulus, *c.pool)), diagnostics, false);
+      FMPC_CUDA_CHECK(field_poisson_.upload(convert<Real>(c.poisson_ratio, *c.pool)), diagnostics, false);
       FMPC_CUDA_CHECK(field_youngs_d_.upload(c.youngs_modulus), diagnostics, false);
       FMPC_CUDA_CHECK(field_poisson_d_.upload(c.poisson_ratio), diagnostics, false);
     } else {
-      FMPC_CUDA_CHECK(field_bulk_.upload(convert<Real>(c.bulk_modulus)), diagnostics, false);
+      FMPC_CUDA_CHECK(field_bulk_.upload(convert<Real>(c.bulk_modulus, *c.pool)), diagnostics, false);
       FMPC_CUDA_CHECK(field_bulk_d_.upload(c.bulk_modulus), diagnostics, false);
     }
     if (c.has_element_damping) {
-      FMPC_CUDA_CHECK(field_damping_.upload(convert<Real>(c.stiffness_damping)), diagnostics, false);
+      FMPC_CUDA_CHECK(field_damping_.upload(convert<Real>(c.stiffness_damping, *c.pool)), diagnostics, false);
       FMPC_CUDA_CHECK(field_damping_d_.upload(c.stiffness_damping), diagnostics, false);
     }
     FMPC_CUDA_CHECK(corner_force_.allocate(4 * static_cast<std::size_t>(element_count_)), diagnostics, false);

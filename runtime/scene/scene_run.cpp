@@ -339,9 +339,12 @@ class SceneRecorder {
     }
     result_.max_displacement = std::max(result_.max_displacement, largest);
     const double time = state.time();
-    if (frame && outputs_ok_) {
+    // Downloaded once for the frame and the sample of the same event.
+    const bool write_frame = frame && outputs_ok_;
+    const std::vector<Point3> velocities =
+        write_frame || sample ? state.velocities(diagnostics) : std::vector<Point3>{};
+    if (write_frame) {
       const std::string name = frame_name(frames_.size());
-      const std::vector<Point3> velocities = state.velocities(diagnostics);
       if (!vtu_cells_) vtu_cells_ = encode_vtu_cells(built_.mesh, vtu_options_, diagnostics);
       // Element stresses as cell data where the cells are the elements: the FEM's von Mises stress, or the volume
       // term's pressure magnitude (springs carry no continuum stress).
@@ -361,7 +364,7 @@ class SceneRecorder {
       frames_.push_back({time, name});
       result_.files.push_back((directory_ / name).string());
     }
-    if (sample) record_sample(state, largest, positions, state.velocities(diagnostics), diagnostics);
+    if (sample) record_sample(state, largest, positions, velocities, diagnostics);
   }
 
   // A sample's CSV row and probe curve point; positions and velocities may be empty where the state reduces in place.

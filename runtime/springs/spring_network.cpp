@@ -486,17 +486,20 @@ void build_adjacency(SpringNetwork& network, WorkerPool* given_pool) {
   network.adjacency_spring = std::move(groups.item);
 }
 
-std::vector<std::int32_t> adjacency_neighbours(const SpringNetwork& network, WorkerPool* given_pool) {
-  const std::size_t n = network.vertex_count;
-  std::vector<std::int32_t> out;
-  if (network.adjacency_offset.size() != n + 1) return out;
-  resize_large(out, network.adjacency_spring.size());
-  PoolLease lease(given_pool, 0, out.size());
-  lease.pool().run(n, [&](std::size_t first, std::size_t last) {
+void write_adjacency_neighbours(const SpringNetwork& network, std::int32_t base, std::int32_t* out, WorkerPool& pool) {
+  pool.run(network.vertex_count, [&](std::size_t first, std::size_t last) {
     for (std::size_t v = first; v < last; ++v)
       for (auto e = network.adjacency_offset[v]; e < network.adjacency_offset[v + 1]; ++e)
-        out[static_cast<std::size_t>(e)] = adjacency_neighbour(network, v, static_cast<std::size_t>(e));
+        out[static_cast<std::size_t>(e)] = base + adjacency_neighbour(network, v, static_cast<std::size_t>(e));
   });
+}
+
+std::vector<std::int32_t> adjacency_neighbours(const SpringNetwork& network, WorkerPool* given_pool) {
+  std::vector<std::int32_t> out;
+  if (network.adjacency_offset.size() != network.vertex_count + 1) return out;
+  resize_large(out, network.adjacency_spring.size());
+  PoolLease lease(given_pool, 0, out.size());
+  write_adjacency_neighbours(network, 0, out.data(), lease.pool());
   return out;
 }
 

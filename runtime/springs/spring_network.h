@@ -51,6 +51,9 @@ inline std::int32_t adjacency_neighbour(const SpringNetwork& network, std::size_
 }
 // Every entry's other endpoint, in CSR order: what the simulators' gathers read. Null pool: one of its own.
 std::vector<std::int32_t> adjacency_neighbours(const SpringNetwork& network, WorkerPool* pool = nullptr);
+// The same written to out[0 .. 2 x springs), each plus `base` (a GPU batch numbers each scene's vertices from its
+// first); the adjacency must span its entries (validate_setup).
+void write_adjacency_neighbours(const SpringNetwork& network, std::int32_t base, std::int32_t* out, WorkerPool& pool);
 
 // The elements at every vertex (the tetrahedra, or without them the triangles), each vertex's in increasing order:
 // what springs_from_* and lumped_masses group the mesh by. Built once and passed to both, it saves a pass over the
