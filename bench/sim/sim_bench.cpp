@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <optional>
@@ -48,6 +49,8 @@ struct Options {
   bool fem_only = false;
   std::size_t cohort = 1000;  // patients of the demo scene in the cohort row
   bool cohort_given = false;  // --cohort N also holds with --quick
+  int spring_cells = 0;  // > 0: only the large springs box of this many cells per side (GPU rows)
+  bool cohort_only = false;  // only the cohort rows (with --spring-cells: both)
 };
 
 struct Row {
@@ -210,7 +213,8 @@ gpu::GpuOptions gpu_options_for(Launch launch) {
 // lanes: GpuOptions::persistent_lanes or gather_lanes (0: automatic); check_every: advance's NaN/Inf check interval (0: at the end
 // of each timed chunk only, to separate the checks' cost from the steps').
 Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, Launch launch,
-            const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery, int element_blocks = 0) {
+            const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery, int element_blocks = 0,
+            bool sliced_springs = true, int slice_window = 0) {
   SimulationSetup setup = base;
   setup.precision = precision;
   setup.integrator = integrator;
@@ -230,12 +234,16 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   gpu::GpuOptions gpu_options = gpu_options_for(launch);
   (launch == Launch::Persistent ? gpu_options.persistent_lanes : gpu_options.gather_lanes) = lanes;
   gpu_options.element_blocks_per_sm = element_blocks;
+  gpu_options.sliced_springs = sliced_springs;
+  gpu_options.slice_window = slice_window;
   const auto simulation = gpu::GpuSimulation::create(setup, gpu_options, diagnostics);
   row.graphs = launch_name(simulation && launch == Launch::Persistent && !simulation->persistent_launch()
                                ? Launch::Graphs
                                : launch);
   if (lanes > 0) row.graphs += " lanes " + std::to_string(lanes);
   if (element_blocks > 0) row.graphs += " element pass " + std::to_string(element_blocks) + " blocks/SM";
+  if (!sliced_springs) row.graphs += " springs in CSR order";
+  if (slice_window > 0) row.graphs += " slice window " + std::to_string(slice_window);
   if (check_every != kCheckEvery) row.graphs += check_every == 0 ? " checks per chunk" : " checks every " + std::to_string(check_every);
   if (!simulation || !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics, check_every); }, 64,
                                  options.min_seconds, row)) {
@@ -349,16 +357,19 @@ std::vector<Row> cohort_rows(std::size_t count, const Options& options) {
   }
   std::vector<Row> rows;
   // The per-step gather's threads per vertex (0: the automatic choice) on the cohort's many short CSR rows.
-  const std::pair<Launch, int> variants[] = {
-      {Launch::Graphs, 0}, {Launch::Graphs, 2}, {Launch::Graphs, 4}, {Launch::Graphs, 8}, {Launch::Persistent, 0}};
+  // Lanes -1: one thread per vertex reading the springs in CSR order instead of the sliced layout.
+  const std::pair<Launch, int> variants[] = {{Launch::Graphs, 0}, {Launch::Graphs, -1}, {Launch::Graphs, 2},
+                                             {Launch::Graphs, 4}, {Launch::Graphs, 8}, {Launch::Persistent, 0}};
   for (const auto& [launch, lanes] : variants) {
     gpu::GpuOptions gpu_options = gpu_options_for(launch);
-    gpu_options.gather_lanes = lanes;
+    gpu_options.gather_lanes = lanes < 0 ? 1 : lanes;
+    gpu_options.sliced_springs = lanes >= 0;
     const auto batch = gpu::GpuBatchSimulation::create(patients, gpu_options, diagnostics);
     if (launch == Launch::Persistent && batch && !batch->persistent_launch()) continue;  // too large for one grid
     Row timed = row;
     timed.graphs = launch_name(launch);
     if (lanes > 0) timed.graphs += " lanes " + std::to_string(lanes);
+    if (lanes < 0) timed.graphs += " lanes 1, springs in CSR order";
     if (!batch ||
         !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, timed)) {
       timed.status = failure_text(diagnostics);
@@ -424,9 +435,13 @@ bool parse(int argc, char** argv, Options& options) {
       options.fem_only = true;
     } else if (arg == "--fem-cells" && i + 1 < argc) {
       options.fem_cells = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
+    } else if (arg == "--cohort-only") {
+      options.cohort_only = true;
+    } else if (arg == "--spring-cells" && i + 1 < argc) {
+      options.spring_cells = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
     } else {
       std::cerr << "usage: fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only] "
-                   "[--cohort PATIENTS]\n";
+                   "[--cohort PATIENTS] [--cohort-only] [--spring-cells N]\n";
       return false;
     }
   }
@@ -447,8 +462,26 @@ int main(int argc, char** argv) {
   // cells^3 boxes, 3n(n+1)^2 + 3n^2(n+1) + n^3 springs: 5 -> 1,115, 11 -> 10,439, 20 -> 59,660 (9,261 vertices, the
   // issue 13 small mesh), 24 -> 102,024, 52 -> 1,008,748.
   std::vector<int> sizes = options.quick ? std::vector<int>{5, 11, 20} : std::vector<int>{5, 11, 20, 24, 52};
-  if (options.fem_only) sizes.clear();
+  // Parts measured alone: the FEM boxes, the large springs box, the cohort.
+  const bool part_alone = options.fem_only || options.spring_cells > 0 || options.cohort_only;
+  if (part_alone) sizes.clear();
   std::vector<Row> rows;
+  // Issue 13's large springs box on the GPU alone (--spring-cells; 240 is the end-to-end scene's): the per-step
+  // kernel with one thread per vertex, its springs in the sliced layout with each sorting window and in CSR order.
+  if (options.spring_cells > 0 && have_device) {
+    const auto start = std::chrono::steady_clock::now();
+    const SimulationSetup base = benchmark_box(options.spring_cells, Precision::Float, Integrator::SemiImplicitEuler);
+    std::cout << "springs box " << options.spring_cells << "^3: " << base.rest_positions.size() << " vertices, "
+              << base.springs.size() << " springs, set up in "
+              << format(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 2) << " s\n"
+              << std::flush;
+    rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options));
+    for (const int window : {32, 64, 256, 512, 1024})
+      rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 1,
+                             kCheckEvery, 0, true, window));
+    rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 1,
+                           kCheckEvery, 0, false));
+  }
   for (const int cells : sizes) {
     const SimulationSetup base = benchmark_box(cells, Precision::Double, Integrator::SemiImplicitEuler);
     std::cout << "box " << cells << "^3: " << base.rest_positions.size() << " vertices, " << base.springs.size()
@@ -474,6 +507,9 @@ int main(int argc, char** argv) {
       if (cells >= 20 && precision == Precision::Float) {
         for (const int lanes : {1, 2, 8})
           rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, lanes));
+        // One thread per vertex reading the springs in CSR order, against the sliced layout (the lanes 1 row).
+        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, 1, kCheckEvery,
+                               0, false));
       }
       for (const Integrator integrator :
            {Integrator::ForwardEuler, Integrator::VelocityVerlet, Integrator::RungeKutta4}) {
@@ -481,7 +517,7 @@ int main(int argc, char** argv) {
       }
     }
   }
-  if (have_device && !options.fem_only) {
+  if (have_device && !part_alone) {
     const std::size_t scenes = options.quick ? 16 : 256;
     std::cout << "batch: " << scenes << " boxes of 5^3 cells\n" << std::flush;
     for (const Precision precision : {Precision::Float, Precision::Double}) {
@@ -489,7 +525,7 @@ int main(int argc, char** argv) {
     }
   }
 
-  if (have_device && !options.fem_only) {
+  if (have_device && (!part_alone || options.cohort_only || (options.spring_cells > 0 && options.cohort_given))) {
     const std::size_t patients = options.quick && !options.cohort_given ? 64 : options.cohort;
     std::cout << "cohort: " << patients << " patients of the demo scene, each with its own probe\n" << std::flush;
     for (Row& row : cohort_rows(patients, options)) rows.push_back(row);
@@ -498,7 +534,9 @@ int main(int argc, char** argv) {
   // The force models with an element pass. CPU rows up to 52^3 cells (843,648 tetrahedra); the largest box on the
   // GPU only, semi-implicit Euler in float and double (issue 10: 10 G tetrahedron-steps/s at 10M tetrahedra).
   std::vector<int> fem_sizes = options.quick ? std::vector<int>{5, 11} : std::vector<int>{11, 24, 52};
-  if (!options.quick && have_device && options.fem_cells > 52) fem_sizes.push_back(options.fem_cells);
+  if (options.spring_cells > 0 || options.cohort_only) fem_sizes.clear();
+  if (!options.quick && have_device && options.fem_cells > 52 && options.spring_cells == 0 && !options.cohort_only)
+    fem_sizes.push_back(options.fem_cells);
   if (options.fem_only && options.fem_cells > 52) fem_sizes = {options.fem_cells};
   for (const int cells : fem_sizes) {
     for (const ForceModel model : {ForceModel::CorotationalFem, ForceModel::Springs}) {
@@ -537,7 +575,11 @@ int main(int argc, char** argv) {
     }
   }
 
+  // The table first: a results folder that cannot be written loses nothing of a long run.
+  print_table(rows, std::cout);
   if (!options.out_dir.empty()) {
+    std::error_code ignored;
+    std::filesystem::create_directories(options.out_dir, ignored);
     std::ofstream csv(options.out_dir + "/sim_bench.csv");
     write_csv(rows, csv);
     std::ofstream table(options.out_dir + "/sim_bench.md");
@@ -548,7 +590,6 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  print_table(rows, std::cout);
   bool all_ok = true;
   for (const Row& r : rows) all_ok = all_ok && r.status == "ok";
   return all_ok ? 0 : 1;
