@@ -16,11 +16,14 @@
 
 namespace fmpc::kernels {
 
+// `row`: the thread's sliced row on the GPU (kernels/spring_math.h, SlicedSpringsView), loaded with its vertex;
+// count -1 (the default) reads the CSR order (the CPU, the lane kernels).
 template <typename Real>
 struct SpringForces {
   SpringNetworkView<Real> springs;
+  SlicedRow row{0, -1};
   FMPC_HD void gather(int v, const StateView<Real>& s, Real& fx, Real& fy, Real& fz) const {
-    gather_spring_force(v, springs, s, fx, fy, fz);
+    gather_spring_force(v, row, springs, s, fx, fy, fz);
   }
 };
 
@@ -36,8 +39,9 @@ template <typename Real>
 struct SpringAndElementForces {
   SpringNetworkView<Real> springs;
   CornerForceView<Real> corners;
+  SlicedRow row{0, -1};
   FMPC_HD void gather(int v, const StateView<Real>& s, Real& fx, Real& fy, Real& fz) const {
-    gather_spring_force(v, springs, s, fx, fy, fz);
+    gather_spring_force(v, row, springs, s, fx, fy, fz);
     Real cx, cy, cz;
     gather_corner_force(v, corners, cx, cy, cz);
     fx += cx;

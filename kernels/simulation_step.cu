@@ -21,14 +21,24 @@ __device__ int vertex_index() {
   return static_cast<int>(blockIdx.x) * static_cast<int>(blockDim.x) + static_cast<int>(threadIdx.x);
 }
 
+// The vertex of thread `row` of a kernel with one thread per vertex (ForceModelView::vertex_order).
+template <typename Real>
+__device__ int vertex_of_row(const ForceModelView<Real>& m, int row) {
+  return m.vertex_order != nullptr ? m.vertex_order[row] : row;
+}
+
+// The force model of thread `row` (a kernel with one thread per vertex, whose vertex is vertex_of_row(m, row)):
+// with its sliced row of springs where the model has the sliced layout.
 template <typename Real, GatherKind K>
-__device__ auto forces_of(const ForceModelView<Real>& m) {
+__device__ auto forces_of(const ForceModelView<Real>& m, int row) {
+  const kernels::SlicedRow sliced =
+      m.springs.sliced.row != nullptr ? m.springs.sliced.row[row] : kernels::SlicedRow{0, -1};
   if constexpr (K == GatherKind::Springs) {
-    return kernels::SpringForces<Real>{m.springs};
+    return kernels::SpringForces<Real>{m.springs, sliced};
   } else if constexpr (K == GatherKind::Elements) {
     return kernels::ElementForces<Real>{m.corners};
   } else {
-    return kernels::SpringAndElementForces<Real>{m.springs, m.corners};
+    return kernels::SpringAndElementForces<Real>{m.springs, m.corners, sliced};
   }
 }
 
@@ -84,6 +94,14 @@ __global__ void spring_incidence_kernel(kernels::SpringNetworkView<Real> net, in
 }
 
 template <typename Real>
+__global__ void sliced_springs_kernel(kernels::SpringNetworkView<Real> net, const int* vertex_order,
+                                      int vertex_count, kernels::SpringIncidence<Real>* record) {
+  const int row = vertex_index();
+  if (row >= vertex_count) return;
+  kernels::write_sliced_row(vertex_order[row], net, net.sliced.row[row], record);
+}
+
+template <typename Real>
 __device__ Real step_of(const StepSize<Real>& step, int v) {
   return step.vertex_scene == nullptr ? step.h : step.scene_h[step.vertex_scene[v]];
 }
@@ -120,18 +138,55 @@ __device__ void fused_vertex_step(const FusedStepArguments<Real>& a, const Force
   out.vz[v] = vz;
 }
 
+// Probe entry i before or after the step at `offset` in the chunk, on `state`: the probe kernel's body, and the
+// persistent kernel's for the probe vertices it owns.
+template <typename Real>
+__device__ void apply_probe_entry(const ProbeArguments<Real>& a, int i, int offset, bool before_step,
+                                  const MutableStateView<Real>& state) {
+  const int v = a.vertices[i];
+  const ProbeScene p = a.scenes[a.entry_scene[i]];
+  const double t = static_cast<double>(*a.step_base + static_cast<unsigned long long>(offset + (before_step ? 0 : 1))) * p.h;
+  if (p.force_mode) {
+    if (!before_step) return;
+    const double share = kernels::probe_ramp_share(t, p.ramp_time);
+    const double count = static_cast<double>(p.count);
+    const bool based = p.has_base_force;
+    a.force.x[v] = static_cast<Real>((based ? a.base_force_x[i] : 0.0) + share * p.target_x / count);
+    a.force.y[v] = static_cast<Real>((based ? a.base_force_y[i] : 0.0) + share * p.target_y / count);
+    a.force.z[v] = static_cast<Real>((based ? a.base_force_z[i] : 0.0) + share * p.target_z / count);
+    return;
+  }
+  kernels::probe_prescribed_state(a.start_x[i], p.target_x, t, p.ramp_time, before_step, state.x[v], state.vx[v]);
+  kernels::probe_prescribed_state(a.start_y[i], p.target_y, t, p.ramp_time, before_step, state.y[v], state.vy[v]);
+  kernels::probe_prescribed_state(a.start_z[i], p.target_z, t, p.ramp_time, before_step, state.z[v], state.vz[v]);
+}
+
+// Vertex v's probe entry after this step and before the next (FusedStepArguments::probe_entry), by the thread
+// that updated v.
+template <typename Real>
+__device__ void apply_own_probe(const FusedStepArguments<Real>& a, int v) {
+  if (a.probe_entry == nullptr) return;
+  const int entry = a.probe_entry[v];
+  if (entry < 0) return;
+  apply_probe_entry(a.probe, entry, a.probe_offset, false, a.out);
+  if (a.probe_next) apply_probe_entry(a.probe, entry, a.probe_offset + 1, true, a.out);
+}
+
 template <typename Real, GatherKind K>
 __global__ void fused_step_kernel(FusedStepArguments<Real> a) {
-  const int v = vertex_index();
-  if (v >= a.vertex_count) return;
-  fused_vertex_step(a, forces_of<Real, K>(a.model), v, a.in, a.out);
+  const int row = vertex_index();
+  if (row >= a.vertex_count) return;
+  const int v = vertex_of_row(a.model, row);
+  fused_vertex_step(a, forces_of<Real, K>(a.model, row), v, a.in, a.out);
+  apply_own_probe(a, v);
 }
 
 template <typename Real, GatherKind K>
 __global__ void acceleration_kernel(VerletArguments<Real> a) {
-  const int v = vertex_index();
-  if (v >= a.vertex_count) return;
-  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), read_only(a.state), a.loads, a.acceleration.x[v],
+  const int row = vertex_index();
+  if (row >= a.vertex_count) return;
+  const int v = vertex_of_row(a.model, row);
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model, row), read_only(a.state), a.loads, a.acceleration.x[v],
                                a.acceleration.y[v], a.acceleration.z[v]);
 }
 
@@ -147,13 +202,14 @@ __global__ void verlet_drift_kernel(VerletArguments<Real> a) {
 
 template <typename Real, GatherKind K>
 __global__ void verlet_kick_kernel(VerletArguments<Real> a) {
-  const int v = vertex_index();
-  if (v >= a.vertex_count) return;
+  const int row = vertex_index();
+  if (row >= a.vertex_count) return;
+  const int v = vertex_of_row(a.model, row);
   const Real h = step_of(a.step, v);
   // Neighbours read x and the predictor only; v and a below are this vertex's own.
   const kernels::StateView<Real> drifted{a.state.x, a.state.y, a.state.z, a.predicted.x, a.predicted.y, a.predicted.z};
   Real ax, ay, az;
-  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), drifted, a.loads, ax, ay, az);
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model, row), drifted, a.loads, ax, ay, az);
   kernels::verlet_velocity_update(a.state.vx[v], a.acceleration.x[v], ax, h);
   kernels::verlet_velocity_update(a.state.vy[v], a.acceleration.y[v], ay, h);
   kernels::verlet_velocity_update(a.state.vz[v], a.acceleration.z[v], az, h);
@@ -164,15 +220,16 @@ __global__ void verlet_kick_kernel(VerletArguments<Real> a) {
 
 template <typename Real, GatherKind K>
 __global__ void runge_kutta4_stage_kernel(RungeKutta4Arguments<Real> a, int stage) {
-  const int v = vertex_index();
-  if (v >= a.vertex_count) return;
+  const int row = vertex_index();
+  if (row >= a.vertex_count) return;
+  const int v = vertex_of_row(a.model, row);
   const Real h = step_of(a.step, v);
   const kernels::StateView<Real> at =
       stage == 0 ? read_only(a.state) : kernels::StateView<Real>{a.stage_position[stage].x, a.stage_position[stage].y,
                                                                  a.stage_position[stage].z, a.stage_velocity[stage].x,
                                                                  a.stage_velocity[stage].y, a.stage_velocity[stage].z};
   Real ax, ay, az;
-  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), at, a.loads, ax, ay, az);
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model, row), at, a.loads, ax, ay, az);
   if (stage < 3) {
     a.stage_acceleration[stage].x[v] = ax;
     a.stage_acceleration[stage].y[v] = ay;
@@ -332,29 +389,6 @@ __global__ void energy_final_kernel(const double* partial, double* result) {
   if (threadIdx.x == 0) *result = total;
 }
 
-// Probe entry i before or after the step at `offset` in the chunk, on `state`: the probe kernel's body, and the
-// persistent kernel's for the probe vertices it owns.
-template <typename Real>
-__device__ void apply_probe_entry(const ProbeArguments<Real>& a, int i, int offset, bool before_step,
-                                  const MutableStateView<Real>& state) {
-  const int v = a.vertices[i];
-  const ProbeScene p = a.scenes[a.entry_scene[i]];
-  const double t = static_cast<double>(*a.step_base + static_cast<unsigned long long>(offset + (before_step ? 0 : 1))) * p.h;
-  if (p.force_mode) {
-    if (!before_step) return;
-    const double share = kernels::probe_ramp_share(t, p.ramp_time);
-    const double count = static_cast<double>(p.count);
-    const bool based = p.has_base_force;
-    a.force.x[v] = static_cast<Real>((based ? a.base_force_x[i] : 0.0) + share * p.target_x / count);
-    a.force.y[v] = static_cast<Real>((based ? a.base_force_y[i] : 0.0) + share * p.target_y / count);
-    a.force.z[v] = static_cast<Real>((based ? a.base_force_z[i] : 0.0) + share * p.target_z / count);
-    return;
-  }
-  kernels::probe_prescribed_state(a.start_x[i], p.target_x, t, p.ramp_time, before_step, state.x[v], state.vx[v]);
-  kernels::probe_prescribed_state(a.start_y[i], p.target_y, t, p.ramp_time, before_step, state.y[v], state.vy[v]);
-  kernels::probe_prescribed_state(a.start_z[i], p.target_z, t, p.ramp_time, before_step, state.z[v], state.vz[v]);
-}
-
 template <typename Real>
 __global__ void apply_probe_kernel(ProbeArguments<Real> a, int offset, bool before_step) {
   const int i = vertex_index();
@@ -489,7 +523,10 @@ __global__ void fused_step_lanes_kernel(FusedStepArguments<Real> a) {
   const unsigned mask = lane_mask(lanes);
   const GatheredForces<Real> forces =
       lanes_gather<Real, K>(a.model, v, lane_cache<Real, K>(a.model, v, lane), a.in, mask, lane, lanes);
-  if (lane == 0) fused_vertex_step(a, forces, v, a.in, a.out);
+  if (lane == 0) {
+    fused_vertex_step(a, forces, v, a.in, a.out);
+    apply_own_probe(a, v);
+  }
 }
 
 // Blocks per multiprocessor the persistent kernel is compiled for (registers per thread <= 65536 / (256 x this)),
@@ -517,12 +554,14 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
   const int lane = thread % lanes;
   const unsigned mask = lane_mask(lanes);
   const int n = a.step.vertex_count;
-  const bool probed = a.probe_entry != nullptr;
+  const ProbeArguments<Real>& probe = a.step.probe;
+  const int* const probe_entry_of = a.step.probe_entry;
+  const bool probed = probe_entry_of != nullptr;
   // One vertex per `lanes` threads: the launch has blocks * 256 >= lanes * n threads.
   const int v = thread / lanes;
   const bool owner = v < n;
   const LaneCache<Real> cache = owner ? lane_cache<Real, K>(a.step.model, v, lane) : LaneCache<Real>{};
-  const int probe_entry = owner && probed ? a.probe_entry[v] : -1;
+  const int probe_entry = owner && probed ? probe_entry_of[v] : -1;
   int parity = a.first_parity;
   const PersistentChecks& c = a.checks;
   if (c.first_non_finite != nullptr) {
@@ -535,7 +574,7 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
   }
   if (probed) {
     for (int v = thread; v < n; v += stride)
-      if (a.probe_entry[v] >= 0) apply_probe_entry(a.probe, a.probe_entry[v], 0, true, buffer(a, parity));
+      if (probe_entry_of[v] >= 0) apply_probe_entry(probe, probe_entry_of[v], 0, true, buffer(a, parity));
     grid.sync();
   }
   for (int step = 0; step < a.steps; ++step) {
@@ -551,8 +590,8 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
       if (lane == 0) {
         fused_vertex_step(a.step, forces, v, in, out);
         if (probe_entry >= 0) {
-          apply_probe_entry(a.probe, probe_entry, step, false, out);
-          if (step + 1 < a.steps) apply_probe_entry(a.probe, probe_entry, step + 1, true, out);
+          apply_probe_entry(probe, probe_entry, step, false, out);
+          if (step + 1 < a.steps) apply_probe_entry(probe, probe_entry, step + 1, true, out);
         }
       }
     }
@@ -658,8 +697,9 @@ __device__ void gather_corner_values(int v, const kernels::CornerForceView<doubl
 
 template <typename Real, GatherKind K>
 __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
-  const int v = vertex_index();
-  if (v >= a.vertex_count) return;
+  const int row = vertex_index();
+  if (row >= a.vertex_count) return;
+  const int v = vertex_of_row(a.model, row);
   double* b = a.rhs + 3 * v;
   const unsigned char held = a.loads.fixed[v];
   if (held == kernels::kAllAxesFixed) {
@@ -672,7 +712,7 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   }
   Real acceleration[3];
   const kernels::StateView<Real> state{a.state.x, a.state.y, a.state.z, a.state.vx, a.state.vy, a.state.vz};
-  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model), state, a.loads, acceleration[0], acceleration[1],
+  kernels::vertex_acceleration(v, forces_of<Real, K>(a.model, row), state, a.loads, acceleration[0], acceleration[1],
                                acceleration[2]);
   for (int c = 0; c < 3; ++c) b[c] = a.h * a.mass[v] * static_cast<double>(acceleration[c]);
   const double own_velocity[3] = {static_cast<double>(a.state.vx[v]), static_cast<double>(a.state.vy[v]),
@@ -877,6 +917,15 @@ cudaError_t launch_largest(const kernels::StateView<Real>& state, const StartPos
   cudaError_t status = cudaGetLastError();
   if (status != cudaSuccess) return status;
   largest_displacement_final_kernel<<<1, kEnergyThreads, 0, stream>>>(partial, result);
+  return cudaGetLastError();
+}
+
+template <typename Real>
+cudaError_t launch_sliced(const kernels::SpringNetworkView<Real>& network, const int* vertex_order, int vertex_count,
+                          kernels::SpringIncidence<Real>* record, cudaStream_t stream) {
+  if (vertex_count <= 0) return cudaSuccess;
+  sliced_springs_kernel<Real><<<blocks_for(vertex_count), kThreadsPerBlock, 0, stream>>>(network, vertex_order,
+                                                                                         vertex_count, record);
   return cudaGetLastError();
 }
 
@@ -1109,6 +1158,14 @@ cudaError_t launch_largest_displacement(const kernels::StateView<float>& state, 
 cudaError_t launch_largest_displacement(const kernels::StateView<double>& state, const StartPositions& start,
                                        int begin, int end, double* partial, double* result, cudaStream_t stream) {
   return launch_largest(state, start, begin, end, partial, result, stream);
+}
+cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<float>& network, const int* vertex_order,
+                                  int vertex_count, kernels::SpringIncidence<float>* record, cudaStream_t stream) {
+  return launch_sliced(network, vertex_order, vertex_count, record, stream);
+}
+cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<double>& network, const int* vertex_order,
+                                  int vertex_count, kernels::SpringIncidence<double>* record, cudaStream_t stream) {
+  return launch_sliced(network, vertex_order, vertex_count, record, stream);
 }
 cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<float>& network, int entries,
                                    kernels::SpringIncidence<float>* incidence, cudaStream_t stream) {

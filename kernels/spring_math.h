@@ -164,6 +164,28 @@ struct alignas(4 * sizeof(Real)) SpringIncidence {
   Real damping;
 };
 
+// The CSR entries in sliced ELLPACK order (SELL-C-sigma, C = 32: Kreutzer, Hager, Wellein, Fehske & Bishop 2014,
+// "A unified sparse matrix data format for efficient general sparse matrix-vector multiplication on modern
+// processors with wide SIMD units"), for the GPU's per-vertex kernels with one thread per vertex. Threads take the
+// vertices in `vertex_order` (runtime/springs/sliced_springs.h: vertices sorted by their number of springs within
+// small windows, so a warp's vertices have nearly the same count), 32 rows per warp; entry j of a row lies at
+// first + 32 j, so the j-th loads of a warp read 32 consecutive records (512 bytes in float, one vector load per
+// thread) instead of 32 records scattered by the CSR offsets. Each vertex still adds its entries in CSR order: the
+// same terms in the same order, the same bits. Rows are indexed by thread, like vertex_order, so a thread's two
+// loads (its vertex and its row) do not wait on each other.
+constexpr int kSliceRows = 32;
+
+struct alignas(8) SlicedRow {
+  int first;  // index of entry 0; entry j at first + kSliceRows j
+  int count;  // the vertex's CSR entries; -1: no sliced row (the gather reads the CSR order)
+};
+
+template <typename Real>
+struct SlicedSpringsView {
+  const SlicedRow* row = nullptr;  // per thread (row r is vertex_order[r]'s); null: no sliced layout
+  const SpringIncidence<Real>* record = nullptr;
+};
+
 // The spring network and state as raw arrays (structure of arrays), for the gather below.
 template <typename Real>
 struct SpringNetworkView {
@@ -175,6 +197,7 @@ struct SpringNetworkView {
   const Real* damping;  // null: no dashpots (a scene without damping allocates no array)
   SpringLawParameters<Real> law;
   const SpringIncidence<Real>* incidence = nullptr;  // per CSR entry; null: read through the arrays above
+  SlicedSpringsView<Real> sliced;  // the GPU's sliced layout where it has one (then `incidence` is null)
 };
 
 template <typename Real>
@@ -211,19 +234,19 @@ FMPC_HD void entry_spring_force(const SpringNetworkView<Real>& net, const StateV
                          net.law, fx, fy, fz);
 }
 
-// Sum of the spring forces on vertex v over its CSR entries, in order (deterministic; no atomics); entry(e) gives
-// entry e as a SpringIncidence. The persistent CUDA kernel computes the terms on several threads and adds them in
-// this order on one (kernels/simulation_step.cu), so its sums have these bits.
+// Sum of the spring forces on vertex v over its `count` CSR entries, in order (deterministic; no atomics); entry(j)
+// gives its j-th entry as a SpringIncidence. The persistent CUDA kernel computes the terms on several threads and
+// adds them in this order on one (kernels/simulation_step.cu), so its sums have these bits.
 template <typename Real, typename Entry>
-FMPC_HD void sum_spring_forces(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s, Entry entry,
-                               Real& fx, Real& fy, Real& fz) {
+FMPC_HD void sum_spring_forces(int v, int count, const SpringNetworkView<Real>& net, const StateView<Real>& s,
+                               Entry entry, Real& fx, Real& fy, Real& fz) {
   Real sx = Real(0), sy = Real(0), sz = Real(0);
   const Real x = s.x[v], y = s.y[v], z = s.z[v];
   const Real vx = s.vx[v], vy = s.vy[v], vz = s.vz[v];
   FMPC_UNROLL_GATHER
-  for (int e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
+  for (int j = 0; j < count; ++j) {
     Real f0, f1, f2;
-    entry_spring_force(net, s, entry(e), x, y, z, vx, vy, vz, f0, f1, f2);
+    entry_spring_force(net, s, entry(j), x, y, z, vx, vy, vz, f0, f1, f2);
     sx += f0;
     sy += f1;
     sz += f2;
@@ -233,16 +256,35 @@ FMPC_HD void sum_spring_forces(int v, const SpringNetworkView<Real>& net, const 
   fz = sz;
 }
 
-// Sum of the spring forces on vertex v, in CSR order: from the incidence records where there are some, else read
-// through the spring indices (the same values, so the same bits).
+// Entry j of a sliced row: what incidence_from_arrays gives for the vertex's CSR entry j.
 template <typename Real>
-FMPC_HD void gather_spring_force(int v, const SpringNetworkView<Real>& net, const StateView<Real>& s, Real& fx,
-                                 Real& fy, Real& fz) {
-  if (net.incidence != nullptr) {
-    sum_spring_forces(v, net, s, [&](int e) { return net.incidence[e]; }, fx, fy, fz);
+FMPC_HD SpringIncidence<Real> sliced_incidence(const SlicedSpringsView<Real>& sliced, SlicedRow row, int j) {
+  return sliced.record[row.first + kSliceRows * j];
+}
+
+// Writes vertex v's CSR entries into its sliced row (the GPU fills the layout with this, one thread per row).
+template <typename Real>
+FMPC_HD void write_sliced_row(int v, const SpringNetworkView<Real>& net, SlicedRow row, SpringIncidence<Real>* record) {
+  const int begin = net.adjacency_offset[v];
+  for (int j = 0; j < row.count; ++j) record[row.first + kSliceRows * j] = incidence_from_arrays(net, begin + j);
+}
+
+// Sum of the spring forces on vertex v, in CSR order: from v's sliced row where it has one (row.count >= 0), else
+// from the incidence records where there are some, else read through the spring indices (the same values, so the
+// same bits).
+template <typename Real>
+FMPC_HD void gather_spring_force(int v, SlicedRow row, const SpringNetworkView<Real>& net, const StateView<Real>& s,
+                                 Real& fx, Real& fy, Real& fz) {
+  if (row.count >= 0) {
+    sum_spring_forces(v, row.count, net, s, [&](int j) { return sliced_incidence(net.sliced, row, j); }, fx, fy, fz);
     return;
   }
-  sum_spring_forces(v, net, s, [&](int e) { return incidence_from_arrays(net, e); }, fx, fy, fz);
+  const int begin = net.adjacency_offset[v], count = net.adjacency_offset[v + 1] - begin;
+  if (net.incidence != nullptr) {
+    sum_spring_forces(v, count, net, s, [&](int j) { return net.incidence[begin + j]; }, fx, fy, fz);
+    return;
+  }
+  sum_spring_forces(v, count, net, s, [&](int j) { return incidence_from_arrays(net, begin + j); }, fx, fy, fz);
 }
 
 }  // namespace fmpc::kernels

@@ -60,7 +60,8 @@ fmpc_test_unity_group(tests_9
   unit/lookup_table_test.cpp)
 fmpc_test_unity_group(tests_10
   unit/fuzzy_math_test.cpp
-  unit/cell_bound_test.cpp)
+  unit/cell_bound_test.cpp
+  unit/sliced_springs_test.cpp)
 fmpc_test_unity_group(tests_11
   unit/mesh_refinement_test.cpp
   unit/plot_test.cpp

@@ -30,6 +30,9 @@ struct ForceModelView {
   kernels::CornerForceView<Real> corners;  // corners.force == corner_force
   kernels::CornerForce<Real>* corner_force;  // 4 per element
   int element_blocks = 3;  // float: the element pass's register bound, 2 or 3 blocks per SM (GpuOptions)
+  // Thread r of the kernels with one thread per vertex takes vertex vertex_order[r] (springs.sliced's order); null:
+  // vertex r. A permutation within each block, so a block covers the same vertices either way.
+  const int* vertex_order = nullptr;
 };
 
 // The springs' incidence records (kernels::SpringIncidence) of every CSR entry, from the network's arrays; run once
@@ -38,6 +41,13 @@ cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<float>& net
                                    kernels::SpringIncidence<float>* incidence, cudaStream_t stream);
 cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<double>& network, int entries,
                                    kernels::SpringIncidence<double>* incidence, cudaStream_t stream);
+
+// Fills the sliced layout's records (network.sliced.row set) from the network's CSR arrays, one thread per row,
+// whose vertex is vertex_order[row] (kernels::write_sliced_row); run once after upload, like launch_spring_incidence.
+cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<float>& network, const int* vertex_order,
+                                  int vertex_count, kernels::SpringIncidence<float>* record, cudaStream_t stream);
+cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<double>& network, const int* vertex_order,
+                                  int vertex_count, kernels::SpringIncidence<double>* record, cudaStream_t stream);
 
 // The element pass at `state`: every element's corner forces (kernels::tetrahedron_corner_forces); nothing for
 // GatherKind::Springs. Enqueued before every per-vertex kernel that gathers at that state.
@@ -71,6 +81,42 @@ struct StepSize {
   Real h;
 };
 
+// Probes on a batch's vertices, applied around every step exactly as the CPU backend does (kernels/
+// integrator_math.h): before a step at t = (step_base + offset) h, displacement probes set their vertices' positions
+// and ramp velocity and force probes their share of the force; after it (t + h) displacement probes set the
+// positions again with zero velocity. step_base (device memory) is written before every chunk, so a captured graph
+// replays with the right times; offset is the step's index within the chunk. Every scene of a batch may have its own
+// probe (ProbeScene): each probe vertex is written by one thread from its own scene's values, so a scene's probe is
+// bitwise the one it has when run alone.
+struct ProbeScene {
+  double target_x, target_y, target_z;
+  double ramp_time;
+  double h;
+  int count;            // the scene's probe vertices (a force probe shares its target equally among them)
+  bool force_mode;
+  bool has_base_force;  // force probes: whether base_force_* hold the vertices' own external force
+};
+template <typename Real>
+struct ProbeArguments {
+  const int* vertices;     // every probing scene's probe vertices, concatenated (batch vertex indices)
+  const int* entry_scene;  // per entry: its scene's index in `scenes`
+  int count;               // entries
+  const double* start_x;   // the probe vertices' start positions (m)
+  const double* start_y;
+  const double* start_z;
+  const double* base_force_x;  // force probes: the vertices' own external force (N), read where has_base_force
+  const double* base_force_y;
+  const double* base_force_z;
+  const ProbeScene* scenes;
+  const unsigned long long* step_base;
+  MutableStateView<Real> state;    // displacement probes write here
+  MutableVector3View<Real> force;  // force probes write here
+};
+cudaError_t launch_apply_probe(const ProbeArguments<float>& arguments, int offset, bool before_step,
+                               cudaStream_t stream);
+cudaError_t launch_apply_probe(const ProbeArguments<double>& arguments, int offset, bool before_step,
+                               cudaStream_t stream);
+
 enum class FusedScheme : int { ForwardEuler = 0, SemiImplicitEuler = 1 };
 
 template <typename Real>
@@ -83,6 +129,14 @@ struct FusedStepArguments {
   FusedScheme scheme;
   StepSize<Real> step;
   int lanes;  // threads per vertex: 0 or 1 (one thread walks its vertex's entries), or valid_lanes
+  // Probe entries applied by their vertex's own thread (the one that updates it), after the step at probe_offset
+  // and, where probe_next, before the next step: the probe kernels' values in the persistent kernel's order, so
+  // consecutive steps need no probe launches between them. probe_entry (per vertex: its entry, -1 for none) null:
+  // none; probe.state is ignored (the thread writes `out`).
+  ProbeArguments<Real> probe;
+  const int* probe_entry;
+  int probe_offset;
+  bool probe_next;
 };
 
 // Threads per vertex the lane kernels take: a power of two up to a warp, so a vertex's lanes are one aligned part of
@@ -136,42 +190,6 @@ struct RungeKutta4Arguments {
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<float>& arguments, int stage, cudaStream_t stream);
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<double>& arguments, int stage, cudaStream_t stream);
 
-// Probes on a batch's vertices, applied around every step exactly as the CPU backend does (kernels/
-// integrator_math.h): before a step at t = (step_base + offset) h, displacement probes set their vertices' positions
-// and ramp velocity and force probes their share of the force; after it (t + h) displacement probes set the
-// positions again with zero velocity. step_base (device memory) is written before every chunk, so a captured graph
-// replays with the right times; offset is the step's index within the chunk. Every scene of a batch may have its own
-// probe (ProbeScene): each probe vertex is written by one thread from its own scene's values, so a scene's probe is
-// bitwise the one it has when run alone.
-struct ProbeScene {
-  double target_x, target_y, target_z;
-  double ramp_time;
-  double h;
-  int count;            // the scene's probe vertices (a force probe shares its target equally among them)
-  bool force_mode;
-  bool has_base_force;  // force probes: whether base_force_* hold the vertices' own external force
-};
-template <typename Real>
-struct ProbeArguments {
-  const int* vertices;     // every probing scene's probe vertices, concatenated (batch vertex indices)
-  const int* entry_scene;  // per entry: its scene's index in `scenes`
-  int count;               // entries
-  const double* start_x;   // the probe vertices' start positions (m)
-  const double* start_y;
-  const double* start_z;
-  const double* base_force_x;  // force probes: the vertices' own external force (N), read where has_base_force
-  const double* base_force_y;
-  const double* base_force_z;
-  const ProbeScene* scenes;
-  const unsigned long long* step_base;
-  MutableStateView<Real> state;    // displacement probes write here
-  MutableVector3View<Real> force;  // force probes write here
-};
-cudaError_t launch_apply_probe(const ProbeArguments<float>& arguments, int offset, bool before_step,
-                               cudaStream_t stream);
-cudaError_t launch_apply_probe(const ProbeArguments<double>& arguments, int offset, bool before_step,
-                               cudaStream_t stream);
-
 // The checks advance makes after a chunk, made by the persistent kernel at its end on the final state (one
 // download then instead of two kernels and their copies): what launch_find_non_finite and launch_count_inverted
 // compute, with their presets written by the kernel itself. first_non_finite null: no checks.
@@ -198,12 +216,12 @@ struct PersistentChecks {
 
 template <typename Real>
 struct PersistentEulerArguments {
-  FusedStepArguments<Real> step;   // in and out are ignored: the kernel alternates state[0] and state[1]
+  // in, out, probe_offset and probe_next are ignored: the kernel alternates state[0] and state[1] and applies the
+  // probe entries around every step of the chunk.
+  FusedStepArguments<Real> step;
   MutableStateView<Real> state[2];
   int first_parity;                // the buffer holding the state at the chunk's start
   int steps;
-  ProbeArguments<Real> probe;      // count 0: no probe; probe.state is ignored (the kernel passes the buffer)
-  const int* probe_entry;          // per vertex: its probe entry, -1 for none; null when probe.count is 0
   int blocks;                      // grid size: at most persistent_euler_block_limit's
   int lanes;                       // threads per vertex, valid_lanes (blocks * 256 >= lanes * vertices)
   PersistentChecks checks;         // the last piece of a chunk

@@ -11,6 +11,7 @@
 
 #include "runtime/gpu/gpu_launch.h"
 #include "runtime/integrate/worker_pool.h"
+#include "runtime/springs/sliced_springs.h"
 
 // Checks a CUDA call; on failure appends an error naming the call and CUDA's reason, and returns `failure` from
 // the enclosing function. Never exits.
@@ -463,14 +464,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
                       rest_length_.data(),
                       stiffness_.data(),
                       c.has_damping ? damping_.data() : nullptr,
-                      {common.law, static_cast<Real>(common.basafa_k2_over_k1), static_cast<Real>(common.basafa_xc)}};
-    if (!common.strain_stiffness && c.offset.back() > 0) {
-      FMPC_CUDA_CHECK(incidence_.allocate(static_cast<std::size_t>(c.offset.back())), diagnostics, false);
-      FMPC_CUDA_CHECK(launch_spring_incidence(model_.springs, c.offset.back(), incidence_.data(), stream_), diagnostics,
-                      false);
-      FMPC_CUDA_CHECK(cudaStreamSynchronize(stream_), diagnostics, false);
-      model_.springs.incidence = incidence_.data();
-    }
+                      {common.law, static_cast<Real>(common.basafa_k2_over_k1), static_cast<Real>(common.basafa_xc)},
+                      nullptr,
+                      {}};  // the records: upload_spring_records
     loads_ = {mass_.data(),
               fixed_.data(),
               rest_x_.data(),
@@ -486,11 +482,43 @@ class GpuBatchImpl final : public GpuBatchSimulation {
               static_cast<Real>(common.nodal_damping_gamma1),
               static_cast<Real>(common.mass_damping)};
     step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
-    if (!choose_launches(diagnostics)) return false;
+    if (!choose_launches(diagnostics) || !upload_spring_records(c, diagnostics)) return false;
     // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
     // stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
     return save_checkpoint(diagnostics) && synchronize(diagnostics);
+  }
+
+  // The springs' incidence records, where the stiffness stays fixed during the run (no strain table): in the sliced
+  // layout for the kernels with one thread per vertex (kernels::SlicedSpringsView), else in CSR order for the
+  // kernels whose lanes share a vertex (the persistent kernel, gather_lanes > 1). Only the one the launches use is
+  // built.
+  bool upload_spring_records(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
+    const int entries = c.offset.back();
+    if (scenes_.front().strain_stiffness || entries == 0) return true;
+    const sim::Integrator scheme = scenes_.front().integrator;
+    const bool euler = scheme == sim::Integrator::ForwardEuler || scheme == sim::Integrator::SemiImplicitEuler;
+    const bool lanes_share_vertices = euler && (persistent_blocks_ > 0 || gather_lanes_ > 1);
+    sim::SlicedSpringLayout layout;
+    const bool sliced = options_.sliced_springs && !lanes_share_vertices &&
+                        sim::slice_spring_entries(c.offset.data(), c.fixed.data(), n_, options_.slice_window,
+                                                  *c.pool, layout);
+    FMPC_CUDA_CHECK(incidence_.allocate(sliced ? static_cast<std::size_t>(layout.entries)
+                                               : static_cast<std::size_t>(entries)),
+                    diagnostics, false);
+    if (sliced) {
+      FMPC_CUDA_CHECK(vertex_order_.upload(layout.vertex_order), diagnostics, false);
+      FMPC_CUDA_CHECK(sliced_row_.upload(layout.row), diagnostics, false);
+      model_.springs.sliced = {sliced_row_.data(), incidence_.data()};
+      FMPC_CUDA_CHECK(launch_sliced_springs(model_.springs, vertex_order_.data(), n_, incidence_.data(), stream_),
+                      diagnostics, false);
+      model_.vertex_order = vertex_order_.data();
+    } else {
+      FMPC_CUDA_CHECK(launch_spring_incidence(model_.springs, entries, incidence_.data(), stream_), diagnostics, false);
+      model_.springs.incidence = incidence_.data();
+    }
+    FMPC_CUDA_CHECK(cudaStreamSynchronize(stream_), diagnostics, false);
+    return true;
   }
 
   // The tetrahedron field: its arrays in Real for the element pass, in double for implicit Euler and the energy
@@ -940,9 +968,13 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // first and is updated to the one holding the result. Around each step, as the CPU backend: the probe before it,
   // the strain table's lookup, the step, the probe after it.
   bool enqueue_steps(std::size_t count, int& parity, DiagnosticList& diagnostics) {
+    // Forward and semi-implicit Euler apply the probe entries from the vertices' own threads (FusedStepArguments::
+    // probe_entry) after each step and before the next: one probe launch before the first step instead of two per step.
+    const bool euler = scheme() == sim::Integrator::ForwardEuler || scheme() == sim::Integrator::SemiImplicitEuler;
+    const bool fused_probes = euler && probe_scenes_.size() > 0 && probe_vertices_unique_;
     for (std::size_t i = 0; i < count; ++i) {
       const int offset = static_cast<int>(i);
-      if (!enqueue_probe(offset, true, state_[parity], diagnostics)) return false;
+      if ((!fused_probes || i == 0) && !enqueue_probe(offset, true, state_[parity], diagnostics)) return false;
       if (!enqueue_strain_lookup(state_[parity], diagnostics)) return false;
       switch (scheme()) {
         case sim::Integrator::ForwardEuler:
@@ -952,6 +984,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
           a.in = state_[parity].view();
           a.out = state_[1 - parity].mutable_view();
           a.lanes = gather_lanes_;
+          if (fused_probes) {
+            a.probe = probe_arguments(state_[1 - parity]);
+            a.probe_entry = probe_entry_.data();
+            a.probe_offset = offset;
+            a.probe_next = i + 1 < count;
+          }
           FMPC_CUDA_CHECK(launch_fused_step(a, stream_), diagnostics, false);
           parity = 1 - parity;
           break;
@@ -990,7 +1028,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
           if (!implicit_solve(diagnostics)) return false;
           break;
       }
-      if (!enqueue_probe(offset, false, state_[parity], diagnostics)) return false;
+      if (!fused_probes && !enqueue_probe(offset, false, state_[parity], diagnostics)) return false;
     }
     return true;
   }
@@ -1188,8 +1226,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       a.first_parity = current_;
       a.steps = static_cast<int>(piece);
       if (probe_scenes_.size() > 0) {
-        a.probe = probe_arguments(state_[current_]);
-        a.probe_entry = probe_entry_.data();
+        a.step.probe = probe_arguments(state_[current_]);
+        a.step.probe_entry = probe_entry_.data();
       }
       a.blocks = persistent_blocks_;
       a.lanes = persistent_lanes_;
@@ -1460,7 +1498,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   std::vector<int> element_begin_;
   int element_count_ = 0;
   DeviceArray<int> corners_, element_scene_, corner_offset_, corner_index_, corner_slot_, inverted_first_;
+  // The springs' records: in the sliced layout (then vertex_order_ and sliced_row_ are set) or in CSR order.
   DeviceArray<kernels::SpringIncidence<Real>> incidence_;
+  DeviceArray<int> vertex_order_;
+  DeviceArray<kernels::SlicedRow> sliced_row_;
   DeviceArray<double> start_x_, start_y_, start_z_;  // the start positions, for largest_displacement
   DeviceArray<unsigned int> inverted_count_;
   DeviceArray<Real> field_rest_inverse_, field_rest_volume_, field_youngs_, field_poisson_, field_bulk_, field_damping_;

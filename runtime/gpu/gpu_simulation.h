@@ -39,6 +39,12 @@ struct GpuOptions {
   // The float element pass's register bound, in blocks of 256 threads per multiprocessor: 3 (80 registers, 20 bytes
   // spilled) or 2 (91 registers, no spills); 0: the default, 3. The same bits either way.
   int element_blocks_per_sm = 0;
+  // The kernels with one thread per vertex read the springs' records in the sliced layout (kernels::
+  // SlicedSpringsView) instead of in CSR order, their threads ordered by entry count within windows of
+  // `slice_window` vertices (32 to 1024, a power of two; 0: sim::kDefaultSliceWindow). Bitwise the same results
+  // either way; false and the window are for measuring.
+  bool sliced_springs = true;
+  int slice_window = 0;
 };
 
 // Where a GPU run became non-finite. `step` is exact: the run keeps a copy of the state at every check that

@@ -170,7 +170,8 @@ FMPC_GPU_TEST(force_models_implicit, "implicit Euler on the FEM and the volume t
   }
 }
 
-FMPC_GPU_TEST(force_models_bitwise, "FEM runs are bitwise identical: run to run, graphs, persistent or not, any check",
+FMPC_GPU_TEST(force_models_bitwise,
+              "FEM runs are bitwise identical: run to run, graphs, persistent or not, sliced springs or not, any check",
               true) {
   for (const Model model : kModels) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
@@ -191,6 +192,16 @@ FMPC_GPU_TEST(force_models_bitwise, "FEM runs are bitwise identical: run to run,
         FMPC_EXPECT(bitwise_equal(run->positions(diagnostics), expected));
         const auto potential = run->potential_energy(diagnostics);
         FMPC_EXPECT(potential && expected_potential && *potential == *expected_potential);
+        // One thread per vertex, the springs' records in the sliced layout and in CSR order.
+        for (const bool sliced : {true, false}) {
+          gpu::GpuOptions one_thread;
+          one_thread.persistent = false;
+          one_thread.gather_lanes = 1;
+          one_thread.sliced_springs = sliced;
+          const auto stepped = gpu::GpuSimulation::create(setup, one_thread, diagnostics);
+          FMPC_REQUIRE(stepped && stepped->advance(600, diagnostics, 64));
+          FMPC_EXPECT(bitwise_equal(stepped->positions(diagnostics), expected));
+        }
         if (diagnostics.has_errors()) note(describe(diagnostics));
         FMPC_EXPECT(!diagnostics.has_errors());
       }

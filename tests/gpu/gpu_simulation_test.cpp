@@ -435,6 +435,58 @@ FMPC_GPU_TEST(persistent_equals_per_step,
   }
 }
 
+// The sliced layout of the springs (GpuOptions::sliced_springs, kernels::SlicedSpringsView: threads ordered by entry
+// count within each block, entries of a warp side by side) against the same kernels reading the CSR order: every
+// integrator with one thread per vertex, a batch of odd sizes (blocks and slices partly idle, windows across scene
+// boundaries), Basafa-Farahmand springs with every load, and a network without dashpots (no damping records).
+// Bitwise, positions, velocities and probe readings.
+FMPC_GPU_TEST(sliced_springs_bitwise, "the sliced spring layout gives the CSR order's bits on every integrator", true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    for (const Integrator integrator : kGpuIntegrators) {
+      SimulationSetup undamped = hanging_box(BoxScene{9, 4, 3, 7000.0, precision, integrator, 3});
+      undamped.springs.damping.clear();
+      undamped.nodal_damping_gamma0 = 1e-3;
+      std::vector<std::vector<SimulationSetup>> cases;
+      cases.push_back({single_tetrahedron(precision, integrator),
+                       hanging_box(BoxScene{7, 6, 5, 9000.0, precision, integrator, 4}),
+                       hanging_box(BoxScene{2, 1, 3, 5000.0, precision, integrator, 5})});
+      cases.push_back({nonlinear_box(precision, integrator)});
+      cases.push_back({undamped});
+      cases.push_back({probed_box(precision, integrator, ProbeLoad::Mode::Force)});
+      for (std::size_t c = 0; c < cases.size(); ++c) {
+        DiagnosticList diagnostics;
+        gpu::GpuOptions csr;
+        csr.persistent = false;
+        csr.gather_lanes = 1;
+        csr.sliced_springs = false;
+        const auto reference = gpu::GpuBatchSimulation::create(cases[c], csr, diagnostics);
+        FMPC_REQUIRE(reference && reference->advance(700, diagnostics, 64));
+        // The default window, none (32: each warp keeps its vertices) and a whole block.
+        for (const int window : {0, 32, 256}) {
+          gpu::GpuOptions sliced = csr;
+          sliced.sliced_springs = true;
+          sliced.slice_window = window;
+          const auto run = gpu::GpuBatchSimulation::create(cases[c], sliced, diagnostics);
+          FMPC_REQUIRE(run && run->advance(1, diagnostics) && run->advance(699, diagnostics, 64));
+          for (std::size_t s = 0; s < cases[c].size(); ++s) {
+            const ProbeReading a = run->probe_reading(s, diagnostics), b = reference->probe_reading(s, diagnostics);
+            const bool same = bitwise_equal(run->positions(s, diagnostics), reference->positions(s, diagnostics)) &&
+                              bitwise_equal(run->velocities(s, diagnostics), reference->velocities(s, diagnostics)) &&
+                              std::memcmp(&a.force, &b.force, sizeof a.force) == 0;
+            if (!same)
+              note(std::string(name_of(precision)) + ", " + to_string(integrator) + ", case " + std::to_string(c) +
+                   ", scene " + std::to_string(s) + ", window " + std::to_string(window) +
+                   ": the sliced layout differs from the CSR order");
+            FMPC_EXPECT(same);
+          }
+        }
+        if (diagnostics.has_errors()) note(describe(diagnostics));
+        FMPC_EXPECT(!diagnostics.has_errors());
+      }
+    }
+  }
+}
+
 FMPC_GPU_TEST(non_finite_located, "NaN/Inf stops the run naming the exact step, vertex and spring", true) {
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     BoxScene scene;
@@ -506,6 +558,10 @@ FMPC_GPU_TEST(sanitizer_smoke, "sanitizer smoke: every kernel on tiny scenes", t
       per_step.persistent = false;
       const auto stepped = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
       FMPC_REQUIRE(stepped && stepped->advance(20, diagnostics, 8));
+      // One thread per vertex: the springs' sliced layout in every integrator's kernels.
+      per_step.gather_lanes = 1;
+      const auto sliced = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
+      FMPC_REQUIRE(sliced && sliced->advance(20, diagnostics, 8));
       FMPC_EXPECT(batch->kinetic_energy(1, diagnostics).has_value());
       FMPC_EXPECT(batch->potential_energy(1, diagnostics).has_value());
       FMPC_EXPECT(batch->largest_displacement(1, diagnostics).has_value());
