@@ -145,8 +145,9 @@ FMPC_HD void spring_force_on_vertex(Real dx, Real dy, Real dz, Real dvx, Real dv
     return;
   }
   const Real length = square_root(length_squared);
-  // One division per spring, not three: the GPU's per-step gather spends most of its instructions on IEEE
-  // divisions (each about ten instructions; the CPU and the GPU still round alike).
+  // One IEEE division per spring, then three products: each division is about ten instructions in the GPU's
+  // gather, and the three of them cost the 240^3 box 8% of its step (H100, docs/performance.md). The CPU and the
+  // GPU still round alike.
   const Real inverse_length = Real(1) / length;
   const Real ux = dx * inverse_length, uy = dy * inverse_length, uz = dz * inverse_length;
   const Real along = spring_tension(length, rest, k, p) + c * (dvx * ux + dvy * uy + dvz * uz);
