@@ -10,6 +10,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "kernels/integrator_math.h"
@@ -72,7 +73,9 @@ bool bitwise_same(Real a, Real b) {
   return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
-// The layout's invariants, then every vertex's gather through it against the CSR order (bitwise).
+// The layout's invariants, then every vertex's gather through it against the CSR order (bitwise). The checks of
+// one network are counted and asserted once (a REQUIRE per entry made the test 20 s under the sanitizers); the
+// first failure is named.
 template <typename Real>
 void check_sliced(int n, int window, bool damped, std::mt19937& random, sim::WorkerPool& pool) {
   const SlicedCase<Real> c(n, damped, random);
@@ -85,36 +88,47 @@ void check_sliced(int n, int window, bool damped, std::mt19937& random, sim::Wor
   const auto count = [&](int v) { return c.offset[v + 1] - c.offset[v]; };
   // What a vertex's gather walks: nothing where every axis is held.
   const auto walked = [&](int v) { return with_fixed && c.fixed[v] == kernels::kAllAxesFixed ? 0 : count(v); };
+  std::string failure;
+  const auto expect = [&](bool holds, const char* what, int r) {
+    if (!holds && failure.empty()) failure = std::string(what) + " at row " + std::to_string(r);
+  };
   std::int64_t widths = 0;
   int slice_width = 0;
   std::vector<char> seen(static_cast<std::size_t>(n), 0);
   for (int r = 0; r < n; ++r) {
     const int v = layout.vertex_order[r];
-    REQUIRE(v / width == r / width);  // a window keeps its vertices
-    REQUIRE(!seen[v]);
+    const bool in_window = v >= 0 && v < n && v / width == r / width;
+    expect(in_window, "a vertex outside its row's window", r);
+    if (!in_window) break;
+    expect(!seen[v], "a vertex taken twice", r);
     seen[v] = 1;
     if (r % width != 0) {
       const int before = layout.vertex_order[r - 1];
       // Most entries walked first, ties by vertex index.
-      REQUIRE((walked(before) > walked(v) || (walked(before) == walked(v) && before < v)));
+      expect(walked(before) > walked(v) || (walked(before) == walked(v) && before < v), "out of order", r);
     }
     // Every row holds all its vertex's entries; a slice is as wide as its longest.
-    REQUIRE(layout.row[r].count == count(v));
+    expect(layout.row[r].count == count(v), "a row's count differs from its vertex's", r);
     slice_width = r % kernels::kSliceRows == 0 ? count(v) : std::max(slice_width, count(v));
     if (r % kernels::kSliceRows == kernels::kSliceRows - 1 || r == n - 1)
       widths += std::int64_t{kernels::kSliceRows} * slice_width;
   }
+  INFO(failure);
+  REQUIRE(failure.empty());
   // No padding beyond each slice's longest row.
   REQUIRE(layout.entries == widths);
   std::vector<char> used(static_cast<std::size_t>(layout.entries), 0);
-  for (int r = 0; r < n; ++r)
+  for (int r = 0; r < n && failure.empty(); ++r)
     for (int j = 0; j < layout.row[r].count; ++j) {
       const std::int64_t at = layout.row[r].first + std::int64_t{kernels::kSliceRows} * j;
-      REQUIRE(at >= 0);
-      REQUIRE(at < layout.entries);
-      REQUIRE(!used[static_cast<std::size_t>(at)]);
+      const bool inside = at >= 0 && at < layout.entries;
+      expect(inside, "an entry outside the layout", r);
+      if (!inside) break;
+      expect(!used[static_cast<std::size_t>(at)], "two entries in one place", r);
       used[static_cast<std::size_t>(at)] = 1;
     }
+  INFO(failure);
+  REQUIRE(failure.empty());
 
   std::vector<kernels::SpringIncidence<Real>> record(static_cast<std::size_t>(layout.entries));
   const kernels::SpringNetworkView<Real> csr = c.view();
@@ -127,8 +141,10 @@ void check_sliced(int n, int window, bool damped, std::mt19937& random, sim::Wor
     Real a[3], b[3];
     kernels::SpringForces<Real>{csr}.gather(v, s, a[0], a[1], a[2]);
     kernels::SpringForces<Real>{sliced, layout.row[r]}.gather(v, s, b[0], b[1], b[2]);
-    for (int axis = 0; axis < 3; ++axis) REQUIRE(bitwise_same(a[axis], b[axis]));
+    for (int axis = 0; axis < 3; ++axis) expect(bitwise_same(a[axis], b[axis]), "the gather's bits differ", r);
   }
+  INFO(failure);
+  REQUIRE(failure.empty());
 }
 
 }  // namespace
