@@ -88,9 +88,7 @@ __global__ void spring_incidence_kernel(kernels::SpringNetworkView<Real> net, in
                                         kernels::SpringIncidence<Real>* incidence) {
   const int e = vertex_index();
   if (e >= entries) return;
-  const int spring = net.adjacency_spring[e];
-  incidence[e] = {net.adjacency_neighbour[e], net.rest_length[spring], net.stiffness[spring],
-                  net.damping != nullptr ? net.damping[spring] : Real(0)};
+  incidence[e] = kernels::incidence_from_arrays(net, e);
 }
 
 template <typename Real>
@@ -161,15 +159,20 @@ __device__ void apply_probe_entry(const ProbeArguments<Real>& a, int i, int offs
   kernels::probe_prescribed_state(a.start_z[i], p.target_z, t, p.ramp_time, before_step, state.z[v], state.vz[v]);
 }
 
-// Vertex v's probe entry after this step and before the next (FusedStepArguments::probe_entry), by the thread
-// that updated v.
+// Probe entry `entry` (-1: none) after the step at `offset` and, where `next`, before the following one, by the
+// thread that updated its vertex: the per-step fused kernels' and the persistent kernel's order.
+template <typename Real>
+__device__ void apply_probe_after_step(const ProbeArguments<Real>& probe, int entry, int offset, bool next,
+                                       const MutableStateView<Real>& out) {
+  if (entry < 0) return;
+  apply_probe_entry(probe, entry, offset, false, out);
+  if (next) apply_probe_entry(probe, entry, offset + 1, true, out);
+}
+
+// Vertex v's probe entry around this step (FusedStepArguments::probe_entry).
 template <typename Real>
 __device__ void apply_own_probe(const FusedStepArguments<Real>& a, int v) {
-  if (a.probe_entry == nullptr) return;
-  const int entry = a.probe_entry[v];
-  if (entry < 0) return;
-  apply_probe_entry(a.probe, entry, a.probe_offset, false, a.out);
-  if (a.probe_next) apply_probe_entry(a.probe, entry, a.probe_offset + 1, true, a.out);
+  if (a.probe_entry != nullptr) apply_probe_after_step(a.probe, a.probe_entry[v], a.probe_offset, a.probe_next, a.out);
 }
 
 template <typename Real, GatherKind K>
@@ -589,10 +592,7 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
       const GatheredForces<Real> forces = lanes_gather<Real, K>(a.step.model, v, cache, in, mask, lane, lanes);
       if (lane == 0) {
         fused_vertex_step(a.step, forces, v, in, out);
-        if (probe_entry >= 0) {
-          apply_probe_entry(probe, probe_entry, step, false, out);
-          if (step + 1 < a.steps) apply_probe_entry(probe, probe_entry, step + 1, true, out);
-        }
+        apply_probe_after_step(probe, probe_entry, step, step + 1 < a.steps, out);
       }
     }
     grid.sync();

@@ -535,9 +535,8 @@ int main(int argc, char** argv) {
   // The force models with an element pass. CPU rows up to 52^3 cells (843,648 tetrahedra); the largest box on the
   // GPU only, semi-implicit Euler in float and double (issue 10: 10 G tetrahedron-steps/s at 10M tetrahedra).
   std::vector<int> fem_sizes = options.quick ? std::vector<int>{5, 11} : std::vector<int>{11, 24, 52};
+  if (!options.quick && have_device && options.fem_cells > 52) fem_sizes.push_back(options.fem_cells);
   if (options.spring_cells > 0 || options.cohort_only) fem_sizes.clear();
-  if (!options.quick && have_device && options.fem_cells > 52 && options.spring_cells == 0 && !options.cohort_only)
-    fem_sizes.push_back(options.fem_cells);
   if (options.fem_only && options.fem_cells > 52) fem_sizes = {options.fem_cells};
   for (const int cells : fem_sizes) {
     for (const ForceModel model : {ForceModel::CorotationalFem, ForceModel::Springs}) {

@@ -424,7 +424,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     for (std::size_t axis = 0; axis < 3; ++axis)
       FMPC_CUDA_CHECK(start_positions[axis]->upload(c.position[axis]), diagnostics, false);
     const sim::Integrator scheme = common.integrator;
-    if (scheme == sim::Integrator::ForwardEuler || scheme == sim::Integrator::SemiImplicitEuler) {
+    if (fused_scheme()) {
       for (DeviceArray<Real>* array : state_[1].arrays()) FMPC_CUDA_CHECK(array->allocate(count), diagnostics, false);
     }
     if (scheme == sim::Integrator::VelocityVerlet) {
@@ -496,9 +496,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool upload_spring_records(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
     const int entries = c.offset.back();
     if (scenes_.front().strain_stiffness || entries == 0) return true;
-    const sim::Integrator scheme = scenes_.front().integrator;
-    const bool euler = scheme == sim::Integrator::ForwardEuler || scheme == sim::Integrator::SemiImplicitEuler;
-    const bool lanes_share_vertices = euler && (persistent_blocks_ > 0 || gather_lanes_ > 1);
+    const bool lanes_share_vertices = fused_scheme() && (persistent_blocks_ > 0 || gather_lanes_ > 1);
     sim::SlicedSpringLayout layout;
     const bool sliced = options_.sliced_springs && !lanes_share_vertices &&
                         sim::slice_spring_entries(c.offset.data(), c.fixed.data(), n_, options_.slice_window,
@@ -661,9 +659,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     }
     while (gather_lanes_ > 1 && static_cast<long long>(n_) * gather_lanes_ > (1LL << 30)) gather_lanes_ /= 2;
     persistent_blocks_ = 0;
-    const sim::Integrator scheme = scenes_.front().integrator;
     if (!options_.persistent || n_ <= 0 || scenes_.front().strain_stiffness || !probe_vertices_unique_) return true;
-    if (scheme != sim::Integrator::ForwardEuler && scheme != sim::Integrator::SemiImplicitEuler) return true;
+    if (!fused_scheme()) return true;
     int limit = 0;
     FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, std::is_same_v<Real, double>, limit), diagnostics, false);
     const auto blocks_for_lanes = [&](int lanes) {
@@ -856,6 +853,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   sim::Integrator scheme() const { return scenes_.front().integrator; }
+  // Forward or semi-implicit Euler: one fused kernel per step from state buffer `current_` into the other.
+  bool fused_scheme() const {
+    return scheme() == sim::Integrator::ForwardEuler || scheme() == sim::Integrator::SemiImplicitEuler;
+  }
 
   // Inverted elements per scene now: counts and each scene's smallest inverted element (local index, -1: none).
   bool count_inverted(std::vector<unsigned int>& counts, std::vector<int>& firsts, DiagnosticList& diagnostics) {
@@ -970,8 +971,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool enqueue_steps(std::size_t count, int& parity, DiagnosticList& diagnostics) {
     // Forward and semi-implicit Euler apply the probe entries from the vertices' own threads (FusedStepArguments::
     // probe_entry) after each step and before the next: one probe launch before the first step instead of two per step.
-    const bool euler = scheme() == sim::Integrator::ForwardEuler || scheme() == sim::Integrator::SemiImplicitEuler;
-    const bool fused_probes = euler && probe_scenes_.size() > 0 && probe_vertices_unique_;
+    const bool fused_probes = fused_scheme() && probe_scenes_.size() > 0 && probe_vertices_unique_;
     for (std::size_t i = 0; i < count; ++i) {
       const int offset = static_cast<int>(i);
       if ((!fused_probes || i == 0) && !enqueue_probe(offset, true, state_[parity], diagnostics)) return false;
@@ -1260,10 +1260,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     }
     if (!set_step_base(diagnostics)) return false;
     FMPC_CUDA_CHECK(cudaGraphLaunch(found->second->get(), stream_), diagnostics, false);
-    if ((scheme() == sim::Integrator::ForwardEuler || scheme() == sim::Integrator::SemiImplicitEuler) &&
-        count % 2 == 1) {
-      current_ = 1 - current_;
-    }
+    if (fused_scheme() && count % 2 == 1) current_ = 1 - current_;
     steps_taken_ += count;
     return true;
   }
