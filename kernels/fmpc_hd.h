@@ -15,3 +15,10 @@
 #else
 #define FMPC_UNROLL_GATHER _Pragma("GCC unroll 4")
 #endif
+
+// Unrolls a loop with a constant trip count completely (its arrays then live in registers).
+#if defined(__CUDACC__) || defined(__clang__)
+#define FMPC_UNROLL_ALL _Pragma("unroll")
+#else
+#define FMPC_UNROLL_ALL _Pragma("GCC unroll 16")
+#endif

@@ -27,8 +27,37 @@ struct VertexLoads {
   Real mass_damping;    // Rayleigh's mass-proportional alpha (1/s): force -alpha m v
 };
 
-// Acceleration of vertex v: (internal forces of the model + external force - (gamma0 + gamma1 |x - x0|) v
-// - alpha m v) / m + g; zero along held axes. `forces` is one of the structs of kernels/internal_force_math.h.
+// Acceleration of vertex v at (x, v) = `self`, not held on every axis, under the model's internal force f:
+// (f + external force - (gamma0 + gamma1 |x - x0|) v - alpha m v) / m + g; zero along held axes.
+template <typename Real>
+FMPC_HD void loaded_acceleration(int v, unsigned char held, const VertexState<Real>& self, Real fx, Real fy, Real fz,
+                                 const VertexLoads<Real>& loads, Real& ax, Real& ay, Real& az) {
+  if (loads.force_x) {
+    fx += loads.force_x[v];
+    fy += loads.force_y[v];
+    fz += loads.force_z[v];
+  }
+  if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
+    const Real dx = self.x - loads.rest_x[v], dy = self.y - loads.rest_y[v], dz = self.z - loads.rest_z[v];
+    const Real gamma = loads.gamma0 + loads.gamma1 * square_root(dx * dx + dy * dy + dz * dz);
+    fx -= gamma * self.vx;
+    fy -= gamma * self.vy;
+    fz -= gamma * self.vz;
+  }
+  if (loads.mass_damping != Real(0)) {
+    const Real drag = loads.mass_damping * loads.mass[v];
+    fx -= drag * self.vx;
+    fy -= drag * self.vy;
+    fz -= drag * self.vz;
+  }
+  const Real inverse_mass = Real(1) / loads.mass[v];
+  ax = axis_fixed(held, 0) ? Real(0) : fx * inverse_mass + loads.gravity_x;
+  ay = axis_fixed(held, 1) ? Real(0) : fy * inverse_mass + loads.gravity_y;
+  az = axis_fixed(held, 2) ? Real(0) : fz * inverse_mass + loads.gravity_z;
+}
+
+// Acceleration of vertex v: loaded_acceleration under the internal forces `forces` gathers (one of the structs of
+// kernels/internal_force_math.h); zero for a vertex held on every axis.
 template <typename Real, typename Forces>
 FMPC_HD void vertex_acceleration(int v, const Forces& forces, const StateView<Real>& s, const VertexLoads<Real>& loads,
                                  Real& ax, Real& ay, Real& az) {
@@ -39,28 +68,7 @@ FMPC_HD void vertex_acceleration(int v, const Forces& forces, const StateView<Re
   }
   Real fx, fy, fz;
   forces.gather(v, s, fx, fy, fz);
-  if (loads.force_x) {
-    fx += loads.force_x[v];
-    fy += loads.force_y[v];
-    fz += loads.force_z[v];
-  }
-  if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
-    const Real dx = s.x[v] - loads.rest_x[v], dy = s.y[v] - loads.rest_y[v], dz = s.z[v] - loads.rest_z[v];
-    const Real gamma = loads.gamma0 + loads.gamma1 * square_root(dx * dx + dy * dy + dz * dz);
-    fx -= gamma * s.vx[v];
-    fy -= gamma * s.vy[v];
-    fz -= gamma * s.vz[v];
-  }
-  if (loads.mass_damping != Real(0)) {
-    const Real drag = loads.mass_damping * loads.mass[v];
-    fx -= drag * s.vx[v];
-    fy -= drag * s.vy[v];
-    fz -= drag * s.vz[v];
-  }
-  const Real inverse_mass = Real(1) / loads.mass[v];
-  ax = axis_fixed(held, 0) ? Real(0) : fx * inverse_mass + loads.gravity_x;
-  ay = axis_fixed(held, 1) ? Real(0) : fy * inverse_mass + loads.gravity_y;
-  az = axis_fixed(held, 2) ? Real(0) : fz * inverse_mass + loads.gravity_z;
+  loaded_acceleration(v, held, vertex_state(s, v), fx, fy, fz, loads, ax, ay, az);
 }
 
 // Forward (explicit) Euler, the thesis's scheme: x1 = x0 + h v0, v1 = v0 + h a(x0, v0).

@@ -22,8 +22,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <optional>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -49,8 +49,8 @@ struct Options {
   bool fem_only = false;
   std::size_t cohort = 1000;  // patients of the demo scene in the cohort row
   bool cohort_given = false;  // --cohort N also holds with --quick
-  int spring_cells = 0;  // > 0: only the large springs box of this many cells per side (GPU rows)
-  bool cohort_only = false;  // only the cohort rows (with --spring-cells: both)
+  int spring_cells = 0;       // > 0: only the large springs box of this many cells per side (GPU rows)
+  bool cohort_only = false;   // only the cohort rows (with --spring-cells: both)
 };
 
 struct Row {
@@ -210,8 +210,8 @@ gpu::GpuOptions gpu_options_for(Launch launch) {
   return options;
 }
 
-// lanes: GpuOptions::persistent_lanes or gather_lanes (0: automatic); check_every: advance's NaN/Inf check interval (0: at the end
-// of each timed chunk only, to separate the checks' cost from the steps').
+// lanes: GpuOptions::persistent_lanes or gather_lanes (0: automatic); check_every: advance's NaN/Inf check interval (0:
+// at the end of each timed chunk only, to separate the checks' cost from the steps').
 Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, Launch launch,
             const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery, int element_blocks = 0,
             bool sliced_springs = true, int slice_window = 0) {
@@ -237,14 +237,15 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   gpu_options.sliced_springs = sliced_springs;
   gpu_options.slice_window = slice_window;
   const auto simulation = gpu::GpuSimulation::create(setup, gpu_options, diagnostics);
-  row.graphs = launch_name(simulation && launch == Launch::Persistent && !simulation->persistent_launch()
-                               ? Launch::Graphs
-                               : launch);
+  row.graphs = launch_name(
+      simulation && launch == Launch::Persistent && !simulation->persistent_launch() ? Launch::Graphs : launch);
+  if (simulation && simulation->cluster_launch()) row.graphs += " in clusters";
   if (lanes > 0) row.graphs += " lanes " + std::to_string(lanes);
   if (element_blocks > 0) row.graphs += " element pass " + std::to_string(element_blocks) + " blocks/SM";
   if (!sliced_springs) row.graphs += " springs in CSR order";
   if (slice_window > 0) row.graphs += " slice window " + std::to_string(slice_window);
-  if (check_every != kCheckEvery) row.graphs += check_every == 0 ? " checks per chunk" : " checks every " + std::to_string(check_every);
+  if (check_every != kCheckEvery)
+    row.graphs += check_every == 0 ? " checks per chunk" : " checks every " + std::to_string(check_every);
   if (!simulation || !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics, check_every); }, 64,
                                  options.min_seconds, row)) {
     row.status = failure_text(diagnostics);
@@ -318,7 +319,8 @@ std::vector<Row> cohort_rows(std::size_t count, const Options& options) {
   for (std::size_t p = 0; p < count; ++p) {
     SpringModelSpec model;
     model.stiffness.mapping = StiffnessMapping::VanGelder1998;
-    model.stiffness.value = 5000.0 + 35000.0 * static_cast<double>(p) / static_cast<double>(std::max<std::size_t>(count - 1, 1));
+    model.stiffness.value =
+        5000.0 + 35000.0 * static_cast<double>(p) / static_cast<double>(std::max<std::size_t>(count - 1, 1));
     model.mass.value = 1060.0;
     model.damping.ratio = 0.9;
     auto setup = build_spring_model(mesh, model, diagnostics);
@@ -359,7 +361,7 @@ std::vector<Row> cohort_rows(std::size_t count, const Options& options) {
   // The per-step gather's threads per vertex (0: the automatic choice) on the cohort's many short CSR rows.
   // Lanes -1: one thread per vertex reading the springs in CSR order instead of the sliced layout.
   const std::pair<Launch, int> variants[] = {{Launch::Graphs, 0}, {Launch::Graphs, -1}, {Launch::Graphs, 2},
-                                             {Launch::Graphs, 4}, {Launch::Graphs, 8}, {Launch::Persistent, 0}};
+                                             {Launch::Graphs, 4}, {Launch::Graphs, 8},  {Launch::Persistent, 0}};
   for (const auto& [launch, lanes] : variants) {
     gpu::GpuOptions gpu_options = gpu_options_for(launch);
     gpu_options.gather_lanes = lanes < 0 ? 1 : lanes;
@@ -368,6 +370,7 @@ std::vector<Row> cohort_rows(std::size_t count, const Options& options) {
     if (launch == Launch::Persistent && batch && !batch->persistent_launch()) continue;  // too large for one grid
     Row timed = row;
     timed.graphs = launch_name(launch);
+    if (batch && batch->cluster_launch()) timed.graphs += " in clusters";
     if (lanes > 0) timed.graphs += " lanes " + std::to_string(lanes);
     if (lanes < 0) timed.graphs += " lanes 1, springs in CSR order";
     if (!batch ||
@@ -395,10 +398,11 @@ void write_csv(const std::vector<Row>& rows, std::ostream& out) {
   out << "model,variant,backend,precision,integrator,graphs,threads,scenes,vertices,springs,tetrahedra,steps,seconds,"
          "us_per_step,spring_steps_per_s,tetrahedron_steps_per_s,status\n";
   for (const Row& r : rows) {
-    out << r.model << ',' << r.variant << ',' << r.backend << ',' << r.precision << ',' << r.integrator << ',' << r.graphs << ','
-        << r.threads << ',' << r.scenes << ',' << r.vertices << ',' << r.springs << ',' << r.elements << ','
-        << r.steps << ',' << format(r.seconds, 6) << ',' << format(r.microseconds_per_step(), 3) << ','
-        << scientific(r.spring_steps_per_second()) << ',' << scientific(r.element_steps_per_second()) << ",\"" << r.status << "\"\n";
+    out << r.model << ',' << r.variant << ',' << r.backend << ',' << r.precision << ',' << r.integrator << ','
+        << r.graphs << ',' << r.threads << ',' << r.scenes << ',' << r.vertices << ',' << r.springs << ',' << r.elements
+        << ',' << r.steps << ',' << format(r.seconds, 6) << ',' << format(r.microseconds_per_step(), 3) << ','
+        << scientific(r.spring_steps_per_second()) << ',' << scientific(r.element_steps_per_second()) << ",\""
+        << r.status << "\"\n";
   }
 }
 
@@ -407,11 +411,9 @@ void print_table(const std::vector<Row>& rows, std::ostream& out) {
          "spring-steps/s | tet-steps/s |\n";
   out << "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
   for (const Row& r : rows) {
-    out << "| " << r.model << " | " << r.variant << " | " << r.precision << " | " << r.integrator << " | " << r.graphs << " | " << r.threads
-        << " | " << r.scenes << " | " << r.springs << " | " << r.elements << " | "
-        << (r.status == "ok" ? format(r.microseconds_per_step(), 2)
-                             : r.status)
-        << " | "
+    out << "| " << r.model << " | " << r.variant << " | " << r.precision << " | " << r.integrator << " | " << r.graphs
+        << " | " << r.threads << " | " << r.scenes << " | " << r.springs << " | " << r.elements << " | "
+        << (r.status == "ok" ? format(r.microseconds_per_step(), 2) : r.status) << " | "
         << (r.status == "ok" && r.springs > 0 ? scientific(r.spring_steps_per_second()) : "-") << " | "
         << (r.status == "ok" && r.elements > 0 ? scientific(r.element_steps_per_second()) : "-") << " |\n";
   }
@@ -440,8 +442,9 @@ bool parse(int argc, char** argv, Options& options) {
     } else if (arg == "--spring-cells" && i + 1 < argc) {
       options.spring_cells = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
     } else {
-      std::cerr << "usage: fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only] "
-                   "[--cohort PATIENTS] [--cohort-only] [--spring-cells N]\n";
+      std::cerr
+          << "usage: fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only] "
+             "[--cohort PATIENTS] [--cohort-only] [--spring-cells N]\n";
       return false;
     }
   }
@@ -509,8 +512,8 @@ int main(int argc, char** argv) {
         for (const int lanes : {1, 2, 8})
           rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, lanes));
         // One thread per vertex reading the springs in CSR order, against the sliced layout (the lanes 1 row).
-        rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, 1, kCheckEvery,
-                               0, false));
+        rows.push_back(
+            gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, 1, kCheckEvery, 0, false));
       }
       for (const Integrator integrator :
            {Integrator::ForwardEuler, Integrator::VelocityVerlet, Integrator::RungeKutta4}) {
@@ -544,8 +547,7 @@ int main(int argc, char** argv) {
       if (largest && model == ForceModel::Springs) continue;
       const auto start = std::chrono::steady_clock::now();
       const SimulationSetup base = benchmark_element_box(cells, model);
-      const double setup_seconds =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::cout << model_name(base) << " box " << cells << "^3: " << base.rest_positions.size() << " vertices, "
                 << base.tetrahedra.size() << " tetrahedra, set up in " << format(setup_seconds, 2) << " s\n"
                 << std::flush;
@@ -566,8 +568,8 @@ int main(int argc, char** argv) {
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options));
       // The element pass's register bound: 2 blocks per SM (no spills) against the default 3.
       if (largest || cells >= 52)
-        rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0,
-                               kCheckEvery, 2));
+        rows.push_back(
+            gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0, kCheckEvery, 2));
       if (!largest && cells <= 24)
         rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Persistent, options));
       if (!largest && cells == 24)

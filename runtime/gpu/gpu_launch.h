@@ -27,7 +27,7 @@ struct ForceModelView {
   GatherKind kind;
   kernels::SpringNetworkView<Real> springs;
   kernels::TetrahedronFieldView<Real> field;
-  kernels::CornerForceView<Real> corners;  // corners.force == corner_force
+  kernels::CornerForceView<Real> corners;    // corners.force == corner_force
   kernels::CornerForce<Real>* corner_force;  // 4 per element
   int element_blocks = 3;  // float: the element pass's register bound, 2 or 3 blocks per SM (GpuOptions)
   // Thread r of the kernels with one thread per vertex takes vertex vertex_order[r] (springs.sliced's order); null:
@@ -38,9 +38,9 @@ struct ForceModelView {
 // The springs' incidence records (kernels::SpringIncidence) of every CSR entry, from the network's arrays; run once
 // after upload, and only where the stiffness stays fixed during the run (no strain table).
 cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<float>& network, int entries,
-                                   kernels::SpringIncidence<float>* incidence, cudaStream_t stream);
+                                    kernels::SpringIncidence<float>* incidence, cudaStream_t stream);
 cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<double>& network, int entries,
-                                   kernels::SpringIncidence<double>* incidence, cudaStream_t stream);
+                                    kernels::SpringIncidence<double>* incidence, cudaStream_t stream);
 
 // Fills the sliced layout's records (network.sliced.row set) from the network's CSR arrays, one thread per row,
 // whose vertex is vertex_order[row] (kernels::write_sliced_row); run once after upload, like launch_spring_incidence.
@@ -92,7 +92,7 @@ struct ProbeScene {
   double target_x, target_y, target_z;
   double ramp_time;
   double h;
-  int count;            // the scene's probe vertices (a force probe shares its target equally among them)
+  int count;  // the scene's probe vertices (a force probe shares its target equally among them)
   bool force_mode;
   bool has_base_force;  // force probes: whether base_force_* hold the vertices' own external force
 };
@@ -220,11 +220,11 @@ struct PersistentEulerArguments {
   // probe entries around every step of the chunk.
   FusedStepArguments<Real> step;
   MutableStateView<Real> state[2];
-  int first_parity;                // the buffer holding the state at the chunk's start
+  int first_parity;  // the buffer holding the state at the chunk's start
   int steps;
-  int blocks;                      // grid size: at most persistent_euler_block_limit's
-  int lanes;                       // threads per vertex, valid_lanes (blocks * 256 >= lanes * vertices)
-  PersistentChecks checks;         // the last piece of a chunk
+  int blocks;               // grid size: at most persistent_euler_block_limit's
+  int lanes;                // threads per vertex, valid_lanes (blocks * 256 >= lanes * vertices)
+  PersistentChecks checks;  // the last piece of a chunk
 };
 constexpr int kPersistentThreads = 256;  // per block
 // The most blocks of kPersistentThreads threads a persistent launch may use, every block resident at once
@@ -233,6 +233,56 @@ constexpr int kPersistentThreads = 256;  // per block
 cudaError_t persistent_euler_block_limit(GatherKind kind, bool double_precision, int& blocks);
 cudaError_t launch_persistent_euler(const PersistentEulerArguments<float>& arguments, cudaStream_t stream);
 cudaError_t launch_persistent_euler(const PersistentEulerArguments<double>& arguments, cudaStream_t stream);
+
+// Springs alone in thread-block clusters (Hopper, issue 13's small meshes and cohorts): each cluster advances a group
+// of whole scenes for the whole chunk with their state on chip, in its blocks' shared memory, and the cluster's
+// hardware barrier replaces the grid barrier of launch_persistent_euler; clusters never wait on each other, so a
+// batch of many scenes needs no grid-wide barrier and may exceed what the GPU holds at once. Thread r of a block
+// takes vertex first_vertex + r, keeps its position and velocity in registers and publishes them every step into a
+// double-buffered copy in its block's shared memory. Before each step a block of a cluster of several copies its
+// window, the contiguous range of vertices its gathers read (its own and their neighbours), from its cluster's
+// published copies into its own shared memory: consecutive threads read consecutive vertices, which distributed
+// shared memory serves in whole requests, where each thread's gather reading its neighbours remotely made a request
+// per value (62,710 steps/s on the 20^3 box against 95,382 with windows; H100). Each block copies its vertices' CSR
+// records (model.springs.incidence) into shared memory once per launch. The terms are kernels::sum_spring_terms' in
+// CSR order and the step, probe and checks the persistent kernel's functions: the same bits. At the end both global
+// state buffers hold what the persistent kernel leaves there (the last state and the one before it).
+constexpr int kClusterRows = 1024;  // rows per block at most (one thread each)
+constexpr int kClusterBlocks = 16;  // blocks per cluster at most (Hopper's non-portable cluster size)
+struct ClusterBlock {
+  int first_vertex, end_vertex;    // its vertices (at most the launch's rows)
+  int window_first, window_count;  // the vertices its gathers read (its own where the cluster is one block)
+  int element_first, element_end;  // the elements whose inversion it checks at the end of a chunk
+};
+template <typename Real>
+struct ClusterEulerArguments {
+  // step (with the CSR records: model.springs.incidence), state, first_parity, steps and checks as for
+  // launch_persistent_euler; its blocks and lanes are ignored.
+  PersistentEulerArguments<Real> chunk;
+  const ClusterBlock* block;  // per block of the grid; a cluster's blocks take consecutive vertices from its first
+  int blocks;                 // the grid: clusters x cluster_blocks
+  int cluster_blocks;         // blocks per cluster: 1..kClusterBlocks
+  int rows;                   // threads per block: a multiple of 32 up to kClusterRows
+  int window_capacity;        // the longest window of a cluster of several blocks, a multiple of 4 (0: none)
+  int shared_bytes;           // cluster_euler_shared_bytes(rows, window_capacity, the most records of a block)
+};
+// Shared memory of the state in a block of `rows` rows with windows of `capacity`: two published copies of six
+// arrays of `rows`, six arrays of `capacity` (a multiple of 4, so the records after them stay 16-byte aligned).
+template <typename Real>
+FMPC_HD constexpr long long cluster_euler_state_bytes(int rows, int capacity) {
+  return (12LL * rows + 6LL * capacity) * static_cast<long long>(sizeof(Real));
+}
+template <typename Real>
+FMPC_HD constexpr long long cluster_euler_shared_bytes(int rows, int capacity, long long records) {
+  return cluster_euler_state_bytes<Real>(rows, capacity) +
+         records * static_cast<long long>(sizeof(kernels::SpringIncidence<Real>));
+}
+// Whether the device launches clusters of `blocks` blocks of `rows` threads with `shared_bytes` each, one cluster
+// resident (compute capability 9.0 or newer; more than 8 blocks where the device allows non-portable sizes). False,
+// with cudaSuccess, where it does not.
+cudaError_t cluster_euler_fits(bool double_precision, int blocks, int rows, long long shared_bytes, bool& fits);
+cudaError_t launch_cluster_euler(const ClusterEulerArguments<float>& arguments, cudaStream_t stream);
+cudaError_t launch_cluster_euler(const ClusterEulerArguments<double>& arguments, cudaStream_t stream);
 
 // k(strain) for every spring from the positions in `state` (kernels/strain_table_math.h), before every step.
 template <typename Real>
@@ -271,13 +321,13 @@ struct ConjugateGradientScalars {
 struct ImplicitElements {
   kernels::TetrahedronLaw law;
   int count;
-  const int* corners;             // 4 per element
-  const double* rest_inverse;     // 9 per element
+  const int* corners;          // 4 per element
+  const double* rest_inverse;  // 9 per element
   const double* rest_volume;
-  const double* youngs_modulus;   // null for the volume law
+  const double* youngs_modulus;  // null for the volume law
   const double* poisson_ratio;
-  const double* bulk_modulus;     // null for the co-rotational law
-  const double* stiffness_damping;  // null: none
+  const double* bulk_modulus;             // null for the co-rotational law
+  const double* stiffness_damping;        // null: none
   kernels::StrainTableView strain_table;  // strain null: none
   kernels::TetrahedronLinearisation* linearisation;
   double* rhs_part;       // 12 per element
@@ -291,7 +341,7 @@ struct ImplicitArguments {
   ImplicitElements elements;  // count 0: none
   kernels::VertexLoads<Real> loads;
   MutableStateView<Real> state;
-  const int* first;             // spring ends
+  const int* first;  // spring ends
   const int* second;
   const double* rest_length;    // double, as the CPU assembly reads them
   const double* mass;           // double
@@ -299,11 +349,11 @@ struct ImplicitArguments {
   double h;
   int vertex_count;
   int spring_count;
-  double* blocks;         // 12 per spring: K_s (6) then the system block (6)
-  double* diagonal;       // per vertex: m + h (gamma0 + gamma1 |x - x0|); 1 for fixed vertices
-  double* inverse_jacobi; // 3 per vertex
-  double* rhs;            // 3 per vertex, b
-  double* x;              // dv
+  double* blocks;          // 12 per spring: K_s (6) then the system block (6)
+  double* diagonal;        // per vertex: m + h (gamma0 + gamma1 |x - x0|); 1 for fixed vertices
+  double* inverse_jacobi;  // 3 per vertex
+  double* rhs;             // 3 per vertex, b
+  double* x;               // dv
   double* r;
   double* z;
   double* p;
@@ -387,10 +437,10 @@ struct StartPositions {
 
 // The largest distance of a vertex in [begin, end) from its start, into *result (double), with partial[kEnergyBlocks]
 // as scratch: the same bits as the host's sim::largest_displacement on the downloaded state.
-cudaError_t launch_largest_displacement(const kernels::StateView<float>& state, const StartPositions& start,
-                                       int begin, int end, double* partial, double* result, cudaStream_t stream);
-cudaError_t launch_largest_displacement(const kernels::StateView<double>& state, const StartPositions& start,
-                                       int begin, int end, double* partial, double* result, cudaStream_t stream);
+cudaError_t launch_largest_displacement(const kernels::StateView<float>& state, const StartPositions& start, int begin,
+                                        int end, double* partial, double* result, cudaStream_t stream);
+cudaError_t launch_largest_displacement(const kernels::StateView<double>& state, const StartPositions& start, int begin,
+                                        int end, double* partial, double* result, cudaStream_t stream);
 
 cudaError_t launch_energy_sum(const EnergyArguments<float>& arguments, EnergyTerm term, int begin, int end,
                               double* partial, double* result, cudaStream_t stream);

@@ -482,7 +482,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
               static_cast<Real>(common.nodal_damping_gamma1),
               static_cast<Real>(common.mass_damping)};
     step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
-    if (!choose_launches(diagnostics) || !upload_spring_records(c, diagnostics)) return false;
+    if (!choose_launches(c, diagnostics) || !upload_spring_records(c, diagnostics)) return false;
     // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
     // stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
@@ -491,19 +491,19 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   // The springs' incidence records, where the stiffness stays fixed during the run (no strain table): in the sliced
   // layout for the kernels with one thread per vertex (kernels::SlicedSpringsView), else in CSR order for the
-  // kernels whose lanes share a vertex (the persistent kernel, gather_lanes > 1). Only the one the launches use is
-  // built.
+  // persistent kernels (cooperative or in one cluster) and the kernels whose lanes share a vertex (gather_lanes > 1).
+  // Only the one the launches use is built.
   bool upload_spring_records(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
     const int entries = c.offset.back();
     if (scenes_.front().strain_stiffness || entries == 0) return true;
-    const bool lanes_share_vertices = fused_scheme() && (persistent_blocks_ > 0 || gather_lanes_ > 1);
+    const bool csr_records = fused_scheme() && (persistent_launch() || gather_lanes_ > 1);
     sim::SlicedSpringLayout layout;
-    const bool sliced = options_.sliced_springs && !lanes_share_vertices &&
-                        sim::slice_spring_entries(c.offset.data(), c.fixed.data(), n_, options_.slice_window,
-                                                  *c.pool, layout);
-    FMPC_CUDA_CHECK(incidence_.allocate(sliced ? static_cast<std::size_t>(layout.entries)
-                                               : static_cast<std::size_t>(entries)),
-                    diagnostics, false);
+    const bool sliced =
+        options_.sliced_springs && !csr_records &&
+        sim::slice_spring_entries(c.offset.data(), c.fixed.data(), n_, options_.slice_window, *c.pool, layout);
+    FMPC_CUDA_CHECK(
+        incidence_.allocate(sliced ? static_cast<std::size_t>(layout.entries) : static_cast<std::size_t>(entries)),
+        diagnostics, false);
     if (sliced) {
       FMPC_CUDA_CHECK(vertex_order_.upload(layout.vertex_order), diagnostics, false);
       FMPC_CUDA_CHECK(sliced_row_.upload(layout.row), diagnostics, false);
@@ -547,7 +547,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       FMPC_CUDA_CHECK(field_damping_d_.upload(c.stiffness_damping), diagnostics, false);
     }
     FMPC_CUDA_CHECK(corner_force_.allocate(4 * static_cast<std::size_t>(element_count_)), diagnostics, false);
-    const auto data = [](const DeviceArray<Real>& array) -> const Real* { return array.size() ? array.data() : nullptr; };
+    const auto data = [](const DeviceArray<Real>& array) -> const Real* {
+      return array.size() ? array.data() : nullptr;
+    };
     const auto data_d = [](const DeviceArray<double>& array) -> const double* {
       return array.size() ? array.data() : nullptr;
     };
@@ -642,7 +644,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // launch each (launch_persistent_euler): where every vertex gets its own group of lanes with all blocks resident,
   // no strain table is looked up between steps and the device can launch cooperative kernels. Larger meshes keep
   // one launch per kernel: their steps are long enough that launches cost little.
-  bool choose_launches(DiagnosticList& diagnostics) {
+  bool choose_launches(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
     // The per-step kernel's lanes (GpuOptions::gather_lanes; automatic from what an H100 measured, docs/
     // performance.md, sixth run): springs on a 20^3 box (9,261 vertices) step in 7.4 us with 8 lanes, 9.5 with 4 and
     // 17.0 with 1, while the 240^3 box (14M vertices) ran at 166 steps/s with 4 lanes and 207 with 1. Lanes pay
@@ -659,15 +661,26 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     }
     while (gather_lanes_ > 1 && static_cast<long long>(n_) * gather_lanes_ > (1LL << 30)) gather_lanes_ /= 2;
     persistent_blocks_ = 0;
+    cluster_blocks_ = 0;
     if (!options_.persistent || n_ <= 0 || scenes_.front().strain_stiffness || !probe_vertices_unique_) return true;
     if (!fused_scheme()) return true;
+    // GpuOptions::persistent_kind: the preferred launch first, the other where it does not fit.
+    const bool clusters_first = options_.persistent_kind == GpuOptions::PersistentKind::Clusters;
+    if (clusters_first && !choose_cluster_launch(c, diagnostics)) return false;
+    if (cluster_blocks_ == 0 && !choose_grid_launch(diagnostics)) return false;
+    if (!clusters_first && persistent_blocks_ == 0 && !choose_cluster_launch(c, diagnostics)) return false;
+    return !persistent_launch() || allocate_check_results(diagnostics);
+  }
+
+  // Whether the persistent chunks run as one cooperative grid (launch_persistent_euler): the most lanes per vertex,
+  // up to 16 (most vertices of the generated meshes have at most 16 springs, so one round of lanes covers them with
+  // their records in registers), whose grid is resident. Sets persistent_blocks_ (0: it does not fit).
+  bool choose_grid_launch(DiagnosticList& diagnostics) {
     int limit = 0;
     FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, std::is_same_v<Real, double>, limit), diagnostics, false);
     const auto blocks_for_lanes = [&](int lanes) {
       return (static_cast<long long>(n_) * lanes + kPersistentThreads - 1) / kPersistentThreads;
     };
-    // The most lanes per vertex, up to 16 (most vertices of the generated meshes have at most 16 springs, so one
-    // round of lanes covers them with their records in registers), whose grid fits.
     const int first = valid_lanes(options_.persistent_lanes) ? options_.persistent_lanes : 16;
     for (int lanes = first; lanes >= 1; lanes /= 2) {
       if (blocks_for_lanes(lanes) > limit) continue;
@@ -675,11 +688,84 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       persistent_lanes_ = lanes;
       break;
     }
-    if (persistent_blocks_ == 0) return true;
-    // The end-of-chunk checks' results: the first non-finite vertex, then per scene the inversion count and first.
+    return true;
+  }
+
+  // The end-of-chunk checks' results of a persistent run: the first non-finite vertex, then per scene the inversion
+  // count and first.
+  bool allocate_check_results(DiagnosticList& diagnostics) {
     const std::size_t results = 1 + (element_count_ > 0 ? 2 * scenes_.size() : 0);
     FMPC_CUDA_CHECK(check_results_.allocate(results), diagnostics, false);
     FMPC_CUDA_CHECK(check_results_host_.allocate(results), diagnostics, false);
+    return true;
+  }
+
+  // Whether the persistent chunks run in thread-block clusters (launch_cluster_euler; GpuOptions::persistent_kind):
+  // springs alone, every scene within one cluster of at most kClusterBlocks blocks of kClusterRows rows. A scene alone
+  // takes the fewest blocks, up to kClusterBlocks, that give each at most kClusterRows rows and, where the mesh allows,
+  // at least 256 (the 20^3 box: 16 blocks of 608); a batch takes the fewest blocks per cluster its largest scene needs,
+  // consecutive scenes packed into each cluster (1,000 demo patients: one block of 416 rows each). A block's published
+  // state, window and records must fit its shared memory, with one cluster resident. Sets cluster_blocks_ (0: the
+  // cooperative kernel decides) and uploads the blocks.
+  bool choose_cluster_launch(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
+    if (model_.kind != GatherKind::Springs || c.offset.back() == 0) return true;
+    const std::size_t scenes = c.vertex_begin.size() - 1;
+    int largest = 0;
+    for (std::size_t s = 0; s < scenes; ++s) largest = std::max(largest, c.vertex_begin[s + 1] - c.vertex_begin[s]);
+    if (largest > kClusterBlocks * kClusterRows) return true;
+    const int fewest = std::max(1, (largest + kClusterRows - 1) / kClusterRows);
+    // A scene alone spreads over several multiprocessors; a batch's parallelism is its many clusters.
+    const int first_try = scenes == 1 ? std::max(fewest, std::min(kClusterBlocks, (largest + 255) / 256)) : fewest;
+    for (int per_cluster = first_try; per_cluster <= kClusterBlocks; ++per_cluster) {
+      const int rows = ((largest + per_cluster - 1) / per_cluster + 31) / 32 * 32;
+      if (rows > kClusterRows) continue;
+      // Consecutive scenes packed into clusters of per_cluster x rows vertices.
+      std::vector<ClusterBlock> blocks;
+      int capacity = 0;
+      long long records = 0;
+      for (std::size_t s = 0; s < scenes;) {
+        std::size_t end_scene = s + 1;
+        while (end_scene < scenes && c.vertex_begin[end_scene + 1] - c.vertex_begin[s] <= per_cluster * rows)
+          ++end_scene;
+        const int first = c.vertex_begin[s], end = c.vertex_begin[end_scene];
+        const int element_first = c.element_begin[s], elements = c.element_begin[end_scene] - element_first;
+        for (int b = 0; b < per_cluster; ++b) {
+          ClusterBlock block{};
+          block.first_vertex = std::min(first + b * rows, end);
+          block.end_vertex = std::min(block.first_vertex + rows, end);
+          block.element_first = element_first + static_cast<int>(static_cast<long long>(elements) * b / per_cluster);
+          block.element_end =
+              element_first + static_cast<int>(static_cast<long long>(elements) * (b + 1) / per_cluster);
+          // The window: from the least to the greatest of its vertices and their neighbours.
+          int least = block.first_vertex, greatest = block.end_vertex - 1;
+          const int entry_first = c.offset[static_cast<std::size_t>(block.first_vertex)];
+          const int entry_end = c.offset[static_cast<std::size_t>(block.end_vertex)];
+          for (int e = entry_first; e < entry_end; ++e) {
+            least = std::min(least, c.neighbour[static_cast<std::size_t>(e)]);
+            greatest = std::max(greatest, c.neighbour[static_cast<std::size_t>(e)]);
+          }
+          block.window_first = block.first_vertex < block.end_vertex ? least : block.first_vertex;
+          block.window_count = block.first_vertex < block.end_vertex ? greatest - least + 1 : 0;
+          if (per_cluster > 1) capacity = std::max(capacity, block.window_count);
+          records = std::max<long long>(records, entry_end - entry_first);
+          blocks.push_back(block);
+        }
+        s = end_scene;
+      }
+      capacity = (capacity + 3) / 4 * 4;
+      const long long bytes = cluster_euler_shared_bytes<Real>(rows, capacity, records);
+      bool fits = false;
+      FMPC_CUDA_CHECK(cluster_euler_fits(std::is_same_v<Real, double>, per_cluster, rows, bytes, fits), diagnostics,
+                      false);
+      if (!fits) continue;
+      FMPC_CUDA_CHECK(cluster_blocks_array_.upload(blocks), diagnostics, false);
+      cluster_blocks_ = static_cast<int>(blocks.size());
+      cluster_size_ = per_cluster;
+      cluster_rows_ = rows;
+      cluster_window_capacity_ = capacity;
+      cluster_shared_bytes_ = static_cast<int>(bytes);
+      return true;
+    }
     return true;
   }
 
@@ -804,7 +890,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
-  bool persistent_launch() const override { return persistent_blocks_ > 0; }
+  bool persistent_launch() const override { return persistent_blocks_ > 0 || cluster_blocks_ > 0; }
+  bool cluster_launch() const override { return cluster_blocks_ > 0; }
 
   std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     return energy_sum(EnergyTerm::Kinetic, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
@@ -879,19 +966,19 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     FMPC_CUDA_CHECK(cudaMemcpyAsync(inverted_count_.data(), counts.data(), scenes * sizeof(unsigned int),
                                     cudaMemcpyHostToDevice, stream_),
                     diagnostics, false);
-    FMPC_CUDA_CHECK(cudaMemcpyAsync(inverted_first_.data(), firsts.data(), scenes * sizeof(int), cudaMemcpyHostToDevice,
-                                    stream_),
-                    diagnostics, false);
-    FMPC_CUDA_CHECK(launch_count_inverted(corners_.data(), element_count_, scenes > 1 ? element_scene_.data() : nullptr,
-                                          state_[current_].view(), inverted_count_.data(), inverted_first_.data(),
-                                          stream_),
-                    diagnostics, false);
+    FMPC_CUDA_CHECK(
+        cudaMemcpyAsync(inverted_first_.data(), firsts.data(), scenes * sizeof(int), cudaMemcpyHostToDevice, stream_),
+        diagnostics, false);
+    FMPC_CUDA_CHECK(
+        launch_count_inverted(corners_.data(), element_count_, scenes > 1 ? element_scene_.data() : nullptr,
+                              state_[current_].view(), inverted_count_.data(), inverted_first_.data(), stream_),
+        diagnostics, false);
     FMPC_CUDA_CHECK(cudaMemcpyAsync(counts.data(), inverted_count_.data(), scenes * sizeof(unsigned int),
                                     cudaMemcpyDeviceToHost, stream_),
                     diagnostics, false);
-    FMPC_CUDA_CHECK(cudaMemcpyAsync(firsts.data(), inverted_first_.data(), scenes * sizeof(int), cudaMemcpyDeviceToHost,
-                                    stream_),
-                    diagnostics, false);
+    FMPC_CUDA_CHECK(
+        cudaMemcpyAsync(firsts.data(), inverted_first_.data(), scenes * sizeof(int), cudaMemcpyDeviceToHost, stream_),
+        diagnostics, false);
     if (!synchronize(diagnostics)) return false;
     for (std::size_t scene = 0; scene < scenes; ++scene)
       firsts[scene] = counts[scene] > 0 ? firsts[scene] - element_begin_[scene] : -1;
@@ -1076,9 +1163,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool set_step_base(DiagnosticList& diagnostics) {
     if (probe_scenes_.size() == 0) return true;
     step_base_host_ = steps_taken_;
-    FMPC_CUDA_CHECK(cudaMemcpyAsync(step_base_.data(), &step_base_host_, sizeof step_base_host_,
-                                    cudaMemcpyHostToDevice, stream_),
-                    diagnostics, false);
+    FMPC_CUDA_CHECK(
+        cudaMemcpyAsync(step_base_.data(), &step_base_host_, sizeof step_base_host_, cudaMemcpyHostToDevice, stream_),
+        diagnostics, false);
     return true;
   }
 
@@ -1183,7 +1270,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       steps_taken_ += count;
       return true;
     }
-    if (persistent_blocks_ > 0) return run_persistent(count, diagnostics);
+    if (persistent_launch()) return run_persistent(count, diagnostics);
     // Velocity Verlet's first step computes a(x0, v0) and implicit Euler reads the residual every CG iteration:
     // those steps are enqueued directly, never captured.
     const bool direct = !allow_graph || count < 2 || scheme() == sim::Integrator::ImplicitEuler;
@@ -1233,7 +1320,18 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       a.lanes = persistent_lanes_;
       const bool last = done + piece == count;
       if (last) a.checks = persistent_checks();
-      FMPC_CUDA_CHECK(launch_persistent_euler(a, stream_), diagnostics, false);
+      if (cluster_blocks_ > 0) {
+        const ClusterEulerArguments<Real> cluster{a,
+                                                  cluster_blocks_array_.data(),
+                                                  cluster_blocks_,
+                                                  cluster_size_,
+                                                  cluster_rows_,
+                                                  cluster_window_capacity_,
+                                                  cluster_shared_bytes_};
+        FMPC_CUDA_CHECK(launch_cluster_euler(cluster, stream_), diagnostics, false);
+      } else {
+        FMPC_CUDA_CHECK(launch_persistent_euler(a, stream_), diagnostics, false);
+      }
       if (last) {
         FMPC_CUDA_CHECK(cudaMemcpyAsync(check_results_host_.data(), check_results_.data(),
                                         check_results_.size() * sizeof(unsigned int), cudaMemcpyDeviceToHost, stream_),
@@ -1471,8 +1569,15 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool probe_vertices_unique_ = true;
   int persistent_blocks_ = 0;  // > 0: run_steps uses launch_persistent_euler with this many blocks
   int persistent_lanes_ = 1;
-  int gather_lanes_ = 1;  // the per-step fused kernel's threads per vertex
-  DeviceArray<unsigned int> check_results_;     // PersistentChecks' results (persistent runs)
+  // > 0: the persistent chunks run in clusters (choose_cluster_launch), this many blocks in all.
+  int cluster_blocks_ = 0;
+  int cluster_size_ = 0;  // blocks per cluster
+  int cluster_rows_ = 0;
+  int cluster_window_capacity_ = 0;
+  int cluster_shared_bytes_ = 0;
+  DeviceArray<ClusterBlock> cluster_blocks_array_;
+  int gather_lanes_ = 1;                     // the per-step fused kernel's threads per vertex
+  DeviceArray<unsigned int> check_results_;  // PersistentChecks' results (persistent runs)
   PinnedArray<unsigned int> check_results_host_;
   // Whether check_results_host_ holds (once the stream is synchronised) the checks at the state now held: set by a
   // persistent chunk, cleared by anything that moves the state and once the inversion count has been read.
@@ -1561,6 +1666,7 @@ class GpuSimulationImpl final : public GpuSimulation {
   }
   int implicit_max_iterations_used() const override { return batch_->implicit_max_iterations_used(); }
   bool persistent_launch() const override { return batch_->persistent_launch(); }
+  bool cluster_launch() const override { return batch_->cluster_launch(); }
 
  private:
   std::unique_ptr<GpuBatchSimulation> batch_;

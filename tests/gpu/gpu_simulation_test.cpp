@@ -7,6 +7,8 @@
 // the tests print the measured maximum.
 #include "runtime/gpu/gpu_simulation.h"
 
+#include <cuda_runtime_api.h>
+
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -378,10 +380,19 @@ FMPC_GPU_TEST(batch_equals_single, "a batch of odd-sized scenes gives each scene
   }
 }
 
-// The persistent launch (GpuOptions::persistent) against the per-step kernels with graphs, for forward and
+// Whether the device launches thread-block clusters (compute capability 9.0 and newer).
+bool clusters_available() {
+  int device = 0, major = 0;
+  return cudaGetDevice(&device) == cudaSuccess &&
+         cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device) == cudaSuccess && major >= 9;
+}
+
+// The persistent launch (GpuOptions::persistent: one cluster or a cooperative grid) against the per-step kernels
+// with graphs, for forward and
 // semi-implicit Euler: displacement and force probes (probe vertices applied by their own threads), a 20^3-cell box
-// (9,261 vertices: 37 blocks, the last partly idle) and a batch of odd sizes with per-scene steps, in uneven
-// chunks (1, 3 checked every 2, 65 every 64, 931 at the end: pieces of 256 steps). Bitwise, probe force included.
+// (9,261 vertices: 37 blocks, the last partly idle), a batch of odd sizes with per-scene steps and a batch of the
+// box and small scenes (in clusters: clusters of several blocks with windows), in uneven chunks (1, 3 checked
+// every 2, 65 every 64, 931 at the end: pieces of 256 steps). Bitwise, probe force included.
 FMPC_GPU_TEST(persistent_equals_per_step,
               "persistent launches give the per-step kernels' bits: probes, batches, sizes, lanes", true) {
   for (const Precision precision : {Precision::Float, Precision::Double}) {
@@ -393,6 +404,10 @@ FMPC_GPU_TEST(persistent_equals_per_step,
       cases.push_back({single_tetrahedron(precision, integrator),
                        probed_box(precision, integrator, ProbeLoad::Mode::Displacement),
                        hanging_box(BoxScene{7, 6, 5, 9000.0, precision, integrator, 4})});
+      // Clusters of ten blocks: the 20^3 box in one, the two small scenes packed into the next.
+      cases.push_back({hanging_box(BoxScene{20, 20, 20, 5000.0, precision, integrator, 7}),
+                       probed_box(precision, integrator, ProbeLoad::Mode::Force),
+                       hanging_box(BoxScene{7, 6, 5, 9000.0, precision, integrator, 4})});
       for (std::size_t c = 0; c < cases.size(); ++c) {
         const std::vector<SimulationSetup>& scenes = cases[c];
         DiagnosticList diagnostics;
@@ -403,16 +418,25 @@ FMPC_GPU_TEST(persistent_equals_per_step,
         const auto reference = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
         FMPC_REQUIRE(reference && reference->advance(1000, diagnostics));
         FMPC_EXPECT(!reference->persistent_launch());
-        // Threads per vertex, persistent (0: automatic, 16 where it fits) and per step (negative: -lanes): one, two
-        // (several rounds over a vertex's entries), eight, a whole warp.
-        for (const int lanes : {0, 1, 2, 32, -2, -8, -32}) {
+        // Threads per vertex, persistent (0: automatic, 16 where it fits; 100: in clusters) and per step (negative:
+        // -lanes): one, two (several rounds over a vertex's entries), eight, a whole warp.
+        for (const int lanes : {100, 0, 1, 2, 32, -2, -8, -32}) {
           gpu::GpuOptions options;
           options.persistent = lanes >= 0;
-          options.persistent_lanes = std::max(lanes, 0);
+          options.persistent_kind =
+              lanes == 100 ? gpu::GpuOptions::PersistentKind::Clusters : gpu::GpuOptions::PersistentKind::Grid;
+          options.persistent_lanes = lanes == 100 ? 0 : std::max(lanes, 0);
           options.gather_lanes = lanes < 0 ? -lanes : 0;
           const auto run = gpu::GpuBatchSimulation::create(scenes, options, diagnostics);
           FMPC_REQUIRE(run);
           FMPC_EXPECT(run->persistent_launch() == (lanes >= 0));
+          // Every float case fits one cluster of a Hopper GPU (the 20^3 box's double records, 238 KB per block, do
+          // not: it stays on the cooperative grid).
+          if (lanes == 100 && clusters_available() && precision == Precision::Float) FMPC_EXPECT(run->cluster_launch());
+          if (lanes >= 0 && lanes != 100) FMPC_EXPECT(!run->cluster_launch());
+          if (lanes == 100)
+            note(std::string(name_of(precision)) + ", case " + std::to_string(c) + ": " +
+                 (run->cluster_launch() ? "one cluster" : "cooperative grid"));
           FMPC_REQUIRE(run->advance(1, diagnostics) && run->advance(3, diagnostics, 2) &&
                        run->advance(65, diagnostics, 64) && run->advance(931, diagnostics, 0));
           for (std::size_t s = 0; s < scenes.size(); ++s) {
@@ -503,26 +527,32 @@ FMPC_GPU_TEST(non_finite_located, "NaN/Inf stops the run naming the exact step, 
     FMPC_EXPECT(!cpu->advance(100000, cpu_diagnostics));
     FMPC_REQUIRE(cpu->non_finite());
     for (const std::size_t check_every : {std::size_t{1}, std::size_t{64}, std::size_t{0}}) {
-      DiagnosticList diagnostics;
-      const auto run = gpu::GpuSimulation::create(setup, diagnostics);
-      FMPC_REQUIRE(run);
-      FMPC_EXPECT(!run->advance(100000, diagnostics, check_every));
-      FMPC_REQUIRE(run->non_finite());
-      const NonFiniteReport& report = *run->non_finite();
-      std::ostringstream line;
-      line << name_of(precision) << ", check every " << check_every << ": GPU step " << report.step << " vertex "
-           << report.vertex << " spring " << report.spring << "; CPU step " << cpu->non_finite()->step << " vertex "
-           << cpu->non_finite()->vertex << " spring " << cpu->non_finite()->spring;
-      note(line.str());
-      FMPC_EXPECT(report.step == cpu->non_finite()->step);
-      FMPC_EXPECT(report.vertex == cpu->non_finite()->vertex);
-      FMPC_EXPECT(report.spring == cpu->non_finite()->spring);
-      FMPC_EXPECT(run->steps_taken() == report.step);
-      FMPC_REQUIRE(diagnostics.error_count() == 1);  // besides the warning about the unstable step
-      FMPC_EXPECT(
-          first_error(diagnostics)
-              .rfind("the GPU simulation became non-finite at step " + std::to_string(report.step) + " (t = ", 0) == 0);
-      FMPC_EXPECT(!run->advance(1, diagnostics));  // a failed run stays stopped
+      // The persistent launch on the cooperative grid and in a cluster (its own end-of-chunk check).
+      for (const auto kind : {gpu::GpuOptions::PersistentKind::Grid, gpu::GpuOptions::PersistentKind::Clusters}) {
+        DiagnosticList diagnostics;
+        gpu::GpuOptions options;
+        options.persistent_kind = kind;
+        const auto run = gpu::GpuSimulation::create(setup, options, diagnostics);
+        FMPC_REQUIRE(run);
+        FMPC_EXPECT(!run->advance(100000, diagnostics, check_every));
+        FMPC_REQUIRE(run->non_finite());
+        const NonFiniteReport& report = *run->non_finite();
+        std::ostringstream line;
+        line << name_of(precision) << (run->cluster_launch() ? ", in a cluster" : ", grid") << ", check every "
+             << check_every << ": GPU step " << report.step << " vertex " << report.vertex << " spring "
+             << report.spring << "; CPU step " << cpu->non_finite()->step << " vertex " << cpu->non_finite()->vertex
+             << " spring " << cpu->non_finite()->spring;
+        note(line.str());
+        FMPC_EXPECT(report.step == cpu->non_finite()->step);
+        FMPC_EXPECT(report.vertex == cpu->non_finite()->vertex);
+        FMPC_EXPECT(report.spring == cpu->non_finite()->spring);
+        FMPC_EXPECT(run->steps_taken() == report.step);
+        FMPC_REQUIRE(diagnostics.error_count() == 1);  // besides the warning about the unstable step
+        FMPC_EXPECT(first_error(diagnostics)
+                        .rfind("the GPU simulation became non-finite at step " + std::to_string(report.step) + " (t = ",
+                               0) == 0);
+        FMPC_EXPECT(!run->advance(1, diagnostics));  // a failed run stays stopped
+      }
     }
   }
 }
@@ -553,7 +583,16 @@ FMPC_GPU_TEST(sanitizer_smoke, "sanitizer smoke: every kernel on tiny scenes", t
       DiagnosticList diagnostics;
       const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
       FMPC_REQUIRE(batch && batch->advance(20, diagnostics, 8));
-      // The Euler schemes run persistent by default; their per-step kernels too.
+      // The Euler schemes run persistent by default (on the cooperative grid, as these fit it); in clusters (one
+      // block per cluster) and their per-step kernels too.
+      gpu::GpuOptions in_clusters;
+      in_clusters.persistent_kind = gpu::GpuOptions::PersistentKind::Clusters;
+      const auto clustered = gpu::GpuBatchSimulation::create(scenes, in_clusters, diagnostics);
+      FMPC_REQUIRE(clustered && clustered->advance(20, diagnostics, 8));
+      // A scene alone of 720 vertices: a cluster of three blocks that copy their windows from each other.
+      const std::vector<SimulationSetup> alone{hanging_box(BoxScene{9, 8, 7, 5000.0, precision, integrator, 5})};
+      const auto spread = gpu::GpuBatchSimulation::create(alone, in_clusters, diagnostics);
+      FMPC_REQUIRE(spread && spread->advance(20, diagnostics, 8));
       gpu::GpuOptions per_step;
       per_step.persistent = false;
       const auto stepped = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
@@ -641,8 +680,9 @@ FMPC_GPU_TEST(undamped_network, "a network without dashpots (no damping array) m
 FMPC_GPU_TEST(implicit_matches_cpu, "implicit Euler: GPU CG agrees with Eigen's, and GPU runs repeat bitwise", true) {
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     for (const bool with_probe : {false, true}) {
-      SimulationSetup setup = with_probe ? probed_box(precision, Integrator::ImplicitEuler, ProbeLoad::Mode::Displacement)
-                                         : hanging_box(BoxScene{3, 5, 2, 5000.0, precision, Integrator::ImplicitEuler});
+      SimulationSetup setup = with_probe
+                                  ? probed_box(precision, Integrator::ImplicitEuler, ProbeLoad::Mode::Displacement)
+                                  : hanging_box(BoxScene{3, 5, 2, 5000.0, precision, Integrator::ImplicitEuler});
       check_implicit_against_cpu(setup, std::string(with_probe ? "with a probe, " : "") + name_of(precision));
     }
   }
