@@ -195,8 +195,16 @@ __device__ void apply_own_probe(const FusedStepArguments<Real>& a, int v) {
   if (a.probe_entry != nullptr) apply_probe_after_step(a.probe, a.probe_entry[v], a.probe_offset, a.probe_next, a.out);
 }
 
+// Blocks per multiprocessor the fused step kernel is compiled for. The float springs gather reading four sliced
+// entries ahead (kernels::kSlicedGatherBatch) takes 66 registers unbounded (3 blocks of 256 per SM); bounded to 4
+// blocks it takes 64 with 4 bytes of spills, and the 240^3 box ran 601.1 steps/s against 581.4 (H100, 2,000 steps;
+// 5 blocks: 48 registers, 80 bytes of spills, 414.6).
 template <typename Real, GatherKind K>
-__global__ void fused_step_kernel(FusedStepArguments<Real> a) {
+constexpr int kFusedStepMinBlocks = std::is_same_v<Real, float>&& K == GatherKind::Springs ? 4 : 1;
+
+template <typename Real, GatherKind K>
+__global__ void __launch_bounds__(kThreadsPerBlock, (kFusedStepMinBlocks<Real, K>))
+    fused_step_kernel(FusedStepArguments<Real> a) {
   const int row = vertex_index();
   if (row >= a.vertex_count) return;
   const int v = vertex_of_row(a.model, row);
