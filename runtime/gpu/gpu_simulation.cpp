@@ -491,7 +491,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   // The springs' incidence records, where the stiffness stays fixed during the run (no strain table): in the sliced
   // layout for the kernels with one thread per vertex (kernels::SlicedSpringsView), else in CSR order for the
-  // persistent kernels (cooperative or in one cluster) and the kernels whose lanes share a vertex (gather_lanes > 1).
+  // persistent kernels (cooperative or in clusters) and the kernels whose lanes share a vertex (gather_lanes > 1).
   // Only the one the launches use is built.
   bool upload_spring_records(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
     const int entries = c.offset.back();
@@ -640,10 +640,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  // The per-step fused kernel's lanes, and whether chunks of forward or semi-implicit Euler run as one cooperative
-  // launch each (launch_persistent_euler): where every vertex gets its own group of lanes with all blocks resident,
-  // no strain table is looked up between steps and the device can launch cooperative kernels. Larger meshes keep
-  // one launch per kernel: their steps are long enough that launches cost little.
+  // The per-step fused kernel's lanes, and whether chunks of forward or semi-implicit Euler run as one persistent
+  // launch each, on a cooperative grid (choose_grid_launch) or in thread-block clusters (choose_cluster_launch): no
+  // strain table is looked up between steps, each probe vertex is listed once, and the batch fits one or the other.
+  // Otherwise one launch per kernel: steps of meshes too large for either are long enough that launches cost little.
   bool choose_launches(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
     // The per-step kernel's lanes (GpuOptions::gather_lanes; automatic from what an H100 measured, docs/
     // performance.md, sixth run): springs on a 20^3 box (9,261 vertices) step in 7.4 us with 8 lanes, 9.5 with 4 and
