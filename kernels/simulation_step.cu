@@ -179,14 +179,26 @@ __device__ void apply_probe_entry(const ProbeArguments<Real>& a, int i, int offs
   if (probe_entry_state(a, i, offset, before_step, x)) store_vertex_state(state, a.vertices[i], x);
 }
 
-// Probe entry `entry` (-1: none) after the step at `offset` and, where `next`, before the following one, by the
-// thread that updated its vertex: the per-step fused kernels' and the persistent kernel's order.
+// Probe entry `entry` (-1: none) after the step at `offset` and, where `next`, before the following one, on the state
+// of its vertex `x`, by the thread that updated the vertex: the per-step fused kernels', the persistent kernel's and
+// the cluster kernel's order. Returns whether the entry prescribed `x` (a displacement entry; a force entry sets the
+// vertex's external force instead).
+template <typename Real>
+__device__ bool probe_around_step(const ProbeArguments<Real>& probe, int entry, int offset, bool next,
+                                  kernels::VertexState<Real>& x) {
+  if (entry < 0) return false;
+  bool prescribed = probe_entry_state(probe, entry, offset, false, x);
+  if (next) prescribed = probe_entry_state(probe, entry, offset + 1, true, x) || prescribed;
+  return prescribed;
+}
+
+// probe_around_step on the state `out` (a displacement entry prescribes every value of its vertex's state, so
+// nothing of `out` is read).
 template <typename Real>
 __device__ void apply_probe_after_step(const ProbeArguments<Real>& probe, int entry, int offset, bool next,
                                        const MutableStateView<Real>& out) {
-  if (entry < 0) return;
-  apply_probe_entry(probe, entry, offset, false, out);
-  if (next) apply_probe_entry(probe, entry, offset + 1, true, out);
+  kernels::VertexState<Real> x{};
+  if (probe_around_step(probe, entry, offset, next, x)) store_vertex_state(out, probe.vertices[entry], x);
 }
 
 // Vertex v's probe entry around this step (FusedStepArguments::probe_entry).
@@ -646,25 +658,14 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
   run_chunk_checks(c, read_only(buffer(a, parity)), n, thread, stride);
 }
 
-// Six arrays of `stride` in shared memory: a cluster_euler_kernel block's published state and its window.
+// Six arrays of `stride` in shared memory (a cluster_euler_kernel block's published state and its window) as a state.
 template <typename Real>
-__device__ kernels::VertexState<Real> shared_vertex_state(const Real* copy, int stride, int i) {
-  return {copy[i],
-          copy[stride + i],
-          copy[2 * stride + i],
-          copy[3 * stride + i],
-          copy[4 * stride + i],
-          copy[5 * stride + i]};
+__device__ kernels::StateView<Real> shared_state(const Real* copy, int stride) {
+  return {copy, copy + stride, copy + 2 * stride, copy + 3 * stride, copy + 4 * stride, copy + 5 * stride};
 }
-
 template <typename Real>
-__device__ void store_shared_vertex_state(Real* copy, int stride, int i, const kernels::VertexState<Real>& x) {
-  copy[i] = x.x;
-  copy[stride + i] = x.y;
-  copy[2 * stride + i] = x.z;
-  copy[3 * stride + i] = x.vx;
-  copy[4 * stride + i] = x.vy;
-  copy[5 * stride + i] = x.vz;
+__device__ MutableStateView<Real> shared_state(Real* copy, int stride) {
+  return {copy, copy + stride, copy + 2 * stride, copy + 3 * stride, copy + 4 * stride, copy + 5 * stride};
 }
 
 // launch_cluster_euler's kernel (gpu_launch.h): clusters of a.cluster_blocks blocks of a.rows threads, thread r of
@@ -720,7 +721,7 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
   kernels::VertexState<Real> self{};
   if (owner) self = kernels::vertex_state(read_only(buffer(chunk, parity)), v);
   if (probe_entry >= 0) probe_entry_state(step.probe, probe_entry, 0, true, self);
-  if (owner) store_shared_vertex_state(published, rows, local, self);
+  if (owner) store_vertex_state(shared_state(published, rows), local, self);
   cluster.sync();
   int current = 0;
   for (int s = 0; s < chunk.steps; ++s) {
@@ -729,7 +730,8 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
       for (int i = local; i < me.window_count; i += rows) {
         const int u = me.window_first + i - cluster_first, from = u / rows;
         const Real* const copy = from == rank ? start : cluster.map_shared_rank(start, from);
-        store_shared_vertex_state(window, stride, i, shared_vertex_state(copy, rows, u - from * rows));
+        store_vertex_state(shared_state(window, stride), i,
+                           kernels::vertex_state(shared_state(copy, rows), u - from * rows));
       }
       __syncthreads();
     }
@@ -740,16 +742,15 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
         Real fx, fy, fz;
         kernels::sum_spring_terms(
             own_count, net.law, self, [&](int j) { return record[own_first + j]; },
-            [&](const kernels::SpringIncidence<Real>& r) { return shared_vertex_state(source, stride, r.neighbour); },
+            [&](const kernels::SpringIncidence<Real>& r) {
+              return kernels::vertex_state(shared_state(source, stride), r.neighbour);
+            },
             fx, fy, fz);
         kernels::loaded_acceleration(v, held, self, fx, fy, fz, step.loads, ax, ay, az);
       }
       euler_update(step.scheme, h, ax, ay, az, self);
-      if (probe_entry >= 0) {
-        probe_entry_state(step.probe, probe_entry, s, false, self);
-        if (s + 1 < chunk.steps) probe_entry_state(step.probe, probe_entry, s + 1, true, self);
-      }
-      store_shared_vertex_state(published + (1 - current) * 6 * rows, rows, local, self);
+      probe_around_step(step.probe, probe_entry, s, s + 1 < chunk.steps, self);
+      store_vertex_state(shared_state(published + (1 - current) * 6 * rows, rows), local, self);
     }
     cluster.sync();
     current = 1 - current;
@@ -757,18 +758,19 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
   }
   if (owner) {
     store_vertex_state(buffer(chunk, parity), v, self);
-    store_vertex_state(buffer(chunk, 1 - parity), v,
-                       shared_vertex_state(published + (1 - current) * 6 * rows, rows, local));
+    store_vertex_state(
+        buffer(chunk, 1 - parity), v,
+        kernels::vertex_state(read_only(shared_state(published + (1 - current) * 6 * rows, rows)), local));
   }
-  // The checks' presets come from launch_reset_checks, before the launch (clusters do not wait on each other).
+  // The checks' presets come from reset_checks_kernel, launched before (clusters do not wait on each other).
   const PersistentChecks& c = chunk.checks;
   if (c.first_non_finite == nullptr) return;
-  if (owner && non_finite_vertex(read_only(buffer(chunk, parity)), v)) atomicMin(c.first_non_finite, v);
+  const kernels::StateView<Real> end = read_only(buffer(chunk, parity));
+  if (owner && non_finite_vertex(end, v)) atomicMin(c.first_non_finite, v);
   if (me.element_first == me.element_end) return;
   cluster.sync();  // the elements' corners may be other blocks' vertices
   for (int e = me.element_first + local; e < me.element_end; e += rows)
-    count_if_inverted(c.corners, e, c.element_scene, read_only(buffer(chunk, parity)), c.inverted_count,
-                      c.inverted_first);
+    count_if_inverted(c.corners, e, c.element_scene, end, c.inverted_count, c.inverted_first);
 #endif
 }
 
@@ -1165,9 +1167,9 @@ cudaError_t launch_persistent(const PersistentEulerArguments<Real>& arguments, c
 }
 
 // Sets cluster_euler_kernel's attributes for `shared_bytes` of dynamic shared memory and, beyond 8 blocks, Hopper's
-// non-portable cluster sizes, and fills the launch configuration of one cluster of `blocks` with its attribute.
+// non-portable cluster sizes, and fills the launch configuration of `grid` blocks in clusters of `blocks`.
 template <typename Real>
-cudaError_t cluster_launch_config(int blocks, int rows, long long shared_bytes, cudaStream_t stream,
+cudaError_t cluster_launch_config(int grid, int blocks, int rows, long long shared_bytes, cudaStream_t stream,
                                   cudaLaunchAttribute& attribute, cudaLaunchConfig_t& config) {
   const void* kernel = reinterpret_cast<const void*>(cluster_euler_kernel<Real>);
   cudaError_t status =
@@ -1179,7 +1181,7 @@ cudaError_t cluster_launch_config(int blocks, int rows, long long shared_bytes, 
   attribute.val.clusterDim.y = 1;
   attribute.val.clusterDim.z = 1;
   config = {};
-  config.gridDim = dim3(static_cast<unsigned>(blocks));
+  config.gridDim = dim3(static_cast<unsigned>(grid));
   config.blockDim = dim3(static_cast<unsigned>(rows));
   config.dynamicSmemBytes = static_cast<std::size_t>(shared_bytes);
   config.stream = stream;
@@ -1204,7 +1206,7 @@ cudaError_t cluster_fits(int blocks, int rows, long long shared_bytes, bool& fit
   }
   cudaLaunchAttribute attribute{};
   cudaLaunchConfig_t config{};
-  status = cluster_launch_config<Real>(blocks, rows, shared_bytes, nullptr, attribute, config);
+  status = cluster_launch_config<Real>(blocks, blocks, rows, shared_bytes, nullptr, attribute, config);
   // A device without non-portable sizes refuses the attribute: no fit, not an error.
   if (status == cudaErrorInvalidValue || status == cudaErrorNotSupported) {
     cudaGetLastError();
@@ -1240,9 +1242,8 @@ cudaError_t launch_cluster(const ClusterEulerArguments<Real>& arguments, cudaStr
   }
   cudaLaunchAttribute attribute{};
   cudaLaunchConfig_t config{};
-  const cudaError_t status = cluster_launch_config<Real>(arguments.cluster_blocks, arguments.rows,
+  const cudaError_t status = cluster_launch_config<Real>(arguments.blocks, arguments.cluster_blocks, arguments.rows,
                                                          arguments.shared_bytes, stream, attribute, config);
-  config.gridDim = dim3(static_cast<unsigned>(arguments.blocks));
   if (status != cudaSuccess) return status;
   return cudaLaunchKernelEx(&config, cluster_euler_kernel<Real>, arguments);
 }

@@ -261,15 +261,18 @@ template <int Batch = 1, typename Real, typename Entry, typename Other>
 FMPC_HD void sum_spring_terms(int count, const SpringLawParameters<Real>& law, const VertexState<Real>& self,
                               Entry entry, Other other, Real& fx, Real& fy, Real& fz) {
   Real sx = Real(0), sy = Real(0), sz = Real(0);
+  const auto add = [&](const SpringIncidence<Real>& r, const VertexState<Real>& o) {
+    Real f0, f1, f2;
+    entry_spring_force(law, r, o, self.x, self.y, self.z, self.vx, self.vy, self.vz, f0, f1, f2);
+    sx += f0;
+    sy += f1;
+    sz += f2;
+  };
   if constexpr (Batch == 1) {
     FMPC_UNROLL_GATHER
     for (int j = 0; j < count; ++j) {
       const SpringIncidence<Real> r = entry(j);
-      Real f0, f1, f2;
-      entry_spring_force(law, r, other(r), self.x, self.y, self.z, self.vx, self.vy, self.vz, f0, f1, f2);
-      sx += f0;
-      sy += f1;
-      sz += f2;
+      add(r, other(r));
     }
   } else {
     for (int first = 0; first < count; first += Batch) {
@@ -282,15 +285,8 @@ FMPC_HD void sum_spring_terms(int count, const SpringLawParameters<Real>& law, c
       for (int b = 0; b < Batch; ++b)
         if (first + b < count) o[b] = other(r[b]);
       FMPC_UNROLL_ALL
-      for (int b = 0; b < Batch; ++b) {
-        if (first + b < count) {
-          Real f0, f1, f2;
-          entry_spring_force(law, r[b], o[b], self.x, self.y, self.z, self.vx, self.vy, self.vz, f0, f1, f2);
-          sx += f0;
-          sy += f1;
-          sz += f2;
-        }
-      }
+      for (int b = 0; b < Batch; ++b)
+        if (first + b < count) add(r[b], o[b]);
     }
   }
   fx = sx;
