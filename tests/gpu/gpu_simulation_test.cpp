@@ -436,7 +436,7 @@ FMPC_GPU_TEST(persistent_equals_per_step,
           if (lanes >= 0 && lanes != 100) FMPC_EXPECT(!run->cluster_launch());
           if (lanes == 100)
             note(std::string(name_of(precision)) + ", case " + std::to_string(c) + ": " +
-                 (run->cluster_launch() ? "one cluster" : "cooperative grid"));
+                 (run->cluster_launch() ? "clusters" : "cooperative grid"));
           FMPC_REQUIRE(run->advance(1, diagnostics) && run->advance(3, diagnostics, 2) &&
                        run->advance(65, diagnostics, 64) && run->advance(931, diagnostics, 0));
           for (std::size_t s = 0; s < scenes.size(); ++s) {
@@ -534,6 +534,8 @@ FMPC_GPU_TEST(non_finite_located, "NaN/Inf stops the run naming the exact step, 
         options.persistent_kind = kind;
         const auto run = gpu::GpuSimulation::create(setup, options, diagnostics);
         FMPC_REQUIRE(run);
+        FMPC_EXPECT(run->cluster_launch() ==
+                    (kind == gpu::GpuOptions::PersistentKind::Clusters && clusters_available()));
         FMPC_EXPECT(!run->advance(100000, diagnostics, check_every));
         FMPC_REQUIRE(run->non_finite());
         const NonFiniteReport& report = *run->non_finite();
