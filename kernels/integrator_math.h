@@ -27,33 +27,66 @@ struct VertexLoads {
   Real mass_damping;    // Rayleigh's mass-proportional alpha (1/s): force -alpha m v
 };
 
-// Acceleration of vertex v at (x, v) = `self`, not held on every axis, under the model's internal force f:
-// (f + external force - (gamma0 + gamma1 |x - x0|) v - alpha m v) / m + g; zero along held axes.
+// A vertex's own load values (VertexLoads' per-vertex arrays at one vertex): what loaded_acceleration reads besides
+// the loads common to every vertex. The persistent CUDA kernel keeps them in registers for a launch.
 template <typename Real>
-FMPC_HD void loaded_acceleration(int v, unsigned char held, const VertexState<Real>& self, Real fx, Real fy, Real fz,
-                                 const VertexLoads<Real>& loads, Real& ax, Real& ay, Real& az) {
+struct VertexLoadValues {
+  Real mass;
+  Real rest_x, rest_y, rest_z;     // read where there is nodal damping
+  Real force_x, force_y, force_z;  // zero without external forces
+};
+
+template <typename Real>
+FMPC_HD VertexLoadValues<Real> vertex_load_values(const VertexLoads<Real>& loads, int v) {
+  VertexLoadValues<Real> l{loads.mass[v], Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
+  if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
+    l.rest_x = loads.rest_x[v];
+    l.rest_y = loads.rest_y[v];
+    l.rest_z = loads.rest_z[v];
+  }
   if (loads.force_x) {
-    fx += loads.force_x[v];
-    fy += loads.force_y[v];
-    fz += loads.force_z[v];
+    l.force_x = loads.force_x[v];
+    l.force_y = loads.force_y[v];
+    l.force_z = loads.force_z[v];
+  }
+  return l;
+}
+
+// Acceleration of a vertex at (x, v) = `self` with load values `own`, not held on every axis, under the model's
+// internal force f: (f + external force - (gamma0 + gamma1 |x - x0|) v - alpha m v) / m + g; zero along held axes.
+template <typename Real>
+FMPC_HD void loaded_acceleration(const VertexLoadValues<Real>& own, unsigned char held, const VertexState<Real>& self,
+                                 Real fx, Real fy, Real fz, const VertexLoads<Real>& loads, Real& ax, Real& ay,
+                                 Real& az) {
+  if (loads.force_x) {
+    fx += own.force_x;
+    fy += own.force_y;
+    fz += own.force_z;
   }
   if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
-    const Real dx = self.x - loads.rest_x[v], dy = self.y - loads.rest_y[v], dz = self.z - loads.rest_z[v];
+    const Real dx = self.x - own.rest_x, dy = self.y - own.rest_y, dz = self.z - own.rest_z;
     const Real gamma = loads.gamma0 + loads.gamma1 * square_root(dx * dx + dy * dy + dz * dz);
     fx -= gamma * self.vx;
     fy -= gamma * self.vy;
     fz -= gamma * self.vz;
   }
   if (loads.mass_damping != Real(0)) {
-    const Real drag = loads.mass_damping * loads.mass[v];
+    const Real drag = loads.mass_damping * own.mass;
     fx -= drag * self.vx;
     fy -= drag * self.vy;
     fz -= drag * self.vz;
   }
-  const Real inverse_mass = Real(1) / loads.mass[v];
+  const Real inverse_mass = Real(1) / own.mass;
   ax = axis_fixed(held, 0) ? Real(0) : fx * inverse_mass + loads.gravity_x;
   ay = axis_fixed(held, 1) ? Real(0) : fy * inverse_mass + loads.gravity_y;
   az = axis_fixed(held, 2) ? Real(0) : fz * inverse_mass + loads.gravity_z;
+}
+
+// loaded_acceleration of vertex v with its load values read from `loads`.
+template <typename Real>
+FMPC_HD void loaded_acceleration(int v, unsigned char held, const VertexState<Real>& self, Real fx, Real fy, Real fz,
+                                 const VertexLoads<Real>& loads, Real& ax, Real& ay, Real& az) {
+  loaded_acceleration(vertex_load_values(loads, v), held, self, fx, fy, fz, loads, ax, ay, az);
 }
 
 // Acceleration of vertex v: loaded_acceleration under the internal forces `forces` gathers (one of the structs of
