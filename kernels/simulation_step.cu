@@ -4,6 +4,7 @@
 // compiled with --fmad=false, the same bits as the CPU loop. The per-vertex kernels are templates over the force
 // model (GatherKind -> a struct of kernels/internal_force_math.h), dispatched once per launch.
 #include <cooperative_groups.h>
+#include <cuda/atomic>
 
 #include <algorithm>
 #include <limits>
@@ -440,8 +441,8 @@ __global__ void apply_probe_kernel(ProbeArguments<Real> a, int offset, bool befo
   apply_probe_entry(a, i, offset, before_step, a.state);
 }
 
-// A vertex's internal forces summed beforehand by its lanes (the persistent kernel): what vertex_acceleration reads
-// through `gather`.
+// A vertex's internal forces summed beforehand (by its lanes in fused_step_lanes_kernel): what vertex_acceleration
+// reads through `gather`.
 template <typename Real>
 struct GatheredForces {
   Real fx, fy, fz;
@@ -482,9 +483,8 @@ __device__ unsigned lane_mask(int lanes) {
   return lanes == 32 ? 0xffffffffu : ((1u << lanes) - 1u) << (warp_lane - warp_lane % lanes);
 }
 
-// What a vertex's lane keeps in registers for the whole launch (the CSR never changes during a run): its vertex's
-// spring and corner ranges and its own first spring record. Every step then starts its loads at the neighbours'
-// positions instead of behind two dependent loads of read-only data.
+// What a vertex's lane reads before its gather: its vertex's spring and corner ranges and its own first spring
+// record, so that its first neighbour's load waits on one load instead of two.
 template <typename Real>
 struct LaneCache {
   int spring_begin = 0, spring_end = 0;
@@ -596,69 +596,8 @@ __device__ void run_chunk_checks(const PersistentChecks& c, const kernels::State
     count_if_inverted(c.corners, e, c.element_scene, end, c.inverted_count, c.inverted_first);
 }
 
-// Blocks per multiprocessor the persistent kernel is compiled for (registers per thread <= 65536 / (256 x this)),
-// hence how many lanes per vertex fit a mesh. Unbounded, the float springs kernel takes 102 registers (2 blocks: a
-// 9,261-vertex mesh gets 4 lanes); bounded to 3 blocks it takes 80 with 24 bytes of spills and gets 8 lanes (290
-// blocks), which measured 7.4 us per step against 9.1 with 4 (H100). Bounding it to 5 blocks (16 lanes) spills 240
-// bytes; the element pass spills already at 80 registers (ptxas -v), so the kinds with elements keep 2 blocks.
-template <typename Real, GatherKind K>
-struct PersistentOccupancy {
-  static constexpr bool springs_only = K == GatherKind::Springs;
-  static constexpr int min_blocks = std::is_same_v<Real, float> ? (springs_only ? 3 : 2) : (springs_only ? 2 : 1);
-};
-
-// launch_persistent_euler's kernel (gpu_launch.h): `steps` steps, a.lanes threads per vertex (all threads share the
-// element pass with a grid stride), a grid barrier after each pass whose writes other threads read. Lane 0 of a
-// vertex updates it and applies its probe entry. Plain loads and stores: the barrier orders them at device scope,
-// and nothing here reads through the non-coherent read-only path.
-template <typename Real, GatherKind K>
-__global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real, K>::min_blocks))
-    persistent_euler_kernel(PersistentEulerArguments<Real> a) {
-  cooperative_groups::grid_group grid = cooperative_groups::this_grid();
-  const int thread = vertex_index();
-  const int stride = static_cast<int>(gridDim.x) * static_cast<int>(blockDim.x);
-  const int lanes = a.lanes;
-  const int lane = thread % lanes;
-  const unsigned mask = lane_mask(lanes);
-  const int n = a.step.vertex_count;
-  const ProbeArguments<Real>& probe = a.step.probe;
-  const int* const probe_entry_of = a.step.probe_entry;
-  const bool probed = probe_entry_of != nullptr;
-  // One vertex per `lanes` threads: the launch has blocks * 256 >= lanes * n threads.
-  const int v = thread / lanes;
-  const bool owner = v < n;
-  const LaneCache<Real> cache = owner ? lane_cache<Real, K>(a.step.model, v, lane) : LaneCache<Real>{};
-  const int probe_entry = owner && probed ? probe_entry_of[v] : -1;
-  int parity = a.first_parity;
-  const PersistentChecks& c = a.checks;
-  reset_chunk_checks(c, n, thread, stride);
-  if (probed) {
-    for (int v = thread; v < n; v += stride)
-      if (probe_entry_of[v] >= 0) apply_probe_entry(probe, probe_entry_of[v], 0, true, buffer(a, parity));
-    grid.sync();
-  }
-  for (int step = 0; step < a.steps; ++step) {
-    const MutableStateView<Real> out = buffer(a, 1 - parity);
-    const kernels::StateView<Real> in = read_only(buffer(a, parity));
-    if constexpr (K != GatherKind::Springs) {
-      for (int e = thread; e < a.step.model.field.count; e += stride)
-        kernels::tetrahedron_corner_forces(e, a.step.model.field, in, a.step.model.corner_force);
-      grid.sync();
-    }
-    if (owner) {
-      const GatheredForces<Real> forces = lanes_gather<Real, K>(a.step.model, v, cache, in, mask, lane, lanes);
-      if (lane == 0) {
-        fused_vertex_step(a.step, forces, v, in, out);
-        apply_probe_after_step(probe, probe_entry, step, step + 1 < a.steps, out);
-      }
-    }
-    grid.sync();
-    parity = 1 - parity;
-  }
-  run_chunk_checks(c, read_only(buffer(a, parity)), n, thread, stride);
-}
-
-// Six arrays of `stride` in shared memory (a cluster_euler_kernel block's published state and its window) as a state.
+// Six arrays of `stride` in shared memory (a persistent or cluster_euler_kernel block's state, a cluster block's
+// window) as a state.
 template <typename Real>
 __device__ kernels::StateView<Real> shared_state(const Real* copy, int stride) {
   return {copy, copy + stride, copy + 2 * stride, copy + 3 * stride, copy + 4 * stride, copy + 5 * stride};
@@ -666,6 +605,222 @@ __device__ kernels::StateView<Real> shared_state(const Real* copy, int stride) {
 template <typename Real>
 __device__ MutableStateView<Real> shared_state(Real* copy, int stride) {
   return {copy, copy + stride, copy + 2 * stride, copy + 3 * stride, copy + 4 * stride, copy + 5 * stride};
+}
+
+// Blocks per multiprocessor the persistent kernel is compiled for (registers per thread <= 65536 / (256 x this)).
+// Springs alone in float: bounded to 2 blocks it takes 112 registers and spills nothing, and the 20^3 box (36 rows
+// per block, 258 blocks) ran 208,663-212,017 steps/s through fmpc simulate; bounded to 3 it takes 80 registers with
+// 60 bytes of spills (24 rows, 386 blocks) and ran 195,931-200,902 (H100).
+template <typename Real, GatherKind K>
+struct PersistentOccupancy {
+  static constexpr int min_blocks = std::is_same_v<Real, float> || K == GatherKind::Springs ? 2 : 1;
+};
+
+// Records per thread whose other ends block_spring_terms reads together: 4 for springs alone in float; 2 in double
+// (4 spilled 162 bytes at the 128 registers of 2 blocks); 1 with elements, whose pass leaves no registers for more.
+template <typename Real, GatherKind K>
+constexpr int kPersistentTermBatch = K != GatherKind::Springs ? 1 : std::is_same_v<Real, float> ? 4 : 2;
+
+// A block's step count, published once its threads have written the step (BlockNeighbours::steps_done): release
+// by one thread after the block's barrier, the pattern of cooperative groups' grid barrier without its single counter
+// that every block of the grid increments.
+__device__ void publish_block_steps(unsigned* steps_done, unsigned steps) {
+  __syncthreads();
+  if (threadIdx.x == 0)
+    cuda::atomic_ref<unsigned, cuda::thread_scope_device>(steps_done[kBlockStepsStride * blockIdx.x])
+        .store(steps, cuda::memory_order_release);
+}
+
+// Waits until each of the `count` blocks `waited` (shared memory) has published `steps` steps: one thread per block
+// polls with acquire loads, then the block's barrier passes what they saw on to every thread. (Relaxed polls and one
+// acquire fence after them ran the 20^3 box at 168,343 steps/s against 180,091 with acquire polls; H100.)
+__device__ void wait_for_blocks(const unsigned* steps_done, const int* waited, int count, unsigned steps) {
+  for (int i = static_cast<int>(threadIdx.x); i < count; i += static_cast<int>(blockDim.x)) {
+    cuda::atomic_ref<const unsigned, cuda::thread_scope_device> done(steps_done[kBlockStepsStride * waited[i]]);
+    while (done.load(cuda::memory_order_acquire) < steps) {
+    }
+  }
+  __syncthreads();
+}
+
+// A persistent block's shared memory (persistent_euler_shared_bytes' layout): its CSR records, their terms, its
+// vertices' state at the step's start, which vertex of the block each record belongs to, and the blocks it waits for.
+template <typename Real>
+struct PersistentShared {
+  kernels::SpringIncidence<Real>* record;
+  Real* term;  // three arrays of a.block_records: x, y, z
+  Real* own;   // six arrays of a.rows: the block's vertices' state
+  int* owner;
+  int* waited;
+};
+
+template <typename Real>
+__device__ PersistentShared<Real> persistent_shared(unsigned char* base, int records, int rows) {
+  PersistentShared<Real> p;
+  p.record = reinterpret_cast<kernels::SpringIncidence<Real>*>(base);
+  p.term = reinterpret_cast<Real*>(p.record + records);
+  p.own = p.term + 3 * records;
+  p.owner = reinterpret_cast<int*>(p.own + 6 * rows);
+  p.waited = p.owner + records;
+  return p;
+}
+
+// The terms of a block's `entries` CSR records (kernels::entry_spring_force at the step's start: the block's own
+// vertices from shared memory, the other ends from `in`), spread over the block's threads regardless of which vertex
+// each belongs to; `Batch` records per thread read their other ends before any term is computed.
+template <int Batch, typename Real>
+__device__ void block_spring_terms(const kernels::SpringLawParameters<Real>& law, int entries,
+                                   const PersistentShared<Real>& p, int rows, const kernels::StateView<Real>& in) {
+  const kernels::StateView<Real> own = shared_state(static_cast<const Real*>(p.own), rows);
+  Real* const tx = p.term;
+  Real* const ty = tx + entries;
+  Real* const tz = ty + entries;
+  constexpr int stride = kPersistentThreads;
+  for (int first = static_cast<int>(threadIdx.x); first < entries; first += Batch * stride) {
+    kernels::VertexState<Real> other[Batch];
+    FMPC_UNROLL_ALL
+    for (int k = 0; k < Batch; ++k)
+      if (first + k * stride < entries) other[k] = kernels::vertex_state(in, p.record[first + k * stride].neighbour);
+    FMPC_UNROLL_ALL
+    for (int k = 0; k < Batch; ++k) {
+      const int e = first + k * stride;
+      if (e >= entries) break;
+      const kernels::VertexState<Real> self = kernels::vertex_state(own, p.owner[e]);
+      kernels::entry_spring_force(law, p.record[e], other[k], self.x, self.y, self.z, self.vx, self.vy, self.vz, tx[e],
+                                  ty[e], tz[e]);
+    }
+  }
+}
+
+// launch_persistent_euler's kernel (gpu_launch.h): `steps` steps, block b on vertices [b rows, (b + 1) rows). Each
+// step has two phases. First the block's threads compute the terms of all its vertices' springs side by side
+// (block_spring_terms, into shared memory); then thread r adds vertex r's terms in CSR order (kernels::
+// sum_spring_terms' order, so its bits), and its corner forces from the element pass, and updates the vertex in
+// registers with the fused step's functions (loaded_acceleration, euler_update, the probe around the step), storing
+// it for the neighbours and into the block's shared copy. A vertex's sum is one thread's chain of additions, so the
+// lanes of a warp share no vertex: the sums cost a warp's instruction per term for 32 vertices at once, where lanes
+// shuffling the terms of one vertex cost three per term for a few. Plain loads and stores of the state: the barriers
+// (grid, or the neighbours' published steps) order them at device scope, and nothing here reads it through the
+// non-coherent read-only path.
+template <typename Real, GatherKind K>
+__global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real, K>::min_blocks))
+    persistent_euler_kernel(PersistentEulerArguments<Real> a) {
+  cooperative_groups::grid_group grid = cooperative_groups::this_grid();
+  extern __shared__ __align__(16) unsigned char persistent_shared_memory[];
+  constexpr bool springs = K != GatherKind::Elements;
+  const int thread = vertex_index();
+  const int stride = static_cast<int>(gridDim.x) * static_cast<int>(blockDim.x);
+  const int local = static_cast<int>(threadIdx.x);
+  const FusedStepArguments<Real>& step = a.step;
+  const kernels::SpringNetworkView<Real>& net = step.model.springs;
+  const int n = step.vertex_count;
+  const int rows = a.rows;
+  const ProbeArguments<Real>& probe = step.probe;
+  const int* const probe_entry_of = step.probe_entry;
+  const bool probed = probe_entry_of != nullptr;
+  const int block_first = static_cast<int>(blockIdx.x) * rows, block_end = min(n, block_first + rows);
+  const int v = block_first + local;
+  const bool owner = local < rows && v < n;
+  const PersistentShared<Real> p = persistent_shared<Real>(persistent_shared_memory, a.block_records, rows);
+  // The block's records (its vertices' entries are contiguous) and their vertices.
+  int entry_first = 0, entries = 0, begin = 0, end = 0;
+  if constexpr (springs) {
+    entry_first = net.adjacency_offset[block_first];
+    entries = net.adjacency_offset[block_end] - entry_first;
+    for (int e = local; e < entries; e += kPersistentThreads)
+      p.record[e] = kernels::spring_incidence(net, entry_first + e);
+    if (owner) {
+      begin = net.adjacency_offset[v] - entry_first;
+      end = net.adjacency_offset[v + 1] - entry_first;
+      for (int e = begin; e < end; ++e) p.owner[e] = local;
+    }
+  }
+  int waited_count = 0;
+  const BlockNeighbours& neighbours = a.neighbours;
+  if constexpr (K == GatherKind::Springs) {
+    const int first = neighbours.offset[blockIdx.x];
+    waited_count = neighbours.offset[blockIdx.x + 1] - first;
+    for (int i = local; i < waited_count; i += kPersistentThreads) p.waited[i] = neighbours.block[first + i];
+    if (local == 0) neighbours.steps_done[kBlockStepsStride * blockIdx.x] = 0u;
+  }
+  const unsigned char held = owner ? step.loads.fixed[v] : kernels::kAllAxesFixed;
+  const Real h = owner ? step_of(step.step, v) : Real(0);
+  const int probe_entry = owner && probed ? probe_entry_of[v] : -1;
+  int parity = a.first_parity;
+  const PersistentChecks& c = a.checks;
+  reset_chunk_checks(c, n, thread, stride);
+  const MutableStateView<Real> own = shared_state(p.own, rows);
+  kernels::VertexState<Real> self{};
+  // The vertex's load values for the launch (a force probe entry changes its external force: read again after it).
+  kernels::VertexLoadValues<Real> load{};
+  if (owner) {
+    self = kernels::vertex_state(read_only(buffer(a, parity)), v);
+    if (a.checkpoint.x != nullptr) store_vertex_state(a.checkpoint, v, self);
+    if (probe_entry >= 0 && probe_entry_state(probe, probe_entry, 0, true, self))
+      store_vertex_state(buffer(a, parity), v, self);
+    store_vertex_state(own, local, self);
+    load = kernels::vertex_load_values(step.loads, v);
+  }
+  // Publishes the probe's state, the counters' reset, the checks' presets and the block's shared memory.
+  grid.sync();
+  for (int s = 0; s < a.steps; ++s) {
+    const MutableStateView<Real> out = buffer(a, 1 - parity);
+    const kernels::StateView<Real> in = read_only(buffer(a, parity));
+    if constexpr (K != GatherKind::Springs) {
+      for (int e = thread; e < step.model.field.count; e += stride)
+        kernels::tetrahedron_corner_forces(e, step.model.field, in, step.model.corner_force);
+      grid.sync();
+    } else if (s > 0) {
+      wait_for_blocks(neighbours.steps_done, p.waited, waited_count, static_cast<unsigned>(s));
+    }
+    if constexpr (springs) {
+      block_spring_terms<kPersistentTermBatch<Real, K>>(net.law, entries, p, rows, in);
+      __syncthreads();
+    }
+    if (owner) {
+      // fused_vertex_step's arithmetic on the registers' state: vertex_acceleration's, then euler_update.
+      Real ax = Real(0), ay = Real(0), az = Real(0);
+      if (held != kernels::kAllAxesFixed) {
+        Real fx = Real(0), fy = Real(0), fz = Real(0);
+        // Unrolled so that the shared loads run ahead of the chain of additions.
+        FMPC_UNROLL_GATHER
+        for (int e = begin; e < end; ++e) {
+          fx += p.term[e];
+          fy += p.term[entries + e];
+          fz += p.term[2 * entries + e];
+        }
+        if constexpr (K != GatherKind::Springs) {
+          Real cx, cy, cz;
+          kernels::gather_corner_force(v, step.model.corners, cx, cy, cz);
+          if constexpr (springs) {
+            fx += cx;
+            fy += cy;
+            fz += cz;
+          } else {
+            fx = cx;
+            fy = cy;
+            fz = cz;
+          }
+        }
+        kernels::loaded_acceleration(load, held, self, fx, fy, fz, step.loads, ax, ay, az);
+      }
+      euler_update(step.scheme, h, ax, ay, az, self);
+      if (probe_entry >= 0) {
+        probe_around_step(probe, probe_entry, s, s + 1 < a.steps, self);
+        load = kernels::vertex_load_values(step.loads, v);
+      }
+      store_vertex_state(out, v, self);
+      store_vertex_state(own, local, self);
+    }
+    if constexpr (K == GatherKind::Springs) {
+      publish_block_steps(neighbours.steps_done, static_cast<unsigned>(s + 1));
+    } else {
+      grid.sync();
+    }
+    parity = 1 - parity;
+  }
+  if constexpr (K == GatherKind::Springs) grid.sync();  // the checks read every block's vertices
+  run_chunk_checks(c, read_only(buffer(a, parity)), n, thread, stride);
 }
 
 // launch_cluster_euler's kernel (gpu_launch.h): clusters of a.cluster_blocks blocks of a.rows threads, thread r of
@@ -720,6 +875,7 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
   int parity = chunk.first_parity;
   kernels::VertexState<Real> self{};
   if (owner) self = kernels::vertex_state(read_only(buffer(chunk, parity)), v);
+  if (owner && chunk.checkpoint.x != nullptr) store_vertex_state(chunk.checkpoint, v, self);
   if (probe_entry >= 0) probe_entry_state(step.probe, probe_entry, 0, true, self);
   if (owner) store_vertex_state(shared_state(published, rows), local, self);
   cluster.sync();
@@ -1131,18 +1287,35 @@ cudaError_t launch_fused(const FusedStepArguments<Real>& arguments, cudaStream_t
   });
 }
 
+// Raises persistent_euler_kernel's dynamic shared memory limit to `shared_bytes` where it is lower (beyond the default
+// 48 KB), never lowers it: simulations alive side by side share the kernel, so their launches need not set it again.
+template <typename Real, GatherKind K>
+cudaError_t persistent_shared_limit(long long shared_bytes) {
+  const void* kernel = reinterpret_cast<const void*>(persistent_euler_kernel<Real, K>);
+  cudaFuncAttributes attributes{};
+  const cudaError_t status = cudaFuncGetAttributes(&attributes, kernel);
+  if (status != cudaSuccess || attributes.maxDynamicSharedSizeBytes >= shared_bytes) return status;
+  return cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize, static_cast<int>(shared_bytes));
+}
+
 template <typename Real>
-cudaError_t persistent_block_limit(GatherKind kind, int& blocks) {
+cudaError_t persistent_block_limit(GatherKind kind, long long shared_bytes, int& blocks) {
   blocks = 0;
-  int device = 0, cooperative = 0, multiprocessors = 0;
+  int device = 0, cooperative = 0, multiprocessors = 0, shared_limit = 0;
   cudaError_t status = cudaGetDevice(&device);
   if (status == cudaSuccess) status = cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device);
   if (status == cudaSuccess) status = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
-  if (status != cudaSuccess || cooperative == 0) return status;
+  if (status == cudaSuccess)
+    status = cudaDeviceGetAttribute(&shared_limit, cudaDevAttrMaxSharedMemoryPerBlockOptin, device);
+  if (status != cudaSuccess || cooperative == 0 || shared_bytes < 0 || shared_bytes > shared_limit) return status;
   return with_kind(kind, [&](auto k) {
+    constexpr GatherKind K = decltype(k)::value;
     int per_multiprocessor = 0;
-    const cudaError_t occupancy = cudaOccupancyMaxActiveBlocksPerMultiprocessor(
-        &per_multiprocessor, persistent_euler_kernel<Real, decltype(k)::value>, kPersistentThreads, 0);
+    cudaError_t occupancy = persistent_shared_limit<Real, K>(shared_bytes);
+    if (occupancy == cudaSuccess)
+      occupancy = cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_multiprocessor, persistent_euler_kernel<Real, K>,
+                                                                kPersistentThreads,
+                                                                static_cast<std::size_t>(shared_bytes));
     blocks = per_multiprocessor * multiprocessors;
     return occupancy;
   });
@@ -1151,18 +1324,22 @@ cudaError_t persistent_block_limit(GatherKind kind, int& blocks) {
 template <typename Real>
 cudaError_t launch_persistent(const PersistentEulerArguments<Real>& arguments, cudaStream_t stream) {
   if (arguments.step.vertex_count <= 0 || arguments.steps <= 0) return cudaSuccess;
-  if (arguments.blocks <= 0 || !valid_lanes(arguments.lanes) ||
-      static_cast<long long>(arguments.blocks) * kPersistentThreads <
-          static_cast<long long>(arguments.lanes) * arguments.step.vertex_count) {
+  if (arguments.blocks <= 0 || arguments.rows <= 0 || arguments.rows > kPersistentThreads ||
+      static_cast<long long>(arguments.blocks) * arguments.rows < arguments.step.vertex_count ||
+      arguments.block_records < 0 || arguments.most_neighbour_blocks < 0 ||
+      (arguments.step.model.kind == GatherKind::Springs && arguments.neighbours.steps_done == nullptr)) {
     return cudaErrorInvalidValue;
   }
   const unsigned blocks = static_cast<unsigned>(arguments.blocks);
+  const long long shared_bytes =
+      persistent_euler_shared_bytes<Real>(arguments.rows, arguments.block_records, arguments.most_neighbour_blocks);
   return with_kind(arguments.step.model.kind, [&](auto kind) {
+    constexpr GatherKind K = decltype(kind)::value;
     PersistentEulerArguments<Real> copy = arguments;
     void* parameters[] = {&copy};
-    return cudaLaunchCooperativeKernel(
-        reinterpret_cast<const void*>(persistent_euler_kernel<Real, decltype(kind)::value>), dim3(blocks),
-        dim3(kPersistentThreads), parameters, 0, stream);
+    return cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(persistent_euler_kernel<Real, K>), dim3(blocks),
+                                       dim3(kPersistentThreads), parameters, static_cast<std::size_t>(shared_bytes),
+                                       stream);
   });
 }
 
@@ -1522,8 +1699,9 @@ cudaError_t launch_cg_direction(const ImplicitArguments<float>& arguments, cudaS
 cudaError_t launch_cg_direction(const ImplicitArguments<double>& arguments, cudaStream_t stream) {
   return launch_direction(arguments, stream);
 }
-cudaError_t persistent_euler_block_limit(GatherKind kind, bool double_precision, int& blocks) {
-  return double_precision ? persistent_block_limit<double>(kind, blocks) : persistent_block_limit<float>(kind, blocks);
+cudaError_t persistent_euler_block_limit(GatherKind kind, bool double_precision, long long shared_bytes, int& blocks) {
+  return double_precision ? persistent_block_limit<double>(kind, shared_bytes, blocks)
+                          : persistent_block_limit<float>(kind, shared_bytes, blocks);
 }
 cudaError_t cluster_euler_fits(bool double_precision, int blocks, int rows, long long shared_bytes, bool& fits) {
   return double_precision ? cluster_fits<double>(blocks, rows, shared_bytes, fits)

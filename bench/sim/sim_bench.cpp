@@ -210,8 +210,8 @@ gpu::GpuOptions gpu_options_for(Launch launch) {
   return options;
 }
 
-// lanes: GpuOptions::persistent_lanes or gather_lanes (0: automatic); check_every: advance's NaN/Inf check interval (0:
-// at the end of each timed chunk only, to separate the checks' cost from the steps').
+// lanes: GpuOptions::persistent_rows (vertices per block) or gather_lanes (0: automatic); check_every: advance's
+// NaN/Inf check interval (0: at the end of each timed chunk only, to separate the checks' cost from the steps').
 Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, Launch launch,
             const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery, int element_blocks = 0,
             bool sliced_springs = true, int slice_window = 0) {
@@ -232,7 +232,7 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   row.springs = setup.springs.size();
   DiagnosticList diagnostics;
   gpu::GpuOptions gpu_options = gpu_options_for(launch);
-  (launch == Launch::Persistent ? gpu_options.persistent_lanes : gpu_options.gather_lanes) = lanes;
+  (launch == Launch::Persistent ? gpu_options.persistent_rows : gpu_options.gather_lanes) = lanes;
   gpu_options.element_blocks_per_sm = element_blocks;
   gpu_options.sliced_springs = sliced_springs;
   gpu_options.slice_window = slice_window;
@@ -240,7 +240,7 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   row.graphs = launch_name(
       simulation && launch == Launch::Persistent && !simulation->persistent_launch() ? Launch::Graphs : launch);
   if (simulation && simulation->cluster_launch()) row.graphs += " in clusters";
-  if (lanes > 0) row.graphs += " lanes " + std::to_string(lanes);
+  if (lanes > 0) row.graphs += (launch == Launch::Persistent ? " rows " : " lanes ") + std::to_string(lanes);
   if (element_blocks > 0) row.graphs += " element pass " + std::to_string(element_blocks) + " blocks/SM";
   if (!sliced_springs) row.graphs += " springs in CSR order";
   if (slice_window > 0) row.graphs += " slice window " + std::to_string(slice_window);
@@ -500,10 +500,11 @@ int main(int argc, char** argv) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       for (const Launch launch : {Launch::Kernels, Launch::Graphs, Launch::Persistent})
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, launch, options));
-      // The small mesh of issue 13 (300,000 steps/s): threads per vertex, and the checks' share.
+      // The small mesh of issue 13 (300,000 steps/s): vertices per block, and the checks' share.
       if (cells == 20 && precision == Precision::Float) {
-        for (const int lanes : {1, 4, 8, 32})
-          rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Persistent, options, lanes));
+        for (const int block_rows : {12, 48, 96, 256})
+          rows.push_back(
+              gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Persistent, options, block_rows));
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Persistent, options, 0, 0));
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0, 0));
       }

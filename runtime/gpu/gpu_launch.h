@@ -204,15 +204,30 @@ struct PersistentChecks {
 };
 
 // Forward or semi-implicit Euler for `steps` steps in one cooperative launch (issue 13, small meshes): the grid stays
-// resident and a grid-wide barrier separates the steps instead of a kernel boundary, which removes the launch gaps.
-// A small mesh's step is otherwise bound by one thread's chain of dependent loads over its vertex's entries, so
-// `lanes` threads share a vertex: they compute its springs' (and corners') terms side by side and add them in CSR
-// order, then lane 0 runs the fused step's per-vertex function and the probe's per-entry function in the per-step
-// order (probe before the step, element pass, gather and update, probe after): the results are bitwise those of
-// launch_fused_step with launch_apply_probe around it. The probe before step k + 1 is applied right after the probe
-// after step k by the vertex's own thread, before the barrier that publishes the step: one barrier per step for
-// springs, two with elements (the element pass reads the state the gather then reads its corner forces of). No
-// strain table (its lookup needs a third barrier; those runs take the per-step path).
+// resident and barriers separate the steps instead of kernel boundaries, which removes the launch gaps. Block b takes
+// `rows` consecutive vertices and keeps their state in registers and in its shared memory, with their CSR records.
+// Each step its threads first compute the terms of all its springs side by side (a small mesh's step is otherwise
+// bound by one thread's chain of dependent loads over its vertex's entries), then one thread per vertex adds its
+// vertex's terms in CSR order and runs the fused step's per-vertex functions and the probe's per-entry function in
+// the per-step order (probe before the step, element pass, gather and update, probe after): the results are bitwise
+// those of launch_fused_step with launch_apply_probe around it. The probe before step k + 1 is applied right after
+// the probe after step k by the vertex's own thread. With springs alone a block waits before each step only for the
+// blocks whose vertices its springs reach (BlockNeighbours), not for the whole grid; with elements a grid barrier
+// follows the element pass (the gather reads its corner forces) and each update (the next element pass reads every
+// vertex). No strain table (its lookup needs a third barrier; those runs take the per-step path).
+//
+// Why waiting on the neighbours alone is safe: block b at step s reads the state of step s of its own and its
+// neighbours' vertices (state[s % 2]) and writes step s + 1 into state[(s + 1) % 2], which holds step s - 1. The
+// springs make "reads a vertex of" symmetric, so the blocks that read b's step s - 1 are the blocks b waits for, and
+// b starts step s only once each of them has published step s, after its reads of step s - 1.
+struct BlockNeighbours {
+  const int* offset;     // per block + 1: its range of `block`
+  const int* block;      // the other blocks owning a neighbour of one of its vertices, ascending
+  unsigned* steps_done;  // per block: the steps of this launch it has published (reset at the launch's start)
+};
+// Block b's count is steps_done[kBlockStepsStride b], one per 128-byte line: some forty blocks poll each count every
+// step, and counts sharing a line made every poll and publication of a line's blocks queue at one L2 slice.
+constexpr int kBlockStepsStride = 32;
 
 template <typename Real>
 struct PersistentEulerArguments {
@@ -223,14 +238,31 @@ struct PersistentEulerArguments {
   int first_parity;  // the buffer holding the state at the chunk's start
   int steps;
   int blocks;               // grid size: at most persistent_euler_block_limit's
-  int lanes;                // threads per vertex, valid_lanes (blocks * 256 >= lanes * vertices)
+  int rows;                 // vertices per block: block b takes [b rows, (b + 1) rows); 1..kPersistentThreads
   PersistentChecks checks;  // the last piece of a chunk
+  // Where the launch stores the state it starts from, before the probe (the advance's checkpoint: the state of
+  // the last check, which the host would otherwise copy after each check); x null: not stored.
+  MutableStateView<Real> checkpoint;
+  int block_records;           // the most CSR entries of a block (with springs)
+  int most_neighbour_blocks;   // the most blocks a block waits for (springs alone)
+  BlockNeighbours neighbours;  // springs alone
 };
 constexpr int kPersistentThreads = 256;  // per block
-// The most blocks of kPersistentThreads threads a persistent launch may use, every block resident at once
-// (cudaOccupancyMaxActiveBlocksPerMultiprocessor x multiprocessors); 0 where the device cannot launch cooperative
-// kernels. Asked once per simulation; a launch with more blocks fails (cudaErrorCooperativeLaunchTooLarge).
-cudaError_t persistent_euler_block_limit(GatherKind kind, bool double_precision, int& blocks);
+// Dynamic shared memory of a persistent block of `rows` vertices with `records` CSR records that waits for
+// `neighbour_blocks` blocks: the records, their terms (three Reals), the vertices' state (six Reals), each record's
+// vertex and the waited blocks' indices.
+template <typename Real>
+FMPC_HD constexpr long long persistent_euler_shared_bytes(long long rows, long long records,
+                                                          long long neighbour_blocks) {
+  return records * static_cast<long long>(sizeof(kernels::SpringIncidence<Real>) + 3 * sizeof(Real) + sizeof(int)) +
+         6 * rows * static_cast<long long>(sizeof(Real)) + neighbour_blocks * static_cast<long long>(sizeof(int));
+}
+// The most blocks of kPersistentThreads threads with `shared_bytes` of dynamic shared memory each that a persistent
+// launch may use (and raises the kernel's shared memory limit to `shared_bytes`, which its launches then need), every
+// block resident at once (cudaOccupancyMaxActiveBlocksPerMultiprocessor x multiprocessors); 0 where the device cannot
+// launch cooperative kernels or a block cannot have that much shared memory. A launch with more blocks fails
+// (cudaErrorCooperativeLaunchTooLarge).
+cudaError_t persistent_euler_block_limit(GatherKind kind, bool double_precision, long long shared_bytes, int& blocks);
 cudaError_t launch_persistent_euler(const PersistentEulerArguments<float>& arguments, cudaStream_t stream);
 cudaError_t launch_persistent_euler(const PersistentEulerArguments<double>& arguments, cudaStream_t stream);
 
@@ -257,7 +289,7 @@ struct ClusterBlock {
 template <typename Real>
 struct ClusterEulerArguments {
   // step (with the CSR records: model.springs.incidence), state, first_parity, steps and checks as for
-  // launch_persistent_euler; its blocks and lanes are ignored.
+  // launch_persistent_euler; its blocks and rows are ignored.
   PersistentEulerArguments<Real> chunk;
   const ClusterBlock* block;  // per block of the grid; a cluster's blocks take consecutive vertices from its first
   int blocks;                 // the grid: clusters x cluster_blocks

@@ -667,26 +667,82 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     // GpuOptions::persistent_kind: the preferred launch first, the other where it does not fit.
     const bool clusters_first = options_.persistent_kind == GpuOptions::PersistentKind::Clusters;
     if (clusters_first && !choose_cluster_launch(c, diagnostics)) return false;
-    if (cluster_blocks_ == 0 && !choose_grid_launch(diagnostics)) return false;
+    if (cluster_blocks_ == 0 && !choose_grid_launch(c, diagnostics)) return false;
     if (!clusters_first && persistent_blocks_ == 0 && !choose_cluster_launch(c, diagnostics)) return false;
     return !persistent_launch() || allocate_check_results(diagnostics);
   }
 
-  // Whether the persistent chunks run as one cooperative grid (launch_persistent_euler): the most lanes per vertex,
-  // up to 16 (most vertices of the generated meshes have at most 16 springs, so one round of lanes covers them with
-  // their records in registers), whose grid is resident. Sets persistent_blocks_ (0: it does not fit).
-  bool choose_grid_launch(DiagnosticList& diagnostics) {
-    int limit = 0;
-    FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, std::is_same_v<Real, double>, limit), diagnostics, false);
-    const auto blocks_for_lanes = [&](int lanes) {
-      return (static_cast<long long>(n_) * lanes + kPersistentThreads - 1) / kPersistentThreads;
-    };
-    const int first = valid_lanes(options_.persistent_lanes) ? options_.persistent_lanes : 16;
-    for (int lanes = first; lanes >= 1; lanes /= 2) {
-      if (blocks_for_lanes(lanes) > limit) continue;
-      persistent_blocks_ = static_cast<int>(blocks_for_lanes(lanes));
-      persistent_lanes_ = lanes;
-      break;
+  // Whether the persistent chunks run as one cooperative grid (launch_persistent_euler): blocks of `rows` vertices
+  // (GpuOptions::persistent_rows; automatically the fewest that keep every block resident, the 20^3 box on an H100:
+  // 24 rows, 386 blocks), each with its records, terms, state and waited blocks in its shared memory. A setting that
+  // does not fit takes the nearest that does, more rows first. Sets persistent_blocks_ (0: no grid fits) and uploads
+  // the blocks' neighbours.
+  bool choose_grid_launch(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
+    const bool springs = model_.kind != GatherKind::Elements;
+    const bool double_precision = std::is_same_v<Real, double>;
+    int resident = 0;  // with the least shared memory: registers and threads bound it
+    FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, double_precision,
+                                                 persistent_euler_shared_bytes<Real>(1, 0, 0), resident),
+                    diagnostics, false);
+    if (resident <= 0) return true;
+    const auto blocks_of = [&](int rows) { return (static_cast<long long>(n_) + rows - 1) / rows; };
+    const auto fewest_rows =
+        static_cast<int>(std::min<long long>((n_ + resident - 1) / resident, kPersistentThreads + 1));
+    const int wanted = std::max(fewest_rows, options_.persistent_rows > 0 ? options_.persistent_rows : fewest_rows);
+    std::vector<int> candidates;
+    for (int rows = wanted; rows <= kPersistentThreads; ++rows) candidates.push_back(rows);
+    for (int rows = std::min(wanted, kPersistentThreads + 1) - 1; rows >= fewest_rows; --rows)
+      candidates.push_back(rows);
+    std::vector<int> offset, waited, owners;
+    for (const int rows : candidates) {
+      const long long blocks = blocks_of(rows);
+      const auto entry_range = [&](long long b) {
+        return std::pair<int, int>{c.offset[static_cast<std::size_t>(b * rows)],
+                                   c.offset[static_cast<std::size_t>(std::min<long long>(n_, (b + 1) * rows))]};
+      };
+      int records = 0;
+      for (long long b = 0; springs && b < blocks; ++b) {
+        const auto [begin, end] = entry_range(b);
+        records = std::max(records, end - begin);
+      }
+      int limit = 0;
+      FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, double_precision,
+                                                   persistent_euler_shared_bytes<Real>(rows, records, 0), limit),
+                      diagnostics, false);
+      if (blocks > limit) continue;
+      // Springs alone: the other blocks owning a neighbour of each block's vertices.
+      int most_waited = 0;
+      offset.assign(1, 0);
+      waited.clear();
+      for (long long b = 0; model_.kind == GatherKind::Springs && b < blocks; ++b) {
+        const auto [begin, end] = entry_range(b);
+        owners.clear();
+        for (int e = begin; e < end; ++e) {
+          const int owner = c.neighbour[static_cast<std::size_t>(e)] / rows;
+          if (owner != b) owners.push_back(owner);
+        }
+        std::sort(owners.begin(), owners.end());
+        owners.erase(std::unique(owners.begin(), owners.end()), owners.end());
+        waited.insert(waited.end(), owners.begin(), owners.end());
+        offset.push_back(static_cast<int>(waited.size()));
+        most_waited = std::max(most_waited, static_cast<int>(owners.size()));
+      }
+      FMPC_CUDA_CHECK(
+          persistent_euler_block_limit(model_.kind, double_precision,
+                                       persistent_euler_shared_bytes<Real>(rows, records, most_waited), limit),
+          diagnostics, false);
+      if (blocks > limit) continue;
+      if (model_.kind == GatherKind::Springs) {
+        FMPC_CUDA_CHECK(neighbour_block_offset_.upload(offset), diagnostics, false);
+        FMPC_CUDA_CHECK(neighbour_block_.upload(waited), diagnostics, false);
+        FMPC_CUDA_CHECK(block_steps_done_.allocate(static_cast<std::size_t>(blocks) * kBlockStepsStride), diagnostics,
+                        false);
+      }
+      persistent_blocks_ = static_cast<int>(blocks);
+      persistent_rows_ = rows;
+      persistent_block_records_ = records;
+      persistent_most_waited_ = most_waited;
+      return true;
     }
     return true;
   }
@@ -1317,7 +1373,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         a.step.probe_entry = probe_entry_.data();
       }
       a.blocks = persistent_blocks_;
-      a.lanes = persistent_lanes_;
+      a.rows = persistent_rows_;
+      if (checkpoint_in_state_) a.checkpoint = checkpoint_.mutable_view();
+      checkpoint_in_state_ = false;
+      a.block_records = persistent_block_records_;
+      a.most_neighbour_blocks = persistent_most_waited_;
+      a.neighbours = {neighbour_block_offset_.data(), neighbour_block_.data(), block_steps_done_.data()};
       const bool last = done + piece == count;
       if (last) a.checks = persistent_checks();
       if (cluster_blocks_ > 0) {
@@ -1382,6 +1443,15 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   bool save_checkpoint(DiagnosticList& diagnostics) {
+    checkpoint_step_ = steps_taken_;
+    checkpoint_has_acceleration_ = have_acceleration_;
+    // Persistent runs change the state only in their launches, which store the state they start from into the
+    // checkpoint (PersistentEulerArguments::checkpoint): until the next one, the state held is the checkpoint. Six
+    // copies per check were a fifth of the 20^3 box's time between checks (H100).
+    if (persistent_launch()) {
+      checkpoint_in_state_ = true;
+      return true;
+    }
     const std::vector<const DeviceArray<Real>*> from = std::as_const(state_[current_]).arrays();
     const std::vector<DeviceArray<Real>*> to = checkpoint_.arrays();
     for (std::size_t i = 0; i < from.size(); ++i)
@@ -1391,13 +1461,16 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.y, acceleration_.y, stream_), diagnostics, false);
       FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.z, acceleration_.z, stream_), diagnostics, false);
     }
-    checkpoint_step_ = steps_taken_;
-    checkpoint_has_acceleration_ = have_acceleration_;
     return true;
   }
 
   bool restore_checkpoint(DiagnosticList& diagnostics) {
     checks_pending_ = false;
+    if (checkpoint_in_state_) {
+      steps_taken_ = checkpoint_step_;
+      have_acceleration_ = checkpoint_has_acceleration_;
+      return true;
+    }
     const std::vector<const DeviceArray<Real>*> from = std::as_const(checkpoint_).arrays();
     const std::vector<DeviceArray<Real>*> to = state_[current_].arrays();
     for (std::size_t i = 0; i < from.size(); ++i)
@@ -1568,7 +1641,11 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceArray<int> probe_vertices_, probe_entry_scene_, probe_entry_;
   bool probe_vertices_unique_ = true;
   int persistent_blocks_ = 0;  // > 0: run_steps uses launch_persistent_euler with this many blocks
-  int persistent_lanes_ = 1;
+  int persistent_rows_ = 0;
+  int persistent_block_records_ = 0;  // the most CSR entries of a persistent block
+  int persistent_most_waited_ = 0;    // the most blocks a persistent block waits for (springs alone)
+  DeviceArray<int> neighbour_block_offset_, neighbour_block_;  // BlockNeighbours
+  DeviceArray<unsigned> block_steps_done_;
   // > 0: the persistent chunks run in clusters (choose_cluster_launch), this many blocks in all.
   int cluster_blocks_ = 0;
   int cluster_size_ = 0;  // blocks per cluster
@@ -1619,6 +1696,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   int current_ = 0;
   std::size_t steps_taken_ = 0;
   std::size_t checkpoint_step_ = 0;
+  bool checkpoint_in_state_ = false;  // the checkpoint is the state held (persistent runs: save_checkpoint)
   bool have_acceleration_ = false;
   bool checkpoint_has_acceleration_ = false;
   bool failed_ = false;

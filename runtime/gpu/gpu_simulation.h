@@ -29,18 +29,20 @@ struct GpuOptions {
   // (launch_persistent_euler) instead of a few kernels per step. The results are bitwise the same either way;
   // use_graphs then has no effect.
   bool persistent = true;
-  // Which persistent launch: the cooperative grid (launch_persistent_euler: every vertex's lanes resident at once,
-  // a grid barrier per step) or thread-block clusters (launch_cluster_euler: springs alone, Hopper or newer, each
-  // scene within one cluster of at most 16 x 1,024 vertices whose state and records fit its shared memory; clusters
-  // run independently, in waves where there are more than the GPU holds). Automatic takes the grid where the batch
-  // fits it and clusters where it does not: on an H100 the 20^3 box ran 124,409 steps/s on the grid and 94,019 in
-  // one cluster, while 1,000 demo patients, too many for one grid, ran at 6.09e10 spring-steps/s in clusters against
-  // 4.23e10 with a launch per step. Grid and Clusters take that one first. Bitwise the same results in every case.
+  // Which persistent launch: the cooperative grid (launch_persistent_euler: every block resident at once, each
+  // waiting between steps for the blocks its springs reach) or thread-block clusters (launch_cluster_euler: springs
+  // alone, Hopper or newer, each scene within one cluster of at most 16 x 1,024 vertices whose state and records fit
+  // its shared memory; clusters run independently, in waves where there are more than the GPU holds). Automatic
+  // takes the grid where the batch fits it and clusters where it does not: on an H100 the 20^3 box ran 208,663
+  // steps/s on the grid and 94,019 in one cluster, while 1,000 demo patients, too many for one grid, ran at 6.09e10
+  // spring-steps/s in clusters against 4.23e10 with a launch per step. Grid and Clusters take that one first.
+  // Bitwise the same results in every case.
   enum class PersistentKind { Automatic, Grid, Clusters };
   PersistentKind persistent_kind = PersistentKind::Automatic;
-  // Threads per vertex in the persistent launch (1, 2, 4, 8, 16 or 32; 0: the most of 16, 8, 4, 2, 1 whose grid is
-  // resident). A setting whose grid does not fit falls back to fewer.
-  int persistent_lanes = 0;
+  // Vertices per block of the cooperative persistent launch (1 to 256; 0: automatic, the fewest whose grid is
+  // resident). A setting whose grid does not fit takes the nearest that does, more rows first. Bitwise the same
+  // results for any value.
+  int persistent_rows = 0;
   // Threads per vertex in the per-step fused kernel of forward and semi-implicit Euler (1, 2, 4, 8, 16 or 32;
   // 0: automatic, by the mesh's size and model): more loads of a vertex's entries in flight. Bitwise the same
   // results for any value.

@@ -387,14 +387,14 @@ bool clusters_available() {
          cudaDeviceGetAttribute(&major, cudaDevAttrComputeCapabilityMajor, device) == cudaSuccess && major >= 9;
 }
 
-// The persistent launch (GpuOptions::persistent: one cluster or a cooperative grid) against the per-step kernels
-// with graphs, for forward and
-// semi-implicit Euler: displacement and force probes (probe vertices applied by their own threads), a 20^3-cell box
-// (9,261 vertices: 37 blocks, the last partly idle), a batch of odd sizes with per-scene steps and a batch of the
-// box and small scenes (in clusters: clusters of several blocks with windows), in uneven chunks (1, 3 checked
-// every 2, 65 every 64, 931 at the end: pieces of 256 steps). Bitwise, probe force included.
+// The persistent launch (GpuOptions::persistent: clusters or a cooperative grid) against the per-step kernels with
+// graphs, for forward and semi-implicit Euler: displacement and force probes (probe vertices applied by their own
+// threads), a 20^3-cell box (9,261 vertices; grids of 1 and 7 rows per block do not fit it and take more, the last
+// block partly idle), a batch of odd sizes with per-scene steps and a batch of the box and small scenes (in
+// clusters: clusters of several blocks with windows), in uneven chunks (1, 3 checked every 2, 65 every 64, 931 at the
+// end: pieces of 256 steps). Bitwise, probe force included.
 FMPC_GPU_TEST(persistent_equals_per_step,
-              "persistent launches give the per-step kernels' bits: probes, batches, sizes, lanes", true) {
+              "persistent launches give the per-step kernels' bits: probes, batches, sizes, block shapes", true) {
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     for (const Integrator integrator : {Integrator::ForwardEuler, Integrator::SemiImplicitEuler}) {
       std::vector<std::vector<SimulationSetup>> cases;
@@ -418,23 +418,30 @@ FMPC_GPU_TEST(persistent_equals_per_step,
         const auto reference = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
         FMPC_REQUIRE(reference && reference->advance(1000, diagnostics));
         FMPC_EXPECT(!reference->persistent_launch());
-        // Threads per vertex, persistent (0: automatic, 16 where it fits; 100: in clusters) and per step (negative:
-        // -lanes): one, two (several rounds over a vertex's entries), eight, a whole warp.
-        for (const int lanes : {100, 0, 1, 2, 32, -2, -8, -32}) {
+        // Persistent in clusters (-1) or on the cooperative grid with `rows` vertices per block (0: automatic; 1: a
+        // block per vertex; 7: blocks that split the rows of the boxes; 256: the most), and per step with `lanes`
+        // threads per vertex: one, two (several rounds over a vertex's entries), eight, a whole warp.
+        struct Launch {
+          int rows, lanes;
+        };
+        for (const Launch launch : {Launch{-1, 0}, Launch{0, 0}, Launch{1, 0}, Launch{7, 0}, Launch{256, 0},
+                                    Launch{0, 2}, Launch{0, 8}, Launch{0, 32}}) {
+          const bool persistent = launch.lanes == 0;
+          const bool clusters = launch.rows < 0;
           gpu::GpuOptions options;
-          options.persistent = lanes >= 0;
+          options.persistent = persistent;
           options.persistent_kind =
-              lanes == 100 ? gpu::GpuOptions::PersistentKind::Clusters : gpu::GpuOptions::PersistentKind::Grid;
-          options.persistent_lanes = lanes == 100 ? 0 : std::max(lanes, 0);
-          options.gather_lanes = lanes < 0 ? -lanes : 0;
+              clusters ? gpu::GpuOptions::PersistentKind::Clusters : gpu::GpuOptions::PersistentKind::Grid;
+          options.persistent_rows = std::max(launch.rows, 0);
+          options.gather_lanes = launch.lanes;
           const auto run = gpu::GpuBatchSimulation::create(scenes, options, diagnostics);
           FMPC_REQUIRE(run);
-          FMPC_EXPECT(run->persistent_launch() == (lanes >= 0));
+          FMPC_EXPECT(run->persistent_launch() == persistent);
           // Every float case fits one cluster of a Hopper GPU (the 20^3 box's double records, 238 KB per block, do
           // not: it stays on the cooperative grid).
-          if (lanes == 100 && clusters_available() && precision == Precision::Float) FMPC_EXPECT(run->cluster_launch());
-          if (lanes >= 0 && lanes != 100) FMPC_EXPECT(!run->cluster_launch());
-          if (lanes == 100)
+          if (clusters && clusters_available() && precision == Precision::Float) FMPC_EXPECT(run->cluster_launch());
+          if (persistent && !clusters) FMPC_EXPECT(!run->cluster_launch());
+          if (clusters)
             note(std::string(name_of(precision)) + ", case " + std::to_string(c) + ": " +
                  (run->cluster_launch() ? "clusters" : "cooperative grid"));
           FMPC_REQUIRE(run->advance(1, diagnostics) && run->advance(3, diagnostics, 2) &&
@@ -447,8 +454,8 @@ FMPC_GPU_TEST(persistent_equals_per_step,
                                     std::memcmp(&a.displacement, &b.displacement, sizeof a.displacement) == 0;
             if (!same || !same_probe)
               note(std::string(name_of(precision)) + ", " + to_string(integrator) + ", case " + std::to_string(c) +
-                   ", scene " + std::to_string(s) + ", lanes " + std::to_string(lanes) +
-                   ": differs from the per-step path");
+                   ", scene " + std::to_string(s) + ", rows " + std::to_string(launch.rows) + ", lanes " +
+                   std::to_string(launch.lanes) + ": differs from the per-step path");
             FMPC_EXPECT(same && same_probe);
           }
         }
