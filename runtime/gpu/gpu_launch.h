@@ -96,6 +96,15 @@ struct ProbeScene {
   bool force_mode;
   bool has_base_force;  // force probes: whether base_force_* hold the vertices' own external force
 };
+// ProbeArguments' entry i as the probe kernels read it (kernels/simulation_step.cu, read_probe_entry), with the chunk's
+// first step; the persistent kernel keeps its probe vertices' entries in shared memory for a launch.
+struct ProbeEntry {
+  ProbeScene scene;
+  double start_x, start_y, start_z;
+  double base_force_x, base_force_y, base_force_z;  // force probes with a base force; else 0
+  unsigned long long step_base;
+  int vertex;
+};
 template <typename Real>
 struct ProbeArguments {
   const int* vertices;     // every probing scene's probe vertices, concatenated (batch vertex indices)
@@ -249,13 +258,14 @@ struct PersistentEulerArguments {
 };
 constexpr int kPersistentThreads = 256;  // per block
 // Dynamic shared memory of a persistent block of `rows` vertices with `records` CSR records that waits for
-// `neighbour_blocks` blocks: the records, their terms (three Reals), the vertices' state (six Reals), each record's
-// vertex and the waited blocks' indices.
+// `neighbour_blocks` blocks: the records, their terms (three Reals), the vertices' probe entries and state (six
+// Reals), each record's vertex and the waited blocks' indices.
 template <typename Real>
 FMPC_HD constexpr long long persistent_euler_shared_bytes(long long rows, long long records,
                                                           long long neighbour_blocks) {
   return records * static_cast<long long>(sizeof(kernels::SpringIncidence<Real>) + 3 * sizeof(Real) + sizeof(int)) +
-         6 * rows * static_cast<long long>(sizeof(Real)) + neighbour_blocks * static_cast<long long>(sizeof(int));
+         rows * static_cast<long long>(sizeof(ProbeEntry) + 6 * sizeof(Real)) +
+         neighbour_blocks * static_cast<long long>(sizeof(int));
 }
 // The most blocks of kPersistentThreads threads with `shared_bytes` of dynamic shared memory each that a persistent
 // launch may use (and raises the kernel's shared memory limit to `shared_bytes`, which its launches then need), every
