@@ -806,7 +806,7 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
   reset_chunk_checks(c, n, thread, stride);
   const MutableStateView<Real> own = shared_state(p.own, rows);
   kernels::VertexState<Real> self{};
-  // The vertex's load values for the launch (a force probe entry changes its external force: read again after it).
+  // The vertex's load values for the launch (a force probe entry's force replaces its external force at each step).
   kernels::VertexLoadValues<Real> load{};
   if (owner) {
     self = kernels::vertex_state(read_only(buffer(a, parity)), v);

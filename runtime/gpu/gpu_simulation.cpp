@@ -674,7 +674,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   // Whether the persistent chunks run as one cooperative grid (launch_persistent_euler): blocks of `rows` vertices
   // (GpuOptions::persistent_rows; automatically the fewest that keep every block resident, the 20^3 box on an H100:
-  // 24 rows, 386 blocks), each with its records, terms, state and waited blocks in its shared memory. A setting that
+  // 36 rows, 258 blocks), each with its records, terms, state and waited blocks in its shared memory. A setting that
   // does not fit takes the nearest that does, more rows first. Sets persistent_blocks_ (0: no grid fits) and uploads
   // the blocks' neighbours.
   bool choose_grid_launch(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
