@@ -133,9 +133,11 @@ FMPC_HD void verlet_velocity_update(Real& v, Real a0, Real a1, Real h) {
 }
 
 // A probe's share of its target at time t (s): linear from 0 at t = 0 to 1 at the ramp time, then held
-// (ramp_time 0: at once). Evaluated in double by both backends so that the prescribed path is the same bits.
+// (ramp_time 0: at once). Evaluated in double by both backends so that the prescribed path is the same bits. Once
+// t reaches the ramp time, t / ramp_time rounds to 1 or more, so the division is skipped: on the GPU it is a
+// double-precision sequence on the path of the probe vertex's thread, which its neighbours' blocks wait for.
 FMPC_HD double probe_ramp_share(double t, double ramp_time) {
-  if (!(ramp_time > 0.0)) return 1.0;
+  if (!(ramp_time > 0.0) || !(t < ramp_time)) return 1.0;
   const double share = t / ramp_time;
   return share < 1.0 ? share : 1.0;
 }
