@@ -146,9 +146,10 @@ __device__ void fused_vertex_step(const FusedStepArguments<Real>& a, const Force
   store_vertex_state(out, v, x);
 }
 
-// ProbeArguments' entry i as probe_entry_state reads it, with the chunk's first step.
+// ProbeArguments' entry i as probe_entry_state reads it, for a chunk starting at step `step_base` (the per-step
+// kernels read it from ProbeArguments::step_base, the persistent kernels have it by value).
 template <typename Real>
-__device__ ProbeEntry read_probe_entry(const ProbeArguments<Real>& a, int i) {
+__device__ ProbeEntry read_probe_entry(const ProbeArguments<Real>& a, int i, unsigned long long step_base) {
   ProbeEntry e;
   e.scene = a.scenes[a.entry_scene[i]];
   e.start_x = a.start_x[i];
@@ -158,7 +159,7 @@ __device__ ProbeEntry read_probe_entry(const ProbeArguments<Real>& a, int i) {
   e.base_force_x = based ? a.base_force_x[i] : 0.0;
   e.base_force_y = based ? a.base_force_y[i] : 0.0;
   e.base_force_z = based ? a.base_force_z[i] : 0.0;
-  e.step_base = *a.step_base;
+  e.step_base = step_base;
   e.vertex = a.vertices[i];
   return e;
 }
@@ -202,24 +203,27 @@ __device__ void store_probe_force(const MutableVector3View<Real>& to, int v, con
   to.z[v] = force.z;
 }
 
-// Probe entry i of `a` before or after the step at `offset`: a force entry sets its vertex's external force in
-// a.force; a displacement entry prescribes `state` and returns true.
-template <typename Real>
-__device__ bool probe_entry_state(const ProbeArguments<Real>& a, int i, int offset, bool before_step,
-                                  kernels::VertexState<Real>& state) {
-  const ProbeEntry e = read_probe_entry(a, i);
+// Entry i of `a` (a chunk from step `step_base`) given to apply(entry, force), which returns whether it prescribed
+// a state; a force it sets goes into a.force. The probe kernel's, the per-step fused kernels' and the cluster
+// kernel's way to an entry.
+template <typename Real, typename Apply>
+__device__ bool apply_to_probe_entry(const ProbeArguments<Real>& a, int i, unsigned long long step_base, Apply apply) {
+  const ProbeEntry e = read_probe_entry(a, i, step_base);
   ProbeForce<Real> force;
-  const bool prescribed = probe_entry_state(e, offset, before_step, state, force);
+  const bool prescribed = apply(e, force);
   store_probe_force(a.force, e.vertex, force);
   return prescribed;
 }
 
-// probe_entry_state on `state`: the probe kernel's body.
+// probe_entry_state of entry i on `state`: the probe kernel's body.
 template <typename Real>
 __device__ void apply_probe_entry(const ProbeArguments<Real>& a, int i, int offset, bool before_step,
                                   const MutableStateView<Real>& state) {
   kernels::VertexState<Real> x{};
-  if (probe_entry_state(a, i, offset, before_step, x)) store_vertex_state(state, a.vertices[i], x);
+  const bool prescribed = apply_to_probe_entry(a, i, *a.step_base, [&](const ProbeEntry& e, ProbeForce<Real>& force) {
+    return probe_entry_state(e, offset, before_step, x, force);
+  });
+  if (prescribed) store_vertex_state(state, a.vertices[i], x);
 }
 
 // Probe entry e after the step at `offset` and, where `next`, before the following one, on the state of its vertex
@@ -234,16 +238,15 @@ __device__ bool probe_around_step(const ProbeEntry& e, int offset, bool next, ke
   return prescribed;
 }
 
-// probe_around_step for entry `entry` of `probe` (-1: none), its force stored in probe.force.
+// probe_around_step for entry `entry` of `probe` (-1: none) in a chunk from step `step_base`, its force stored in
+// probe.force.
 template <typename Real>
-__device__ bool probe_around_step(const ProbeArguments<Real>& probe, int entry, int offset, bool next,
-                                  kernels::VertexState<Real>& x) {
+__device__ bool probe_around_step(const ProbeArguments<Real>& probe, int entry, unsigned long long step_base,
+                                  int offset, bool next, kernels::VertexState<Real>& x) {
   if (entry < 0) return false;
-  const ProbeEntry e = read_probe_entry(probe, entry);
-  ProbeForce<Real> force;
-  const bool prescribed = probe_around_step(e, offset, next, x, force);
-  store_probe_force(probe.force, e.vertex, force);
-  return prescribed;
+  return apply_to_probe_entry(probe, entry, step_base, [&](const ProbeEntry& e, ProbeForce<Real>& force) {
+    return probe_around_step(e, offset, next, x, force);
+  });
 }
 
 // probe_around_step on the state `out` (a displacement entry prescribes every value of its vertex's state, so
@@ -251,8 +254,10 @@ __device__ bool probe_around_step(const ProbeArguments<Real>& probe, int entry, 
 template <typename Real>
 __device__ void apply_probe_after_step(const ProbeArguments<Real>& probe, int entry, int offset, bool next,
                                        const MutableStateView<Real>& out) {
+  if (entry < 0) return;
   kernels::VertexState<Real> x{};
-  if (probe_around_step(probe, entry, offset, next, x)) store_vertex_state(out, probe.vertices[entry], x);
+  if (probe_around_step(probe, entry, *probe.step_base, offset, next, x))
+    store_vertex_state(out, probe.vertices[entry], x);
 }
 
 // Vertex v's probe entry around this step (FusedStepArguments::probe_entry).
@@ -629,13 +634,25 @@ __global__ void fused_step_lanes_kernel(FusedStepArguments<Real> a) {
 
 // The end-of-chunk checks' presets (PersistentChecks), written by a persistent kernel's threads before its first
 // barrier, which publishes them.
-__device__ void reset_chunk_checks(const PersistentChecks& c, int n, int thread, int stride) {
+__device__ void reset_chunk_checks(const PersistentChecks& c, int checks, int n, int thread, int stride) {
   if (c.first_non_finite == nullptr) return;
-  if (thread == 0) *c.first_non_finite = n;
-  for (int scene = thread; scene < c.scene_count; scene += stride) {
-    c.inverted_count[scene] = 0u;
-    c.inverted_first[scene] = c.element_count;
+  for (int j = thread; j < checks; j += stride) c.first_non_finite[j * c.slot_stride] = n;
+  for (int i = thread; i < checks * c.scene_count; i += stride) {
+    const int j = i / c.scene_count, scene = i - j * c.scene_count;
+    c.inverted_count[j * c.slot_stride + scene] = 0u;
+    c.inverted_first[j * c.slot_stride + scene] = c.element_count;
   }
+}
+
+// Check j's results (PersistentChecks::slot_stride).
+__device__ PersistentChecks check_slot(PersistentChecks c, int j) {
+  const int offset = j * c.slot_stride;
+  c.first_non_finite += offset;
+  if (c.inverted_count != nullptr) {
+    c.inverted_count += offset;
+    c.inverted_first += offset;
+  }
+  return c;
 }
 
 // The end-of-chunk checks on the final state `end`, after a barrier that published it.
@@ -647,6 +664,14 @@ __device__ void run_chunk_checks(const PersistentChecks& c, const kernels::State
     if (non_finite_vertex(end, v)) atomicMin(c.first_non_finite, v);
   for (int e = thread; e < c.element_count; e += stride)
     count_if_inverted(c.corners, e, c.element_scene, end, c.inverted_count, c.inverted_first);
+}
+
+// Checkpoint slot k of a persistent launch (PersistentEulerArguments::checkpoints).
+template <typename Real>
+__device__ MutableStateView<Real> checkpoint_slot(const PersistentEulerArguments<Real>& a, int k) {
+  const long long offset = k * a.checkpoint_stride;
+  const MutableStateView<Real>& c = a.checkpoints;
+  return {c.x + offset, c.y + offset, c.z + offset, c.vx + offset, c.vy + offset, c.vz + offset};
 }
 
 // Six arrays of `stride` in shared memory (a persistent or cluster_euler_kernel block's state, a cluster block's
@@ -756,7 +781,10 @@ __device__ void block_spring_terms(const kernels::SpringLawParameters<Real>& law
 // lanes of a warp share no vertex: the sums cost a warp's instruction per term for 32 vertices at once, where lanes
 // shuffling the terms of one vertex cost three per term for a few. Plain loads and stores of the state: the barriers
 // (grid, or the neighbours' published steps) order them at device scope, and nothing here reads it through the
-// non-coherent read-only path.
+// non-coherent read-only path. At a check before the launch's last (check_count) each thread stores its vertex into
+// the check's checkpoint slot and flags it there if non-finite; with elements, a grid barrier, then the grid counts
+// the inverted ones in that slot. A launch thus takes many checks (a whole advance of a small mesh) instead of the
+// launch, the end-of-chunk barrier and the download per check that cost the 20^3 box about 17 us each (H100).
 template <typename Real, GatherKind K>
 __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real, K>::min_blocks))
     persistent_euler_kernel(PersistentEulerArguments<Real> a) {
@@ -803,19 +831,21 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
   const int probe_entry = owner && probed ? probe_entry_of[v] : -1;
   int parity = a.first_parity;
   const PersistentChecks& c = a.checks;
-  reset_chunk_checks(c, n, thread, stride);
+  reset_chunk_checks(c, a.check_count, n, thread, stride);
+  int check = 0;                  // the next check's index
+  int check_after = a.first_check;  // the steps after which it comes (before the last)
   const MutableStateView<Real> own = shared_state(p.own, rows);
   kernels::VertexState<Real> self{};
   // The vertex's load values for the launch (a force probe entry's force replaces its external force at each step).
   kernels::VertexLoadValues<Real> load{};
   if (owner) {
     self = kernels::vertex_state(read_only(buffer(a, parity)), v);
-    if (a.checkpoint.x != nullptr) store_vertex_state(a.checkpoint, v, self);
+    if (a.store_start) store_vertex_state(checkpoint_slot(a, 0), v, self);
     if (probe_entry >= 0) {
       // Read once for the launch: after every step's barrier each of these loads would go to L2, and the probe
       // vertices' blocks hold their neighbours back. The 20^3 box ran 206,103-209,177 steps/s with the entry read per
       // step, 252,854-264,211 read once, 295,895-299,349 without its probe (H100).
-      p.probe[local] = read_probe_entry(probe, probe_entry);
+      p.probe[local] = read_probe_entry(probe, probe_entry, a.step_base);
       ProbeForce<Real> force;
       if (probe_entry_state(p.probe[local], 0, true, self, force)) store_vertex_state(buffer(a, parity), v, self);
       store_probe_force(probe.force, v, force);
@@ -828,6 +858,7 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
   for (int s = 0; s < a.steps; ++s) {
     const MutableStateView<Real> out = buffer(a, 1 - parity);
     const kernels::StateView<Real> in = read_only(buffer(a, parity));
+    const bool checked = check + 1 < a.check_count && s + 1 == check_after;
     if constexpr (K != GatherKind::Springs) {
       for (int e = thread; e < step.model.field.count; e += stride)
         kernels::tetrahedron_corner_forces(e, step.model.field, in, step.model.corner_force);
@@ -867,9 +898,16 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
         kernels::loaded_acceleration(load, held, self, fx, fy, fz, step.loads, ax, ay, az);
       }
       euler_update(step.scheme, h, ax, ay, az, self);
+      // probe_around_step's two prescriptions, the check's state between them.
+      ProbeForce<Real> force;
+      if (probe_entry >= 0) probe_entry_state(p.probe[local], s, false, self, force);
+      if (checked) {
+        const MutableStateView<Real> checkpoint = checkpoint_slot(a, check + 1);
+        store_vertex_state(checkpoint, v, self);
+        if (non_finite_vertex(read_only(checkpoint), v)) atomicMin(check_slot(c, check).first_non_finite, v);
+      }
       if (probe_entry >= 0) {
-        ProbeForce<Real> force;
-        probe_around_step(p.probe[local], s, s + 1 < a.steps, self, force);
+        if (s + 1 < a.steps) probe_entry_state(p.probe[local], s + 1, true, self, force);
         store_probe_force(probe.force, v, force);
         if (force.set) {
           load.force_x = force.x;
@@ -885,10 +923,21 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
     } else {
       grid.sync();
     }
+    if (checked) {
+      if (c.element_count > 0) {
+        if constexpr (K == GatherKind::Springs) grid.sync();  // the elements' corners are other blocks' vertices
+        const PersistentChecks at = check_slot(c, check);
+        const kernels::StateView<Real> checkpoint = read_only(checkpoint_slot(a, check + 1));
+        for (int e = thread; e < c.element_count; e += stride)
+          count_if_inverted(c.corners, e, c.element_scene, checkpoint, at.inverted_count, at.inverted_first);
+      }
+      ++check;
+      check_after += a.check_every;
+    }
     parity = 1 - parity;
   }
   if constexpr (K == GatherKind::Springs) grid.sync();  // the checks read every block's vertices
-  run_chunk_checks(c, read_only(buffer(a, parity)), n, thread, stride);
+  run_chunk_checks(check_slot(c, a.check_count - 1), read_only(buffer(a, parity)), n, thread, stride);
 }
 
 // launch_cluster_euler's kernel (gpu_launch.h): clusters of a.cluster_blocks blocks of a.rows threads, thread r of
@@ -943,8 +992,12 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
   int parity = chunk.first_parity;
   kernels::VertexState<Real> self{};
   if (owner) self = kernels::vertex_state(read_only(buffer(chunk, parity)), v);
-  if (owner && chunk.checkpoint.x != nullptr) store_vertex_state(chunk.checkpoint, v, self);
-  if (probe_entry >= 0) probe_entry_state(step.probe, probe_entry, 0, true, self);
+  if (owner && chunk.store_start) store_vertex_state(checkpoint_slot(chunk, 0), v, self);
+  if (probe_entry >= 0) {
+    apply_to_probe_entry(step.probe, probe_entry, chunk.step_base, [&](const ProbeEntry& e, ProbeForce<Real>& force) {
+      return probe_entry_state(e, 0, true, self, force);
+    });
+  }
   if (owner) store_vertex_state(shared_state(published, rows), local, self);
   cluster.sync();
   int current = 0;
@@ -973,7 +1026,7 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
         kernels::loaded_acceleration(v, held, self, fx, fy, fz, step.loads, ax, ay, az);
       }
       euler_update(step.scheme, h, ax, ay, az, self);
-      probe_around_step(step.probe, probe_entry, s, s + 1 < chunk.steps, self);
+      probe_around_step(step.probe, probe_entry, chunk.step_base, s, s + 1 < chunk.steps, self);
       store_vertex_state(shared_state(published + (1 - current) * 6 * rows, rows), local, self);
     }
     cluster.sync();
@@ -999,8 +1052,8 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
 }
 
 // PersistentChecks' presets (reset_chunk_checks), for the kernels whose blocks do not all run at once.
-__global__ void reset_checks_kernel(PersistentChecks c, int vertex_count) {
-  reset_chunk_checks(c, vertex_count, static_cast<int>(threadIdx.x), static_cast<int>(blockDim.x));
+__global__ void reset_checks_kernel(PersistentChecks c, int checks, int vertex_count) {
+  reset_chunk_checks(c, checks, vertex_count, static_cast<int>(threadIdx.x), static_cast<int>(blockDim.x));
 }
 
 template <typename Real>
@@ -1389,13 +1442,27 @@ cudaError_t persistent_block_limit(GatherKind kind, long long shared_bytes, int&
   });
 }
 
+// A launch's checks (PersistentEulerArguments::check_count): at least one, the last at the end and the others
+// before it; more than one only with their results and checkpoint slots.
+template <typename Real>
+bool valid_checks(const PersistentEulerArguments<Real>& a) {
+  if (a.check_count < 1) return false;
+  if (a.check_count == 1) return true;
+  const long long last_inner = a.first_check + static_cast<long long>(a.check_count - 2) * a.check_every;
+  return a.first_check >= 1 && (a.check_count == 2 || a.check_every >= 1) && last_inner < a.steps &&
+         a.checks.first_non_finite != nullptr &&
+         a.checks.slot_stride >= 1 && a.checkpoints.x != nullptr &&
+         a.checkpoint_stride >= static_cast<long long>(a.step.vertex_count);
+}
+
 template <typename Real>
 cudaError_t launch_persistent(const PersistentEulerArguments<Real>& arguments, cudaStream_t stream) {
   if (arguments.step.vertex_count <= 0 || arguments.steps <= 0) return cudaSuccess;
   if (arguments.blocks <= 0 || arguments.rows <= 0 || arguments.rows > kPersistentThreads ||
       static_cast<long long>(arguments.blocks) * arguments.rows < arguments.step.vertex_count ||
       arguments.block_records < 0 || arguments.most_neighbour_blocks < 0 ||
-      (arguments.step.model.kind == GatherKind::Springs && arguments.neighbours.steps_done == nullptr)) {
+      (arguments.step.model.kind == GatherKind::Springs && arguments.neighbours.steps_done == nullptr) ||
+      !valid_checks(arguments)) {
     return cudaErrorInvalidValue;
   }
   const unsigned blocks = static_cast<unsigned>(arguments.blocks);
@@ -1477,11 +1544,11 @@ cudaError_t launch_cluster(const ClusterEulerArguments<Real>& arguments, cudaStr
       arguments.cluster_blocks < 1 || arguments.cluster_blocks > kClusterBlocks ||
       arguments.blocks % arguments.cluster_blocks != 0 || chunk.step.model.kind != GatherKind::Springs ||
       chunk.step.model.springs.incidence == nullptr || arguments.window_capacity < 0 ||
-      arguments.window_capacity % 4 != 0) {
+      arguments.window_capacity % 4 != 0 || chunk.check_count != 1) {
     return cudaErrorInvalidValue;
   }
   if (chunk.checks.first_non_finite != nullptr) {
-    reset_checks_kernel<<<1, kThreadsPerBlock, 0, stream>>>(chunk.checks, chunk.step.vertex_count);
+    reset_checks_kernel<<<1, kThreadsPerBlock, 0, stream>>>(chunk.checks, 1, chunk.step.vertex_count);
     const cudaError_t reset = cudaGetLastError();
     if (reset != cudaSuccess) return reset;
   }

@@ -85,9 +85,9 @@ struct StepSize {
 // integrator_math.h): before a step at t = (step_base + offset) h, displacement probes set their vertices' positions
 // and ramp velocity and force probes their share of the force; after it (t + h) displacement probes set the
 // positions again with zero velocity. step_base (device memory) is written before every chunk, so a captured graph
-// replays with the right times; offset is the step's index within the chunk. Every scene of a batch may have its own
-// probe (ProbeScene): each probe vertex is written by one thread from its own scene's values, so a scene's probe is
-// bitwise the one it has when run alone.
+// replays with the right times (a persistent launch has it by value instead); offset is the step's index within the
+// chunk. Every scene of a batch may have its own probe (ProbeScene): each probe vertex is written by one thread from
+// its own scene's values, so a scene's probe is bitwise the one it has when run alone.
 struct ProbeScene {
   double target_x, target_y, target_z;
   double ramp_time;
@@ -199,9 +199,11 @@ struct RungeKutta4Arguments {
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<float>& arguments, int stage, cudaStream_t stream);
 cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<double>& arguments, int stage, cudaStream_t stream);
 
-// The checks advance makes after a chunk, made by the persistent kernel at its end on the final state (one
-// download then instead of two kernels and their copies): what launch_find_non_finite and launch_count_inverted
-// compute, with their presets written by the kernel itself. first_non_finite null: no checks.
+// The checks advance makes after a chunk, made by the persistent kernels (at the end of a launch on its final state,
+// and the cooperative grid's at each check within it: PersistentEulerArguments::check_count), one download per
+// launch instead of two kernels and their copies per check: what launch_find_non_finite and launch_count_inverted
+// compute, with their presets written by the kernel itself. first_non_finite null: no checks. The pointers are check
+// 0's results; check j's are slot_stride entries further (one buffer of slot_stride x checks).
 struct PersistentChecks {
   int* first_non_finite;
   const int* corners;  // 4 per element
@@ -210,6 +212,7 @@ struct PersistentChecks {
   int scene_count;
   unsigned int* inverted_count;  // per scene
   int* inverted_first;           // per scene
+  int slot_stride;
 };
 
 // Forward or semi-implicit Euler for `steps` steps in one cooperative launch (issue 13, small meshes): the grid stays
@@ -246,12 +249,24 @@ struct PersistentEulerArguments {
   MutableStateView<Real> state[2];
   int first_parity;  // the buffer holding the state at the chunk's start
   int steps;
+  // The chunk's first step, for the probe's times: by value, so that no copy to the device precedes each launch
+  // (step.probe.step_base is not read).
+  unsigned long long step_base;
   int blocks;               // grid size: at most persistent_euler_block_limit's
   int rows;                 // vertices per block: block b takes [b rows, (b + 1) rows); 1..kPersistentThreads
-  PersistentChecks checks;  // the last piece of a chunk
-  // Where the launch stores the state it starts from, before the probe (the advance's checkpoint: the state of
-  // the last check, which the host would otherwise copy after each check); x null: not stored.
-  MutableStateView<Real> checkpoint;
+  // The launch's checks: check_count of them, the last at its end (the cluster kernel takes one); check j before it
+  // comes after step first_check + j check_every (counted from 1), on the state a launch ending there would hold
+  // (before the probe's prescription for the next step).
+  PersistentChecks checks;
+  int check_count;
+  int first_check;
+  int check_every;
+  // The advance's checkpoints, which the host would otherwise copy after each check: slot k of each array at
+  // checkpoints + k checkpoint_stride. Slot 0 takes the state the launch starts from (before the probe) where
+  // store_start; slot j + 1 the state at check j before the last.
+  MutableStateView<Real> checkpoints;
+  long long checkpoint_stride;
+  bool store_start;
   int block_records;           // the most CSR entries of a block (with springs)
   int most_neighbour_blocks;   // the most blocks a block waits for (springs alone)
   BlockNeighbours neighbours;  // springs alone

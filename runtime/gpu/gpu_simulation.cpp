@@ -3,6 +3,7 @@
 #include <cuda_runtime_api.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -34,6 +35,16 @@ namespace {
 // Longer chunks replay the same graph several times: a graph's size (and its instantiation time) grows with its
 // kernel count, while the launch overhead saved per step does not improve beyond a few hundred steps.
 constexpr std::size_t kMaxStepsPerGraph = 256;
+
+// A persistent launch on the cooperative grid takes a check per checkpoint slot that fits this (advance; the 20^3
+// box's float state, 217 KiB, fits many), up to kMostPersistentChecks (4,096 steps at the 64 between checks).
+constexpr std::size_t kPersistentCheckpointBytes = std::size_t{64} << 20;
+constexpr std::size_t kMostPersistentChecks = 64;
+// A persistent launch's most steps (about 3 s of the 20^3 box): longer stretches between checks run as several.
+constexpr std::size_t kMostPersistentLaunchSteps = std::size_t{1} << 20;
+
+// Page-locked staging for downloads (download_ranges): 4 MiB of float, 8 of double.
+constexpr std::size_t kDownloadStagingEntries = std::size_t{1} << 20;
 
 // Device memory owned by one object; freed on destruction.
 template <typename T>
@@ -749,10 +760,22 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   // The end-of-chunk checks' results of a persistent run: the first non-finite vertex, then per scene the inversion
   // count and first.
+  // The persistent checks' results (a slot per check of a launch) and, on the cooperative grid, a checkpoint slot per
+  // check: persistent_checks_ checks per launch, as many checkpoints as fit in kPersistentCheckpointBytes, up to
+  // kMostPersistentChecks (clusters, whose checks are their launches' ends: one).
   bool allocate_check_results(DiagnosticList& diagnostics) {
-    const std::size_t results = 1 + (element_count_ > 0 ? 2 * scenes_.size() : 0);
-    FMPC_CUDA_CHECK(check_results_.allocate(results), diagnostics, false);
-    FMPC_CUDA_CHECK(check_results_host_.allocate(results), diagnostics, false);
+    check_slot_stride_ = 1 + (element_count_ > 0 ? 2 * scenes_.size() : 0);
+    persistent_checks_ = 1;
+    if (persistent_blocks_ > 0) {
+      const std::size_t checkpoint_bytes = 6 * sizeof(Real) * static_cast<std::size_t>(n_);
+      persistent_checks_ =
+          std::clamp<std::size_t>(kPersistentCheckpointBytes / checkpoint_bytes, 1, kMostPersistentChecks);
+    }
+    FMPC_CUDA_CHECK(check_results_.allocate(persistent_checks_ * check_slot_stride_), diagnostics, false);
+    FMPC_CUDA_CHECK(check_results_host_.allocate(persistent_checks_ * check_slot_stride_), diagnostics, false);
+    if (persistent_checks_ > 1)
+      for (DeviceArray<Real>* array : checkpoint_.arrays())
+        FMPC_CUDA_CHECK(array->allocate(persistent_checks_ * static_cast<std::size_t>(n_)), diagnostics, false);
     return true;
   }
 
@@ -837,6 +860,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       c.inverted_count = results + 1;
       c.inverted_first = reinterpret_cast<int*>(results + 1 + scenes_.size());
     }
+    c.slot_stride = static_cast<int>(check_slot_stride_);
     return c;
   }
 
@@ -874,20 +898,54 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
     if (failed_) return false;
-    std::size_t done = 0;
-    while (done < steps) {
-      // Checks fall on multiples of check_every counted from the run's start (as the CPU backend's), and at the end.
-      const std::size_t chunk =
-          check_every == 0 ? steps : std::min(check_every - steps_taken_ % check_every, steps - done);
-      if (!run_steps(chunk, options_.use_graphs, diagnostics)) return fail();
-      done += chunk;
-      const std::optional<int> bad = first_non_finite_vertex(diagnostics);
-      if (!bad) return fail();
-      if (*bad < n_) return locate_non_finite(diagnostics);
-      if (!check_displacement_bound(diagnostics) || !check_inversions(diagnostics)) return fail();
-      if (!save_checkpoint(diagnostics)) return fail();
+    const std::size_t last = steps_taken_ + steps;
+    while (steps_taken_ < last) {
+      // Checks fall on multiples of check_every counted from the run's start (as the CPU backend's), and at the end;
+      // a persistent launch takes up to persistent_checks_ of them.
+      std::vector<std::size_t> ends;
+      for (std::size_t at = steps_taken_; at < last && ends.size() < checks_per_launch();) {
+        at = check_every == 0 ? last : std::min(last, (at / check_every + 1) * check_every);
+        if (!ends.empty() && at - steps_taken_ > kMostPersistentLaunchSteps) break;
+        ends.push_back(at);
+      }
+      if (persistent_launch() ? !run_persistent(ends, diagnostics)
+                              : !run_steps(ends.front() - steps_taken_, options_.use_graphs, diagnostics))
+        return fail();
+      // Each check acted on in order as if its chunk had been launched alone: the state of a check before the
+      // launch's last is only in its checkpoint slot, so acting on it means restoring the check before (a replay),
+      // after which the launch's later steps are dropped.
+      for (std::size_t check = 0; check < ends.size(); ++check) {
+        const bool inner = check + 1 < ends.size();
+        if (persistent_launch()) {
+          steps_taken_ = ends[check];
+          checks_slot_ = static_cast<int>(check);
+          checks_pending_ = true;
+        }
+        const std::optional<int> bad = first_non_finite_vertex(diagnostics);
+        if (!bad) return fail();
+        if (*bad < n_) return locate_non_finite(diagnostics);
+        const std::size_t restores = restores_;
+        if (!check_displacement_bound(diagnostics) || !check_inversions(diagnostics)) return fail();
+        if (!save_checkpoint(diagnostics)) return fail();
+        if (restores_ != restores) break;
+        if (inner) {
+          // The launch stored this check's state in slot check + 1.
+          checkpoint_slot_ = static_cast<int>(check) + 1;
+          checkpoint_in_state_ = false;
+        }
+      }
     }
     return true;
+  }
+
+  // The checks one launch takes (advance): persistent_checks_ on the cooperative grid, one otherwise and where the
+  // displacement bound is checked (from the positions held, which are the launch's last).
+  std::size_t checks_per_launch() const {
+    if (persistent_blocks_ == 0) return 1;
+    for (std::size_t scene = 0; scene < scenes_.size(); ++scene)
+      if (scenes_[scene].nodal_damping_gamma1 > 0.0 && std::isfinite(stability_[scene].assumed_displacement_max))
+        return 1;
+    return persistent_checks_;
   }
 
   const sim::InversionReport& inversions(std::size_t scene) const override { return inversions_.at(scene); }
@@ -914,13 +972,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       for (std::size_t scene = 0; scene < scenes_.size(); ++scene)
         out[scene].assign(all.begin() + vertex_begin_[scene], all.begin() + vertex_begin_[scene + 1]);
     };
-    std::vector<sim::Point3> all = download_range(0, static_cast<std::size_t>(n_), s.x, s.y, s.z, diagnostics);
-    if (all.size() != static_cast<std::size_t>(n_)) return false;
-    split(all, positions);
-    if (velocities == nullptr) return true;
-    all = download_range(0, static_cast<std::size_t>(n_), s.vx, s.vy, s.vz, diagnostics);
-    if (all.size() != static_cast<std::size_t>(n_)) return false;
-    split(all, *velocities);
+    std::vector<std::array<const DeviceArray<Real>*, 3>> triples{{&s.x, &s.y, &s.z}};
+    if (velocities != nullptr) triples.push_back({&s.vx, &s.vy, &s.vz});
+    std::vector<std::vector<sim::Point3>> all;
+    if (!download_ranges(0, static_cast<std::size_t>(n_), triples, all, diagnostics)) return false;
+    split(all[0], positions);
+    if (velocities != nullptr) split(all[1], *velocities);
     return true;
   }
 
@@ -938,11 +995,29 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return std::vector<double>(host.begin(), host.end());
   }
 
+  // Every sample of a probed scene reads it (100 per run): positions and velocities with one synchronisation into
+  // buffers kept between readings, and without a strain table the stiffness as uploaded (rounded to Real), made once
+  // for the scene instead of downloaded. Fresh buffers and the stiffness made per reading cost about 0.3 ms per
+  // sample of the 20^3 box, mostly page faults (H100 machine).
   sim::ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const override {
     if (scene >= scenes_.size() || !scenes_[scene].probe) return {};
+    const sim::SimulationSetup& setup = scenes_[scene];
     const double time = static_cast<double>(steps_taken_) * stability_[scene].time_step;
-    return sim::read_probe(scenes_[scene], time, positions(scene, diagnostics), velocities(scene, diagnostics),
-                           current_stiffness(scene, diagnostics));
+    const DeviceState<Real>& s = state_[current_];
+    const auto begin = static_cast<std::size_t>(vertex_begin_[scene]);
+    if (!download_ranges(begin, static_cast<std::size_t>(vertex_begin_[scene + 1]) - begin,
+                         {{&s.x, &s.y, &s.z}, {&s.vx, &s.vy, &s.vz}}, probe_state_, diagnostics))
+      return {};
+    if (setup.strain_stiffness) {
+      probe_stiffness_ = current_stiffness(scene, diagnostics);
+      probe_stiffness_scene_ = scenes_.size();
+    } else if (probe_stiffness_scene_ != scene) {
+      probe_stiffness_.resize(setup.springs.stiffness.size());
+      for (std::size_t k = 0; k < probe_stiffness_.size(); ++k)
+        probe_stiffness_[k] = static_cast<double>(static_cast<Real>(setup.springs.stiffness[k]));
+      probe_stiffness_scene_ = scene;
+    }
+    return sim::read_probe(setup, time, probe_state_[0], probe_state_[1], probe_stiffness_);
   }
 
   int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
@@ -958,11 +1033,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
                                                 vertex_begin_.at(scene + 1), energy_partial_.data(),
                                                 energy_result_.data(), stream_),
                     diagnostics, std::nullopt);
-    double result = 0.0;
-    FMPC_CUDA_CHECK(cudaMemcpyAsync(&result, energy_result_.data(), sizeof(double), cudaMemcpyDeviceToHost, stream_),
-                    diagnostics, std::nullopt);
-    if (!synchronize(diagnostics)) return std::nullopt;
-    return result;
+    return download_result(diagnostics);
   }
   std::optional<double> elastic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     const auto springs =
@@ -1005,10 +1076,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool count_inverted(std::vector<unsigned int>& counts, std::vector<int>& firsts, DiagnosticList& diagnostics) {
     const std::size_t scenes = scenes_.size();
     if (checks_pending_) {
-      // The persistent kernel counted at the state now held (its copy was synchronised by first_non_finite_vertex).
+      // The persistent kernel counted at the state now held.
       if (!synchronize(diagnostics)) return false;
       checks_pending_ = false;
-      const unsigned int* results = check_results_host_.data();
+      const unsigned int* results = check_results_host_.data() + checks_slot_ * check_slot_stride_;
       counts.assign(results + 1, results + 1 + scenes);
       firsts.resize(scenes);
       for (std::size_t scene = 0; scene < scenes; ++scene) {
@@ -1326,7 +1397,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       steps_taken_ += count;
       return true;
     }
-    if (persistent_launch()) return run_persistent(count, diagnostics);
+    if (persistent_launch()) return run_persistent({steps_taken_ + count}, diagnostics);
     // Velocity Verlet's first step computes a(x0, v0) and implicit Euler reads the residual every CG iteration:
     // those steps are enqueued directly, never captured.
     const bool direct = !allow_graph || count < 2 || scheme() == sim::Integrator::ImplicitEuler;
@@ -1357,52 +1428,68 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return a;
   }
 
-  // `count` steps in cooperative launches of at most kMaxStepsPerGraph steps each (probe times from step_base).
-  bool run_persistent(std::size_t count, DiagnosticList& diagnostics) {
-    for (std::size_t done = 0; done < count;) {
-      const std::size_t piece = std::min(count - done, kMaxStepsPerGraph);
-      if (!set_step_base(diagnostics)) return false;
-      PersistentEulerArguments<Real> a{};
-      a.step = fused_arguments();
-      a.state[0] = state_[0].mutable_view();
-      a.state[1] = state_[1].mutable_view();
-      a.first_parity = current_;
-      a.steps = static_cast<int>(piece);
-      if (probe_scenes_.size() > 0) {
-        a.step.probe = probe_arguments(state_[current_]);
-        a.step.probe_entry = probe_entry_.data();
-      }
-      a.blocks = persistent_blocks_;
-      a.rows = persistent_rows_;
-      if (checkpoint_in_state_) a.checkpoint = checkpoint_.mutable_view();
-      checkpoint_in_state_ = false;
-      a.block_records = persistent_block_records_;
-      a.most_neighbour_blocks = persistent_most_waited_;
-      a.neighbours = {neighbour_block_offset_.data(), neighbour_block_.data(), block_steps_done_.data()};
-      const bool last = done + piece == count;
-      if (last) a.checks = persistent_checks();
-      if (cluster_blocks_ > 0) {
-        const ClusterEulerArguments<Real> cluster{a,
-                                                  cluster_blocks_array_.data(),
-                                                  cluster_blocks_,
-                                                  cluster_size_,
-                                                  cluster_rows_,
-                                                  cluster_window_capacity_,
-                                                  cluster_shared_bytes_};
-        FMPC_CUDA_CHECK(launch_cluster_euler(cluster, stream_), diagnostics, false);
-      } else {
-        FMPC_CUDA_CHECK(launch_persistent_euler(a, stream_), diagnostics, false);
-      }
-      if (last) {
-        FMPC_CUDA_CHECK(cudaMemcpyAsync(check_results_host_.data(), check_results_.data(),
-                                        check_results_.size() * sizeof(unsigned int), cudaMemcpyDeviceToHost, stream_),
-                        diagnostics, false);
-      }
-      if (piece % 2 == 1) current_ = 1 - current_;
-      steps_taken_ += piece;
-      done += piece;
+  // Persistent launches from the state held through the checks after `ends` (steps_taken_ after each, increasing;
+  // at most persistent_checks_ of them, one in clusters): one launch, or where a single check is more than
+  // kMostPersistentLaunchSteps away, launches without checks up to the last. Where the state held is the checkpoint
+  // it goes to slot 0, the state of each check but the last to the slot after it (advance); the checks' results are
+  // downloaded.
+  bool run_persistent(const std::vector<std::size_t>& ends, DiagnosticList& diagnostics) {
+    while (ends.back() - steps_taken_ > kMostPersistentLaunchSteps) {
+      if (!launch_persistent(kMostPersistentLaunchSteps, {}, diagnostics)) return false;
     }
+    std::vector<std::size_t> counts(ends.size());
+    for (std::size_t check = 0; check < ends.size(); ++check) counts[check] = ends[check] - steps_taken_;
+    if (!launch_persistent(counts.back(), counts, diagnostics)) return false;
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(check_results_host_.data(), check_results_.data(),
+                                    ends.size() * check_slot_stride_ * sizeof(unsigned int), cudaMemcpyDeviceToHost,
+                                    stream_),
+                    diagnostics, false);
+    checks_slot_ = static_cast<int>(ends.size()) - 1;
     checks_pending_ = true;
+    return true;
+  }
+
+  // One persistent launch of `count` steps with checks after checks[j] of them (the last `count`; none: no checks).
+  bool launch_persistent(std::size_t count, const std::vector<std::size_t>& checks, DiagnosticList& diagnostics) {
+    PersistentEulerArguments<Real> a{};
+    a.step = fused_arguments();
+    a.state[0] = state_[0].mutable_view();
+    a.state[1] = state_[1].mutable_view();
+    a.first_parity = current_;
+    a.steps = static_cast<int>(count);
+    a.step_base = steps_taken_;
+    if (probe_scenes_.size() > 0) {
+      a.step.probe = probe_arguments(state_[current_]);
+      a.step.probe_entry = probe_entry_.data();
+    }
+    a.blocks = persistent_blocks_;
+    a.rows = persistent_rows_;
+    if (!checks.empty()) a.checks = persistent_checks();
+    a.check_count = std::max(1, static_cast<int>(checks.size()));
+    a.first_check = checks.empty() ? static_cast<int>(count) : static_cast<int>(checks.front());
+    a.check_every = checks.size() > 2 ? static_cast<int>(checks[1] - checks[0]) : 0;
+    a.checkpoints = checkpoint_.mutable_view();
+    a.checkpoint_stride = static_cast<long long>(n_);
+    a.store_start = checkpoint_in_state_;
+    a.block_records = persistent_block_records_;
+    a.most_neighbour_blocks = persistent_most_waited_;
+    a.neighbours = {neighbour_block_offset_.data(), neighbour_block_.data(), block_steps_done_.data()};
+    if (cluster_blocks_ > 0) {
+      const ClusterEulerArguments<Real> cluster{a,
+                                                cluster_blocks_array_.data(),
+                                                cluster_blocks_,
+                                                cluster_size_,
+                                                cluster_rows_,
+                                                cluster_window_capacity_,
+                                                cluster_shared_bytes_};
+      FMPC_CUDA_CHECK(launch_cluster_euler(cluster, stream_), diagnostics, false);
+    } else {
+      FMPC_CUDA_CHECK(launch_persistent_euler(a, stream_), diagnostics, false);
+    }
+    if (checkpoint_in_state_) checkpoint_slot_ = 0;
+    checkpoint_in_state_ = false;
+    if (count % 2 == 1) current_ = 1 - current_;
+    steps_taken_ += count;
     return true;
   }
 
@@ -1446,16 +1533,13 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     checkpoint_step_ = steps_taken_;
     checkpoint_has_acceleration_ = have_acceleration_;
     // Persistent runs change the state only in their launches, which store the state they start from into the
-    // checkpoint (PersistentEulerArguments::checkpoint): until the next one, the state held is the checkpoint. Six
+    // checkpoint (PersistentEulerArguments::checkpoints): until the next one, the state held is the checkpoint. Six
     // copies per check were a fifth of the 20^3 box's time between checks (H100).
     if (persistent_launch()) {
       checkpoint_in_state_ = true;
       return true;
     }
-    const std::vector<const DeviceArray<Real>*> from = std::as_const(state_[current_]).arrays();
-    const std::vector<DeviceArray<Real>*> to = checkpoint_.arrays();
-    for (std::size_t i = 0; i < from.size(); ++i)
-      FMPC_CUDA_CHECK(copy_async(*to[i], *from[i], stream_), diagnostics, false);
+    if (!copy_state(checkpoint_slot(checkpoint_slot_), state_[current_].view(), diagnostics)) return false;
     if (scheme() == sim::Integrator::VelocityVerlet) {
       FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.x, acceleration_.x, stream_), diagnostics, false);
       FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.y, acceleration_.y, stream_), diagnostics, false);
@@ -1466,15 +1550,14 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   bool restore_checkpoint(DiagnosticList& diagnostics) {
     checks_pending_ = false;
+    ++restores_;
     if (checkpoint_in_state_) {
       steps_taken_ = checkpoint_step_;
       have_acceleration_ = checkpoint_has_acceleration_;
       return true;
     }
-    const std::vector<const DeviceArray<Real>*> from = std::as_const(checkpoint_).arrays();
-    const std::vector<DeviceArray<Real>*> to = state_[current_].arrays();
-    for (std::size_t i = 0; i < from.size(); ++i)
-      FMPC_CUDA_CHECK(copy_async(*to[i], *from[i], stream_), diagnostics, false);
+    if (!copy_state(state_[current_].mutable_view(), read_only_view(checkpoint_slot(checkpoint_slot_)), diagnostics))
+      return false;
     if (scheme() == sim::Integrator::VelocityVerlet) {
       FMPC_CUDA_CHECK(copy_async(acceleration_.x, checkpoint_acceleration_.x, stream_), diagnostics, false);
       FMPC_CUDA_CHECK(copy_async(acceleration_.y, checkpoint_acceleration_.y, stream_), diagnostics, false);
@@ -1485,11 +1568,33 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
+  // Checkpoint slot `slot` (several on the cooperative grid: allocate_check_results).
+  MutableStateView<Real> checkpoint_slot(int slot) const {
+    const std::size_t offset = static_cast<std::size_t>(slot) * static_cast<std::size_t>(n_);
+    const MutableStateView<Real> c = checkpoint_.mutable_view();
+    return {c.x + offset, c.y + offset, c.z + offset, c.vx + offset, c.vy + offset, c.vz + offset};
+  }
+  static kernels::StateView<Real> read_only_view(const MutableStateView<Real>& s) {
+    return {s.x, s.y, s.z, s.vx, s.vy, s.vz};
+  }
+
+  // The n_ vertices' state copied from `from` to `to` on the stream.
+  bool copy_state(const MutableStateView<Real>& to, const kernels::StateView<Real>& from, DiagnosticList& diagnostics) {
+    Real* const targets[6] = {to.x, to.y, to.z, to.vx, to.vy, to.vz};
+    const Real* const sources[6] = {from.x, from.y, from.z, from.vx, from.vy, from.vz};
+    if (n_ == 0) return true;
+    for (int i = 0; i < 6; ++i)
+      FMPC_CUDA_CHECK(cudaMemcpyAsync(targets[i], sources[i], static_cast<std::size_t>(n_) * sizeof(Real),
+                                      cudaMemcpyDeviceToDevice, stream_),
+                      diagnostics, false);
+    return true;
+  }
+
   // The smallest vertex index with a non-finite position or velocity, n_ when there is none.
   std::optional<int> first_non_finite_vertex(DiagnosticList& diagnostics) {
     if (checks_pending_) {
       if (!synchronize(diagnostics)) return std::nullopt;
-      return static_cast<int>(check_results_host_.data()[0]);
+      return static_cast<int>(check_results_host_.data()[checks_slot_ * check_slot_stride_]);
     }
     int first = n_;
     FMPC_CUDA_CHECK(cudaMemcpyAsync(first_non_finite_.data(), &first, sizeof(int), cudaMemcpyHostToDevice, stream_),
@@ -1579,21 +1684,52 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   std::vector<sim::Point3> download_range(std::size_t begin, std::size_t count, const DeviceArray<Real>& x,
                                           const DeviceArray<Real>& y, const DeviceArray<Real>& z,
                                           DiagnosticList& diagnostics) const {
-    std::vector<Real> host[3];
-    const DeviceArray<Real>* device[3] = {&x, &y, &z};
-    for (std::size_t axis = 0; axis < 3; ++axis) {
-      host[axis].resize(count);
-      if (count == 0) continue;
-      FMPC_CUDA_CHECK(cudaMemcpyAsync(host[axis].data(), device[axis]->data() + begin, count * sizeof(Real),
-                                      cudaMemcpyDeviceToHost, stream_),
-                      diagnostics, {});
+    std::vector<std::vector<sim::Point3>> out;
+    if (!download_ranges(begin, count, {{&x, &y, &z}}, out, diagnostics)) return {};
+    return std::move(out.front());
+  }
+
+  // Entries [begin, begin + count) of each triple of arrays (x, y, z) as points into out[t] (resized, so a buffer
+  // kept between calls is not allocated again); false after a device error (reported). Through page-locked staging
+  // of kDownloadStagingEntries Reals, one synchronisation per piece that fills it (a sample of the 20^3 box's
+  // positions and velocities is one), where copies into pageable memory each wait for the stream.
+  bool download_ranges(std::size_t begin, std::size_t count,
+                       const std::vector<std::array<const DeviceArray<Real>*, 3>>& triples,
+                       std::vector<std::vector<sim::Point3>>& out, DiagnosticList& diagnostics) const {
+    out.resize(triples.size());
+    for (std::vector<sim::Point3>& points : out) points.resize(count);
+    if (count == 0 || triples.empty()) return true;
+    if (download_staging_.size() == 0)
+      FMPC_CUDA_CHECK(download_staging_.allocate(kDownloadStagingEntries), diagnostics, false);
+    const std::size_t arrays = 3 * triples.size();
+    const std::size_t piece_most = download_staging_.size() / arrays;
+    for (std::size_t first = 0; first < count; first += piece_most) {
+      const std::size_t piece = std::min(piece_most, count - first);
+      Real* const staged = download_staging_.data();
+      for (std::size_t array = 0; array < arrays; ++array)
+        FMPC_CUDA_CHECK(cudaMemcpyAsync(staged + array * piece, triples[array / 3][array % 3]->data() + begin + first,
+                                        piece * sizeof(Real), cudaMemcpyDeviceToHost, stream_),
+                        diagnostics, false);
+      if (!synchronize(diagnostics)) return false;
+      for (std::size_t t = 0; t < triples.size(); ++t) {
+        const Real* const x = staged + 3 * t * piece;
+        for (std::size_t i = 0; i < piece; ++i)
+          out[t][first + i] = {static_cast<double>(x[i]), static_cast<double>(x[piece + i]),
+                               static_cast<double>(x[2 * piece + i])};
+      }
     }
-    if (!synchronize(diagnostics)) return {};
-    std::vector<sim::Point3> out(count);
-    for (std::size_t i = 0; i < count; ++i) {
-      out[i] = {static_cast<double>(host[0][i]), static_cast<double>(host[1][i]), static_cast<double>(host[2][i])};
-    }
-    return out;
+    return true;
+  }
+
+  // energy_result_ (a reduction's), through page-locked memory: every sample reads three (largest displacement,
+  // kinetic and elastic energy), and a copy into pageable memory waits on its own.
+  std::optional<double> download_result(DiagnosticList& diagnostics) const {
+    if (result_host_.size() == 0) FMPC_CUDA_CHECK(result_host_.allocate(1), diagnostics, std::nullopt);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(result_host_.data(), energy_result_.data(), sizeof(double), cudaMemcpyDeviceToHost,
+                                    stream_),
+                    diagnostics, std::nullopt);
+    if (!synchronize(diagnostics)) return std::nullopt;
+    return *result_host_.data();
   }
 
   std::optional<double> energy_sum(EnergyTerm term, int begin, int end, DiagnosticList& diagnostics) const {
@@ -1617,13 +1753,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       a.table = {table_strain_.data(), table_modulus_.data(), static_cast<int>(table_strain_.size())};
       a.stiffness_per_modulus = stiffness_per_modulus_.data();
     }
-    double result = 0.0;
     FMPC_CUDA_CHECK(launch_energy_sum(a, term, begin, end, energy_partial_.data(), energy_result_.data(), stream_),
                     diagnostics, std::nullopt);
-    FMPC_CUDA_CHECK(cudaMemcpyAsync(&result, energy_result_.data(), sizeof(double), cudaMemcpyDeviceToHost, stream_),
-                    diagnostics, std::nullopt);
-    if (!synchronize(diagnostics)) return std::nullopt;
-    return result;
+    return download_result(diagnostics);
   }
 
   const std::vector<sim::SimulationSetup> scenes_;
@@ -1654,11 +1786,22 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   int cluster_shared_bytes_ = 0;
   DeviceArray<ClusterBlock> cluster_blocks_array_;
   int gather_lanes_ = 1;                     // the per-step fused kernel's threads per vertex
-  DeviceArray<unsigned int> check_results_;  // PersistentChecks' results (persistent runs)
+  // PersistentChecks' results (persistent runs): a slot of check_slot_stride_ per check of a launch.
+  DeviceArray<unsigned int> check_results_;
   PinnedArray<unsigned int> check_results_host_;
-  // Whether check_results_host_ holds (once the stream is synchronised) the checks at the state now held: set by a
-  // persistent chunk, cleared by anything that moves the state and once the inversion count has been read.
+  std::size_t check_slot_stride_ = 1;  // PersistentChecks::slot_stride
+  std::size_t persistent_checks_ = 1;  // the most checks of one persistent launch (allocate_check_results)
+  int checks_slot_ = 0;                // the check whose results are pending
+  // Whether check_results_host_'s slot checks_slot_ holds (once the stream is synchronised) the checks at the state
+  // now held (advance: or at the check acted on): set by a persistent launch, cleared by anything that moves the
+  // state and once the inversion count has been read.
   bool checks_pending_ = false;
+  mutable PinnedArray<Real> download_staging_;  // download_ranges', allocated on first use
+  mutable PinnedArray<double> result_host_;     // download_result's
+  // probe_reading's buffers: the state downloaded, the stiffness of scene probe_stiffness_scene_ (none: the count).
+  mutable std::vector<std::vector<sim::Point3>> probe_state_;
+  mutable std::vector<double> probe_stiffness_;
+  mutable std::size_t probe_stiffness_scene_ = std::numeric_limits<std::size_t>::max();
   DeviceArray<ProbeScene> probe_scenes_;
   DeviceArray<double> probe_start_x_, probe_start_y_, probe_start_z_, probe_base_x_, probe_base_y_, probe_base_z_;
   DeviceArray<unsigned long long> step_base_;
@@ -1669,7 +1812,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   unsigned long long step_base_host_ = 0;
   int implicit_iterations_max_ = 0;
   bool cg_warning_given_ = false;
-  DeviceState<Real> state_[2], checkpoint_;
+  DeviceState<Real> state_[2];
+  // The state at the last check (checkpoint_step_): slot checkpoint_slot_ of checkpoint_ (checkpoint_slot), which
+  // has persistent_checks_ slots on the cooperative grid.
+  DeviceState<Real> checkpoint_;
+  int checkpoint_slot_ = 0;
+  std::size_t restores_ = 0;  // restore_checkpoint's calls (advance: whether a check replayed)
   DeviceVector3<Real> acceleration_, predicted_, checkpoint_acceleration_;
   DeviceVector3<Real> stage_position_a_, stage_position_b_, stage_velocity_[3], stage_acceleration_[3];
   ForceModelView<Real> model_{};

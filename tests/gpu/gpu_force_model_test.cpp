@@ -242,6 +242,17 @@ FMPC_GPU_TEST(inversions_match_cpu, "inversions: the GPU finds the CPU's first s
     FMPC_EXPECT(b.first_element == a.first_element);
     FMPC_EXPECT(gpu_diagnostics.warning_count() == 1);
     FMPC_EXPECT(!gpu_diagnostics.items().empty() && gpu_diagnostics.items()[0].code == "inverted-elements");
+    // The persistent run found the inversion in a chunk with the next one launched ahead, took that one back and
+    // replayed from the checkpoint: it goes on with the per-step kernels' bits.
+    FMPC_EXPECT(device->persistent_launch());
+    gpu::GpuOptions per_step;
+    per_step.persistent = false;
+    DiagnosticList reference_diagnostics;
+    const auto reference = gpu::GpuSimulation::create(setup, per_step, reference_diagnostics);
+    FMPC_REQUIRE(reference && reference->advance(1000, reference_diagnostics));
+    FMPC_EXPECT(reference->inversions().first_step == b.first_step);
+    FMPC_EXPECT(bitwise_equal(device->positions(gpu_diagnostics), reference->positions(reference_diagnostics)));
+    FMPC_EXPECT(bitwise_equal(device->velocities(gpu_diagnostics), reference->velocities(reference_diagnostics)));
     setup.on_inversion = InversionPolicy::Stop;
     DiagnosticList stopped;
     const auto stop = gpu::GpuSimulation::create(setup, stopped);
