@@ -33,9 +33,10 @@ struct GpuOptions {
   // waiting between steps for the blocks its springs reach) or thread-block clusters (launch_cluster_euler: springs
   // alone, Hopper or newer, each scene within one cluster of at most 16 x 1,024 vertices whose state and records fit
   // its shared memory; clusters run independently, in waves where there are more than the GPU holds). Automatic
-  // takes the grid where the batch fits it and clusters where it does not: on an H100 the 20^3 box ran 249,658-
-  // 264,211 steps/s on the grid and 94,019 in one cluster, while 1,000 demo patients, too many for one grid, ran at 6.09e10
-  // spring-steps/s in clusters against 4.23e10 with a launch per step. Grid and Clusters take that one first.
+  // takes the grid where the batch fits it and clusters where it does not: on an H100 the 20^3 box ran 310,322-
+  // 320,840 steps/s end to end on the grid (94,019 in one cluster, measured when the grid ran 124,409-131,427), while
+  // 1,000 demo patients, too many for one grid, ran at 6.33e10 spring-steps/s in clusters against 4.23e10 with a
+  // launch per step. Grid and Clusters take that one first.
   // Bitwise the same results in every case.
   enum class PersistentKind { Automatic, Grid, Clusters };
   PersistentKind persistent_kind = PersistentKind::Automatic;
