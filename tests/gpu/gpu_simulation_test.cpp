@@ -468,6 +468,29 @@ FMPC_GPU_TEST(persistent_equals_per_step,
   }
 }
 
+// A check more than 2^20 steps away (advance with check_every 0): the persistent run launches pieces without
+// checks up to the last one, each from its own first step, which the probe's ramp (still rising in the last piece)
+// reads. Bitwise against the per-step kernels.
+FMPC_GPU_TEST(persistent_long_launch, "persistent launches in pieces beyond 2^20 steps give the per-step bits", true) {
+  SimulationSetup setup = probed_box(Precision::Float, Integrator::SemiImplicitEuler, ProbeLoad::Mode::Displacement);
+  DiagnosticList diagnostics;
+  const auto stability = check_stability(setup, diagnostics);
+  FMPC_REQUIRE(stability);
+  const std::size_t steps = (std::size_t{1} << 20) + 77;
+  setup.probe->ramp_time = 1.2 * static_cast<double>(steps) * stability->time_step;
+  gpu::GpuOptions per_step;
+  per_step.persistent = false;
+  const auto reference = gpu::GpuSimulation::create(setup, per_step, diagnostics);
+  const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+  FMPC_REQUIRE(reference && run && run->persistent_launch());
+  FMPC_REQUIRE(reference->advance(steps, diagnostics, 0) && run->advance(steps, diagnostics, 0));
+  FMPC_EXPECT(run->steps_taken() == steps);
+  FMPC_EXPECT(bitwise_equal(run->positions(diagnostics), reference->positions(diagnostics)));
+  FMPC_EXPECT(bitwise_equal(run->velocities(diagnostics), reference->velocities(diagnostics)));
+  FMPC_EXPECT(!diagnostics.has_errors());
+  if (diagnostics.has_errors()) note(describe(diagnostics));
+}
+
 // The sliced layout of the springs (GpuOptions::sliced_springs, kernels::SlicedSpringsView: threads ordered by entry
 // count within each block, entries of a warp side by side) against the same kernels reading the CSR order: every
 // integrator with one thread per vertex, a batch of odd sizes (blocks and slices partly idle, windows across scene
