@@ -106,11 +106,6 @@ __device__ Real step_of(const StepSize<Real>& step, int v) {
 }
 
 template <typename Real>
-__device__ kernels::StateView<Real> read_only(const MutableStateView<Real>& s) {
-  return {s.x, s.y, s.z, s.vx, s.vy, s.vz};
-}
-
-template <typename Real>
 __device__ void store_vertex_state(const MutableStateView<Real>& s, int v, const kernels::VertexState<Real>& x) {
   s.x[v] = x.x;
   s.y[v] = x.y;
@@ -669,9 +664,7 @@ __device__ void run_chunk_checks(const PersistentChecks& c, const kernels::State
 // Checkpoint slot k of a persistent launch (PersistentEulerArguments::checkpoints).
 template <typename Real>
 __device__ MutableStateView<Real> checkpoint_slot(const PersistentEulerArguments<Real>& a, int k) {
-  const long long offset = k * a.checkpoint_stride;
-  const MutableStateView<Real>& c = a.checkpoints;
-  return {c.x + offset, c.y + offset, c.z + offset, c.vx + offset, c.vy + offset, c.vz + offset};
+  return offset_state(a.checkpoints, k * a.checkpoint_stride);
 }
 
 // Six arrays of `stride` in shared memory (a persistent or cluster_euler_kernel block's state, a cluster block's

@@ -67,6 +67,17 @@ struct MutableStateView {
 };
 
 template <typename Real>
+FMPC_HD kernels::StateView<Real> read_only(const MutableStateView<Real>& s) {
+  return {s.x, s.y, s.z, s.vx, s.vy, s.vz};
+}
+
+// The state `offset` entries further into each of s's arrays (a checkpoint slot of several in one allocation).
+template <typename Real>
+FMPC_HD MutableStateView<Real> offset_state(const MutableStateView<Real>& s, long long offset) {
+  return {s.x + offset, s.y + offset, s.z + offset, s.vx + offset, s.vy + offset, s.vz + offset};
+}
+
+template <typename Real>
 struct MutableVector3View {
   Real* x;
   Real* y;

@@ -758,10 +758,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  // The end-of-chunk checks' results of a persistent run: the first non-finite vertex, then per scene the inversion
-  // count and first.
-  // The persistent checks' results (a slot per check of a launch) and, on the cooperative grid, a checkpoint slot per
-  // check: persistent_checks_ checks per launch, as many checkpoints as fit in kPersistentCheckpointBytes, up to
+  // The persistent checks' results (a slot per check of a launch: the first non-finite vertex, then per scene the
+  // inversion count and first) and, on the cooperative grid, a checkpoint slot per check: persistent_checks_ checks per launch, as many checkpoints as fit in kPersistentCheckpointBytes, up to
   // kMostPersistentChecks (clusters, whose checks are their launches' ends: one).
   bool allocate_check_results(DiagnosticList& diagnostics) {
     check_slot_stride_ = 1 + (element_count_ > 0 ? 2 * scenes_.size() : 0);
@@ -943,8 +941,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   std::size_t checks_per_launch() const {
     if (persistent_blocks_ == 0) return 1;
     for (std::size_t scene = 0; scene < scenes_.size(); ++scene)
-      if (scenes_[scene].nodal_damping_gamma1 > 0.0 && std::isfinite(stability_[scene].assumed_displacement_max))
-        return 1;
+      if (displacement_bound_checked(scene)) return 1;
     return persistent_checks_;
   }
 
@@ -1010,7 +1007,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       return {};
     if (setup.strain_stiffness) {
       probe_stiffness_ = current_stiffness(scene, diagnostics);
-      probe_stiffness_scene_ = scenes_.size();
+      probe_stiffness_scene_.reset();
     } else if (probe_stiffness_scene_ != scene) {
       probe_stiffness_.resize(setup.springs.stiffness.size());
       for (std::size_t k = 0; k < probe_stiffness_.size(); ++k)
@@ -1156,13 +1153,19 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
+  // Whether the scene's nodal damping gamma1 |x - x0| was bounded with a displacement (sim::StabilityReport), which
+  // check_displacement_bound checks.
+  bool displacement_bound_checked(std::size_t scene) const {
+    return scenes_[scene].nodal_damping_gamma1 > 0.0 && std::isfinite(stability_[scene].assumed_displacement_max);
+  }
+
   // The nodal damping gamma1 |x - x0| was bounded with a displacement (sim::StabilityReport); a vertex that moves
   // further stops the run with an error, as on the CPU.
   bool check_displacement_bound(DiagnosticList& diagnostics) {
     for (std::size_t scene = 0; scene < scenes_.size(); ++scene) {
+      if (!displacement_bound_checked(scene)) continue;
       const sim::SimulationSetup& setup = scenes_[scene];
       const double bound = stability_[scene].assumed_displacement_max;
-      if (!(setup.nodal_damping_gamma1 > 0.0) || !std::isfinite(bound)) continue;
       const std::vector<sim::Point3> points = positions(scene, diagnostics);
       for (std::size_t v = 0; v < points.size(); ++v) {
         const double moved = sim::distance(points[v], setup.rest_positions[v]);
@@ -1556,7 +1559,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       have_acceleration_ = checkpoint_has_acceleration_;
       return true;
     }
-    if (!copy_state(state_[current_].mutable_view(), read_only_view(checkpoint_slot(checkpoint_slot_)), diagnostics))
+    if (!copy_state(state_[current_].mutable_view(), read_only(checkpoint_slot(checkpoint_slot_)), diagnostics))
       return false;
     if (scheme() == sim::Integrator::VelocityVerlet) {
       FMPC_CUDA_CHECK(copy_async(acceleration_.x, checkpoint_acceleration_.x, stream_), diagnostics, false);
@@ -1570,12 +1573,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
 
   // Checkpoint slot `slot` (several on the cooperative grid: allocate_check_results).
   MutableStateView<Real> checkpoint_slot(int slot) const {
-    const std::size_t offset = static_cast<std::size_t>(slot) * static_cast<std::size_t>(n_);
-    const MutableStateView<Real> c = checkpoint_.mutable_view();
-    return {c.x + offset, c.y + offset, c.z + offset, c.vx + offset, c.vy + offset, c.vz + offset};
-  }
-  static kernels::StateView<Real> read_only_view(const MutableStateView<Real>& s) {
-    return {s.x, s.y, s.z, s.vx, s.vy, s.vz};
+    return offset_state(checkpoint_.mutable_view(), static_cast<long long>(slot) * n_);
   }
 
   // The n_ vertices' state copied from `from` to `to` on the stream.
@@ -1798,10 +1796,11 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool checks_pending_ = false;
   mutable PinnedArray<Real> download_staging_;  // download_ranges', allocated on first use
   mutable PinnedArray<double> result_host_;     // download_result's
-  // probe_reading's buffers: the state downloaded, the stiffness of scene probe_stiffness_scene_ (none: the count).
+  // probe_reading's buffers: the state downloaded, the uploaded stiffness of scene probe_stiffness_scene_ (none: a
+  // strain table's, downloaded at each reading).
   mutable std::vector<std::vector<sim::Point3>> probe_state_;
   mutable std::vector<double> probe_stiffness_;
-  mutable std::size_t probe_stiffness_scene_ = std::numeric_limits<std::size_t>::max();
+  mutable std::optional<std::size_t> probe_stiffness_scene_;
   DeviceArray<ProbeScene> probe_scenes_;
   DeviceArray<double> probe_start_x_, probe_start_y_, probe_start_z_, probe_base_x_, probe_base_y_, probe_base_z_;
   DeviceArray<unsigned long long> step_base_;
