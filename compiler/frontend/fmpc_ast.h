@@ -124,7 +124,9 @@ struct File {
   Comments end_comments;  // own-line comments after the last item (only `leading` and `blank_line_before`)
 };
 
-// Parses `text`; nullopt when it has syntax errors, all of which are in `diagnostics` (sorted by position).
+// Parses `text`; its syntax errors are in `diagnostics` (sorted by position). nullopt when one of them could not be
+// repaired; a File when every one was (fmpc_token_repair.h: `.5`, `==`, `mL/min`, a missing ':' ...), read as the
+// fix-its say, so that the later steps can report their errors too. A File comes with errors only after repairs.
 std::optional<File> parse_fmpc(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
 
 // Resolves names, named MF arguments and units. Systems with errors are left out of the result (their errors are

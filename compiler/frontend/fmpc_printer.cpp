@@ -402,8 +402,11 @@ std::string print_fmpc(const File& file) { return Printer().print(file); }
 
 std::optional<std::string> format_fmpc(const std::string& path, const std::string& text,
                                        DiagnosticList& diagnostics) {
-  std::optional<ast::File> file = ast::parse_fmpc(path, text, diagnostics);
-  if (!file) return std::nullopt;
+  DiagnosticList syntax;
+  std::optional<ast::File> file = ast::parse_fmpc(path, text, syntax);
+  diagnostics.append(syntax);
+  // A file read through repairs is not what its text says: the fix-its are the user's to make.
+  if (!file || syntax.has_errors()) return std::nullopt;
   return ast::print_fmpc(*file);
 }
 
