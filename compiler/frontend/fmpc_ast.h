@@ -46,7 +46,7 @@ struct Setting {
 };
 
 struct Argument {
-  Name name;
+  Name name;  // empty for a positional argument (refused by sema with the named spelling)
   Number value;  // the number, or the low end of an interval `[low, high]`
   std::optional<Name> unit;
   SourceRange range;
@@ -69,6 +69,7 @@ struct Term {
   std::optional<Number> lower_scale;     // `lower scale S [lag L]`
   std::optional<Number> lower_lag;       // `lower [scale S] lag L`
   SourceRange lower_range;               // the `lower ...` part, when present
+  SourceRange call_range;                // FAMILY(...) of the upper MF
   SourceRange range;
   Comments comments;
 };
@@ -147,9 +148,16 @@ struct FamilySignature {
   std::vector<const char*> parameters;  // in the language's canonical order
   std::vector<int> matlab_index;        // position of each parameter in MATLAB's params vector
   std::vector<bool> takes_unit;         // false for slopes
+  std::vector<const char*> matlab_parameters;  // MATLAB's documented names, in MATLAB's order: sigma, c
 };
 const FamilySignature* find_family(const std::string& name);
+// The family MATLAB calls `name` ("trimf" -> triangle), accepted as an alias (docs/language.md, "MATLAB's names");
+// nullptr when `name` is not one of MATLAB's names that differ from fmpc's.
+const FamilySignature* find_matlab_family(const std::string& name);
+// The fmpc family or MATLAB alias; `alias` tells which.
+const FamilySignature* find_family_or_alias(const std::string& name, bool* alias = nullptr);
 const FamilySignature& family_of(MfKind kind);
 std::vector<std::string> family_names();
+std::vector<std::string> matlab_family_names();  // the aliases: trimf, trapmf, ...
 
 }  // namespace fmpc::ast

@@ -252,7 +252,19 @@ class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
     bool end_expected = false;
     bool modifiers_expected = false;
     std::vector<std::string> keywords;
+    // Positional parameters and MATLAB's `[...]` vector are read only to be refused with the named spelling:
+    // messages do not offer them.
+    const std::size_t rule = context ? context->getRuleIndex() : static_cast<std::size_t>(FmpcParser::RuleFile);
+    const bool in_call = rule == FmpcParser::RuleMfCall || rule == FmpcParser::RuleArgument;
+    const bool parameter_expected = in_call && previous && (previous->getText() == "(" || previous->getText() == ",");
+    bool call_expected = false;
+    for (const ssize_t type : expected.toList())
+      call_expected = call_expected || parser->getVocabulary().getLiteralName(static_cast<std::size_t>(type)) == "'('";
     for (const ssize_t type : expected.toList()) {
+      if (parameter_expected && type == FmpcLexer::NUMBER) continue;
+      if ((call_expected || parameter_expected) &&
+          parser->getVocabulary().getLiteralName(static_cast<std::size_t>(type)) == "'['")
+        continue;
       if (type == static_cast<ssize_t>(antlr4::Token::EOF)) {
         end_expected = true;
       } else if (is_name_token(static_cast<std::size_t>(type))) {
@@ -502,9 +514,16 @@ class AstBuilder {
 
   std::vector<Argument> build_arguments(FmpcParser::MfCallContext* call) {
     std::vector<Argument> arguments;
+    // MATLAB's vector `gaussmf [0.91 7.64]`: positional arguments, refused by sema with the named spelling.
+    for (antlr4::tree::TerminalNode* number_node : call->NUMBER()) {
+      Argument argument;
+      argument.value = number(number_node->getSymbol());
+      argument.range = argument.value.range;
+      arguments.push_back(std::move(argument));
+    }
     for (FmpcParser::ArgumentContext* argument_context : call->argument()) {
       Argument argument;
-      argument.name = name(argument_context->name());
+      if (argument_context->name()) argument.name = name(argument_context->name());
       if (FmpcParser::IntervalContext* interval = argument_context->interval()) {
         argument.value = number(interval->low);
         argument.high = number(interval->high);
@@ -524,6 +543,7 @@ class AstBuilder {
     FmpcParser::MfCallContext* upper = context->mfCall(0);
     term.family = name(upper->family);
     term.arguments = build_arguments(upper);
+    term.call_range = source_.context(upper);
     term.explicit_upper = context->UPPER() != nullptr;
     if (context->lowerMf) {
       LowerCall lower;

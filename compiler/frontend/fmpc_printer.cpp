@@ -165,11 +165,18 @@ class Printer {
   static std::string call_text(const Name& family_name, const std::vector<Argument>& source_arguments,
                                const std::vector<std::string>& inputs) {
     const bool linear = family_name.text == "linear";
+    const bool positional = std::any_of(source_arguments.begin(), source_arguments.end(), [](const Argument& a) {
+      return a.name.text.empty() && !a.name.quoted;
+    });
     std::vector<std::string> order;
+    Name shown_family = family_name;
     if (linear) {
       order = inputs;
-    } else if (const FamilySignature* family = find_family(family_name.text)) {
+    } else if (const FamilySignature* family = find_family_or_alias(family_name.text)) {
       order.assign(family->parameters.begin(), family->parameters.end());
+      // MATLAB's name (trimf) is written as fmpc's (triangle), unless positional parameters keep MATLAB's order
+      // meaningful (sema refuses those, with the named spelling).
+      if (!positional) shown_family.text = family->name;
     }
     std::vector<const Argument*> arguments;
     for (const Argument& argument : source_arguments) arguments.push_back(&argument);
@@ -180,17 +187,18 @@ class Printer {
     };
     std::stable_sort(arguments.begin(), arguments.end(),
                      [&](const Argument* a, const Argument* b) { return rank(a) < rank(b); });
-    std::string text = name_text(family_name) + "(";
+    std::string text = name_text(shown_family) + "(";
     for (std::size_t i = 0; i < arguments.size(); ++i) {
       const Argument& argument = *arguments[i];
       if (i > 0) text += ", ";
       // In linear(...) a quoted "offset" is an input of that name, a bare one the constant term.
       const bool quote = argument.name.quoted && argument.name.text == "offset";
-      text += quote ? "\"offset\"" : name_text(argument.name);
+      const bool named = !argument.name.text.empty() || argument.name.quoted;
+      text += quote ? "\"offset\" " : named ? name_text(argument.name) + " " : "";
       if (argument.high)
-        text += " [" + format_number(argument.value.value) + ", " + format_number(argument.high->value) + "]";
+        text += "[" + format_number(argument.value.value) + ", " + format_number(argument.high->value) + "]";
       else
-        text += " " + format_number(argument.value.value);
+        text += format_number(argument.value.value);
       if (argument.unit) text += " " + unit_text(*argument.unit);
     }
     return text + ")";

@@ -517,7 +517,9 @@ TEST_CASE("fmpc language: bad named MF arguments", "[fmpc-language]") {
   CHECK(diagnostics_of(head + "gaus(mean 1, sd 1)") ==
         std::vector<std::string>{"5:8-12: unknown membership function 'gaus' | did you mean 'gauss'? | membership "
                                  "functions: triangle, trapezoid, gauss, gauss2, bell, sigmoid, dsigmoid, psigmoid, "
-                                 "zshape, sshape, pishape, linear_s, linear_z, constant, linear"});
+                                 "zshape, sshape, pishape, linear_s, linear_z, constant, linear | MATLAB's names "
+                                 "are accepted too: trimf, trapmf, gaussmf, gauss2mf, gbellmf, sigmf, dsigmf, "
+                                 "psigmf, zmf, smf, pimf, linsmf, linzmf"});
   CHECK(diagnostics_of(head + "linear(xx 1, y 2, offset 3)") ==
         std::vector<std::string>{"5:15-17: 'xx' is not an input of system 's' | did you mean 'x'? | linear(...) "
                                  "takes one coefficient per input of 's' (x, y) and an offset"});
@@ -525,6 +527,69 @@ TEST_CASE("fmpc language: bad named MF arguments", "[fmpc-language]") {
         std::vector<std::string>{"5:30-36: the offset is given twice | first given here: 5:20"});
   CHECK(diagnostics_of(head + "linear(x 1, x 4)") ==
         std::vector<std::string>{"5:20-21: the coefficient of 'x' is given twice | first given here: 5:15"});
+}
+
+TEST_CASE("fmpc language: MATLAB's MF names read as fmpc's families; MATLAB's parameter spellings are refused",
+          "[fmpc-language]") {
+  // Every alias gives the IR of its fmpc family, parameters in MATLAB's order.
+  const std::vector<std::pair<std::string, std::string>> pairs = {
+      {"trimf(start 1, peak 2, end 3)", "triangle(start 1, peak 2, end 3)"},
+      {"trapmf(start 1, top_start 2, top_end 3, end 4)", "trapezoid(start 1, top_start 2, top_end 3, end 4)"},
+      {"gaussmf(mean 5, sd 1)", "gauss(mean 5, sd 1)"},
+      {"gauss2mf(mean1 2, sd1 1, mean2 4, sd2 2)", "gauss2(mean1 2, sd1 1, mean2 4, sd2 2)"},
+      {"gbellmf(width 2, slope 3, center 5)", "bell(width 2, slope 3, center 5)"},
+      {"sigmf(slope 2, center 5)", "sigmoid(slope 2, center 5)"},
+      {"dsigmf(slope1 2, center1 3, slope2 2, center2 7)", "dsigmoid(slope1 2, center1 3, slope2 2, center2 7)"},
+      {"psigmf(slope1 2, center1 3, slope2 -2, center2 7)", "psigmoid(slope1 2, center1 3, slope2 -2, center2 7)"},
+      {"zmf(start 2, end 6)", "zshape(start 2, end 6)"},
+      {"smf(start 2, end 6)", "sshape(start 2, end 6)"},
+      {"pimf(start 1, top_start 2, top_end 3, end 4)", "pishape(start 1, top_start 2, top_end 3, end 4)"},
+      {"linsmf(start 2, end 6)", "linear_s(start 2, end 6)"},
+      {"linzmf(start 2, end 6)", "linear_z(start 2, end 6)"}};
+  const std::string head = "system s\ninput x in [0, 10]\n  t is ";
+  const std::string tail = "\noutput y in [0, 1]\n  o is gauss(mean 0.5, sd 0.1)\nrule: if x is t then y is o\n";
+  for (const auto& [matlab, fmpc] : pairs) {
+    INFO(matlab);
+    const FuzzySystem aliased = read_one(head + matlab + tail);
+    const FuzzySystem plain = read_one(head + fmpc + tail);
+    CHECK(aliased.inputs[0].terms[0].mf.kind == plain.inputs[0].terms[0].mf.kind);
+    CHECK(aliased.inputs[0].terms[0].mf.params == plain.inputs[0].terms[0].mf.params);
+    // fmt writes fmpc's name.
+    CHECK(format_ok(head + matlab + tail) == format_ok(head + fmpc + tail));
+  }
+  // Positional values under a MATLAB name: MATLAB's order, spelled out with names, with a fix-it.
+  CHECK(diagnostics_of(head + "gaussmf(0.91, 7.64)" + tail) ==
+        std::vector<std::string>{"3:8-27: parameters are named in fmpc: write gauss(mean 7.64, sd 0.91) | MATLAB's "
+                                 "gaussmf [sigma c] is gauss(mean c, sd sigma)"});
+  CHECK(diagnostics_of(head + "gbellmf [2 3 5]" + tail) ==
+        std::vector<std::string>{"3:8-23: parameters are named in fmpc: write bell(width 2, slope 3, center 5) | "
+                                 "MATLAB's gbellmf [a b c] is bell(width a, slope b, center c)"});
+  // MATLAB's own parameter names under any name.
+  CHECK(diagnostics_of(head + "gauss2mf(sig1 1, c1 2, sig2 2, c2 4)" + tail) ==
+        std::vector<std::string>{"3:8-44: these are MATLAB's parameter names; in fmpc write gauss2(mean1 2, sd1 1, "
+                                 "mean2 4, sd2 2) | MATLAB's gauss2mf [sig1 c1 sig2 c2] is gauss2(mean1 c1, sd1 "
+                                 "sig1, mean2 c2, sd2 sig2)"});
+  // One MATLAB name among fmpc's: the note says which fmpc name it is.
+  CHECK(diagnostics_of(head + "gaussmf(mean 5, sigma 1)" + tail) ==
+        std::vector<std::string>{"3:8-15: gauss(...) of term 't' is missing parameter 'sd' | gauss takes: mean, sd",
+                                 "3:24-29: 'gauss' has no parameter 'sigma' | MATLAB's gaussmf calls it sigma; fmpc "
+                                 "calls it 'sd' | gauss takes: mean, sd"});
+  // Under fmpc's name, positional values imply no order: none is guessed.
+  CHECK(diagnostics_of(head + "gauss(7.64, 0.91)" + tail) ==
+        std::vector<std::string>{"3:14-18: parameters are named in fmpc: write gauss(mean VALUE, sd VALUE) | gauss "
+                                 "takes: mean, sd"});
+  CHECK(diagnostics_of(head + "trimf(1, 2)" + tail) ==
+        std::vector<std::string>{"3:14-15: parameters are named in fmpc: write triangle(start VALUE, peak VALUE, end "
+                                 "VALUE) | triangle takes: start, peak, end | MATLAB's trimf [a b c] is "
+                                 "triangle(start a, peak b, end c)"});
+  // The fix-it replaces the whole call.
+  DiagnosticList diagnostics;
+  read_fmpc("t.fis", head + "trimf(1, 2, 3)" + tail, diagnostics);
+  REQUIRE(diagnostics.items().size() == 1);
+  REQUIRE(diagnostics.items()[0].fix);
+  CHECK(diagnostics.items()[0].fix->replacement == "triangle(start 1, peak 2, end 3)");
+  CHECK(diagnostics.items()[0].fix->range.column == 8);
+  CHECK(diagnostics.items()[0].fix->range.end_column == 22);
 }
 
 TEST_CASE("fmpc language: what a newcomer writes is repaired with a fix-it, and reading goes on", "[fmpc-language]") {
@@ -594,9 +659,9 @@ TEST_CASE("fmpc language: what a newcomer writes is repaired with a fix-it, and 
 
 TEST_CASE("fmpc language: every repair's fix-it, applied, gives a file without errors", "[fmpc-language]") {
   const std::string text = "system s\n  type = mamdani\n  when no rule fires midrange\ninput x in [0 10] mL/min\n"
-                           "  a is gauss(mean .5, sd +1)\n  b is gauss(sd 1, mean 5)\n  F0-F1 is triangle(start 1, peak 2, end 3)\n"
+                           "  a is gauss(mean .5, sd +1)\n  b is gaussmf(1, 5)\n  F0-F1 is trimf(a 1, b 2, c 3)\n"
                            "output y in [0, 1] µm\n  o is gauss(mean - 0.5, sd 0.1)\n"
-                           "input z in [0, 1]\n  c is linear_z(start 0, end 1)\n"
+                           "input z in [0, 1]\n  c is linzmf(a 0, b 1)\n"
                            "rule r1 if x == a && z != c then y is o weight=0.5\nrule: if x is F0-F1 then y is o\n";
   DiagnosticList diagnostics;
   read_fmpc("t.fis", text, diagnostics);
@@ -610,7 +675,7 @@ TEST_CASE("fmpc language: every repair's fix-it, applied, gives a file without e
     REQUIRE(d.fix);
     fixes.push_back(*d.fix);
   }
-  CHECK(fixes.size() == 15);
+  CHECK(fixes.size() == 18);
   std::sort(fixes.begin(), fixes.end(), [](const FixIt& a, const FixIt& b) { return b.range < a.range; });
   for (const FixIt& fix : fixes) {
     std::string& line = lines[static_cast<std::size_t>(fix.range.line - 1)];
