@@ -149,12 +149,12 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
 
 // The points' CSV (`--csv FILE`, or standard input without it), parsed; nullopt with an error when it cannot be
 // read or parsed. Its text joins `sources` so that diagnostics can quote it.
-std::optional<CsvTable> read_points_csv(const std::string& csv_option, SourceFiles& sources,
-                                        DiagnosticList& diagnostics) {
+std::optional<CsvTable> read_points_csv(const std::string& csv_option, const FuzzySystem& system,
+                                        SourceFiles& sources, DiagnosticList& diagnostics) {
   const std::string csv_path = csv_option.empty() ? "-" : csv_option;
   const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
   return read_csv_file(csv_path, shown_path, sim::kMaxCsvFileBytes, "CSV file", SourceRange{shown_path, 0, 0, 0, 0},
-                       sources, diagnostics);
+                       sources, diagnostics, csv_header_of(system));
 }
 
 // ---- lookup tables (.fzt) ----
@@ -209,7 +209,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       varying.push_back(assignment);
     }
     if (auto point = point_from_assignments(varying, interface, diagnostics)) points.push_back(std::move(*point));
-  } else if (std::optional<CsvTable> read = read_points_csv(options.csv, sources, diagnostics)) {
+  } else if (std::optional<CsvTable> read = read_points_csv(options.csv, interface, sources, diagnostics)) {
     CsvTable& csv = *read;
     // Columns of fixed inputs: checked against the fixed value, then left out.
     for (std::size_t c = csv.header.size(); c-- > 0;) {
@@ -360,7 +360,7 @@ int run_eval(const EvalOptions& options) {
                          "or: fmpc eval " + options.file + " --csv points.csv (header row: " + header + ")",
                          "or pipe the CSV on standard input (--csv - reads a terminal too, ending with Ctrl-D)"});
     } else {
-      if (const std::optional<CsvTable> csv = read_points_csv(options.csv, sources, diagnostics))
+      if (const std::optional<CsvTable> csv = read_points_csv(options.csv, *system, sources, diagnostics))
         points = points_from_csv(*csv, *system, diagnostics, &label_column);
     }
   }

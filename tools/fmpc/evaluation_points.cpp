@@ -41,6 +41,12 @@ std::vector<std::string> variable_names(const std::vector<Variable>& variables) 
   return names;
 }
 
+std::string csv_header_of(const FuzzySystem& system) {
+  std::string header;
+  for (const Variable& v : system.inputs) header += (header.empty() ? "" : ",") + v.name;
+  return header;
+}
+
 namespace {
 
 // `csv_column`: the name is a CSV header, where a label column may stand too.

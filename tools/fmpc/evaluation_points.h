@@ -26,6 +26,9 @@ bool is_label_column(const std::string& header);
 // The names of the variables, in order.
 std::vector<std::string> variable_names(const std::vector<Variable>& variables);
 
+// The header a CSV of points for `system` has: its inputs, comma-separated ("service,food").
+std::string csv_header_of(const FuzzySystem& system);
+
 // The whole text as a number (strtod), or nullopt.
 std::optional<double> parse_number(const std::string& text);
 

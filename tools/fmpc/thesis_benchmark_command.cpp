@@ -38,7 +38,7 @@ std::optional<std::vector<sim::LiverPatient>> read_patients(const std::string& p
                                                             SourceFiles& sources, DiagnosticList& diagnostics) {
   const std::optional<CsvTable> table =
       read_csv_file(path, path, kPatientFileLimit, "patient table",
-                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics);
+                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics, csv_header_of(system));
   if (!table) return std::nullopt;
   const std::size_t errors_before = diagnostics.error_count();
   const std::vector<EvaluationPoint> points = points_from_csv(*table, system, diagnostics);
