@@ -52,6 +52,9 @@ class SourceMap {
 
   const std::string& path() const { return path_; }
 
+  // The byte offset of code point `code_point` (ANTLR's index); the text's size past its end.
+  std::size_t byte_offset(std::size_t code_point) const { return byte_of(code_point); }
+
  private:
   std::size_t byte_of(std::size_t code_point) const {
     return code_point < code_point_offsets_.size() ? code_point_offsets_[code_point] : size_;
