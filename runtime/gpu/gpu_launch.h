@@ -13,6 +13,7 @@
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
+#include "kernels/element_laws.h"
 #include "kernels/tetrahedron_math.h"
 
 namespace fmpc::gpu {
@@ -21,13 +22,18 @@ namespace fmpc::gpu {
 // launchers dispatch on it once per launch (static dispatch inside the kernels).
 enum class GatherKind : int { Springs = 0, Elements = 1, SpringsAndElements = 2 };
 
-// A force model on the device: the springs (Springs, SpringsAndElements), and the tetrahedron field with the corner
-// forces its element pass writes and the per-vertex gather reads (Elements, SpringsAndElements).
+using kernels::kMostElementTerms;
+
+// A force model on the device: the springs (Springs, SpringsAndElements), and the element terms (kernels/
+// element_term.h) with the corner forces their passes write (the first term's, then each later one's added) and the
+// per-vertex gather reads (Elements, SpringsAndElements).
 template <typename Real>
 struct ForceModelView {
   GatherKind kind;
   kernels::SpringNetworkView<Real> springs;
-  kernels::TetrahedronFieldView<Real> field;
+  kernels::ElementTermView<Real> terms[kMostElementTerms];
+  int term_count;
+  int element_count;
   kernels::CornerForceView<Real> corners;    // corners.force == corner_force
   kernels::CornerForce<Real>* corner_force;  // 4 per element
   int element_blocks = 3;  // float: the element pass's register bound, 2 or 3 blocks per SM (GpuOptions)
@@ -48,8 +54,9 @@ template <typename Real>
 cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<Real>& network, const int* vertex_order,
                                   int vertex_count, kernels::SpringIncidence<Real>* record, cudaStream_t stream);
 
-// The element pass at `state`: every element's corner forces (kernels::tetrahedron_corner_forces); nothing for
-// GatherKind::Springs. Enqueued before every per-vertex kernel that gathers at that state.
+// The element pass at `state`: every element's corner forces (kernels::element_corner_forces), one launch per term
+// with its law a template argument, the later terms' forces added to the first's; nothing without terms. Enqueued
+// before every per-vertex kernel that gathers at that state.
 template <typename Real>
 cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
                                   cudaStream_t stream);
@@ -381,22 +388,16 @@ struct ConjugateGradientScalars {
   double beta;       // rz_next / rz
 };
 
-// The element part of implicit Euler, in double: each element's linearisation at the step's start (rotation or
-// volume gradient, kernels::TetrahedronLinearisation), and per corner 3 values each of h^2 K v0, of the diagonal of
-// (h^2 + h beta) K_aa, and of (h^2 + h beta) K p for the conjugate gradient's current direction (fixed corners' p
-// taken as zero), gathered per vertex over the corner CSR.
+// The element part of implicit Euler, in double: each term's linearisation of each element at the step's start (its
+// law's Linearisation, e.g. a rotation or a volume gradient), and per corner 3 values each of h^2 K v0, of the
+// diagonal of (h^2 + h beta) K_aa, and of (h^2 + h beta) K p for the conjugate gradient's current direction (fixed
+// corners' p taken as zero), the terms summed in order, gathered per vertex over the corner CSR.
 struct ImplicitElements {
-  kernels::TetrahedronLaw law;
-  int count;
-  const int* corners;          // 4 per element
-  const double* rest_inverse;  // 9 per element
-  const double* rest_volume;
-  const double* youngs_modulus;  // null for the volume law
-  const double* poisson_ratio;
-  const double* bulk_modulus;             // null for the co-rotational law
-  const double* stiffness_damping;        // null: none
-  kernels::StrainTableView strain_table;  // strain null: none
-  kernels::TetrahedronLinearisation* linearisation;
+  int count;           // elements; 0: none
+  int term_count;
+  const int* corners;  // 4 per element
+  kernels::ElementTermView<double> terms[kMostElementTerms];
+  void* linearisation[kMostElementTerms];  // per term: one of its law's Linearisation per element
   double* rhs_part;       // 12 per element
   double* diagonal_part;  // 12 per element
   double* product;        // 12 per element
@@ -481,14 +482,16 @@ struct EnergyArguments {
   const double* force_x;  // null: no external forces
   const double* force_y;
   const double* force_z;
-  ImplicitElements elements;  // ElementPotential: the field in double (the linearisation arrays unused)
+  // ElementPotential: one element term in double and the elements' corners.
+  kernels::ElementTermView<double> element_term;
+  const int* element_corners;
 };
 
 enum class EnergyTerm : int {
   Kinetic = 0,           // sum over vertices of m |v|^2 / 2
   SpringPotential = 1,   // sum over springs of spring_potential_energy
   LoadPotential = 2,     // sum over vertices of -(m g + f) . x
-  ElementPotential = 3,  // sum over elements of tetrahedron_elastic_energy
+  ElementPotential = 3,  // sum over elements of element_term's law's energy
 };
 
 // Sums the term over [begin, end) into *result (device memory); `partial` holds kEnergyBlocks doubles.
