@@ -30,7 +30,7 @@
 #include <vector>
 
 #include "runtime/fem/fem_model_builder.h"
-#include "runtime/fem/tetrahedron_field.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/gpu/gpu_simulation.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/scene/spring_model_builder.h"
@@ -100,15 +100,16 @@ SimulationSetup benchmark_box(int cells, Precision precision, Integrator integra
   return *setup;
 }
 
-// The same box as co-rotational FEM (nu 0.45, damping ratio 0.9), or as springs with the volume term for nu 0.45.
-SimulationSetup benchmark_element_box(int cells, ForceModel model) {
+// The same box as a finite-element model of the default law (nu 0.45, damping ratio 0.9), or, with_springs, as
+// springs with the law beside them calibrated for nu 0.45.
+SimulationSetup benchmark_element_box(int cells, bool with_springs) {
   DiagnosticList diagnostics;
   BoxSpec box;
   box.cells_x = box.cells_y = box.cells_z = cells;
   box.size = {0.1, 0.1, 0.1};
   const Mesh mesh = generate_box(box, diagnostics);
   std::optional<SimulationSetup> setup;
-  if (model == ForceModel::CorotationalFem) {
+  if (!with_springs) {
     FemModelSpec spec;
     spec.youngs_modulus = {5000.0};
     spec.poisson_ratio = {0.45};
@@ -116,17 +117,20 @@ SimulationSetup benchmark_element_box(int cells, ForceModel model) {
     spec.damping_ratio = 0.9;
     setup = build_fem_model(mesh, spec, diagnostics);
   } else {
-    const auto unit = calibrate_volume_term(5000.0, 0.45, StiffnessMapping::VanGelder1998, SourceRange{}, diagnostics);
-    if (!unit) return {};
+    ElementMaterial material;
+    material.youngs_modulus.assign(mesh.tetrahedra.size(), 5000.0);
+    material.poisson_ratio.assign(mesh.tetrahedra.size(), 0.45);
+    auto term = element_law_beside_springs().build(material, diagnostics);
+    if (!term) return {};
     SpringModelSpec spec;
     spec.stiffness.mapping = StiffnessMapping::VanGelder1998;
-    spec.stiffness.value = unit->spring_modulus;
+    spec.stiffness.value = 5000.0 * term->spring_modulus_scale;
     spec.mass.value = 1060.0;
     spec.damping.ratio = 0.9;
     setup = build_spring_model(mesh, spec, diagnostics);
     if (setup) {
       setup->tetrahedra = mesh.tetrahedra;
-      if (!add_volume_term(*setup, unit->bulk_modulus, 0.9, 0.0, diagnostics)) return {};
+      if (!add_element_term(*setup, std::move(term->term), 0.9, 0.0, diagnostics)) return {};
     }
   }
   if (!setup) return {};
@@ -138,12 +142,14 @@ SimulationSetup benchmark_element_box(int cells, ForceModel model) {
 }
 
 std::size_t element_count(const SimulationSetup& setup) {
-  return setup.tetrahedron_field ? setup.tetrahedra.size() : 0;
+  return setup.elements.empty() ? 0 : setup.tetrahedra.size();
 }
 
-const char* model_name(const SimulationSetup& setup) {
-  if (setup.model == ForceModel::CorotationalFem) return "corotational_fem";
-  return setup.tetrahedron_field ? "springs+volume" : "springs";
+// "springs", the finite-element law's model keyword, or springs with the law beside them.
+std::string model_label(const SimulationSetup& setup) {
+  if (setup.springs.size() > 0 && !setup.elements.empty())
+    return element_law_row(setup.elements.terms.front().law).trade_label;
+  return sim::model_name(setup);
 }
 
 // Runs advance(chunk) until at least min_seconds have passed (the chunk doubling from `first`), after one untimed
@@ -176,7 +182,7 @@ Row cpu_row(const SimulationSetup& base, unsigned threads, Precision precision, 
   setup.threads = threads;
   setup.precision = precision;
   Row row;
-  row.model = model_name(setup);
+  row.model = model_label(setup);
   row.elements = element_count(setup);
   row.variant = "cpu";
   row.backend = "cpu";
@@ -222,7 +228,7 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   // undamped, docs/simulator.md): its rows run with alpha = 20 /s, which changes no kernel's work.
   if (integrator == Integrator::ForwardEuler) setup.mass_damping = 20.0;
   Row row;
-  row.model = model_name(setup);
+  row.model = model_label(setup);
   row.elements = element_count(setup);
   row.variant = "cuda";
   row.backend = "cuda";
@@ -543,18 +549,18 @@ int main(int argc, char** argv) {
   if (options.spring_cells > 0 || options.cohort_only) fem_sizes.clear();
   if (options.fem_only && options.fem_cells > 52) fem_sizes = {options.fem_cells};
   for (const int cells : fem_sizes) {
-    for (const ForceModel model : {ForceModel::CorotationalFem, ForceModel::Springs}) {
+    for (const bool with_springs : {false, true}) {
       const bool largest = cells > 52;
-      if (largest && model == ForceModel::Springs) continue;
+      if (largest && with_springs) continue;
       const auto start = std::chrono::steady_clock::now();
-      const SimulationSetup base = benchmark_element_box(cells, model);
+      const SimulationSetup base = benchmark_element_box(cells, with_springs);
       const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      std::cout << model_name(base) << " box " << cells << "^3: " << base.rest_positions.size() << " vertices, "
+      std::cout << model_label(base) << " box " << cells << "^3: " << base.rest_positions.size() << " vertices, "
                 << base.tetrahedra.size() << " tetrahedra, set up in " << format(setup_seconds, 2) << " s\n"
                 << std::flush;
       if (base.rest_positions.empty()) {
         Row row;
-        row.model = model == ForceModel::CorotationalFem ? "corotational_fem" : "springs+volume";
+        row.model = model_label(base);
         row.variant = "setup";
         row.status = "failed: the model was not built";
         rows.push_back(row);

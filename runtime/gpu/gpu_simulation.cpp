@@ -194,12 +194,18 @@ struct ConcatenatedScenes {
   HostArray<double> rest[3], position[3], velocity[3], force[3];
   bool has_forces = false;
   bool has_damping = false;  // false: no scene has dashpots, and no damping array is uploaded
-  // Tetrahedra (every scene's, for inversion counts) and, when the scenes have a tetrahedron field, its arrays and
-  // the corner CSR (each scene's corners point at its own elements).
+  // Tetrahedra (every scene's, for inversion counts) and, when the scenes have element terms, their geometry, the
+  // corner CSR (each scene's corners point at its own elements) and each term's parameters and damping (the scenes
+  // of a batch have the same terms: create() refuses others).
   HostArray<int> corners, element_scene, corner_offset, corner_index, corner_slot;
-  HostArray<double> rest_inverse, rest_volume, youngs_modulus, poisson_ratio, bulk_modulus, stiffness_damping;
-  bool has_field = false;
-  bool has_element_damping = false;
+  HostArray<double> rest_inverse, rest_volume;
+  struct Term {
+    int law = 0;
+    HostArray<double> parameter[kernels::kMostLawParameters];
+    HostArray<double> stiffness_damping;  // empty: no scene damps this term
+  };
+  std::vector<Term> terms;
+  bool has_elements = false;
   // The staging's threads, which also convert the arrays on upload (one pool, not one per array).
   std::unique_ptr<sim::WorkerPool> pool;
 };
@@ -226,14 +232,12 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
   for (const auto& setup : scenes) {
     c.has_forces = c.has_forces || !setup.external_forces.empty() || force_probe(setup);
     c.has_damping = c.has_damping || !setup.springs.damping.empty();
-    c.has_field = c.has_field || setup.tetrahedron_field.has_value();
-    c.has_element_damping =
-        c.has_element_damping || (setup.tetrahedron_field && !setup.tetrahedron_field->stiffness_damping.empty());
+    c.has_elements = c.has_elements || !setup.elements.empty();
     vertices += setup.rest_positions.size();
     entries += setup.springs.adjacency_spring.size();
     springs += setup.springs.size();
     elements += setup.tetrahedra.size();
-    if (setup.tetrahedron_field) corners += setup.tetrahedron_field->corner_index.size();
+    if (!setup.elements.empty()) corners += setup.elements.geometry.corner_index.size();
   }
   c.offset.reserve(vertices + 1);  // and the end offset, pushed last
   for (auto* array : {&c.offset, &c.vertex_scene}) array->resize(vertices);
@@ -249,14 +253,24 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
   }
   c.corners.resize(4 * elements);
   c.element_scene.resize(elements);
-  if (c.has_field) {
+  if (c.has_elements) {
     c.corner_offset.reserve(vertices + 1);
     c.corner_offset.resize(vertices);
     c.corner_index.resize(corners);
     c.corner_slot.resize(corners);
     c.rest_inverse.resize(9 * elements);
-    for (auto* array : {&c.rest_volume, &c.youngs_modulus, &c.poisson_ratio, &c.bulk_modulus}) array->resize(elements);
-    if (c.has_element_damping) c.stiffness_damping.resize(elements);
+    c.rest_volume.resize(elements);
+    const std::vector<sim::ElementTerm>& first = scenes.front().elements.terms;
+    c.terms.resize(first.size());
+    for (std::size_t t = 0; t < first.size(); ++t) {
+      ConcatenatedScenes::Term& term = c.terms[t];
+      term.law = first[t].law;
+      for (int p = 0; p < kernels::kMostLawParameters; ++p)
+        if (!first[t].parameter[p].empty()) term.parameter[p].resize(elements);
+      bool damped = false;
+      for (const auto& setup : scenes) damped = damped || !setup.elements.terms[t].stiffness_damping.empty();
+      if (damped) term.stiffness_damping.resize(elements);
+    }
   }
   c.pool = std::make_unique<sim::WorkerPool>(sim::resolve_thread_count(0, entries + 4 * elements + vertices));
   sim::WorkerPool& pool = *c.pool;
@@ -273,8 +287,8 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     fill_on_pool(pool, c.corners, 4 * eb, 4 * m,
                  [&](std::size_t i) { return vertex_base + setup.tetrahedra[i / 4][i % 4]; });
     fill_on_pool(pool, c.element_scene, eb, m, [&](std::size_t) { return scene; });
-    if (setup.tetrahedron_field) {
-      const sim::TetrahedronField& field = *setup.tetrahedron_field;
+    if (!setup.elements.empty()) {
+      const sim::ElementGeometry& field = setup.elements.geometry;
       const int corners_before = corner_base;
       const auto cbase = static_cast<std::size_t>(corner_base);
       fill_on_pool(pool, c.corner_offset, vb, n,
@@ -289,10 +303,12 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
       const auto copy_or_zero = [&](HostArray<double>& to, const std::vector<double>& from) {
         fill_on_pool(pool, to, eb, m, [&](std::size_t e) { return from.empty() ? 0.0 : from[e]; });
       };
-      copy_or_zero(c.youngs_modulus, field.youngs_modulus);
-      copy_or_zero(c.poisson_ratio, field.poisson_ratio);
-      copy_or_zero(c.bulk_modulus, field.bulk_modulus);
-      if (c.has_element_damping) copy_or_zero(c.stiffness_damping, field.stiffness_damping);
+      for (std::size_t term = 0; term < c.terms.size(); ++term) {
+        const sim::ElementTerm& own = setup.elements.terms[term];
+        for (int p = 0; p < kernels::kMostLawParameters; ++p)
+          if (!c.terms[term].parameter[p].empty()) copy_or_zero(c.terms[term].parameter[p], own.parameter[p]);
+        if (!c.terms[term].stiffness_damping.empty()) copy_or_zero(c.terms[term].stiffness_damping, own.stiffness_damping);
+      }
     }
     const int entries_before = entry_base;
     const auto entry_at = static_cast<std::size_t>(entry_base);
@@ -339,14 +355,22 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     c.element_begin.push_back(element_base + static_cast<int>(m));
   }
   c.offset.push_back(entry_base);
-  if (c.has_field) c.corner_offset.push_back(corner_base);
+  if (c.has_elements) c.corner_offset.push_back(corner_base);
   return c;
 }
 
 // The gather a batch's scenes share (create() refuses batches that differ in it).
 GatherKind gather_kind(const sim::SimulationSetup& setup) {
-  if (setup.model == sim::ForceModel::CorotationalFem) return GatherKind::Elements;
-  return setup.tetrahedron_field ? GatherKind::SpringsAndElements : GatherKind::Springs;
+  if (setup.elements.empty()) return GatherKind::Springs;
+  return setup.springs.size() > 0 ? GatherKind::SpringsAndElements : GatherKind::Elements;
+}
+
+// Whether two setups have the same element terms, law for law (their parameters may differ).
+bool same_element_laws(const sim::SimulationSetup& a, const sim::SimulationSetup& b) {
+  if (a.elements.terms.size() != b.elements.terms.size()) return false;
+  for (std::size_t t = 0; t < a.elements.terms.size(); ++t)
+    if (a.elements.terms[t].law != b.elements.terms[t].law) return false;
+  return true;
 }
 
 template <typename Real, typename Allocator>
@@ -358,8 +382,10 @@ HostArray<Real> convert(const std::vector<double, Allocator>& values, sim::Worke
 
 // The first field in which `scene` differs from scene 0 among those a batch shares, or nullptr.
 const char* shared_field_mismatch(const sim::SimulationSetup& scene, const sim::SimulationSetup& reference) {
-  if (scene.model != reference.model) return "force model";
+  const bool springs = scene.springs.size() > 0, reference_springs = reference.springs.size() > 0;
+  if (springs != reference_springs || (!springs && !same_element_laws(scene, reference))) return "force model";
   if (gather_kind(scene) != gather_kind(reference)) return "volume term (on in one scene, off in the other)";
+  if (!same_element_laws(scene, reference)) return "element terms";
   if (scene.integrator != reference.integrator) return "integrator";
   if (scene.precision != reference.precision) return "precision";
   if (scene.law != reference.law) return "spring law";
@@ -463,7 +489,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       FMPC_CUDA_CHECK(inverted_count_.allocate(scenes_.size()), diagnostics, false);
       FMPC_CUDA_CHECK(inverted_first_.allocate(scenes_.size()), diagnostics, false);
     }
-    if (c.has_field && !upload_field(c, diagnostics)) return false;
+    if (c.has_elements && !upload_elements(c, diagnostics)) return false;
 
     if (!upload_probes(diagnostics) || !upload_single_scene_features(diagnostics)) return false;
 
@@ -530,70 +556,67 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  // The tetrahedron field: its arrays in Real for the element pass, in double for implicit Euler and the energy
-  // sums, the corner CSR and the corner forces. The strain table (uploaded with the single-scene features) is
-  // attached to the views afterwards.
-  bool upload_field(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
-    const sim::SimulationSetup& common = scenes_.front();
-    const kernels::TetrahedronLaw law = common.tetrahedron_field->law;
-    const bool corotational = law == kernels::TetrahedronLaw::CorotationalLinear;
+  // The element terms: the geometry and each term's parameters in Real for the element pass and in double for
+  // implicit Euler and the energy sums, the corner CSR and the corner forces. The strain table (uploaded with the
+  // single-scene features) is attached to the views of the terms whose law reads one afterwards.
+  bool upload_elements(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
+    const std::size_t count = static_cast<std::size_t>(element_count_);
     FMPC_CUDA_CHECK(corner_offset_.upload(c.corner_offset), diagnostics, false);
     FMPC_CUDA_CHECK(corner_index_.upload(c.corner_index), diagnostics, false);
     FMPC_CUDA_CHECK(corner_slot_.upload(c.corner_slot), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_inverse_.upload(convert<Real>(c.rest_inverse, *c.pool)), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_volume_.upload(convert<Real>(c.rest_volume, *c.pool)), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_volume_d_.upload(c.rest_volume), diagnostics, false);
-    if (corotational) {
-      FMPC_CUDA_CHECK(field_youngs_.upload(convert<Real>(c.youngs_modulus, *c.pool)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_poisson_.upload(convert<Real>(c.poisson_ratio, *c.pool)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_youngs_d_.upload(c.youngs_modulus), diagnostics, false);
-      FMPC_CUDA_CHECK(field_poisson_d_.upload(c.poisson_ratio), diagnostics, false);
-    } else {
-      FMPC_CUDA_CHECK(field_bulk_.upload(convert<Real>(c.bulk_modulus, *c.pool)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_bulk_d_.upload(c.bulk_modulus), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_inverse_.upload(convert<Real>(c.rest_inverse, *c.pool)), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_volume_.upload(convert<Real>(c.rest_volume, *c.pool)), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_volume_d_.upload(c.rest_volume), diagnostics, false);
+    FMPC_CUDA_CHECK(corner_force_.allocate(4 * count), diagnostics, false);
+    const bool implicit = scenes_.front().integrator == sim::Integrator::ImplicitEuler;
+    model_.term_count = static_cast<int>(c.terms.size());
+    model_.element_count = element_count_;
+    elements_ = {};
+    elements_.count = element_count_;
+    elements_.term_count = model_.term_count;
+    elements_.corners = corners_.data();
+    for (std::size_t t = 0; t < c.terms.size(); ++t) {
+      const ConcatenatedScenes::Term& term = c.terms[t];
+      DeviceTermArrays& arrays = term_arrays_[t];
+      kernels::ElementTermView<Real>& view = model_.terms[t];
+      kernels::ElementTermView<double>& view_d = elements_.terms[t];
+      view = {};
+      view_d = {};
+      view.law = view_d.law = term.law;
+      view.count = view_d.count = element_count_;
+      view.corners = view_d.corners = corners_.data();
+      view.corner_slot = view_d.corner_slot = corner_slot_.data();
+      view.rest_inverse = rest_inverse_.data();
+      view.rest_volume = rest_volume_.data();
+      view_d.rest_inverse = rest_inverse_d_.data();
+      view_d.rest_volume = rest_volume_d_.data();
+      for (int p = 0; p < kernels::kMostLawParameters; ++p) {
+        if (term.parameter[p].empty()) continue;
+        FMPC_CUDA_CHECK(arrays.parameter[p].upload(convert<Real>(term.parameter[p], *c.pool)), diagnostics, false);
+        FMPC_CUDA_CHECK(arrays.parameter_d[p].upload(term.parameter[p]), diagnostics, false);
+        view.parameter[p] = arrays.parameter[p].data();
+        view_d.parameter[p] = arrays.parameter_d[p].data();
+      }
+      if (!term.stiffness_damping.empty()) {
+        FMPC_CUDA_CHECK(arrays.damping.upload(convert<Real>(term.stiffness_damping, *c.pool)), diagnostics, false);
+        FMPC_CUDA_CHECK(arrays.damping_d.upload(term.stiffness_damping), diagnostics, false);
+        view.stiffness_damping = arrays.damping.data();
+        view_d.stiffness_damping = arrays.damping_d.data();
+      }
+      view.strain_table = view_d.strain_table = {nullptr, nullptr, 0};
+      if (implicit) {
+        const std::size_t bytes = kernels::visit_element_law(
+            term.law, [](auto element_law) { return sizeof(typename decltype(element_law)::Linearisation); });
+        FMPC_CUDA_CHECK(arrays.linearisation.allocate(bytes * count), diagnostics, false);
+        elements_.linearisation[t] = arrays.linearisation.data();
+      }
     }
-    if (c.has_element_damping) {
-      FMPC_CUDA_CHECK(field_damping_.upload(convert<Real>(c.stiffness_damping, *c.pool)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_damping_d_.upload(c.stiffness_damping), diagnostics, false);
-    }
-    FMPC_CUDA_CHECK(corner_force_.allocate(4 * static_cast<std::size_t>(element_count_)), diagnostics, false);
-    const auto data = [](const DeviceArray<Real>& array) -> const Real* {
-      return array.size() ? array.data() : nullptr;
-    };
-    const auto data_d = [](const DeviceArray<double>& array) -> const double* {
-      return array.size() ? array.data() : nullptr;
-    };
-    model_.field = {law,
-                    element_count_,
-                    corners_.data(),
-                    corner_slot_.data(),
-                    field_rest_inverse_.data(),
-                    field_rest_volume_.data(),
-                    data(field_youngs_),
-                    data(field_poisson_),
-                    data(field_bulk_),
-                    data(field_damping_),
-                    {nullptr, nullptr, 0}};
     model_.corners = {corner_offset_.data(), corner_index_.data(), corner_force_.data()};
     model_.corner_force = corner_force_.data();
-    elements_ = {};
-    elements_.law = law;
-    elements_.count = element_count_;
-    elements_.corners = corners_.data();
-    elements_.rest_inverse = field_rest_inverse_d_.data();
-    elements_.rest_volume = field_rest_volume_d_.data();
-    elements_.youngs_modulus = data_d(field_youngs_d_);
-    elements_.poisson_ratio = data_d(field_poisson_d_);
-    elements_.bulk_modulus = data_d(field_bulk_d_);
-    elements_.stiffness_damping = data_d(field_damping_d_);
-    elements_.strain_table = {nullptr, nullptr, 0};
-    if (common.integrator == sim::Integrator::ImplicitEuler) {
-      const auto count = static_cast<std::size_t>(element_count_);
-      FMPC_CUDA_CHECK(element_linearisation_.allocate(count), diagnostics, false);
+    if (implicit) {
       for (DeviceArray<double>* array : {&element_rhs_part_, &element_diagonal_part_, &element_product_})
         FMPC_CUDA_CHECK(array->allocate(12 * count), diagnostics, false);
-      elements_.linearisation = element_linearisation_.data();
       elements_.rhs_part = element_rhs_part_.data();
       elements_.diagonal_part = element_diagonal_part_.data();
       elements_.product = element_product_.data();
@@ -690,9 +713,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // the blocks' neighbours.
   bool choose_grid_launch(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
     const bool springs = model_.kind != GatherKind::Elements;
-    const bool double_precision = std::is_same_v<Real, double>;
     int resident = 0;  // with the least shared memory: registers and threads bound it
-    FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, double_precision,
+    FMPC_CUDA_CHECK(persistent_euler_block_limit<Real>(model_.kind,
                                                  persistent_euler_shared_bytes<Real>(1, 0, 0), resident),
                     diagnostics, false);
     if (resident <= 0) return true;
@@ -717,7 +739,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         records = std::max(records, end - begin);
       }
       int limit = 0;
-      FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, double_precision,
+      FMPC_CUDA_CHECK(persistent_euler_block_limit<Real>(model_.kind,
                                                    persistent_euler_shared_bytes<Real>(rows, records, 0), limit),
                       diagnostics, false);
       if (blocks > limit) continue;
@@ -739,7 +761,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         most_waited = std::max(most_waited, static_cast<int>(owners.size()));
       }
       FMPC_CUDA_CHECK(
-          persistent_euler_block_limit(model_.kind, double_precision,
+          persistent_euler_block_limit<Real>(model_.kind,
                                        persistent_euler_shared_bytes<Real>(rows, records, most_waited), limit),
           diagnostics, false);
       if (blocks > limit) continue;
@@ -832,7 +854,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       capacity = (capacity + 3) / 4 * 4;
       const long long bytes = cluster_euler_shared_bytes<Real>(rows, capacity, records);
       bool fits = false;
-      FMPC_CUDA_CHECK(cluster_euler_fits(std::is_same_v<Real, double>, per_cluster, rows, bytes, fits), diagnostics,
+      FMPC_CUDA_CHECK(cluster_euler_fits<Real>(per_cluster, rows, bytes, fits), diagnostics,
                       false);
       if (!fits) continue;
       FMPC_CUDA_CHECK(cluster_blocks_array_.upload(blocks), diagnostics, false);
@@ -872,11 +894,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       FMPC_CUDA_CHECK(table_strain_.upload(table.strain), diagnostics, false);
       FMPC_CUDA_CHECK(table_modulus_.upload(table.modulus), diagnostics, false);
       FMPC_CUDA_CHECK(stiffness_per_modulus_.upload(table.stiffness_per_modulus), diagnostics, false);
-      if (setup.tetrahedron_field && setup.tetrahedron_field->law == kernels::TetrahedronLaw::CorotationalLinear) {
-        const kernels::StrainTableView view{table_strain_.data(), table_modulus_.data(),
-                                            static_cast<int>(table.strain.size())};
-        model_.field.strain_table = view;
-        elements_.strain_table = view;
+      const kernels::StrainTableView view{table_strain_.data(), table_modulus_.data(),
+                                          static_cast<int>(table.strain.size())};
+      for (std::size_t t = 0; t < setup.elements.terms.size(); ++t) {
+        if (!sim::reads_strain_table(setup.elements.terms[t])) continue;
+        model_.terms[t].strain_table = view;
+        elements_.terms[t].strain_table = view;
       }
     }
     if (setup.integrator == sim::Integrator::ImplicitEuler) {
@@ -1036,12 +1059,15 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     const auto springs =
         energy_sum(EnergyTerm::SpringPotential, spring_begin_.at(scene), spring_begin_.at(scene + 1), diagnostics);
     if (!springs) return std::nullopt;
-    std::optional<double> elements = 0.0;
-    if (elements_.count > 0)
-      elements =
-          energy_sum(EnergyTerm::ElementPotential, element_begin_.at(scene), element_begin_.at(scene + 1), diagnostics);
-    if (!elements) return std::nullopt;
-    return *springs + *elements;
+    // The terms' energies in list order, as the host's element_elastic_energy adds them.
+    double elements = 0.0;
+    for (int term = 0; term < elements_.term_count && elements_.count > 0; ++term) {
+      const auto energy = energy_sum(EnergyTerm::ElementPotential, element_begin_.at(scene),
+                                     element_begin_.at(scene + 1), diagnostics, term);
+      if (!energy) return std::nullopt;
+      elements += *energy;
+    }
+    return *springs + elements;
   }
   std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     const auto elastic = elastic_energy(scene, diagnostics);
@@ -1730,7 +1756,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return *result_host_.data();
   }
 
-  std::optional<double> energy_sum(EnergyTerm term, int begin, int end, DiagnosticList& diagnostics) const {
+  // The sum of `term` over [begin, end); ElementPotential's of element term `element_term`.
+  std::optional<double> energy_sum(EnergyTerm term, int begin, int end, DiagnosticList& diagnostics,
+                                   int element_term = 0) const {
     const sim::SimulationSetup& common = scenes_.front();
     EnergyArguments<Real> a{};
     a.state = state_[current_].view();
@@ -1746,7 +1774,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     a.force_x = energy_force_x_.data();
     a.force_y = energy_force_y_.data();
     a.force_z = energy_force_z_.data();
-    a.elements = elements_;
+    if (term == EnergyTerm::ElementPotential) {
+      a.element_term = elements_.terms[element_term];
+      a.element_corners = corners_.data();
+    }
     if (common.strain_stiffness) {
       a.table = {table_strain_.data(), table_modulus_.data(), static_cast<int>(table_strain_.size())};
       a.stiffness_per_modulus = stiffness_per_modulus_.data();
@@ -1830,11 +1861,19 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceArray<kernels::SlicedRow> sliced_row_;
   DeviceArray<double> start_x_, start_y_, start_z_;  // the start positions, for largest_displacement
   DeviceArray<unsigned int> inverted_count_;
-  DeviceArray<Real> field_rest_inverse_, field_rest_volume_, field_youngs_, field_poisson_, field_bulk_, field_damping_;
+  // The element terms' arrays (upload_elements): the geometry in Real and in double, each term's parameters and
+  // damping in both and its implicit linearisation.
+  struct DeviceTermArrays {
+    DeviceArray<Real> parameter[kernels::kMostLawParameters];
+    DeviceArray<double> parameter_d[kernels::kMostLawParameters];
+    DeviceArray<Real> damping;
+    DeviceArray<double> damping_d;
+    DeviceArray<unsigned char> linearisation;
+  };
+  DeviceArray<Real> rest_inverse_, rest_volume_;
+  DeviceArray<double> rest_inverse_d_, rest_volume_d_;
+  DeviceTermArrays term_arrays_[kMostElementTerms];
   DeviceArray<kernels::CornerForce<Real>> corner_force_;
-  DeviceArray<double> field_rest_inverse_d_, field_rest_volume_d_, field_youngs_d_, field_poisson_d_, field_bulk_d_,
-      field_damping_d_;
-  DeviceArray<kernels::TetrahedronLinearisation> element_linearisation_;
   DeviceArray<double> element_rhs_part_, element_diagonal_part_, element_product_;
   std::vector<sim::InversionReport> inversions_;
   kernels::VertexLoads<Real> loads_{};

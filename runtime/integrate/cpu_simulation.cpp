@@ -11,6 +11,7 @@
 
 #include "kernels/implicit_math.h"
 #include "kernels/integrator_math.h"
+#include "kernels/element_laws.h"
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
@@ -93,30 +94,35 @@ class CpuSimulationImpl final : public CpuSimulation {
     network_view_.law.k2_over_k1 = static_cast<Real>(setup.basafa_k2_over_k1);
     network_view_.law.xc = static_cast<Real>(setup.basafa_xc);
     for (const Tetrahedron& t : setup.tetrahedra) corners_.insert(corners_.end(), t.begin(), t.end());
-    if (setup_.tetrahedron_field) {
-      const TetrahedronField& field = *setup_.tetrahedron_field;
-      field_rest_inverse_ = convert(field.rest_inverse);
-      field_rest_volume_ = convert(field.rest_volume);
-      field_youngs_modulus_ = convert(field.youngs_modulus);
-      field_poisson_ratio_ = convert(field.poisson_ratio);
-      field_bulk_modulus_ = convert(field.bulk_modulus);
-      field_damping_ = convert(field.stiffness_damping);
-      corner_force_.assign(4 * field.size(), kernels::CornerForce<Real>{});
-      const auto data_or_null = [](const std::vector<Real>& values) { return values.empty() ? nullptr : values.data(); };
-      field_view_.law = field.law;
-      field_view_.count = static_cast<int>(field.size());
-      field_view_.corners = corners_.data();
-      field_view_.corner_slot = field.corner_slot.data();
-      field_view_.rest_inverse = field_rest_inverse_.data();
-      field_view_.rest_volume = field_rest_volume_.data();
-      field_view_.youngs_modulus = data_or_null(field_youngs_modulus_);
-      field_view_.poisson_ratio = data_or_null(field_poisson_ratio_);
-      field_view_.bulk_modulus = data_or_null(field_bulk_modulus_);
-      field_view_.stiffness_damping = data_or_null(field_damping_);
-      field_view_.strain_table = {nullptr, nullptr, 0};
-      if (setup_.strain_stiffness && field.law == kernels::TetrahedronLaw::CorotationalLinear)
-        field_view_.strain_table = strain_table_view(*setup_.strain_stiffness);
-      corner_view_ = {field.corner_offset.data(), field.corner_index.data(), corner_force_.data()};
+    if (!setup_.elements.empty()) {
+      const ElementGeometry& geometry = setup_.elements.geometry;
+      rest_inverse_ = convert(geometry.rest_inverse);
+      rest_volume_ = convert(geometry.rest_volume);
+      corner_force_.assign(4 * geometry.size(), kernels::CornerForce<Real>{});
+      const kernels::StrainTableView table = setup_.strain_stiffness ? strain_table_view(*setup_.strain_stiffness)
+                                                                     : kernels::StrainTableView{nullptr, nullptr, 0};
+      for (const ElementTerm& term : setup_.elements.terms) {
+        TermArrays arrays;
+        for (int p = 0; p < kernels::kMostLawParameters; ++p) arrays.parameter[p] = convert(term.parameter[p]);
+        arrays.damping = convert(term.stiffness_damping);
+        term_arrays_.push_back(std::move(arrays));
+        const TermArrays& held = term_arrays_.back();
+        const auto data_or_null = [](const std::vector<Real>& values) {
+          return values.empty() ? nullptr : values.data();
+        };
+        kernels::ElementTermView<Real> view{};
+        view.law = term.law;
+        view.count = static_cast<int>(geometry.size());
+        view.corners = corners_.data();
+        view.corner_slot = geometry.corner_slot.data();
+        view.rest_inverse = rest_inverse_.data();
+        view.rest_volume = rest_volume_.data();
+        for (int p = 0; p < kernels::kMostLawParameters; ++p) view.parameter[p] = data_or_null(held.parameter[p]);
+        view.stiffness_damping = data_or_null(held.damping);
+        view.strain_table = reads_strain_table(term) ? table : kernels::StrainTableView{nullptr, nullptr, 0};
+        term_views_.push_back(view);
+      }
+      corner_view_ = {geometry.corner_offset.data(), geometry.corner_index.data(), corner_force_.data()};
     }
     loads_.mass = mass_.data();
     loads_.fixed = fixed_.data();
@@ -199,12 +205,24 @@ class CpuSimulationImpl final : public CpuSimulation {
   // the model's forces, dispatched once per call.
   void accelerations(const Vector3Arrays<Real>& p, const Vector3Arrays<Real>& v, Vector3Arrays<Real>& a) {
     const kernels::StateView<Real> state = view(p, v);
-    if (setup_.tetrahedron_field) {
-      pool_.run(static_cast<std::size_t>(field_view_.count), [&](std::size_t begin, std::size_t end) {
-        for (std::size_t e = begin; e < end; ++e)
-          kernels::tetrahedron_corner_forces(static_cast<int>(e), field_view_, state, corner_force_.data());
-      });
-      if (setup_.model == ForceModel::CorotationalFem) {
+    if (!term_views_.empty()) {
+      // Each term's pass in list order: the first writes the corner forces, the later ones add to them.
+      for (std::size_t term = 0; term < term_views_.size(); ++term) {
+        const kernels::ElementTermView<Real>& field = term_views_[term];
+        kernels::visit_element_law(field.law, [&](auto element_law) {
+          using Law = decltype(element_law);
+          pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
+            for (std::size_t e = begin; e < end; ++e) {
+              if (term == 0) {
+                kernels::element_corner_forces<Law, false>(static_cast<int>(e), field, state, corner_force_.data());
+              } else {
+                kernels::element_corner_forces<Law, true>(static_cast<int>(e), field, state, corner_force_.data());
+              }
+            }
+          });
+        });
+      }
+      if (setup_.springs.size() == 0) {
         vertex_pass(kernels::ElementForces<Real>{corner_view_}, state, a);
       } else {
         vertex_pass(kernels::SpringAndElementForces<Real>{network_view_, corner_view_}, state, a);
@@ -611,10 +629,15 @@ class CpuSimulationImpl final : public CpuSimulation {
   kernels::VertexLoads<Real> loads_{};
   std::vector<int> corners_;  // 4 per tetrahedron
   std::vector<std::int32_t> neighbour_;  // the other endpoint of each CSR entry (adjacency_neighbours)
-  std::vector<Real> field_rest_inverse_, field_rest_volume_, field_youngs_modulus_, field_poisson_ratio_,
-      field_bulk_modulus_, field_damping_;
+  // The element terms in Real: the geometry the terms share, each term's parameters and damping, and its view.
+  struct TermArrays {
+    std::vector<Real> parameter[kernels::kMostLawParameters];
+    std::vector<Real> damping;
+  };
+  std::vector<Real> rest_inverse_, rest_volume_;
+  std::vector<TermArrays> term_arrays_;  // the views point into its vectors' buffers, which moves keep
+  std::vector<kernels::ElementTermView<Real>> term_views_;
   std::vector<kernels::CornerForce<Real>> corner_force_;
-  kernels::TetrahedronFieldView<Real> field_view_{};
   kernels::CornerForceView<Real> corner_view_{};
   Real h_ = Real(0);
   bool have_acceleration_ = false;
@@ -648,7 +671,7 @@ double elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& p
                          : net.stiffness[s];
     energy += kernels::spring_potential_energy(length, rest, k, law);
   }
-  if (setup.tetrahedron_field) energy += element_elastic_energy(setup, positions);
+  if (!setup.elements.empty()) energy += element_elastic_energy(setup, positions);
   return energy;
 }
 

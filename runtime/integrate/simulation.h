@@ -11,7 +11,7 @@
 #include "diagnostics/diagnostic.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
-#include "runtime/fem/tetrahedron_field.h"
+#include "runtime/fem/element_terms.h"
 #include "runtime/mesh/mesh.h"
 #include "runtime/springs/spring_network.h"
 
@@ -20,18 +20,10 @@ namespace fmpc::sim {
 enum class Integrator { ForwardEuler, SemiImplicitEuler, VelocityVerlet, RungeKutta4, ImplicitEuler };
 enum class Precision { Float, Double };
 
-// What computes the internal forces (DESIGN section 7). Every integrator runs every model on both backends: the
-// integrators ask a model for its forces (and, for implicit Euler, its stiffness), never for its kind.
-enum class ForceModel {
-  Springs,          // the spring network, optionally with the volume term (tetrahedron_field, VolumePreservation)
-  CorotationalFem,  // linear tetrahedra with per-element rotation (tetrahedron_field, CorotationalLinear); no springs
-};
-
 // What happens when a tetrahedron turns inside out during a run: it is always counted and reported.
 enum class InversionPolicy { Warn, Stop };
 
 const char* to_string(Integrator integrator);
-const char* to_string(ForceModel model);
 
 struct ImplicitSolverOptions {
   // Conjugate-gradient iterations per step; 0: twice the unknowns (3 per vertex), Eigen's default. A fixed small
@@ -61,8 +53,8 @@ struct ProbeReading {
 
 // Table-driven stiffness k(strain) (DESIGN section 7): every step, each spring's strain X = (l - l0) / l0 is looked
 // up in modulus(X) (kernels/table_math.h, clamped to the table's ends) and k = modulus(X) * stiffness_per_modulus.
-// With the co-rotational FEM, each element's Young's modulus is modulus(X) at its principal strain of largest
-// magnitude (kernels/tetrahedron_math.h), and stiffness_per_modulus is empty.
+// An element term whose law takes its Young's modulus from a strain table (kStrainTableModulus) looks it up at the
+// law's strain measure (kernels/laws/), and stiffness_per_modulus is empty.
 struct StrainStiffnessTable {
   std::vector<double> strain;                 // breakpoints, strictly increasing, at least 2
   std::vector<double> modulus;                // Pa, one per breakpoint
@@ -74,15 +66,17 @@ struct SimulationSetup {
   std::vector<Point3> initial_positions;   // empty: the rest positions
   std::vector<Point3> initial_velocities;  // empty: at rest
   std::vector<double> mass;                // kg per vertex (lumped_masses)
-  ForceModel model = ForceModel::Springs;
-  // Springs: rest_length, stiffness, damping and adjacency filled in. CorotationalFem: no springs (vertex_count and
-  // an all-zero adjacency_offset only).
+  // What computes the internal forces (DESIGN section 7): a spring network and element terms, either or both; every
+  // integrator runs every combination on both backends, asking for forces (and, for implicit Euler, the stiffness),
+  // never for a kind. Springs: rest_length, stiffness, damping and adjacency filled in; a model of elements alone
+  // has none (vertex_count and an all-zero adjacency_offset only).
   SpringNetwork springs;
-  // The mesh's tetrahedra (positively oriented): inversions are counted on them in every model, and a tetrahedron
-  // field's arrays are parallel to them. Empty for triangle meshes.
+  // The mesh's tetrahedra (positively oriented): inversions are counted on them in every model, and the element
+  // terms' arrays are parallel to them. Empty for triangle meshes.
   std::vector<Tetrahedron> tetrahedra;
-  // CorotationalFem: the elements (CorotationalLinear). Springs: the volume term (VolumePreservation), when on.
-  std::optional<TetrahedronField> tetrahedron_field;
+  // The element terms (runtime/fem/element_terms.h): a finite-element model's law, or a term beside the springs (the
+  // volume term); empty: none. At most kernels::kMostElementTerms.
+  ElementTerms elements;
   // Rayleigh's mass-proportional damping alpha (1/s): a force -alpha m v on every free vertex (its stiffness-
   // proportional part is in the springs' dashpots and the elements' stiffness_damping).
   double mass_damping = 0.0;
@@ -121,6 +115,10 @@ struct SimulationSetup {
   std::optional<StrainStiffnessTable> strain_stiffness;  // replaces springs.stiffness every step
 };
 
+// The model's name as scenes spell it: "springs" for a spring network (with or without a term beside it), else the
+// scene `model:` keyword of its element law (the registry's model_keyword).
+std::string model_name(const SimulationSetup& setup);
+
 // Where vertex v starts: its initial position, or its rest position.
 const Point3& start_position(const SimulationSetup& setup, std::size_t v);
 
@@ -146,10 +144,15 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
                                     const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
                                     const std::vector<std::int32_t>& vertices);
 
-// Per tetrahedron at `positions` (double): the von Mises stress (Pa) of the co-rotational FEM, or of the volume
-// term's pressure kappa (V - V0) / V0 with springs (whose own stresses are not a continuum field); empty without
-// a tetrahedron field.
-std::vector<double> element_von_mises_stress(const SimulationSetup& setup, const std::vector<Point3>& positions);
+// Per element term, per tetrahedron at `positions` (double): the term's stress output (its law's stress_output, the
+// frames' cell array named by the law's kStressOutput: e.g. a von Mises stress, or the volume term's pressure beside
+// springs, whose own stresses are not a continuum field); empty without element terms.
+struct ElementStressOutput {
+  const char* name;            // the cell array's name
+  std::vector<double> values;  // one per tetrahedron
+};
+std::vector<ElementStressOutput> element_stress_outputs(const SimulationSetup& setup,
+                                                        const std::vector<Point3>& positions);
 
 // The CG iteration cap of one implicit step: options.max_iterations, or twice the unknowns when it is 0.
 int implicit_iteration_limit(const SimulationSetup& setup);
@@ -158,11 +161,10 @@ int implicit_iteration_limit(const SimulationSetup& setup);
 bool validate_loads(const SimulationSetup& setup, DiagnosticList& diagnostics);
 
 // Elastic energy at `positions` (J): of the springs, 1/2 k (l - l0)^2 for the linear law, the integral of F_s for
-// Basafa-Farahmand; of the elements, V0 (mu eps:eps + lambda/2 tr(eps)^2) (co-rotational) or kappa (V - V0)^2 /
-// (2 V0) (volume term). With a strain table, k (E) is the table's value at the current strain (an approximation:
-// the integral of the varying modulus is not taken).
+// Basafa-Farahmand; of each element term, its law's energy. With a strain table, k (E) is the table's value at the
+// current strain (an approximation: the integral of the varying modulus is not taken).
 double elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions);
-// The tetrahedron field's share of elastic_energy.
+// The element terms' share of elastic_energy.
 double element_elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions);
 // Kinetic energy 1/2 m |v|^2 summed over the vertices (J).
 double kinetic_energy(const SimulationSetup& setup, const std::vector<Point3>& velocities);

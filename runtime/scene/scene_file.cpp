@@ -12,6 +12,7 @@
 #include <unordered_map>
 
 #include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/io/input_file.h"
 
 namespace fmpc::sim {
@@ -46,7 +47,10 @@ const char* scene_name(StiffnessMapping mapping) {
   return "van_gelder_1998";
 }
 
-const char* scene_name(ForceModel model) { return to_string(model); }
+std::string model_keyword(const Scene& scene) {
+  if (scene.model == ForceModel::Springs) return "springs";
+  return element_law_row(scene.element_law).model_keyword;
+}
 
 SourceRange Scene::range_of(const std::string& field) const {
   const auto found = ranges.find(field);
@@ -403,9 +407,18 @@ class SceneParser {
                                           "; give the scene a 'name'");
     }
     if (root["model"]) {
-      static const std::vector<std::string> names = {"springs", "corotational_fem"};
-      if (auto i = keyword(root["model"], "model", names, "a force model"))
-        scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::CorotationalFem;
+      // "springs", then each element law's model keyword, in the registry's order.
+      std::vector<std::string> names = {"springs"};
+      std::vector<int> laws = {-1};
+      for (const ElementLawRow& row : element_law_rows()) {
+        if (row.model_keyword == nullptr) continue;
+        names.push_back(row.model_keyword);
+        laws.push_back(row.law);
+      }
+      if (auto i = keyword(root["model"], "model", names, "a force model")) {
+        scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::Elements;
+        if (*i > 0) scene_.element_law = laws[*i];
+      }
     }
     if (root["on_inversion"]) {
       static const std::vector<std::string> names = {"warn", "stop"};
@@ -462,7 +475,7 @@ class SceneParser {
       if (auto value = integer(root["threads"], "threads", 0, 256)) scene_.threads = static_cast<unsigned>(*value);
     }
     if (root["outputs"]) parse_outputs(root["outputs"]);
-    if (scene_.model == ForceModel::CorotationalFem) check_fem_fields(root);
+    if (scene_.model == ForceModel::Elements) check_fem_fields(root);
     if (scene_.model == ForceModel::Springs && scene_.material.poisson_ratio && !scene_.volume_term) {
       diagnostics_.error(scene_.range_of("material.poisson_ratio"),
                          "material.poisson_ratio: springs alone have nu = 1/4 (central springs obey the Cauchy "

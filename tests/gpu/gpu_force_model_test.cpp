@@ -13,7 +13,8 @@
 #include <vector>
 
 #include "runtime/fem/fem_model_builder.h"
-#include "runtime/fem/tetrahedron_field.h"
+#include "runtime/fem/element_law_registry.h"
+#include "tests/support/volume_term.h"
 #include "runtime/gpu/gpu_simulation.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/scene/spring_model_builder.h"
