@@ -140,6 +140,9 @@ std::string print_fmpc(const File& file);
 // Reserved words: names spelled like these are quoted by the printer.
 bool is_reserved_word(const std::string& word);
 
+// A name as the language writes it: bare when it is an identifier and not a reserved word, else quoted.
+std::string name_as_written(const std::string& name);
+
 // The parameter names of an MF family in the language ("gauss" -> mean, sd) and its IR kind; nullopt for unknown
 // families. "linear" has no fixed names (its coefficients are named by input) and reports an empty list.
 struct FamilySignature {

@@ -1,6 +1,5 @@
 // edit_fmpc_parameters (fmpc_language.h): numbers rewritten in place, found through the AST's source ranges.
 #include <algorithm>
-#include <cctype>
 
 #include "compiler/frontend/fmpc_ast.h"
 #include "compiler/frontend/fmpc_language.h"
@@ -15,13 +14,6 @@ struct Replacement {
   std::size_t end = 0;
   std::string text;
 };
-
-bool plain_name(const std::string& name) {
-  if (name.empty() || !(std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_')) return false;
-  for (char c : name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
-  return !ast::is_reserved_word(name);
-}
 
 const ast::Term* find_term(const ast::File& file, const ParameterEdit& edit, const ast::Variable** variable) {
   for (const ast::System& system : file.systems) {
@@ -90,8 +82,7 @@ std::optional<std::string> edit_fmpc_parameters(const std::string& path, const s
     }
     // A linear coefficient left out (0): added before the closing parenthesis.
     const std::size_t close = offset(term->call_range.end_line, term->call_range.end_column) - 1;
-    const std::string name = edit.parameter == "offset" || plain_name(edit.parameter) ? edit.parameter
-                                                                                     : "\"" + edit.parameter + "\"";
+    const std::string name = edit.parameter == "offset" ? edit.parameter : ast::name_as_written(edit.parameter);
     replacements.push_back(
         Replacement{close, close, (term->arguments.empty() ? "" : ", ") + name + " " + number});
   }

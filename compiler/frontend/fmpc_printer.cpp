@@ -23,12 +23,7 @@ bool is_identifier(const std::string& text) {
   });
 }
 
-std::string name_text(const std::string& name) {
-  if (is_identifier(name) && !is_reserved_word(name)) return name;
-  return "\"" + name + "\"";
-}
-
-std::string name_text(const Name& name) { return name_text(name.text); }
+std::string name_text(const Name& name) { return name_as_written(name.text); }
 
 std::string unit_text(const Name& unit) { return unit.text == "%" ? unit.text : name_text(unit); }
 
@@ -403,6 +398,11 @@ System system_of(const FuzzySystem& source) {
 }
 
 }  // namespace
+
+std::string name_as_written(const std::string& name) {
+  if (is_identifier(name) && !is_reserved_word(name)) return name;
+  return "\"" + name + "\"";
+}
 
 std::string print_fmpc(const File& file) { return Printer().print(file); }
 

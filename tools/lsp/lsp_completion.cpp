@@ -2,7 +2,6 @@
 // with the names of the system being edited (its variables, a variable's terms, a family's parameters). The word
 // being typed is left to the client to filter by.
 #include <algorithm>
-#include <cctype>
 
 #include "compiler/frontend/fmpc_ast.h"
 #include "tools/lsp/lsp_document.h"
@@ -19,17 +18,6 @@ constexpr int kItemUnit = 11;
 constexpr int kItemValue = 12;
 constexpr int kItemKeyword = 14;
 constexpr int kItemEnumMember = 20;
-
-bool is_identifier(const std::string& text) {
-  if (text.empty() || !(std::isalpha(static_cast<unsigned char>(text[0])) || text[0] == '_')) return false;
-  for (char c : text)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
-  return true;
-}
-
-std::string name_as_written(const std::string& name) {
-  return is_identifier(name) && !ast::is_reserved_word(name) ? name : "\"" + name + "\"";
-}
 
 class Completions {
  public:
@@ -91,13 +79,13 @@ Json Document::completion(const Position& position, bool snippets) const {
     if (!system) return;
     for (const OutlineVariable& variable : system->variables)
       if (variable.is_output == outputs)
-        out.add(name_as_written(variable.name), kItemVariable, outputs ? "output" : "input");
+        out.add(ast::name_as_written(variable.name), kItemVariable, outputs ? "output" : "input");
   };
   const auto add_terms = [&](std::optional<std::size_t> subject) {
     if (!subject || !system) return;
     if (const OutlineVariable* variable = system->find_variable(unquoted_name(tokens[*subject])))
       for (const OutlineTerm& term : variable->terms)
-        out.add(name_as_written(term.name), kItemEnumMember, "term of " + variable->name);
+        out.add(ast::name_as_written(term.name), kItemEnumMember, "term of " + variable->name);
   };
   const bool next_line = positions_.at_offset(limit).line > positions_.at_offset(p.end).line;
 
