@@ -62,7 +62,7 @@ class LspProcess {
     std::size_t written = 0;
     while (written < bytes.size()) {
       const ssize_t n = ::write(in_, bytes.data() + written, bytes.size() - written);
-      REQUIRE(n > 0);
+      if (n <= 0) FAIL("fmpc lsp stopped reading its input");
       written += static_cast<std::size_t>(n);
     }
   }
@@ -121,9 +121,9 @@ class LspProcess {
  private:
   char byte() {
     pollfd fd{out_, POLLIN, 0};
-    REQUIRE(::poll(&fd, 1, 20000) == 1);
+    if (::poll(&fd, 1, 20000) != 1) FAIL("fmpc lsp sent nothing for 20 s");
     char c = 0;
-    REQUIRE(::read(out_, &c, 1) == 1);
+    if (::read(out_, &c, 1) != 1) FAIL("fmpc lsp closed its output");
     return c;
   }
 
@@ -293,6 +293,8 @@ TEST_CASE("fmpc lsp: malformed and oversized frames, bad JSON and bad requests g
   // A request before initialize.
   CHECK(server.request("textDocument/hover", at("file:///a.fis", 0, 0))["error"]["code"] == -32002);
   server.request("initialize", Json{{"capabilities", Json::object()}});
+  CHECK(server.request("initialize", Json{{"capabilities", Json::object()}})["error"]["message"] ==
+        "'initialize' was already sent");
   // A header part without Content-Length, then one whose length is not a number: each refused, the stream goes on.
   server.write_raw("Content-Type: application/vscode-jsonrpc; charset=utf-8\r\n\r\n");
   Json error = server.response(nullptr);

@@ -130,6 +130,10 @@ std::vector<Json> LanguageServer::handle(const Json& message) {
       out.push_back(error_response(id, kServerNotInitialized, "the first request must be 'initialize'"));
       return out;
     }
+    if (initialized_ && method == "initialize") {
+      out.push_back(error_response(id, kInvalidRequest, "'initialize' was already sent"));
+      return out;
+    }
     if (shutdown_) {
       out.push_back(error_response(id, kInvalidRequest, "the server is shutting down: only 'exit' is accepted"));
       return out;
