@@ -285,7 +285,10 @@ int run_tune(const TuneOptions& options) {
   else
     out << "\nThe search converged after " << result.search.evaluations << " evaluations.\n";
   out << "\n## Changes\n\n";
-  if (file.dialect == Dialect::Fmpc)
+  // The writers of the other formats lay a file out their own way: a line diff means something only where the
+  // input was laid out the same (a file fmpc wrote, for one).
+  const auto line_count = [](const std::string& t) { return std::count(t.begin(), t.end(), '\n'); };
+  if (file.dialect == Dialect::Fmpc || line_count(original) == line_count(text))
     out << "```diff\n" << tune_line_diff(original, text, options.file, tuned_path) << "```\n";
   else
     out << "(written by fmpc's " << dialect_name(file.dialect)
