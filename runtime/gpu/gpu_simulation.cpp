@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "runtime/gpu/gpu_launch.h"
+#include "runtime/integrate/stepping_engine.h"
 #include "runtime/integrate/worker_pool.h"
 #include "runtime/springs/sliced_springs.h"
 
@@ -163,7 +164,7 @@ cudaError_t copy_async(DeviceArray<Real>& to, const DeviceArray<Real>& from, cud
 }
 
 // Host arrays whose resize leaves trivial values uninitialised, so that the pool's workers touch their pages first:
-// std::vector's zero fill ran on one thread, page faults included (GpuSimulation::create of a 97M-spring box took
+// std::vector's zero fill ran on one thread, page faults included (creating the simulation of a 97M-spring box took
 // 29.8 s on the H100 machine's 16 cores, most of it copying on one thread).
 template <typename T>
 struct UninitialisedAllocator : std::allocator<T> {
@@ -403,14 +404,16 @@ const char* shared_field_mismatch(const sim::SimulationSetup& scene, const sim::
   return nullptr;
 }
 
+// The CUDA engine of a batch (runtime/integrate/stepping_engine.h): upload, launch choice, the integrators'
+// enqueueing with persistent and graph launches, the checks' data and the checkpoint, read-back.
 template <typename Real>
-class GpuBatchImpl final : public GpuBatchSimulation {
+class GpuEngine final : public sim::SteppingEngine {
  public:
-  GpuBatchImpl(std::vector<sim::SimulationSetup> scenes, std::vector<sim::StabilityReport> stability,
-               const GpuOptions& options)
-      : scenes_(std::move(scenes)), stability_(std::move(stability)), options_(options) {}
+  GpuEngine(const std::vector<sim::SimulationSetup>& scenes, const std::vector<sim::StabilityReport>& stability,
+            const GpuOptions& options)
+      : scenes_(scenes), stability_(stability), options_(options) {}
 
-  ~GpuBatchImpl() override {
+  ~GpuEngine() override {
     graphs_.clear();
     if (stream_ != nullptr) cudaStreamDestroy(stream_);
   }
@@ -482,7 +485,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     FMPC_CUDA_CHECK(energy_result_.allocate(1), diagnostics, false);
     element_begin_ = c.element_begin;
     element_count_ = element_begin_.back();
-    inversions_.assign(scenes_.size(), sim::InversionReport{});
     if (element_count_ > 0) {
       FMPC_CUDA_CHECK(corners_.upload(c.corners), diagnostics, false);
       if (scenes_.size() > 1) FMPC_CUDA_CHECK(element_scene_.upload(c.element_scene), diagnostics, false);
@@ -523,7 +525,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
     // stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
-    return save_checkpoint(diagnostics) && synchronize(diagnostics);
+    return synchronize(diagnostics);
   }
 
   // The springs' incidence records, where the stiffness stays fixed during the run (no strain table): in the sliced
@@ -917,63 +919,32 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
-    if (failed_) return false;
-    const std::size_t last = steps_taken_ + steps;
-    while (steps_taken_ < last) {
-      // Checks fall on multiples of check_every counted from the run's start (as the CPU backend's), and at the end;
-      // a persistent launch takes up to persistent_checks_ of them.
-      std::vector<std::size_t> ends;
-      for (std::size_t at = steps_taken_; at < last && ends.size() < checks_per_launch();) {
-        at = check_every == 0 ? last : std::min(last, (at / check_every + 1) * check_every);
-        if (!ends.empty() && at - steps_taken_ > kMostPersistentLaunchSteps) break;
-        ends.push_back(at);
-      }
-      if (persistent_launch() ? !run_persistent(ends, diagnostics)
-                              : !run_steps(ends.front() - steps_taken_, options_.use_graphs, diagnostics))
-        return fail();
-      // Each check acted on in order as if its chunk had been launched alone: the state of a check before the
-      // launch's last is only in its checkpoint slot, so acting on it means restoring the check before (a replay),
-      // after which the launch's later steps are dropped.
-      for (std::size_t check = 0; check < ends.size(); ++check) {
-        const bool inner = check + 1 < ends.size();
-        if (persistent_launch()) {
-          steps_taken_ = ends[check];
-          checks_slot_ = static_cast<int>(check);
-          checks_pending_ = true;
-        }
-        const std::optional<int> bad = first_non_finite_vertex(diagnostics);
-        if (!bad) return fail();
-        if (*bad < n_) return locate_non_finite(diagnostics);
-        const std::size_t restores = restores_;
-        if (!check_displacement_bound(diagnostics) || !check_inversions(diagnostics)) return fail();
-        if (!save_checkpoint(diagnostics)) return fail();
-        if (restores_ != restores) break;
-        if (inner) {
-          // The launch stored this check's state in slot check + 1.
-          checkpoint_slot_ = static_cast<int>(check) + 1;
-          checkpoint_in_state_ = false;
-        }
-      }
-    }
-    return true;
-  }
-
-  // The checks one launch takes (advance): persistent_checks_ on the cooperative grid, one otherwise and where the
-  // displacement bound is checked (from the positions held, which are the launch's last).
-  std::size_t checks_per_launch() const {
-    if (persistent_blocks_ == 0) return 1;
-    for (std::size_t scene = 0; scene < scenes_.size(); ++scene)
-      if (displacement_bound_checked(scene)) return 1;
-    return persistent_checks_;
-  }
-
-  const sim::InversionReport& inversions(std::size_t scene) const override { return inversions_.at(scene); }
-
-  std::size_t scene_count() const override { return scenes_.size(); }
+  const char* label() const override { return "GPU "; }
   std::size_t steps_taken() const override { return steps_taken_; }
-  const sim::StabilityReport& stability(std::size_t scene) const override { return stability_.at(scene); }
-  const std::optional<GpuNonFiniteReport>& non_finite() const override { return non_finite_; }
+  // A persistent launch on the cooperative grid takes persistent_checks_; otherwise one check per run.
+  std::size_t checks_per_run() const override { return persistent_blocks_ > 0 ? persistent_checks_ : 1; }
+  std::size_t most_steps_per_run() const override { return kMostPersistentLaunchSteps; }
+  bool non_finite_is_exact() const override { return false; }
+  sim::SimulationLaunches launches() const override { return {persistent_launch(), cluster_launch()}; }
+  bool reduces_in_place() const override { return true; }
+
+  bool run(const std::vector<std::size_t>& ends, DiagnosticList& diagnostics) override {
+    run_ends_ = ends;
+    selected_inner_ = false;
+    return persistent_launch() ? run_persistent(ends, diagnostics)
+                               : run_steps(ends.front() - steps_taken_, options_.use_graphs, diagnostics);
+  }
+
+  // A persistent launch's check before its last is only in its checkpoint slot: the checks read that slot, and a
+  // checkpoint saved there is that slot (save_checkpoint).
+  void select_check(std::size_t check) override {
+    if (!persistent_launch()) return;
+    steps_taken_ = run_ends_[check];
+    checks_slot_ = static_cast<int>(check);
+    checks_pending_ = true;
+    selected_check_ = check;
+    selected_inner_ = check + 1 < run_ends_.size();
+  }
 
   std::vector<sim::Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const override {
     const DeviceState<Real>& s = state_[current_];
@@ -1041,8 +1012,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
-  bool persistent_launch() const override { return persistent_blocks_ > 0 || cluster_blocks_ > 0; }
-  bool cluster_launch() const override { return cluster_blocks_ > 0; }
+  bool persistent_launch() const { return persistent_blocks_ > 0 || cluster_blocks_ > 0; }
+  bool cluster_launch() const { return cluster_blocks_ > 0; }
 
   std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     return energy_sum(EnergyTerm::Kinetic, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
@@ -1079,11 +1050,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
  private:
-  bool fail() {
-    failed_ = true;
-    return false;
-  }
-
   bool synchronize(DiagnosticList& diagnostics) const {
     FMPC_CUDA_CHECK(cudaStreamSynchronize(stream_), diagnostics, false);
     return true;
@@ -1096,7 +1062,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   // Inverted elements per scene now: counts and each scene's smallest inverted element (local index, -1: none).
-  bool count_inverted(std::vector<unsigned int>& counts, std::vector<int>& firsts, DiagnosticList& diagnostics) {
+  bool count_inverted(std::vector<unsigned int>& counts, std::vector<int>& firsts, DiagnosticList& diagnostics) override {
     const std::size_t scenes = scenes_.size();
     if (checks_pending_) {
       // The persistent kernel counted at the state now held.
@@ -1132,79 +1098,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     if (!synchronize(diagnostics)) return false;
     for (std::size_t scene = 0; scene < scenes; ++scene)
       firsts[scene] = counts[scene] > 0 ? firsts[scene] - element_begin_[scene] : -1;
-    return true;
-  }
-
-  // As the CPU backend: inversions counted at every check; a scene's first one is located exactly by replaying from
-  // the last check one step at a time, then warned about (the run goes on) or, with on_inversion: stop, an error.
-  bool check_inversions(DiagnosticList& diagnostics) {
-    if (element_count_ == 0) return true;
-    std::vector<unsigned int> counts;
-    std::vector<int> firsts;
-    if (!count_inverted(counts, firsts, diagnostics)) return false;
-    bool newly = false;
-    for (std::size_t scene = 0; scene < counts.size(); ++scene)
-      newly = newly || (counts[scene] > 0 && inversions_[scene].largest_count == 0);
-    if (newly) {
-      const std::size_t failed_by = steps_taken_;
-      if (!restore_checkpoint(diagnostics)) return false;
-      bool stop = false;
-      for (;;) {
-        if (!count_inverted(counts, firsts, diagnostics)) return false;
-        for (std::size_t scene = 0; scene < counts.size(); ++scene) {
-          sim::InversionReport& report = inversions_[scene];
-          if (counts[scene] == 0 || report.largest_count > 0) continue;
-          report.first_step = steps_taken_;
-          report.first_time = static_cast<double>(steps_taken_) * stability_[scene].time_step;
-          report.first_element = firsts[scene];
-          report.largest_count = report.current_count = counts[scene];
-          std::string message = sim::inversion_message(scenes_[scene], report);
-          if (scenes_.size() > 1) message = "scene " + std::to_string(scene) + ": " + message;
-          if (scenes_[scene].on_inversion == sim::InversionPolicy::Stop) {
-            diagnostics.error(scenes_[scene].source_range, message + "; the scene's on_inversion is stop");
-            stop = true;
-          } else {
-            diagnostics.warning(scenes_[scene].source_range, "inverted-elements", message);
-          }
-        }
-        if (stop) return false;
-        if (steps_taken_ >= failed_by) break;
-        if (!run_steps(1, false, diagnostics)) return false;
-      }
-    }
-    for (std::size_t scene = 0; scene < counts.size(); ++scene) {
-      inversions_[scene].current_count = counts[scene];
-      inversions_[scene].largest_count = std::max<std::size_t>(inversions_[scene].largest_count, counts[scene]);
-    }
-    return true;
-  }
-
-  // Whether the scene's nodal damping gamma1 |x - x0| was bounded with a displacement (sim::StabilityReport), which
-  // check_displacement_bound checks.
-  bool displacement_bound_checked(std::size_t scene) const {
-    return scenes_[scene].nodal_damping_gamma1 > 0.0 && std::isfinite(stability_[scene].assumed_displacement_max);
-  }
-
-  // The nodal damping gamma1 |x - x0| was bounded with a displacement (sim::StabilityReport); a vertex that moves
-  // further stops the run with an error, as on the CPU.
-  bool check_displacement_bound(DiagnosticList& diagnostics) {
-    for (std::size_t scene = 0; scene < scenes_.size(); ++scene) {
-      if (!displacement_bound_checked(scene)) continue;
-      const sim::SimulationSetup& setup = scenes_[scene];
-      const double bound = stability_[scene].assumed_displacement_max;
-      const std::vector<sim::Point3> points = positions(scene, diagnostics);
-      for (std::size_t v = 0; v < points.size(); ++v) {
-        const double moved = sim::distance(points[v], setup.rest_positions[v]);
-        if (moved <= bound) continue;
-        std::ostringstream message;
-        if (scenes_.size() > 1) message << "scene " << scene << ": ";
-        message << "vertex " << v << " moved " << moved << " m from rest by step " << steps_taken_ << ", beyond the "
-                << bound << " m the stable time step assumed for the nodal damping gamma1 |x - x0| (gamma1 = "
-                << setup.nodal_damping_gamma1 << " N s/m^2); give a smaller dt explicitly or lower gamma1";
-        diagnostics.error(setup.source_range, message.str());
-        return false;
-      }
-    }
     return true;
   }
 
@@ -1391,11 +1284,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     const double error = std::sqrt(residual / scalars.rhs_norm2);
     if (!(error <= options.tolerance) && !cg_warning_given_) {
       cg_warning_given_ = true;
-      std::ostringstream message;
-      message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after " << iterations
-              << " iterations with relative residual " << error << " (tolerance " << options.tolerance
-              << "); raise max_iterations or use a smaller dt";
-      diagnostics.warning(scenes_.front().source_range, "cg-not-converged", message.str());
+      diagnostics.warning(scenes_.front().source_range, "cg-not-converged",
+                          sim::cg_stopped_message(steps_taken_ + 1, iterations, error, options.tolerance));
     }
     FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
     return true;
@@ -1558,14 +1448,16 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  bool save_checkpoint(DiagnosticList& diagnostics) {
+  bool save_checkpoint(DiagnosticList& diagnostics) override {
     checkpoint_step_ = steps_taken_;
     checkpoint_has_acceleration_ = have_acceleration_;
     // Persistent runs change the state only in their launches, which store the state they start from into the
     // checkpoint (PersistentEulerArguments::checkpoints): until the next one, the state held is the checkpoint. Six
-    // copies per check were a fifth of the 20^3 box's time between checks (H100).
+    // copies per check were a fifth of the 20^3 box's time between checks (H100). At a check before the launch's
+    // last, the launch stored that check's state in slot check + 1.
     if (persistent_launch()) {
-      checkpoint_in_state_ = true;
+      checkpoint_in_state_ = !selected_inner_;
+      if (selected_inner_) checkpoint_slot_ = static_cast<int>(selected_check_) + 1;
       return true;
     }
     if (!copy_state(checkpoint_slot(checkpoint_slot_), state_[current_].view(), diagnostics)) return false;
@@ -1577,9 +1469,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  bool restore_checkpoint(DiagnosticList& diagnostics) {
+  bool restore_checkpoint(DiagnosticList& diagnostics) override {
     checks_pending_ = false;
-    ++restores_;
+    selected_inner_ = false;
     if (checkpoint_in_state_) {
       steps_taken_ = checkpoint_step_;
       have_acceleration_ = checkpoint_has_acceleration_;
@@ -1615,7 +1507,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   // The smallest vertex index with a non-finite position or velocity, n_ when there is none.
-  std::optional<int> first_non_finite_vertex(DiagnosticList& diagnostics) {
+  std::optional<int> first_non_finite_vertex(DiagnosticList& diagnostics) override {
     if (checks_pending_) {
       if (!synchronize(diagnostics)) return std::nullopt;
       return static_cast<int>(check_results_host_.data()[checks_slot_ * check_slot_stride_]);
@@ -1629,66 +1521,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
                     diagnostics, std::nullopt);
     if (!synchronize(diagnostics)) return std::nullopt;
     return first;
-  }
-
-  // A check failed: replay from the last good checkpoint one step at a time to find the first non-finite step
-  // (the kernels are deterministic, so the replay retraces the run), then report it like the CPU backend.
-  bool locate_non_finite(DiagnosticList& diagnostics) {
-    const std::size_t failed_by = steps_taken_;
-    if (!restore_checkpoint(diagnostics)) return fail();
-    std::optional<int> bad = n_;
-    while (steps_taken_ < failed_by && *bad >= n_) {
-      if (!run_steps(1, false, diagnostics)) return fail();
-      bad = first_non_finite_vertex(diagnostics);
-      if (!bad) return fail();
-    }
-    const int vertex = *bad < n_ ? *bad : 0;
-    const auto scene = static_cast<std::size_t>(std::upper_bound(vertex_begin_.begin(), vertex_begin_.end(), vertex) -
-                                                vertex_begin_.begin() - 1);
-    const int local = vertex - vertex_begin_[scene];
-    GpuNonFiniteReport found;
-    found.scene = scene;
-    found.report.step = steps_taken_;
-    found.report.time = static_cast<double>(steps_taken_) * stability_[scene].time_step;
-    found.report.vertex = local;
-    found.report.spring = culprit_spring(scene, static_cast<std::size_t>(local), diagnostics);
-    non_finite_ = found;
-    const sim::SpringNetwork& net = scenes_[scene].springs;
-    std::ostringstream message;
-    message << "the GPU simulation became non-finite at step " << found.report.step << " (t = " << found.report.time
-            << " s)";
-    if (scenes_.size() > 1) message << " in scene " << scene;
-    message << ": vertex " << local << " has a NaN or infinite position or velocity";
-    if (found.report.spring >= 0) {
-      const auto s = static_cast<std::size_t>(found.report.spring);
-      message << "; its most strained spring is " << found.report.spring << " (vertices " << net.first[s] << " and "
-              << net.second[s] << ")";
-    }
-    message << "; lower dt, raise damping, or check the loads";
-    diagnostics.error(scenes_[scene].source_range, message.str());
-    return fail();
-  }
-
-  // The spring at v whose length is non-finite, or else the one with the largest |strain| (as the CPU backend).
-  std::int32_t culprit_spring(std::size_t scene, std::size_t v, DiagnosticList& diagnostics) const {
-    const std::vector<sim::Point3> points = positions(scene, diagnostics);
-    const sim::SpringNetwork& net = scenes_[scene].springs;
-    if (points.size() != net.vertex_count) return -1;
-    std::int32_t best = -1;
-    double worst = -1.0;
-    for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
-      const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
-      const double length = sim::distance(points[static_cast<std::size_t>(net.first[s])],
-                                          points[static_cast<std::size_t>(net.second[s])]);
-      const double strain = std::isfinite(length) ? std::abs(length - net.rest_length[s]) / net.rest_length[s]
-                                                  : std::numeric_limits<double>::infinity();
-      if (strain > worst) {
-        worst = strain;
-        best = static_cast<std::int32_t>(s);
-      }
-      if (!std::isfinite(strain)) break;
-    }
-    return best;
   }
 
   bool scene_exists(std::size_t scene, DiagnosticList& diagnostics) const {
@@ -1787,8 +1619,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return download_result(diagnostics);
   }
 
-  const std::vector<sim::SimulationSetup> scenes_;
-  const std::vector<sim::StabilityReport> stability_;
+  const std::vector<sim::SimulationSetup>& scenes_;  // the Simulation's
+  const std::vector<sim::StabilityReport>& stability_;
   const GpuOptions options_;
   std::vector<int> vertex_begin_, spring_begin_;
   int n_ = 0;
@@ -1847,7 +1679,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // has persistent_checks_ slots on the cooperative grid.
   DeviceState<Real> checkpoint_;
   int checkpoint_slot_ = 0;
-  std::size_t restores_ = 0;  // restore_checkpoint's calls (advance: whether a check replayed)
   DeviceVector3<Real> acceleration_, predicted_, checkpoint_acceleration_;
   DeviceVector3<Real> stage_position_a_, stage_position_b_, stage_velocity_[3], stage_acceleration_[3];
   ForceModelView<Real> model_{};
@@ -1875,7 +1706,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceTermArrays term_arrays_[kMostElementTerms];
   DeviceArray<kernels::CornerForce<Real>> corner_force_;
   DeviceArray<double> element_rhs_part_, element_diagonal_part_, element_product_;
-  std::vector<sim::InversionReport> inversions_;
   kernels::VertexLoads<Real> loads_{};
   StepSize<Real> step_{};
   std::map<std::pair<std::size_t, int>, std::unique_ptr<GraphExecutable>> graphs_;
@@ -1885,66 +1715,21 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool checkpoint_in_state_ = false;  // the checkpoint is the state held (persistent runs: save_checkpoint)
   bool have_acceleration_ = false;
   bool checkpoint_has_acceleration_ = false;
-  bool failed_ = false;
-  std::optional<GpuNonFiniteReport> non_finite_;
-};
-
-// One scene: a batch of one, with the single-scene interface.
-class GpuSimulationImpl final : public GpuSimulation {
- public:
-  explicit GpuSimulationImpl(std::unique_ptr<GpuBatchSimulation> batch) : batch_(std::move(batch)) {}
-
-  bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
-    const bool ok = batch_->advance(steps, diagnostics, check_every);
-    if (batch_->non_finite()) non_finite_ = batch_->non_finite()->report;
-    return ok;
-  }
-  std::size_t steps_taken() const override { return batch_->steps_taken(); }
-  std::vector<sim::Point3> positions(DiagnosticList& diagnostics) const override {
-    return batch_->positions(0, diagnostics);
-  }
-  std::vector<sim::Point3> velocities(DiagnosticList& diagnostics) const override {
-    return batch_->velocities(0, diagnostics);
-  }
-  const sim::StabilityReport& stability() const override { return batch_->stability(0); }
-  double time() const override { return static_cast<double>(steps_taken()) * stability().time_step; }
-  std::optional<double> kinetic_energy(DiagnosticList& diagnostics) const override {
-    return batch_->kinetic_energy(0, diagnostics);
-  }
-  std::optional<double> largest_displacement(DiagnosticList& diagnostics) const override {
-    return batch_->largest_displacement(0, diagnostics);
-  }
-  std::optional<double> elastic_energy(DiagnosticList& diagnostics) const override {
-    return batch_->elastic_energy(0, diagnostics);
-  }
-  std::optional<double> potential_energy(DiagnosticList& diagnostics) const override {
-    return batch_->potential_energy(0, diagnostics);
-  }
-  const std::optional<sim::NonFiniteReport>& non_finite() const override { return non_finite_; }
-  const sim::InversionReport& inversions() const override { return batch_->inversions(0); }
-  sim::ProbeReading probe_reading(DiagnosticList& diagnostics) const override {
-    return batch_->probe_reading(0, diagnostics);
-  }
-  std::vector<double> current_stiffness(DiagnosticList& diagnostics) const override {
-    return batch_->current_stiffness(0, diagnostics);
-  }
-  int implicit_max_iterations_used() const override { return batch_->implicit_max_iterations_used(); }
-  bool persistent_launch() const override { return batch_->persistent_launch(); }
-  bool cluster_launch() const override { return batch_->cluster_launch(); }
-
- private:
-  std::unique_ptr<GpuBatchSimulation> batch_;
-  std::optional<sim::NonFiniteReport> non_finite_;
+  // The last run's check ends, and the check select_check made current (inner: before the launch's last).
+  std::vector<std::size_t> run_ends_;
+  std::size_t selected_check_ = 0;
+  bool selected_inner_ = false;
 };
 
 // What a batch of several scenes cannot share is refused before the device is touched, never silently ignored.
 const char* single_scene_feature(const sim::SimulationSetup& setup) {
   if (setup.integrator == sim::Integrator::ImplicitEuler) {
     return "implicit Euler runs one scene at a time on the GPU (its conjugate gradient solves one system); run the "
-           "scene as its own GpuSimulation";
+           "scene as a simulation of its own";
   }
   if (setup.strain_stiffness) {
-    return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as its own GpuSimulation";
+    return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as a simulation of its "
+           "own";
   }
   return nullptr;
 }
@@ -1971,51 +1756,27 @@ bool cuda_device_available(std::string& description) {
   return true;
 }
 
-namespace {
-std::unique_ptr<GpuBatchSimulation> create_batch(std::vector<sim::SimulationSetup> scenes, const GpuOptions& options,
-                                                 DiagnosticList& diagnostics);
-}  // namespace
-
-std::unique_ptr<GpuBatchSimulation> GpuBatchSimulation::create(const std::vector<sim::SimulationSetup>& scenes,
-                                                               const GpuOptions& options, DiagnosticList& diagnostics) {
-  return create_batch(scenes, options, diagnostics);
+bool batch_accepts(const std::vector<sim::SimulationSetup>& scenes, std::size_t s, DiagnosticList& diagnostics) {
+  const char* feature = scenes.size() > 1 ? single_scene_feature(scenes[s]) : nullptr;
+  if (feature != nullptr) {
+    diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + ": " + feature);
+    return false;
+  }
+  if (const char* field = shared_field_mismatch(scenes[s], scenes.front())) {
+    diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + " differs from scene 0 in its " + field +
+                                         "; the scenes of one GPU batch share it: run it in another batch");
+    return false;
+  }
+  return true;
 }
 
-namespace {
-// The batch keeps its scenes (probes, messages, the displacement bound): moved in, not copied again.
-std::unique_ptr<GpuBatchSimulation> create_batch(std::vector<sim::SimulationSetup> scenes, const GpuOptions& options,
-                                                 DiagnosticList& diagnostics) {
-  if (scenes.empty()) {
-    diagnostics.error(SourceRange{}, "a GPU batch needs at least one scene");
-    return nullptr;
-  }
-  std::vector<sim::StabilityReport> stability;
+std::unique_ptr<sim::SteppingEngine> create_engine(const std::vector<sim::SimulationSetup>& scenes,
+                                                   const std::vector<sim::StabilityReport>& stability,
+                                                   const GpuOptions& options, DiagnosticList& diagnostics) {
   std::size_t vertices = 0, entries = 0;
-  for (std::size_t s = 0; s < scenes.size(); ++s) {
-    const char* feature = scenes.size() > 1 ? single_scene_feature(scenes[s]) : nullptr;
-    if (feature != nullptr) {
-      diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + ": " + feature);
-      return nullptr;
-    }
-    if (const char* field = shared_field_mismatch(scenes[s], scenes.front())) {
-      diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + " differs from scene 0 in its " + field +
-                                           "; the scenes of one GPU batch share it: run it in another batch");
-      return nullptr;
-    }
-    DiagnosticList scene_diagnostics;
-    const auto report = sim::check_stability(scenes[s], scene_diagnostics);  // validates the setup first
-    if (scenes.size() > 1) {
-      for (Diagnostic diagnostic : scene_diagnostics.items()) {
-        diagnostic.message = "scene " + std::to_string(s) + ": " + diagnostic.message;
-        diagnostics.add(std::move(diagnostic));
-      }
-    } else {
-      diagnostics.append(scene_diagnostics);
-    }
-    if (!report) return nullptr;
-    stability.push_back(*report);
-    vertices += scenes[s].rest_positions.size();
-    entries += scenes[s].springs.adjacency_spring.size();
+  for (const sim::SimulationSetup& setup : scenes) {
+    vertices += setup.rest_positions.size();
+    entries += setup.springs.adjacency_spring.size();
   }
   const auto limit = static_cast<std::size_t>(std::numeric_limits<int>::max() - 1);
   if (vertices > limit || entries > limit) {
@@ -2024,31 +1785,14 @@ std::unique_ptr<GpuBatchSimulation> create_batch(std::vector<sim::SimulationSetu
                                          " spring ends are too many: split the batch");
     return nullptr;
   }
-  std::unique_ptr<GpuBatchSimulation> batch;
   if (scenes.front().precision == sim::Precision::Float) {
-    auto impl = std::make_unique<GpuBatchImpl<float>>(std::move(scenes), std::move(stability), options);
-    if (!impl->upload(diagnostics)) return nullptr;
-    batch = std::move(impl);
-  } else {
-    auto impl = std::make_unique<GpuBatchImpl<double>>(std::move(scenes), std::move(stability), options);
-    if (!impl->upload(diagnostics)) return nullptr;
-    batch = std::move(impl);
+    auto engine = std::make_unique<GpuEngine<float>>(scenes, stability, options);
+    if (!engine->upload(diagnostics)) return nullptr;
+    return engine;
   }
-  return batch;
-}
-}  // namespace
-
-std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup& setup, DiagnosticList& diagnostics) {
-  return create(setup, GpuOptions{}, diagnostics);
-}
-
-std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup& setup, const GpuOptions& options,
-                                                     DiagnosticList& diagnostics) {
-  std::vector<sim::SimulationSetup> one;
-  one.push_back(setup);
-  auto batch = create_batch(std::move(one), options, diagnostics);
-  if (!batch) return nullptr;
-  return std::make_unique<GpuSimulationImpl>(std::move(batch));
+  auto engine = std::make_unique<GpuEngine<double>>(scenes, stability, options);
+  if (!engine->upload(diagnostics)) return nullptr;
+  return engine;
 }
 
 }  // namespace fmpc::gpu
