@@ -1,5 +1,5 @@
 #pragma once
-// Linear tetrahedra, shared by the CPU loops (runtime/), the CUDA kernels (kernels/simulation_step.cu) and the host's
+// Linear tetrahedra, shared by the CPU loops (runtime/), the CUDA kernels (kernels/*.cu) and the host's
 // energy, stress and probe sums: every function is FMPC_HD and templated on the real type, and uses only +, -, *, /
 // and sqrt (correctly rounded on both sides; no transcendental functions), so a kernel compiled with --fmad=false
 // gives the CPU loop's bits.

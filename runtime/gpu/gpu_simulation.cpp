@@ -690,9 +690,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // the blocks' neighbours.
   bool choose_grid_launch(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
     const bool springs = model_.kind != GatherKind::Elements;
-    const bool double_precision = std::is_same_v<Real, double>;
     int resident = 0;  // with the least shared memory: registers and threads bound it
-    FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, double_precision,
+    FMPC_CUDA_CHECK(persistent_euler_block_limit<Real>(model_.kind,
                                                  persistent_euler_shared_bytes<Real>(1, 0, 0), resident),
                     diagnostics, false);
     if (resident <= 0) return true;
@@ -717,7 +716,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         records = std::max(records, end - begin);
       }
       int limit = 0;
-      FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, double_precision,
+      FMPC_CUDA_CHECK(persistent_euler_block_limit<Real>(model_.kind,
                                                    persistent_euler_shared_bytes<Real>(rows, records, 0), limit),
                       diagnostics, false);
       if (blocks > limit) continue;
@@ -739,7 +738,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         most_waited = std::max(most_waited, static_cast<int>(owners.size()));
       }
       FMPC_CUDA_CHECK(
-          persistent_euler_block_limit(model_.kind, double_precision,
+          persistent_euler_block_limit<Real>(model_.kind,
                                        persistent_euler_shared_bytes<Real>(rows, records, most_waited), limit),
           diagnostics, false);
       if (blocks > limit) continue;
@@ -832,7 +831,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       capacity = (capacity + 3) / 4 * 4;
       const long long bytes = cluster_euler_shared_bytes<Real>(rows, capacity, records);
       bool fits = false;
-      FMPC_CUDA_CHECK(cluster_euler_fits(std::is_same_v<Real, double>, per_cluster, rows, bytes, fits), diagnostics,
+      FMPC_CUDA_CHECK(cluster_euler_fits<Real>(per_cluster, rows, bytes, fits), diagnostics,
                       false);
       if (!fits) continue;
       FMPC_CUDA_CHECK(cluster_blocks_array_.upload(blocks), diagnostics, false);
