@@ -130,9 +130,9 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   const double dx = static_cast<double>(a.state.x[v]) - a.rest_position[3 * v];
   const double dy = static_cast<double>(a.state.y[v]) - a.rest_position[3 * v + 1];
   const double dz = static_cast<double>(a.state.z[v]) - a.rest_position[3 * v + 2];
-  const double diagonal = a.mass[v] + a.h * (static_cast<double>(a.loads.gamma0) +
-                                             static_cast<double>(a.loads.gamma1) * sqrt(dx * dx + dy * dy + dz * dz) +
-                                             static_cast<double>(a.loads.mass_damping) * a.mass[v]);
+  const double diagonal = kernels::implicit_vertex_diagonal(
+      a.mass[v], a.h, static_cast<double>(a.loads.gamma0), static_cast<double>(a.loads.gamma1),
+      sqrt(dx * dx + dy * dy + dz * dz), static_cast<double>(a.loads.mass_damping));
   double jacobi[3] = {diagonal, diagonal, diagonal};
   const kernels::SpringNetworkView<Real>& springs = a.model.springs;
   for (int e = springs.adjacency_offset[v]; e < springs.adjacency_offset[v + 1]; ++e) {

@@ -40,6 +40,24 @@ using namespace fmpc::sim;
 
 namespace {
 
+#if FMPC_RUNTIME_HAVE_CUDA
+// A simulation on the CUDA backend: one scene, or a batch.
+std::unique_ptr<Simulation> gpu_simulation(const SimulationSetup& setup, DiagnosticList& diagnostics,
+                                           const GpuOptions& options = {}) {
+  SimulationOptions cuda;
+  cuda.backend = Backend::Cuda;
+  cuda.gpu = options;
+  return Simulation::create(setup, diagnostics, cuda);
+}
+std::unique_ptr<Simulation> gpu_batch(std::vector<SimulationSetup> scenes, const GpuOptions& options,
+                                      DiagnosticList& diagnostics) {
+  SimulationOptions cuda;
+  cuda.backend = Backend::Cuda;
+  cuda.gpu = options;
+  return Simulation::create(std::move(scenes), cuda, diagnostics);
+}
+#endif
+
 struct Options {
   std::string out_dir;
   bool quick = false;
@@ -193,7 +211,7 @@ Row cpu_row(const SimulationSetup& base, unsigned threads, Precision precision, 
   row.vertices = setup.rest_positions.size();
   row.springs = setup.springs.size();
   DiagnosticList diagnostics;
-  const auto simulation = CpuSimulation::create(setup, diagnostics);
+  const auto simulation = sim::Simulation::create(setup, diagnostics);
   if (!simulation ||
       !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics); }, 1, options.min_seconds, row)) {
     row.status = failure_text(diagnostics);
@@ -242,10 +260,10 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   gpu_options.element_blocks_per_sm = element_blocks;
   gpu_options.sliced_springs = sliced_springs;
   gpu_options.slice_window = slice_window;
-  const auto simulation = gpu::GpuSimulation::create(setup, gpu_options, diagnostics);
+  const auto simulation = gpu_simulation(setup, diagnostics, gpu_options);
   row.graphs = launch_name(
-      simulation && launch == Launch::Persistent && !simulation->persistent_launch() ? Launch::Graphs : launch);
-  if (simulation && simulation->cluster_launch()) row.graphs += " in clusters";
+      simulation && launch == Launch::Persistent && !simulation->launches().persistent ? Launch::Graphs : launch);
+  if (simulation && simulation->launches().clusters) row.graphs += " in clusters";
   if (lanes > 0) row.graphs += (launch == Launch::Persistent ? " rows " : " lanes ") + std::to_string(lanes);
   if (element_blocks > 0) row.graphs += " element pass " + std::to_string(element_blocks) + " blocks/SM";
   if (!sliced_springs) row.graphs += " springs in CSR order";
@@ -260,7 +278,7 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
 }
 
 // `count` small scenes (different stiffness, hence different steps) in one batch, against the same scenes as
-// separate GpuSimulations advanced one after another.
+// separate simulations advanced one after another.
 std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, const Options& options) {
   std::vector<SimulationSetup> scenes;
   for (std::size_t s = 0; s < count; ++s) {
@@ -285,15 +303,15 @@ std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, c
     row.springs = springs;
     DiagnosticList diagnostics;
     if (batched) {
-      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu_options_for(Launch::Graphs), diagnostics);
+      const auto batch = gpu_batch(scenes, gpu_options_for(Launch::Graphs), diagnostics);
       if (!batch ||
           !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, row)) {
         row.status = failure_text(diagnostics);
       }
     } else {
-      std::vector<std::unique_ptr<gpu::GpuSimulation>> singles;
+      std::vector<std::unique_ptr<Simulation>> singles;
       for (const auto& scene : scenes) {
-        singles.push_back(gpu::GpuSimulation::create(scene, gpu_options_for(Launch::Graphs), diagnostics));
+        singles.push_back(gpu_simulation(scene, diagnostics, gpu_options_for(Launch::Graphs)));
         if (!singles.back()) break;
       }
       const auto advance_all = [&](std::size_t n) {
@@ -372,11 +390,11 @@ std::vector<Row> cohort_rows(std::size_t count, const Options& options) {
     gpu::GpuOptions gpu_options = gpu_options_for(launch);
     gpu_options.gather_lanes = lanes < 0 ? 1 : lanes;
     gpu_options.sliced_springs = lanes >= 0;
-    const auto batch = gpu::GpuBatchSimulation::create(patients, gpu_options, diagnostics);
-    if (launch == Launch::Persistent && batch && !batch->persistent_launch()) continue;  // too large for one grid
+    const auto batch = gpu_batch(patients, gpu_options, diagnostics);
+    if (launch == Launch::Persistent && batch && !batch->launches().persistent) continue;  // too large for one grid
     Row timed = row;
     timed.graphs = launch_name(launch);
-    if (batch && batch->cluster_launch()) timed.graphs += " in clusters";
+    if (batch && batch->launches().clusters) timed.graphs += " in clusters";
     if (lanes > 0) timed.graphs += " lanes " + std::to_string(lanes);
     if (lanes < 0) timed.graphs += " lanes 1, springs in CSR order";
     if (!batch ||

@@ -79,19 +79,4 @@ PrecisionCheckResult compare_precision(const Scene& scene, const SimulationSetup
   return check;
 }
 
-PrecisionCheckResult check_precision(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
-                                     const SceneRunResult& run, DiagnosticList& diagnostics) {
-  const SimulationSetup& setup = built.setup;
-  if (const auto skipped = precision_check_skipped(scene, setup, run)) {
-    PrecisionCheckResult check;
-    check.other = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
-    check.reason = *skipped;
-    return check;
-  }
-  DiagnosticList ignored;
-  const auto simulation = create_stepper(precision_check_setup(setup, run), options.backend, ignored);
-  const bool completed = simulation && simulation->advance(run.steps_taken, ignored);
-  return compare_precision(scene, setup, run, completed ? simulation.get() : nullptr, diagnostics);
-}
-
 }  // namespace fmpc::sim

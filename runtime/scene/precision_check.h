@@ -22,8 +22,4 @@ SimulationSetup precision_check_setup(const SimulationSetup& setup, const SceneR
 PrecisionCheckResult compare_precision(const Scene& scene, const SimulationSetup& setup, const SceneRunResult& run,
                                        const SceneState* other_run, DiagnosticList& diagnostics);
 
-// The scene again in the other precision, to its last step, compared with the run's final answers.
-PrecisionCheckResult check_precision(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
-                                     const SceneRunResult& run, DiagnosticList& diagnostics);
-
 }  // namespace fmpc::sim

@@ -302,14 +302,14 @@ class TradeRunner {
       for (std::size_t a = 0; a < 3; ++a) low[a] = std::min(low[a], p[a]), high[a] = std::max(high[a], p[a]);
     outcome.extent = distance(low, high);
     DiagnosticList run_diagnostics;
-    auto simulation = CpuSimulation::create(setup, run_diagnostics);
+    auto simulation = Simulation::create(setup, run_diagnostics);
     if (simulation) {
       const double start = process_cpu_seconds();
       row.completed = simulation->advance(row.steps, run_diagnostics);
       row.cpu_seconds = process_cpu_seconds() - start;
       row.steps_per_second = static_cast<double>(simulation->steps_taken()) / std::max(row.cpu_seconds, 1e-9);
       row.inverted_elements = simulation->inversions().largest_count;
-      const std::vector<Point3> positions = simulation->positions();
+      const std::vector<Point3> positions = simulation->positions(run_diagnostics);
       outcome.displacement.resize(coarse_vertices);
       for (std::size_t v = 0; v < coarse_vertices; ++v) {
         const Point3& start_point = start_position(setup, v);
@@ -319,7 +319,7 @@ class TradeRunner {
       }
       if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement) {
         const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
-        if (length > 0.0) row.final_probe_force = dot(simulation->probe_reading().force, setup.probe->target) / length;
+        if (length > 0.0) row.final_probe_force = dot(simulation->probe_reading(run_diagnostics).force, setup.probe->target) / length;
       }
     }
     if (!row.completed) {

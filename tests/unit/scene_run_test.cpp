@@ -241,30 +241,30 @@ TEST_CASE("a displacement probe records the reaction force, a force probe the di
   SimulationSetup pushed = setup;
   pushed.probe = ProbeLoad{ProbeLoad::Mode::Displacement, {1}, {0.1, 0, 0}, 0.5};
   DiagnosticList diagnostics;
-  auto simulation = CpuSimulation::create(pushed, diagnostics);
+  auto simulation = Simulation::create(pushed, diagnostics);
   REQUIRE(simulation);
   REQUIRE(simulation->advance(25, diagnostics));  // half the ramp
-  CHECK(simulation->positions()[1][0] == Approx(1.05).epsilon(1e-12));
-  ProbeReading reading = simulation->probe_reading();
+  CHECK(simulation->positions(diagnostics)[1][0] == Approx(1.05).epsilon(1e-12));
+  ProbeReading reading = simulation->probe_reading(diagnostics);
   CHECK(reading.displacement[0] == Approx(0.05).epsilon(1e-12));
   CHECK(reading.force[0] == Approx(100.0 * 0.05).epsilon(1e-12));  // k d: the probe pulls against the spring
   REQUIRE(simulation->advance(100, diagnostics));
-  reading = simulation->probe_reading();
+  reading = simulation->probe_reading(diagnostics);
   CHECK(reading.force[0] == Approx(10.0).epsilon(1e-12));
 
   SimulationSetup pulled = setup;
   pulled.probe = ProbeLoad{ProbeLoad::Mode::Force, {1}, {5.0, 0, 0}, 0.0};
-  simulation = CpuSimulation::create(pulled, diagnostics);
+  simulation = Simulation::create(pulled, diagnostics);
   REQUIRE(simulation);
   REQUIRE(simulation->advance(2000, diagnostics));
-  reading = simulation->probe_reading();
+  reading = simulation->probe_reading(diagnostics);
   CHECK(reading.force[0] == 5.0);
   CHECK(reading.displacement[0] == Approx(5.0 / 100.0).epsilon(1e-6));  // F / k at rest
 
   SimulationSetup clash = setup;
   clash.probe = ProbeLoad{ProbeLoad::Mode::Force, {0, 2}, {1, 0, 0}, 0.0};
   DiagnosticList refused;
-  CHECK_FALSE(CpuSimulation::create(clash, refused));
+  CHECK_FALSE(Simulation::create(clash, refused));
   CHECK(messages(refused) == std::vector<std::string>{"probe vertex 0 is also fixed; unfix it or pick another",
                                                       "probe vertex 2 is out of range (the mesh has 2 vertices)"});
 }

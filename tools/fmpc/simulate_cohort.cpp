@@ -320,7 +320,7 @@ int run_cohort_command(const SimulateOptions& options) {
   run_options.threads = scene->threads;
   ProgressLine progress("simulate");
   run_options.progress = [&](std::size_t done, std::size_t total) {
-    progress.show_fraction(done, total, backend->backend == "cuda" ? "step" : "patient");
+    progress.show_fraction(done, total, "step");
   };
   const std::optional<sim::CohortRunResult> run = sim::run_cohort(patients, run_options, diagnostics);
   progress.finish();
