@@ -149,12 +149,12 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
 
 // The points' CSV (`--csv FILE`, or standard input without it), parsed; nullopt with an error when it cannot be
 // read or parsed. Its text joins `sources` so that diagnostics can quote it.
-std::optional<CsvTable> read_points_csv(const std::string& csv_option, SourceFiles& sources,
-                                        DiagnosticList& diagnostics) {
+std::optional<CsvTable> read_points_csv(const std::string& csv_option, const FuzzySystem& system,
+                                        SourceFiles& sources, DiagnosticList& diagnostics) {
   const std::string csv_path = csv_option.empty() ? "-" : csv_option;
   const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
   return read_csv_file(csv_path, shown_path, sim::kMaxCsvFileBytes, "CSV file", SourceRange{shown_path, 0, 0, 0, 0},
-                       sources, diagnostics);
+                       sources, diagnostics, csv_header_of(system));
 }
 
 // ---- lookup tables (.fzt) ----
@@ -195,6 +195,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
   }
   const FuzzySystem interface = table_interface(*table);
   std::vector<EvaluationPoint> points;
+  std::string label_column;  // the points' label column (docs/cli.md), empty without one
   if (!options.assignments.empty() && !options.csv.empty()) {
     diagnostics.error(kCommandLine, "give NAME=VALUE inputs or --csv, not both");
   } else if (!options.assignments.empty()) {
@@ -208,7 +209,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       varying.push_back(assignment);
     }
     if (auto point = point_from_assignments(varying, interface, diagnostics)) points.push_back(std::move(*point));
-  } else if (std::optional<CsvTable> read = read_points_csv(options.csv, sources, diagnostics)) {
+  } else if (std::optional<CsvTable> read = read_points_csv(options.csv, interface, sources, diagnostics)) {
     CsvTable& csv = *read;
     // Columns of fixed inputs: checked against the fixed value, then left out.
     for (std::size_t c = csv.header.size(); c-- > 0;) {
@@ -223,11 +224,12 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       }
       csv.header.erase(csv.header.begin() + static_cast<std::ptrdiff_t>(c));
     }
-    if (!diagnostics.has_errors()) points = points_from_csv(csv, interface, diagnostics);
+    if (!diagnostics.has_errors()) points = points_from_csv(csv, interface, diagnostics, &label_column);
   }
   std::ostringstream csv;
   if (!diagnostics.has_errors()) {
     std::vector<std::string> header = variable_names(interface.inputs);
+    if (!label_column.empty()) header.insert(header.begin(), label_column);
     for (const Variable& v : interface.outputs) header.push_back(v.name);
     csv << format_csv_row(header);
     std::vector<const double*> breakpoints;
@@ -239,6 +241,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       interpolate_table(view, point.inputs.data(), out.data());
       report_table_inputs(interface, point.inputs, point.origins, point_diagnostics);
       std::vector<std::string> row;
+      if (!label_column.empty()) row.push_back(point.name);
       for (double v : point.inputs) row.push_back(format_number(v));
       for (double v : out) row.push_back(format_number(v));
       csv << format_csv_row(row);
@@ -268,8 +271,10 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
 // in aligned columns (units in the header). The exact numbers are in the CSV (-o) and --explain.
 class SummaryTable {
  public:
-  explicit SummaryTable(const FuzzySystem& system) {
-    std::vector<std::string> header{"point"};
+  // `label_column`: the header of the points' label column, which then names the rows; empty without one.
+  SummaryTable(const FuzzySystem& system, const std::string& label_column) {
+    std::vector<std::string> header{label_column.empty() ? "point" : label_column};
+    labelled_ = !label_column.empty();
     for (const auto* variables : {&system.inputs, &system.outputs})
       for (const Variable& v : *variables)
         header.push_back(v.unit.empty() || v.unit == "dimensionless" ? v.name : v.name + " (" + v.unit + ")");
@@ -277,7 +282,7 @@ class SummaryTable {
     rows_.push_back(std::move(header));
   }
   void add(const FuzzySystem& system, const EvaluationPoint& point, const Evaluation& evaluation) {
-    std::vector<std::string> row{std::to_string(rows_.size())};
+    std::vector<std::string> row{point.name.empty() ? std::to_string(rows_.size()) : point.name};
     for (double v : point.inputs) row.push_back(four_digits(v));
     for (double v : evaluation.outputs) row.push_back(four_digits(v));
     std::size_t best = evaluation.firing_strengths.size();
@@ -297,9 +302,10 @@ class SummaryTable {
     for (const auto& row : rows_) {
       std::string line;
       for (std::size_t c = 0; c < row.size(); ++c) {
-        // Numbers right-aligned, the rule name (last) left-aligned; no trailing spaces.
+        // Numbers right-aligned, labels and the rule name (last) left-aligned; no trailing spaces.
         const std::string pad(widths[c] - row[c].size(), ' ');
-        line += (c ? "  " : "") + (c + 1 == row.size() ? row[c] : pad + row[c]);
+        const bool text = c + 1 == row.size() || (c == 0 && labelled_);
+        line += (c ? "  " : "") + (c + 1 == row.size() ? row[c] : text ? row[c] + pad : pad + row[c]);
       }
       out << line << '\n';
     }
@@ -307,6 +313,7 @@ class SummaryTable {
 
  private:
   std::vector<std::vector<std::string>> rows_;
+  bool labelled_ = false;
 };
 
 Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<double>& inputs, bool with_sets) {
@@ -331,6 +338,7 @@ int run_eval(const EvalOptions& options) {
   SourceFiles& sources = file.sources;
   const FuzzySystem* system = select_system(file, options.system, diagnostics);
   std::vector<EvaluationPoint> points;
+  std::string label_column;  // the points' label column (docs/cli.md), empty without one
   if (system) {
     if (!options.assignments.empty() && !options.csv.empty()) {
       diagnostics.error(kCommandLine, "give NAME=VALUE inputs or --csv, not both");
@@ -352,8 +360,8 @@ int run_eval(const EvalOptions& options) {
                          "or: fmpc eval " + options.file + " --csv points.csv (header row: " + header + ")",
                          "or pipe the CSV on standard input (--csv - reads a terminal too, ending with Ctrl-D)"});
     } else {
-      if (const std::optional<CsvTable> csv = read_points_csv(options.csv, sources, diagnostics))
-        points = points_from_csv(*csv, *system, diagnostics);
+      if (const std::optional<CsvTable> csv = read_points_csv(options.csv, *system, sources, diagnostics))
+        points = points_from_csv(*csv, *system, diagnostics, &label_column);
     }
   }
   // --explain prints every sample of each output's aggregated set for every point, and builds the sets in memory
@@ -376,6 +384,7 @@ int run_eval(const EvalOptions& options) {
   std::ostringstream explanation_text;
   if (system && !diagnostics.has_errors()) {
     std::vector<std::string> header = variable_names(system->inputs);
+    if (!label_column.empty()) header.insert(header.begin(), label_column);
     for (const Variable& v : system->outputs) {
       header.push_back(v.name);
       if (system->interval_type2) {
@@ -388,12 +397,13 @@ int run_eval(const EvalOptions& options) {
     EvaluationOptions evaluation_options;
     evaluation_options.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
     Interpreter interpreter(*system, evaluation_options);
-    SummaryTable summary(*system);
+    SummaryTable summary(*system, label_column);
     for (const EvaluationPoint& point : points) {
       const Explanation explanation = explain_or_evaluate(interpreter, point.inputs, options.explain);
       report_evaluation_flags(*system, point.inputs, point.origins, point.where, explanation.evaluation,
                               point_diagnostics);
       std::vector<std::string> row;
+      if (!label_column.empty()) row.push_back(point.name);
       for (double v : point.inputs) row.push_back(format_number(v));
       const Evaluation& evaluation = explanation.evaluation;
       for (std::size_t o = 0; o < evaluation.outputs.size(); ++o) {

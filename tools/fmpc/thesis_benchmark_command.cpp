@@ -32,13 +32,13 @@ struct ThesisBenchmarkOptions {
 
 constexpr std::size_t kPatientFileLimit = std::size_t{1} << 20;
 
-// Patients from a CSV with a column per input of `system`, read as `fmpc eval` reads its points; labelled
-// "patient 1", "patient 2", ... in row order.
+// Patients from a CSV with a column per input of `system`, read as `fmpc eval` reads its points; named by its
+// `label` or `patient` column, or "patient 1", "patient 2", ... in row order without one.
 std::optional<std::vector<sim::LiverPatient>> read_patients(const std::string& path, const FuzzySystem& system,
                                                             SourceFiles& sources, DiagnosticList& diagnostics) {
   const std::optional<CsvTable> table =
       read_csv_file(path, path, kPatientFileLimit, "patient table",
-                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics);
+                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics, csv_header_of(system));
   if (!table) return std::nullopt;
   const std::size_t errors_before = diagnostics.error_count();
   const std::vector<EvaluationPoint> points = points_from_csv(*table, system, diagnostics);
@@ -49,7 +49,8 @@ std::optional<std::vector<sim::LiverPatient>> read_patients(const std::string& p
   }
   std::vector<sim::LiverPatient> patients;
   for (const EvaluationPoint& point : points)
-    patients.push_back({"patient " + std::to_string(patients.size() + 1), point.inputs});
+    patients.push_back({point.name.empty() ? "patient " + std::to_string(patients.size() + 1) : point.name,
+                        point.inputs});
   return patients;
 }
 
