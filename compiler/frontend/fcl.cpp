@@ -21,7 +21,8 @@ struct Line {
   int column = 1;    // of the first non-blank character
 };
 
-// The text with comments replaced by spaces (columns kept), split into non-blank lines.
+// The text with comments replaced by spaces (columns kept), split into non-blank lines: each has a first word, as
+// lines and words are cut at the same blanks (kFuzzyliteBlanks).
 std::vector<Line> lines_of(std::string text) {
   for (std::size_t i = 0; i < text.size(); ++i) {
     if (text.compare(i, 2, "(*") == 0) {
@@ -39,9 +40,9 @@ std::vector<Line> lines_of(std::string text) {
   int number = 0;
   for (std::string line; std::getline(in, line);) {
     ++number;
-    const std::size_t first = line.find_first_not_of(" \t\r");
+    const std::size_t first = line.find_first_not_of(kFuzzyliteBlanks);
     if (first == std::string::npos) continue;
-    std::size_t last = line.find_last_not_of(" \t\r;");
+    std::size_t last = line.find_last_not_of(std::string(kFuzzyliteBlanks) + ";");
     if (last == std::string::npos || last < first) last = first;
     lines.push_back(Line{line.substr(first, last - first + 1), number, static_cast<int>(first) + 1});
   }
@@ -203,7 +204,7 @@ class FclReader {
       offset = text.size();
       return {};
     }
-    offset = text.find_first_not_of(' ', assign + skip);
+    offset = text.find_first_not_of(kFuzzyliteBlanks, assign + skip);
     if (offset == std::string::npos) offset = text.size();
     return text.substr(offset);
   }

@@ -14,13 +14,6 @@ namespace fmpc {
 
 namespace {
 
-std::string trimmed(const std::string& text) {
-  const std::size_t first = text.find_first_not_of(" \t\r");
-  if (first == std::string::npos) return {};
-  const std::size_t last = text.find_last_not_of(" \t\r");
-  return text.substr(first, last - first + 1);
-}
-
 // Per-output settings FLL gives each output and fmpc gives the system: read per output, then reconciled.
 struct OutputSettings {
   std::string aggregation, defuzzifier, default_value;
@@ -46,7 +39,7 @@ class FllReader {
       ++number;
       const std::size_t comment = line.find('#');
       if (comment != std::string::npos) line.resize(comment);
-      const std::size_t first = line.find_first_not_of(" \t\r");
+      const std::size_t first = line.find_first_not_of(kFuzzyliteBlanks);
       if (first == std::string::npos) continue;
       const std::size_t colon = line.find(':', first);
       const auto at = [&](std::size_t column, std::size_t length) {
@@ -56,9 +49,9 @@ class FllReader {
         diagnostics_.error(at(first, line.size() - first), "expected 'key: value' (FLL)");
         continue;
       }
-      const std::string key = trimmed(line.substr(first, colon - first));
-      const std::size_t value_start = line.find_first_not_of(" \t", colon + 1);
-      const std::string value = value_start == std::string::npos ? "" : trimmed(line.substr(value_start));
+      const std::string key = fuzzylite_trimmed(line.substr(first, colon - first));
+      const std::size_t value_start = line.find_first_not_of(kFuzzyliteBlanks, colon + 1);
+      const std::string value = value_start == std::string::npos ? "" : fuzzylite_trimmed(line.substr(value_start));
       const SourceRange key_at = at(first, key.size());
       const SourceRange value_at =
           value_start == std::string::npos ? at(colon + 1, 0) : at(value_start, value.size());

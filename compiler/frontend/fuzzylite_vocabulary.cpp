@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <sstream>
+#include <cstring>
 #include <utility>
 
 #include "diagnostics/number_format.h"
@@ -162,10 +162,10 @@ std::vector<Word> words_of(const std::string& text) {
   std::vector<Word> words;
   std::size_t i = 0;
   while (i < text.size()) {
-    while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
+    while (i < text.size() && is_fuzzylite_blank(text[i])) ++i;
     if (i >= text.size()) break;
     const std::size_t start = i;
-    while (i < text.size() && text[i] != ' ' && text[i] != '\t') ++i;
+    while (i < text.size() && !is_fuzzylite_blank(text[i])) ++i;
     words.push_back(Word{text.substr(start, i - start), static_cast<int>(start)});
   }
   return words;
@@ -331,10 +331,17 @@ std::string fuzzylite_rule_text(const FuzzySystem& system, const Rule& rule, con
   return text;
 }
 
+bool is_fuzzylite_blank(char c) { return c != '\0' && std::strchr(kFuzzyliteBlanks, c) != nullptr; }
+
+std::string fuzzylite_trimmed(const std::string& text) {
+  const std::size_t first = text.find_first_not_of(kFuzzyliteBlanks);
+  if (first == std::string::npos) return {};
+  return text.substr(first, text.find_last_not_of(kFuzzyliteBlanks) - first + 1);
+}
+
 std::vector<std::string> fuzzylite_words(const std::string& text) {
-  std::istringstream in(text);
   std::vector<std::string> words;
-  for (std::string w; in >> w;) words.push_back(w);
+  for (const Word& word : words_of(text)) words.push_back(word.text);
   return words;
 }
 

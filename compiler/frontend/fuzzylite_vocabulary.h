@@ -42,6 +42,14 @@ std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRa
 std::string fuzzylite_rule_text(const FuzzySystem& system, const Rule& rule, const SourceRange& where,
                                 DiagnosticList& diagnostics);
 
+// The blanks of both formats: space, tab, carriage return, vertical tab, form feed and newline (std::isspace's set
+// in the C locale). Every reader of the two formats trims and splits lines with this one set, so that a line that
+// is not blank always has a first word (a form feed alone on a line once passed the trim and crashed the FCL reader
+// on a line of no words).
+inline constexpr const char* kFuzzyliteBlanks = " \t\r\v\f\n";
+bool is_fuzzylite_blank(char c);
+// `text` without its leading and trailing blanks.
+std::string fuzzylite_trimmed(const std::string& text);
 // The words of `text`, split at blanks.
 std::vector<std::string> fuzzylite_words(const std::string& text);
 // A number as fuzzylite writes them ("0.250", "nan", "inf", "-inf"); nullopt for anything else.

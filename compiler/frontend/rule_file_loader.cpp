@@ -13,12 +13,13 @@ namespace fmpc {
 
 namespace {
 
-// The first line that is not blank or a comment, without its leading blanks.
+// The first line that is not blank or a comment, without its leading blanks (std::isspace's, as the FLL and FCL
+// readers cut lines: a form feed alone on the first line leaves an FCL file FCL).
 std::string first_content_line(const std::string& text) {
   std::size_t pos = 0;
   while (pos < text.size()) {
     const std::size_t end = std::min(text.find('\n', pos), text.size());
-    const std::size_t first = text.find_first_not_of(" \t\r", pos);
+    const std::size_t first = text.find_first_not_of(" \t\r\v\f", pos);
     if (first < end) {
       const char c = text[first];
       if (text.compare(first, 2, "(*") == 0) {  // FCL block comment, possibly over several lines

@@ -1,0 +1,105 @@
+// Hostile inputs to the rule-file readers, one property per class of issue 30 (docs/limits.md): lines and words cut
+// at one set of blanks in FLL and FCL. tests/hostile runs the same classes through the fmpc command line, and
+// tests/fuzz/fuzz_fll.cpp and fuzz_fcl.cpp fuzz both readers.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cctype>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "compiler/frontend/fuzzylite_vocabulary.h"
+#include "compiler/frontend/rule_file_loader.h"
+#include "diagnostics/diagnostic.h"
+
+using namespace fmpc;
+
+namespace {
+
+const char* const kFcl =
+    "FUNCTION_BLOCK demo\n"
+    "VAR_INPUT\n  x : REAL;\nEND_VAR\n"
+    "VAR_OUTPUT\n  z : REAL;\nEND_VAR\n"
+    "FUZZIFY x\n  RANGE := (0 .. 10);\n  TERM low := Triangle 0 0 10;\n  TERM high := Triangle 0 10 10;\nEND_FUZZIFY\n"
+    "DEFUZZIFY z\n  RANGE := (0 .. 1);\n  TERM small := Triangle 0 0 1;\n  TERM big := Triangle 0 1 1;\n"
+    "  METHOD : COG;\n  ACCU : MAX;\n  DEFAULT := 0.5;\nEND_DEFUZZIFY\n"
+    "RULEBLOCK rules\n  AND : MIN;\n  OR : MAX;\n  ACT : MIN;\n"
+    "  RULE 1 : if x is low then z is small;\n  RULE 2 : if x is high then z is big;\nEND_RULEBLOCK\n"
+    "END_FUNCTION_BLOCK\n";
+
+const char* const kFll =
+    "Engine: demo\n"
+    "InputVariable: x\n  enabled: true\n  range: 0 10\n  term: low Triangle 0 0 10\n  term: high Triangle 0 10 10\n"
+    "OutputVariable: z\n  enabled: true\n  range: 0 1\n  aggregation: Maximum\n  defuzzifier: Centroid 100\n"
+    "  default: 0.5\n  term: small Triangle 0 0 1\n  term: big Triangle 0 1 1\n"
+    "RuleBlock: rules\n  conjunction: Minimum\n  disjunction: Maximum\n  implication: Minimum\n"
+    "  rule: if x is low then z is small\n  rule: if x is high then z is big\n";
+
+// The lines of `text`, with `filler` inserted as a line of its own before line `at` (0-based).
+std::string with_line(const std::string& text, std::size_t at, const std::string& filler) {
+  std::size_t position = 0;
+  for (std::size_t line = 0; line < at && position != std::string::npos; ++line) {
+    position = text.find('\n', position);
+    if (position != std::string::npos) ++position;
+  }
+  if (position == std::string::npos) position = text.size();
+  return text.substr(0, position) + filler + "\n" + text.substr(position);
+}
+
+std::size_t line_count(const std::string& text) {
+  return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+struct Loaded {
+  RuleFile file;
+  DiagnosticList diagnostics;
+};
+
+Loaded load(const std::string& path, const std::string& text) {
+  Loaded loaded;
+  loaded.file = load_rule_file(path, text, loaded.diagnostics);
+  return loaded;
+}
+
+}  // namespace
+
+TEST_CASE("FLL and FCL cut lines and words at one set of blanks: std::isspace's", "[hostile][fuzzylite]") {
+  for (int c = 1; c < 256; ++c)
+    CHECK(is_fuzzylite_blank(static_cast<char>(c)) == (std::isspace(c) != 0));
+  // A line of nothing but blanks is no line at all, wherever it stands, in either format: the file reads as it did
+  // without it (a form feed or vertical tab alone on a line once crashed the FCL reader).
+  for (const auto& [path, text] : {std::pair<std::string, std::string>{"x.fcl", kFcl}, {"x.fll", kFll}}) {
+    const Loaded plain = load(path, text);
+    REQUIRE_FALSE(plain.diagnostics.has_errors());
+    for (const char blank : std::string(kFuzzyliteBlanks)) {
+      if (blank == '\n') continue;
+      for (std::size_t at = 0; at <= line_count(text); ++at) {
+        for (const std::string& filler : {std::string(1, blank), std::string(3, blank) + " \t"}) {
+          const Loaded read = load(path, with_line(text, at, filler));
+          INFO(path << ": a line of byte " << static_cast<int>(blank) << " before line " << at + 1);
+          CHECK_FALSE(read.diagnostics.has_errors());
+          REQUIRE(read.file.systems.size() == 1);
+          CHECK(read.file.systems[0].rules.size() == 2);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("FLL and FCL readers take any line of bytes without crashing", "[hostile][fuzzylite]") {
+  // Seeded: lines of random bytes (blanks, ';', ':', '(' and keywords among them) at random places of both files.
+  // A crash fails the run; every line that is not blank must be read as something (an error or a meaning).
+  std::mt19937 random(30);
+  const std::vector<std::string> pieces = {"\f", "\v", "\r", "\t", " ", ";", ":", ":=", "(", ")", "..", "(*", "*)",
+                                           "//", "#", "TERM", "RANGE", "FUZZIFY", "END_FUZZIFY", "VAR_INPUT",
+                                           "range:", "term:", "rule:", "Engine:", "x", "1", "\x01", "\xff"};
+  for (const auto& [path, text] : {std::pair<std::string, std::string>{"x.fcl", kFcl}, {"x.fll", kFll}}) {
+    for (int round = 0; round < 400; ++round) {
+      std::string line;
+      const int count = 1 + static_cast<int>(random() % 6);
+      for (int k = 0; k < count; ++k) line += pieces[random() % pieces.size()];
+      const std::size_t at = 1 + random() % line_count(text);
+      (void)load(path, with_line(text, at, line));
+    }
+  }
+}
