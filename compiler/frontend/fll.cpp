@@ -70,6 +70,14 @@ class FllReader {
                 const SourceRange& value_at) {
     if (key == "Engine") {
       section_ = Section::Engine;
+      keys_.open_section();
+      if (engine_at_.valid()) {
+        diagnostics_.error(key_at, "a second 'Engine:'; an FLL file holds one engine, and fmpc reads it as one system",
+                           {"the first engine starts here: " + std::to_string(engine_at_.line) + ":" +
+                                std::to_string(engine_at_.column) + "; put each engine in a file of its own"});
+        return;
+      }
+      engine_at_ = key_at;
       system_.name = value.empty() ? "fll" : value;
       system_.range = key_at;
       return;
@@ -77,6 +85,7 @@ class FllReader {
     if (key == "InputVariable" || key == "OutputVariable") {
       const bool input = key == "InputVariable";
       section_ = input ? Section::Input : Section::Output;
+      keys_.open_section();
       Variable variable;
       variable.name = value;
       variable.range = key_at;
@@ -88,8 +97,11 @@ class FllReader {
     }
     if (key == "RuleBlock") {
       section_ = Section::RuleBlock;
+      keys_.open_section();
       return;
     }
+    // Every other key but `term` and `rule` once per section.
+    if (key != "term" && key != "rule" && !keys_.once_in_section(key, key_at, section_title(), diagnostics_)) return;
     if (key == "description") {
       if (section_ == Section::Engine) system_.description = value;
       else if (Variable* v = current_variable()) v->description = value;
@@ -118,6 +130,12 @@ class FllReader {
       case Section::RuleBlock: return "rule block";
       default: return "engine";
     }
+  }
+
+  // "input variable 'x'", "the engine": where a key was given twice.
+  std::string section_title() {
+    if (const Variable* v = current_variable()) return section_name() + " '" + v->name + "'";
+    return section_ == Section::RuleBlock ? "the rule block" : "the engine";
   }
 
   Variable* current_variable() {
@@ -210,6 +228,8 @@ class FllReader {
       rules_.push_back(RuleLine{value, value_at});
       return;
     }
+    if (key == "conjunction" || key == "implication" || key == "disjunction" || key == "activation")
+      if (!keys_.one_value(key, value, value_at, diagnostics_)) return;
     if (key == "conjunction" || key == "implication") {
       if (value == "none") return;
       const auto norm = tnorm_from_fuzzylite(value);
@@ -327,6 +347,8 @@ class FllReader {
   Section section_ = Section::None;
   std::vector<OutputSettings> outputs_;
   std::vector<RuleLine> rules_;
+  SourceRange engine_at_;
+  FuzzyliteKeys keys_;
 };
 
 std::string defuzzifier_text(const FuzzySystem& system) {

@@ -388,6 +388,32 @@ void set_no_fire_from_defaults(FuzzySystem& system, const std::vector<double>& d
     system.no_fire_value = defaults[0];
   } else {
     diagnostics.error(where, "the outputs' defaults differ and are not each output's mid-range; fmpc systems have "
+namespace {
+
+std::string position_of(const SourceRange& at) { return std::to_string(at.line) + ":" + std::to_string(at.column); }
+
+}  // namespace
+
+bool FuzzyliteKeys::once_in_section(const std::string& key, const SourceRange& at, const std::string& section,
+                                    DiagnosticList& diagnostics) {
+  const auto [first, inserted] = section_.emplace(key, at);
+  if (inserted) return true;
+  diagnostics.error(at, "'" + key + "' is given twice in " + section + "; keep one",
+                    {"first given here: " + position_of(first->second)});
+  return false;
+}
+
+bool FuzzyliteKeys::one_value(const std::string& setting, const std::string& value, const SourceRange& at,
+                              DiagnosticList& diagnostics) {
+  const auto [first, inserted] = file_.emplace(setting, std::make_pair(value, at));
+  if (inserted || first->second.first == value) return true;
+  diagnostics.error(at, "'" + setting + "' is '" + value + "' here and '" + first->second.first +
+                            "' before; an fmpc system has one " + setting + " for all its rules and outputs: make "
+                            "them equal, or split the file",
+                    {"first given here: " + position_of(first->second.second)});
+  return false;
+}
+
                              "one no-fire value (or mid-range, or an error) for all outputs");
   }
 }

@@ -3,6 +3,7 @@
 // writes it): membership-function families with their parameter orders, norms, defuzzifiers and hedges, mapped to
 // fmpc's IR. Parameters in the IR are in MATLAB's order (kernels/fuzzy_kinds.h); fuzzylite orders some differently
 // (Gaussian: mean, sd; Bell: centre, width, slope; Sigmoid: inflection, slope).
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -68,6 +69,26 @@ void set_no_fire_from_defaults(FuzzySystem& system, const std::vector<double>& d
 
 // The formats of rule files fmpc can be handed, told apart by content (rule_file_loader.h uses these).
 bool looks_like_fll(const std::string& first_line);  // "Engine:" or another FLL section keyword first
+// Keys an FLL or FCL section gives at most once ("range", "METHOD"), and settings the whole file gives one value
+// (fmpc sets norms and the defuzzifier once per system, FLL and FCL per rule block or output): a repeat is an error
+// naming the first, never "the last one wins" (a second `range:` or `ACCU` once replaced the first silently).
+class FuzzyliteKeys {
+ public:
+  // A new section (variable, block): its keys may be given again.
+  void open_section() { section_.clear(); }
+  // False, after an error at `at` naming the first, when `key` was given before in this section (`section` names
+  // it: "input variable 'x'").
+  bool once_in_section(const std::string& key, const SourceRange& at, const std::string& section,
+                       DiagnosticList& diagnostics);
+  // False, after an error at `at` naming the first, when the file gave `setting` another value before.
+  bool one_value(const std::string& setting, const std::string& value, const SourceRange& at,
+                 DiagnosticList& diagnostics);
+
+ private:
+  std::map<std::string, SourceRange> section_;
+  std::map<std::string, std::pair<std::string, SourceRange>> file_;
+};
+
 bool looks_like_fcl(const std::string& first_line);  // "FUNCTION_BLOCK" first
 
 }  // namespace fmpc

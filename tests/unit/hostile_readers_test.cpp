@@ -1,5 +1,5 @@
 // Hostile inputs to the rule-file readers, one property per class of issue 30 (docs/limits.md): lines and words cut
-// at one set of blanks in FLL and FCL. tests/hostile runs the same classes through the fmpc command line, and
+// at one set of blanks in FLL and FCL, no key given twice. tests/hostile runs the same classes through the fmpc command line, and
 // tests/fuzz/fuzz_fll.cpp and fuzz_fcl.cpp fuzz both readers.
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -100,6 +100,31 @@ TEST_CASE("FLL and FCL readers take any line of bytes without crashing", "[hosti
       for (int k = 0; k < count; ++k) line += pieces[random() % pieces.size()];
       const std::size_t at = 1 + random() % line_count(text);
       (void)load(path, with_line(text, at, line));
+    }
+  }
+}
+
+TEST_CASE("FLL and FCL: a line given twice is an error, never the last one winning", "[hostile][fuzzylite]") {
+  // Every line of both samples, copied right after itself with its value changed where it has one: the file then
+  // has an error. Rules may repeat (a duplicate rule is lint's), and so may FLL's rule blocks.
+  for (const auto& [path, text] : {std::pair<std::string, std::string>{"x.fcl", kFcl}, {"x.fll", kFll}}) {
+    std::vector<std::string> lines;
+    for (std::size_t start = 0; start < text.size();) {
+      const std::size_t end = text.find('\n', start);
+      lines.push_back(text.substr(start, end - start));
+      start = end + 1;
+    }
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      const std::string trimmed = fuzzylite_trimmed(lines[i]);
+      if (trimmed.rfind("RULE ", 0) == 0 || trimmed.rfind("rule:", 0) == 0 || trimmed.rfind("RuleBlock:", 0) == 0)
+        continue;
+      std::string copy = lines[i];
+      // Another value where the line has a number: "last wins" would change the system, not only repeat it.
+      const std::size_t digit = copy.find_first_of("0123456789");
+      if (digit != std::string::npos) copy[digit] = copy[digit] == '9' ? '8' : static_cast<char>(copy[digit] + 1);
+      const Loaded read = load(path, with_line(text, i + 1, copy));
+      INFO(path << ": line " << i + 1 << " given twice: " << copy);
+      CHECK(read.diagnostics.has_errors());
     }
   }
 }
