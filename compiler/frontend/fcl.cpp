@@ -415,8 +415,9 @@ class FclReader {
     for (const Default& d : defaults_) values[d.output] = d.value;
     if (!defaults_.empty()) set_no_fire_from_defaults(system_, values, defaults_.back().at, diagnostics_);
     else system_.no_fire = NoFirePolicy::Error;
+    const SystemNames names(system_);
     for (const auto& [text, where] : rules_)
-      if (auto rule = parse_fuzzylite_rule(text, where, system_, diagnostics_)) system_.rules.push_back(*rule);
+      if (auto rule = parse_fuzzylite_rule(text, where, system_, names, diagnostics_)) system_.rules.push_back(*rule);
   }
 
   std::string path_;

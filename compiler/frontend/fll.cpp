@@ -284,8 +284,10 @@ class FllReader {
       read_defuzzifier(s);
     }
     read_defaults();
+    const SystemNames names(system_);
     for (const RuleLine& line : rules_)
-      if (auto rule = parse_fuzzylite_rule(line.text, line.at, system_, diagnostics_)) system_.rules.push_back(*rule);
+      if (auto rule = parse_fuzzylite_rule(line.text, line.at, system_, names, diagnostics_))
+        system_.rules.push_back(*rule);
   }
 
   // Each output's default as a number (NaN where none was given), into the system's one policy.

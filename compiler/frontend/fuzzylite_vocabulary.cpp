@@ -179,7 +179,7 @@ std::string lower(std::string text) {
 }  // namespace
 
 std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRange& at, const FuzzySystem& system,
-                                         DiagnosticList& diagnostics) {
+                                         const SystemNames& names, DiagnosticList& diagnostics) {
   const std::vector<Word> words = words_of(text);
   const auto range_of = [&](const Word& w) {
     return SourceRange{at.file, at.line, at.column + w.offset, at.line,
@@ -203,14 +203,11 @@ std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRa
     // VARIABLE is [not] [hedge...] TERM
     const Word& variable_word = words[k];
     const std::vector<Variable>& variables = in_consequent ? system.outputs : system.inputs;
-    int variable = -1;
-    for (std::size_t v = 0; v < variables.size(); ++v)
-      if (variables[v].name == variable_word.text) variable = static_cast<int>(v);
+    const int variable = names.variable(in_consequent, variable_word.text);
     if (variable < 0) {
-      std::vector<std::string> names;
-      for (const Variable& v : variables) names.push_back(v.name);
       std::vector<std::string> notes;
-      if (auto suggestion = closest_name(variable_word.text, names)) notes.push_back("did you mean '" + *suggestion + "'?");
+      if (auto suggestion = closest_name(variable_word.text, names.variable_names(in_consequent)))
+        notes.push_back("did you mean '" + *suggestion + "'?");
       diagnostics.error(range_of(variable_word),
                         "'" + variable_word.text + "' is not an " + (in_consequent ? "output" : "input") + " variable",
                         notes);
@@ -250,12 +247,11 @@ std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRa
     }
     clause.hedge = *hedge;
     const Variable& var = variables[static_cast<std::size_t>(variable)];
-    clause.term = var.find_term(words[term_at].text);
+    clause.term = names.term(in_consequent, variable, words[term_at].text);
     if (clause.term < 0) {
-      std::vector<std::string> names;
-      for (const Term& term : var.terms) names.push_back(term.name);
       std::vector<std::string> notes;
-      if (auto suggestion = closest_name(words[term_at].text, names)) notes.push_back("did you mean '" + *suggestion + "'?");
+      if (auto suggestion = closest_name(words[term_at].text, names.term_names(in_consequent, variable)))
+        notes.push_back("did you mean '" + *suggestion + "'?");
       diagnostics.error(range_of(words[term_at]),
                         "'" + words[term_at].text + "' is not a term of '" + var.name + "'", notes);
       return std::nullopt;
@@ -388,6 +384,10 @@ void set_no_fire_from_defaults(FuzzySystem& system, const std::vector<double>& d
     system.no_fire_value = defaults[0];
   } else {
     diagnostics.error(where, "the outputs' defaults differ and are not each output's mid-range; fmpc systems have "
+                             "one no-fire value (or mid-range, or an error) for all outputs");
+  }
+}
+
 namespace {
 
 std::string position_of(const SourceRange& at) { return std::to_string(at.line) + ":" + std::to_string(at.column); }
@@ -412,10 +412,6 @@ bool FuzzyliteKeys::one_value(const std::string& setting, const std::string& val
                             "them equal, or split the file",
                     {"first given here: " + position_of(first->second.second)});
   return false;
-}
-
-                             "one no-fire value (or mid-range, or an error) for all outputs");
-  }
 }
 
 bool looks_like_fll(const std::string& line) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "compiler/ir/fuzzy_system.h"
+#include "compiler/ir/system_names.h"
 #include "diagnostics/diagnostic.h"
 
 namespace fmpc {
@@ -37,8 +38,9 @@ std::vector<std::string> fuzzylite_hedge_words(Hedge hedge);  // empty for a hed
 // A rule in fuzzylite's syntax ("if A is very x and B is not y then Z is w with 0.5"), its variables and terms
 // resolved against `system`'s inputs and outputs. `at` locates the text's first character; errors point into it.
 // One connective per rule (fmpc's), no parentheses, no `any`.
+// `names` indexes `system`'s names (built once for all its rules: compiler/ir/system_names.h).
 std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRange& at, const FuzzySystem& system,
-                                         DiagnosticList& diagnostics);
+                                         const SystemNames& names, DiagnosticList& diagnostics);
 // `rule` in that syntax; empty with an error when fuzzylite cannot say it (a hedge it means differently).
 std::string fuzzylite_rule_text(const FuzzySystem& system, const Rule& rule, const SourceRange& where,
                                 DiagnosticList& diagnostics);
@@ -67,8 +69,6 @@ SystemType fuzzylite_system_type(const FuzzySystem& system, const SourceRange& w
 void set_no_fire_from_defaults(FuzzySystem& system, const std::vector<double>& defaults, const SourceRange& where,
                                DiagnosticList& diagnostics);
 
-// The formats of rule files fmpc can be handed, told apart by content (rule_file_loader.h uses these).
-bool looks_like_fll(const std::string& first_line);  // "Engine:" or another FLL section keyword first
 // Keys an FLL or FCL section gives at most once ("range", "METHOD"), and settings the whole file gives one value
 // (fmpc sets norms and the defuzzifier once per system, FLL and FCL per rule block or output): a repeat is an error
 // naming the first, never "the last one wins" (a second `range:` or `ACCU` once replaced the first silently).
@@ -89,6 +89,8 @@ class FuzzyliteKeys {
   std::map<std::string, std::pair<std::string, SourceRange>> file_;
 };
 
+// The formats of rule files fmpc can be handed, told apart by content (rule_file_loader.h uses these).
+bool looks_like_fll(const std::string& first_line);  // "Engine:" or another FLL section keyword first
 bool looks_like_fcl(const std::string& first_line);  // "FUNCTION_BLOCK" first
 
 }  // namespace fmpc
