@@ -948,9 +948,7 @@ RuleFile read_matlab_fis(const std::string& path, const std::string& text, Diagn
     diagnostics.error(range, "the file is not valid UTF-8 here", {"save the file as UTF-8"});
     return file;
   }
-  // A UTF-8 byte order mark becomes blanks so that columns still count bytes of the original text.
-  std::string source = text;
-  if (source.compare(0, 3, "\xEF\xBB\xBF") == 0) source.replace(0, 3, "   ");
+  const std::string source = blank_byte_order_mark(text);
 
   const SourcePositions positions(path, source);
   SyntaxErrorCollector errors(positions, diagnostics);

@@ -7,6 +7,7 @@
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/frontend/fuzzylite_vocabulary.h"
 #include "compiler/frontend/matlab_fis.h"
+#include "compiler/frontend/utf8.h"
 #include "compiler/sema/check.h"
 
 namespace fmpc {
@@ -16,7 +17,7 @@ namespace {
 // The first line that is not blank or a comment, without its leading blanks (std::isspace's, as the FLL and FCL
 // readers cut lines: a form feed alone on the first line leaves an FCL file FCL).
 std::string first_content_line(const std::string& text) {
-  std::size_t pos = 0;
+  std::size_t pos = starts_with_byte_order_mark(text) ? 3 : 0;
   while (pos < text.size()) {
     const std::size_t end = std::min(text.find('\n', pos), text.size());
     const std::size_t first = text.find_first_not_of(" \t\r\v\f", pos);
@@ -76,7 +77,8 @@ std::string foreign_format(const std::string& text) {
   return {};
 }
 
-RuleFile load_rule_file(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
+RuleFile load_rule_file(const std::string& path, const std::string& original, DiagnosticList& diagnostics) {
+  const std::string text = blank_byte_order_mark(original);
   const Dialect dialect = detect_dialect(text);
   if (dialect == Dialect::Fmpc) {
     const std::string foreign = foreign_format(text);

@@ -34,4 +34,11 @@ std::size_t first_invalid_utf8(std::string_view text) {
   return std::string_view::npos;
 }
 
+bool starts_with_byte_order_mark(std::string_view text) { return text.substr(0, 3) == "\xEF\xBB\xBF"; }
+
+std::string blank_byte_order_mark(std::string text) {
+  if (starts_with_byte_order_mark(text)) text.replace(0, 3, "   ");
+  return text;
+}
+
 }  // namespace fmpc

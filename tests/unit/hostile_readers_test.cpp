@@ -1,9 +1,11 @@
 // Hostile inputs to the rule-file readers, one property per class of issue 30 (docs/limits.md): lines and words cut
-// at one set of blanks in FLL and FCL, no key given twice. tests/hostile runs the same classes through the fmpc command line, and
+// at one set of blanks in FLL and FCL, no key given twice, a byte order mark read as nothing. tests/hostile runs the same classes through the fmpc command line, and
 // tests/fuzz/fuzz_fll.cpp and fuzz_fcl.cpp fuzz both readers.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cctype>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -11,6 +13,8 @@
 #include "compiler/frontend/fuzzylite_vocabulary.h"
 #include "compiler/frontend/rule_file_loader.h"
 #include "diagnostics/diagnostic.h"
+#include "runtime/scene/scene_file.h"
+#include "tests/support/system_comparison.h"
 
 using namespace fmpc;
 
@@ -127,4 +131,39 @@ TEST_CASE("FLL and FCL: a line given twice is an error, never the last one winni
       CHECK(read.diagnostics.has_errors());
     }
   }
+}
+
+TEST_CASE("a UTF-8 byte order mark changes nothing a reader reports", "[hostile]") {
+  // Every rule format and the scene reader: the text with a BOM reads to the same systems and the same diagnostics
+  // (message, line and column) as without (a BOM once made an FLL file read as the fmpc language).
+  std::vector<std::pair<std::string, std::string>> files = {{"x.fcl", kFcl}, {"x.fll", kFll}};
+  for (const char* name : {"tests/golden/lint_warnings/warnings.fis", "tests/golden/cli_three_mistakes/three.fis",
+                           "tests/golden/fcl_check_errors/demo.fcl", "tests/golden/fll_eval/tipper.fll",
+                           "rulesets/liver_fibrosis/it2.fis", "tests/fuzz/seeds/matlab_fis/type2.fis",
+                           "tests/fuzz/seeds/fcl/features.fcl", "tests/fuzz/seeds/fll/features.fll"}) {
+    std::ifstream in(std::string(FMPC_SOURCE_DIR) + "/" + name, std::ios::binary);
+    REQUIRE(in);
+    files.emplace_back(name, std::string(std::istreambuf_iterator<char>(in), {}));
+  }
+  const auto report = [](const DiagnosticList& diagnostics) {
+    std::vector<std::string> lines;
+    for (const Diagnostic& d : diagnostics.items())
+      lines.push_back(std::to_string(d.range.line) + ":" + std::to_string(d.range.column) + ": " + d.message);
+    return lines;
+  };
+  for (const auto& [path, text] : files) {
+    INFO(path);
+    const Loaded plain = load(path, text);
+    const Loaded marked = load(path, "\xEF\xBB\xBF" + text);
+    CHECK(report(marked.diagnostics) == report(plain.diagnostics));
+    REQUIRE(marked.file.systems.size() == plain.file.systems.size());
+    for (std::size_t s = 0; s < plain.file.systems.size(); ++s)
+      CHECK(testing::first_difference(plain.file.systems[s], marked.file.systems[s]).empty());
+  }
+  const std::string scene = "mesh: {box: {size: [1, 1, 1], cells: [2, 2, 2]}}\nmaterial: {youngs_modulus: 5}\nnme: x\n";
+  DiagnosticList plain, marked;
+  (void)sim::parse_scene("/nonexistent/s.yaml", scene, plain);
+  (void)sim::parse_scene("/nonexistent/s.yaml", "\xEF\xBB\xBF" + scene, marked);
+  CHECK(report(marked) == report(plain));
+  CHECK(plain.has_errors());
 }

@@ -23,6 +23,7 @@ struct CsvTable {
 // Every cell keeps its text and position (about 100 bytes each); a table of more cells is refused.
 inline constexpr std::size_t kMaxCsvCells = std::size_t{1} << 20;  // 1,048,576
 
+// A leading UTF-8 byte order mark is read as three spaces (compiler/frontend/utf8.h).
 CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
 
 // Reads the file at `path` ("-": standard input; at most `limit` bytes, `what` names it in the error when it cannot
