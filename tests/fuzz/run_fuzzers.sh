@@ -23,7 +23,7 @@ build=$(cd "$1" && pwd)
 seconds=$2
 shift 2
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fmpc_language matlab_fis scene_yaml gmsh obj vtk fzt csv)
+[ ${#targets[@]} -gt 0 ] || targets=(fmpc_language matlab_fis fll fcl scene_yaml gmsh obj vtk fzt csv)
 binaries=${FMPC_FUZZ_BINARIES:-$build/tests/fuzz}
 shared=$(cd "$root/.." && pwd)/shared/data
 
