@@ -14,6 +14,7 @@
 
 #include "compiler/backend/cpp/embedded_kernels.h"
 #include "compiler/backend/cpp/emit_type2.h"
+#include "compiler/backend/cpp/namespace_name.h"
 #include "compiler/eval/defuzzify.h"
 #include "compiler/ir/content_hash.h"
 #include "diagnostics/number_format.h"
@@ -57,24 +58,6 @@ std::string comment_safe(const std::string& text) {
   for (const char c : text) out += (c == '\n' || c == '\r') ? ' ' : c;
   while (!out.empty() && (out.back() == '\\' || out.back() == ' ')) out.pop_back();
   return out;
-}
-
-bool is_identifier(const std::string& text) {
-  if (text.empty()) return false;
-  const auto first = static_cast<unsigned char>(text[0]);
-  if (!(std::isalpha(first) || text[0] == '_')) return false;
-  return std::all_of(text.begin(), text.end(),
-                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
-}
-
-bool is_namespace_path(const std::string& text) {
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t end = text.find("::", start);
-    if (!is_identifier(text.substr(start, end == std::string::npos ? std::string::npos : end - start))) return false;
-    if (end == std::string::npos) return true;
-    start = end + 2;
-  }
 }
 
 // A T-typed constant. Parameters are finite after sema; the non-finite spellings keep the header compiling if a
@@ -1069,10 +1052,10 @@ bool check_supported(const FuzzySystem& system, const EmitOptions& options, Diag
                       {"`fmpc compile --target table` accepts `samples exact`"});
     supported = false;
   }
-  if (!is_namespace_path(options.namespace_name)) {
+  if (const auto problem = namespace_name_problem(options.namespace_name)) {
     diagnostics.error(SourceRange{options.source_path, 0, 0, 0, 0},
-                      "namespace '" + options.namespace_name +
-                          "' is not a C++ namespace name: use identifiers joined by '::', e.g. scene::liver");
+                      "namespace '" + options.namespace_name + "' cannot name the generated code's namespace: " +
+                          *problem + "; use identifiers joined by '::', e.g. scene::liver");
     supported = false;
   }
   return supported;
