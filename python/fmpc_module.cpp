@@ -237,14 +237,15 @@ TableHandle table_handle(LookupTable table) {
 }
 
 TableHandle load_table(const std::string& path) {
+  // Only the signature is read of a file that is not a table (a rule file, or a gigabyte of anything else).
   std::string error;
-  const std::optional<std::string> bytes = sim::read_input_file(path, sim::kMaxTableFileBytes, "lookup table", error);
-  if (!bytes) raise_error(SourceRange{path, 0, 0, 0, 0}, error);
-  DiagnosticList diagnostics;
-  if (!has_fzt_signature(*bytes))
-    raise_error(SourceRange{path, 0, 0, 0, 0}, "'" + path + "' is not a compiled lookup table (.fzt)",
+  const std::optional<sim::KindOfInput> input =
+      sim::read_input_file(path, {sim::InputKind{"lookup table", sim::kMaxTableFileBytes, fzt_signature()}}, error);
+  if (!input)
+    raise_error(SourceRange{path, 0, 0, 0, 0}, error,
                 {"a rule file is loaded with fmpc.load(path); fmpc.compile_table(...) writes tables"});
-  std::optional<LookupTable> table = parse_fzt(path, *bytes, diagnostics);
+  DiagnosticList diagnostics;
+  std::optional<LookupTable> table = parse_fzt(path, input->contents, diagnostics);
   if (!table) raise_error(diagnostics, SourceFiles{});
   return table_handle(std::move(*table));
 }

@@ -176,6 +176,49 @@ TEST_CASE("the input reader refuses what is not a regular file, and files over t
   std::filesystem::remove_all(folder);
 }
 
+TEST_CASE("an input of several kinds is read under the limit of the kind its first bytes name", "[hostile]") {
+  // `fmpc eval` and fmpc.load_table: a table (signature, 1 KiB here) or a rule file (anything, 100 bytes here).
+  const std::vector<sim::InputKind> kinds = {{"lookup table", 1024, "SIG!"}, {"rule file", 100, ""}};
+  const std::string folder = temporary_folder("kinds");
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(folder + "/" + name, std::ios::binary) << text;
+    return folder + "/" + name;
+  };
+  std::string error;
+  // Every size on either side of each limit, for both kinds, and files shorter than the signature.
+  for (const std::size_t size : {0, 3, 4, 99, 100, 101, 1023, 1024, 1025}) {
+    for (const bool table : {true, false}) {
+      std::string text = table ? "SIG!" : "rule";
+      text.resize(std::max<std::size_t>(size, 0), 'x');
+      if (size < 4) text = std::string(size, 'S');  // shorter than the signature: a rule file
+      const bool is_table = table && size >= 4;
+      const std::size_t limit = is_table ? 1024 : 100;
+      INFO(size << (is_table ? " byte table" : " byte rule file"));
+      const auto input = sim::read_input_file(write("f", text), kinds, error);
+      CHECK(bool(input) == (size <= limit));
+      if (input) {
+        CHECK(input->kind == (is_table ? 0u : 1u));
+        CHECK(input->contents == text);
+      } else {
+        CHECK(error.find(std::string("the limit for a ") + (is_table ? "lookup table" : "rule file")) !=
+              std::string::npos);
+      }
+    }
+  }
+  // A gigabyte that is not a table is refused by the rule file's limit, before it is read (sparse: no disk used).
+  const std::string big = folder + "/big";
+  {
+    std::ofstream(big).close();
+    std::filesystem::resize_file(big, std::uintmax_t{1} << 30);
+  }
+  CHECK_FALSE(sim::read_input_file(big, kinds, error));
+  CHECK(error.find("is 1 GiB; the limit for a rule file is 100 bytes") != std::string::npos);
+  // With only the table kind, anything else is named as not a table after its first bytes.
+  CHECK_FALSE(sim::read_input_file(big, {kinds[0]}, error));
+  CHECK(error.find("it is not a lookup table") != std::string::npos);
+  std::filesystem::remove_all(folder);
+}
+
 TEST_CASE("several outputs are written all or none", "[hostile]") {
   const std::string folder = temporary_folder("outputs");
   DiagnosticList diagnostics;

@@ -315,13 +315,21 @@ Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<doub
 }
 
 int run_eval(const EvalOptions& options) {
-  {
-    std::string error;
-    // A file that is not a table, or cannot be read as one, is read as a rule file next (with its own limit).
-    const std::optional<std::string> bytes = read_text_file(options.file, sim::kMaxTableFileBytes, "lookup table", error);
-    if (bytes && has_fzt_signature(*bytes)) return run_eval_table(options, *bytes);
+  // A table or a rule file, told apart by the first bytes, each read under its own limit.
+  std::string error;
+  const std::optional<sim::KindOfInput> input = sim::read_input_file(
+      options.file,
+      {sim::InputKind{"lookup table", sim::kMaxTableFileBytes, fzt_signature()},
+       sim::InputKind{"rule file", sim::kMaxRuleFileBytes, ""}},
+      error);
+  if (!input) {
+    DiagnosticList diagnostics;
+    diagnostics.error(SourceRange{options.file, 0, 0, 0, 0}, error);
+    print_diagnostics(diagnostics, SourceFiles{}, std::cerr);
+    return kExitErrors;
   }
-  LoadedRuleFile file = load_rule_file_from_disk(options.file);
+  if (input->kind == 0) return run_eval_table(options, input->contents);
+  LoadedRuleFile file = sim::load_rule_text(options.file, input->contents);
   if (file.diagnostics.has_errors()) {
     print_diagnostics(file.diagnostics, file.sources, std::cerr);
     return kExitErrors;
@@ -427,7 +435,7 @@ int run_eval(const EvalOptions& options) {
   }
   print_diagnostics(diagnostics, sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;
-  std::string error;
+  error.clear();
   if (options.explain || options.summary) {
     std::cout << explanation_text.str();
     if (options.output != "-" && !write_text_file_atomically(options.output, csv.str(), error)) {

@@ -223,6 +223,8 @@ bool validate_table(const LookupTable& table, const std::string& origin, Diagnos
   return true;
 }
 
+std::string fzt_signature() { return std::string(kMagic, sizeof kMagic); }
+
 bool has_fzt_signature(const std::string& bytes) {
   return bytes.size() >= sizeof kMagic && std::memcmp(bytes.data(), kMagic, sizeof kMagic) == 0;
 }
