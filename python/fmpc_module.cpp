@@ -17,6 +17,7 @@
 #include "compiler/backend/table/table_builder.h"
 #include "compiler/eval/evaluation_report.h"
 #include "compiler/eval/interpreter.h"
+#include "compiler/frontend/utf8.h"
 #include "compiler/passes/pipeline.h"
 #include "diagnostics/number_format.h"
 #include "compiler/ir/content_hash.h"
@@ -53,13 +54,18 @@ std::string severity_name(Severity severity) {
   return severity == Severity::Error ? "error" : severity == Severity::Warning ? "warning" : "note";
 }
 
+// Messages may quote any bytes of any file (a binary file read as a scene): a Python str takes UTF-8 only, so every
+// text goes through valid_utf8 (a bad byte becomes U+FFFD) instead of raising UnicodeDecodeError.
 std::vector<PyDiagnostic> to_python(const DiagnosticList& diagnostics, const SourceFiles& sources) {
   std::vector<PyDiagnostic> out;
   for (const Diagnostic& d : diagnostics.items()) {
     std::string text = render(d, sources);
     while (!text.empty() && text.back() == '\n') text.pop_back();
-    out.push_back(PyDiagnostic{severity_name(d.severity), d.code, d.message, d.range.file, d.range.line,
-                               d.range.column, d.range.end_line, d.range.end_column, d.notes, std::move(text)});
+    std::vector<std::string> notes;
+    for (const std::string& note : d.notes) notes.push_back(valid_utf8(note));
+    out.push_back(PyDiagnostic{severity_name(d.severity), valid_utf8(d.code), valid_utf8(d.message),
+                               valid_utf8(d.range.file), d.range.line, d.range.column, d.range.end_line,
+                               d.range.end_column, std::move(notes), valid_utf8(text)});
   }
   return out;
 }

@@ -87,6 +87,10 @@ RuleFile load_rule_file(const std::string& path, const std::string& original, Di
       return RuleFile{path, {}};
     }
   }
+  // The MATLAB reader and the fmpc parser check UTF-8 themselves; FLL and FCL names reach every output (Python's
+  // str among them), so their text is checked here.
+  if ((dialect == Dialect::Fll || dialect == Dialect::Fcl) && report_invalid_utf8(path, text, diagnostics))
+    return RuleFile{path, {}};
   RuleFile file;
   switch (dialect) {
     case Dialect::Matlab: file = read_matlab_fis(path, text, diagnostics); break;

@@ -80,6 +80,20 @@ class Arguments(unittest.TestCase):
         self.assert_names("scene", lambda: fmpc.simulate(1.5))
         self.assert_names("output_directory", lambda: fmpc.simulate("s.yaml", output_directory=""))
 
+    def test_messages_quoting_binary_files_are_text(self):
+        # Found by fuzz_python_arguments: simulate on a binary file (a .fzt) raised UnicodeDecodeError from the
+        # YAML error quoting its bytes; messages now replace bytes that are not UTF-8 with U+FFFD.
+        with self.assertRaises(fmpc.Error) as caught:
+            fmpc.simulate(GOLDEN_TABLE)
+        self.assertTrue(caught.exception.diagnostics)
+        folder = scratch("binary")
+        latin1 = os.path.join(folder, "latin1.fll")
+        with open(latin1, "wb") as out:
+            out.write(b"Engine: caf\xe9\n")
+        with self.assertRaises(fmpc.Error) as caught:
+            fmpc.load(latin1)
+        self.assertIn("not valid UTF-8", str(caught.exception))
+
     def test_nan_is_refused_before_any_row_is_evaluated(self):
         # Issue 30: a NaN in row 0 of 10^8 rows was found after all of them (133 s). 2 million rows of a 247-rule
         # system take minutes to evaluate; the refusal takes well under a second.

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "compiler/frontend/utf8.h"
 #include "compiler/ir/content_hash.h"
 #include "diagnostics/number_format.h"
 
@@ -91,6 +92,11 @@ class ByteReader {
     }
     std::string s(size, '\0');
     if (!raw(s.data(), size, what)) return {};
+    // Names, units and paths are text everywhere they go (messages, generated headers, Python's str).
+    if (first_invalid_utf8(s) != std::string::npos) {
+      fail(std::string(what) + ": not valid UTF-8 text");
+      return {};
+    }
     return s;
   }
   void fail(std::string message) {
