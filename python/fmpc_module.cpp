@@ -28,6 +28,7 @@
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
 #include "runtime/scene/scene_run.h"
+#include "python/fmpc_module.h"
 
 namespace py = pybind11;
 
@@ -574,11 +575,7 @@ SimulationHandle simulate(const py::object& scene_object, const py::object& outp
 
 }  // namespace
 
-}  // namespace fmpc::python
-
-using namespace fmpc::python;  // NOLINT: the bindings name every function of this file
-
-PYBIND11_MODULE(fmpc, m) {
+void define_fmpc_module(py::module_& m) {
   m.doc() = "fmpc: fuzzy rule files (fmpc, MATLAB .fis, FLL, FCL), their evaluation on numpy arrays, lookup tables "
             "and the soft-tissue simulator (docs/python.md)";
   static py::exception<std::runtime_error> error(m, "Error", PyExc_ValueError);
@@ -670,3 +667,7 @@ PYBIND11_MODULE(fmpc, m) {
         "Runs a scene file (docs/scenes.md) and writes its outputs (to output_directory, default the scene's); "
         "returns the probe curve and final positions as arrays and the summary as a dict.");
 }
+
+}  // namespace fmpc::python
+
+PYBIND11_MODULE(fmpc, m) { fmpc::python::define_fmpc_module(m); }

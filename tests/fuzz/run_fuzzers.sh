@@ -23,7 +23,7 @@ build=$(cd "$1" && pwd)
 seconds=$2
 shift 2
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fmpc_language matlab_fis fll fcl scene_yaml gmsh obj vtk fzt csv)
+[ ${#targets[@]} -gt 0 ] || targets=(fmpc_language matlab_fis fll fcl scene_yaml gmsh obj vtk fzt csv python_arguments)
 binaries=${FMPC_FUZZ_BINARIES:-$build/tests/fuzz}
 shared=$(cd "$root/.." && pwd)/shared/data
 
@@ -35,6 +35,11 @@ fuzz_one() {
   seeds=${seeds:-$build/fuzz-corpus/$name-seeds}
   local dict=()
   [ -f "$root/tests/fuzz/dict/$name.dict" ] && dict=(-dict="$root/tests/fuzz/dict/$name.dict")
+  # fuzz_python_arguments reads its fixtures from the source tree and keeps the interpreter's objects to the end.
+  if [ "$name" = python_arguments ]; then
+    dict+=(-detect_leaks=0)
+    export FMPC_FUZZ_FIXTURES="$root"
+  fi
   local TIMEFORMAT='%U %S' status=0
   # bash's `time`: the process's user and system CPU seconds, into TARGET.PROCESS.cpu.
   { time "$binaries/fuzz_$name" "${dict[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
