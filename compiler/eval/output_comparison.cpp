@@ -145,4 +145,25 @@ std::vector<std::string> output_changes(const FuzzySystem& intended, const Fuzzy
   return changes;
 }
 
+std::vector<std::string> name_changes(const FuzzySystem& intended, const FuzzySystem& written) {
+  std::vector<std::string> changes;
+  // "input 'a\"b' is written as 'a'b'", "term 'x' of output 'z' is written as ..."
+  const auto compare = [&](const std::string& what, const std::string& from, const std::string& to,
+                           const std::string& of = "") {
+    if (from != to) changes.push_back(what + " '" + from + "'" + of + " is written as '" + to + "'");
+  };
+  compare("system", intended.name, written.name);
+  const auto variables = [&](const std::vector<Variable>& from, const std::vector<Variable>& to, const char* role) {
+    for (std::size_t v = 0; v < from.size() && v < to.size(); ++v) {
+      compare(role, from[v].name, to[v].name);
+      for (std::size_t t = 0; t < from[v].terms.size() && t < to[v].terms.size(); ++t)
+        compare("term", from[v].terms[t].name, to[v].terms[t].name,
+                " of " + std::string(role) + " '" + from[v].name + "'");
+    }
+  };
+  variables(intended.inputs, written.inputs, "input");
+  variables(intended.outputs, written.outputs, "output");
+  return changes;
+}
+
 }  // namespace fmpc

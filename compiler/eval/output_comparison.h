@@ -25,4 +25,9 @@ struct OutputComparison {
 std::vector<std::string> output_changes(const FuzzySystem& intended, const FuzzySystem& written,
                                         const OutputComparison& comparison = {});
 
+// The names `written` spells differently from `intended` (the system's, its variables' and their terms'), in words:
+// the fmpc language writes '"' in a name as '\'' and a line break as a space, and the points a user evaluates
+// name inputs and outputs, so a changed name is never silent (`fmpc convert` warns, -Wrenamed-term).
+std::vector<std::string> name_changes(const FuzzySystem& intended, const FuzzySystem& written);
+
 }  // namespace fmpc

@@ -25,9 +25,11 @@ struct ConvertOptions {
 };
 
 // The written text read back, system by system, as `fmpc` would read the file (MATLAB's format or the fmpc
-// language), against the systems it was written from: what would change in the outputs (empty: nothing).
+// language), against the systems it was written from: what would change in the outputs (empty: nothing). Names
+// that read back otherwise are a warning in `diagnostics_out` (-Wrenamed-term), located at the system or `path`.
 std::vector<std::string> changes_on_reading_back(const std::string& text, bool matlab,
-                                                 const std::vector<FuzzySystem>& intended) {
+                                                 const std::vector<FuzzySystem>& intended, const std::string& path,
+                                                 DiagnosticList& diagnostics_out) {
   DiagnosticList diagnostics;
   const RuleFile back = matlab ? read_matlab_fis("converted.fis", text, diagnostics)
                                : load_rule_file("converted.fis", text, diagnostics);
@@ -41,9 +43,19 @@ std::vector<std::string> changes_on_reading_back(const std::string& text, bool m
     return {"the written file holds " + std::to_string(back.systems.size()) + " systems, not " +
             std::to_string(intended.size())};
   std::vector<std::string> changes;
-  for (std::size_t k = 0; k < intended.size(); ++k)
+  for (std::size_t k = 0; k < intended.size(); ++k) {
+    const std::string prefix = intended.size() > 1 ? "system '" + intended[k].name + "': " : std::string();
     for (const std::string& change : output_changes(intended[k], back.systems[k]))
-      changes.push_back((intended.size() > 1 ? "system '" + intended[k].name + "': " : std::string()) + change);
+      changes.push_back(prefix + change);
+    // Names do not change outputs, but the points a user evaluates name inputs: a renamed one is said.
+    const std::vector<std::string> renamed = name_changes(intended[k], back.systems[k]);
+    if (!renamed.empty())
+      diagnostics_out.warning(intended[k].range.valid() ? intended[k].range : SourceRange{path, 0, 0, 0, 0},
+                              "renamed-term",
+                              prefix + std::to_string(renamed.size()) + " name" + (renamed.size() == 1 ? "" : "s") +
+                                  " cannot be written as they are",
+                              renamed);
+  }
   return changes;
 }
 
@@ -117,7 +129,7 @@ int run_convert(const ConvertOptions& options) {
   // A conversion that would change what the system computes is refused unless asked for (issue 11): the text is
   // read back as fmpc would read the file and evaluated against the system it was written from.
   if (!diagnostics.has_errors()) {
-    std::vector<std::string> changes = changes_on_reading_back(text, matlab_text, intended);
+    std::vector<std::string> changes = changes_on_reading_back(text, matlab_text, intended, options.file, diagnostics);
     // What the writer itself reports as changing the outputs (an output unit scenes would read otherwise).
     std::size_t lossy_warnings = 0;
     for (const Diagnostic& d : diagnostics.items()) lossy_warnings += d.code == kMatlabLossy ? 1 : 0;
