@@ -113,7 +113,10 @@ std::vector<std::string> output_changes(const FuzzySystem& intended, const Fuzzy
     double from = 0.0, to = 0.0;
   };
   std::vector<std::array<Largest, 3>> largest(intended.outputs.size());
-  for (const std::vector<double>& x : probe_points(intended, comparison.random_points)) {
+  const std::vector<std::vector<double>> points = probe_points(intended, comparison.random_points);
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const std::vector<double>& x = points[k];
+    if (comparison.progress) comparison.progress(k, points.size());
     const Evaluation p = a.evaluate(x), q = b.evaluate(x);
     for (std::size_t o = 0; o < intended.outputs.size(); ++o) {
       const double range = intended.outputs[o].max - intended.outputs[o].min;

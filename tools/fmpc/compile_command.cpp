@@ -185,7 +185,7 @@ int run_compile(const CompileOptions& options) {
       progress.show("round " + std::to_string(p.round) + ", " + std::to_string(p.grid_points) + " grid points (budget " +
                     std::to_string(p.budget) + "), error " + format_number(p.training_error) + " (target " +
                     format_number(p.target) + "); estimated " + format_number(std::round(p.estimated_grid_points)) +
-                    " points, at least " + duration_text(left) + " more");
+                    " points, at least " + duration_text(left) + " left");
     };
     TableBuildStatistics stats;
     const std::optional<LookupTable> table = build_table(*system, *compiled, table_options, diagnostics, &stats);

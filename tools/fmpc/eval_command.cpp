@@ -16,6 +16,7 @@
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 
@@ -397,7 +398,10 @@ int run_eval(const EvalOptions& options) {
     evaluation_options.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
     Interpreter interpreter(*system, evaluation_options);
     SummaryTable summary(*system);
-    for (const EvaluationPoint& point : points) {
+    ProgressLine progress("eval");  // a million points of a large system take minutes
+    for (std::size_t p = 0; p < points.size(); ++p) {
+      const EvaluationPoint& point = points[p];
+      progress.show_fraction(p, points.size(), "point");
       const Explanation explanation = explain_or_evaluate(interpreter, point.inputs, options.explain);
       report_evaluation_flags(*system, point.inputs, point.origins, point.where, explanation.evaluation,
                               point_diagnostics);
@@ -415,6 +419,7 @@ int run_eval(const EvalOptions& options) {
       if (options.explain) write_explanation(*system, point, explanation, options.explain_threshold, explanation_text);
       if (options.summary) summary.add(*system, point, evaluation);
     }
+    progress.finish();
     if (options.summary) summary.write(explanation_text);
     // A large CSV out of range everywhere would bury the terminal: keep the first warnings and count the rest.
     std::size_t warnings = 0, dropped = 0;
