@@ -22,6 +22,7 @@ endif()
 set(extra_args)
 if(NAME STREQUAL "python_arguments")
   set(ENV{FMPC_FUZZ_FIXTURES} ${SOURCE_DIR})
+  set(ENV{ASAN_OPTIONS} "$ENV{ASAN_OPTIONS}:detect_leaks=0")  # libFuzzer's flag covers the inputs, not the exit
   set(extra_args -detect_leaks=0)
 endif()
 execute_process(
