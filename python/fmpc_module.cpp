@@ -24,6 +24,7 @@
 #include "kernels/table_math.h"
 #include "runtime/io/atomic_file.h"
 #include "runtime/io/input_file.h"
+#include "runtime/io/memory_limit.h"
 #include "runtime/io/rule_file_input.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
@@ -479,6 +480,9 @@ TableHandle compile_table(const SystemHandle& handle, const py::object& output_o
   options.value_type = precision == "float" ? TableValueType::Float32 : TableValueType::Float64;
   options.spacing = spacing == "uniform" ? BreakpointSpacing::Uniform : BreakpointSpacing::Refined;
   options.max_grid_points = max_grid_points;
+  const sim::MemoryLimit memory = sim::memory_limit();
+  options.memory_limit_bytes = memory.bytes;
+  options.memory_limit_source = memory.source;
   options.seed = seed;
   options.threads = threads;
   options.evaluation.reference = reference_of(semantics);

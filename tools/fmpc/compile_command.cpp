@@ -16,6 +16,7 @@
 #include "compiler/ir/content_hash.h"
 #include "diagnostics/number_format.h"
 #include "compiler/passes/pipeline.h"
+#include "runtime/io/memory_limit.h"
 #include "tools/fmpc/binding_arguments.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/progress_line.h"
@@ -171,6 +172,9 @@ int run_compile(const CompileOptions& options) {
     table_options.spacing = options.spacing == "uniform" ? BreakpointSpacing::Uniform : BreakpointSpacing::Refined;
     table_options.value_type = options.precision == "float" ? TableValueType::Float32 : TableValueType::Float64;
     table_options.max_grid_points = options.max_grid_points;
+    const sim::MemoryLimit memory = sim::memory_limit();
+    table_options.memory_limit_bytes = memory.bytes;
+    table_options.memory_limit_source = memory.source;
     table_options.held_out_points = options.held_out;
     table_options.seed = options.seed;
     table_options.threads = options.threads;
