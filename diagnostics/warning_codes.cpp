@@ -45,6 +45,7 @@ const std::vector<WarningCode>& warning_codes() {
       {"no-rule-fired", "eval"},
       {"nan-output", "plot"},
       {"precision-dependent", "simulate"},
+      {"probe-load", "scene"},
       // meshes, scenes and the simulator
       {"mesh-ignored-elements", "scene"},
       {"mesh-repaired", "scene"},
