@@ -105,7 +105,7 @@ TEST_CASE("re-running simulate into a folder removes the earlier run's extra fra
   fs::remove_all(folder);
 }
 
-TEST_CASE("every command that can run long reports progress and the time left on a pipe", "[cli]") {
+TEST_CASE("every command that can run long reports progress and the time left on a pipe", "[cli][heavy]") {
   // Issue 30: trade --points 10000000 and plot of a 100,000-rule system ran silently when stderr was not a
   // terminal. FMPC_PROGRESS_SECONDS shortens the period of the plain lines (10 s by default) so that runs of a
   // fraction of a second show them.

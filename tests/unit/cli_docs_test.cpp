@@ -175,7 +175,7 @@ TEST_CASE("every warning code in the sources is a known -W code", "[cli][docs]")
   }
 }
 
-TEST_CASE("every option that takes a value refuses an empty one, naming it", "[cli]") {
+TEST_CASE("every option that takes a value refuses an empty one, naming it", "[cli][heavy]") {
   // `-o ''` once sent simulate's outputs to the default folder and `--csv ''` made trade write nothing: an empty
   // value is a mistake (an unset shell variable), and every command says so, whatever the option.
   std::size_t checked = 0;
