@@ -46,6 +46,7 @@ const std::vector<WarningCode>& warning_codes() {
       {"nan-output", "plot"},
       {"missing-measurement", "tune"},
       {"precision-dependent", "simulate"},
+      {"probe-load", "scene"},
       // meshes, scenes and the simulator
       {"mesh-ignored-elements", "scene"},
       {"mesh-repaired", "scene"},

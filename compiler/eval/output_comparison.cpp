@@ -113,7 +113,10 @@ std::vector<std::string> output_changes(const FuzzySystem& intended, const Fuzzy
     double from = 0.0, to = 0.0;
   };
   std::vector<std::array<Largest, 3>> largest(intended.outputs.size());
-  for (const std::vector<double>& x : probe_points(intended, comparison.random_points)) {
+  const std::vector<std::vector<double>> points = probe_points(intended, comparison.random_points);
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const std::vector<double>& x = points[k];
+    if (comparison.progress) comparison.progress(k, points.size());
     const Evaluation p = a.evaluate(x), q = b.evaluate(x);
     for (std::size_t o = 0; o < intended.outputs.size(); ++o) {
       const double range = intended.outputs[o].max - intended.outputs[o].min;
@@ -142,6 +145,27 @@ std::vector<std::string> output_changes(const FuzzySystem& intended, const Fuzzy
                         format_number(l.from) + " to " + format_number(l.to) + " at " + point_text(intended, l.at) +
                         ")");
     }
+  return changes;
+}
+
+std::vector<std::string> name_changes(const FuzzySystem& intended, const FuzzySystem& written) {
+  std::vector<std::string> changes;
+  // "input 'a\"b' is written as 'a'b'", "term 'x' of output 'z' is written as ..."
+  const auto compare = [&](const std::string& what, const std::string& from, const std::string& to,
+                           const std::string& of = "") {
+    if (from != to) changes.push_back(what + " '" + from + "'" + of + " is written as '" + to + "'");
+  };
+  compare("system", intended.name, written.name);
+  const auto variables = [&](const std::vector<Variable>& from, const std::vector<Variable>& to, const char* role) {
+    for (std::size_t v = 0; v < from.size() && v < to.size(); ++v) {
+      compare(role, from[v].name, to[v].name);
+      for (std::size_t t = 0; t < from[v].terms.size() && t < to[v].terms.size(); ++t)
+        compare("term", from[v].terms[t].name, to[v].terms[t].name,
+                " of " + std::string(role) + " '" + from[v].name + "'");
+    }
+  };
+  variables(intended.inputs, written.inputs, "input");
+  variables(intended.outputs, written.outputs, "output");
   return changes;
 }
 

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <unordered_map>
 
 #include "compiler/frontend/fmpc_ast.h"
 #include "compiler/frontend/fmpc_language.h"
+#include "compiler/ir/system_names.h"
 #include "diagnostics/number_format.h"
 
 namespace fmpc {
@@ -97,6 +99,7 @@ class SystemLowering {
     settings_failed_ = diagnostics_.has_errors();
     for (const Item& item : source_.items)
       if (const auto* variable = std::get_if<ast::Variable>(&item)) lower_variable_header(*variable);
+    names_.emplace(system_);  // the variables, for linear(...) coefficients
     std::size_t input_index = 0, output_index = 0;
     std::vector<std::pair<fmpc::Variable*, std::size_t>> failed_terms;
     for (const Item& item : source_.items) {
@@ -109,6 +112,7 @@ class SystemLowering {
         if (diagnostics_.error_count() > errors_before) failed_terms.emplace_back(&target, target.terms.size() - 1);
       }
     }
+    names_.emplace(system_);  // and their terms, for the rules
     for (const Item& item : source_.items)
       if (const auto* rule = std::get_if<ast::Rule>(&item)) {
         const std::size_t errors_before = diagnostics_.error_count();
@@ -557,17 +561,8 @@ class SystemLowering {
     return true;
   }
 
-  std::vector<std::string> input_names() const {
-    std::vector<std::string> names;
-    for (const fmpc::Variable& input : system_.inputs) names.push_back(input.name);
-    return names;
-  }
-
-  std::vector<std::string> output_names() const {
-    std::vector<std::string> names;
-    for (const fmpc::Variable& output : system_.outputs) names.push_back(output.name);
-    return names;
-  }
+  const std::vector<std::string>& input_names() const { return names_->variable_names(false); }
+  const std::vector<std::string>& output_names() const { return names_->variable_names(true); }
 
   void lower_linear(const std::vector<Argument>& arguments, const fmpc::Variable& variable, MembershipFunction& mf) {
     const std::size_t inputs = system_.inputs.size();
@@ -580,11 +575,11 @@ class SystemLowering {
       const bool is_offset = argument.name.text == "offset" && !argument.name.quoted;
       std::size_t index = inputs;
       if (!is_offset) {
-        const int input = system_.find_input(argument.name.text);
+        const int input = names_->variable(false, argument.name.text);
         if (input < 0) {
           std::vector<std::string> notes = did_you_mean(argument.name.text, input_names());
           notes.push_back("linear(...) takes one coefficient per input of " + quoted(system_.name) + " (" +
-                          list_text(input_names()) + ") and an offset");
+                          name_list_text(input_names()) + ") and an offset");
           diagnostics_.error(argument.name.range,
                              quoted(argument.name.text) + " is not an input of system " + quoted(system_.name),
                              notes);
@@ -613,17 +608,23 @@ class SystemLowering {
 
   // --- rules --------------------------------------------------------------------------------------------------
 
-  // The system of this file, other than this one, that has a variable called `name`, with its role.
-  std::optional<std::string> owner_elsewhere(const std::string& name) const {
-    for (const System& other : file_.systems) {
-      if (&other == &source_ || other.name.text == source_.name.text) continue;
-      for (const Item& item : other.items)
-        if (const auto* variable = std::get_if<ast::Variable>(&item); variable && variable->name.text == name)
-          return quoted(name) + " is an " + (variable->is_output ? "output" : "input") + " of system " +
-                 quoted(other.name.text) + "; a rule of " + quoted(source_.name.text) +
-                 " can only name its own variables";
+  // The system of this file, other than this one, that has a variable called `name`, with its role. The other
+  // systems' variables are indexed on the first unknown name, so that many unknown names cost one pass.
+  std::optional<std::string> owner_elsewhere(const std::string& name) {
+    if (!variables_elsewhere_) {
+      variables_elsewhere_.emplace();
+      for (const System& other : file_.systems) {
+        if (&other == &source_ || other.name.text == source_.name.text) continue;
+        for (const Item& item : other.items)
+          if (const auto* variable = std::get_if<ast::Variable>(&item))
+            variables_elsewhere_->emplace(variable->name.text, std::make_pair(&other, variable->is_output));
+      }
     }
-    return std::nullopt;
+    const auto found = variables_elsewhere_->find(name);
+    if (found == variables_elsewhere_->end()) return std::nullopt;
+    const auto [other, is_output] = found->second;
+    return quoted(name) + " is an " + (is_output ? "output" : "input") + " of system " + quoted(other->name.text) +
+           "; a rule of " + quoted(source_.name.text) + " can only name its own variables";
   }
 
   // Resolves one clause; returns false after reporting when it does not resolve.
@@ -631,10 +632,9 @@ class SystemLowering {
                     std::map<int, SourceRange>& used) {
     const std::vector<fmpc::Variable>& variables = consequent ? system_.outputs : system_.inputs;
     const char* role = consequent ? "output" : "input";
-    const int index = consequent ? system_.find_output(source.variable.text) : system_.find_input(source.variable.text);
+    const int index = names_->variable(consequent, source.variable.text);
     if (index < 0) {
-      const int other_role = consequent ? system_.find_input(source.variable.text)
-                                        : system_.find_output(source.variable.text);
+      const int other_role = names_->variable(!consequent, source.variable.text);
       if (other_role >= 0) {
         diagnostics_.error(source.variable.range,
                            quoted(source.variable.text) + " is an " + (consequent ? "input" : "output") + " of " +
@@ -660,12 +660,11 @@ class SystemLowering {
                          {"first used here: " + position_text(previous->second)});
       return false;
     }
-    const int term = variable.find_term(source.term.text);
+    const int term = names_->term(consequent, index, source.term.text);
     if (term < 0) {
-      std::vector<std::string> term_names;
-      for (const fmpc::Term& candidate : variable.terms) term_names.push_back(candidate.name);
+      const std::vector<std::string>& term_names = names_->term_names(consequent, index);
       std::vector<std::string> notes = did_you_mean(source.term.text, term_names);
-      notes.push_back("terms of " + quoted(variable.name) + ": " + list_text(term_names));
+      notes.push_back("terms of " + quoted(variable.name) + ": " + name_list_text(term_names));
       diagnostics_.error(source.term.range,
                          std::string(role) + " " + quoted(variable.name) + " has no term " + quoted(source.term.text),
                          notes);
@@ -713,6 +712,9 @@ class SystemLowering {
   const System& source_;
   DiagnosticList& diagnostics_;
   FuzzySystem system_;
+  std::optional<SystemNames> names_;  // system_'s names, indexed once its variables (then its terms) are lowered
+  // The other systems' variables by name: the first system that has it, and whether it is an output there.
+  std::optional<std::unordered_map<std::string, std::pair<const System*, bool>>> variables_elsewhere_;
   bool settings_failed_ = false;
   std::vector<std::size_t> failed_rules_;
 };

@@ -1,5 +1,6 @@
 #include "tools/fmpc/csv_table.h"
 
+#include "compiler/frontend/utf8.h"
 #include "tools/fmpc/text_files.h"
 
 #include <algorithm>
@@ -16,8 +17,9 @@ std::string trimmed(const std::string& s) {
 
 }  // namespace
 
-CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticList& diagnostics,
+CsvTable parse_csv(const std::string& path, const std::string& original, DiagnosticList& diagnostics,
                    const std::string& header_example) {
+  const std::string text = blank_byte_order_mark(original);
   CsvTable table;
   table.path = path;
   std::vector<CsvCell> row;

@@ -23,7 +23,8 @@ struct CsvTable {
 // Every cell keeps its text and position (about 100 bytes each); a table of more cells is refused.
 inline constexpr std::size_t kMaxCsvCells = std::size_t{1} << 20;  // 1,048,576
 
-// `header_example` (e.g. "label,HCV,HBV", from the file's own inputs) is shown when the text has no header row.
+// `header_example` (e.g. "label,HCV,HBV", from the file's own inputs) is shown when the text has no header row. A
+// leading UTF-8 byte order mark is read as three spaces (compiler/frontend/utf8.h).
 CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticList& diagnostics,
                    const std::string& header_example = "");
 

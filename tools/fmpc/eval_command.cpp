@@ -16,6 +16,7 @@
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 
@@ -322,13 +323,21 @@ Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<doub
 }
 
 int run_eval(const EvalOptions& options) {
-  {
-    std::string error;
-    // A file that is not a table, or cannot be read as one, is read as a rule file next (with its own limit).
-    const std::optional<std::string> bytes = read_text_file(options.file, sim::kMaxTableFileBytes, "lookup table", error);
-    if (bytes && has_fzt_signature(*bytes)) return run_eval_table(options, *bytes);
+  // A table or a rule file, told apart by the first bytes, each read under its own limit.
+  std::string error;
+  const std::optional<sim::KindOfInput> input = sim::read_input_file(
+      options.file,
+      {sim::InputKind{"lookup table", sim::kMaxTableFileBytes, fzt_signature()},
+       sim::InputKind{"rule file", sim::kMaxRuleFileBytes, ""}},
+      error);
+  if (!input) {
+    DiagnosticList diagnostics;
+    diagnostics.error(SourceRange{options.file, 0, 0, 0, 0}, error);
+    print_diagnostics(diagnostics, SourceFiles{}, std::cerr);
+    return kExitErrors;
   }
-  LoadedRuleFile file = load_rule_file_from_disk(options.file);
+  if (input->kind == 0) return run_eval_table(options, input->contents);
+  LoadedRuleFile file = sim::load_rule_text(options.file, input->contents);
   if (file.diagnostics.has_errors()) {
     print_diagnostics(file.diagnostics, file.sources, std::cerr);
     return kExitErrors;
@@ -398,7 +407,10 @@ int run_eval(const EvalOptions& options) {
     evaluation_options.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
     Interpreter interpreter(*system, evaluation_options);
     SummaryTable summary(*system, label_column);
-    for (const EvaluationPoint& point : points) {
+    ProgressLine progress("eval");  // a million points of a large system take minutes
+    for (std::size_t p = 0; p < points.size(); ++p) {
+      const EvaluationPoint& point = points[p];
+      progress.show_fraction(p, points.size(), "point");
       const Explanation explanation = explain_or_evaluate(interpreter, point.inputs, options.explain);
       report_evaluation_flags(*system, point.inputs, point.origins, point.where, explanation.evaluation,
                               point_diagnostics);
@@ -417,6 +429,7 @@ int run_eval(const EvalOptions& options) {
       if (options.explain) write_explanation(*system, point, explanation, options.explain_threshold, explanation_text);
       if (options.summary) summary.add(*system, point, evaluation);
     }
+    progress.finish();
     if (options.summary) summary.write(explanation_text);
     // A large CSV out of range everywhere would bury the terminal: keep the first warnings and count the rest.
     std::size_t warnings = 0, dropped = 0;
@@ -437,7 +450,7 @@ int run_eval(const EvalOptions& options) {
   }
   print_diagnostics(diagnostics, sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;
-  std::string error;
+  error.clear();
   if (options.explain || options.summary) {
     std::cout << explanation_text.str();
     if (options.output != "-" && !write_text_file_atomically(options.output, csv.str(), error)) {

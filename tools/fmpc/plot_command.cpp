@@ -12,6 +12,7 @@
 #include "compiler/eval/interpreter.h"
 #include "diagnostics/number_format.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 #include "kernels/fuzzy_math.h"
@@ -405,8 +406,10 @@ int run_plot(const PlotOptions& options) {
   Interpreter interpreter(system);
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   std::size_t nan_count = 0;
+  ProgressLine progress("plot");  // 1001 x 1001 points of a 100,000-rule system take minutes
   for (std::size_t r = 0; r < n; ++r)
     for (std::size_t c = 0; c < n; ++c) {
+      if (c == 0) progress.show_fraction(r, n, "row");
       point[static_cast<std::size_t>(ix)] = map.x[c];
       point[static_cast<std::size_t>(iy)] = map.y[r];
       const double z = interpreter.evaluate(point).outputs[static_cast<std::size_t>(io)];
@@ -418,6 +421,7 @@ int run_plot(const PlotOptions& options) {
       lo = std::min(lo, z);
       hi = std::max(hi, z);
     }
+  progress.finish();
   if (nan_count > 0)
     diagnostics.warning(kCommandLine, "nan-output",
                         std::to_string(nan_count) + " of " + std::to_string(n * n) +

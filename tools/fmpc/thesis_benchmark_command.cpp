@@ -13,6 +13,7 @@
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 #include "tools/plot/line_chart.h"
@@ -194,7 +195,11 @@ int run_thesis_benchmark(const ThesisBenchmarkOptions& options) {
   }
   std::vector<double> moduli;
   for (const double kpa : options.moduli) moduli.push_back(kpa * 1000.0);
-  const auto report = sim::run_liver_benchmark(controllers, patients, moduli, options.run, diagnostics);
+  ProgressLine progress("thesis-benchmark");
+  sim::LiverBenchmarkOptions run_options = options.run;
+  run_options.progress = [&](std::size_t done, std::size_t total) { progress.show_fraction(done, total, "run"); };
+  const auto report = sim::run_liver_benchmark(controllers, patients, moduli, run_options, diagnostics);
+  progress.finish();
   if (!report) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;
