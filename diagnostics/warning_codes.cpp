@@ -44,6 +44,7 @@ const std::vector<WarningCode>& warning_codes() {
       {"input-out-of-range", "eval"},
       {"no-rule-fired", "eval"},
       {"nan-output", "plot"},
+      {"missing-measurement", "validate"},
       {"precision-dependent", "simulate"},
       // meshes, scenes and the simulator
       {"mesh-ignored-elements", "scene"},

@@ -9,6 +9,8 @@
 #include <iostream>
 #include <limits>
 
+#include "compiler/eval/control_surface.h"
+#include "compiler/eval/evaluation_report.h"
 #include "compiler/eval/interpreter.h"
 #include "diagnostics/number_format.h"
 #include "tools/fmpc/commands.h"
@@ -66,10 +68,6 @@ int find_variable(const std::vector<Variable>& variables, const std::string& nam
 std::string axis_label(const Variable& variable) {
   return variable.unit.empty() || variable.unit == "dimensionless" ? variable.name
                                                                    : variable.name + " (" + variable.unit + ")";
-}
-
-std::string with_unit(double value, const Variable& variable) {
-  return format_number(value) + (variable.unit.empty() || variable.unit == "dimensionless" ? "" : " " + variable.unit);
 }
 
 // A clause's grade interval at x: the term's [lower, upper] grade, hedged, then negated (MATLAB's order).
@@ -184,7 +182,7 @@ int plot_rules(const FuzzySystem& system, const std::vector<double>& point, cons
                        " aggregation, " + to_string(system.defuzzifier) + ")");
   std::string at;
   for (std::size_t i = 0; i < system.inputs.size(); ++i)
-    at += (i ? ", " : "") + system.inputs[i].name + " = " + with_unit(point[i], system.inputs[i]);
+    at += (i ? ", " : "") + system.inputs[i].name + " = " + value_with_unit(point[i], system.inputs[i].unit);
   view.title.push_back(at);
   for (std::size_t i = 0; i < system.inputs.size(); ++i) {
     view.input_titles.push_back(system.inputs[i].name + " = " + format_number(point[i]));
@@ -295,7 +293,7 @@ int plot_rules(const FuzzySystem& system, const std::vector<double>& point, cons
   if (status == kExitOk) {
     std::cout << options.image << ": " << system.rules.size() << " rules at " << at << ";";
     for (std::size_t o = 0; o < system.outputs.size(); ++o)
-      std::cout << ' ' << system.outputs[o].name << " = " << with_unit(evaluation.outputs[o], system.outputs[o]);
+      std::cout << ' ' << system.outputs[o].name << " = " << value_with_unit(evaluation.outputs[o], system.outputs[o].unit);
     std::cout << '\n';
   }
   return status;
@@ -393,31 +391,19 @@ int run_plot(const PlotOptions& options) {
   const Variable& x_input = system.inputs[static_cast<std::size_t>(ix)];
   const Variable& y_input = system.inputs[static_cast<std::size_t>(iy)];
   const Variable& output = system.outputs[static_cast<std::size_t>(io)];
+  const ControlSurface grid = control_surface(system, static_cast<std::size_t>(ix), static_cast<std::size_t>(iy),
+                                              static_cast<std::size_t>(io), point, n);
   plot::HeatMap map;
-  map.x.resize(n);
-  map.y.resize(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double t = static_cast<double>(k) / static_cast<double>(n - 1);
-    map.x[k] = x_input.min + t * (x_input.max - x_input.min);
-    map.y[k] = y_input.min + t * (y_input.max - y_input.min);
-  }
-  map.z.resize(n * n);
-  Interpreter interpreter(system);
+  map.x = grid.x;
+  map.y = grid.y;
+  map.z = grid.z;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  std::size_t nan_count = 0;
-  for (std::size_t r = 0; r < n; ++r)
-    for (std::size_t c = 0; c < n; ++c) {
-      point[static_cast<std::size_t>(ix)] = map.x[c];
-      point[static_cast<std::size_t>(iy)] = map.y[r];
-      const double z = interpreter.evaluate(point).outputs[static_cast<std::size_t>(io)];
-      map.z[r * n + c] = z;
-      if (std::isnan(z)) {
-        ++nan_count;
-        continue;
-      }
+  for (double z : map.z)
+    if (!std::isnan(z)) {
       lo = std::min(lo, z);
       hi = std::max(hi, z);
     }
+  const std::size_t nan_count = grid.nan_points;
   if (nan_count > 0)
     diagnostics.warning(kCommandLine, "nan-output",
                         std::to_string(nan_count) + " of " + std::to_string(n * n) +
@@ -433,7 +419,7 @@ int run_plot(const PlotOptions& options) {
   std::string rest;
   for (std::size_t i = 0; i < system.inputs.size(); ++i) {
     if (static_cast<int>(i) == ix || static_cast<int>(i) == iy) continue;
-    rest += (rest.empty() ? "fixed: " : ", ") + system.inputs[i].name + " = " + with_unit(point[i], system.inputs[i]) +
+    rest += (rest.empty() ? "fixed: " : ", ") + system.inputs[i].name + " = " + value_with_unit(point[i], system.inputs[i].unit) +
             (fixed[i] ? "" : " (mid-range)");
   }
   if (!rest.empty()) map.title.push_back(rest);
