@@ -11,25 +11,19 @@
 #include <string>
 
 #include "compiler/eval/rule_contributions.h"
-#include "compiler/frontend/rule_file_loader.h"
 #include "tests/support/random_system.h"
+#include "tests/support/rule_text.h"
 
 namespace fmpc {
 namespace {
 
-FuzzySystem system_from(const std::string& text) {
-  DiagnosticList diagnostics;
-  RuleFile file = load_rule_file("t.fis", text, diagnostics);
-  REQUIRE_FALSE(diagnostics.has_errors());
-  REQUIRE(file.systems.size() == 1);
-  return file.systems.front();
-}
+using testing::system_from_text;
 
 FuzzySystem shipped(const std::string& relative) {
   std::ifstream in(std::string(FMPC_SOURCE_DIR) + "/" + relative);
   std::stringstream text;
   text << in.rdbuf();
-  return system_from(text.str());
+  return system_from_text(text.str());
 }
 
 FuzzySystem without_rule(FuzzySystem system, std::size_t rule) {
@@ -60,7 +54,7 @@ rule r3: if x is high then z is c
 )";
 
 TEST_CASE("Sugeno shares are exact, with fis.c's denominator", "[contributions]") {
-  const FuzzySystem system = system_from(kTwoOutputs);
+  const FuzzySystem system = system_from_text(kTwoOutputs);
   REQUIRE(contribution_method(system) == ContributionMethod::ExactShare);
   // x = 2.5: low 0.75, high 0.25. y = (0.75 * 20 + 0.25 * 80) / (0.75 + 0.25 + 0.25): r3 fires but concludes on z
   // only, and MATLAB still counts it in y's denominator.
@@ -81,7 +75,7 @@ TEST_CASE("Sugeno shares are exact, with fis.c's denominator", "[contributions]"
 TEST_CASE("Sugeno with wtsum: contributions are height times value", "[contributions]") {
   std::string text = kTwoOutputs;
   text.replace(text.find("wtaver"), 6, "wtsum");
-  const RuleContributions result = rule_contributions(system_from(text), {2.5});
+  const RuleContributions result = rule_contributions(system_from_text(text), {2.5});
   CHECK(result.outputs[0].contribution[0] == 0.75 * 20);
   CHECK(result.outputs[0].contribution[1] == 0.25 * 80);
   CHECK(sum(result.outputs[0].contribution) == result.outputs[0].output);
@@ -90,14 +84,14 @@ TEST_CASE("Sugeno with wtsum: contributions are height times value", "[contribut
 TEST_CASE("no rule fired: the policy's output and no contributions", "[contributions]") {
   std::string text = kTwoOutputs;
   text.replace(text.find("in [0, 10]"), 10, "in [0, 30]");
-  const RuleContributions result = rule_contributions(system_from(text), {25});
+  const RuleContributions result = rule_contributions(system_from_text(text), {25});
   CHECK(result.outputs[0].no_rule_fired);
   CHECK(result.outputs[0].output == 50);  // midrange of [0, 100]
   for (double c : result.outputs[0].contribution) CHECK(c == 0.0);
 }
 
 TEST_CASE("NaN input: NaN contributions", "[contributions]") {
-  const RuleContributions result = rule_contributions(system_from(kTwoOutputs), {std::nan("")});
+  const RuleContributions result = rule_contributions(system_from_text(kTwoOutputs), {std::nan("")});
   CHECK(std::isnan(result.outputs[0].output));
   for (double c : result.outputs[0].contribution) CHECK(std::isnan(c));
 }
@@ -171,7 +165,7 @@ TEST_CASE("leave one rule out equals evaluating without the rule", "[contributio
 }
 
 TEST_CASE("leave one rule out: the only rule firing leaves the policy's value", "[contributions]") {
-  const FuzzySystem system = system_from(R"(system m
+  const FuzzySystem system = system_from_text(R"(system m
 input x in [0, 10] kPa
   low is triangle(start 0, peak 0, end 5)
   high is triangle(start 5, peak 10, end 10)
@@ -195,7 +189,7 @@ rule r2: if x is high then y is big
 TEST_CASE("Octave semantics use leave one rule out for Sugeno", "[contributions]") {
   EvaluationOptions octave;
   octave.reference = Reference::Octave;
-  const FuzzySystem system = system_from(kTwoOutputs);
+  const FuzzySystem system = system_from_text(kTwoOutputs);
   CHECK(contribution_method(system, octave) == ContributionMethod::LeaveOneOut);
   const RuleContributions result = rule_contributions(system, {2.5}, octave);
   CHECK(result.outputs[0].output_without[0] == evaluate(without_rule(system, 0), {2.5}, octave).outputs[0]);

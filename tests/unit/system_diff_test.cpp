@@ -8,19 +8,13 @@
 
 #include "compiler/eval/control_surface.h"
 #include "compiler/eval/system_diff.h"
-#include "compiler/frontend/rule_file_loader.h"
 #include "compiler/ir/units.h"
+#include "tests/support/rule_text.h"
 
 namespace fmpc {
 namespace {
 
-FuzzySystem system_from(const std::string& text) {
-  DiagnosticList diagnostics;
-  RuleFile file = load_rule_file("t.fis", text, diagnostics);
-  REQUIRE_FALSE(diagnostics.has_errors());
-  REQUIRE(file.systems.size() == 1);
-  return file.systems.front();
-}
+using testing::system_from_text;
 
 const char* kBase = R"(system s
 input x in [0, 10] kPa
@@ -45,7 +39,7 @@ std::string edited(std::string text, const std::string& from, const std::string&
 }
 
 TEST_CASE("system_differences: nothing between equal systems", "[diff]") {
-  CHECK(system_differences(system_from(kBase), system_from(kBase)).empty());
+  CHECK(system_differences(system_from_text(kBase), system_from_text(kBase)).empty());
 }
 
 TEST_CASE("system_differences: settings, variables and terms", "[diff]") {
@@ -54,7 +48,7 @@ TEST_CASE("system_differences: settings, variables and terms", "[diff]") {
   text = edited(text, "high is triangle(start 5, peak 10, end 10)", "high is triangle(start 5, peak 9, end 10)");
   text = edited(text, "  big is triangle(start 6, peak 8, end 10)\n",
                 "  big is gauss(mean 8, sd 1)\n  huge is triangle(start 8, peak 10, end 10)\n");
-  const SystemDifferences d = system_differences(system_from(kBase), system_from(text));
+  const SystemDifferences d = system_differences(system_from_text(kBase), system_from_text(text));
   REQUIRE(d.settings.size() == 1);
   CHECK(d.settings[0] == "the defuzzifier changes from centroid to bisector");
   REQUIRE(d.variables.size() == 1);
@@ -79,7 +73,7 @@ TEST_CASE("system_differences: rules by label and by conditions", "[diff]") {
   text = edited(text, "weight 0.5", "weight 0.25");
   text += "rule r9: if x is high and w is on then y is big\n";
   text = edited(text, "rule r1: if x is low then y is small\n", "");
-  const FuzzySystem a = system_from(kBase), b = system_from(text);
+  const FuzzySystem a = system_from_text(kBase), b = system_from_text(text);
   const SystemDifferences d = system_differences(a, b);
   CHECK(d.settings.empty());
   CHECK(d.terms.empty());
@@ -99,17 +93,17 @@ TEST_CASE("system_differences: rules by label and by conditions", "[diff]") {
 }
 
 TEST_CASE("dominant_term: the best-describing output term", "[diff]") {
-  const FuzzySystem s = system_from(kBase);
+  const FuzzySystem s = system_from_text(kBase);
   CHECK(dominant_term(s, 0, 2) == 0);
   CHECK(dominant_term(s, 0, 8) == 1);
   CHECK(dominant_term(s, 0, 5) == -1);  // between the terms: no grade above 0
   CHECK(dominant_term(s, 0, std::nan("")) == -1);
-  const FuzzySystem tie = system_from(edited(edited(kBase, "small is triangle(start 0, peak 2, end 4)",
+  const FuzzySystem tie = system_from_text(edited(edited(kBase, "small is triangle(start 0, peak 2, end 4)",
                                                     "small is triangle(start 0, peak 2, end 7)"),
                                              "big is triangle(start 6, peak 8, end 10)",
                                              "big is triangle(start 3, peak 8, end 10)"));
   CHECK(dominant_term(tie, 0, 5) == 0);  // both 0.4: the first
-  const FuzzySystem sugeno = system_from(R"(system g
+  const FuzzySystem sugeno = system_from_text(R"(system g
   type sugeno
 input x in [0, 1] dimensionless
   a is linear_s(start 0, end 1)
@@ -125,8 +119,8 @@ rule: if x is a then y is low
 }
 
 TEST_CASE("compare_over_points: changes and stage changes", "[diff]") {
-  const FuzzySystem a = system_from(kBase);
-  const FuzzySystem same = system_from(kBase);
+  const FuzzySystem a = system_from_text(kBase);
+  const FuzzySystem same = system_from_text(kBase);
   const std::vector<std::vector<double>> points = {{1, 0.2}, {4, 0.9}, {9, 0.5}};
   const auto unchanged = compare_over_points(a, same, points, points);
   REQUIRE(unchanged.size() == 1);
@@ -136,7 +130,7 @@ TEST_CASE("compare_over_points: changes and stage changes", "[diff]") {
   CHECK(unchanged[0].agreement.count == 3);
   CHECK(unchanged[0].agreement.mean_absolute_error == 0);
   // r2 now concludes small: the patient at x = 9 moves from big to small.
-  const FuzzySystem b = system_from(edited(kBase, "then y is big\nrule:", "then y is small\nrule:"));
+  const FuzzySystem b = system_from_text(edited(kBase, "then y is big\nrule:", "then y is small\nrule:"));
   const auto changed = compare_over_points(a, b, points, points);
   CHECK(changed[0].stage_changes == std::vector<std::size_t>{2});
   CHECK(changed[0].stage_a[2] == 1);
@@ -146,7 +140,7 @@ TEST_CASE("compare_over_points: changes and stage changes", "[diff]") {
 }
 
 TEST_CASE("control_surface equals the interpreter at every grid point", "[diff]") {
-  const FuzzySystem s = system_from(kBase);
+  const FuzzySystem s = system_from_text(kBase);
   const ControlSurface surface = control_surface(s, 1, 0, 0, {5, 0.5}, 5);
   REQUIRE(surface.x == std::vector<double>{0, 0.25, 0.5, 0.75, 1});
   REQUIRE(surface.y == std::vector<double>{0, 2.5, 5, 7.5, 10});

@@ -3,13 +3,12 @@
 // per-patient table (--table) and a histogram of the changes per output (--plots DIR).
 #include <CLI/CLI.hpp>
 
-#include <filesystem>
+#include <cctype>
 #include <iostream>
 
-#include "runtime/io/atomic_file.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/report_output.h"
 #include "tools/fmpc/rule_file_session.h"
-#include "tools/fmpc/text_files.h"
 #include "tools/fmpc/version_diff_report.h"
 
 namespace fmpc::cli {
@@ -20,12 +19,7 @@ struct DiffOptions {
   std::string first;
   std::string second;
   std::string patients;
-  std::string system;
-  std::vector<std::string> columns;
-  std::string markdown;
-  std::string table;
-  std::string plots;
-  std::string semantics = "matlab";
+  ReportOptions report;
 };
 
 // A file name for an output's histogram: its name where that is a safe file name, else its position.
@@ -38,9 +32,10 @@ std::string histogram_file(const std::string& output, std::size_t index) {
 int run_diff(const DiffOptions& options) {
   LoadedRuleFile first = load_rule_file_from_disk(options.first);
   LoadedRuleFile second = load_rule_file_from_disk(options.second);
-  const FuzzySystem* a = first.diagnostics.has_errors() ? nullptr : select_system(first, options.system, first.diagnostics);
+  const FuzzySystem* a =
+      first.diagnostics.has_errors() ? nullptr : select_system(first, options.report.system, first.diagnostics);
   const FuzzySystem* b =
-      second.diagnostics.has_errors() ? nullptr : select_system(second, options.system, second.diagnostics);
+      second.diagnostics.has_errors() ? nullptr : select_system(second, options.report.system, second.diagnostics);
   // Each file's diagnostics quote its own lines; the patient file's text joins the first file's sources.
   print_diagnostics(first.diagnostics, first.sources, std::cerr);
   if (options.second != options.first) print_diagnostics(second.diagnostics, second.sources, std::cerr);
@@ -48,7 +43,7 @@ int run_diff(const DiffOptions& options) {
   DiagnosticList diagnostics;
   SourceFiles& sources = first.sources;
   PatientDataRequest request;
-  parse_column_mappings(options.columns, request.input_columns, diagnostics);
+  parse_column_mappings(options.report.columns, request.input_columns, diagnostics);
   std::optional<CsvTable> table;
   if (!diagnostics.has_errors())
     table = read_csv_file(options.patients, options.patients, sim::kMaxCsvFileBytes, "patient file",
@@ -59,37 +54,21 @@ int run_diff(const DiffOptions& options) {
     data = read_patient_data(*table, request, diagnostics);
   }
   std::optional<VersionDiffReport> report;
-  if (data) {
-    EvaluationOptions evaluation;
-    evaluation.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
-    report = compare_versions(*a, *b, *data, evaluation, diagnostics);
-  }
+  if (data) report = compare_versions(*a, *b, *data, options.report.evaluation(), diagnostics);
   print_diagnostics(diagnostics, sources, std::cerr);
   if (!report || diagnostics.has_errors()) return kExitErrors;
   report->path_a = options.first;
   report->path_b = options.second;
   report->data_path = options.patients;
-  const std::string markdown = version_diff_markdown(*report, *a, *b);
-  std::vector<std::pair<std::string, std::string>> writes;
-  if (!options.markdown.empty()) writes.emplace_back(options.markdown, markdown);
-  if (!options.table.empty()) writes.emplace_back(options.table, version_diff_csv(*report, *a, *b));
-  if (!options.plots.empty()) {
-    DiagnosticList folder;
-    if (!sim::ensure_directory(options.plots, folder)) {
-      print_diagnostics(folder, sources, std::cerr);
-      return kExitErrors;
-    }
-    for (std::size_t o = 0; o < report->outputs.size(); ++o)
-      writes.emplace_back((std::filesystem::path(options.plots) / histogram_file(report->outputs[o].name, o)).string(),
-                          difference_histogram_plot(*report, o, plot::ImageFormat::Png));
-  }
-  std::string error;
-  if (!write_text_files_atomically(writes, error)) {
-    std::cerr << "fmpc diff: error: " << error << "\n";
-    return kExitErrors;
-  }
-  std::cout << markdown;
-  return kExitOk;
+  return write_report(
+      options.report, "diff", version_diff_markdown(*report, *a, *b), [&] { return version_diff_csv(*report, *a, *b); },
+      [&] {
+        std::vector<std::pair<std::string, std::string>> plots;
+        for (std::size_t o = 0; o < report->outputs.size(); ++o)
+          plots.emplace_back(histogram_file(report->outputs[o].name, o),
+                             difference_histogram_plot(*report, o, plot::ImageFormat::Png));
+        return plots;
+      });
 }
 
 }  // namespace
@@ -105,13 +84,8 @@ void register_diff_command(CLI::App& app, int& exit_code) {
   command->add_option("second", options->second, "The second version")->required();
   command->add_option("--csv", options->patients, "CSV of patients: a column per input, optionally 'label'")
       ->required();
-  command->add_option("--system", options->system, "Which system of the files");
-  command->add_option("--column", options->columns, "Read an input from another column: INPUT=COLUMN (repeatable)");
-  command->add_option("--markdown", options->markdown, "Write the markdown report to this file too");
-  command->add_option("--table", options->table, "Write every patient's outputs, changes and stages as CSV");
-  command->add_option("--plots", options->plots, "Write differences_OUTPUT.png (a histogram) into this folder");
-  command->add_option("--semantics", options->semantics, "matlab or octave (docs/numerics.md)")
-      ->check(CLI::IsMember({"matlab", "octave"}));
+  add_report_options(*command, options->report, "Write every patient's outputs, changes and stages as CSV",
+                     "Write differences_OUTPUT.png (a histogram) into this folder");
   command->callback([options, &exit_code] { exit_code = run_diff(*options); });
 }
 

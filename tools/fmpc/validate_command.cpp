@@ -3,13 +3,11 @@
 // markdown (stdout and --markdown), a per-patient table (--table) and two pictures (--plots DIR).
 #include <CLI/CLI.hpp>
 
-#include <filesystem>
 #include <iostream>
 
-#include "runtime/io/atomic_file.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/report_output.h"
 #include "tools/fmpc/rule_file_session.h"
-#include "tools/fmpc/text_files.h"
 #include "tools/fmpc/validation_report.h"
 
 namespace fmpc::cli {
@@ -19,24 +17,20 @@ namespace {
 struct ValidateOptions {
   std::string file;
   std::string data;
-  std::string system;
   std::string output;
   std::string measured;
-  std::vector<std::string> columns;
-  std::string markdown;
-  std::string table;
-  std::string plots;
-  std::string semantics = "matlab";
+  ReportOptions report;
 };
 
 int run_validate(const ValidateOptions& options) {
   LoadedRuleFile file = load_rule_file_from_disk(options.file);
   DiagnosticList& diagnostics = file.diagnostics;
-  const FuzzySystem* system = diagnostics.has_errors() ? nullptr : select_system(file, options.system, diagnostics);
+  const FuzzySystem* system =
+      diagnostics.has_errors() ? nullptr : select_system(file, options.report.system, diagnostics);
   std::optional<std::size_t> output;
   if (system) output = output_named(*system, options.output, diagnostics);
   PatientDataRequest request;
-  parse_column_mappings(options.columns, request.input_columns, diagnostics);
+  parse_column_mappings(options.report.columns, request.input_columns, diagnostics);
   std::optional<CsvTable> table;
   if (!diagnostics.has_errors())
     table = read_csv_file(options.data, options.data, sim::kMaxCsvFileBytes, "data file",
@@ -49,37 +43,18 @@ int run_validate(const ValidateOptions& options) {
     data = read_patient_data(*table, request, diagnostics);
   }
   std::optional<ValidationReport> report;
-  if (data) {
-    EvaluationOptions evaluation;
-    evaluation.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
-    report = validate_rules(*system, *output, *data, evaluation, diagnostics);
-  }
+  if (data) report = validate_rules(*system, *output, *data, options.report.evaluation(), diagnostics);
   print_diagnostics(diagnostics, file.sources, std::cerr);
   if (!report || diagnostics.has_errors()) return kExitErrors;
   report->rules_path = options.file;
   report->data_path = options.data;
-  const std::string markdown = validation_markdown(*report);
-  std::vector<std::pair<std::string, std::string>> writes;
-  if (!options.markdown.empty()) writes.emplace_back(options.markdown, markdown);
-  if (!options.table.empty()) writes.emplace_back(options.table, validation_csv(*report, *system));
-  if (!options.plots.empty()) {
-    DiagnosticList folder;
-    if (!sim::ensure_directory(options.plots, folder)) {
-      print_diagnostics(folder, file.sources, std::cerr);
-      return kExitErrors;
-    }
-    const std::filesystem::path dir(options.plots);
-    writes.emplace_back((dir / "predicted_against_measured.png").string(),
-                        predicted_against_measured_plot(*report, plot::ImageFormat::Png));
-    writes.emplace_back((dir / "bland_altman.png").string(), bland_altman_plot(*report, plot::ImageFormat::Png));
-  }
-  std::string error;
-  if (!write_text_files_atomically(writes, error)) {
-    std::cerr << "fmpc validate: error: " << error << "\n";
-    return kExitErrors;
-  }
-  std::cout << markdown;
-  return kExitOk;
+  return write_report(
+      options.report, "validate", validation_markdown(*report), [&] { return validation_csv(*report, *system); },
+      [&] {
+        return std::vector<std::pair<std::string, std::string>>{
+            {"predicted_against_measured.png", predicted_against_measured_plot(*report, plot::ImageFormat::Png)},
+            {"bland_altman.png", bland_altman_plot(*report, plot::ImageFormat::Png)}};
+      });
 }
 
 }  // namespace
@@ -94,17 +69,12 @@ void register_validate_command(CLI::App& app, int& exit_code) {
       "Prints markdown; --markdown, --table and --plots write files (docs/cli.md).");
   command->add_option("file", options->file, "Rule file")->required();
   command->add_option("--data", options->data, "CSV of patients with measured values")->required();
-  command->add_option("--system", options->system, "Which system of the file");
   command->add_option("--output", options->output, "The output the measurements are of (default: the first)");
   command->add_option("--measured", options->measured,
                       "The measured column (default: the first of OUTPUT, measured, measured_OUTPUT, OUTPUT_measured)");
-  command->add_option("--column", options->columns, "Read an input from another column: INPUT=COLUMN (repeatable)");
-  command->add_option("--markdown", options->markdown, "Write the markdown report to this file too");
-  command->add_option("--table", options->table, "Write every patient (inputs, measured, predicted, difference) as CSV");
-  command->add_option("--plots", options->plots,
-                      "Write predicted_against_measured.png and bland_altman.png into this folder");
-  command->add_option("--semantics", options->semantics, "matlab or octave (docs/numerics.md)")
-      ->check(CLI::IsMember({"matlab", "octave"}));
+  add_report_options(*command, options->report,
+                     "Write every patient (inputs, measured, predicted, difference) as CSV",
+                     "Write predicted_against_measured.png and bland_altman.png into this folder");
   command->callback([options, &exit_code] { exit_code = run_validate(*options); });
 }
 

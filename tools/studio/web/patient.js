@@ -52,9 +52,9 @@ Studio.patient.buildInputs = function (system) {
     const unit = v.unit && v.unit !== "dimensionless" ? v.unit : "";
     box.append(Studio.element("div", { class: "patient-input" }, [
       Studio.element("label", { for: "slider-" + i, text: v.name }),
-      Studio.element("span", { class: "description", text: v.description }),
+      Studio.element("span", { class: "description", text: (v.description ? v.description + "; " : "") +
+        "range " + v.min + " to " + Studio.withUnit(String(v.max), unit) }),
       slider, field, Studio.element("span", { class: "unit", text: unit }),
-      Studio.element("span", { class: "range", text: "[" + v.min + ", " + v.max + "]" }),
     ]));
   });
 };
