@@ -132,6 +132,17 @@ TEST_CASE("studio API: the session token is required on every request", "[studio
   CHECK(studio.server.url() == "http://127.0.0.1:" + std::to_string(studio.server.port()) + "/?token=test-token");
 }
 
+TEST_CASE("studio API: a second server cannot share the port", "[studio]") {
+  Studio studio;
+  StudioServer second;
+  StudioOptions options;
+  options.root = studio.folder;
+  options.port = studio.server.port();
+  std::string error;
+  CHECK_FALSE(second.start(options, error));
+  CHECK(error == "cannot listen on 127.0.0.1:" + std::to_string(options.port) + " (in use?): pick another --port");
+}
+
 TEST_CASE("studio API: another Host header is refused (DNS rebinding)", "[studio]") {
   Studio studio;
   const std::string port = std::to_string(studio.server.port());

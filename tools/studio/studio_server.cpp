@@ -1,13 +1,17 @@
 #include "tools/studio/studio_server.h"
 
 #include <httplib.h>
+#include <sys/socket.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <functional>
 #include <list>
 #include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "compiler/frontend/rule_file_loader.h"
 #include "runtime/io/input_file.h"
@@ -140,6 +144,9 @@ struct StudioServer::State {
   StudioOptions options;
   httplib::Server server;
   int port = 0;
+  std::atomic<bool> serving{false};
+  std::atomic<bool> stop_requested{false};
+  std::atomic<bool> finished{false};
 
   // A path from the page, checked against the folder: 403 when it leads outside.
   fs::path inside(const std::string& relative) const {
@@ -383,6 +390,13 @@ bool StudioServer::start(const StudioOptions& options, std::string& error) {
   }
   httplib::Server& server = s.server;
   server.set_payload_max_length(kMaxRequestBytes);
+  // cpp-httplib's default also sets SO_REUSEPORT, with which a second process (of the same user) could bind the
+  // studio's port and take a share of its connections; SO_REUSEADDR alone only lets a restart reuse a port in
+  // TIME_WAIT, and a port in use is refused.
+  server.set_socket_options([](int socket) {
+    int yes = 1;
+    setsockopt(socket, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   server.set_default_headers({
       {"Cache-Control", "no-store"},
       {"X-Content-Type-Options", "nosniff"},
@@ -476,8 +490,27 @@ bool StudioServer::start(const StudioOptions& options, std::string& error) {
   return true;
 }
 
-bool StudioServer::serve() { return state_->server.listen_after_bind(); }
-void StudioServer::stop() { state_->server.stop(); }
+// cpp-httplib's stop() does nothing before its listening loop has started, which would leave a serve() that starts
+// just after a stop() running for ever: each side tells the other where it is.
+bool StudioServer::serve() {
+  State& s = *state_;
+  s.serving = true;
+  if (s.stop_requested) {
+    s.finished = true;
+    return true;
+  }
+  const bool listened = s.server.listen_after_bind();
+  s.finished = true;
+  return listened;
+}
+
+void StudioServer::stop() {
+  State& s = *state_;
+  s.stop_requested = true;
+  if (!s.serving) return;
+  while (!s.server.is_running() && !s.finished) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  s.server.stop();
+}
 int StudioServer::port() const { return state_->port; }
 const std::string& StudioServer::token() const { return state_->options.token; }
 std::string StudioServer::url() const {
