@@ -91,6 +91,7 @@ Studio.compare.fillAgainst = function () {
 Studio.on("file", () => Studio.compare.fillAgainst());
 Studio.on("saved", () => { if (Studio.state.tab === "compare") Studio.compare.run(); });
 Studio.on("tab", (tab) => { if (tab === "compare") Studio.compare.run(); });
+Studio.on("model", () => { if (Studio.state.tab === "compare") Studio.compare.run(); });
 
 document.addEventListener("DOMContentLoaded", () => {
   Studio.loadCsv(document.getElementById("compare-file"), document.getElementById("compare-folder-file"), (csv) => {
