@@ -172,16 +172,23 @@ if [[ "${1:-}" == "--prepare" ]]; then
   echo "copied Eigen headers to $CARRY/eigen3 ($(du -sh "$CARRY" | cut -f1)); carry build-gpu-carry to the GPU machine"
   prepare_evaluator_headers || exit 1
   rm -rf "$PROGRAMS" "$PROGRAMS.tar.xz"
-  prepare_scenes || exit 1
+  # Without a CUDA build's fmpc (FMPC unset) the scenes section cannot run; the tests, sanitizers and bench can.
+  if [[ -n "${FMPC:-}" ]]; then
+    prepare_scenes || exit 1
+  else
+    echo "FMPC is not set: no fmpc bundled, the scenes section will not run (tests, sanitizers, bench will)"
+  fi
   prepare_fuzz || exit 1
   rm -f "$CARRY/fuzz-corpus.tar.xz"
   if [[ -n "${FUZZ_CORPUS:-}" ]]; then
     cp "$FUZZ_CORPUS" "$CARRY/fuzz-corpus.tar.xz" || exit 1
     echo "carrying the fuzz corpus $FUZZ_CORPUS"
   fi
-  tar -C "$CARRY" -cJf "$PROGRAMS.tar.xz" programs && rm -rf "$PROGRAMS" || exit 1
+  if [[ -d "$PROGRAMS" ]]; then
+    tar -C "$CARRY" -cJf "$PROGRAMS.tar.xz" programs && rm -rf "$PROGRAMS" || exit 1
+  fi
   size=$(du -sm "$CARRY" | cut -f1)
-  echo "build-gpu-carry: $size MiB (programs.tar.xz $(du -sh "$PROGRAMS.tar.xz" | cut -f1))"
+  echo "build-gpu-carry: $size MiB (programs.tar.xz $(du -sh "$PROGRAMS.tar.xz" 2>/dev/null | cut -f1 || echo none))"
   [[ $size -lt 64 ]] || { echo "build-gpu-carry is over the carry limit of 64 MiB" >&2; exit 1; }
   exit 0
 fi

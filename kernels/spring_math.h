@@ -1,6 +1,6 @@
 #pragma once
 // Spring laws and the per-vertex force gather, shared by the CPU loops (runtime/integrate) and the CUDA kernels
-// (kernels/simulation_step.cu). Everything is FMPC_HD, templated on the real type (float or double), and sums in the
+// (kernels/*.cu). Everything is FMPC_HD, templated on the real type (float or double), and sums in the
 // CSR order of the adjacency, so every backend adds the same terms in the same order.
 #include "kernels/fmpc_hd.h"
 
@@ -253,7 +253,7 @@ FMPC_HD VertexState<Real> vertex_state(const StateView<Real>& s, int v) {
 // Sum of the spring forces on a vertex at (x, v) over its `count` CSR entries, in order (deterministic; no atomics):
 // entry(j) gives its j-th entry as a SpringIncidence, other(record) the state of that spring's other end. Every
 // gather of both backends adds its terms here or in this order (the persistent CUDA kernel computes them on several
-// threads and adds them in this order on one, kernels/simulation_step.cu), so they all have these bits. Batch > 1
+// threads and adds them in this order on one, kernels/persistent_step.cu), so they all have these bits. Batch > 1
 // reads the records, then the other ends, of `Batch` entries before computing any of their terms: a term's branch
 // (spring_force_on_vertex's guard) otherwise holds the next entry's loads back (kSlicedGatherBatch). The terms are
 // still added one by one in CSR order.

@@ -1,6 +1,7 @@
 #pragma once
-// Host-side declarations of the kernel launches in kernels/simulation_step.cu. Every launcher returns the launch's
-// cudaError_t (cudaGetLastError after <<<>>>), never exits; runtime/gpu/gpu_simulation.cpp turns it into a Diagnostic.
+// Host-side declarations of the kernel launches in kernels/explicit_step.cu, persistent_step.cu, implicit_step.cu and
+// reductions.cu: templates over the real type, instantiated there for float and double. Every launcher returns the
+// launch's cudaError_t (cudaGetLastError after <<<>>>), never exits; runtime/gpu/ turns it into a Diagnostic.
 //
 // A batch of scenes is one concatenated network: scene s owns a contiguous range of vertices and springs, its CSR
 // entries point at its own vertices only, so one thread per vertex serves every scene in one launch. Per-scene time
@@ -12,6 +13,7 @@
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
+#include "kernels/element_laws.h"
 #include "kernels/tetrahedron_math.h"
 
 namespace fmpc::gpu {
@@ -20,13 +22,18 @@ namespace fmpc::gpu {
 // launchers dispatch on it once per launch (static dispatch inside the kernels).
 enum class GatherKind : int { Springs = 0, Elements = 1, SpringsAndElements = 2 };
 
-// A force model on the device: the springs (Springs, SpringsAndElements), and the tetrahedron field with the corner
-// forces its element pass writes and the per-vertex gather reads (Elements, SpringsAndElements).
+using kernels::kMostElementTerms;
+
+// A force model on the device: the springs (Springs, SpringsAndElements), and the element terms (kernels/
+// element_term.h) with the corner forces their passes write (the first term's, then each later one's added) and the
+// per-vertex gather reads (Elements, SpringsAndElements).
 template <typename Real>
 struct ForceModelView {
   GatherKind kind;
   kernels::SpringNetworkView<Real> springs;
-  kernels::TetrahedronFieldView<Real> field;
+  kernels::ElementTermView<Real> terms[kMostElementTerms];
+  int term_count;
+  int element_count;
   kernels::CornerForceView<Real> corners;    // corners.force == corner_force
   kernels::CornerForce<Real>* corner_force;  // 4 per element
   int element_blocks = 3;  // float: the element pass's register bound, 2 or 3 blocks per SM (GpuOptions)
@@ -37,23 +44,21 @@ struct ForceModelView {
 
 // The springs' incidence records (kernels::SpringIncidence) of every CSR entry, from the network's arrays; run once
 // after upload, and only where the stiffness stays fixed during the run (no strain table).
-cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<float>& network, int entries,
-                                    kernels::SpringIncidence<float>* incidence, cudaStream_t stream);
-cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<double>& network, int entries,
-                                    kernels::SpringIncidence<double>* incidence, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<Real>& network, int entries,
+                                    kernels::SpringIncidence<Real>* incidence, cudaStream_t stream);
 
 // Fills the sliced layout's records (network.sliced.row set) from the network's CSR arrays, one thread per row,
 // whose vertex is vertex_order[row] (kernels::write_sliced_row); run once after upload, like launch_spring_incidence.
-cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<float>& network, const int* vertex_order,
-                                  int vertex_count, kernels::SpringIncidence<float>* record, cudaStream_t stream);
-cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<double>& network, const int* vertex_order,
-                                  int vertex_count, kernels::SpringIncidence<double>* record, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<Real>& network, const int* vertex_order,
+                                  int vertex_count, kernels::SpringIncidence<Real>* record, cudaStream_t stream);
 
-// The element pass at `state`: every element's corner forces (kernels::tetrahedron_corner_forces); nothing for
-// GatherKind::Springs. Enqueued before every per-vertex kernel that gathers at that state.
-cudaError_t launch_element_forces(const ForceModelView<float>& model, const kernels::StateView<float>& state,
-                                  cudaStream_t stream);
-cudaError_t launch_element_forces(const ForceModelView<double>& model, const kernels::StateView<double>& state,
+// The element pass at `state`: every element's corner forces (kernels::element_corner_forces), one launch per term
+// with its law a template argument, the later terms' forces added to the first's; nothing without terms. Enqueued
+// before every per-vertex kernel that gathers at that state.
+template <typename Real>
+cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
                                   cudaStream_t stream);
 
 template <typename Real>
@@ -107,7 +112,7 @@ struct ProbeScene {
   bool force_mode;
   bool has_base_force;  // force probes: whether base_force_* hold the vertices' own external force
 };
-// ProbeArguments' entry i as the probe kernels read it (kernels/simulation_step.cu, read_probe_entry), with the chunk's
+// ProbeArguments' entry i as the probe kernels read it (kernels/probe_schedule.cuh, probe_entry), with the chunk's
 // first step; the persistent kernel keeps its probe vertices' entries in shared memory for a launch.
 struct ProbeEntry {
   ProbeScene scene;
@@ -132,9 +137,8 @@ struct ProbeArguments {
   MutableStateView<Real> state;    // displacement probes write here
   MutableVector3View<Real> force;  // force probes write here
 };
-cudaError_t launch_apply_probe(const ProbeArguments<float>& arguments, int offset, bool before_step,
-                               cudaStream_t stream);
-cudaError_t launch_apply_probe(const ProbeArguments<double>& arguments, int offset, bool before_step,
+template <typename Real>
+cudaError_t launch_apply_probe(const ProbeArguments<Real>& arguments, int offset, bool before_step,
                                cudaStream_t stream);
 
 enum class FusedScheme : int { ForwardEuler = 0, SemiImplicitEuler = 1 };
@@ -167,8 +171,8 @@ constexpr bool valid_lanes(int lanes) { return lanes > 0 && lanes <= 32 && (lane
 // from the element pass launched before it), add the loads, update the vertex. With lanes > 1, that many threads
 // share a vertex's entries and add the terms in CSR order (as the persistent kernel): the same bits, more loads in
 // flight per vertex (the gather of a large mesh is latency-bound with one thread walking about 14 entries).
-cudaError_t launch_fused_step(const FusedStepArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_fused_step(const FusedStepArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_fused_step(const FusedStepArguments<Real>& arguments, cudaStream_t stream);
 
 // Velocity Verlet, two kernels per step (the second gathers at positions the first one wrote):
 //   drift: x += h v + h^2/2 a, predicted = v + h a            (own vertex only)
@@ -184,12 +188,12 @@ struct VerletArguments {
   int vertex_count;
   StepSize<Real> step;
 };
-cudaError_t launch_acceleration(const VerletArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_acceleration(const VerletArguments<double>& arguments, cudaStream_t stream);
-cudaError_t launch_verlet_drift(const VerletArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_verlet_drift(const VerletArguments<double>& arguments, cudaStream_t stream);
-cudaError_t launch_verlet_kick(const VerletArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_verlet_kick(const VerletArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_acceleration(const VerletArguments<Real>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_verlet_drift(const VerletArguments<Real>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_verlet_kick(const VerletArguments<Real>& arguments, cudaStream_t stream);
 
 // Classical RK4 as four gather kernels per step. Stage s (0..3) gathers the acceleration at the stage state
 // (stage_position[s], stage_velocity[s]) (stage 0: the state itself), stores it, and writes the next stage's state
@@ -207,8 +211,8 @@ struct RungeKutta4Arguments {
   int vertex_count;
   StepSize<Real> step;
 };
-cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<float>& arguments, int stage, cudaStream_t stream);
-cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<double>& arguments, int stage, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<Real>& arguments, int stage, cudaStream_t stream);
 
 // The checks advance makes after a chunk, made by the persistent kernels (at the end of a launch on its final state,
 // and the cooperative grid's at each check within it: PersistentEulerArguments::check_count), one download per
@@ -298,9 +302,10 @@ FMPC_HD constexpr long long persistent_euler_shared_bytes(long long rows, long l
 // block resident at once (cudaOccupancyMaxActiveBlocksPerMultiprocessor x multiprocessors); 0 where the device cannot
 // launch cooperative kernels or a block cannot have that much shared memory. A launch with more blocks fails
 // (cudaErrorCooperativeLaunchTooLarge).
-cudaError_t persistent_euler_block_limit(GatherKind kind, bool double_precision, long long shared_bytes, int& blocks);
-cudaError_t launch_persistent_euler(const PersistentEulerArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_persistent_euler(const PersistentEulerArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t persistent_euler_block_limit(GatherKind kind, long long shared_bytes, int& blocks);
+template <typename Real>
+cudaError_t launch_persistent_euler(const PersistentEulerArguments<Real>& arguments, cudaStream_t stream);
 
 // Springs alone in thread-block clusters (Hopper, issue 13's small meshes and cohorts): each cluster advances a group
 // of whole scenes for the whole chunk with their state on chip, in its blocks' shared memory, and the cluster's
@@ -348,9 +353,10 @@ FMPC_HD constexpr long long cluster_euler_shared_bytes(int rows, int capacity, l
 // Whether the device launches clusters of `blocks` blocks of `rows` threads with `shared_bytes` each, one cluster
 // resident (compute capability 9.0 or newer; more than 8 blocks where the device allows non-portable sizes). False,
 // with cudaSuccess, where it does not.
-cudaError_t cluster_euler_fits(bool double_precision, int blocks, int rows, long long shared_bytes, bool& fits);
-cudaError_t launch_cluster_euler(const ClusterEulerArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_cluster_euler(const ClusterEulerArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t cluster_euler_fits(int blocks, int rows, long long shared_bytes, bool& fits);
+template <typename Real>
+cudaError_t launch_cluster_euler(const ClusterEulerArguments<Real>& arguments, cudaStream_t stream);
 
 // k(strain) for every spring from the positions in `state` (kernels/strain_table_math.h), before every step.
 template <typename Real>
@@ -364,8 +370,8 @@ struct StrainStiffnessArguments {
   Real* stiffness;
   int spring_count;
 };
-cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<Real>& arguments, cudaStream_t stream);
 
 // Implicit Euler on the GPU (kernels/implicit_math.h): the system M - h df/dv - h^2 df/dx is applied matrix-free
 // from per-spring blocks, and solved by a Jacobi-preconditioned conjugate gradient in double with Eigen's
@@ -382,22 +388,16 @@ struct ConjugateGradientScalars {
   double beta;       // rz_next / rz
 };
 
-// The element part of implicit Euler, in double: each element's linearisation at the step's start (rotation or
-// volume gradient, kernels::TetrahedronLinearisation), and per corner 3 values each of h^2 K v0, of the diagonal of
-// (h^2 + h beta) K_aa, and of (h^2 + h beta) K p for the conjugate gradient's current direction (fixed corners' p
-// taken as zero), gathered per vertex over the corner CSR.
+// The element part of implicit Euler, in double: each term's linearisation of each element at the step's start (its
+// law's Linearisation, e.g. a rotation or a volume gradient), and per corner 3 values each of h^2 K v0, of the
+// diagonal of (h^2 + h beta) K_aa, and of (h^2 + h beta) K p for the conjugate gradient's current direction (fixed
+// corners' p taken as zero), the terms summed in order, gathered per vertex over the corner CSR.
 struct ImplicitElements {
-  kernels::TetrahedronLaw law;
-  int count;
-  const int* corners;          // 4 per element
-  const double* rest_inverse;  // 9 per element
-  const double* rest_volume;
-  const double* youngs_modulus;  // null for the volume law
-  const double* poisson_ratio;
-  const double* bulk_modulus;             // null for the co-rotational law
-  const double* stiffness_damping;        // null: none
-  kernels::StrainTableView strain_table;  // strain null: none
-  kernels::TetrahedronLinearisation* linearisation;
+  int count;           // elements; 0: none
+  int term_count;
+  const int* corners;  // 4 per element
+  kernels::ElementTermView<double> terms[kMostElementTerms];
+  void* linearisation[kMostElementTerms];  // per term: one of its law's Linearisation per element
   double* rhs_part;       // 12 per element
   double* diagonal_part;  // 12 per element
   double* product;        // 12 per element
@@ -431,37 +431,34 @@ struct ImplicitArguments {
 };
 // Blocks of every spring and the linearisation of every element, then b, the diagonal and the Jacobi preconditioner
 // of every vertex.
-cudaError_t launch_implicit_assemble(const ImplicitArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_implicit_assemble(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
 // x = 0, r = b, z = p = M^-1 r, scalars: rhs_norm2 = b.b, rz = r.z.
-cudaError_t launch_cg_start(const ImplicitArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_cg_start(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_cg_start(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
 // ap = A p (the elements' product first, then per vertex), alpha = rz / p.ap, x += alpha p, r -= alpha ap,
 // z = M^-1 r, rr = r.r, rz_next = r.z, beta.
-cudaError_t launch_cg_iteration(const ImplicitArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_cg_iteration(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_cg_iteration(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
 // p = z + beta p, rz = rz_next.
-cudaError_t launch_cg_direction(const ImplicitArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_cg_direction(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_cg_direction(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
 // v += dv, x += h v on the free vertices (x and v in Real, as the CPU backend).
-cudaError_t launch_implicit_finish(const ImplicitArguments<float>& arguments, cudaStream_t stream);
-cudaError_t launch_implicit_finish(const ImplicitArguments<double>& arguments, cudaStream_t stream);
+template <typename Real>
+cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
 
 // Writes into *first_vertex (device memory, preset to vertex_count) the smallest vertex index whose position or
 // velocity is NaN or infinite (integer atomicMin: the answer does not depend on scheduling).
-cudaError_t launch_find_non_finite(const kernels::StateView<float>& state, int vertex_count, int* first_vertex,
-                                   cudaStream_t stream);
-cudaError_t launch_find_non_finite(const kernels::StateView<double>& state, int vertex_count, int* first_vertex,
+template <typename Real>
+cudaError_t launch_find_non_finite(const kernels::StateView<Real>& state, int vertex_count, int* first_vertex,
                                    cudaStream_t stream);
 
 // Inverted tetrahedra (signed volume <= 0) at `state`, per scene: count[scene] += 1 (integer atomics: the count does
 // not depend on scheduling) and first[scene] = the smallest inverted element index (atomicMin). element_scene null:
 // every element is scene 0's. count and first are preset by the caller (0 and element_count).
+template <typename Real>
 cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
-                                  const kernels::StateView<float>& state, unsigned int* count, int* first,
-                                  cudaStream_t stream);
-cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
-                                  const kernels::StateView<double>& state, unsigned int* count, int* first,
+                                  const kernels::StateView<Real>& state, unsigned int* count, int* first,
                                   cudaStream_t stream);
 
 // Energies of one scene, summed in double by a fixed-shape tree (kEnergyBlocks partial sums of kEnergyThreads
@@ -485,14 +482,16 @@ struct EnergyArguments {
   const double* force_x;  // null: no external forces
   const double* force_y;
   const double* force_z;
-  ImplicitElements elements;  // ElementPotential: the field in double (the linearisation arrays unused)
+  // ElementPotential: one element term in double and the elements' corners.
+  kernels::ElementTermView<double> element_term;
+  const int* element_corners;
 };
 
 enum class EnergyTerm : int {
   Kinetic = 0,           // sum over vertices of m |v|^2 / 2
   SpringPotential = 1,   // sum over springs of spring_potential_energy
   LoadPotential = 2,     // sum over vertices of -(m g + f) . x
-  ElementPotential = 3,  // sum over elements of tetrahedron_elastic_energy
+  ElementPotential = 3,  // sum over elements of element_term's law's energy
 };
 
 // Sums the term over [begin, end) into *result (device memory); `partial` holds kEnergyBlocks doubles.
@@ -505,14 +504,12 @@ struct StartPositions {
 
 // The largest distance of a vertex in [begin, end) from its start, into *result (double), with partial[kEnergyBlocks]
 // as scratch: the same bits as the host's sim::largest_displacement on the downloaded state.
-cudaError_t launch_largest_displacement(const kernels::StateView<float>& state, const StartPositions& start, int begin,
-                                        int end, double* partial, double* result, cudaStream_t stream);
-cudaError_t launch_largest_displacement(const kernels::StateView<double>& state, const StartPositions& start, int begin,
+template <typename Real>
+cudaError_t launch_largest_displacement(const kernels::StateView<Real>& state, const StartPositions& start, int begin,
                                         int end, double* partial, double* result, cudaStream_t stream);
 
-cudaError_t launch_energy_sum(const EnergyArguments<float>& arguments, EnergyTerm term, int begin, int end,
-                              double* partial, double* result, cudaStream_t stream);
-cudaError_t launch_energy_sum(const EnergyArguments<double>& arguments, EnergyTerm term, int begin, int end,
+template <typename Real>
+cudaError_t launch_energy_sum(const EnergyArguments<Real>& arguments, EnergyTerm term, int begin, int end,
                               double* partial, double* result, cudaStream_t stream);
 
 }  // namespace fmpc::gpu

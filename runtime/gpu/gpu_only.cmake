@@ -1,6 +1,6 @@
 # FMPC_GPU_ONLY=ON: the build for the GPU machine, which has CMake, nvcc and the CUDA libraries but none of the
 # Debian packages the full build needs (antlr4, yaml-cpp, CLI11, Catch2, Eigen, fuzzylite). It builds only
-#   fmpc_runtime     kernels/simulation_step.cu, runtime/gpu, and the CPU reference it is compared with: meshes,
+#   fmpc_runtime     kernels/*_step.cu and reductions.cu, runtime/gpu, and the CPU reference it is compared with: meshes,
 #                    springs, integrators, the model builder, diagnostics/diagnostic.cpp and
 #                    diagnostics/number_format.cpp;
 #   fmpc_gpu_tests   tests/gpu (its own runner, no Catch2), ctest label `gpu`;
@@ -46,7 +46,10 @@ add_library(fmpc_runtime STATIC
   ${PROJECT_SOURCE_DIR}/runtime/scene/spring_model_builder.cpp
   ${PROJECT_SOURCE_DIR}/diagnostics/diagnostic.cpp
   ${PROJECT_SOURCE_DIR}/diagnostics/number_format.cpp
-  ${PROJECT_SOURCE_DIR}/kernels/simulation_step.cu)
+  ${PROJECT_SOURCE_DIR}/kernels/explicit_step.cu
+  ${PROJECT_SOURCE_DIR}/kernels/persistent_step.cu
+  ${PROJECT_SOURCE_DIR}/kernels/implicit_step.cu
+  ${PROJECT_SOURCE_DIR}/kernels/reductions.cu)
 target_include_directories(fmpc_runtime PUBLIC ${PROJECT_SOURCE_DIR})
 target_include_directories(fmpc_runtime SYSTEM PUBLIC ${FMPC_EIGEN_INCLUDE_DIR})
 target_link_libraries(fmpc_runtime PUBLIC fmpc_kernels Threads::Threads CUDA::cudart_static PRIVATE fmpc_warnings)

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "runtime/gpu/gpu_launch.h"
+#include "runtime/integrate/stepping_engine.h"
 #include "runtime/integrate/worker_pool.h"
 #include "runtime/springs/sliced_springs.h"
 
@@ -163,7 +164,7 @@ cudaError_t copy_async(DeviceArray<Real>& to, const DeviceArray<Real>& from, cud
 }
 
 // Host arrays whose resize leaves trivial values uninitialised, so that the pool's workers touch their pages first:
-// std::vector's zero fill ran on one thread, page faults included (GpuSimulation::create of a 97M-spring box took
+// std::vector's zero fill ran on one thread, page faults included (creating the simulation of a 97M-spring box took
 // 29.8 s on the H100 machine's 16 cores, most of it copying on one thread).
 template <typename T>
 struct UninitialisedAllocator : std::allocator<T> {
@@ -194,12 +195,18 @@ struct ConcatenatedScenes {
   HostArray<double> rest[3], position[3], velocity[3], force[3];
   bool has_forces = false;
   bool has_damping = false;  // false: no scene has dashpots, and no damping array is uploaded
-  // Tetrahedra (every scene's, for inversion counts) and, when the scenes have a tetrahedron field, its arrays and
-  // the corner CSR (each scene's corners point at its own elements).
+  // Tetrahedra (every scene's, for inversion counts) and, when the scenes have element terms, their geometry, the
+  // corner CSR (each scene's corners point at its own elements) and each term's parameters and damping (the scenes
+  // of a batch have the same terms: create() refuses others).
   HostArray<int> corners, element_scene, corner_offset, corner_index, corner_slot;
-  HostArray<double> rest_inverse, rest_volume, youngs_modulus, poisson_ratio, bulk_modulus, stiffness_damping;
-  bool has_field = false;
-  bool has_element_damping = false;
+  HostArray<double> rest_inverse, rest_volume;
+  struct Term {
+    int law = 0;
+    HostArray<double> parameter[kernels::kMostLawParameters];
+    HostArray<double> stiffness_damping;  // empty: no scene damps this term
+  };
+  std::vector<Term> terms;
+  bool has_elements = false;
   // The staging's threads, which also convert the arrays on upload (one pool, not one per array).
   std::unique_ptr<sim::WorkerPool> pool;
 };
@@ -226,14 +233,12 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
   for (const auto& setup : scenes) {
     c.has_forces = c.has_forces || !setup.external_forces.empty() || force_probe(setup);
     c.has_damping = c.has_damping || !setup.springs.damping.empty();
-    c.has_field = c.has_field || setup.tetrahedron_field.has_value();
-    c.has_element_damping =
-        c.has_element_damping || (setup.tetrahedron_field && !setup.tetrahedron_field->stiffness_damping.empty());
+    c.has_elements = c.has_elements || !setup.elements.empty();
     vertices += setup.rest_positions.size();
     entries += setup.springs.adjacency_spring.size();
     springs += setup.springs.size();
     elements += setup.tetrahedra.size();
-    if (setup.tetrahedron_field) corners += setup.tetrahedron_field->corner_index.size();
+    if (!setup.elements.empty()) corners += setup.elements.geometry.corner_index.size();
   }
   c.offset.reserve(vertices + 1);  // and the end offset, pushed last
   for (auto* array : {&c.offset, &c.vertex_scene}) array->resize(vertices);
@@ -249,14 +254,24 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
   }
   c.corners.resize(4 * elements);
   c.element_scene.resize(elements);
-  if (c.has_field) {
+  if (c.has_elements) {
     c.corner_offset.reserve(vertices + 1);
     c.corner_offset.resize(vertices);
     c.corner_index.resize(corners);
     c.corner_slot.resize(corners);
     c.rest_inverse.resize(9 * elements);
-    for (auto* array : {&c.rest_volume, &c.youngs_modulus, &c.poisson_ratio, &c.bulk_modulus}) array->resize(elements);
-    if (c.has_element_damping) c.stiffness_damping.resize(elements);
+    c.rest_volume.resize(elements);
+    const std::vector<sim::ElementTerm>& first = scenes.front().elements.terms;
+    c.terms.resize(first.size());
+    for (std::size_t t = 0; t < first.size(); ++t) {
+      ConcatenatedScenes::Term& term = c.terms[t];
+      term.law = first[t].law;
+      for (int p = 0; p < kernels::kMostLawParameters; ++p)
+        if (!first[t].parameter[p].empty()) term.parameter[p].resize(elements);
+      bool damped = false;
+      for (const auto& setup : scenes) damped = damped || !setup.elements.terms[t].stiffness_damping.empty();
+      if (damped) term.stiffness_damping.resize(elements);
+    }
   }
   c.pool = std::make_unique<sim::WorkerPool>(sim::resolve_thread_count(0, entries + 4 * elements + vertices));
   sim::WorkerPool& pool = *c.pool;
@@ -273,8 +288,8 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     fill_on_pool(pool, c.corners, 4 * eb, 4 * m,
                  [&](std::size_t i) { return vertex_base + setup.tetrahedra[i / 4][i % 4]; });
     fill_on_pool(pool, c.element_scene, eb, m, [&](std::size_t) { return scene; });
-    if (setup.tetrahedron_field) {
-      const sim::TetrahedronField& field = *setup.tetrahedron_field;
+    if (!setup.elements.empty()) {
+      const sim::ElementGeometry& field = setup.elements.geometry;
       const int corners_before = corner_base;
       const auto cbase = static_cast<std::size_t>(corner_base);
       fill_on_pool(pool, c.corner_offset, vb, n,
@@ -289,10 +304,12 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
       const auto copy_or_zero = [&](HostArray<double>& to, const std::vector<double>& from) {
         fill_on_pool(pool, to, eb, m, [&](std::size_t e) { return from.empty() ? 0.0 : from[e]; });
       };
-      copy_or_zero(c.youngs_modulus, field.youngs_modulus);
-      copy_or_zero(c.poisson_ratio, field.poisson_ratio);
-      copy_or_zero(c.bulk_modulus, field.bulk_modulus);
-      if (c.has_element_damping) copy_or_zero(c.stiffness_damping, field.stiffness_damping);
+      for (std::size_t term = 0; term < c.terms.size(); ++term) {
+        const sim::ElementTerm& own = setup.elements.terms[term];
+        for (int p = 0; p < kernels::kMostLawParameters; ++p)
+          if (!c.terms[term].parameter[p].empty()) copy_or_zero(c.terms[term].parameter[p], own.parameter[p]);
+        if (!c.terms[term].stiffness_damping.empty()) copy_or_zero(c.terms[term].stiffness_damping, own.stiffness_damping);
+      }
     }
     const int entries_before = entry_base;
     const auto entry_at = static_cast<std::size_t>(entry_base);
@@ -339,14 +356,22 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     c.element_begin.push_back(element_base + static_cast<int>(m));
   }
   c.offset.push_back(entry_base);
-  if (c.has_field) c.corner_offset.push_back(corner_base);
+  if (c.has_elements) c.corner_offset.push_back(corner_base);
   return c;
 }
 
 // The gather a batch's scenes share (create() refuses batches that differ in it).
 GatherKind gather_kind(const sim::SimulationSetup& setup) {
-  if (setup.model == sim::ForceModel::CorotationalFem) return GatherKind::Elements;
-  return setup.tetrahedron_field ? GatherKind::SpringsAndElements : GatherKind::Springs;
+  if (setup.elements.empty()) return GatherKind::Springs;
+  return setup.springs.size() > 0 ? GatherKind::SpringsAndElements : GatherKind::Elements;
+}
+
+// Whether two setups have the same element terms, law for law (their parameters may differ).
+bool same_element_laws(const sim::SimulationSetup& a, const sim::SimulationSetup& b) {
+  if (a.elements.terms.size() != b.elements.terms.size()) return false;
+  for (std::size_t t = 0; t < a.elements.terms.size(); ++t)
+    if (a.elements.terms[t].law != b.elements.terms[t].law) return false;
+  return true;
 }
 
 template <typename Real, typename Allocator>
@@ -358,8 +383,10 @@ HostArray<Real> convert(const std::vector<double, Allocator>& values, sim::Worke
 
 // The first field in which `scene` differs from scene 0 among those a batch shares, or nullptr.
 const char* shared_field_mismatch(const sim::SimulationSetup& scene, const sim::SimulationSetup& reference) {
-  if (scene.model != reference.model) return "force model";
+  const bool springs = scene.springs.size() > 0, reference_springs = reference.springs.size() > 0;
+  if (springs != reference_springs || (!springs && !same_element_laws(scene, reference))) return "force model";
   if (gather_kind(scene) != gather_kind(reference)) return "volume term (on in one scene, off in the other)";
+  if (!same_element_laws(scene, reference)) return "element terms";
   if (scene.integrator != reference.integrator) return "integrator";
   if (scene.precision != reference.precision) return "precision";
   if (scene.law != reference.law) return "spring law";
@@ -377,14 +404,16 @@ const char* shared_field_mismatch(const sim::SimulationSetup& scene, const sim::
   return nullptr;
 }
 
+// The CUDA engine of a batch (runtime/integrate/stepping_engine.h): upload, launch choice, the integrators'
+// enqueueing with persistent and graph launches, the checks' data and the checkpoint, read-back.
 template <typename Real>
-class GpuBatchImpl final : public GpuBatchSimulation {
+class GpuEngine final : public sim::SteppingEngine {
  public:
-  GpuBatchImpl(std::vector<sim::SimulationSetup> scenes, std::vector<sim::StabilityReport> stability,
-               const GpuOptions& options)
-      : scenes_(std::move(scenes)), stability_(std::move(stability)), options_(options) {}
+  GpuEngine(const std::vector<sim::SimulationSetup>& scenes, const std::vector<sim::StabilityReport>& stability,
+            const GpuOptions& options)
+      : scenes_(scenes), stability_(stability), options_(options) {}
 
-  ~GpuBatchImpl() override {
+  ~GpuEngine() override {
     graphs_.clear();
     if (stream_ != nullptr) cudaStreamDestroy(stream_);
   }
@@ -456,14 +485,13 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     FMPC_CUDA_CHECK(energy_result_.allocate(1), diagnostics, false);
     element_begin_ = c.element_begin;
     element_count_ = element_begin_.back();
-    inversions_.assign(scenes_.size(), sim::InversionReport{});
     if (element_count_ > 0) {
       FMPC_CUDA_CHECK(corners_.upload(c.corners), diagnostics, false);
       if (scenes_.size() > 1) FMPC_CUDA_CHECK(element_scene_.upload(c.element_scene), diagnostics, false);
       FMPC_CUDA_CHECK(inverted_count_.allocate(scenes_.size()), diagnostics, false);
       FMPC_CUDA_CHECK(inverted_first_.allocate(scenes_.size()), diagnostics, false);
     }
-    if (c.has_field && !upload_field(c, diagnostics)) return false;
+    if (c.has_elements && !upload_elements(c, diagnostics)) return false;
 
     if (!upload_probes(diagnostics) || !upload_single_scene_features(diagnostics)) return false;
 
@@ -497,7 +525,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
     // stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
-    return save_checkpoint(diagnostics) && synchronize(diagnostics);
+    return synchronize(diagnostics);
   }
 
   // The springs' incidence records, where the stiffness stays fixed during the run (no strain table): in the sliced
@@ -530,70 +558,67 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  // The tetrahedron field: its arrays in Real for the element pass, in double for implicit Euler and the energy
-  // sums, the corner CSR and the corner forces. The strain table (uploaded with the single-scene features) is
-  // attached to the views afterwards.
-  bool upload_field(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
-    const sim::SimulationSetup& common = scenes_.front();
-    const kernels::TetrahedronLaw law = common.tetrahedron_field->law;
-    const bool corotational = law == kernels::TetrahedronLaw::CorotationalLinear;
+  // The element terms: the geometry and each term's parameters in Real for the element pass and in double for
+  // implicit Euler and the energy sums, the corner CSR and the corner forces. The strain table (uploaded with the
+  // single-scene features) is attached to the views of the terms whose law reads one afterwards.
+  bool upload_elements(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
+    const std::size_t count = static_cast<std::size_t>(element_count_);
     FMPC_CUDA_CHECK(corner_offset_.upload(c.corner_offset), diagnostics, false);
     FMPC_CUDA_CHECK(corner_index_.upload(c.corner_index), diagnostics, false);
     FMPC_CUDA_CHECK(corner_slot_.upload(c.corner_slot), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_inverse_.upload(convert<Real>(c.rest_inverse, *c.pool)), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_volume_.upload(convert<Real>(c.rest_volume, *c.pool)), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
-    FMPC_CUDA_CHECK(field_rest_volume_d_.upload(c.rest_volume), diagnostics, false);
-    if (corotational) {
-      FMPC_CUDA_CHECK(field_youngs_.upload(convert<Real>(c.youngs_modulus, *c.pool)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_poisson_.upload(convert<Real>(c.poisson_ratio, *c.pool)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_youngs_d_.upload(c.youngs_modulus), diagnostics, false);
-      FMPC_CUDA_CHECK(field_poisson_d_.upload(c.poisson_ratio), diagnostics, false);
-    } else {
-      FMPC_CUDA_CHECK(field_bulk_.upload(convert<Real>(c.bulk_modulus, *c.pool)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_bulk_d_.upload(c.bulk_modulus), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_inverse_.upload(convert<Real>(c.rest_inverse, *c.pool)), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_volume_.upload(convert<Real>(c.rest_volume, *c.pool)), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
+    FMPC_CUDA_CHECK(rest_volume_d_.upload(c.rest_volume), diagnostics, false);
+    FMPC_CUDA_CHECK(corner_force_.allocate(4 * count), diagnostics, false);
+    const bool implicit = scenes_.front().integrator == sim::Integrator::ImplicitEuler;
+    model_.term_count = static_cast<int>(c.terms.size());
+    model_.element_count = element_count_;
+    elements_ = {};
+    elements_.count = element_count_;
+    elements_.term_count = model_.term_count;
+    elements_.corners = corners_.data();
+    for (std::size_t t = 0; t < c.terms.size(); ++t) {
+      const ConcatenatedScenes::Term& term = c.terms[t];
+      DeviceTermArrays& arrays = term_arrays_[t];
+      kernels::ElementTermView<Real>& view = model_.terms[t];
+      kernels::ElementTermView<double>& view_d = elements_.terms[t];
+      view = {};
+      view_d = {};
+      view.law = view_d.law = term.law;
+      view.count = view_d.count = element_count_;
+      view.corners = view_d.corners = corners_.data();
+      view.corner_slot = view_d.corner_slot = corner_slot_.data();
+      view.rest_inverse = rest_inverse_.data();
+      view.rest_volume = rest_volume_.data();
+      view_d.rest_inverse = rest_inverse_d_.data();
+      view_d.rest_volume = rest_volume_d_.data();
+      for (int p = 0; p < kernels::kMostLawParameters; ++p) {
+        if (term.parameter[p].empty()) continue;
+        FMPC_CUDA_CHECK(arrays.parameter[p].upload(convert<Real>(term.parameter[p], *c.pool)), diagnostics, false);
+        FMPC_CUDA_CHECK(arrays.parameter_d[p].upload(term.parameter[p]), diagnostics, false);
+        view.parameter[p] = arrays.parameter[p].data();
+        view_d.parameter[p] = arrays.parameter_d[p].data();
+      }
+      if (!term.stiffness_damping.empty()) {
+        FMPC_CUDA_CHECK(arrays.damping.upload(convert<Real>(term.stiffness_damping, *c.pool)), diagnostics, false);
+        FMPC_CUDA_CHECK(arrays.damping_d.upload(term.stiffness_damping), diagnostics, false);
+        view.stiffness_damping = arrays.damping.data();
+        view_d.stiffness_damping = arrays.damping_d.data();
+      }
+      view.strain_table = view_d.strain_table = {nullptr, nullptr, 0};
+      if (implicit) {
+        const std::size_t bytes = kernels::visit_element_law(
+            term.law, [](auto element_law) { return sizeof(typename decltype(element_law)::Linearisation); });
+        FMPC_CUDA_CHECK(arrays.linearisation.allocate(bytes * count), diagnostics, false);
+        elements_.linearisation[t] = arrays.linearisation.data();
+      }
     }
-    if (c.has_element_damping) {
-      FMPC_CUDA_CHECK(field_damping_.upload(convert<Real>(c.stiffness_damping, *c.pool)), diagnostics, false);
-      FMPC_CUDA_CHECK(field_damping_d_.upload(c.stiffness_damping), diagnostics, false);
-    }
-    FMPC_CUDA_CHECK(corner_force_.allocate(4 * static_cast<std::size_t>(element_count_)), diagnostics, false);
-    const auto data = [](const DeviceArray<Real>& array) -> const Real* {
-      return array.size() ? array.data() : nullptr;
-    };
-    const auto data_d = [](const DeviceArray<double>& array) -> const double* {
-      return array.size() ? array.data() : nullptr;
-    };
-    model_.field = {law,
-                    element_count_,
-                    corners_.data(),
-                    corner_slot_.data(),
-                    field_rest_inverse_.data(),
-                    field_rest_volume_.data(),
-                    data(field_youngs_),
-                    data(field_poisson_),
-                    data(field_bulk_),
-                    data(field_damping_),
-                    {nullptr, nullptr, 0}};
     model_.corners = {corner_offset_.data(), corner_index_.data(), corner_force_.data()};
     model_.corner_force = corner_force_.data();
-    elements_ = {};
-    elements_.law = law;
-    elements_.count = element_count_;
-    elements_.corners = corners_.data();
-    elements_.rest_inverse = field_rest_inverse_d_.data();
-    elements_.rest_volume = field_rest_volume_d_.data();
-    elements_.youngs_modulus = data_d(field_youngs_d_);
-    elements_.poisson_ratio = data_d(field_poisson_d_);
-    elements_.bulk_modulus = data_d(field_bulk_d_);
-    elements_.stiffness_damping = data_d(field_damping_d_);
-    elements_.strain_table = {nullptr, nullptr, 0};
-    if (common.integrator == sim::Integrator::ImplicitEuler) {
-      const auto count = static_cast<std::size_t>(element_count_);
-      FMPC_CUDA_CHECK(element_linearisation_.allocate(count), diagnostics, false);
+    if (implicit) {
       for (DeviceArray<double>* array : {&element_rhs_part_, &element_diagonal_part_, &element_product_})
         FMPC_CUDA_CHECK(array->allocate(12 * count), diagnostics, false);
-      elements_.linearisation = element_linearisation_.data();
       elements_.rhs_part = element_rhs_part_.data();
       elements_.diagonal_part = element_diagonal_part_.data();
       elements_.product = element_product_.data();
@@ -690,9 +715,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // the blocks' neighbours.
   bool choose_grid_launch(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
     const bool springs = model_.kind != GatherKind::Elements;
-    const bool double_precision = std::is_same_v<Real, double>;
     int resident = 0;  // with the least shared memory: registers and threads bound it
-    FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, double_precision,
+    FMPC_CUDA_CHECK(persistent_euler_block_limit<Real>(model_.kind,
                                                  persistent_euler_shared_bytes<Real>(1, 0, 0), resident),
                     diagnostics, false);
     if (resident <= 0) return true;
@@ -717,7 +741,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         records = std::max(records, end - begin);
       }
       int limit = 0;
-      FMPC_CUDA_CHECK(persistent_euler_block_limit(model_.kind, double_precision,
+      FMPC_CUDA_CHECK(persistent_euler_block_limit<Real>(model_.kind,
                                                    persistent_euler_shared_bytes<Real>(rows, records, 0), limit),
                       diagnostics, false);
       if (blocks > limit) continue;
@@ -739,7 +763,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
         most_waited = std::max(most_waited, static_cast<int>(owners.size()));
       }
       FMPC_CUDA_CHECK(
-          persistent_euler_block_limit(model_.kind, double_precision,
+          persistent_euler_block_limit<Real>(model_.kind,
                                        persistent_euler_shared_bytes<Real>(rows, records, most_waited), limit),
           diagnostics, false);
       if (blocks > limit) continue;
@@ -832,7 +856,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       capacity = (capacity + 3) / 4 * 4;
       const long long bytes = cluster_euler_shared_bytes<Real>(rows, capacity, records);
       bool fits = false;
-      FMPC_CUDA_CHECK(cluster_euler_fits(std::is_same_v<Real, double>, per_cluster, rows, bytes, fits), diagnostics,
+      FMPC_CUDA_CHECK(cluster_euler_fits<Real>(per_cluster, rows, bytes, fits), diagnostics,
                       false);
       if (!fits) continue;
       FMPC_CUDA_CHECK(cluster_blocks_array_.upload(blocks), diagnostics, false);
@@ -872,11 +896,12 @@ class GpuBatchImpl final : public GpuBatchSimulation {
       FMPC_CUDA_CHECK(table_strain_.upload(table.strain), diagnostics, false);
       FMPC_CUDA_CHECK(table_modulus_.upload(table.modulus), diagnostics, false);
       FMPC_CUDA_CHECK(stiffness_per_modulus_.upload(table.stiffness_per_modulus), diagnostics, false);
-      if (setup.tetrahedron_field && setup.tetrahedron_field->law == kernels::TetrahedronLaw::CorotationalLinear) {
-        const kernels::StrainTableView view{table_strain_.data(), table_modulus_.data(),
-                                            static_cast<int>(table.strain.size())};
-        model_.field.strain_table = view;
-        elements_.strain_table = view;
+      const kernels::StrainTableView view{table_strain_.data(), table_modulus_.data(),
+                                          static_cast<int>(table.strain.size())};
+      for (std::size_t t = 0; t < setup.elements.terms.size(); ++t) {
+        if (!sim::reads_strain_table(setup.elements.terms[t])) continue;
+        model_.terms[t].strain_table = view;
+        elements_.terms[t].strain_table = view;
       }
     }
     if (setup.integrator == sim::Integrator::ImplicitEuler) {
@@ -894,63 +919,32 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
-    if (failed_) return false;
-    const std::size_t last = steps_taken_ + steps;
-    while (steps_taken_ < last) {
-      // Checks fall on multiples of check_every counted from the run's start (as the CPU backend's), and at the end;
-      // a persistent launch takes up to persistent_checks_ of them.
-      std::vector<std::size_t> ends;
-      for (std::size_t at = steps_taken_; at < last && ends.size() < checks_per_launch();) {
-        at = check_every == 0 ? last : std::min(last, (at / check_every + 1) * check_every);
-        if (!ends.empty() && at - steps_taken_ > kMostPersistentLaunchSteps) break;
-        ends.push_back(at);
-      }
-      if (persistent_launch() ? !run_persistent(ends, diagnostics)
-                              : !run_steps(ends.front() - steps_taken_, options_.use_graphs, diagnostics))
-        return fail();
-      // Each check acted on in order as if its chunk had been launched alone: the state of a check before the
-      // launch's last is only in its checkpoint slot, so acting on it means restoring the check before (a replay),
-      // after which the launch's later steps are dropped.
-      for (std::size_t check = 0; check < ends.size(); ++check) {
-        const bool inner = check + 1 < ends.size();
-        if (persistent_launch()) {
-          steps_taken_ = ends[check];
-          checks_slot_ = static_cast<int>(check);
-          checks_pending_ = true;
-        }
-        const std::optional<int> bad = first_non_finite_vertex(diagnostics);
-        if (!bad) return fail();
-        if (*bad < n_) return locate_non_finite(diagnostics);
-        const std::size_t restores = restores_;
-        if (!check_displacement_bound(diagnostics) || !check_inversions(diagnostics)) return fail();
-        if (!save_checkpoint(diagnostics)) return fail();
-        if (restores_ != restores) break;
-        if (inner) {
-          // The launch stored this check's state in slot check + 1.
-          checkpoint_slot_ = static_cast<int>(check) + 1;
-          checkpoint_in_state_ = false;
-        }
-      }
-    }
-    return true;
-  }
-
-  // The checks one launch takes (advance): persistent_checks_ on the cooperative grid, one otherwise and where the
-  // displacement bound is checked (from the positions held, which are the launch's last).
-  std::size_t checks_per_launch() const {
-    if (persistent_blocks_ == 0) return 1;
-    for (std::size_t scene = 0; scene < scenes_.size(); ++scene)
-      if (displacement_bound_checked(scene)) return 1;
-    return persistent_checks_;
-  }
-
-  const sim::InversionReport& inversions(std::size_t scene) const override { return inversions_.at(scene); }
-
-  std::size_t scene_count() const override { return scenes_.size(); }
+  const char* label() const override { return "GPU "; }
   std::size_t steps_taken() const override { return steps_taken_; }
-  const sim::StabilityReport& stability(std::size_t scene) const override { return stability_.at(scene); }
-  const std::optional<GpuNonFiniteReport>& non_finite() const override { return non_finite_; }
+  // A persistent launch on the cooperative grid takes persistent_checks_; otherwise one check per run.
+  std::size_t checks_per_run() const override { return persistent_blocks_ > 0 ? persistent_checks_ : 1; }
+  std::size_t most_steps_per_run() const override { return kMostPersistentLaunchSteps; }
+  bool non_finite_is_exact() const override { return false; }
+  sim::SimulationLaunches launches() const override { return {persistent_launch(), cluster_launch()}; }
+  bool reduces_in_place() const override { return true; }
+
+  bool run(const std::vector<std::size_t>& ends, DiagnosticList& diagnostics) override {
+    run_ends_ = ends;
+    selected_inner_ = false;
+    return persistent_launch() ? run_persistent(ends, diagnostics)
+                               : run_steps(ends.front() - steps_taken_, options_.use_graphs, diagnostics);
+  }
+
+  // A persistent launch's check before its last is only in its checkpoint slot: the checks read that slot, and a
+  // checkpoint saved there is that slot (save_checkpoint).
+  void select_check(std::size_t check) override {
+    if (!persistent_launch()) return;
+    steps_taken_ = run_ends_[check];
+    checks_slot_ = static_cast<int>(check);
+    checks_pending_ = true;
+    selected_check_ = check;
+    selected_inner_ = check + 1 < run_ends_.size();
+  }
 
   std::vector<sim::Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const override {
     const DeviceState<Real>& s = state_[current_];
@@ -1018,8 +1012,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
-  bool persistent_launch() const override { return persistent_blocks_ > 0 || cluster_blocks_ > 0; }
-  bool cluster_launch() const override { return cluster_blocks_ > 0; }
+  bool persistent_launch() const { return persistent_blocks_ > 0 || cluster_blocks_ > 0; }
+  bool cluster_launch() const { return cluster_blocks_ > 0; }
 
   std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     return energy_sum(EnergyTerm::Kinetic, vertex_begin_.at(scene), vertex_begin_.at(scene + 1), diagnostics);
@@ -1036,12 +1030,15 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     const auto springs =
         energy_sum(EnergyTerm::SpringPotential, spring_begin_.at(scene), spring_begin_.at(scene + 1), diagnostics);
     if (!springs) return std::nullopt;
-    std::optional<double> elements = 0.0;
-    if (elements_.count > 0)
-      elements =
-          energy_sum(EnergyTerm::ElementPotential, element_begin_.at(scene), element_begin_.at(scene + 1), diagnostics);
-    if (!elements) return std::nullopt;
-    return *springs + *elements;
+    // The terms' energies in list order, as the host's element_elastic_energy adds them.
+    double elements = 0.0;
+    for (int term = 0; term < elements_.term_count && elements_.count > 0; ++term) {
+      const auto energy = energy_sum(EnergyTerm::ElementPotential, element_begin_.at(scene),
+                                     element_begin_.at(scene + 1), diagnostics, term);
+      if (!energy) return std::nullopt;
+      elements += *energy;
+    }
+    return *springs + elements;
   }
   std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const override {
     const auto elastic = elastic_energy(scene, diagnostics);
@@ -1053,11 +1050,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
  private:
-  bool fail() {
-    failed_ = true;
-    return false;
-  }
-
   bool synchronize(DiagnosticList& diagnostics) const {
     FMPC_CUDA_CHECK(cudaStreamSynchronize(stream_), diagnostics, false);
     return true;
@@ -1070,7 +1062,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   // Inverted elements per scene now: counts and each scene's smallest inverted element (local index, -1: none).
-  bool count_inverted(std::vector<unsigned int>& counts, std::vector<int>& firsts, DiagnosticList& diagnostics) {
+  bool count_inverted(std::vector<unsigned int>& counts, std::vector<int>& firsts, DiagnosticList& diagnostics) override {
     const std::size_t scenes = scenes_.size();
     if (checks_pending_) {
       // The persistent kernel counted at the state now held.
@@ -1106,79 +1098,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     if (!synchronize(diagnostics)) return false;
     for (std::size_t scene = 0; scene < scenes; ++scene)
       firsts[scene] = counts[scene] > 0 ? firsts[scene] - element_begin_[scene] : -1;
-    return true;
-  }
-
-  // As the CPU backend: inversions counted at every check; a scene's first one is located exactly by replaying from
-  // the last check one step at a time, then warned about (the run goes on) or, with on_inversion: stop, an error.
-  bool check_inversions(DiagnosticList& diagnostics) {
-    if (element_count_ == 0) return true;
-    std::vector<unsigned int> counts;
-    std::vector<int> firsts;
-    if (!count_inverted(counts, firsts, diagnostics)) return false;
-    bool newly = false;
-    for (std::size_t scene = 0; scene < counts.size(); ++scene)
-      newly = newly || (counts[scene] > 0 && inversions_[scene].largest_count == 0);
-    if (newly) {
-      const std::size_t failed_by = steps_taken_;
-      if (!restore_checkpoint(diagnostics)) return false;
-      bool stop = false;
-      for (;;) {
-        if (!count_inverted(counts, firsts, diagnostics)) return false;
-        for (std::size_t scene = 0; scene < counts.size(); ++scene) {
-          sim::InversionReport& report = inversions_[scene];
-          if (counts[scene] == 0 || report.largest_count > 0) continue;
-          report.first_step = steps_taken_;
-          report.first_time = static_cast<double>(steps_taken_) * stability_[scene].time_step;
-          report.first_element = firsts[scene];
-          report.largest_count = report.current_count = counts[scene];
-          std::string message = sim::inversion_message(scenes_[scene], report);
-          if (scenes_.size() > 1) message = "scene " + std::to_string(scene) + ": " + message;
-          if (scenes_[scene].on_inversion == sim::InversionPolicy::Stop) {
-            diagnostics.error(scenes_[scene].source_range, message + "; the scene's on_inversion is stop");
-            stop = true;
-          } else {
-            diagnostics.warning(scenes_[scene].source_range, "inverted-elements", message);
-          }
-        }
-        if (stop) return false;
-        if (steps_taken_ >= failed_by) break;
-        if (!run_steps(1, false, diagnostics)) return false;
-      }
-    }
-    for (std::size_t scene = 0; scene < counts.size(); ++scene) {
-      inversions_[scene].current_count = counts[scene];
-      inversions_[scene].largest_count = std::max<std::size_t>(inversions_[scene].largest_count, counts[scene]);
-    }
-    return true;
-  }
-
-  // Whether the scene's nodal damping gamma1 |x - x0| was bounded with a displacement (sim::StabilityReport), which
-  // check_displacement_bound checks.
-  bool displacement_bound_checked(std::size_t scene) const {
-    return scenes_[scene].nodal_damping_gamma1 > 0.0 && std::isfinite(stability_[scene].assumed_displacement_max);
-  }
-
-  // The nodal damping gamma1 |x - x0| was bounded with a displacement (sim::StabilityReport); a vertex that moves
-  // further stops the run with an error, as on the CPU.
-  bool check_displacement_bound(DiagnosticList& diagnostics) {
-    for (std::size_t scene = 0; scene < scenes_.size(); ++scene) {
-      if (!displacement_bound_checked(scene)) continue;
-      const sim::SimulationSetup& setup = scenes_[scene];
-      const double bound = stability_[scene].assumed_displacement_max;
-      const std::vector<sim::Point3> points = positions(scene, diagnostics);
-      for (std::size_t v = 0; v < points.size(); ++v) {
-        const double moved = sim::distance(points[v], setup.rest_positions[v]);
-        if (moved <= bound) continue;
-        std::ostringstream message;
-        if (scenes_.size() > 1) message << "scene " << scene << ": ";
-        message << "vertex " << v << " moved " << moved << " m from rest by step " << steps_taken_ << ", beyond the "
-                << bound << " m the stable time step assumed for the nodal damping gamma1 |x - x0| (gamma1 = "
-                << setup.nodal_damping_gamma1 << " N s/m^2); give a smaller dt explicitly or lower gamma1";
-        diagnostics.error(setup.source_range, message.str());
-        return false;
-      }
-    }
     return true;
   }
 
@@ -1365,11 +1284,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     const double error = std::sqrt(residual / scalars.rhs_norm2);
     if (!(error <= options.tolerance) && !cg_warning_given_) {
       cg_warning_given_ = true;
-      std::ostringstream message;
-      message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after " << iterations
-              << " iterations with relative residual " << error << " (tolerance " << options.tolerance
-              << "); raise max_iterations or use a smaller dt";
-      diagnostics.warning(scenes_.front().source_range, "cg-not-converged", message.str());
+      diagnostics.warning(scenes_.front().source_range, "cg-not-converged",
+                          sim::cg_stopped_message(steps_taken_ + 1, iterations, error, options.tolerance));
     }
     FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
     return true;
@@ -1532,14 +1448,16 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  bool save_checkpoint(DiagnosticList& diagnostics) {
+  bool save_checkpoint(DiagnosticList& diagnostics) override {
     checkpoint_step_ = steps_taken_;
     checkpoint_has_acceleration_ = have_acceleration_;
     // Persistent runs change the state only in their launches, which store the state they start from into the
     // checkpoint (PersistentEulerArguments::checkpoints): until the next one, the state held is the checkpoint. Six
-    // copies per check were a fifth of the 20^3 box's time between checks (H100).
+    // copies per check were a fifth of the 20^3 box's time between checks (H100). At a check before the launch's
+    // last, the launch stored that check's state in slot check + 1.
     if (persistent_launch()) {
-      checkpoint_in_state_ = true;
+      checkpoint_in_state_ = !selected_inner_;
+      if (selected_inner_) checkpoint_slot_ = static_cast<int>(selected_check_) + 1;
       return true;
     }
     if (!copy_state(checkpoint_slot(checkpoint_slot_), state_[current_].view(), diagnostics)) return false;
@@ -1551,9 +1469,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return true;
   }
 
-  bool restore_checkpoint(DiagnosticList& diagnostics) {
+  bool restore_checkpoint(DiagnosticList& diagnostics) override {
     checks_pending_ = false;
-    ++restores_;
+    selected_inner_ = false;
     if (checkpoint_in_state_) {
       steps_taken_ = checkpoint_step_;
       have_acceleration_ = checkpoint_has_acceleration_;
@@ -1589,7 +1507,7 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   }
 
   // The smallest vertex index with a non-finite position or velocity, n_ when there is none.
-  std::optional<int> first_non_finite_vertex(DiagnosticList& diagnostics) {
+  std::optional<int> first_non_finite_vertex(DiagnosticList& diagnostics) override {
     if (checks_pending_) {
       if (!synchronize(diagnostics)) return std::nullopt;
       return static_cast<int>(check_results_host_.data()[checks_slot_ * check_slot_stride_]);
@@ -1603,66 +1521,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
                     diagnostics, std::nullopt);
     if (!synchronize(diagnostics)) return std::nullopt;
     return first;
-  }
-
-  // A check failed: replay from the last good checkpoint one step at a time to find the first non-finite step
-  // (the kernels are deterministic, so the replay retraces the run), then report it like the CPU backend.
-  bool locate_non_finite(DiagnosticList& diagnostics) {
-    const std::size_t failed_by = steps_taken_;
-    if (!restore_checkpoint(diagnostics)) return fail();
-    std::optional<int> bad = n_;
-    while (steps_taken_ < failed_by && *bad >= n_) {
-      if (!run_steps(1, false, diagnostics)) return fail();
-      bad = first_non_finite_vertex(diagnostics);
-      if (!bad) return fail();
-    }
-    const int vertex = *bad < n_ ? *bad : 0;
-    const auto scene = static_cast<std::size_t>(std::upper_bound(vertex_begin_.begin(), vertex_begin_.end(), vertex) -
-                                                vertex_begin_.begin() - 1);
-    const int local = vertex - vertex_begin_[scene];
-    GpuNonFiniteReport found;
-    found.scene = scene;
-    found.report.step = steps_taken_;
-    found.report.time = static_cast<double>(steps_taken_) * stability_[scene].time_step;
-    found.report.vertex = local;
-    found.report.spring = culprit_spring(scene, static_cast<std::size_t>(local), diagnostics);
-    non_finite_ = found;
-    const sim::SpringNetwork& net = scenes_[scene].springs;
-    std::ostringstream message;
-    message << "the GPU simulation became non-finite at step " << found.report.step << " (t = " << found.report.time
-            << " s)";
-    if (scenes_.size() > 1) message << " in scene " << scene;
-    message << ": vertex " << local << " has a NaN or infinite position or velocity";
-    if (found.report.spring >= 0) {
-      const auto s = static_cast<std::size_t>(found.report.spring);
-      message << "; its most strained spring is " << found.report.spring << " (vertices " << net.first[s] << " and "
-              << net.second[s] << ")";
-    }
-    message << "; lower dt, raise damping, or check the loads";
-    diagnostics.error(scenes_[scene].source_range, message.str());
-    return fail();
-  }
-
-  // The spring at v whose length is non-finite, or else the one with the largest |strain| (as the CPU backend).
-  std::int32_t culprit_spring(std::size_t scene, std::size_t v, DiagnosticList& diagnostics) const {
-    const std::vector<sim::Point3> points = positions(scene, diagnostics);
-    const sim::SpringNetwork& net = scenes_[scene].springs;
-    if (points.size() != net.vertex_count) return -1;
-    std::int32_t best = -1;
-    double worst = -1.0;
-    for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
-      const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
-      const double length = sim::distance(points[static_cast<std::size_t>(net.first[s])],
-                                          points[static_cast<std::size_t>(net.second[s])]);
-      const double strain = std::isfinite(length) ? std::abs(length - net.rest_length[s]) / net.rest_length[s]
-                                                  : std::numeric_limits<double>::infinity();
-      if (strain > worst) {
-        worst = strain;
-        best = static_cast<std::int32_t>(s);
-      }
-      if (!std::isfinite(strain)) break;
-    }
-    return best;
   }
 
   bool scene_exists(std::size_t scene, DiagnosticList& diagnostics) const {
@@ -1730,7 +1588,9 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return *result_host_.data();
   }
 
-  std::optional<double> energy_sum(EnergyTerm term, int begin, int end, DiagnosticList& diagnostics) const {
+  // The sum of `term` over [begin, end); ElementPotential's of element term `element_term`.
+  std::optional<double> energy_sum(EnergyTerm term, int begin, int end, DiagnosticList& diagnostics,
+                                   int element_term = 0) const {
     const sim::SimulationSetup& common = scenes_.front();
     EnergyArguments<Real> a{};
     a.state = state_[current_].view();
@@ -1746,7 +1606,10 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     a.force_x = energy_force_x_.data();
     a.force_y = energy_force_y_.data();
     a.force_z = energy_force_z_.data();
-    a.elements = elements_;
+    if (term == EnergyTerm::ElementPotential) {
+      a.element_term = elements_.terms[element_term];
+      a.element_corners = corners_.data();
+    }
     if (common.strain_stiffness) {
       a.table = {table_strain_.data(), table_modulus_.data(), static_cast<int>(table_strain_.size())};
       a.stiffness_per_modulus = stiffness_per_modulus_.data();
@@ -1756,8 +1619,8 @@ class GpuBatchImpl final : public GpuBatchSimulation {
     return download_result(diagnostics);
   }
 
-  const std::vector<sim::SimulationSetup> scenes_;
-  const std::vector<sim::StabilityReport> stability_;
+  const std::vector<sim::SimulationSetup>& scenes_;  // the Simulation's
+  const std::vector<sim::StabilityReport>& stability_;
   const GpuOptions options_;
   std::vector<int> vertex_begin_, spring_begin_;
   int n_ = 0;
@@ -1816,7 +1679,6 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   // has persistent_checks_ slots on the cooperative grid.
   DeviceState<Real> checkpoint_;
   int checkpoint_slot_ = 0;
-  std::size_t restores_ = 0;  // restore_checkpoint's calls (advance: whether a check replayed)
   DeviceVector3<Real> acceleration_, predicted_, checkpoint_acceleration_;
   DeviceVector3<Real> stage_position_a_, stage_position_b_, stage_velocity_[3], stage_acceleration_[3];
   ForceModelView<Real> model_{};
@@ -1830,13 +1692,20 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   DeviceArray<kernels::SlicedRow> sliced_row_;
   DeviceArray<double> start_x_, start_y_, start_z_;  // the start positions, for largest_displacement
   DeviceArray<unsigned int> inverted_count_;
-  DeviceArray<Real> field_rest_inverse_, field_rest_volume_, field_youngs_, field_poisson_, field_bulk_, field_damping_;
+  // The element terms' arrays (upload_elements): the geometry in Real and in double, each term's parameters and
+  // damping in both and its implicit linearisation.
+  struct DeviceTermArrays {
+    DeviceArray<Real> parameter[kernels::kMostLawParameters];
+    DeviceArray<double> parameter_d[kernels::kMostLawParameters];
+    DeviceArray<Real> damping;
+    DeviceArray<double> damping_d;
+    DeviceArray<unsigned char> linearisation;
+  };
+  DeviceArray<Real> rest_inverse_, rest_volume_;
+  DeviceArray<double> rest_inverse_d_, rest_volume_d_;
+  DeviceTermArrays term_arrays_[kMostElementTerms];
   DeviceArray<kernels::CornerForce<Real>> corner_force_;
-  DeviceArray<double> field_rest_inverse_d_, field_rest_volume_d_, field_youngs_d_, field_poisson_d_, field_bulk_d_,
-      field_damping_d_;
-  DeviceArray<kernels::TetrahedronLinearisation> element_linearisation_;
   DeviceArray<double> element_rhs_part_, element_diagonal_part_, element_product_;
-  std::vector<sim::InversionReport> inversions_;
   kernels::VertexLoads<Real> loads_{};
   StepSize<Real> step_{};
   std::map<std::pair<std::size_t, int>, std::unique_ptr<GraphExecutable>> graphs_;
@@ -1846,66 +1715,21 @@ class GpuBatchImpl final : public GpuBatchSimulation {
   bool checkpoint_in_state_ = false;  // the checkpoint is the state held (persistent runs: save_checkpoint)
   bool have_acceleration_ = false;
   bool checkpoint_has_acceleration_ = false;
-  bool failed_ = false;
-  std::optional<GpuNonFiniteReport> non_finite_;
-};
-
-// One scene: a batch of one, with the single-scene interface.
-class GpuSimulationImpl final : public GpuSimulation {
- public:
-  explicit GpuSimulationImpl(std::unique_ptr<GpuBatchSimulation> batch) : batch_(std::move(batch)) {}
-
-  bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every) override {
-    const bool ok = batch_->advance(steps, diagnostics, check_every);
-    if (batch_->non_finite()) non_finite_ = batch_->non_finite()->report;
-    return ok;
-  }
-  std::size_t steps_taken() const override { return batch_->steps_taken(); }
-  std::vector<sim::Point3> positions(DiagnosticList& diagnostics) const override {
-    return batch_->positions(0, diagnostics);
-  }
-  std::vector<sim::Point3> velocities(DiagnosticList& diagnostics) const override {
-    return batch_->velocities(0, diagnostics);
-  }
-  const sim::StabilityReport& stability() const override { return batch_->stability(0); }
-  double time() const override { return static_cast<double>(steps_taken()) * stability().time_step; }
-  std::optional<double> kinetic_energy(DiagnosticList& diagnostics) const override {
-    return batch_->kinetic_energy(0, diagnostics);
-  }
-  std::optional<double> largest_displacement(DiagnosticList& diagnostics) const override {
-    return batch_->largest_displacement(0, diagnostics);
-  }
-  std::optional<double> elastic_energy(DiagnosticList& diagnostics) const override {
-    return batch_->elastic_energy(0, diagnostics);
-  }
-  std::optional<double> potential_energy(DiagnosticList& diagnostics) const override {
-    return batch_->potential_energy(0, diagnostics);
-  }
-  const std::optional<sim::NonFiniteReport>& non_finite() const override { return non_finite_; }
-  const sim::InversionReport& inversions() const override { return batch_->inversions(0); }
-  sim::ProbeReading probe_reading(DiagnosticList& diagnostics) const override {
-    return batch_->probe_reading(0, diagnostics);
-  }
-  std::vector<double> current_stiffness(DiagnosticList& diagnostics) const override {
-    return batch_->current_stiffness(0, diagnostics);
-  }
-  int implicit_max_iterations_used() const override { return batch_->implicit_max_iterations_used(); }
-  bool persistent_launch() const override { return batch_->persistent_launch(); }
-  bool cluster_launch() const override { return batch_->cluster_launch(); }
-
- private:
-  std::unique_ptr<GpuBatchSimulation> batch_;
-  std::optional<sim::NonFiniteReport> non_finite_;
+  // The last run's check ends, and the check select_check made current (inner: before the launch's last).
+  std::vector<std::size_t> run_ends_;
+  std::size_t selected_check_ = 0;
+  bool selected_inner_ = false;
 };
 
 // What a batch of several scenes cannot share is refused before the device is touched, never silently ignored.
 const char* single_scene_feature(const sim::SimulationSetup& setup) {
   if (setup.integrator == sim::Integrator::ImplicitEuler) {
     return "implicit Euler runs one scene at a time on the GPU (its conjugate gradient solves one system); run the "
-           "scene as its own GpuSimulation";
+           "scene as a simulation of its own";
   }
   if (setup.strain_stiffness) {
-    return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as its own GpuSimulation";
+    return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as a simulation of its "
+           "own";
   }
   return nullptr;
 }
@@ -1932,51 +1756,27 @@ bool cuda_device_available(std::string& description) {
   return true;
 }
 
-namespace {
-std::unique_ptr<GpuBatchSimulation> create_batch(std::vector<sim::SimulationSetup> scenes, const GpuOptions& options,
-                                                 DiagnosticList& diagnostics);
-}  // namespace
-
-std::unique_ptr<GpuBatchSimulation> GpuBatchSimulation::create(const std::vector<sim::SimulationSetup>& scenes,
-                                                               const GpuOptions& options, DiagnosticList& diagnostics) {
-  return create_batch(scenes, options, diagnostics);
+bool batch_accepts(const std::vector<sim::SimulationSetup>& scenes, std::size_t s, DiagnosticList& diagnostics) {
+  const char* feature = scenes.size() > 1 ? single_scene_feature(scenes[s]) : nullptr;
+  if (feature != nullptr) {
+    diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + ": " + feature);
+    return false;
+  }
+  if (const char* field = shared_field_mismatch(scenes[s], scenes.front())) {
+    diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + " differs from scene 0 in its " + field +
+                                         "; the scenes of one GPU batch share it: run it in another batch");
+    return false;
+  }
+  return true;
 }
 
-namespace {
-// The batch keeps its scenes (probes, messages, the displacement bound): moved in, not copied again.
-std::unique_ptr<GpuBatchSimulation> create_batch(std::vector<sim::SimulationSetup> scenes, const GpuOptions& options,
-                                                 DiagnosticList& diagnostics) {
-  if (scenes.empty()) {
-    diagnostics.error(SourceRange{}, "a GPU batch needs at least one scene");
-    return nullptr;
-  }
-  std::vector<sim::StabilityReport> stability;
+std::unique_ptr<sim::SteppingEngine> create_engine(const std::vector<sim::SimulationSetup>& scenes,
+                                                   const std::vector<sim::StabilityReport>& stability,
+                                                   const GpuOptions& options, DiagnosticList& diagnostics) {
   std::size_t vertices = 0, entries = 0;
-  for (std::size_t s = 0; s < scenes.size(); ++s) {
-    const char* feature = scenes.size() > 1 ? single_scene_feature(scenes[s]) : nullptr;
-    if (feature != nullptr) {
-      diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + ": " + feature);
-      return nullptr;
-    }
-    if (const char* field = shared_field_mismatch(scenes[s], scenes.front())) {
-      diagnostics.error(SourceRange{}, "scene " + std::to_string(s) + " differs from scene 0 in its " + field +
-                                           "; the scenes of one GPU batch share it: run it in another batch");
-      return nullptr;
-    }
-    DiagnosticList scene_diagnostics;
-    const auto report = sim::check_stability(scenes[s], scene_diagnostics);  // validates the setup first
-    if (scenes.size() > 1) {
-      for (Diagnostic diagnostic : scene_diagnostics.items()) {
-        diagnostic.message = "scene " + std::to_string(s) + ": " + diagnostic.message;
-        diagnostics.add(std::move(diagnostic));
-      }
-    } else {
-      diagnostics.append(scene_diagnostics);
-    }
-    if (!report) return nullptr;
-    stability.push_back(*report);
-    vertices += scenes[s].rest_positions.size();
-    entries += scenes[s].springs.adjacency_spring.size();
+  for (const sim::SimulationSetup& setup : scenes) {
+    vertices += setup.rest_positions.size();
+    entries += setup.springs.adjacency_spring.size();
   }
   const auto limit = static_cast<std::size_t>(std::numeric_limits<int>::max() - 1);
   if (vertices > limit || entries > limit) {
@@ -1985,31 +1785,14 @@ std::unique_ptr<GpuBatchSimulation> create_batch(std::vector<sim::SimulationSetu
                                          " spring ends are too many: split the batch");
     return nullptr;
   }
-  std::unique_ptr<GpuBatchSimulation> batch;
   if (scenes.front().precision == sim::Precision::Float) {
-    auto impl = std::make_unique<GpuBatchImpl<float>>(std::move(scenes), std::move(stability), options);
-    if (!impl->upload(diagnostics)) return nullptr;
-    batch = std::move(impl);
-  } else {
-    auto impl = std::make_unique<GpuBatchImpl<double>>(std::move(scenes), std::move(stability), options);
-    if (!impl->upload(diagnostics)) return nullptr;
-    batch = std::move(impl);
+    auto engine = std::make_unique<GpuEngine<float>>(scenes, stability, options);
+    if (!engine->upload(diagnostics)) return nullptr;
+    return engine;
   }
-  return batch;
-}
-}  // namespace
-
-std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup& setup, DiagnosticList& diagnostics) {
-  return create(setup, GpuOptions{}, diagnostics);
-}
-
-std::unique_ptr<GpuSimulation> GpuSimulation::create(const sim::SimulationSetup& setup, const GpuOptions& options,
-                                                     DiagnosticList& diagnostics) {
-  std::vector<sim::SimulationSetup> one;
-  one.push_back(setup);
-  auto batch = create_batch(std::move(one), options, diagnostics);
-  if (!batch) return nullptr;
-  return std::make_unique<GpuSimulationImpl>(std::move(batch));
+  auto engine = std::make_unique<GpuEngine<double>>(scenes, stability, options);
+  if (!engine->upload(diagnostics)) return nullptr;
+  return engine;
 }
 
 }  // namespace fmpc::gpu

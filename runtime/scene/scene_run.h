@@ -97,6 +97,9 @@ std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier
 // Where a run writes when its caller names no folder: the scene's outputs.directory, else SCENE-NAME_output.
 std::string default_output_directory(const Scene& scene);
 
+// The backend SceneRunOptions::backend names ("cuda": Backend::Cuda, else the CPU).
+Backend run_backend(const std::string& name);
+
 // Steps: scene.steps when set, else ceil(duration / dt) (dt from the stability check when `auto`).
 // Returns nullopt when the simulation could not start or an output could not be written (errors appended).
 std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
@@ -113,15 +116,15 @@ struct CohortPatient {
 };
 
 struct CohortRunOptions {
-  std::string backend = "cpu";  // "cuda": every patient in one GpuBatchSimulation; "cpu": patients side by side
-  unsigned threads = 0;         // CPU workers, each running whole patients one at a time (0: every hardware thread)
-  // (done, total): patients on the CPU, steps on CUDA; called under a lock, from any thread.
+  std::string backend = "cpu";  // every patient in one Simulation batch on this backend ("cpu" or "cuda")
+  unsigned threads = 0;         // CPU workers stepping and writing patients side by side (0: every hardware thread)
+  // (steps done, steps planned) after each output event.
   std::function<void(std::size_t, std::size_t)> progress;
 };
 
 struct CohortRunResult {
   // Per patient, in the order given: nullopt when it could not start or its outputs could not be written (errors
-  // appended). On CUDA a non-finite state in one patient stops the batch: every patient then has completed: false.
+  // appended). A non-finite state in one patient stops the batch: every patient then has completed: false.
   std::vector<std::optional<SceneRunResult>> patients;
   double wall_seconds = 0.0;  // all patients: stepping and recording (outputs and the precision check excluded)
   double spring_steps = 0.0;  // the sum over patients of springs x steps taken

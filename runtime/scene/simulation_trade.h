@@ -17,12 +17,25 @@
 
 namespace fmpc::sim {
 
-// The force models compared: springs with each Young's modulus mapping, springs with the volume term (the scene's
-// mapping, calibrated to its Poisson ratio), and the co-rotational FEM.
-enum class TradeModel { SpringsVanGelder, SpringsLloyd, SpringsVolumeTerm, CorotationalFem };
+// A force model compared: springs with a Young's modulus mapping, or an element law of the registry
+// (runtime/fem/element_law_registry.h): one beside the springs (the scene's mapping, calibrated to its Poisson ratio)
+// or a finite-element model of its own.
+struct TradeModel {
+  int element_law = -1;  // -1: springs alone
+  StiffnessMapping mapping = StiffnessMapping::VanGelder1998;  // springs alone: their mapping
 
-// The spelling of --models: "springs_van_gelder", "springs_lloyd", "springs_volume_term", "corotational_fem".
-const char* trade_model_name(TradeModel model);
+  // Springs (by mapping), then the laws beside springs, then the finite-element laws: the order of runs and rows.
+  int rank() const;
+  bool operator==(const TradeModel& other) const { return rank() == other.rank(); }
+  bool operator<(const TradeModel& other) const { return rank() < other.rank(); }
+};
+
+// Every model, in rank order: springs_van_gelder, springs_lloyd, then each registry law's trade name.
+std::vector<TradeModel> trade_models();
+// The reference's model: the default finite-element law (default_fem_law).
+TradeModel trade_reference_model();
+// The spelling of --models: "springs_van_gelder", "springs_lloyd", or a law's trade name.
+std::string trade_model_name(const TradeModel& model);
 std::optional<TradeModel> parse_trade_model(const std::string& name);
 
 // An integrator and its step: dt_factor times the automatic step of semi-implicit Euler for the same model and mesh
@@ -39,8 +52,7 @@ inline constexpr unsigned kMaxTradeRefinements = 3;
 inline constexpr std::size_t kMaxTradeTetrahedra = std::size_t{1} << 22;
 
 struct SimulationTradeOptions {
-  std::vector<TradeModel> models{TradeModel::SpringsVanGelder, TradeModel::SpringsLloyd,
-                                 TradeModel::SpringsVolumeTerm, TradeModel::CorotationalFem};
+  std::vector<TradeModel> models = trade_models();
   std::vector<Precision> precisions{Precision::Float, Precision::Double};
   std::vector<TradeIntegrator> integrators{{Integrator::SemiImplicitEuler, 1.0}, {Integrator::ImplicitEuler, 4.0}};
   std::vector<unsigned> refinements{0, 1};
@@ -65,7 +77,7 @@ struct TradeErrors {
 struct SimulationTradeRow {
   std::string variant;  // a short label, e.g. "FEM f32 SIE r1"
   bool reference = false;
-  TradeModel model = TradeModel::CorotationalFem;
+  TradeModel model = trade_reference_model();
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;  // springs only
   Precision precision = Precision::Double;
   TradeIntegrator integrator;

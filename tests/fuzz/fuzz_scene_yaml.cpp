@@ -1,4 +1,4 @@
-// libFuzzer target: scene YAML (runtime/scene/scene_file.cpp: the duplicate-key scan, the field checks).
+// libFuzzer target: scene YAML (runtime/scene/scene_file*.cpp: the duplicate-key scan, the field checks).
 #include <cstdint>
 #include <string>
 

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "compiler/backend/cpp/embedded_kernels.h"
+#include "compiler/backend/cpp/embedded_math.h"
 #include "compiler/backend/cpp/emit_cpp.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/rule_file_loader.h"
@@ -486,7 +487,8 @@ TEST_CASE("the banner names the source and its hash; #line points at rules and b
 }
 
 TEST_CASE("generated headers carry the kernel math verbatim, renamed, and only the CUDA target a kernel", "[emit]") {
-  for (const char* path : {"kernels/fmpc_hd.h", "kernels/fuzzy_kinds.h", "kernels/fuzzy_math.h"}) {
+  for (const char* path : {"kernels/fmpc_hd.h", "kernels/fuzzy_kinds.h", "kernels/fuzzy_math.h",
+                           "kernels/lane_exp_math.h"}) {
     INFO(path);
     CHECK(std::string(fmpc::embedded_kernel_source(path)) ==
           read_text(fs::path(FMPC_SOURCE_DIR) / path));
@@ -513,6 +515,13 @@ TEST_CASE("generated headers carry the kernel math verbatim, renamed, and only t
   CHECK(cpp->find("fmpc_math::mf::gaussian(x0") != std::string::npos);
   CHECK(cpp->find("fmpc_math::mf::triangle(x3") != std::string::npos);
   CHECK(cpp->find("fmpc_math::mf::sigmoid(x") == std::string::npos);
+  // The lanes' exp: kernels/lane_exp_math.h's definitions, verbatim, in the header's own namespace.
+  const std::string lane_exp = fmpc::embedded_namespace_body("kernels/lane_exp_math.h");
+  CHECK(lane_exp.rfind("// exp for the lanes of evaluate_batch:\n", 0) == 0);
+  CHECK(lane_exp.find("inline double lane_exp(double argument, double lowest) {") != std::string::npos);
+  CHECK(lane_exp.find("namespace") == std::string::npos);
+  CHECK(cpp->find("inline constexpr std::size_t kBatchLanes = 16;\n\n" + lane_exp + "\n") != std::string::npos);
+  CHECK(fmpc::embedded_namespace_body("kernels/no_such_file.h").empty());
 }
 
 TEST_CASE("evaluate_batch runs blocks of lanes for centroid Mamdani systems, and the loop over evaluate otherwise",

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "compiler/backend/cpp/embedded_kernels.h"
+#include "compiler/backend/cpp/embedded_math.h"
 #include "compiler/backend/cpp/emit_cpp.h"
 #include "compiler/backend/cpp/emit_type2.h"
 #include "compiler/eval/interpreter.h"

@@ -50,7 +50,8 @@ const SimulationTradeRow& row_named(const SimulationTradeResult& result, const s
 
 TEST_CASE("the simulation trade: the reference has no error, the FEM is closer to it than springs", "[heavy][trade][scene]") {
   SimulationTradeOptions options;
-  options.models = {TradeModel::SpringsVanGelder, TradeModel::SpringsLloyd, TradeModel::CorotationalFem};
+  options.models = {*parse_trade_model("springs_van_gelder"), *parse_trade_model("springs_lloyd"),
+                    *parse_trade_model("corotational_fem")};
   options.precisions = {Precision::Float, Precision::Double};
   options.integrators = {{Integrator::SemiImplicitEuler, 1.0}};
   options.refinements = {1};

@@ -42,6 +42,15 @@ std::vector<std::string> given(CLI::App& command, const char* const* begin, cons
 }
 
 // The arguments as library options; errors name the argument.
+// Every --models name (sim::trade_models' order) joined by ", ", the last by `last`.
+std::string trade_model_names(const std::string& last) {
+  const std::vector<sim::TradeModel> models = sim::trade_models();
+  std::string text;
+  for (std::size_t i = 0; i < models.size(); ++i)
+    text += (i == 0 ? "" : i + 1 == models.size() ? last : ", ") + sim::trade_model_name(models[i]);
+  return text;
+}
+
 std::optional<sim::SimulationTradeOptions> trade_options(const SceneTradeArguments& arguments,
                                                          DiagnosticList& diagnostics) {
   sim::SimulationTradeOptions options;
@@ -51,8 +60,7 @@ std::optional<sim::SimulationTradeOptions> trade_options(const SceneTradeArgumen
     for (const std::string& name : arguments.models) {
       if (const auto model = sim::parse_trade_model(name)) options.models.push_back(*model);
       else
-        diagnostics.error(nowhere, "--models: '" + name + "' is not a model; use springs_van_gelder, springs_lloyd, "
-                                   "springs_volume_term or corotational_fem");
+        diagnostics.error(nowhere, "--models: '" + name + "' is not a model; use " + trade_model_names(" or "));
     }
   }
   if (!arguments.precisions.empty()) {
@@ -108,8 +116,7 @@ std::optional<sim::SimulationTradeOptions> trade_options(const SceneTradeArgumen
 std::shared_ptr<SceneTradeArguments> add_scene_trade_options(CLI::App& command) {
   auto arguments = std::make_shared<SceneTradeArguments>();
   command.add_option("--models", arguments->models,
-                     "Scenes: force models (springs_van_gelder, springs_lloyd, springs_volume_term, "
-                     "corotational_fem; default all)")
+                     "Scenes: force models (" + trade_model_names(", ") + "; default all)")
       ->delimiter(',');
   command.add_option("--precisions", arguments->precisions, "Scenes: float, double (default both)")->delimiter(',');
   command.add_option("--integrators", arguments->integrators,

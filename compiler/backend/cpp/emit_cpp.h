@@ -5,9 +5,15 @@
 //
 // What "self-contained" means: the header compiles alone with any C++17 compiler (or nvcc); it includes only the
 // standard library (and <cuda_runtime.h> for the CUDA target). The membership math is a verbatim copy of
-// kernels/fmpc_hd.h, kernels/fuzzy_kinds.h and kernels/fuzzy_math.h, embedded into fmpc at build time, so there
-// is one definition of every formula; the copy lives in a namespace named after its content hash, so headers
-// from different systems (or fmpc versions) can share a translation unit.
+// kernels/fmpc_hd.h, kernels/fuzzy_kinds.h and kernels/fuzzy_math.h (and kernels/lane_exp_math.h where
+// evaluate_batch runs lanes), embedded into fmpc at build time, so there is one definition of every formula; the
+// copy lives in a namespace named after its content hash, so headers from different systems (or fmpc versions) can
+// share a translation unit.
+//
+// By job: emit_evaluator (emit_cpp.cpp) writes the header's frame (banner, includes, embedded math, interface
+// constants, the choice of evaluate_batch, the CUDA kernel and launcher); evaluator_emitter.h the type-1 evaluate
+// function, emit_type2.h the interval type-2 one, lane_batch_emitter.h the vectorised evaluate_batch,
+// embedded_math.h the copies of kernels/*_math.h, cpp_text.h the C++ spellings they share.
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -39,48 +45,5 @@ struct EmitOptions {
 // Precondition: `system` passed sema (compiler/sema/check.h).
 std::optional<std::string> emit_evaluator(const FuzzySystem& system, const EmitOptions& options,
                                           DiagnosticList& diagnostics);
-
-// The text of fmpc's membership math (kernels/fmpc_hd.h, fuzzy_kinds.h, fuzzy_math.h) as embedded at build time,
-// with its namespace renamed to `math_namespace`; used by the emitters and by tests that compare the copy.
-std::string embedded_fuzzy_math(const std::string& math_namespace);
-
-// The same for any list of embedded kernel headers (paths as in embedded_kernel_source), in the order given.
-std::string embedded_kernel_math(const std::vector<std::string>& paths, const std::string& math_namespace);
-
-// Spellings shared with the interval type-2 emitter (emit_type2.h), so that both write the same text.
-std::string emitted_constant(double value);                   // "T(0.25)"; NaN and +-inf spelled for device code
-std::string emitted_string_literal(const std::string& text);  // a C++ string literal, escaped
-std::string emitted_comment_text(const std::string& text);    // fits one `//` line (no newline, no final backslash)
-std::string emitted_enumerator(TNorm norm);                   // "fmpc_math::TNorm::Minimum"
-std::string emitted_enumerator(SNorm norm);                   // "fmpc_math::SNorm::Maximum"
-// norm(a, b) on grades, which cannot be NaN in generated code (a NaN input returns first): min and max through the
-// header's grade_min / grade_max, product and sum written out, the Einstein norms through fmpc_math.
-std::string emitted_tnorm_call(TNorm norm, const std::string& a, const std::string& b);
-std::string emitted_snorm_call(SNorm norm, const std::string& a, const std::string& b);
-// A Sugeno rule's output value: c, or p1 x1 + ... + pn xn + c summed left to right (the interpreter's
-// sugeno_rule_value), over the inputs x0 .. x(input_count - 1); NaN for a malformed consequent. Zero coefficients
-// are kept: 0 * inf is NaN there too.
-std::string emitted_sugeno_value(const MembershipFunction& mf, std::size_t input_count);
-
-// A rule's consequent clause on one output, in rule order.
-struct EmittedConsequent {
-  std::size_t rule = 0;
-  const Clause* clause = nullptr;
-};
-std::vector<EmittedConsequent> consequents_on_output(const FuzzySystem& system, std::size_t output);
-
-// The `#line` directives around a rule's code: one to the rule's line in the rule file, and after the code one
-// back to the header (where the options name a source and a header path). Each returns the directive, or "".
-class LineDirectives {
- public:
-  explicit LineDirectives(const EmitOptions& options) : options_(options) {}
-  std::string to_rule(const SourceRange& range);
-  // `lines_written`: the header lines before this directive (#line N names the line after the directive).
-  std::string back_to_header(int lines_written);
-
- private:
-  const EmitOptions& options_;
-  bool pending_return_ = false;
-};
 
 }  // namespace fmpc

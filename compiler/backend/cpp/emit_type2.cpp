@@ -8,7 +8,6 @@
 
 #include "compiler/eval/defuzzify.h"
 #include "compiler/eval/interpreter.h"
-#include "diagnostics/number_format.h"
 #include "kernels/type2_math.h"
 
 namespace fmpc {
@@ -61,16 +60,16 @@ const char* type_reduction_enumerator(TypeReduction method) {
 // "{T(a), T(b), ...}": a parameter array's initialiser (one element at least, so that the array is valid C++).
 std::string constant_list(const std::vector<double>& values) {
   std::string list;
-  for (const double v : values) list += (list.empty() ? "" : ", ") + emitted_constant(v);
+  for (const double v : values) list += (list.empty() ? "" : ", ") + cpp_constant(v);
   return "{" + (list.empty() ? std::string("T(0)") : list) + "}";
 }
 
 class Type2Emitter {
  public:
-  Type2Emitter(const FuzzySystem& system, const EmitOptions& options, int first_line)
-      : system_(system), options_(options), lines_(first_line) {}
+  Type2Emitter(const FuzzySystem& system, const EmitOptions& options, CodeWriter& out)
+      : system_(system), options_(options), out_(out) {}
 
-  std::string emit() {
+  void emit() {
     emit_sort_helper();
     emit_evaluate_interval();
     line("");
@@ -79,24 +78,10 @@ class Type2Emitter {
     line("FMPC_HD unsigned evaluate(const T* inputs, T* outputs) {");
     line("  return evaluate_interval(inputs, outputs, static_cast<T*>(nullptr), static_cast<T*>(nullptr));");
     line("}");
-    return text_;
   }
 
  private:
-  void line(const std::string& text) {
-    text_ += text;
-    text_ += '\n';
-    ++lines_;
-  }
-
-  void line_directive(const SourceRange& range) {
-    const std::string directive = directives_.to_rule(range);
-    if (!directive.empty()) line(directive);
-  }
-  void return_to_header() {
-    const std::string directive = directives_.back_to_header(lines_);
-    if (!directive.empty()) line(directive);
-  }
+  void line(const std::string& text) { out_.line(text); }
 
   // The Sugeno centre-of-sets reduction sorts the rules by their output value at run time (linear consequents
   // move with the inputs): the interpreter's std::stable_sort, as an insertion sort (stable: an element moves only
@@ -137,12 +122,10 @@ class Type2Emitter {
     if (input_count == 0) line("  (void)inputs;");
     for (std::size_t i = 0; i < input_count; ++i)
       line("  const T x" + std::to_string(i) + " = inputs[" + std::to_string(i) + "];  // " +
-           emitted_comment_text(system_.inputs[i].name));
+           cpp_comment_text(system_.inputs[i].name));
+    const std::vector<std::string> x = input_locals(input_count);
     if (input_count > 0) {
-      std::string test;
-      for (std::size_t i = 0; i < input_count; ++i)
-        test += (i ? " || " : "") + std::string("fmpc_math::fmpc_is_nan(x") + std::to_string(i) + ")";
-      line("  if (" + test + ") {");
+      line("  if (" + any_nan_test(x) + ") {");
       line("    for (std::size_t o = 0; o < kOutputCount; ++o) {");
       line("      outputs[o] = fmpc_math::fmpc_quiet_nan<T>();");
       line("      if (lower != nullptr) lower[o] = fmpc_math::fmpc_quiet_nan<T>();");
@@ -152,15 +135,7 @@ class Type2Emitter {
       line("  }");
     }
     line("  unsigned flags = 0u;");
-    if (input_count > 0) {
-      std::string test;
-      for (std::size_t i = 0; i < input_count; ++i) {
-        const std::string x = "x" + std::to_string(i);
-        test += (i ? " || " : "") + x + " < " + emitted_constant(system_.inputs[i].min) + " || " + x + " > " +
-                emitted_constant(system_.inputs[i].max);
-      }
-      line("  if (" + test + ") flags |= kFlagInputOutOfRange;");
-    }
+    if (input_count > 0) line("  if (" + out_of_range_test(system_, x) + ") flags |= kFlagInputOutOfRange;");
     if (system_.type == SystemType::Mamdani) plan_mamdani_columns();
     emit_firing_intervals();
     for (std::size_t o = 0; o < system_.outputs.size(); ++o) {
@@ -196,8 +171,8 @@ class Type2Emitter {
     }
     line("  const fmpc_math::GradeInterval<T> " + name + " = fmpc_math::footprint_membership<T>(" +
          mf_kind_enumerator(term.mf.kind) + ", p" + suffix + ", " + footprint_enumerator(footprint) + ", " +
-         emitted_constant(first) + ", " + emitted_constant(second) + ", " + lower_kind + ", " + lower_params +
-         ", x" + std::to_string(i) + ");  // " + emitted_comment_text(input.name + " is " + term.name));
+         cpp_constant(first) + ", " + cpp_constant(second) + ", " + lower_kind + ", " + lower_params +
+         ", x" + std::to_string(i) + ");  // " + cpp_comment_text(input.name + " is " + term.name));
     return name;
   }
 
@@ -211,7 +186,7 @@ class Type2Emitter {
     if (emitted_.insert(name).second) {
       std::string lower = grade + ".lower", upper = grade + ".upper";
       if (clause.hedge != Hedge::None) {
-        const std::string exponent = emitted_constant(hedge_exponent(clause.hedge));
+        const std::string exponent = cpp_constant(hedge_exponent(clause.hedge));
         lower = "fmpc_math::apply_hedge(" + lower + ", " + exponent + ")";
         upper = "fmpc_math::apply_hedge(" + upper + ", " + exponent + ")";
       }
@@ -241,8 +216,8 @@ class Type2Emitter {
           used[r] = true;
     for (std::size_t r = 0; r < system_.rules.size(); ++r) {
       const Rule& rule = system_.rules[r];
-      line("  // " + emitted_comment_text(system_.rule_display_name(r)));
-      line_directive(rule.range);
+      line("  // " + cpp_comment_text(system_.rule_display_name(r)));
+      directives_.to_rule(rule.range, out_);
       std::vector<Clause> antecedent = rule.antecedent;
       std::stable_sort(antecedent.begin(), antecedent.end(),
                        [](const Clause& a, const Clause& b) { return a.variable < b.variable; });
@@ -252,8 +227,8 @@ class Type2Emitter {
       const bool folded = rule.folded_grade.has_value();
       std::string lower = identity, upper = identity;
       if (folded) {
-        upper = emitted_constant(*rule.folded_grade);
-        lower = emitted_constant(rule.folded_grade_lower.value_or(*rule.folded_grade));
+        upper = cpp_constant(*rule.folded_grade);
+        lower = cpp_constant(rule.folded_grade_lower.value_or(*rule.folded_grade));
       }
       for (std::size_t c = 0; c < antecedent.size(); ++c) {
         const auto [mu_lower, mu_upper] = clause_ends(antecedent[c]);
@@ -261,23 +236,23 @@ class Type2Emitter {
           lower = mu_lower;
           upper = mu_upper;
         } else if (conjunction) {
-          lower = emitted_tnorm_call(system_.and_method, lower, mu_lower);
-          upper = emitted_tnorm_call(system_.and_method, upper, mu_upper);
+          lower = tnorm_call(system_.and_method, lower, mu_lower);
+          upper = tnorm_call(system_.and_method, upper, mu_upper);
         } else {
-          lower = emitted_snorm_call(system_.or_method, lower, mu_lower);
-          upper = emitted_snorm_call(system_.or_method, upper, mu_upper);
+          lower = snorm_call(system_.or_method, lower, mu_lower);
+          upper = snorm_call(system_.or_method, upper, mu_upper);
         }
       }
       const std::string rs = std::to_string(r);
       line("  const T sl" + rs + " = " + lower + ";");
       line("  const T su" + rs + " = " + upper + ";");
       // 1 * s == s exactly.
-      const std::string weight = rule.weight == 1.0 ? "" : emitted_constant(rule.weight) + " * ";
+      const std::string weight = rule.weight == 1.0 ? "" : cpp_constant(rule.weight) + " * ";
       line("  const T fl" + rs + " = " + weight + "grade_min(sl" + rs + ", su" + rs + ");");
       line("  const T fu" + rs + " = " + weight + "grade_max(sl" + rs + ", su" + rs + ");");
       if (!used[r]) line("  (void)fl" + rs + ";  (void)fu" + rs + ";");
       if (system_.type == SystemType::Mamdani) emit_column_updates(r);
-      return_to_header();
+      directives_.back_to_header(out_);
     }
   }
 
@@ -295,7 +270,7 @@ class Type2Emitter {
     rule_columns_.assign(system_.rules.size(), {});
     for (std::size_t o = 0; o < system_.outputs.size(); ++o) {
       std::map<std::tuple<int, int, bool>, std::size_t> column_of_consequent;
-      for (const EmittedConsequent& consequent : consequents_on_output(system_, o)) {
+      for (const OutputConsequent& consequent : consequents_on_output(system_, o)) {
         const Clause& clause = *consequent.clause;
         const auto key = std::make_tuple(clause.term, static_cast<int>(clause.hedge), clause.negated);
         const auto found = merge ? column_of_consequent.find(key) : column_of_consequent.end();
@@ -334,18 +309,8 @@ class Type2Emitter {
 
   void emit_no_fire(std::size_t o, const std::string& indent) {
     line(indent + "flags |= kFlagNoRuleFired;");
-    std::string value;
-    switch (system_.no_fire) {
-      case NoFirePolicy::Midrange:
-        value = emitted_constant((system_.outputs[o].min + system_.outputs[o].max) / 2.0);
-        break;
-      case NoFirePolicy::Value: value = emitted_constant(system_.no_fire_value); break;
-      case NoFirePolicy::Error:
-        value = "fmpc_math::fmpc_quiet_nan<T>()";
-        line(indent + "flags |= kFlagNoFireError;");
-        break;
-    }
-    line(indent + "y = yl = yr = " + value + ";");
+    if (system_.no_fire == NoFirePolicy::Error) line(indent + "flags |= kFlagNoFireError;");
+    line(indent + "y = yl = yr = " + no_fire_value(system_, o) + ";");
   }
 
   void emit_nan_output(const std::string& indent) { line(indent + "y = yl = yr = fmpc_math::fmpc_quiet_nan<T>();"); }
@@ -364,26 +329,6 @@ class Type2Emitter {
     line("  }");
   }
 
-  // A double table (T converts each element where it is read; see the type-1 emitter's emit_table for why).
-  void emit_table(const std::string& indent, const std::string& name, const std::vector<std::vector<double>>& rows) {
-    const std::size_t width = rows.empty() ? 0 : rows.front().size();
-    line(indent + "FMPC_GENERATED_TABLE double " + name + "[" + std::to_string(rows.size()) + "][" +
-         std::to_string(width) + "] = {");
-    for (const auto& row : rows) {
-      line(indent + "    {");
-      std::string text;
-      for (std::size_t k = 0; k < row.size(); ++k) {
-        text += format_number(row[k]) + ",";
-        if (text.size() > 100 || k + 1 == row.size()) {
-          line(indent + "        " + text);
-          text.clear();
-        }
-      }
-      line(indent + "    },");
-    }
-    line(indent + "};");
-  }
-
   // Mamdani (interpreter's mamdani_type2_output): implication and aggregation on each end of the sampled
   // consequents, the ends put in order where an unclipped `sum` made them cross, then type reduction over the
   // sample points. The consequents' [lower, upper] grades at the samples, hedged and negated, are computed here
@@ -393,7 +338,7 @@ class Type2Emitter {
     const std::string os = std::to_string(o);
     const std::vector<double> x = output_sample_points(output.min, output.max, system_.samples, Reference::Matlab);
     const std::string n = std::to_string(x.size());
-    line("  // output " + emitted_comment_text(output.name) + ": " + n +
+    line("  // output " + cpp_comment_text(output.name) + ": " + n +
          " samples of the aggregated [lower, upper] sets, then type reduction (" +
          to_string(system_.type_reduction) + ")");
     line("  {");
@@ -427,9 +372,10 @@ class Type2Emitter {
     line("    if (!fired) {");
     emit_no_fire(o, "      ");
     line("    } else {");
-    emit_table("      ", "kLowerGrades", grades_lower);
-    emit_table("      ", "kUpperGrades", grades_upper);
-    emit_table("      ", "kSamplePoints", {x});
+    // Matrices even with one column, which the loop below indexes as [c][k].
+    out_.double_table("      ", "kLowerGrades", grades_lower, x.size(), true);
+    out_.double_table("      ", "kUpperGrades", grades_upper, x.size(), true);
+    out_.double_table("      ", "kSamplePoints", {x}, x.size(), true);
     line("      T aggregate_lower[" + n + "], aggregate_upper[" + n + "], points[" + n + "];");
     line("      bool nan = false;");
     line("      FMPC_GENERATED_UNROLL");
@@ -437,16 +383,16 @@ class Type2Emitter {
     for (std::size_t c = 0; c < strengths.size(); ++c) {
       const std::string cs = std::to_string(c);
       const std::string implied_lower =
-          emitted_tnorm_call(system_.implication, strengths[c].first, "T(kLowerGrades[" + cs + "][k])");
+          tnorm_call(system_.implication, strengths[c].first, "T(kLowerGrades[" + cs + "][k])");
       const std::string implied_upper =
-          emitted_tnorm_call(system_.implication, strengths[c].second, "T(kUpperGrades[" + cs + "][k])");
+          tnorm_call(system_.implication, strengths[c].second, "T(kUpperGrades[" + cs + "][k])");
       // The first column is taken as is: aggregation(0, v) == v for every s-norm and v >= 0.
       if (c == 0) {
         line("        T l = " + implied_lower + ";");
         line("        T u = " + implied_upper + ";");
       } else {
-        line("        l = " + emitted_snorm_call(system_.aggregation, "l", implied_lower) + ";");
-        line("        u = " + emitted_snorm_call(system_.aggregation, "u", implied_upper) + ";");
+        line("        l = " + snorm_call(system_.aggregation, "l", implied_lower) + ";");
+        line("        u = " + snorm_call(system_.aggregation, "u", implied_upper) + ";");
       }
     }
     line("        if (fmpc_math::fmpc_is_nan(l) || fmpc_math::fmpc_is_nan(u)) {");
@@ -486,11 +432,11 @@ class Type2Emitter {
   // sorted by z_low (yl) and, where some z is an interval, by z_high (yr).
   void emit_sugeno_output(std::size_t o) {
     const Variable& output = system_.outputs[o];
-    const std::vector<EmittedConsequent> consequents = consequents_on_output(system_, o);
+    const std::vector<OutputConsequent> consequents = consequents_on_output(system_, o);
     const bool weighted_sum = system_.defuzzifier == Defuzzifier::WeightedSum;
     std::vector<bool> concludes(system_.rules.size(), false);
     bool interval_values = false;
-    for (const EmittedConsequent& consequent : consequents) {
+    for (const OutputConsequent& consequent : consequents) {
       concludes[consequent.rule] = true;
       const Term& term = output.terms[static_cast<std::size_t>(consequent.clause->term)];
       interval_values = interval_values || (term.footprint && term.footprint->kind == FootprintKind::IntervalValue);
@@ -499,7 +445,7 @@ class Type2Emitter {
                                                               static_cast<std::size_t>(std::count(
                                                                   concludes.begin(), concludes.end(), false)));
     const std::string p = std::to_string(capacity);
-    line("  // output " + emitted_comment_text(output.name) + ": " + to_string(system_.defuzzifier) +
+    line("  // output " + cpp_comment_text(output.name) + ": " + to_string(system_.defuzzifier) +
          (weighted_sum ? "" : std::string(", type reduction ") + to_string(system_.type_reduction)));
     line("  {");
     line("    T y = T(0), yl = T(0), yr = T(0);");
@@ -507,7 +453,7 @@ class Type2Emitter {
     line("    T z_low[" + p + "] = {}, z_high[" + p + "] = {}, w_low[" + p + "] = {}, w_high[" + p + "] = {};");
     line("    int n = 0;");
     line("    bool fired = false;");
-    for (const EmittedConsequent& consequent : consequents) {
+    for (const OutputConsequent& consequent : consequents) {
       const std::string rs = std::to_string(consequent.rule);
       const Clause& clause = *consequent.clause;
       const Term& term = output.terms[static_cast<std::size_t>(clause.term)];
@@ -515,17 +461,17 @@ class Type2Emitter {
       line("      fmpc_math::GradeInterval<T> h{fl" + rs + ", fu" + rs + "};");
       // Octave's eval_rules_sugeno hedges the height as w^(1/hedge), then negates it (interpreter).
       if (clause.hedge != Hedge::None) {
-        const std::string power = emitted_constant(1.0 / hedge_exponent(clause.hedge));
+        const std::string power = cpp_constant(1.0 / hedge_exponent(clause.hedge));
         line("      h.lower = fmpc_math::fmpc_pow(h.lower, " + power + ");");
         line("      h.upper = fmpc_math::fmpc_pow(h.upper, " + power + ");");
       }
       if (clause.negated) line("      h = fmpc_math::interval_not(h);");
       line("      fired = fired || h.upper != T(0);");
       if (term.footprint && term.footprint->kind == FootprintKind::IntervalValue) {
-        line("      z_low[n] = " + emitted_constant(term.footprint->first) + ";");
-        line("      z_high[n] = " + emitted_constant(term.footprint->second) + ";");
+        line("      z_low[n] = " + cpp_constant(term.footprint->first) + ";");
+        line("      z_high[n] = " + cpp_constant(term.footprint->second) + ";");
       } else {
-        line("      z_low[n] = " + emitted_sugeno_value(term.mf, system_.inputs.size()) + ";");
+        line("      z_low[n] = " + sugeno_value(term.mf, system_.inputs.size()) + ";");
         line("      z_high[n] = z_low[n];");
       }
       line("      w_low[n] = h.lower;");
@@ -609,8 +555,7 @@ class Type2Emitter {
 
   const FuzzySystem& system_;
   const EmitOptions& options_;
-  std::string text_;
-  int lines_;
+  CodeWriter& out_;
   std::set<std::string> emitted_;
   LineDirectives directives_{options_};
   struct Column {
@@ -624,15 +569,8 @@ class Type2Emitter {
 
 }  // namespace
 
-const std::vector<std::string>& type2_embedded_math_files() {
-  static const std::vector<std::string> files = {"kernels/fmpc_hd.h", "kernels/fuzzy_kinds.h",
-                                                 "kernels/fuzzy_math.h", "kernels/type2_math.h",
-                                                 "kernels/type_reduction_math.h"};
-  return files;
-}
-
-std::string emit_type2_evaluate_function(const FuzzySystem& system, const EmitOptions& options, int first_line) {
-  return Type2Emitter(system, options, first_line).emit();
+void emit_type2_evaluate_function(const FuzzySystem& system, const EmitOptions& options, CodeWriter& out) {
+  Type2Emitter(system, options, out).emit();
 }
 
 }  // namespace fmpc

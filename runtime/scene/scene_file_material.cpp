@@ -1,0 +1,441 @@
+#include "runtime/scene/scene_file_parser.h"
+
+#include <cmath>
+#include <initializer_list>
+
+#include "diagnostics/number_format.h"
+#include "runtime/io/input_file.h"
+
+namespace fmpc::sim {
+
+void SceneParser::parse_mesh(const YAML::Node& node) {
+  remember(node, "mesh");
+  if (!check_map(node, "mesh", {"file", "box", "ellipsoid", "units"})) return;
+  SceneMesh& mesh = scene_.mesh;
+  switch (one_of(node, "mesh", {"file", "box", "ellipsoid"})) {
+    case 0:
+      if (auto file = text(node["file"], "mesh.file")) {
+        mesh.kind = SceneMesh::Kind::File;
+        mesh.file = resolve(*file);
+        check_input_file(node["file"], "mesh.file", mesh.file, kMaxMeshFileBytes, "mesh file");
+      }
+      break;
+    case 1: {
+      mesh.kind = SceneMesh::Kind::Box;
+      const YAML::Node box = node["box"];
+      remember(box, "mesh.box");
+      if (!check_map(box, "mesh.box", {"size", "min", "cells"})) break;
+      if (!box["size"]) error(box, "mesh.box", "a box needs 'size' [x, y, z] (mesh units)");
+      else if (auto size = vector3(box["size"], "mesh.box.size", " (mesh units)")) {
+        if (!((*size)[0] > 0.0 && (*size)[1] > 0.0 && (*size)[2] > 0.0))
+          error(box["size"], "mesh.box.size", "every size must be positive");
+        mesh.box.size = *size;
+      }
+      if (box["min"])
+        if (auto min = vector3(box["min"], "mesh.box.min", " (mesh units)")) mesh.box.minimum = *min;
+      if (box["cells"]) {
+        const YAML::Node cells = box["cells"];
+        if (!cells.IsSequence() || cells.size() != 3) {
+          error(cells, "mesh.box.cells", "expected three cell counts [nx, ny, nz] from 1 to 1000, got " +
+                                             describe(cells));
+        } else {
+          int* counts[3] = {&mesh.box.cells_x, &mesh.box.cells_y, &mesh.box.cells_z};
+          for (std::size_t i = 0; i < 3; ++i)
+            if (auto n = integer(cells[i], "mesh.box.cells", 1, 1000)) *counts[i] = static_cast<int>(*n);
+          if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.box)))
+            error(cells, "mesh.box.cells", "[" + std::to_string(mesh.box.cells_x) + ", " +
+                                               std::to_string(mesh.box.cells_y) + ", " +
+                                               std::to_string(mesh.box.cells_z) + "] " + *too_large +
+                                               ": use fewer cells");
+        }
+      }
+      break;
+    }
+    case 2: {
+      mesh.kind = SceneMesh::Kind::Ellipsoid;
+      const YAML::Node ellipsoid = node["ellipsoid"];
+      remember(ellipsoid, "mesh.ellipsoid");
+      if (!check_map(ellipsoid, "mesh.ellipsoid", {"radii", "centre", "resolution"})) break;
+      if (!ellipsoid["radii"]) error(ellipsoid, "mesh.ellipsoid", "an ellipsoid needs 'radii' [x, y, z] (mesh units)");
+      else if (auto radii = vector3(ellipsoid["radii"], "mesh.ellipsoid.radii", " (mesh units)")) {
+        if (!((*radii)[0] > 0.0 && (*radii)[1] > 0.0 && (*radii)[2] > 0.0))
+          error(ellipsoid["radii"], "mesh.ellipsoid.radii", "every radius must be positive");
+        mesh.ellipsoid.radii = *radii;
+      }
+      if (ellipsoid["centre"])
+        if (auto centre = vector3(ellipsoid["centre"], "mesh.ellipsoid.centre", " (mesh units)"))
+          mesh.ellipsoid.centre = *centre;
+      if (ellipsoid["resolution"])
+        if (auto n = integer(ellipsoid["resolution"], "mesh.ellipsoid.resolution", 1, 200)) {
+          mesh.ellipsoid.resolution = static_cast<int>(*n);
+          if (const auto too_large = generated_mesh_too_large(tetrahedron_count(mesh.ellipsoid)))
+            error(ellipsoid["resolution"], "mesh.ellipsoid.resolution",
+                  std::to_string(*n) + " " + *too_large + ": use a smaller resolution");
+        }
+      break;
+    }
+    default:
+      break;
+  }
+  if (node["units"]) {
+    const YAML::Node units = node["units"];
+    remember(units, "mesh.units");
+    double value = 0.0;
+    if (units.IsScalar() && units.Scalar() == "m") mesh.unit = 1.0;
+    else if (units.IsScalar() && units.Scalar() == "cm") mesh.unit = 0.01;
+    else if (units.IsScalar() && units.Scalar() == "mm") mesh.unit = 0.001;
+    else if (units.IsScalar() && YAML::convert<double>::decode(units, value) && std::isfinite(value) && value > 0.0)
+      mesh.unit = value;
+    else
+      error(units, "mesh.units", describe(units) + " is not a unit; use m, cm, mm or a positive number of metres "
+                                                   "per mesh unit");
+  }
+}
+
+void SceneParser::parse_material(const YAML::Node& node) {
+  remember(node, "material");
+  if (!check_map(node, "material", {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table",
+                                    "system", "output", "patient", "inputs", "strain_axis", "thickness",
+                                    "flexion_fraction", "mapping", "poisson_ratio"}))
+    return;
+  SceneMaterial& material = scene_.material;
+  const std::vector<std::string> sources = {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table"};
+  const int source = one_of(node, "material", sources);
+  if (source < 0) return;
+  material.source = static_cast<SceneMaterial::Source>(source);
+  const std::string key = sources[static_cast<std::size_t>(source)];
+  const std::string field = "material." + key;
+  switch (material.source) {
+    case SceneMaterial::Source::YoungsModulus:
+      if (auto v = positive(node[key], field, " (kPa)")) material.value = *v;
+      break;
+    case SceneMaterial::Source::Stiffness:
+      if (auto v = positive(node[key], field, " (N/m)")) material.value = *v;
+      break;
+    case SceneMaterial::Source::StiffnessOverLength:
+      if (auto v = positive(node[key], field, " (N)")) material.value = *v;
+      break;
+    case SceneMaterial::Source::Rules:
+    case SceneMaterial::Source::Table:
+      if (auto file = text(node[key], field)) {
+        material.file = resolve(*file);
+        if (material.source == SceneMaterial::Source::Rules)
+          check_input_file(node[key], field, material.file, kMaxRuleFileBytes, "rule file");
+        else
+          check_input_file(node[key], field, material.file, kMaxTableFileBytes, "table file");
+      }
+      break;
+  }
+  const bool fuzzy = material.source == SceneMaterial::Source::Rules || material.source == SceneMaterial::Source::Table;
+  for (const char* only_fuzzy : {"system", "output", "inputs", "strain_axis"}) {
+    if (node[only_fuzzy] && !fuzzy)
+      error(node[only_fuzzy], std::string("material.") + only_fuzzy, "only allowed with 'rules' or 'table'");
+  }
+  if (node["system"] && material.source == SceneMaterial::Source::Table)
+    error(node["system"], "material.system", "only allowed with 'rules' (a table holds one system)");
+  if (node["system"])
+    if (auto v = text(node["system"], "material.system")) material.system = *v;
+  if (node["output"])
+    if (auto v = text(node["output"], "material.output")) material.output = *v;
+  if (node["patient"])
+    if (auto v = text(node["patient"], "material.patient")) material.patient = *v;
+  if (node["mapping"]) {
+    if (material.source == SceneMaterial::Source::Stiffness ||
+        material.source == SceneMaterial::Source::StiffnessOverLength) {
+      error(node["mapping"], "material.mapping",
+            "only allowed with 'youngs_modulus', 'rules' or 'table' (it maps Young's modulus to spring constants)");
+    } else {
+      const std::vector<std::string> names = {scene_name(StiffnessMapping::VanGelder1998),
+                                              scene_name(StiffnessMapping::LloydSzekelyHarders2007)};
+      material.mapping_given = true;
+      if (auto i = keyword(node["mapping"], "material.mapping", names, "a Young's modulus mapping"))
+        material.mapping = *i == 0 ? StiffnessMapping::VanGelder1998 : StiffnessMapping::LloydSzekelyHarders2007;
+    }
+  }
+  if (node["poisson_ratio"]) material.poisson_ratio = poisson_ratio(node["poisson_ratio"]);
+  if (node["thickness"])
+    if (auto v = positive(node["thickness"], "material.thickness", " (m)")) material.thickness = *v;
+  if (node["flexion_fraction"])
+    if (auto v = non_negative(node["flexion_fraction"], "material.flexion_fraction", "")) material.flexion_fraction = *v;
+  if (fuzzy && !node["inputs"])
+    error(node, "material.inputs", "missing; bind every input of the rules to a constant, regions or strain");
+  if (node["inputs"] && fuzzy) parse_inputs(node["inputs"]);
+  bool has_strain = false;
+  for (const auto& b : material.bindings) has_strain = has_strain || b.kind == InputBinding::Kind::Strain;
+  if (node["strain_axis"] && fuzzy) {
+    const YAML::Node axis = node["strain_axis"];
+    remember(axis, "material.strain_axis");
+    if (!has_strain) error(axis, "material.strain_axis", "only allowed when an input is bound to 'strain'");
+    if (material.source == SceneMaterial::Source::Table)
+      error(axis, "material.strain_axis", "not allowed with 'table' (the table's own breakpoints are used)");
+    if (check_map(axis, "material.strain_axis", {"min", "max", "points"})) {
+      StrainAxis strain_axis;
+      if (axis["min"])
+        if (auto v = number(axis["min"], "material.strain_axis.min", "a number (strain)")) strain_axis.min = *v;
+      if (axis["max"])
+        if (auto v = number(axis["max"], "material.strain_axis.max", "a number (strain)")) strain_axis.max = *v;
+      if (axis["points"])
+        if (auto v = integer(axis["points"], "material.strain_axis.points", 2, 100000))
+          strain_axis.points = static_cast<int>(*v);
+      if (!(strain_axis.min < strain_axis.max))
+        error(axis, "material.strain_axis", "'min' must be below 'max'");
+      material.strain_axis = strain_axis;
+    }
+  }
+}
+
+// `regions: [{box: {min, max}, value: NUMBER}, ...]` of a map; false after an error.
+bool SceneParser::parse_regions(const YAML::Node& value, const std::string& field, std::vector<RegionValue>& out) {
+  const YAML::Node regions = value["regions"];
+  if (!regions || !regions.IsSequence() || regions.size() == 0) {
+    error(regions ? regions : value, field + ".regions", "expected a list of {box: {min, max}, value: NUMBER}");
+    return false;
+  }
+  for (std::size_t r = 0; r < regions.size(); ++r) {
+    const std::string region_field = field + ".regions[" + std::to_string(r) + "]";
+    if (!check_map(regions[r], region_field, {"box", "value"})) continue;
+    if (!regions[r]["box"] || !regions[r]["value"]) {
+      error(regions[r], region_field, "a region needs 'box' and 'value'");
+      continue;
+    }
+    const auto region_box = box(regions[r]["box"], region_field + ".box");
+    const auto region_value = number(regions[r]["value"], region_field + ".value", "a number");
+    if (region_box && region_value) out.push_back({*region_box, *region_value});
+  }
+  return true;
+}
+
+// A Poisson ratio in [0, 0.499]: a number, or {regions: [...], default: NUMBER}.
+std::optional<RegionalValue> SceneParser::poisson_ratio(const YAML::Node& node) {
+  const std::string field = "material.poisson_ratio";
+  remember(node, field);
+  const std::string allowed = "a number in [0, 0.499]";
+  const auto in_range = [&](const YAML::Node& at, const std::string& where, double v) {
+    if (v >= 0.0 && v <= 0.499) return true;
+    error(at, where, "expected " + allowed + " (0.5 is incompressible, which linear tetrahedra cannot represent "
+                     "without locking), got " + format_number(v));
+    return false;
+  };
+  RegionalValue out;
+  if (node.IsMap()) {
+    if (!check_map(node, field, {"regions", "default"})) return std::nullopt;
+    out.has_default = false;
+    if (node["default"]) {
+      const auto v = number(node["default"], field + ".default", allowed);
+      if (!v || !in_range(node["default"], field + ".default", *v)) return std::nullopt;
+      out.value = *v;
+      out.has_default = true;
+    }
+    if (!parse_regions(node, field, out.regions)) return std::nullopt;
+    for (std::size_t r = 0; r < out.regions.size(); ++r)
+      if (!in_range(node["regions"][r]["value"], field + ".regions[" + std::to_string(r) + "].value",
+                    out.regions[r].value))
+        return std::nullopt;
+    return out;
+  }
+  const auto v = number(node, field, allowed + " or {regions: [...], default: NUMBER}");
+  if (!v || !in_range(node, field, *v)) return std::nullopt;
+  out.value = *v;
+  return out;
+}
+
+void SceneParser::parse_inputs(const YAML::Node& node) {
+  remember(node, "material.inputs");
+  if (!node.IsMap() || node.size() == 0) {
+    error(node, "material.inputs", "expected a map from input name to a number, 'strain' or {regions: ...}");
+    return;
+  }
+  int strain_bindings = 0;
+  for (auto it = node.begin(); it != node.end(); ++it) {
+    InputBinding binding;
+    binding.input = it->first.Scalar();
+    const std::string field = "material.inputs." + binding.input;
+    remember(it->first, field);
+    const YAML::Node value = it->second;
+    double number_value = 0.0;
+    if (value.IsScalar() && value.Scalar() == "strain") {
+      binding.kind = InputBinding::Kind::Strain;
+      ++strain_bindings;
+      if (strain_bindings > 1) error(value, field, "only one input can be bound to 'strain'");
+    } else if (value.IsScalar() && YAML::convert<double>::decode(value, number_value) && std::isfinite(number_value)) {
+      binding.kind = InputBinding::Kind::Constant;
+      binding.value = number_value;
+    } else if (value.IsMap()) {
+      binding.kind = InputBinding::Kind::PerRegion;
+      if (!check_map(value, field, {"regions", "default"})) continue;
+      if (value["default"]) {
+        if (auto v = number(value["default"], field + ".default", "a number")) {
+          binding.value = *v;
+          binding.has_default = true;
+        }
+      }
+      if (!parse_regions(value, field, binding.regions)) continue;
+    } else {
+      error(value, field, "expected a number, 'strain' or {regions: [...], default: NUMBER}, got " + describe(value));
+      continue;
+    }
+    remember(it->first, field);
+    scene_.material.bindings.push_back(std::move(binding));
+  }
+}
+
+// What only springs have is refused with the co-rotational FEM, naming the field.
+void SceneParser::check_fem_fields(const YAML::Node& root) {
+  const std::string why = " has no meaning for model: corotational_fem (it is a spring setting)";
+  const YAML::Node material = root["material"];
+  if (material && material.IsMap()) {
+    for (const char* key : {"stiffness", "stiffness_over_length"})
+      if (material[key])
+        error(material[key], std::string("material.") + key,
+              "the co-rotational FEM takes Young's modulus (youngs_modulus, rules or table), not spring constants");
+    // A mapping beside spring constants already has its own error (it needs Young's modulus).
+    const bool modulus = material["youngs_modulus"] || material["rules"] || material["table"];
+    for (const char* key : {"mapping", "thickness", "flexion_fraction"})
+      if (material[key] && (modulus || std::string(key) != "mapping"))
+        error(material[key], std::string("material.") + key, why.substr(1));
+  }
+  if (root["springs"]) error(root["springs"], "springs", why.substr(1));
+  if (root["law"]) error(root["law"], "law", why.substr(1) + "; the FEM's material is linear elastic (co-rotated)");
+  const YAML::Node damping = root["damping"];
+  if (damping && damping.IsMap()) {
+    for (const char* key : {"coefficient", "natural_frequency"})
+      if (damping[key])
+        error(damping[key], std::string("damping.") + key,
+              "a per-spring dashpot setting; the FEM is damped by 'ratio' (each element's fastest mode) and "
+              "'rayleigh'");
+  }
+}
+
+void SceneParser::parse_mass(const YAML::Node& node) {
+  remember(node, "mass");
+  if (!check_map(node, "mass", {"density", "total", "thickness"})) return;
+  switch (one_of(node, "mass", {"density", "total"})) {
+    case 0:
+      scene_.mass.source = MassSpec::Source::Density;
+      if (auto v = positive(node["density"], "mass.density", " (kg/m^3)")) scene_.mass.value = *v;
+      break;
+    case 1:
+      scene_.mass.source = MassSpec::Source::TotalMass;
+      if (auto v = positive(node["total"], "mass.total", " (kg)")) scene_.mass.value = *v;
+      break;
+    default:
+      break;
+  }
+  if (node["thickness"])
+    if (auto v = positive(node["thickness"], "mass.thickness", " (m)")) scene_.mass.thickness = *v;
+}
+
+void SceneParser::parse_damping(const YAML::Node& node) {
+  remember(node, "damping");
+  if (node.IsScalar() && node.Scalar() == "none") {
+    scene_.damping.rule = DampingSpec::Rule::Fixed;
+    scene_.damping.value = 0.0;
+    return;
+  }
+  if (!node.IsMap()) {
+    error(node, "damping", "expected 'none' or a map with 'ratio' (and optionally 'natural_frequency') or "
+                           "'coefficient', and/or 'rayleigh'");
+    return;
+  }
+  if (!check_map(node, "damping", {"ratio", "natural_frequency", "coefficient", "rayleigh"})) return;
+  if (node["rayleigh"]) {
+    const YAML::Node rayleigh = node["rayleigh"];
+    remember(rayleigh, "damping.rayleigh");
+    if (check_map(rayleigh, "damping.rayleigh", {"mass", "stiffness"})) {
+      if (!rayleigh["mass"] && !rayleigh["stiffness"])
+        error(rayleigh, "damping.rayleigh", "give 'mass' (alpha, 1/s) and/or 'stiffness' (beta, s)");
+      if (rayleigh["mass"])
+        if (auto v = non_negative(rayleigh["mass"], "damping.rayleigh.mass", " (1/s)")) scene_.rayleigh.mass = *v;
+      if (rayleigh["stiffness"])
+        if (auto v = non_negative(rayleigh["stiffness"], "damping.rayleigh.stiffness", " (s)"))
+          scene_.rayleigh.stiffness = *v;
+    }
+    if (!node["ratio"] && !node["coefficient"]) {
+      // Rayleigh alone: no ratio damping beside it.
+      scene_.damping.rule = DampingSpec::Rule::DampingRatio;
+      scene_.damping.ratio = 0.0;
+      if (node["natural_frequency"])
+        error(node["natural_frequency"], "damping.natural_frequency", "only allowed with 'ratio'");
+      return;
+    }
+  }
+  switch (one_of(node, "damping", {"ratio", "coefficient"})) {
+    case 0:
+      if (auto v = non_negative(node["ratio"], "damping.ratio", "")) scene_.damping.ratio = *v;
+      scene_.damping.rule = DampingSpec::Rule::DampingRatio;
+      if (node["natural_frequency"]) {
+        scene_.damping.rule = DampingSpec::Rule::ThesisNaturalFrequency;
+        if (auto v = positive(node["natural_frequency"], "damping.natural_frequency", " (rad/s)"))
+          scene_.damping.natural_frequency = *v;
+      }
+      break;
+    case 1:
+      if (node["natural_frequency"])
+        error(node["natural_frequency"], "damping.natural_frequency", "only allowed with 'ratio'");
+      scene_.damping.rule = DampingSpec::Rule::Fixed;
+      if (auto v = non_negative(node["coefficient"], "damping.coefficient", " (N s/m)")) scene_.damping.value = *v;
+      break;
+    default:
+      break;
+  }
+}
+
+void SceneParser::parse_springs(const YAML::Node& node) {
+  remember(node, "springs");
+  if (node.IsMap() && node["shear"]) {
+    // The thesis names shear springs (section 3.2.1) but gives no rule for them; its flexion springs are the
+    // across-edge diagonals that cloth models call shear springs (docs/simulator.md, Springs).
+    error(node["shear"], "springs.shear",
+          "the thesis gives no rule for shear springs on a triangle mesh; its flexion springs (Fig. 3.4) join the "
+          "two vertices across each shared edge, the diagonal that cloth models call a shear spring: use "
+          "'flexion' (and 'bending' for springs that skip a vertex)");
+    return;
+  }
+  if (!check_map(node, "springs", {"structural", "flexion", "bending", "bending_min_angle", "volume_term"})) return;
+  if (node["volume_term"])
+    if (auto v = boolean(node["volume_term"], "springs.volume_term")) scene_.volume_term = *v;
+  if (node["structural"])
+    if (auto v = boolean(node["structural"], "springs.structural")) scene_.triangle_springs.structural = *v;
+  if (node["flexion"])
+    if (auto v = boolean(node["flexion"], "springs.flexion")) scene_.triangle_springs.flexion = *v;
+  if (node["bending"])
+    if (auto v = boolean(node["bending"], "springs.bending")) scene_.triangle_springs.bending = *v;
+  if (node["bending_min_angle"]) {
+    const YAML::Node angle = node["bending_min_angle"];
+    if (auto v = number(angle, "springs.bending_min_angle", "an angle from 90 to 180 (degrees)")) {
+      if (*v < 90.0 || *v > 180.0)
+        error(angle, "springs.bending_min_angle",
+              "expected an angle from 90 to 180 (degrees), got " + format_number(*v));
+      else
+        scene_.triangle_springs.bending_min_angle_degrees = *v;
+    }
+  }
+}
+
+void SceneParser::parse_law(const YAML::Node& node) {
+  remember(node, "law");
+  static const std::vector<std::string> names = {"linear", "basafa_farahmand"};
+  if (node.IsScalar()) {
+    if (auto i = keyword(node, "law", names, "a spring law"))
+      scene_.law.law = *i == 0 ? kernels::SpringLaw::LinearDashpot : kernels::SpringLaw::BasafaFarahmand;
+    return;
+  }
+  if (!check_map(node, "law", names)) return;
+  if (node["linear"] || node.size() != 1) {
+    error(node, "law", "expected 'linear', 'basafa_farahmand' or {basafa_farahmand: {k2_over_k1, xc, gamma0, gamma1}}");
+    return;
+  }
+  const YAML::Node bf = node["basafa_farahmand"];
+  scene_.law.law = kernels::SpringLaw::BasafaFarahmand;
+  if (!check_map(bf, "law.basafa_farahmand", {"k2_over_k1", "xc", "gamma0", "gamma1"})) return;
+  if (bf["k2_over_k1"])
+    if (auto v = non_negative(bf["k2_over_k1"], "law.basafa_farahmand.k2_over_k1", "")) scene_.law.k2_over_k1 = *v;
+  if (bf["xc"])
+    if (auto v = positive(bf["xc"], "law.basafa_farahmand.xc", " (strain)")) scene_.law.xc = *v;
+  if (bf["gamma0"])
+    if (auto v = non_negative(bf["gamma0"], "law.basafa_farahmand.gamma0", " (N s/m)")) scene_.law.gamma0 = *v;
+  if (bf["gamma1"])
+    if (auto v = non_negative(bf["gamma1"], "law.basafa_farahmand.gamma1", " (N s/m^2)")) scene_.law.gamma1 = *v;
+}
+
+}  // namespace fmpc::sim

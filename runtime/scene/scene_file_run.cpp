@@ -1,0 +1,147 @@
+#include "runtime/scene/scene_file_parser.h"
+
+#include <cmath>
+
+#include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
+
+namespace fmpc::sim {
+
+void SceneParser::parse(const YAML::Node& root) {
+  if (!root.IsMap()) {
+    diagnostics_.error(range(root), "a scene file is a YAML map with 'mesh', 'material' and the other keys of "
+                                    "docs/scenes.md");
+    return;
+  }
+  check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "hold",
+                       "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
+                       "on_inversion"});
+  if (root["name"]) {
+    if (auto name = text(root["name"], "name")) {
+      if (const auto problem = output_name_problem(*name))
+        error(root["name"], "name", "'" + *name + "' " + *problem);
+      else
+        scene_.name = *name;
+    }
+  } else if (const auto problem = output_name_problem(scene_.name)) {
+    diagnostics_.error(range(root), "name: the scene file's name '" + scene_.name + "' " + *problem +
+                                        "; give the scene a 'name'");
+  }
+  if (root["model"]) {
+    // "springs", then each element law's model keyword, in the registry's order.
+    std::vector<std::string> names = {"springs"};
+    std::vector<int> laws = {-1};
+    for (const ElementLawRow& row : element_law_rows()) {
+      if (row.model_keyword == nullptr) continue;
+      names.push_back(row.model_keyword);
+      laws.push_back(row.law);
+    }
+    if (auto i = keyword(root["model"], "model", names, "a force model")) {
+      scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::Elements;
+      if (*i > 0) scene_.element_law = laws[*i];
+    }
+  }
+  if (root["on_inversion"]) {
+    static const std::vector<std::string> names = {"warn", "stop"};
+    if (auto i = keyword(root["on_inversion"], "on_inversion", names, "what to do when an element turns inside out"))
+      scene_.on_inversion = *i == 0 ? InversionPolicy::Warn : InversionPolicy::Stop;
+  }
+  if (!root["mesh"]) diagnostics_.error(range(root), "mesh: missing; give a mesh file or a generated box or ellipsoid");
+  else parse_mesh(root["mesh"]);
+  if (!root["material"]) diagnostics_.error(range(root), "material: missing; give youngs_modulus, stiffness, "
+                                                         "stiffness_over_length, rules or table");
+  else parse_material(root["material"]);
+  if (root["mass"]) parse_mass(root["mass"]);
+  if (root["damping"]) parse_damping(root["damping"]);
+  if (root["springs"]) parse_springs(root["springs"]);
+  if (root["law"]) parse_law(root["law"]);
+  if (root["fixed"]) parse_fixed(root["fixed"]);
+  if (root["hold"]) parse_hold(root["hold"]);
+  if (root["loads"]) parse_loads(root["loads"]);
+  if (root["integrator"]) {
+    static const std::vector<std::string> names = {"forward_euler", "semi_implicit_euler", "velocity_verlet", "rk4",
+                                                   "implicit_euler"};
+    static const Integrator values[] = {Integrator::ForwardEuler, Integrator::SemiImplicitEuler,
+                                        Integrator::VelocityVerlet, Integrator::RungeKutta4,
+                                        Integrator::ImplicitEuler};
+    if (auto i = keyword(root["integrator"], "integrator", names, "an integrator")) scene_.integrator = values[*i];
+  }
+  if (root["dt"]) {
+    const YAML::Node dt = root["dt"];
+    remember(dt, "dt");
+    if (dt.IsScalar() && dt.Scalar() == "auto") {
+      scene_.dt.reset();
+    } else {
+      double value = 0.0;
+      if (!dt.IsScalar() || !YAML::convert<double>::decode(dt, value) || !std::isfinite(value) || !(value > 0.0))
+        error(dt, "dt", "expected 'auto' or a positive time step in seconds, got " + describe(dt));
+      else
+        scene_.dt = value;
+    }
+  }
+  if (root["duration"]) {
+    if (auto value = positive(root["duration"], "duration", " of seconds")) scene_.duration = *value;
+  }
+  if (root["backend"]) {
+    static const std::vector<std::string> names = {"auto", "cpu", "cuda"};
+    if (auto i = keyword(root["backend"], "backend", names, "a backend"))
+      scene_.backend = static_cast<SceneBackend>(*i);
+  }
+  if (root["precision"]) {
+    static const std::vector<std::string> names = {"float", "double"};
+    if (auto i = keyword(root["precision"], "precision", names, "a precision"))
+      scene_.precision = *i == 0 ? Precision::Float : Precision::Double;
+  }
+  if (root["threads"]) {
+    if (auto value = integer(root["threads"], "threads", 0, 256)) scene_.threads = static_cast<unsigned>(*value);
+  }
+  if (root["outputs"]) parse_outputs(root["outputs"]);
+  if (scene_.model == ForceModel::Elements) check_fem_fields(root);
+  if (scene_.model == ForceModel::Springs && scene_.material.poisson_ratio && !scene_.volume_term) {
+    diagnostics_.error(scene_.range_of("material.poisson_ratio"),
+                       "material.poisson_ratio: springs alone have nu = 1/4 (central springs obey the Cauchy "
+                       "relation lambda = mu); add the volume term (springs: {volume_term: true}) to reach another "
+                       "ratio, or use model: corotational_fem");
+  }
+  if (scene_.dt && root["dt"]) {
+    const double steps = std::ceil(scene_.duration / *scene_.dt);
+    if (!(steps <= kMaxSimulationSteps))
+      error(root["dt"], "dt", "duration " + format_number(scene_.duration) + " s / dt " + format_number(*scene_.dt) +
+                                  " s is " + format_number(steps) + " steps; the limit is " +
+                                  format_number(kMaxSimulationSteps) + ": raise dt or shorten the duration");
+  }
+}
+
+void SceneParser::parse_outputs(const YAML::Node& node) {
+  remember(node, "outputs");
+  if (!check_map(node, "outputs",
+                 {"directory", "frames", "vtu", "samples", "csv", "summary", "plot", "precision_check"}))
+    return;
+  SceneOutputs& out = scene_.outputs;
+  if (node["precision_check"]) {
+    static const std::vector<std::string> names = {"auto", "on", "off"};
+    if (auto i = keyword(node["precision_check"], "outputs.precision_check", names, "auto, on or off"))
+      out.precision_check = *i == 0   ? SceneOutputs::PrecisionCheck::Auto
+                            : *i == 1 ? SceneOutputs::PrecisionCheck::On
+                                      : SceneOutputs::PrecisionCheck::Off;
+  }
+  if (node["directory"])
+    if (auto v = text(node["directory"], "outputs.directory")) out.directory = *v;
+  if (node["frames"])
+    if (auto v = integer(node["frames"], "outputs.frames", 0, 100000)) out.frames = static_cast<int>(*v);
+  if (node["vtu"]) {
+    static const std::vector<std::string> names = {"binary", "ascii"};
+    if (auto i = keyword(node["vtu"], "outputs.vtu", names, "a VTU encoding"))
+      out.vtu = *i == 0 ? VtuFormat::Binary : VtuFormat::Ascii;
+  }
+  if (node["samples"])
+    if (auto v = integer(node["samples"], "outputs.samples", 0, 1000000)) out.samples = static_cast<int>(*v);
+  if (node["csv"])
+    if (auto v = boolean(node["csv"], "outputs.csv")) out.csv = *v;
+  if (node["summary"])
+    if (auto v = boolean(node["summary"], "outputs.summary")) out.summary = *v;
+  if (node["plot"])
+    if (auto v = boolean(node["plot"], "outputs.plot")) out.plot = *v;
+}
+
+}  // namespace fmpc::sim

@@ -1,0 +1,347 @@
+#include "runtime/scene/scene_recorder.h"
+
+#include <cmath>
+#include <cstdio>
+#include <regex>
+#include <sstream>
+
+#include "diagnostics/number_format.h"
+#include "runtime/io/atomic_file.h"
+#include "runtime/io/input_file.h"
+#include "runtime/io/json_text.h"
+
+namespace fmpc::sim {
+
+namespace {
+
+std::string frame_name(std::size_t index) {
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%05zu.vtu", index);
+  return name;
+}
+
+}  // namespace
+
+std::vector<std::size_t> spread(int count, std::size_t total) {
+  std::vector<std::size_t> steps;
+  if (count <= 0) return steps;
+  if (count == 1) return {total};
+  for (int i = 0; i < count; ++i) {
+    const double fraction = static_cast<double>(i) / static_cast<double>(count - 1);
+    steps.push_back(static_cast<std::size_t>(std::llround(fraction * static_cast<double>(total))));
+  }
+  steps.erase(std::unique(steps.begin(), steps.end()), steps.end());
+  return steps;
+}
+
+SceneRecorder::SceneRecorder(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
+                             std::size_t total)
+    : scene_(scene), built_(built), options_(options), directory_(options.output_directory) {
+  const SimulationSetup& setup = built.setup;
+  result_.steps_planned = total;
+  frame_steps_ = scene.outputs.frames > 0 ? spread(scene.outputs.frames, total) : std::vector<std::size_t>{};
+  write_csv_ = scene.outputs.csv && scene.outputs.samples > 0;
+  with_probe_ = setup.probe.has_value();
+  sample_steps_ = write_csv_ || with_probe_ ? spread(std::max(scene.outputs.samples, 2), total)
+                                            : std::vector<std::size_t>{};
+  events_.insert(frame_steps_.begin(), frame_steps_.end());
+  events_.insert(sample_steps_.begin(), sample_steps_.end());
+  for (int i = 1; i <= 100; ++i) events_.insert(total * static_cast<std::size_t>(i) / 100);
+  events_.insert(total);
+  if (with_probe_) {
+    const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
+    if (length > 0.0)
+      for (std::size_t i = 0; i < 3; ++i) probe_axis_[i] = setup.probe->target[i] / length;
+  }
+  if (write_csv_) {
+    const auto columns = time_series_columns(with_probe_);
+    for (std::size_t i = 0; i < columns.size(); ++i) csv_ += (i ? "," : "") + columns[i];
+    csv_ += "\n";
+  }
+  vtu_options_.format = scene.outputs.vtu;
+}
+
+void SceneRecorder::record(const SceneState& state, bool frame, bool sample, DiagnosticList& diagnostics) {
+  const SimulationSetup& setup = built_.setup;
+  const std::vector<Point3>& rest = start_positions();
+  if (!frame && (!sample || state.reduces_in_place())) {
+    // A progress event (the largest displacement alone), or a sample reduced where the state lives.
+    const std::optional<double> largest = state.largest_displacement(rest, diagnostics);
+    if (largest) result_.max_displacement = std::max(result_.max_displacement, *largest);
+    else outputs_ok_ = false;
+    if (largest && sample) record_sample(state, *largest, {}, {}, diagnostics);
+    return;
+  }
+  const std::vector<Point3> positions = state.positions(diagnostics);
+  if (positions.size() != rest.size()) {  // a device error, already reported
+    outputs_ok_ = false;
+    return;
+  }
+  std::vector<Point3> displacement(positions.size());
+  double largest = 0.0;
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    for (std::size_t i = 0; i < 3; ++i) displacement[v][i] = positions[v][i] - rest[v][i];
+    largest = std::max(largest, std::sqrt(dot(displacement[v], displacement[v])));
+  }
+  result_.max_displacement = std::max(result_.max_displacement, largest);
+  const double time = state.time();
+  // Downloaded once for the frame and the sample of the same event.
+  const bool write_frame = frame && outputs_ok_;
+  const std::vector<Point3> velocities =
+      write_frame || sample ? state.velocities(diagnostics) : std::vector<Point3>{};
+  if (write_frame) {
+    const std::string name = frame_name(frames_.size());
+    if (!vtu_cells_) vtu_cells_ = encode_vtu_cells(built_.mesh, vtu_options_, diagnostics);
+    // Element stresses as cell data where the cells are the elements: each element term's stress output (its law's:
+    // a von Mises stress, or the volume term's pressure magnitude; springs carry no continuum stress).
+    std::vector<VtuArray> cell_data;
+    if (!setup.elements.empty() && vtu_cells_ && vtu_cells_->size() == setup.tetrahedra.size())
+      for (const ElementStressOutput& stress : element_stress_outputs(setup, positions))
+        cell_data.push_back(vtu_scalars(stress.name, stress.values));
+    const auto vtu = vtu_cells_ ? vtu_document(positions, *vtu_cells_,
+                                               {vtu_vectors("displacement", displacement),
+                                                vtu_vectors("velocity", velocities)},
+                                               cell_data, vtu_options_, diagnostics)
+                                : std::nullopt;
+    outputs_ok_ = vtu && write_file_atomically((directory_ / name).string(), *vtu, diagnostics);
+    frames_.push_back({time, name});
+    result_.files.push_back((directory_ / name).string());
+  }
+  if (sample) record_sample(state, largest, positions, velocities, diagnostics);
+}
+
+
+void SceneRecorder::record_sample(const SceneState& state, double largest, const std::vector<Point3>& positions,
+                                  const std::vector<Point3>& velocities, DiagnosticList& diagnostics) {
+  const double time = state.time();
+  const auto energies = state.energies(built_.setup, positions, velocities, diagnostics);
+  if (!energies) {  // a device error, already reported
+    outputs_ok_ = false;
+    return;
+  }
+  const auto [kinetic, elastic] = *energies;
+  std::vector<double> row = {time};
+  if (with_probe_) {
+    const ProbeReading reading = state.probe_reading(diagnostics);
+    const ProbeCurvePoint point{time, dot(reading.displacement, probe_axis_), dot(reading.force, probe_axis_)};
+    result_.probe_curve.push_back(point);
+    row.insert(row.end(), {point.displacement, point.force, reading.displacement[0], reading.displacement[1],
+                           reading.displacement[2], reading.force[0], reading.force[1], reading.force[2]});
+  }
+  row.insert(row.end(), {kinetic, elastic, largest});
+  if (write_csv_) {
+    for (std::size_t i = 0; i < row.size(); ++i) csv_ += (i ? "," : "") + format_number(row[i]);
+    csv_ += "\n";
+  }
+}
+
+std::optional<SceneRunResult> SceneRecorder::finish(const SceneState& state, bool completed, double wall_seconds,
+                                                    const std::function<PrecisionCheckResult(const SceneRunResult&)>& check,
+                                                    DiagnosticList& diagnostics) {
+  SceneRunResult& result = result_;
+  result.stability = state.stability();
+  result.wall_seconds = wall_seconds;
+  result.completed = completed;
+  result.steps_taken = state.steps_taken();
+  result.steps_per_second =
+      result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
+  result.inversions = state.inversions();
+  result.final_positions = state.positions(diagnostics);
+  result.final_max_displacement = largest_displacement(result.final_positions, start_positions());
+  result.precision_check = check(result);
+  const Scene& scene = scene_;
+  const std::filesystem::path& directory = directory_;
+  const std::vector<PvdFrame>& frames = frames_;
+  const bool write_csv = write_csv_;
+  bool outputs_ok = outputs_ok_;
+  if (outputs_ok && !frames.empty()) {
+    const std::string pvd = (directory / (scene.name + ".pvd")).string();
+    outputs_ok = write_file_atomically(pvd, pvd_document(frames), diagnostics);
+    result.files.push_back(pvd);
+  }
+  if (outputs_ok && write_csv) {
+    result.csv_path = (directory / "time_series.csv").string();
+    outputs_ok = write_file_atomically(result.csv_path, csv_, diagnostics);
+    result.files.push_back(result.csv_path);
+  }
+  result.summary_json = summary_json(state, diagnostics);
+  if (outputs_ok && scene.outputs.summary) {
+    const std::string summary = (directory / "summary.json").string();
+    outputs_ok = write_file_atomically(summary, result.summary_json, diagnostics);
+    result.files.push_back(summary);
+  }
+  if (!outputs_ok) return std::nullopt;
+  return result;
+}
+
+std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList& diagnostics) const {
+  const Scene& scene = scene_;
+  const BuiltScene& built = built_;
+  const SceneRunOptions& options = options_;
+  const SimulationSetup& setup = built_.setup;
+  const SceneRunResult& result = result_;
+  const std::vector<PvdFrame>& frames = frames_;
+  const bool write_csv = write_csv_, with_probe = with_probe_;
+  const double dt = result.stability.time_step;
+  const std::vector<double> stiffness = state.current_stiffness(diagnostics);
+  double k_min = 0.0, k_max = 0.0, k_sum = 0.0;
+  if (!stiffness.empty()) {
+    k_min = *std::min_element(stiffness.begin(), stiffness.end());
+    k_max = *std::max_element(stiffness.begin(), stiffness.end());
+    for (const double k : stiffness) k_sum += k;
+  }
+  JsonDocument json;
+  json["scene"] = scene.name;
+  json["scene_file"] = scene.path;
+  json["completed"] = result.completed;
+  json["model"] = model_name(setup);
+  json["inverted_elements"] = result.inversions.largest_count;
+  json["backend"] = options.backend;
+  json["precision"] = setup.precision == Precision::Float ? "float" : "double";
+  json["integrator"] = scene_name(setup.integrator);
+  json["dt_s"] = dt;
+  json["dt_auto"] = result.stability.automatic;
+  json["critical_dt_s"] = result.stability.critical_time_step;
+  json["steps"] = result.steps_taken;
+  json["steps_planned"] = result.steps_planned;
+  json["simulated_time_s"] = state.time();
+  json["wall_time_s"] = result.wall_seconds;
+  json["steps_per_second"] = result.steps_per_second;
+  JsonDocument& timing = json["timing"];
+  timing["simulator_s"] = result.timing.simulator;
+  timing["first_advance_s"] = result.timing.first_advance;
+  timing["stepping_s"] = result.timing.stepping;
+  timing["recording_s"] = result.timing.recording;
+  json["threads"] = static_cast<std::size_t>(setup.threads);
+  json["max_displacement_m"] = result.max_displacement;
+  JsonDocument& mesh = json["mesh"];
+  mesh["source"] = built.mesh.source;
+  mesh["vertices"] = built.mesh.points.size();
+  mesh["tetrahedra"] = built.mesh.tetrahedra.size();
+  mesh["triangles"] = built.mesh.triangles.size();
+  mesh["springs"] = setup.springs.size();
+  mesh["volume_term"] = setup.springs.size() > 0 && !setup.elements.empty();
+  mesh["fixed_vertices"] = setup.fixed_vertices.size();
+  mesh["metres_per_unit"] = scene.mesh.unit;
+  JsonDocument& material = json["stiffness"];
+  material["description"] = built.stiffness_description;
+  material["k_min_N_per_m"] = k_min;
+  material["k_mean_N_per_m"] = stiffness.empty() ? 0.0 : k_sum / static_cast<double>(stiffness.size());
+  material["k_max_N_per_m"] = k_max;
+  material["strain_table"] = setup.strain_stiffness.has_value();
+  if (built.material) {
+    material["rules"] = scene.material.file;
+    material["system"] = built.material->system;
+    material["output"] = built.material->output;
+    material["patient"] = scene.material.patient;
+    material["youngs_modulus_min_kPa"] = built.material->modulus_min / 1000.0;
+    material["youngs_modulus_max_kPa"] = built.material->modulus_max / 1000.0;
+    material["evaluations"] = built.material->evaluations;
+    JsonDocument& inputs = material["inputs"] = JsonDocument::object();
+    for (const InputBinding& binding : scene.material.bindings) {
+      if (binding.kind == InputBinding::Kind::Constant) inputs[binding.input] = binding.value;
+      else inputs[binding.input] = binding.kind == InputBinding::Kind::Strain ? "strain" : "per region";
+    }
+  }
+  if (with_probe) {
+    double max_force = 0.0;
+    for (const ProbeCurvePoint& point : result.probe_curve) max_force = std::max(max_force, std::abs(point.force));
+    JsonDocument& probe = json["probe"];
+    probe["mode"] = setup.probe->mode == ProbeLoad::Mode::Displacement ? "displacement" : "force";
+    probe["vertices"] = setup.probe->vertices.size();
+    probe["final_displacement_m"] = result.probe_curve.empty() ? 0.0 : result.probe_curve.back().displacement;
+    probe["final_force_N"] = result.probe_curve.empty() ? 0.0 : result.probe_curve.back().force;
+    probe["max_abs_force_N"] = max_force;
+  }
+  JsonDocument& inversions = json["inversions"];
+  inversions["largest_count"] = result.inversions.largest_count;
+  inversions["final_count"] = result.inversions.current_count;
+  inversions["checked_every_steps"] = kCheckEvery;
+  inversions["policy"] = setup.on_inversion == InversionPolicy::Stop ? "stop" : "warn";
+  if (result.inversions.largest_count > 0) {
+    inversions["first_step"] = result.inversions.first_step;
+    inversions["first_time_s"] = result.inversions.first_time;
+    inversions["first_element"] = static_cast<std::size_t>(result.inversions.first_element);
+  }
+  const PrecisionCheckResult& precision = result.precision_check;
+  JsonDocument& precision_json = json["precision_check"];
+  precision_json["ran"] = precision.ran;
+  precision_json["other_precision"] = precision.other == Precision::Float ? "float" : "double";
+  precision_json["result"] = precision.reason;
+  precision_json["tolerance"] = kPrecisionTolerance;
+  if (precision.ran) {
+    precision_json["probe_force_relative_difference"] = precision.probe_force_difference;
+    precision_json["max_displacement_relative_difference"] = precision.displacement_difference;
+    precision_json["other_inverted_elements"] = precision.other_inverted;
+    precision_json["agrees"] = precision.agrees;
+  }
+  JsonDocument& outputs = json["outputs"];
+  outputs["directory"] = options.output_directory;
+  outputs["frames"] = frames.size();
+  outputs["pvd"] = frames.empty() ? std::string() : scene.name + ".pvd";
+  outputs["csv"] = write_csv ? std::string("time_series.csv") : std::string();
+  return json_text(json);
+}
+
+std::vector<std::string> time_series_columns(bool with_probe) {
+  if (!with_probe) return {"time_s", "kinetic_energy_J", "elastic_energy_J", "max_displacement_m"};
+  return {"time_s",          "probe_displacement_m", "probe_force_N",    "probe_dx_m",        "probe_dy_m",
+          "probe_dz_m",      "probe_fx_N",           "probe_fy_N",       "probe_fz_N",        "kinetic_energy_J",
+          "elastic_energy_J", "max_displacement_m"};
+}
+
+std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> files;
+  std::error_code error;
+  if (!fs::is_directory(directory, error)) return files;
+  static const std::regex frame_line(
+      R"re(    <DataSet timestep="[-+0-9.eE]+" group="" part="0" file="(frame_[0-9]{5}\.vtu)"/>)re");
+  const std::string head =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" byte_order=\"LittleEndian\">\n"
+      "  <Collection>\n";
+  const std::string tail = "  </Collection>\n</VTKFile>\n";
+  for (const fs::directory_entry& entry : fs::directory_iterator(directory, error)) {
+    if (entry.path().extension() != ".pvd" || !entry.is_regular_file(error)) continue;
+    std::string read_error;
+    const std::optional<std::string> text = read_input_file(entry.path().string(), kMaxSceneFileBytes, "pvd", read_error);
+    if (!text || text->compare(0, head.size(), head) != 0 || text->size() < head.size() + tail.size() ||
+        text->compare(text->size() - tail.size(), tail.size(), tail) != 0)
+      continue;
+    std::vector<fs::path> frames;
+    std::istringstream lines(text->substr(head.size(), text->size() - head.size() - tail.size()));
+    bool fmpc_wrote_it = true;
+    for (std::string line; std::getline(lines, line);) {
+      std::smatch match;
+      if (!std::regex_match(line, match, frame_line)) {
+        fmpc_wrote_it = false;
+        break;
+      }
+      frames.push_back(directory / match[1].str());
+    }
+    if (!fmpc_wrote_it) continue;
+    files.push_back(entry.path());
+    for (const fs::path& frame : frames)
+      if (fs::is_regular_file(frame, error)) files.push_back(frame);
+  }
+  return files;
+}
+
+std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier, const std::vector<std::string>& written,
+                               DiagnosticList& diagnostics) {
+  std::size_t removed = 0;
+  for (const std::filesystem::path& path : earlier) {
+    bool rewritten = false;
+    for (const std::string& file : written)
+      rewritten = rewritten || std::filesystem::path(file).lexically_normal() == path.lexically_normal();
+    if (rewritten) continue;
+    std::error_code error;
+    if (std::filesystem::remove(path, error)) ++removed;
+    else if (error)
+      diagnostics.error(SourceRange{path.string(), 0, 0, 0, 0},
+                        "cannot remove this file of an earlier run: " + error.message());
+  }
+  return removed;
+}
+
+}  // namespace fmpc::sim
