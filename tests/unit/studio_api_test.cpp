@@ -319,5 +319,56 @@ TEST_CASE("studio API: validation and comparison carry the commands' numbers", "
   CHECK(same["differences"].empty());
 }
 
+TEST_CASE("studio API: the patient's scene runs with the edited rules", "[studio]") {
+  Studio studio;
+  // A small block (2 x 2 x 1 cells) pressed by a probe for 0.05 s, its material from tissue.fis.
+  write(studio.folder / "block.yaml", R"(name: block
+mesh:
+  box: {size: [0.02, 0.02, 0.01], cells: [2, 2, 1]}
+  units: m
+material:
+  rules: tissue.fis
+  inputs: {reading: 12, fat: 35}
+mass: {density: 1060}
+damping: {ratio: 0.9}
+fixed:
+  plane: {point: [0, 0, 0], normal: [0, 0, 1]}
+loads:
+  probe:
+    ray: {origin: [0.01, 0.01, 0.05], direction: [0, 0, -1]}
+    displacement: [0, 0, -0.001]
+    ramp: 0.04
+integrator: semi_implicit_euler
+dt: auto
+duration: 0.05
+)");
+  std::string edit = kRules;
+  edit.replace(edit.find("peak 12"), 7, "peak 15");
+  const auto answer = studio.post("/api/scene", {{"path", "tissue.fis"}, {"text", edit}, {"inputs", {21, 35}},
+                                                 {"scene", "block.yaml"}});
+  REQUIRE(answer->status == 200);
+  const json run = body(answer);
+  CHECK(run["patient_and_rules_used"] == true);
+  CHECK(run["completed"] == true);
+  // The modulus is the edited rules' output for the panel's patient, not the scene's own inputs.
+  DiagnosticList diagnostics;
+  const FuzzySystem edited = load_rule_file("tissue.fis", edit, diagnostics).systems.front();
+  CHECK(run["stiffness"].get<std::string>().find(format_number(evaluate(edited, {21, 35}).outputs[0]) + " kPa") !=
+        std::string::npos);
+  CHECK(run["rest"].size() == 18 * 3);  // 3 x 3 x 2 vertices
+  CHECK(run["final"].size() == run["rest"].size());
+  CHECK_FALSE(run["triangles"].empty());
+  CHECK(run["probe_curve"].size() > 2);
+  CHECK(run["probe_curve"].back()[2].get<double>() != 0.0);
+  // A scene with a mistake answers the simulator's located message.
+  write(studio.folder / "broken.yaml", "name: broken\nmesh: {box: {size: [1, 1, 1], cells: [1, 1, 1]}}\ndurration: 1\n");
+  const auto broken = studio.post("/api/scene", {{"path", "tissue.fis"}, {"text", kRules}, {"inputs", {21, 35}},
+                                                 {"scene", "broken.yaml"}});
+  CHECK(broken->status == 422);
+  CHECK(body(broken)["error"].get<std::string>().find("broken.yaml:3:1: error:") != std::string::npos);
+  CHECK(studio.post("/api/scene", {{"path", "tissue.fis"}, {"text", kRules}, {"inputs", {21, 35}},
+                                   {"scene", "../block.yaml"}})->status == 403);
+}
+
 }  // namespace
 }  // namespace fmpc::studio
