@@ -22,8 +22,10 @@ std::string policy_text(const FuzzySystem& system) {
 
 std::string samples_text(int samples) { return samples == 0 ? "exact" : std::to_string(samples); }
 
-// The settings that decide outputs, each as "what: intended -> written" where they differ.
-void compare_settings(const FuzzySystem& a, const FuzzySystem& b, std::vector<std::string>& changes) {
+}  // namespace
+
+std::vector<std::string> setting_changes(const FuzzySystem& a, const FuzzySystem& b) {
+  std::vector<std::string> changes;
   const auto differ = [&](const std::string& what, const std::string& x, const std::string& y) {
     if (x != y) changes.push_back(what + " changes from " + x + " to " + y);
   };
@@ -40,6 +42,18 @@ void compare_settings(const FuzzySystem& a, const FuzzySystem& b, std::vector<st
     differ("the output sampling", samples_text(a.samples), samples_text(b.samples));
   }
   differ("the no-fire policy", policy_text(a), policy_text(b));
+  return changes;
+}
+
+namespace {
+
+// The settings that decide outputs, each as "what: intended -> written" where they differ, and the variables' ranges
+// (by position).
+void compare_settings(const FuzzySystem& a, const FuzzySystem& b, std::vector<std::string>& changes) {
+  for (std::string& change : setting_changes(a, b)) changes.push_back(std::move(change));
+  const auto differ = [&](const std::string& what, const std::string& x, const std::string& y) {
+    if (x != y) changes.push_back(what + " changes from " + x + " to " + y);
+  };
   for (const auto* variables : {&a.inputs, &a.outputs}) {
     const auto* others = variables == &a.inputs ? &b.inputs : &b.outputs;
     const char* role = variables == &a.inputs ? "input" : "output";

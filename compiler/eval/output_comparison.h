@@ -26,6 +26,10 @@ struct OutputComparison {
 //   centre, 101 points across each input's range with the others at their middle, and `random_points` seeded
 //   uniform points; the largest difference per output and where, when above 1e-12 of the output's range.
 // Names of variables and terms, descriptions, units and rule labels are not compared (the writers report them).
+// The settings in the first group above that differ, each as "the defuzzifier changes from centroid to bisector"
+// (variables are not compared here).
+std::vector<std::string> setting_changes(const FuzzySystem& a, const FuzzySystem& b);
+
 std::vector<std::string> output_changes(const FuzzySystem& intended, const FuzzySystem& written,
                                         const OutputComparison& comparison = {});
 

@@ -26,6 +26,9 @@ int main(int argc, char** argv) {
   fmpc::cli::register_thesis_benchmark_command(app, exit_code);
   fmpc::cli::register_tune_command(app, exit_code);
   fmpc::cli::register_lsp_command(app, exit_code);
+  fmpc::cli::register_validate_command(app, exit_code);
+  fmpc::cli::register_diff_command(app, exit_code);
+  fmpc::cli::register_studio_command(app, exit_code);
   const char* exit_rule =
       "Exit status (every command, docs/cli.md): 0 done; 1 done, but warnings made errors by -Werror (or files\n"
       "`fmt --check` would change); 2 errors in the input or the command line; 70 an internal error in fmpc.";
