@@ -10,6 +10,14 @@ namespace fmpc::kernels {
 
 struct LinearTetrahedron {
   static constexpr int kNodes = 4;
+  static constexpr int kPoints = 1;  // material points (per-point state: kernels/prony_viscoelasticity.h)
+
+  // F at each material point from node positions x.
+  template <typename Real>
+  static FMPC_HD void deformation_gradients(const ElementTermView<Real>& t, int e, const Real x[kNodes][3],
+                                            Real F[kPoints][9]) {
+    corner_gradient(x, t.rest_inverse + 9 * e, F[0]);
+  }
 
   // The element's forces on its nodes at positions x and, where the term is damped (v non-null), velocities v.
   template <typename Law, typename Real>
@@ -20,7 +28,7 @@ struct LinearTetrahedron {
     shape_gradients(rest_inverse, g);
     corner_gradient(x, rest_inverse, F);
     if (v) corner_gradient(v, rest_inverse, F_rate);
-    Law::first_piola(Law::material(t, e), F, v ? F_rate : nullptr, P);
+    point_first_piola<Law>(t, e, kPoints * e, F, v ? F_rate : nullptr, P);
     corner_forces_from_stress(P, g, t.rest_volume[e], out);
   }
 

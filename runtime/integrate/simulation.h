@@ -42,6 +42,9 @@ struct ProbeLoad {
   // Force: N, the total, shared equally by the probe vertices (added to any external force).
   Point3 target{0.0, 0.0, 0.0};
   double ramp_time = 0.0;  // s
+  // > 0: cyclic loading instead, a triangle wave up to target at ramp_time and back to zero at twice it, `cycles`
+  // times, then held at zero (kernels::probe_ramp_share).
+  int cycles = 0;
 };
 
 // What a probe measures at the current state.
