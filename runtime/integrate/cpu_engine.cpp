@@ -193,7 +193,9 @@ class CpuScene final : public CpuSceneBase {
   }
 
   ProbeReading probe_reading() const override {
-    return read_probe(setup_, time(), positions(), velocities(), current_stiffness());
+    ElementTermStates states;
+    for (const TermArrays& arrays : term_arrays_) states.emplace_back(arrays.state.begin(), arrays.state.end());
+    return read_probe(setup_, time(), positions(), velocities(), current_stiffness(), &states);
   }
 
   std::vector<double> current_stiffness() const override {

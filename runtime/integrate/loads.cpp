@@ -34,7 +34,8 @@ kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table) {
 }
 
 ProbeReading read_probe(const SimulationSetup& setup, double time, const std::vector<Point3>& positions,
-                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness) {
+                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
+                        const ElementTermStates* states) {
   ProbeReading reading;
   if (!setup.probe || setup.probe->vertices.empty()) return reading;
   const std::size_t n = setup.rest_positions.size();
@@ -51,7 +52,7 @@ ProbeReading read_probe(const SimulationSetup& setup, double time, const std::ve
     for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] = share * probe.target[axis];
     return reading;
   }
-  const std::vector<Point3> forces = internal_forces(setup, positions, velocities, stiffness, probe.vertices);
+  const std::vector<Point3> forces = internal_forces(setup, positions, velocities, stiffness, probe.vertices, states);
   for (const Point3& f : forces)
     for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] -= f[axis];
   return reading;

@@ -7,12 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "runtime/fem/fem_model_builder.h"
 #include "runtime/gpu/gpu_simulation.h"
 #include "runtime/integrate/stepping_engine.h"
-#include "runtime/mesh/generated_mesh.h"
 #include "tests/gpu/cpu_gpu_comparison.h"
 #include "tests/gpu/gpu_test_harness.h"
+#include "tests/support/viscoelastic_box.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
@@ -23,28 +22,13 @@ namespace {
 // A 0.1 m box of 5 kPa tissue (nu 0.45, two Prony terms with times near the run's length) hanging from its top face
 // under gravity, 3 x 5 x 2 cells (odd sizes: blocks partly idle), started from a stretched state so that the history
 // of the jump at t = 0 is not zero.
-SimulationSetup viscoelastic_box(Precision precision, Integrator integrator) {
-  BoxSpec box;
-  box.cells_x = 3;
-  box.cells_y = 5;
-  box.cells_z = 2;
-  box.size = {0.1, 0.1, 0.1};
+SimulationSetup stretched_box(Precision precision, Integrator integrator) {
   DiagnosticList diagnostics;
-  const Mesh mesh = generate_box(box, diagnostics);
-  FemModelSpec spec;
-  spec.youngs_modulus = {5000.0};
-  spec.poisson_ratio = {0.45};
-  spec.mass.value = 1060.0;
-  spec.damping_ratio = 0.3;
-  spec.prony = {{0.3, 0.02}, {0.25, 0.2}};
   SimulationSetup out;
-  if (auto setup = build_fem_model(mesh, spec, diagnostics)) out = *setup;
+  if (auto setup = sim::viscoelastic_box(3, 5, 2, {{0.3, 0.02}, {0.25, 0.2}}, diagnostics)) out = *setup;
   if (diagnostics.has_errors()) note("setup: " + describe(diagnostics));
-  for (std::size_t v = 0; v < out.rest_positions.size(); ++v)
-    if (out.rest_positions[v][1] > 0.0999) out.fixed_vertices.push_back(static_cast<std::int32_t>(v));
   out.initial_positions = out.rest_positions;
   for (Point3& p : out.initial_positions) p[1] = 0.1 - (0.1 - p[1]) * 1.05;
-  out.gravity = {0.0, -9.81, 0.0};
   out.precision = precision;
   out.integrator = integrator;
   return out;
@@ -56,7 +40,7 @@ FMPC_GPU_TEST(viscoelastic_matches_cpu, "a viscoelastic FEM: every integrator ma
               true) {
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     for (const Integrator integrator : kGpuIntegrators) {
-      const SimulationSetup setup = viscoelastic_box(precision, integrator);
+      const SimulationSetup setup = stretched_box(precision, integrator);
       const Difference d = cpu_gpu_difference(setup, 2000, gpu::GpuOptions{});
       std::ostringstream line;
       line << "viscoelastic FEM, " << to_string(integrator) << ", " << name_of(precision)
@@ -65,7 +49,7 @@ FMPC_GPU_TEST(viscoelastic_matches_cpu, "a viscoelastic FEM: every integrator ma
       FMPC_EXPECT(d.positions == 0.0);
       FMPC_EXPECT(d.velocities == 0.0);
     }
-    check_implicit_against_cpu(viscoelastic_box(precision, Integrator::ImplicitEuler),
+    check_implicit_against_cpu(stretched_box(precision, Integrator::ImplicitEuler),
                                std::string("viscoelastic FEM, ") + name_of(precision));
   }
 }
@@ -74,7 +58,7 @@ FMPC_GPU_TEST(viscoelastic_checkpoint, "the GPU checkpoint restores the per-poin
               true) {
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     for (const Integrator integrator : kGpuIntegrators) {
-      const std::vector<SimulationSetup> scenes = {viscoelastic_box(precision, integrator)};
+      const std::vector<SimulationSetup> scenes = {stretched_box(precision, integrator)};
       DiagnosticList diagnostics;
       const auto stability = check_stability(scenes.front(), diagnostics);
       FMPC_REQUIRE(stability);
@@ -101,7 +85,7 @@ FMPC_GPU_TEST(viscoelastic_checkpoint, "the GPU checkpoint restores the per-poin
 
 FMPC_GPU_TEST(viscoelastic_batch_refused, "a viscoelastic scene in a GPU batch of several is refused naming it",
               false) {
-  const SimulationSetup scene = viscoelastic_box(Precision::Float, Integrator::SemiImplicitEuler);
+  const SimulationSetup scene = stretched_box(Precision::Float, Integrator::SemiImplicitEuler);
   DiagnosticList diagnostics;
   FMPC_EXPECT(!gpu_batch({scene, scene}, gpu::GpuOptions{}, diagnostics));
   FMPC_EXPECT(first_error(diagnostics) ==

@@ -13,6 +13,7 @@
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
+#include "tests/support/viscoelastic_box.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
@@ -240,24 +241,9 @@ TEST_CASE("every law with a Prony series creeps as the series' closed-form compl
 
 TEST_CASE("a viscoelastic FEM's per-point state is saved and restored with the CPU engine's checkpoint",
           "[fem][visco]") {
-  BoxSpec box;
-  box.cells_x = 3;
-  box.cells_y = 3;
-  box.cells_z = 2;
-  box.size = {0.1, 0.1, 0.1};
   DiagnosticList diagnostics;
-  const Mesh mesh = generate_box(box, diagnostics);
-  FemModelSpec spec;
-  spec.youngs_modulus = {5000.0};
-  spec.poisson_ratio = {0.45};
-  spec.mass.value = 1060.0;
-  spec.damping_ratio = 0.2;
-  spec.prony = kTwoTerms;
-  auto setup = build_fem_model(mesh, spec, diagnostics);
+  auto setup = viscoelastic_box(3, 3, 2, kTwoTerms, diagnostics);
   REQUIRE(setup);
-  for (std::size_t v = 0; v < setup->rest_positions.size(); ++v)
-    if (setup->rest_positions[v][1] > 0.0999) setup->fixed_vertices.push_back(static_cast<std::int32_t>(v));
-  setup->gravity = {0.0, -9.81, 0.0};
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     for (const Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::VelocityVerlet,
                                         Integrator::RungeKutta4, Integrator::ImplicitEuler}) {
@@ -292,17 +278,8 @@ TEST_CASE("a viscoelastic FEM's per-point state is saved and restored with the C
 
 TEST_CASE("a Prony series with weights summing to 1 or more, or too many terms, is refused naming the term",
           "[fem][visco]") {
-  BoxSpec box;
-  box.cells_x = box.cells_y = box.cells_z = 1;
-  box.size = {0.1, 0.1, 0.1};
   DiagnosticList diagnostics;
-  const Mesh mesh = generate_box(box, diagnostics);
-  FemModelSpec spec;
-  spec.youngs_modulus = {5000.0};
-  spec.poisson_ratio = {0.45};
-  spec.mass.value = 1060.0;
-  spec.prony = {{0.6, 1.0}, {0.4, 2.0}};
-  auto setup = build_fem_model(mesh, spec, diagnostics);
+  auto setup = viscoelastic_box(1, 1, 1, {{0.6, 1.0}, {0.4, 2.0}}, diagnostics);
   REQUIRE(setup);
   DiagnosticList refused;
   CHECK_FALSE(validate_setup(*setup, refused));
@@ -373,4 +350,37 @@ TEST_CASE("material.viscoelastic: the scene's Prony series reaches the element t
                      "  viscoelastic: {prony: [{weight: 0.2, time: 1}]}\n") ==
         std::vector<std::string>{"4:17: material.viscoelastic acts on an element law; a spring network has none: use a "
                                  "finite-element model (model: corotational_fem), or remove 'viscoelastic'"});
+}
+
+TEST_CASE("a displacement probe's reaction force includes the Prony history: held, it relaxes to g_inf of the elastic "
+          "one",
+          "[fem][visco]") {
+  DiagnosticList diagnostics;
+  const std::vector<PronyTerm> prony = {{0.5, 0.05}};
+  auto setup = viscoelastic_box(2, 2, 2, prony, diagnostics);
+  REQUIRE(setup);
+  setup->gravity = {0.0, 0.0, 0.0};
+  setup->mass_damping = 100.0;  // quasi-static by the end
+  setup->precision = Precision::Double;
+  ProbeLoad probe;
+  for (std::size_t v = 0; v < setup->rest_positions.size(); ++v)
+    if (setup->rest_positions[v][1] < 1e-6) probe.vertices.push_back(static_cast<std::int32_t>(v));
+  probe.target = {0.0, -0.001, 0.0};
+  probe.ramp_time = 0.01;
+  setup->probe = probe;
+  SimulationSetup elastic = *setup;
+  elastic.elements.terms.front().prony.clear();
+  const auto viscous_run = Simulation::create(*setup, diagnostics);
+  const auto elastic_run = Simulation::create(elastic, diagnostics);
+  REQUIRE(viscous_run);
+  REQUIRE(elastic_run);
+  const auto steps = static_cast<std::size_t>(0.6 / viscous_run->stability(0).time_step);
+  REQUIRE(viscous_run->advance(steps, diagnostics));
+  REQUIRE(elastic_run->advance(steps, diagnostics));
+  const double viscous = viscous_run->probe_reading(0, diagnostics).force[1];
+  const double elastic_force = elastic_run->probe_reading(0, diagnostics).force[1];
+  INFO("probe force after 0.6 s held: viscoelastic " << viscous << " N, elastic " << elastic_force << " N");
+  REQUIRE(elastic_force < 0.0);
+  // 12 time constants: the history's own part exp(-12) is gone; the rest is the quasi-static state's settling.
+  CHECK(viscous / elastic_force == Approx(0.5).epsilon(0.02));
 }
