@@ -64,9 +64,12 @@ struct PronyConstants {
 // Values per point for `count` Prony terms: S0, then h_i.
 FMPC_HD constexpr int prony_state_width(int count) { return 9 * (count + 1); }
 
+// The constants and the state's view by value: a reference into a kernel's parameter would copy the whole
+// ElementTermView to local memory in every thread (main's cd5b8a5 measured that on the element pass).
+
 // The held history's stress H = sum_i (b_i h_i - d_i S0) at point p.
 template <typename Real>
-FMPC_HD void prony_history_stress(const PronyConstants<Real>& c, const PointStateView<Real>& state, int p, Real* H) {
+FMPC_HD void prony_history_stress(const PronyConstants<Real> c, const PointStateView<Real> state, int p, Real* H) {
   const Real* values = state.values;
   const long long points = state.points;
   for (int k = 0; k < 9; ++k) H[k] = Real(0);
@@ -81,7 +84,7 @@ FMPC_HD void prony_history_stress(const PronyConstants<Real>& c, const PointStat
 
 // P of the viscoelastic point: gamma P0 + F H, with P0 the law's stress at F (in P on entry).
 template <typename Real>
-FMPC_HD void prony_first_piola(const PronyConstants<Real>& c, const PointStateView<Real>& state, int p, const Real* F,
+FMPC_HD void prony_first_piola(const PronyConstants<Real> c, const PointStateView<Real> state, int p, const Real* F,
                                Real* P) {
   Real H[9], FH[9];
   prony_history_stress(c, state, p, H);
@@ -92,7 +95,7 @@ FMPC_HD void prony_first_piola(const PronyConstants<Real>& c, const PointStateVi
 // The update after an accepted step at point p: S0' = F^-1 P0 (P0 the law's elastic stress at the step's end F),
 // h_i = a_i h_i + c_i (S0' - S0), S0 = S0'.
 template <typename Real>
-FMPC_HD void prony_update(const PronyConstants<Real>& c, const PointStateView<Real>& state, int p, const Real* F,
+FMPC_HD void prony_update(const PronyConstants<Real> c, const PointStateView<Real> state, int p, const Real* F,
                           const Real* P0) {
   Real C[9], S[9];
   cofactor3(F, C);
