@@ -22,7 +22,7 @@ using ast::Setting;
 using ast::SettingKind;
 using ast::System;
 
-std::string quoted(const std::string& text) { return "'" + text + "'"; }
+std::string in_quotes(const std::string& text) { return "'" + text + "'"; }
 
 std::string position_text(const SourceRange& range) {
   return std::to_string(range.line) + ":" + std::to_string(range.column);
@@ -35,7 +35,7 @@ std::string list_text(const std::vector<std::string>& names) {
 }
 
 std::vector<std::string> did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
-  if (auto suggestion = closest_name(name, candidates)) return {"did you mean " + quoted(*suggestion) + "?"};
+  if (auto suggestion = closest_name(name, candidates)) return {"did you mean " + in_quotes(*suggestion) + "?"};
   return {};
 }
 
@@ -148,10 +148,10 @@ class SystemLowering {
     for (const Setting& setting : source_.settings) {
       auto [it, inserted] = first_set.emplace(setting.kind, setting.range);
       if (!inserted)
-        diagnostics_.error(setting.range,
-                           quoted(setting_name(setting.kind)) + " is set twice in system " + quoted(system_.name) +
-                               "; keep one",
-                           {"first set here: " + position_text(it->second)});
+        diagnostics_.error(
+            setting.range,
+            in_quotes(setting_name(setting.kind)) + " is set twice in system " + in_quotes(system_.name) + "; keep one",
+            {"first set here: " + position_text(it->second)});
     }
     for (const Setting& setting : source_.settings)
       if (setting.kind == SettingKind::Type) lower_type(setting);
@@ -180,9 +180,9 @@ class SystemLowering {
   void unknown_choice(const Setting& setting, const std::string& what, const std::vector<std::string>& choices) {
     std::vector<std::string> notes = did_you_mean(setting.value.text, choices);
     notes.push_back("choose one of: " + list_text(choices));
-    std::string message = "unknown " + what + " " + quoted(setting.value.text);
+    std::string message = "unknown " + what + " " + in_quotes(setting.value.text);
     if (setting.kind != SettingKind::Type && setting.kind != SettingKind::Defuzzify)
-      message += std::string(" for ") + quoted(setting_name(setting.kind));
+      message += std::string(" for ") + in_quotes(setting_name(setting.kind));
     diagnostics_.error(setting.value.range, message, notes);
   }
 
@@ -258,12 +258,12 @@ class SystemLowering {
   std::optional<double> in_variable_unit(double value, const std::optional<Name>& unit, const std::string& parameter,
                                          const fmpc::Variable& variable) {
     if (!unit || unit->text == variable.unit) return value;
-    const std::string what = quoted(unit->text) + " given for " + quoted(parameter);
+    const std::string what = in_quotes(unit->text) + " given for " + in_quotes(parameter);
     if (variable.unit.empty()) {
-      diagnostics_.error(unit->range, what + ", but " + quoted(variable.name) + " has no unit",
-                         {"give " + quoted(variable.name) + " a unit after its range (in [" +
-                          format_number(variable.min) + ", " + format_number(variable.max) + "] " + unit->text +
-                          ") or drop this one"});
+      diagnostics_.error(
+          unit->range, what + ", but " + in_quotes(variable.name) + " has no unit",
+          {"give " + in_quotes(variable.name) + " a unit after its range (in [" + format_number(variable.min) + ", " +
+           format_number(variable.max) + "] " + unit->text + ") or drop this one"});
       return std::nullopt;
     }
     const std::optional<UnitMeaning> from = unit_meaning(unit->text);
@@ -271,22 +271,23 @@ class SystemLowering {
     const std::string known = "fmpc converts Pa, m, s, N and g with SI prefixes (kPa, mm, ms, ...), % and "
                               "dimensionless";
     if (!from) {
-      diagnostics_.error(unit->range, "unknown unit " + quoted(unit->text) + " for " + quoted(parameter) + "; " +
-                                          quoted(variable.name) + " is in " + quoted(variable.unit),
+      diagnostics_.error(unit->range,
+                         "unknown unit " + in_quotes(unit->text) + " for " + in_quotes(parameter) + "; " +
+                             in_quotes(variable.name) + " is in " + in_quotes(variable.unit),
                          {known});
       return std::nullopt;
     }
     if (!to) {
       diagnostics_.error(unit->range,
-                         "unit " + quoted(unit->text) + " of " + quoted(parameter) + " does not convert to " +
-                             quoted(variable.unit) + ", the unit of " + quoted(variable.name),
+                         "unit " + in_quotes(unit->text) + " of " + in_quotes(parameter) + " does not convert to " +
+                             in_quotes(variable.unit) + ", the unit of " + in_quotes(variable.name),
                          {known + "; write the value in " + variable.unit});
       return std::nullopt;
     }
     if (std::string(from->dimension) != to->dimension) {
-      diagnostics_.error(unit->range, "unit " + quoted(unit->text) + " (" + from->dimension + ") of " +
-                                          quoted(parameter) + " does not convert to " + quoted(variable.unit) +
-                                          " (" + to->dimension + "), the unit of " + quoted(variable.name));
+      diagnostics_.error(unit->range, "unit " + in_quotes(unit->text) + " (" + from->dimension + ") of " +
+                                          in_quotes(parameter) + " does not convert to " + in_quotes(variable.unit) +
+                                          " (" + to->dimension + "), the unit of " + in_quotes(variable.name));
       return std::nullopt;
     }
     return scale_by_power_of_ten(value, from->exponent - to->exponent);
@@ -301,7 +302,7 @@ class SystemLowering {
     if (!family) {
       std::vector<std::string> notes = did_you_mean(source.family.text, ast::family_names());
       notes.push_back("membership functions: " + list_text(ast::family_names()));
-      diagnostics_.error(source.family.range, "unknown membership function " + quoted(source.family.text), notes);
+      diagnostics_.error(source.family.range, "unknown membership function " + in_quotes(source.family.text), notes);
       return term;
     }
     term.mf.kind = family->kind;
@@ -320,18 +321,19 @@ class SystemLowering {
       for (const Argument& argument : source.arguments)
         if (argument.high && !has_lower) where = argument.range;
       if (has_lower || source.explicit_upper || term.footprint)
-        diagnostics_.error(where,
-                           "term " + quoted(source.name.text) + " has a footprint of uncertainty, but system " +
-                               quoted(system_.name) + " is type-1; declare `type interval_type2 " +
-                               to_string(system_.type) + "` to use interval type-2 terms");
+        diagnostics_.error(where, "term " + in_quotes(source.name.text) +
+                                      " has a footprint of uncertainty, but system " + in_quotes(system_.name) +
+                                      " is type-1; declare `type interval_type2 " + to_string(system_.type) +
+                                      "` to use interval type-2 terms");
       term.footprint.reset();
       return;
     }
     if (!has_lower) return;
     if (term.footprint) {
-      diagnostics_.error(source.lower_range, "term " + quoted(source.name.text) +
-                                                 " has an interval parameter and a lower MF; give one footprint: "
-                                                 "an interval, or `upper F(...) lower G(...)`, or `lower scale S lag L`");
+      diagnostics_.error(source.lower_range,
+                         "term " + in_quotes(source.name.text) +
+                             " has an interval parameter and a lower MF; give one footprint: "
+                             "an interval, or `upper F(...) lower G(...)`, or `lower scale S lag L`");
       return;
     }
     Footprint footprint;
@@ -344,7 +346,7 @@ class SystemLowering {
         notes.push_back("a lower MF is one of the input families: triangle, trapezoid, gauss, ...");
         diagnostics_.error(source.lower->family.range,
                            (family ? "'" + source.lower->family.text + "' cannot be a lower MF"
-                                   : "unknown membership function " + quoted(source.lower->family.text)),
+                                   : "unknown membership function " + in_quotes(source.lower->family.text)),
                            notes);
         return;
       }
@@ -373,20 +375,20 @@ class SystemLowering {
         std::vector<std::string> notes = did_you_mean(argument.name.text, names);
         notes.push_back(takes);
         diagnostics_.error(argument.name.range,
-                           quoted(family.name) + " has no parameter " + quoted(argument.name.text), notes);
+                           in_quotes(family.name) + " has no parameter " + in_quotes(argument.name.text), notes);
         continue;
       }
       const auto index = static_cast<std::size_t>(found - names.begin());
       if (given[index]) {
-        diagnostics_.error(argument.name.range, "parameter " + quoted(argument.name.text) + " is given twice",
+        diagnostics_.error(argument.name.range, "parameter " + in_quotes(argument.name.text) + " is given twice",
                            {"first given here: " + position_text(given[index]->name.range)});
         continue;
       }
       given[index] = &argument;
       if (argument.unit && !family.takes_unit[index]) {
-        diagnostics_.error(argument.unit->range,
-                           quoted(argument.name.text) + " of " + family.name + " takes no unit (it is per unit of " +
-                               quoted(variable.name) + "); remove " + quoted(argument.unit->text));
+        diagnostics_.error(argument.unit->range, in_quotes(argument.name.text) + " of " + family.name +
+                                                     " takes no unit (it is per unit of " + in_quotes(variable.name) +
+                                                     "); remove " + in_quotes(argument.unit->text));
         continue;
       }
       std::optional<double> value = in_variable_unit(argument.value.value, argument.unit, argument.name.text, variable);
@@ -401,13 +403,13 @@ class SystemLowering {
     }
     std::vector<std::string> missing;
     for (std::size_t i = 0; i < names.size(); ++i)
-      if (!given[i]) missing.push_back(quoted(names[i]));
+      if (!given[i]) missing.push_back(in_quotes(names[i]));
     if (!missing.empty()) {
       std::string list;
       for (std::size_t i = 0; i < missing.size(); ++i)
         list += (i == 0 ? "" : i + 1 == missing.size() ? " and " : ", ") + missing[i];
       diagnostics_.error(family_name.range,
-                         std::string(family.name) + "(...) of term " + quoted(source.name.text) + " is missing " +
+                         std::string(family.name) + "(...) of term " + in_quotes(source.name.text) + " is missing " +
                              (missing.size() == 1 ? "parameter " : "parameters ") + list,
                          {takes});
     }
@@ -423,14 +425,14 @@ class SystemLowering {
     else if (family.kind == MfKind::Constant && parameter == "value") kind = FootprintKind::IntervalValue;
     if (kind == FootprintKind::None || term == nullptr) {
       diagnostics_.error(argument.range,
-                         quoted(parameter) + " of " + family.name + " takes a number, not an interval",
+                         in_quotes(parameter) + " of " + family.name + " takes a number, not an interval",
                          {"intervals: gauss(mean [m1, m2], sd s), gauss(mean m, sd [s1, s2]) and, for sugeno "
                           "outputs, constant(value [c1, c2]); other families take `upper F(...) lower G(...)` or "
                           "`lower scale S lag L`"});
       return false;
     }
     if (term->footprint) {
-      diagnostics_.error(argument.range, "term " + quoted(term->name) +
+      diagnostics_.error(argument.range, "term " + in_quotes(term->name) +
                                              " has two intervals; an uncertain gaussian has an uncertain mean or "
                                              "an uncertain sd, not both (use `upper gauss(...) lower gauss(...)`)");
       return false;
@@ -470,27 +472,28 @@ class SystemLowering {
         const int input = system_.find_input(argument.name.text);
         if (input < 0) {
           std::vector<std::string> notes = did_you_mean(argument.name.text, input_names());
-          notes.push_back("linear(...) takes one coefficient per input of " + quoted(system_.name) + " (" +
+          notes.push_back("linear(...) takes one coefficient per input of " + in_quotes(system_.name) + " (" +
                           list_text(input_names()) + ") and an offset");
           diagnostics_.error(argument.name.range,
-                             quoted(argument.name.text) + " is not an input of system " + quoted(system_.name),
+                             in_quotes(argument.name.text) + " is not an input of system " + in_quotes(system_.name),
                              notes);
           continue;
         }
         index = static_cast<std::size_t>(input);
       }
       if (given[index]) {
-        diagnostics_.error(argument.name.range,
-                           (is_offset ? std::string("the offset") : "the coefficient of " + quoted(argument.name.text)) +
-                               " is given twice",
-                           {"first given here: " + position_text(given[index]->name.range)});
+        diagnostics_.error(
+            argument.name.range,
+            (is_offset ? std::string("the offset") : "the coefficient of " + in_quotes(argument.name.text)) +
+                " is given twice",
+            {"first given here: " + position_text(given[index]->name.range)});
         continue;
       }
       given[index] = &argument;
       if (!is_offset) {
         if (argument.unit)
-          diagnostics_.error(argument.unit->range, "the coefficient of " + quoted(argument.name.text) +
-                                                       " takes no unit; remove " + quoted(argument.unit->text));
+          diagnostics_.error(argument.unit->range, "the coefficient of " + in_quotes(argument.name.text) +
+                                                       " takes no unit; remove " + in_quotes(argument.unit->text));
         else mf.params[index] = argument.value.value;
       } else if (auto value = in_variable_unit(argument.value.value, argument.unit, "offset", variable)) {
         mf.params[index] = *value;
@@ -506,8 +509,8 @@ class SystemLowering {
       if (&other == &source_ || other.name.text == source_.name.text) continue;
       for (const Item& item : other.items)
         if (const auto* variable = std::get_if<ast::Variable>(&item); variable && variable->name.text == name)
-          return quoted(name) + " is an " + (variable->is_output ? "output" : "input") + " of system " +
-                 quoted(other.name.text) + "; a rule of " + quoted(source_.name.text) +
+          return in_quotes(name) + " is an " + (variable->is_output ? "output" : "input") + " of system " +
+                 in_quotes(other.name.text) + "; a rule of " + in_quotes(source_.name.text) +
                  " can only name its own variables";
     }
     return std::nullopt;
@@ -523,17 +526,17 @@ class SystemLowering {
       const int other_role = consequent ? system_.find_input(source.variable.text)
                                         : system_.find_output(source.variable.text);
       if (other_role >= 0) {
-        diagnostics_.error(source.variable.range,
-                           quoted(source.variable.text) + " is an " + (consequent ? "input" : "output") + " of " +
-                               quoted(system_.name) + "; the " +
-                               (consequent ? "conclusions after 'then' name outputs"
-                                           : "conditions after 'if' name inputs"));
+        diagnostics_.error(
+            source.variable.range,
+            in_quotes(source.variable.text) + " is an " + (consequent ? "input" : "output") + " of " +
+                in_quotes(system_.name) + "; the " +
+                (consequent ? "conclusions after 'then' name outputs" : "conditions after 'if' name inputs"));
       } else if (auto elsewhere = owner_elsewhere(source.variable.text)) {
         diagnostics_.error(source.variable.range, *elsewhere);
       } else {
         diagnostics_.error(source.variable.range,
-                           std::string("unknown ") + role + " " + quoted(source.variable.text) + " in system " +
-                               quoted(system_.name),
+                           std::string("unknown ") + role + " " + in_quotes(source.variable.text) + " in system " +
+                               in_quotes(system_.name),
                            did_you_mean(source.variable.text, consequent ? output_names() : input_names()));
       }
       return false;
@@ -542,7 +545,7 @@ class SystemLowering {
     const auto [previous, inserted] = used.emplace(index, source.variable.range);
     if (!inserted) {
       diagnostics_.error(source.variable.range,
-                         std::string(role) + " " + quoted(variable.name) + " appears twice in " + rule_name +
+                         std::string(role) + " " + in_quotes(variable.name) + " appears twice in " + rule_name +
                              "; a rule names each " + role + " at most once",
                          {"first used here: " + position_text(previous->second)});
       return false;
@@ -552,10 +555,10 @@ class SystemLowering {
       std::vector<std::string> term_names;
       for (const fmpc::Term& candidate : variable.terms) term_names.push_back(candidate.name);
       std::vector<std::string> notes = did_you_mean(source.term.text, term_names);
-      notes.push_back("terms of " + quoted(variable.name) + ": " + list_text(term_names));
-      diagnostics_.error(source.term.range,
-                         std::string(role) + " " + quoted(variable.name) + " has no term " + quoted(source.term.text),
-                         notes);
+      notes.push_back("terms of " + in_quotes(variable.name) + ": " + list_text(term_names));
+      diagnostics_.error(
+          source.term.range,
+          std::string(role) + " " + in_quotes(variable.name) + " has no term " + in_quotes(source.term.text), notes);
       return false;
     }
     clause.variable = index;
@@ -572,7 +575,7 @@ class SystemLowering {
     rule.range = source.range;
     rule.weight = source.weight ? source.weight->value : 1.0;
     const std::string rule_name =
-        source.label ? "rule " + quoted(source.label->text) : "rule " + std::to_string(system_.rules.size() + 1);
+        source.label ? "rule " + in_quotes(source.label->text) : "rule " + std::to_string(system_.rules.size() + 1);
     if (!source.connectives.empty()) {
       rule.connective = source.connectives.front().connective;
       for (const ConnectiveToken& connective : source.connectives) {
@@ -616,7 +619,7 @@ RuleFile ast::lower_fmpc(const File& file, DiagnosticList& diagnostics) {
     const auto [first, inserted] = system_names.emplace(system.name.text, system.name.range);
     if (!inserted)
       system_diagnostics.error(system.name.range,
-                               "system " + quoted(system.name.text) + " is defined twice in this file; rename one",
+                               "system " + in_quotes(system.name.text) + " is defined twice in this file; rename one",
                                {"first defined here: " + position_text(first->second)});
     SystemLowering lowering(file, i, system_diagnostics);
     FuzzySystem lowered = lowering.lower();

@@ -42,7 +42,7 @@ SimulationSetup hanging_box(double damping_ratio) {
   return *setup;
 }
 
-bool same_bits(const std::vector<Point3>& a, const std::vector<Point3>& b) {
+bool same_positions(const std::vector<Point3>& a, const std::vector<Point3>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Point3)) == 0;
 }
 
@@ -65,7 +65,7 @@ TEST_CASE("loads: a scene without damping has no damping array and runs as zero 
       REQUIRE(run_b);
       REQUIRE(run_a->advance(300, diagnostics));
       REQUIRE(run_b->advance(300, diagnostics));
-      CHECK(same_bits(run_a->positions(), run_b->positions()));
+      CHECK(same_positions(run_a->positions(), run_b->positions()));
       CHECK_FALSE(diagnostics.has_errors());
     }
   }
