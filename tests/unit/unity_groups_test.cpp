@@ -93,7 +93,8 @@ std::string read_file(const std::string& path) {
 
 }  // namespace
 
-TEST_CASE("file-scope names: anonymous namespaces and statics, not members, templates' lines or using-declarations", "[build]") {
+TEST_CASE("file-scope names: anonymous namespaces and statics, not members, templates' lines or using-declarations",
+          "[build]") {
   // Written line by line, so that this file's own lines do not start with the sample's declarations.
   const std::string text =
       "#include <map>\n"
