@@ -33,6 +33,15 @@
 #               timed; then the bench on a small batch under compute-sanitizer memcheck and racecheck. Its headers
 #               come from --prepare (build-gpu-carry/evaluator, generated with the build machine's fmpc), as do
 #               those of the gpu-labelled test gpu.generated_evaluator (simulator section: evaluators and tables)
+#   baseline    (only when asked: --only baseline) this tree against a baseline commit, in the same call on the same
+#               GPU (issue 25: within 3%). `BASELINE=<commit> BASELINE_FMPC=<that commit's CUDA build's fmpc> --prepare`
+#               carries the commit's source (baseline-src.tar.xz) and bundles its fmpc as fmpc-baseline; here the
+#               baseline's fmpc_sim_bench is built GPU-only beside this tree's, and each row runs alternately on the two
+#               BASELINE_REPEATS times (default 3): small (the 20^3 box end to end: each tree's fmpc simulate on its own
+#               bench/scenes/small_box_springs.yaml, steps/s), large (the 240^3 springs box, fmpc_sim_bench
+#               --spring-cells 240), fem (--fem-only --fem-cells 120) and cohort (--cohort-only --cohort 1000), us per
+#               step per fmpc_sim_bench row. BASELINE_ROWS picks rows (default small,cohort,fem,large). Medians and
+#               the ratio this/baseline in baseline.md
 # Other GPU benchmarks add their own section function below and call it from the list at the end.
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
@@ -172,16 +181,33 @@ if [[ "${1:-}" == "--prepare" ]]; then
   echo "copied Eigen headers to $CARRY/eigen3 ($(du -sh "$CARRY" | cut -f1)); carry build-gpu-carry to the GPU machine"
   prepare_evaluator_headers || exit 1
   rm -rf "$PROGRAMS" "$PROGRAMS.tar.xz"
-  prepare_scenes || exit 1
+  # Without a CUDA build's fmpc (FMPC unset) the scenes section cannot run; the tests, sanitizers and bench can.
+  if [[ -n "${FMPC:-}" ]]; then
+    prepare_scenes || exit 1
+  else
+    echo "FMPC is not set: no fmpc bundled, the scenes section will not run (tests, sanitizers, bench will)"
+  fi
+  rm -f "$CARRY/baseline-src.tar.xz"
+  if [[ -n "${BASELINE:-}" ]]; then
+    [[ -n "${BASELINE_FMPC:-}" && -x "${BASELINE_FMPC:-}" ]] ||
+      { echo "BASELINE=$BASELINE needs BASELINE_FMPC=<a CUDA build of $BASELINE>/tools/fmpc" >&2; exit 1; }
+    git -C "$ROOT" archive --format=tar --prefix=baseline-src/ "$BASELINE" | xz -T0 > "$CARRY/baseline-src.tar.xz" ||
+      { echo "git archive $BASELINE failed" >&2; exit 1; }
+    git -C "$ROOT" rev-parse --short "$BASELINE" > "$CARRY/baseline-commit.txt"
+    bundle_program "$BASELINE_FMPC" fmpc-baseline || exit 1
+    echo "carrying the source of $BASELINE and its fmpc ($BASELINE_FMPC) for the baseline section"
+  fi
   prepare_fuzz || exit 1
   rm -f "$CARRY/fuzz-corpus.tar.xz"
   if [[ -n "${FUZZ_CORPUS:-}" ]]; then
     cp "$FUZZ_CORPUS" "$CARRY/fuzz-corpus.tar.xz" || exit 1
     echo "carrying the fuzz corpus $FUZZ_CORPUS"
   fi
-  tar -C "$CARRY" -cJf "$PROGRAMS.tar.xz" programs && rm -rf "$PROGRAMS" || exit 1
+  if [[ -d "$PROGRAMS" ]]; then
+    tar -C "$CARRY" -cJf "$PROGRAMS.tar.xz" programs && rm -rf "$PROGRAMS" || exit 1
+  fi
   size=$(du -sm "$CARRY" | cut -f1)
-  echo "build-gpu-carry: $size MiB (programs.tar.xz $(du -sh "$PROGRAMS.tar.xz" | cut -f1))"
+  echo "build-gpu-carry: $size MiB (programs.tar.xz $(du -sh "$PROGRAMS.tar.xz" 2>/dev/null | cut -f1 || echo none))"
   [[ $size -lt 64 ]] || { echo "build-gpu-carry is over the carry limit of 64 MiB" >&2; exit 1; }
   exit 0
 fi
@@ -202,8 +228,8 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | scenes | evaluator | fuzz | setup | profile) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator, fuzz, setup, profile)" >&2
+          tests | sanitizers | bench | scenes | evaluator | fuzz | setup | profile | baseline) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator, fuzz, setup, profile, baseline)" >&2
              exit 2 ;;
         esac
       done
@@ -414,6 +440,82 @@ scenes_section() {
   fi
 }
 
+# The median of the numbers on stdin.
+median() { sort -g | awk '{ v[NR] = $1 } END { if (NR == 0) print "nan"; else if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
+# fmpc_sim_bench's rows of a CSV as "key us_per_step" lines (key: model..scenes, spaces as _).
+bench_rows() { awk -F, 'NR > 1 && $17 ~ /ok/ { key = $1 "/" $2 "/" $4 "/" $5 "/" $6 "/" $7 "/" $8; gsub(/ /, "_", key); print key, $14 }' "$1"; }
+
+# This tree against the baseline commit (see the header): both fmpc_sim_bench binaries and both fmpc, alternately.
+baseline_section() {
+  local commit
+  commit=$(cat "$CARRY/baseline-commit.txt" 2>/dev/null)
+  section "baseline: this tree against ${commit:-?} on the same GPU, alternately"
+  if [[ ! -f "$CARRY/baseline-src.tar.xz" ]] || ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc-baseline" ]]; then
+    fail "no baseline carried: run 'BASELINE=<commit> BASELINE_FMPC=... FMPC=... bash bench/run_gpu.sh --prepare'"
+    return 1
+  fi
+  local base="$BUILD/baseline" current="$BUILD/bench/sim/fmpc_sim_bench"
+  [[ -x "$current" ]] || { fail "no $current (the build section builds it)"; return 1; }
+  if [[ ! -x "$base/build/bench/sim/fmpc_sim_bench" ]]; then
+    rm -rf "$base" && mkdir -p "$base" && tar -C "$base" -xJf "$CARRY/baseline-src.tar.xz" || { fail "unpack baseline"; return 1; }
+    local generator=()
+    command -v ninja > /dev/null && generator=(-G Ninja)
+    if ! (export PATH="/usr/local/cuda/bin:$PATH"
+          cmake -S "$base/baseline-src" -B "$base/build" ${generator[@]+"${generator[@]}"} -DFMPC_GPU_ONLY=ON \
+            -DFMPC_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90 -DCMAKE_BUILD_TYPE=Release -DFMPC_EIGEN_INCLUDE_DIR="$CARRY/eigen3" &&
+          cmake --build "$base/build" --target fmpc_sim_bench -j "$JOBS") > "$OUT/baseline_build.log" 2>&1; then
+      tail -20 "$OUT/baseline_build.log"
+      fail "baseline fmpc_sim_bench build (see baseline_build.log)"
+      return 1
+    fi
+  fi
+  local rows="${BASELINE_ROWS:-small,cohort,fem,large}" repeats="${BASELINE_REPEATS:-3}" r tree row
+  local results="$OUT/baseline_runs.txt"
+  : > "$results"
+  mkdir -p "$OUT/baseline" "$BUILD/scenes"
+  for ((r = 1; r <= repeats; ++r)); do
+    for row in ${rows//,/ }; do
+      for tree in this baseline; do
+        local bench="$current" fmpc="$UNPACKED/bin/fmpc" source="$ROOT" args=()
+        if [[ $tree == baseline ]]; then
+          bench="$base/build/bench/sim/fmpc_sim_bench" fmpc="$UNPACKED/bin/fmpc-baseline" source="$base/baseline-src"
+        fi
+        case $row in
+          small)
+            "$fmpc" simulate "$source/bench/scenes/small_box_springs.yaml" --backend cuda -o "$BUILD/scenes/baseline_$tree" \
+              > "$OUT/baseline/small_${tree}_$r.log" 2>&1 || { fail "small box on $tree (baseline/small_${tree}_$r.log)"; continue; }
+            echo "$tree small_box_springs_end_to_end_steps_per_s $(json_field "$BUILD/scenes/baseline_$tree/summary.json" steps_per_second)" >> "$results"
+            continue ;;
+          large) args=(--spring-cells 240) ;;
+          fem) args=(--fem-only --fem-cells 120) ;;
+          cohort) args=(--cohort-only --cohort 1000) ;;
+          *) fail "BASELINE_ROWS: unknown row '$row' (small, large, fem, cohort)"; continue ;;
+        esac
+        mkdir -p "$OUT/baseline/${row}_${tree}_$r"
+        if "$bench" "${args[@]}" --out "$OUT/baseline/${row}_${tree}_$r" > "$OUT/baseline/${row}_${tree}_$r.log" 2>&1; then
+          bench_rows "$OUT/baseline/${row}_${tree}_$r/sim_bench.csv" | sed "s/^/$tree /" >> "$results"
+        else
+          fail "fmpc_sim_bench ${args[*]} on $tree (baseline/${row}_${tree}_$r.log)"
+        fi
+      done
+    done
+  done
+  {
+    echo "| row | this: median (runs) | ${commit:-baseline}: median (runs) | this / baseline |"
+    echo "| --- | --- | --- | --- |"
+    local key
+    for key in $(awk '{ print $2 }' "$results" | awk '!seen[$0]++'); do
+      local mine theirs
+      mine=$(awk -v k="$key" '$1 == "this" && $2 == k { print $3 }' "$results" | median)
+      theirs=$(awk -v k="$key" '$1 == "baseline" && $2 == k { print $3 }' "$results" | median)
+      echo "| $key | $mine ($(awk -v k="$key" '$1 == "this" && $2 == k { printf "%s ", $3 }' "$results")) | $theirs ($(awk -v k="$key" '$1 == "baseline" && $2 == k { printf "%s ", $3 }' "$results")) | $(awk -v a="$mine" -v b="$theirs" 'BEGIN { if (b > 0) printf "%.4f", a / b; else print "-" }') |"
+    done
+  } > "$OUT/baseline.md"
+  record "us per step for fmpc_sim_bench rows (lower is better), steps/s for the end-to-end row (higher is better):"
+  cat "$OUT/baseline.md" | tee -a "$SUMMARY"
+}
+
 # build-gpu-carry/programs.tar.xz (bundle_program) unpacked once into $UNPACKED.
 unpack_programs() {
   [[ -f "$CARRY/programs.tar.xz" ]] || return 1
@@ -542,11 +644,12 @@ evaluator_section() {
 }
 
 device_info
-if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted profile; then
+if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted profile || wanted baseline; then
   if build_section; then
     simulator_section
     wanted setup && setup_section
     wanted profile && profile_section
+    wanted baseline && baseline_section
   fi
 fi
 wanted scenes && scenes_section

@@ -20,12 +20,33 @@ namespace {
 // SM; bounded to 3 blocks it gets 80 registers and spills 20 bytes (ncu: the spills' local stores became the pass's
 // largest L2 traffic once the corner forces were written as vectors). ForceModelView::element_blocks picks the
 // instance; double keeps its registers (1).
-template <typename Real, int MinBlocks>
+template <typename Real, typename Law, bool Accumulate, int MinBlocks>
 __global__ void __launch_bounds__(kThreadsPerBlock, MinBlocks)
-    element_forces_kernel(ForceModelView<Real> m, kernels::StateView<Real> state) {
+    element_forces_kernel(kernels::ElementTermView<Real> term, kernels::StateView<Real> state,
+                          kernels::CornerForce<Real>* force) {
   const int e = vertex_index();
-  if (e >= m.field.count) return;
-  kernels::tetrahedron_corner_forces(e, m.field, state, m.corner_force);
+  if (e >= term.count) return;
+  kernels::element_corner_forces<Law, Accumulate>(e, term, state, force);
+}
+
+// One term's element pass with its law and whether it adds to the corner forces as template arguments.
+template <typename Real, typename Law, bool Accumulate>
+cudaError_t launch_term_forces(const ForceModelView<Real>& model, const kernels::ElementTermView<Real>& term,
+                               const kernels::StateView<Real>& state, cudaStream_t stream) {
+  const int blocks = blocks_for(term.count);
+  if constexpr (std::is_same_v<Real, float>) {
+    if (model.element_blocks == 2) {
+      element_forces_kernel<Real, Law, Accumulate, 2>
+          <<<blocks, kThreadsPerBlock, 0, stream>>>(term, state, model.corner_force);
+      return cudaGetLastError();
+    }
+    element_forces_kernel<Real, Law, Accumulate, 3>
+        <<<blocks, kThreadsPerBlock, 0, stream>>>(term, state, model.corner_force);
+  } else {
+    element_forces_kernel<Real, Law, Accumulate, 1>
+        <<<blocks, kThreadsPerBlock, 0, stream>>>(term, state, model.corner_force);
+  }
+  return cudaGetLastError();
 }
 
 template <typename Real>
@@ -341,23 +362,23 @@ cudaError_t launch_verlet(VerletKernel which, const VerletArguments<Real>& argum
 
 template <typename Real>
 cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
-                            cudaStream_t stream) {
-  if (model.kind == GatherKind::Springs || model.field.count <= 0) return cudaSuccess;
-  if constexpr (std::is_same_v<Real, float>) {
-    if (model.element_blocks == 2) {
-      element_forces_kernel<Real, 2><<<blocks_for(model.field.count), kThreadsPerBlock, 0, stream>>>(model, state);
-      return cudaGetLastError();
-    }
-    element_forces_kernel<Real, 3><<<blocks_for(model.field.count), kThreadsPerBlock, 0, stream>>>(model, state);
-  } else {
-    element_forces_kernel<Real, 1><<<blocks_for(model.field.count), kThreadsPerBlock, 0, stream>>>(model, state);
+                                  cudaStream_t stream) {
+  if (model.kind == GatherKind::Springs || model.element_count <= 0) return cudaSuccess;
+  for (int t = 0; t < model.term_count; ++t) {
+    const kernels::ElementTermView<Real>& term = model.terms[t];
+    const cudaError_t status = kernels::visit_element_law(term.law, [&](auto element_law) {
+      using Law = decltype(element_law);
+      return t == 0 ? launch_term_forces<Real, Law, false>(model, term, state, stream)
+                    : launch_term_forces<Real, Law, true>(model, term, state, stream);
+    });
+    if (status != cudaSuccess) return status;
   }
-  return cudaGetLastError();
+  return cudaSuccess;
 }
 
 template <typename Real>
-cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<Real>& network, const int* vertex_order, int vertex_count,
-                          kernels::SpringIncidence<Real>* record, cudaStream_t stream) {
+cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<Real>& network, const int* vertex_order,
+                                  int vertex_count, kernels::SpringIncidence<Real>* record, cudaStream_t stream) {
   if (vertex_count <= 0) return cudaSuccess;
   sliced_springs_kernel<Real>
       <<<blocks_for(vertex_count), kThreadsPerBlock, 0, stream>>>(network, vertex_order, vertex_count, record);
@@ -366,7 +387,7 @@ cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<Real>& networ
 
 template <typename Real>
 cudaError_t launch_spring_incidence(const kernels::SpringNetworkView<Real>& network, int entries,
-                             kernels::SpringIncidence<Real>* incidence, cudaStream_t stream) {
+                                    kernels::SpringIncidence<Real>* incidence, cudaStream_t stream) {
   if (entries <= 0) return cudaSuccess;
   spring_incidence_kernel<Real><<<blocks_for(entries), kThreadsPerBlock, 0, stream>>>(network, entries, incidence);
   return cudaGetLastError();
@@ -421,7 +442,8 @@ cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<Real>& argument
 }
 
 template <typename Real>
-cudaError_t launch_apply_probe(const ProbeArguments<Real>& arguments, int offset, bool before_step, cudaStream_t stream) {
+cudaError_t launch_apply_probe(const ProbeArguments<Real>& arguments, int offset, bool before_step,
+                               cudaStream_t stream) {
   if (arguments.count <= 0) return cudaSuccess;
   apply_probe_kernel<Real>
       <<<blocks_for(arguments.count), kThreadsPerBlock, 0, stream>>>(arguments, offset, before_step);
@@ -435,19 +457,19 @@ cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<Real>& argume
   return cudaGetLastError();
 }
 
-#define FMPC_EXPLICIT_STEP_LAUNCHERS(Real)                                                                            \
-  template cudaError_t launch_element_forces<Real>(const ForceModelView<Real>&, const kernels::StateView<Real>&,      \
-                                                   cudaStream_t);                                                    \
-  template cudaError_t launch_sliced_springs<Real>(const kernels::SpringNetworkView<Real>&, const int*, int,         \
-                                                   kernels::SpringIncidence<Real>*, cudaStream_t);                   \
-  template cudaError_t launch_spring_incidence<Real>(const kernels::SpringNetworkView<Real>&, int,                   \
-                                                     kernels::SpringIncidence<Real>*, cudaStream_t);                 \
-  template cudaError_t launch_fused_step<Real>(const FusedStepArguments<Real>&, cudaStream_t);                       \
-  template cudaError_t launch_acceleration<Real>(const VerletArguments<Real>&, cudaStream_t);                        \
-  template cudaError_t launch_verlet_drift<Real>(const VerletArguments<Real>&, cudaStream_t);                        \
-  template cudaError_t launch_verlet_kick<Real>(const VerletArguments<Real>&, cudaStream_t);                         \
-  template cudaError_t launch_runge_kutta4_stage<Real>(const RungeKutta4Arguments<Real>&, int, cudaStream_t);        \
-  template cudaError_t launch_apply_probe<Real>(const ProbeArguments<Real>&, int, bool, cudaStream_t);               \
+#define FMPC_EXPLICIT_STEP_LAUNCHERS(Real)                                                                       \
+  template cudaError_t launch_element_forces<Real>(const ForceModelView<Real>&, const kernels::StateView<Real>&, \
+                                                   cudaStream_t);                                                \
+  template cudaError_t launch_sliced_springs<Real>(const kernels::SpringNetworkView<Real>&, const int*, int,     \
+                                                   kernels::SpringIncidence<Real>*, cudaStream_t);               \
+  template cudaError_t launch_spring_incidence<Real>(const kernels::SpringNetworkView<Real>&, int,               \
+                                                     kernels::SpringIncidence<Real>*, cudaStream_t);             \
+  template cudaError_t launch_fused_step<Real>(const FusedStepArguments<Real>&, cudaStream_t);                   \
+  template cudaError_t launch_acceleration<Real>(const VerletArguments<Real>&, cudaStream_t);                    \
+  template cudaError_t launch_verlet_drift<Real>(const VerletArguments<Real>&, cudaStream_t);                    \
+  template cudaError_t launch_verlet_kick<Real>(const VerletArguments<Real>&, cudaStream_t);                     \
+  template cudaError_t launch_runge_kutta4_stage<Real>(const RungeKutta4Arguments<Real>&, int, cudaStream_t);    \
+  template cudaError_t launch_apply_probe<Real>(const ProbeArguments<Real>&, int, bool, cudaStream_t);           \
   template cudaError_t launch_strain_stiffness<Real>(const StrainStiffnessArguments<Real>&, cudaStream_t);
 FMPC_EXPLICIT_STEP_LAUNCHERS(float)
 FMPC_EXPLICIT_STEP_LAUNCHERS(double)

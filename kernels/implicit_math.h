@@ -50,4 +50,12 @@ FMPC_HD bool implicit_spring_blocks(double dx, double dy, double dz, double rest
   return true;
 }
 
+// A free vertex's entry on the diagonal of implicit Euler's system before the springs' and elements' blocks: its mass
+// plus h times its damping per unit velocity, the nodal gamma0 + gamma1 |x - x0| and Rayleigh's alpha m (both
+// backends' assembly).
+FMPC_HD double implicit_vertex_diagonal(double mass, double h, double gamma0, double gamma1, double distance_from_rest,
+                                        double mass_damping) {
+  return mass + h * (gamma0 + gamma1 * distance_from_rest + mass_damping * mass);
+}
+
 }  // namespace fmpc::kernels

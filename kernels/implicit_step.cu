@@ -22,10 +22,12 @@ __global__ void implicit_spring_blocks_kernel(ImplicitArguments<Real> a) {
                                   a.blocks + 12 * s, a.blocks + 12 * s + 6);
 }
 
-// Element e's share of the implicit system, as the CPU backend's add_element_blocks: its linearisation at the
-// step's start, h^2 K v0 for the right-hand side and the diagonal of (h^2 + h beta) K_aa for the preconditioner.
-template <typename Real>
-__global__ void implicit_element_kernel(ImplicitArguments<Real> a) {
+// Element e's share of one term of the implicit system: its linearisation at the step's start (the term's law's, into
+// `linearisation`), h^2 K v0 for the right-hand side and the diagonal of (h^2 + h beta) K_aa for the preconditioner;
+// the first term writes them, each later one adds (Accumulate).
+template <typename Real, typename Law, bool Accumulate>
+__global__ void implicit_element_kernel(ImplicitArguments<Real> a, kernels::ElementTermView<double> term,
+                                        typename Law::Linearisation* linearisation) {
   const int e = vertex_index();
   const ImplicitElements& f = a.elements;
   if (e >= f.count) return;
@@ -39,25 +41,29 @@ __global__ void implicit_element_kernel(ImplicitArguments<Real> a) {
     v[c][1] = static_cast<double>(a.state.vy[vertex]);
     v[c][2] = static_cast<double>(a.state.vz[vertex]);
   }
-  const kernels::TetrahedronMaterial<double> m = implicit_material(f, e);
-  kernels::TetrahedronLinearisation lin;
-  kernels::linearise_tetrahedron(m, x, lin);
-  f.linearisation[e] = lin;
-  kernels::tetrahedron_stiffness_action(m, lin, v, kv);
+  const auto m = Law::material(term, e);
+  typename Law::Linearisation lin;
+  Law::linearise(m, x, lin);
+  linearisation[e] = lin;
+  Law::stiffness_action(m, lin, v, kv);
   const double scale = a.h * a.h + a.h * m.stiffness_damping;
   for (int c = 0; c < 4; ++c) {
     double block[9];
-    kernels::tetrahedron_stiffness_block(m, lin, c, c, block);
+    Law::stiffness_block(m, lin, c, c, block);
     for (int i = 0; i < 3; ++i) {
-      f.rhs_part[12 * e + 3 * c + i] = a.h * a.h * kv[c][i];
-      f.diagonal_part[12 * e + 3 * c + i] = scale * block[4 * i];
+      double& rhs = f.rhs_part[12 * e + 3 * c + i];
+      double& diagonal = f.diagonal_part[12 * e + 3 * c + i];
+      rhs = Accumulate ? rhs + a.h * a.h * kv[c][i] : a.h * a.h * kv[c][i];
+      diagonal = Accumulate ? diagonal + scale * block[4 * i] : scale * block[4 * i];
     }
   }
 }
 
-// (h^2 + h beta) K p of element e, with the corners at fixed vertices taken as zero (their rows are identity).
-template <typename Real>
-__global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a) {
+// (h^2 + h beta) K p of element e for one term, with the corners at fixed vertices taken as zero (their rows are
+// identity); the first term writes, each later one adds.
+template <typename Real, typename Law, bool Accumulate>
+__global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a, kernels::ElementTermView<double> term,
+                                              const typename Law::Linearisation* linearisation) {
   const int e = vertex_index();
   const ImplicitElements& f = a.elements;
   if (e >= f.count) return;
@@ -67,11 +73,27 @@ __global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a) {
     const unsigned char held = a.loads.fixed[vertex];
     for (int i = 0; i < 3; ++i) p[c][i] = kernels::axis_fixed(held, i) ? 0.0 : a.p[3 * vertex + i];
   }
-  const kernels::TetrahedronMaterial<double> m = implicit_material(f, e);
-  kernels::tetrahedron_stiffness_action(m, f.linearisation[e], p, kp);
+  const auto m = Law::material(term, e);
+  Law::stiffness_action(m, linearisation[e], p, kp);
   const double scale = a.h * a.h + a.h * m.stiffness_damping;
   for (int c = 0; c < 4; ++c)
-    for (int i = 0; i < 3; ++i) f.product[12 * e + 3 * c + i] = scale * kp[c][i];
+    for (int i = 0; i < 3; ++i) {
+      double& product = f.product[12 * e + 3 * c + i];
+      product = Accumulate ? product + scale * kp[c][i] : scale * kp[c][i];
+    }
+}
+
+// launch(Law, term index) for each element term, its law a template argument; the first error stops.
+template <typename Launch>
+cudaError_t for_each_term(const ImplicitElements& elements, Launch&& launch) {
+  for (int t = 0; t < elements.term_count; ++t) {
+    const cudaError_t status = kernels::visit_element_law(elements.terms[t].law, [&](auto element_law) {
+      launch(element_law, t);
+      return cudaGetLastError();
+    });
+    if (status != cudaSuccess) return status;
+  }
+  return cudaSuccess;
 }
 
 // Sum over the corners at v of an element-major array of 3 values per corner (double).
@@ -108,9 +130,9 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   const double dx = static_cast<double>(a.state.x[v]) - a.rest_position[3 * v];
   const double dy = static_cast<double>(a.state.y[v]) - a.rest_position[3 * v + 1];
   const double dz = static_cast<double>(a.state.z[v]) - a.rest_position[3 * v + 2];
-  const double diagonal = a.mass[v] + a.h * (static_cast<double>(a.loads.gamma0) +
-                                             static_cast<double>(a.loads.gamma1) * sqrt(dx * dx + dy * dy + dz * dz) +
-                                             static_cast<double>(a.loads.mass_damping) * a.mass[v]);
+  const double diagonal = kernels::implicit_vertex_diagonal(
+      a.mass[v], a.h, static_cast<double>(a.loads.gamma0), static_cast<double>(a.loads.gamma1),
+      sqrt(dx * dx + dy * dy + dz * dz), static_cast<double>(a.loads.mass_damping));
   double jacobi[3] = {diagonal, diagonal, diagonal};
   const kernels::SpringNetworkView<Real>& springs = a.model.springs;
   for (int e = springs.adjacency_offset[v]; e < springs.adjacency_offset[v + 1]; ++e) {
@@ -279,7 +301,6 @@ cudaError_t launch_dots(const double* first, const double* second, const double*
   return cudaGetLastError();
 }
 
-
 }  // namespace
 
 template <typename Real>
@@ -294,8 +315,17 @@ cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStrea
     cudaError_t status = launch_element_forces(
         a.model, kernels::StateView<Real>{a.state.x, a.state.y, a.state.z, a.state.vx, a.state.vy, a.state.vz}, stream);
     if (status != cudaSuccess) return status;
-    implicit_element_kernel<Real><<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a);
-    status = cudaGetLastError();
+    status = for_each_term(a.elements, [&](auto element_law, int t) {
+      using Law = decltype(element_law);
+      auto* linearisation = static_cast<typename Law::Linearisation*>(a.elements.linearisation[t]);
+      if (t == 0) {
+        implicit_element_kernel<Real, Law, false>
+            <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
+      } else {
+        implicit_element_kernel<Real, Law, true>
+            <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
+      }
+    });
     if (status != cudaSuccess) return status;
   }
   if (a.vertex_count <= 0) return cudaSuccess;
@@ -318,8 +348,17 @@ template <typename Real>
 cudaError_t launch_cg_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
   if (a.vertex_count <= 0) return cudaSuccess;
   if (a.elements.count > 0) {
-    implicit_element_apply_kernel<Real><<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a);
-    const cudaError_t status = cudaGetLastError();
+    const cudaError_t status = for_each_term(a.elements, [&](auto element_law, int t) {
+      using Law = decltype(element_law);
+      const auto* linearisation = static_cast<const typename Law::Linearisation*>(a.elements.linearisation[t]);
+      if (t == 0) {
+        implicit_element_apply_kernel<Real, Law, false>
+            <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
+      } else {
+        implicit_element_apply_kernel<Real, Law, true>
+            <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
+      }
+    });
     if (status != cudaSuccess) return status;
   }
   implicit_apply_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
@@ -347,11 +386,11 @@ cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_
   return cudaGetLastError();
 }
 
-#define FMPC_IMPLICIT_STEP_LAUNCHERS(Real)                                                                            \
-  template cudaError_t launch_implicit_assemble<Real>(const ImplicitArguments<Real>&, cudaStream_t);                 \
-  template cudaError_t launch_cg_start<Real>(const ImplicitArguments<Real>&, cudaStream_t);                          \
-  template cudaError_t launch_cg_iteration<Real>(const ImplicitArguments<Real>&, cudaStream_t);                      \
-  template cudaError_t launch_cg_direction<Real>(const ImplicitArguments<Real>&, cudaStream_t);                      \
+#define FMPC_IMPLICIT_STEP_LAUNCHERS(Real)                                                           \
+  template cudaError_t launch_implicit_assemble<Real>(const ImplicitArguments<Real>&, cudaStream_t); \
+  template cudaError_t launch_cg_start<Real>(const ImplicitArguments<Real>&, cudaStream_t);          \
+  template cudaError_t launch_cg_iteration<Real>(const ImplicitArguments<Real>&, cudaStream_t);      \
+  template cudaError_t launch_cg_direction<Real>(const ImplicitArguments<Real>&, cudaStream_t);      \
   template cudaError_t launch_implicit_finish<Real>(const ImplicitArguments<Real>&, cudaStream_t);
 FMPC_IMPLICIT_STEP_LAUNCHERS(float)
 FMPC_IMPLICIT_STEP_LAUNCHERS(double)

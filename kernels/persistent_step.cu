@@ -3,8 +3,8 @@
 // inside a launch. Each vertex's step is explicit_vertex_step (kernels/step_device.cuh) and the probe's
 // kernels/probe_schedule.cuh: the per-step kernels' bits.
 #include <cooperative_groups.h>
-#include <cuda/atomic>
 
+#include <cuda/atomic>
 #include <type_traits>
 
 #include "kernels/probe_schedule.cuh"
@@ -20,7 +20,6 @@ template <typename Real>
 __device__ MutableStateView<Real> buffer(const PersistentEulerArguments<Real>& a, int parity) {
   return parity == 0 ? a.state[0] : a.state[1];
 }
-
 
 // The end-of-chunk checks' presets (PersistentChecks), written by a persistent kernel's threads before its first
 // barrier, which publishes them.
@@ -74,7 +73,9 @@ struct PersistentOccupancy {
 // Records per thread whose other ends block_spring_terms reads together: 4 for springs alone in float; 2 in double
 // (4 spilled 162 bytes at the 128 registers of 2 blocks); 1 with elements, whose pass leaves no registers for more.
 template <typename Real, GatherKind K>
-constexpr int kPersistentTermBatch = K != GatherKind::Springs ? 1 : std::is_same_v<Real, float> ? 4 : 2;
+constexpr int kPersistentTermBatch = K != GatherKind::Springs      ? 1
+                                     : std::is_same_v<Real, float> ? 4
+                                                                   : 2;
 
 // A block's step count, published once its threads have written the step (BlockNeighbours::steps_done): release
 // by one thread after the block's barrier, the pattern of cooperative groups' grid barrier without its single counter
@@ -149,6 +150,30 @@ __device__ void block_spring_terms(const kernels::SpringLawParameters<Real>& law
   }
 }
 
+// The element pass of every term over the grid, thread `thread` of `stride` on its elements: each term's pass writes or
+// adds to the corner slots of the same elements, so the terms need no barrier between them. The term index is a
+// constant in each unrolled iteration (indexing the parameter's array with a run-time index would copy it to local
+// memory); the law is visited per element pass.
+template <typename Real>
+__device__ void grid_element_pass(const ForceModelView<Real>& model, const kernels::StateView<Real>& in, int thread,
+                                  int stride) {
+  FMPC_UNROLL_ALL
+  for (int t = 0; t < kMostElementTerms; ++t) {
+    if (t >= model.term_count) break;
+    const kernels::ElementTermView<Real>& term = model.terms[t];
+    kernels::visit_element_law_on_device(term.law, [&](auto element_law) {
+      using Law = decltype(element_law);
+      for (int e = thread; e < term.count; e += stride) {
+        if (t == 0) {
+          kernels::element_corner_forces<Law, false>(e, term, in, model.corner_force);
+        } else {
+          kernels::element_corner_forces<Law, true>(e, term, in, model.corner_force);
+        }
+      }
+    });
+  }
+}
+
 // launch_persistent_euler's kernel (gpu_launch.h): `steps` steps, block b on vertices [b rows, (b + 1) rows). Each
 // step has two phases. First the block's threads compute the terms of all its vertices' springs side by side
 // (block_spring_terms, into shared memory); then thread r adds vertex r's terms in CSR order (kernels::
@@ -209,7 +234,7 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
   int parity = a.first_parity;
   const PersistentChecks& c = a.checks;
   reset_chunk_checks(c, a.check_count, n, thread, stride);
-  int check = 0;                  // the next check's index
+  int check = 0;                    // the next check's index
   int check_after = a.first_check;  // the steps after which it comes (before the last)
   const MutableStateView<Real> own = shared_state(p.own, rows);
   kernels::VertexState<Real> self{};
@@ -237,8 +262,7 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
     const kernels::StateView<Real> in = read_only(buffer(a, parity));
     const bool checked = check + 1 < a.check_count && s + 1 == check_after;
     if constexpr (K != GatherKind::Springs) {
-      for (int e = thread; e < step.model.field.count; e += stride)
-        kernels::tetrahedron_corner_forces(e, step.model.field, in, step.model.corner_force);
+      grid_element_pass(step.model, in, thread, stride);
       grid.sync();
     } else if (s > 0) {
       wait_for_blocks(neighbours.steps_done, p.waited, waited_count, static_cast<unsigned>(s));
@@ -457,8 +481,7 @@ bool valid_checks(const PersistentEulerArguments<Real>& a) {
   if (a.check_count == 1) return true;
   const long long last_inner = a.first_check + static_cast<long long>(a.check_count - 2) * a.check_every;
   return a.first_check >= 1 && (a.check_count == 2 || a.check_every >= 1) && last_inner < a.steps &&
-         a.checks.first_non_finite != nullptr &&
-         a.checks.slot_stride >= 1 && a.checkpoints.x != nullptr &&
+         a.checks.first_non_finite != nullptr && a.checks.slot_stride >= 1 && a.checkpoints.x != nullptr &&
          a.checkpoint_stride >= static_cast<long long>(a.step.vertex_count);
 }
 
@@ -503,9 +526,9 @@ cudaError_t persistent_euler_block_limit(GatherKind kind, long long shared_bytes
     int per_multiprocessor = 0;
     cudaError_t occupancy = persistent_shared_limit<Real, K>(shared_bytes);
     if (occupancy == cudaSuccess)
-      occupancy = cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_multiprocessor, persistent_euler_kernel<Real, K>,
-                                                                kPersistentThreads,
-                                                                static_cast<std::size_t>(shared_bytes));
+      occupancy =
+          cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_multiprocessor, persistent_euler_kernel<Real, K>,
+                                                        kPersistentThreads, static_cast<std::size_t>(shared_bytes));
     blocks = per_multiprocessor * multiprocessors;
     return occupancy;
   });
@@ -592,10 +615,10 @@ cudaError_t launch_cluster_euler(const ClusterEulerArguments<Real>& arguments, c
   return cudaLaunchKernelEx(&config, cluster_euler_kernel<Real>, arguments);
 }
 
-#define FMPC_PERSISTENT_STEP_LAUNCHERS(Real)                                                                          \
-  template cudaError_t persistent_euler_block_limit<Real>(GatherKind, long long, int&);                              \
-  template cudaError_t launch_persistent_euler<Real>(const PersistentEulerArguments<Real>&, cudaStream_t);           \
-  template cudaError_t cluster_euler_fits<Real>(int, int, long long, bool&);                                         \
+#define FMPC_PERSISTENT_STEP_LAUNCHERS(Real)                                                               \
+  template cudaError_t persistent_euler_block_limit<Real>(GatherKind, long long, int&);                    \
+  template cudaError_t launch_persistent_euler<Real>(const PersistentEulerArguments<Real>&, cudaStream_t); \
+  template cudaError_t cluster_euler_fits<Real>(int, int, long long, bool&);                               \
   template cudaError_t launch_cluster_euler<Real>(const ClusterEulerArguments<Real>&, cudaStream_t);
 FMPC_PERSISTENT_STEP_LAUNCHERS(float)
 FMPC_PERSISTENT_STEP_LAUNCHERS(double)

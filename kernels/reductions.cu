@@ -14,7 +14,6 @@ __global__ void find_non_finite_kernel(kernels::StateView<Real> s, int vertex_co
   if (non_finite_vertex(s, v)) atomicMin(first_vertex, v);
 }
 
-
 template <typename Real>
 __device__ double energy_term(const EnergyArguments<Real>& a, EnergyTerm term, int i) {
   const kernels::StateView<Real>& s = a.state;
@@ -37,19 +36,21 @@ __device__ double energy_term(const EnergyArguments<Real>& a, EnergyTerm term, i
   if (term == EnergyTerm::ElementPotential) {
     double corners[4][3];
     for (int c = 0; c < 4; ++c) {
-      const int vertex = a.elements.corners[4 * i + c];
+      const int vertex = a.element_corners[4 * i + c];
       corners[c][0] = static_cast<double>(s.x[vertex]);
       corners[c][1] = static_cast<double>(s.y[vertex]);
       corners[c][2] = static_cast<double>(s.z[vertex]);
     }
-    return kernels::tetrahedron_elastic_energy(implicit_material(a.elements, i), corners);
+    return kernels::visit_element_law_on_device(a.element_term.law, [&](auto element_law) {
+      using Law = decltype(element_law);
+      return Law::energy(Law::material(a.element_term, i), corners);
+    });
   }
   const double x = static_cast<double>(s.x[i]), y = static_cast<double>(s.y[i]), z = static_cast<double>(s.z[i]);
   double energy = -(a.mass[i] * a.gravity_x * x) - a.mass[i] * a.gravity_y * y - a.mass[i] * a.gravity_z * z;
   if (a.force_x != nullptr) energy -= a.force_x[i] * x + a.force_y[i] * y + a.force_z[i] * z;
   return energy;
 }
-
 
 // The largest |x - start| over vertices [begin, end), in double with mesh.cpp's distance() operations (compiled
 // with --fmad=false: the host's bits); a maximum is exact in any order.
@@ -109,8 +110,8 @@ __global__ void count_inverted_kernel(const int* corners, int element_count, con
 }  // namespace
 
 template <typename Real>
-cudaError_t launch_largest_displacement(const kernels::StateView<Real>& state, const StartPositions& start, int begin, int end,
-                           double* partial, double* result, cudaStream_t stream) {
+cudaError_t launch_largest_displacement(const kernels::StateView<Real>& state, const StartPositions& start, int begin,
+                                        int end, double* partial, double* result, cudaStream_t stream) {
   largest_displacement_partial_kernel<Real>
       <<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(state, start, begin, end, partial);
   cudaError_t status = cudaGetLastError();
@@ -121,8 +122,8 @@ cudaError_t launch_largest_displacement(const kernels::StateView<Real>& state, c
 
 template <typename Real>
 cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
-                            const kernels::StateView<Real>& state, unsigned int* count, int* first,
-                            cudaStream_t stream) {
+                                  const kernels::StateView<Real>& state, unsigned int* count, int* first,
+                                  cudaStream_t stream) {
   if (element_count <= 0) return cudaSuccess;
   count_inverted_kernel<Real><<<blocks_for(element_count), kThreadsPerBlock, 0, stream>>>(
       corners, element_count, element_scene, state, count, first);
@@ -131,7 +132,7 @@ cudaError_t launch_count_inverted(const int* corners, int element_count, const i
 
 template <typename Real>
 cudaError_t launch_find_non_finite(const kernels::StateView<Real>& state, int vertex_count, int* first_vertex,
-                              cudaStream_t stream) {
+                                   cudaStream_t stream) {
   if (vertex_count <= 0) return cudaSuccess;
   find_non_finite_kernel<Real>
       <<<blocks_for(vertex_count), kThreadsPerBlock, 0, stream>>>(state, vertex_count, first_vertex);
@@ -139,8 +140,8 @@ cudaError_t launch_find_non_finite(const kernels::StateView<Real>& state, int ve
 }
 
 template <typename Real>
-cudaError_t launch_energy_sum(const EnergyArguments<Real>& arguments, EnergyTerm term, int begin, int end, double* partial,
-                          double* result, cudaStream_t stream) {
+cudaError_t launch_energy_sum(const EnergyArguments<Real>& arguments, EnergyTerm term, int begin, int end,
+                              double* partial, double* result, cudaStream_t stream) {
   energy_partial_kernel<Real><<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(arguments, term, begin, end, partial);
   cudaError_t status = cudaGetLastError();
   if (status != cudaSuccess) return status;
@@ -149,12 +150,12 @@ cudaError_t launch_energy_sum(const EnergyArguments<Real>& arguments, EnergyTerm
 }
 
 #define FMPC_REDUCTION_LAUNCHERS(Real)                                                                                \
-  template cudaError_t launch_largest_displacement<Real>(const kernels::StateView<Real>&, const StartPositions&, int,  \
-                                                         int, double*, double*, cudaStream_t);                       \
-  template cudaError_t launch_count_inverted<Real>(const int*, int, const int*, const kernels::StateView<Real>&,     \
-                                                   unsigned int*, int*, cudaStream_t);                               \
-  template cudaError_t launch_find_non_finite<Real>(const kernels::StateView<Real>&, int, int*, cudaStream_t);       \
-  template cudaError_t launch_energy_sum<Real>(const EnergyArguments<Real>&, EnergyTerm, int, int, double*, double*, \
+  template cudaError_t launch_largest_displacement<Real>(const kernels::StateView<Real>&, const StartPositions&, int, \
+                                                         int, double*, double*, cudaStream_t);                        \
+  template cudaError_t launch_count_inverted<Real>(const int*, int, const int*, const kernels::StateView<Real>&,      \
+                                                   unsigned int*, int*, cudaStream_t);                                \
+  template cudaError_t launch_find_non_finite<Real>(const kernels::StateView<Real>&, int, int*, cudaStream_t);        \
+  template cudaError_t launch_energy_sum<Real>(const EnergyArguments<Real>&, EnergyTerm, int, int, double*, double*,  \
                                                cudaStream_t);
 FMPC_REDUCTION_LAUNCHERS(float)
 FMPC_REDUCTION_LAUNCHERS(double)

@@ -67,7 +67,6 @@ __device__ void store_vertex_state(const MutableStateView<Real>& s, int v, const
   s.vz[v] = x.vz;
 }
 
-
 // Forward or semi-implicit Euler on one vertex's state with acceleration a.
 template <typename Real>
 __device__ void euler_update(FusedScheme scheme, Real h, Real ax, Real ay, Real az, kernels::VertexState<Real>& x) {
@@ -124,7 +123,6 @@ __device__ MutableStateView<Real> shared_state(Real* copy, int stride) {
   return {copy, copy + stride, copy + 2 * stride, copy + 3 * stride, copy + 4 * stride, copy + 5 * stride};
 }
 
-
 // The fixed tree of one block: thread t combines elements t, t + stride, ... in order, then pairs are combined
 // halving the width. Deterministic because the shape depends only on the launch size, never on timing.
 template <typename Combine>
@@ -145,19 +143,5 @@ __device__ inline double block_tree_sum(double value, double* cache) {
 
 // A maximum that skips NaN as the host's std::max(largest, d) does (a NaN d never replaces largest).
 __device__ inline double larger(double a, double b) { return a < b ? b : a; }
-
-// The element's material in double, from the implicit copy of the field.
-__device__ inline kernels::TetrahedronMaterial<double> implicit_material(const ImplicitElements& f, int e) {
-  kernels::TetrahedronMaterial<double> m;
-  m.law = f.law;
-  m.rest_inverse = f.rest_inverse + 9 * e;
-  m.rest_volume = f.rest_volume[e];
-  m.youngs_modulus = f.youngs_modulus ? f.youngs_modulus[e] : 0.0;
-  m.poisson_ratio = f.poisson_ratio ? f.poisson_ratio[e] : 0.0;
-  m.bulk_modulus = f.bulk_modulus ? f.bulk_modulus[e] : 0.0;
-  m.stiffness_damping = f.stiffness_damping ? f.stiffness_damping[e] : 0.0;
-  m.strain_table = f.strain_table.strain ? &f.strain_table : nullptr;
-  return m;
-}
 
 }  // namespace fmpc::gpu

@@ -1,34 +1,14 @@
 #pragma once
-// Linear tetrahedra, shared by the CPU loops (runtime/), the CUDA kernels (kernels/*.cu) and the host's
-// energy, stress and probe sums: every function is FMPC_HD and templated on the real type, and uses only +, -, *, /
-// and sqrt (correctly rounded on both sides; no transcendental functions), so a kernel compiled with --fmad=false
-// gives the CPU loop's bits.
-//
-// Two laws act per tetrahedron:
-// - CorotationalLinear: co-rotational linear elasticity (Mueller & Gross 2004, "Interactive virtual materials",
-//   GI; Nesme, Payan & Faure 2005, "Efficient, physically plausible finite elements", Eurographics; SOFA's
-//   TetrahedronFEMForceField with method "large" uses a QR rotation instead). The rotation R is the rotation of the
-//   polar decomposition F = R S, taken from the singular value decomposition with the sign of the smallest singular
-//   value flipped for an inverted element (Irving, Teran & Fedkiw 2004, "Invertible finite elements for robust
-//   simulation of large deformation", SCA), so that R is always a proper rotation and an inverted element is pushed
-//   back towards its rest orientation. Strain eps = sym(R^T F) - I, stress sigma = lambda tr(eps) I + 2 mu eps, and
-//   the force on corner a is f_a = -V0 R sigma g_a (g_a the rest shape-function gradient); i.e. -R K0 (R^T x - X).
-//   Damping: sigma uses eps + beta d(eps)/dt with d(eps)/dt = sym(R^T L), L the velocity gradient: stiffness-
-//   proportional (Rayleigh) damping beta R K0 R^T v per element.
-// - VolumePreservation: the volume constraint C = V - V0 of Teschner, Heidelberger, Mueller & Gross 2004 ("A
-//   versatile and robust model for geometrically complex deformable solids", CGI), with stiffness k_V = kappa / V0
-//   so that kappa is a modulus (Pa) and the term does not depend on the element size: energy kappa (V - V0)^2 /
-//   (2 V0), force f_a = -kappa (V - V0) / V0 dV/dx_a. At small strain V - V0 = V0 tr(eps), so the term adds kappa
-//   to Lame's lambda of the springs beside it (docs/simulator.md calibrates it to a Poisson ratio). Unlike a spring
-//   it tells a tetrahedron from its mirror image: an inverted element (V < 0) is pushed back. Damping: beta kappa
-//   (dV/dt) / V0 dV/dx_a.
+// Linear tetrahedra's geometry and the small-matrix algebra the element laws (kernels/laws/) are written in, shared by
+// the CPU loops (runtime/), the CUDA kernels (kernels/*.cu) and the host's energy, stress and probe sums: every
+// function is FMPC_HD and templated on the real type, and uses only +, -, *, / and sqrt (correctly rounded on both
+// sides; no transcendental functions), so a kernel compiled with --fmad=false gives the CPU loop's bits. Also the
+// corner forces' layout (CornerForce, CornerForceView) that an element pass writes and a vertex's gather reads.
 #include "kernels/fmpc_hd.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
 
 namespace fmpc::kernels {
-
-enum class TetrahedronLaw : int { CorotationalLinear = 0, VolumePreservation = 1 };
 
 template <typename Real>
 struct RealLimits;
@@ -366,92 +346,6 @@ FMPC_HD void corner_forces_from_stress(const Real* P, const Real g[4][3], Real v
   }
 }
 
-// What one element needs besides its corners' positions and velocities.
-template <typename Real>
-struct TetrahedronMaterial {
-  TetrahedronLaw law;
-  const Real* rest_inverse;  // Dm^-1, 9 values (the volume law needs it only for its stiffness bound)
-  Real rest_volume;          // V0 (m^3)
-  Real youngs_modulus;       // CorotationalLinear: Pa (a strain table replaces it, see below)
-  Real poisson_ratio;        // CorotationalLinear
-  Real bulk_modulus;         // VolumePreservation: kappa (Pa)
-  Real stiffness_damping;    // beta (s): stiffness-proportional damping
-  const StrainTableView* strain_table;  // CorotationalLinear: E(principal strain) each step; null: youngs_modulus
-};
-
-// What the force computation saw, for inversion counts, strain tables and stress output.
-template <typename Real>
-struct TetrahedronReading {
-  Real volume;           // current signed volume (m^3)
-  Real youngs_modulus;   // the modulus used (Pa): the table's value with a strain table
-  Real strain;           // with a strain table, the principal strain of largest magnitude (else 0); Volume: V/V0 - 1
-};
-
-// The force on each corner of one element. x and v: the corners' positions and velocities [corner][axis].
-template <typename Real>
-FMPC_HD void tetrahedron_forces(const TetrahedronMaterial<Real>& m, const Real x[4][3], const Real v[4][3],
-                                Real force[4][3], TetrahedronReading<Real>* reading = nullptr) {
-  const Real volume = tetrahedron_volume(x);
-  if (m.law == TetrahedronLaw::VolumePreservation) {
-    // dV/dx_a = (x_b - x_0) x (x_c - x_0) / 6 for (a, b, c) = (1, 2, 3) cyclic, dV/dx_0 = -(sum).
-    Real e[3][3];
-    for (int k = 0; k < 3; ++k)
-      for (int i = 0; i < 3; ++i) e[k][i] = x[k + 1][i] - x[0][i];
-    Real gradient[4][3];
-    cross3(e[1], e[2], gradient[1]);
-    cross3(e[2], e[0], gradient[2]);
-    cross3(e[0], e[1], gradient[3]);
-    Real rate = Real(0);
-    for (int i = 0; i < 3; ++i) {
-      for (int a = 1; a < 4; ++a) gradient[a][i] /= Real(6);
-      gradient[0][i] = -(gradient[1][i] + gradient[2][i] + gradient[3][i]);
-    }
-    for (int a = 0; a < 4; ++a) rate += dot3(gradient[a], v[a]);
-    const Real scale =
-        -m.bulk_modulus * ((volume - m.rest_volume) + m.stiffness_damping * rate) / m.rest_volume;
-    for (int a = 0; a < 4; ++a)
-      for (int i = 0; i < 3; ++i) force[a][i] = scale * gradient[a][i];
-    if (reading) {
-      reading->volume = volume;
-      reading->youngs_modulus = Real(0);
-      reading->strain = volume / m.rest_volume - Real(1);
-    }
-    return;
-  }
-  Real g[4][3], F[9], R[9];
-  shape_gradients(m.rest_inverse, g);
-  corner_gradient(x, m.rest_inverse, F);
-  // The principal stretches cost an eigen-decomposition: only a strain table needs them.
-  Real strain = Real(0), modulus = m.youngs_modulus;
-  if (m.strain_table) {
-    Real stretch[3];
-    rotation_and_stretches(F, R, stretch);
-    strain = principal_strain_of_largest_magnitude(stretch);
-    modulus = static_cast<Real>(strain_table_modulus(*m.strain_table, static_cast<double>(strain)));
-  } else {
-    polar_rotation(F, R);
-  }
-  Real mu, lambda;
-  lame_parameters(modulus, m.poisson_ratio, mu, lambda);
-  Real e[9];
-  corotated_symmetric_part(R, F, true, e);
-  if (m.stiffness_damping != Real(0)) {
-    Real L[9], rate[9];
-    corner_gradient(v, m.rest_inverse, L);
-    corotated_symmetric_part(R, L, false, rate);
-    for (int i = 0; i < 9; ++i) e[i] += m.stiffness_damping * rate[i];
-  }
-  Real sigma[9], P[9];
-  linear_stress(e, mu, lambda, sigma);
-  multiply3(R, sigma, P);
-  corner_forces_from_stress(P, g, m.rest_volume, force);
-  if (reading) {
-    reading->volume = volume;
-    reading->youngs_modulus = modulus;
-    reading->strain = strain;
-  }
-}
-
 // ---- the gather: corner forces summed per vertex ------------------------------------------------------------------
 
 // One corner's force, padded to four values: the element pass writes it with one aligned vector store and the gather
@@ -464,7 +358,7 @@ struct alignas(4 * sizeof(Real)) CornerForce {
 
 // The corners of the elements at each vertex, as CSR: entries corner[offset[v] .. offset[v+1]) are 4 e + c (element
 // e's corner c), increasing; force holds one CornerForce per entry in the same order (vertex-major: force[k] is entry
-// k's, written by the element pass through TetrahedronFieldView::corner_slot), so a vertex reads one contiguous run.
+// k's, written by the element pass through ElementTermView::corner_slot), so a vertex reads one contiguous run.
 template <typename Real>
 struct CornerForceView {
   const int* offset;
@@ -488,218 +382,13 @@ FMPC_HD void gather_corner_force(int v, const CornerForceView<Real>& view, Real&
   fz = sz;
 }
 
-// ---- implicit Euler: the elements' stiffness, linearised at the step's start (double) ------------------------------
-
-// What a linearised element keeps between the conjugate gradient's iterations.
-struct TetrahedronLinearisation {
-  double rotation[9];    // CorotationalLinear: R at the step's start
-  double gradient[4][3]; // VolumePreservation: dV/dx_a at the step's start
-  double modulus;        // CorotationalLinear: Young's modulus at the step's start (a strain table's value)
-};
-
-// The element's tangent stiffness (Gauss-Newton for the volume term: kappa / V0 dV dV^T, whose positive
-// semi-definite part keeps conjugate gradients applicable; the co-rotational R K0 R^T, the rotation held fixed as in
-// Mueller & Gross 2004) applied to a corner field p [corner][axis]: out_a = sum_b K_ab p_b.
-FMPC_HD void tetrahedron_stiffness_action(const TetrahedronMaterial<double>& m, const TetrahedronLinearisation& lin,
-                                          const double p[4][3], double out[4][3]) {
-  const double modulus = lin.modulus;
-  if (m.law == TetrahedronLaw::VolumePreservation) {
-    double along = 0.0;
-    for (int a = 0; a < 4; ++a) along += dot3(lin.gradient[a], p[a]);
-    const double scale = m.bulk_modulus / m.rest_volume * along;
-    for (int a = 0; a < 4; ++a)
-      for (int i = 0; i < 3; ++i) out[a][i] = scale * lin.gradient[a][i];
-    return;
-  }
-  double g[4][3];
-  shape_gradients(m.rest_inverse, g);
-  // p' = R^T p, strain sym(sum_b p'_b g_b^T), stress, then f'_a = V0 sigma g_a and out_a = R f'_a.
-  double rotated[4][3];
-  for (int a = 0; a < 4; ++a)
-    for (int i = 0; i < 3; ++i)
-      rotated[a][i] = lin.rotation[i] * p[a][0] + lin.rotation[3 + i] * p[a][1] + lin.rotation[6 + i] * p[a][2];
-  double H[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  for (int a = 0; a < 4; ++a)
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) H[3 * i + j] += rotated[a][i] * g[a][j];
-  double e[9];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) e[3 * i + j] = 0.5 * (H[3 * i + j] + H[3 * j + i]);
-  double mu, lambda, sigma[9], P[9];
-  lame_parameters(modulus, m.poisson_ratio, mu, lambda);
-  linear_stress(e, mu, lambda, sigma);
-  multiply3(lin.rotation, sigma, P);
-  for (int a = 0; a < 4; ++a)
-    for (int i = 0; i < 3; ++i)
-      out[a][i] = m.rest_volume * (P[3 * i] * g[a][0] + P[3 * i + 1] * g[a][1] + P[3 * i + 2] * g[a][2]);
-}
-
-// The 3 x 3 block K_ab of the same stiffness (row-major): co-rotational V0 R (lambda g_a g_b^T + mu g_b g_a^T +
-// mu (g_a . g_b) I) R^T, volume kappa / V0 dV_a dV_b^T.
-FMPC_HD void tetrahedron_stiffness_block(const TetrahedronMaterial<double>& m, const TetrahedronLinearisation& lin,
-                                         int a, int b, double* block) {
-  const double modulus = lin.modulus;
-  if (m.law == TetrahedronLaw::VolumePreservation) {
-    const double scale = m.bulk_modulus / m.rest_volume;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) block[3 * i + j] = scale * lin.gradient[a][i] * lin.gradient[b][j];
-    return;
-  }
-  double g[4][3];
-  shape_gradients(m.rest_inverse, g);
-  double mu, lambda;
-  lame_parameters(modulus, m.poisson_ratio, mu, lambda);
-  const double gg = dot3(g[a], g[b]);
-  double k0[9];
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      k0[3 * i + j] = m.rest_volume * (lambda * g[a][i] * g[b][j] + mu * g[b][i] * g[a][j] + (i == j ? mu * gg : 0.0));
-  double rk[9];
-  multiply3(lin.rotation, k0, rk);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j)
-      block[3 * i + j] = rk[3 * i] * lin.rotation[3 * j] + rk[3 * i + 1] * lin.rotation[3 * j + 1] +
-                         rk[3 * i + 2] * lin.rotation[3 * j + 2];
-}
-
-// All 16 blocks at once (row-major 12 x 12: K[3a + i][3b + j]), the shape gradients and Lame's parameters computed
-// once: what assembling a matrix wants.
-FMPC_HD void tetrahedron_stiffness_matrix(const TetrahedronMaterial<double>& m, const TetrahedronLinearisation& lin,
-                                          double* K) {
-  if (m.law == TetrahedronLaw::VolumePreservation) {
-    const double scale = m.bulk_modulus / m.rest_volume;
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b)
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) K[12 * (3 * a + i) + 3 * b + j] = scale * lin.gradient[a][i] * lin.gradient[b][j];
-    return;
-  }
-  double g[4][3], rg[4][3], mu, lambda;
-  shape_gradients(m.rest_inverse, g);
-  lame_parameters(lin.modulus, m.poisson_ratio, mu, lambda);
-  // R K0_ab R^T = V0 (lambda (R g_a)(R g_b)^T + mu (R g_b)(R g_a)^T + mu (g_a . g_b) I).
-  for (int a = 0; a < 4; ++a)
-    for (int i = 0; i < 3; ++i)
-      rg[a][i] = lin.rotation[3 * i] * g[a][0] + lin.rotation[3 * i + 1] * g[a][1] + lin.rotation[3 * i + 2] * g[a][2];
-  for (int a = 0; a < 4; ++a)
-    for (int b = 0; b < 4; ++b) {
-      const double gg = dot3(g[a], g[b]);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          K[12 * (3 * a + i) + 3 * b + j] =
-              m.rest_volume * (lambda * rg[a][i] * rg[b][j] + mu * rg[b][i] * rg[a][j] + (i == j ? mu * gg : 0.0));
-    }
-}
-
-// The linearisation at positions x: the rotation, or the volume gradient.
-FMPC_HD void linearise_tetrahedron(const TetrahedronMaterial<double>& m, const double x[4][3],
-                                   TetrahedronLinearisation& lin) {
-  if (m.law == TetrahedronLaw::VolumePreservation) {
-    double e[3][3];
-    for (int k = 0; k < 3; ++k)
-      for (int i = 0; i < 3; ++i) e[k][i] = x[k + 1][i] - x[0][i];
-    cross3(e[1], e[2], lin.gradient[1]);
-    cross3(e[2], e[0], lin.gradient[2]);
-    cross3(e[0], e[1], lin.gradient[3]);
-    for (int i = 0; i < 3; ++i) {
-      for (int a = 1; a < 4; ++a) lin.gradient[a][i] /= 6.0;
-      lin.gradient[0][i] = -(lin.gradient[1][i] + lin.gradient[2][i] + lin.gradient[3][i]);
-    }
-    for (int i = 0; i < 9; ++i) lin.rotation[i] = (i % 4 == 0) ? 1.0 : 0.0;
-    lin.modulus = 0.0;
-    return;
-  }
-  double F[9];
-  corner_gradient(x, m.rest_inverse, F);
-  lin.modulus = m.youngs_modulus;
-  if (m.strain_table) {
-    double stretch[3];
-    rotation_and_stretches(F, lin.rotation, stretch);
-    lin.modulus = strain_table_modulus(*m.strain_table, principal_strain_of_largest_magnitude(stretch));
-  } else {
-    polar_rotation(F, lin.rotation);
-  }
-  for (int a = 0; a < 4; ++a)
-    for (int i = 0; i < 3; ++i) lin.gradient[a][i] = 0.0;
-}
-
-// ---- outputs and bounds -------------------------------------------------------------------------------------------
+// ---- outputs -----------------------------------------------------------------------------------------------------
 
 // Von Mises equivalent stress of a symmetric stress (Pa): sqrt(((s11 - s22)^2 + (s22 - s33)^2 + (s33 - s11)^2) / 2
 // + 3 (s12^2 + s23^2 + s13^2)). Invariant under rotation, so the co-rotated stress gives the value of R sigma R^T.
 FMPC_HD double von_mises_stress(const double* s) {
   const double a = s[0] - s[4], b = s[4] - s[8], c = s[8] - s[0];
   return square_root(0.5 * (a * a + b * b + c * c) + 3.0 * (s[1] * s[1] + s[5] * s[5] + s[2] * s[2]));
-}
-
-// The co-rotational element's stress at positions x (in its rotated frame), in double.
-FMPC_HD void corotational_stress(const double* rest_inverse, double modulus, double poisson_ratio, const double x[4][3],
-                                 double* sigma) {
-  double F[9], R[9], e[9], mu, lambda;
-  corner_gradient(x, rest_inverse, F);
-  polar_rotation(F, R);
-  corotated_symmetric_part(R, F, true, e);
-  lame_parameters(modulus, poisson_ratio, mu, lambda);
-  linear_stress(e, mu, lambda, sigma);
-}
-
-// The element's elastic energy at positions x (J), in double: V0 (mu eps:eps + lambda/2 tr(eps)^2) with the
-// co-rotated strain (and a strain table's modulus at the element's strain), or kappa (V - V0)^2 / (2 V0).
-FMPC_HD double tetrahedron_elastic_energy(const TetrahedronMaterial<double>& m, const double x[4][3]) {
-  if (m.law == TetrahedronLaw::VolumePreservation) {
-    const double change = tetrahedron_volume(x) - m.rest_volume;
-    return m.bulk_modulus * change * change / (2.0 * m.rest_volume);
-  }
-  double F[9], R[9], strain[9], mu, lambda;
-  corner_gradient(x, m.rest_inverse, F);
-  double modulus = m.youngs_modulus;
-  if (m.strain_table) {
-    double stretch[3];
-    rotation_and_stretches(F, R, stretch);
-    modulus = strain_table_modulus(*m.strain_table, principal_strain_of_largest_magnitude(stretch));
-  } else {
-    polar_rotation(F, R);
-  }
-  corotated_symmetric_part(R, F, true, strain);
-  lame_parameters(modulus, m.poisson_ratio, mu, lambda);
-  double contraction = 0.0;
-  for (int i = 0; i < 9; ++i) contraction += strain[i] * strain[i];
-  const double trace = strain[0] + strain[4] + strain[8];
-  return m.rest_volume * (mu * contraction + 0.5 * lambda * trace * trace);
-}
-
-// An upper bound of the largest eigenvalue of the element's stiffness at rest (N/m), for the critical time step:
-// the smaller of the Frobenius norm and the largest absolute row sum (Gershgorin) of the 12 x 12 matrix, both of
-// which bound the spectral radius of a symmetric matrix. The rotation does not change the eigenvalues.
-FMPC_HD double tetrahedron_stiffness_bound(const TetrahedronMaterial<double>& m, double modulus) {
-  TetrahedronLinearisation lin{};
-  for (int i = 0; i < 9; ++i) lin.rotation[i] = (i % 4 == 0) ? 1.0 : 0.0;
-  lin.modulus = modulus;
-  if (m.law == TetrahedronLaw::VolumePreservation) {
-    // The only non-zero eigenvalue of kappa / V0 dV dV^T is kappa / V0 |dV|^2, and at rest dV/dx_a = V0 g_a.
-    double g[4][3], squared = 0.0;
-    shape_gradients(m.rest_inverse, g);
-    for (int a = 0; a < 4; ++a) squared += dot3(g[a], g[a]);
-    return m.bulk_modulus * m.rest_volume * squared;
-  }
-  double frobenius = 0.0, row_max = 0.0;
-  double rows[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-  for (int a = 0; a < 4; ++a) {
-    for (int b = 0; b < 4; ++b) {
-      double block[9];
-      tetrahedron_stiffness_block(m, lin, a, b, block);
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-          const double entry = block[3 * i + j];
-          frobenius += entry * entry;
-          rows[3 * a + i] += entry < 0.0 ? -entry : entry;
-        }
-      }
-    }
-  }
-  for (int r = 0; r < 12; ++r) row_max = rows[r] > row_max ? rows[r] : row_max;
-  frobenius = square_root(frobenius);
-  return frobenius < row_max ? frobenius : row_max;
 }
 
 }  // namespace fmpc::kernels

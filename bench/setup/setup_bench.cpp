@@ -8,7 +8,7 @@
 // --threads    worker threads (default 0: every hardware thread); the checksum must not change with it
 // --breakdown  after the timed build, time build_spring_model's steps one by one (degenerate check, masses,
 //              springs with their CSR, rest lengths, stiffness, damping) on the same mesh
-// --simulator  then create the simulators from the setup (CpuSimulation; with CUDA, GpuSimulation) and report the
+// --simulator  then create the simulators from the setup (sim::Simulation on the CPU and, with CUDA, on it) and report the
 //              peak they reach: their own copies of the setup and its upload
 // --out DIR    also write DIR/setup_bench.csv and DIR/setup_bench.md
 //
@@ -218,15 +218,17 @@ Row run_size(int cells, const Options& options) {
     DiagnosticList simulator_diagnostics;
     {
       reset_peak();
-      auto cpu = CpuSimulation::create(*setup, simulator_diagnostics);
+      auto cpu = sim::Simulation::create(*setup, simulator_diagnostics);
       row.cpu_simulation_peak = cpu ? status_bytes("VmHWM") - baseline : -1;
     }
 #if FMPC_RUNTIME_HAVE_CUDA
     std::string device;
     if (gpu::cuda_device_available(device)) {
       reset_peak();
-      auto gpu_simulation = gpu::GpuSimulation::create(*setup, simulator_diagnostics);
-      row.gpu_simulation_peak = gpu_simulation ? status_bytes("VmHWM") - baseline : -1;
+      sim::SimulationOptions cuda;
+      cuda.backend = sim::Backend::Cuda;
+      auto gpu_run = sim::Simulation::create(*setup, simulator_diagnostics, cuda);
+      row.gpu_simulation_peak = gpu_run ? status_bytes("VmHWM") - baseline : -1;
     }
 #endif
   }
@@ -336,7 +338,7 @@ int main(int argc, char** argv) {
   std::vector<Row> rows;
   std::string table =
       "| cells | vertices | tetrahedra | springs | threads | generate s | repair s | model s | setup s | setup CPU s "
-      "| peak B/spring | held B/spring | data B/spring | CpuSimulation peak B/spring | GpuSimulation peak B/spring "
+      "| peak B/spring | held B/spring | data B/spring | CPU simulation peak B/spring | GPU simulation peak B/spring "
       "| checksum | status |\n"
       "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- "
       "| --- |\n";

@@ -30,7 +30,7 @@
 #include <vector>
 
 #include "runtime/fem/fem_model_builder.h"
-#include "runtime/fem/tetrahedron_field.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/gpu/gpu_simulation.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/scene/spring_model_builder.h"
@@ -39,6 +39,24 @@ using namespace fmpc;
 using namespace fmpc::sim;
 
 namespace {
+
+#if FMPC_RUNTIME_HAVE_CUDA
+// A simulation on the CUDA backend: one scene, or a batch.
+std::unique_ptr<Simulation> gpu_simulation(const SimulationSetup& setup, DiagnosticList& diagnostics,
+                                           const GpuOptions& options = {}) {
+  SimulationOptions cuda;
+  cuda.backend = Backend::Cuda;
+  cuda.gpu = options;
+  return Simulation::create(setup, diagnostics, cuda);
+}
+std::unique_ptr<Simulation> gpu_batch(std::vector<SimulationSetup> scenes, const GpuOptions& options,
+                                      DiagnosticList& diagnostics) {
+  SimulationOptions cuda;
+  cuda.backend = Backend::Cuda;
+  cuda.gpu = options;
+  return Simulation::create(std::move(scenes), cuda, diagnostics);
+}
+#endif
 
 struct Options {
   std::string out_dir;
@@ -100,15 +118,16 @@ SimulationSetup benchmark_box(int cells, Precision precision, Integrator integra
   return *setup;
 }
 
-// The same box as co-rotational FEM (nu 0.45, damping ratio 0.9), or as springs with the volume term for nu 0.45.
-SimulationSetup benchmark_element_box(int cells, ForceModel model) {
+// The same box as a finite-element model of the default law (nu 0.45, damping ratio 0.9), or, with_springs, as
+// springs with the law beside them calibrated for nu 0.45.
+SimulationSetup benchmark_element_box(int cells, bool with_springs) {
   DiagnosticList diagnostics;
   BoxSpec box;
   box.cells_x = box.cells_y = box.cells_z = cells;
   box.size = {0.1, 0.1, 0.1};
   const Mesh mesh = generate_box(box, diagnostics);
   std::optional<SimulationSetup> setup;
-  if (model == ForceModel::CorotationalFem) {
+  if (!with_springs) {
     FemModelSpec spec;
     spec.youngs_modulus = {5000.0};
     spec.poisson_ratio = {0.45};
@@ -116,17 +135,20 @@ SimulationSetup benchmark_element_box(int cells, ForceModel model) {
     spec.damping_ratio = 0.9;
     setup = build_fem_model(mesh, spec, diagnostics);
   } else {
-    const auto unit = calibrate_volume_term(5000.0, 0.45, StiffnessMapping::VanGelder1998, SourceRange{}, diagnostics);
-    if (!unit) return {};
+    ElementMaterial material;
+    material.youngs_modulus.assign(mesh.tetrahedra.size(), 5000.0);
+    material.poisson_ratio.assign(mesh.tetrahedra.size(), 0.45);
+    auto term = element_law_beside_springs().build(material, diagnostics);
+    if (!term) return {};
     SpringModelSpec spec;
     spec.stiffness.mapping = StiffnessMapping::VanGelder1998;
-    spec.stiffness.value = unit->spring_modulus;
+    spec.stiffness.value = 5000.0 * term->spring_modulus_scale;
     spec.mass.value = 1060.0;
     spec.damping.ratio = 0.9;
     setup = build_spring_model(mesh, spec, diagnostics);
     if (setup) {
       setup->tetrahedra = mesh.tetrahedra;
-      if (!add_volume_term(*setup, unit->bulk_modulus, 0.9, 0.0, diagnostics)) return {};
+      if (!add_element_term(*setup, std::move(term->term), 0.9, 0.0, diagnostics)) return {};
     }
   }
   if (!setup) return {};
@@ -138,12 +160,14 @@ SimulationSetup benchmark_element_box(int cells, ForceModel model) {
 }
 
 std::size_t element_count(const SimulationSetup& setup) {
-  return setup.tetrahedron_field ? setup.tetrahedra.size() : 0;
+  return setup.elements.empty() ? 0 : setup.tetrahedra.size();
 }
 
-const char* model_name(const SimulationSetup& setup) {
-  if (setup.model == ForceModel::CorotationalFem) return "corotational_fem";
-  return setup.tetrahedron_field ? "springs+volume" : "springs";
+// "springs", the finite-element law's model keyword, or springs with the law beside them.
+std::string model_label(const SimulationSetup& setup) {
+  if (setup.springs.size() > 0 && !setup.elements.empty())
+    return element_law_row(setup.elements.terms.front().law).trade_label;
+  return sim::model_name(setup);
 }
 
 // Runs advance(chunk) until at least min_seconds have passed (the chunk doubling from `first`), after one untimed
@@ -176,7 +200,7 @@ Row cpu_row(const SimulationSetup& base, unsigned threads, Precision precision, 
   setup.threads = threads;
   setup.precision = precision;
   Row row;
-  row.model = model_name(setup);
+  row.model = model_label(setup);
   row.elements = element_count(setup);
   row.variant = "cpu";
   row.backend = "cpu";
@@ -187,7 +211,7 @@ Row cpu_row(const SimulationSetup& base, unsigned threads, Precision precision, 
   row.vertices = setup.rest_positions.size();
   row.springs = setup.springs.size();
   DiagnosticList diagnostics;
-  const auto simulation = CpuSimulation::create(setup, diagnostics);
+  const auto simulation = sim::Simulation::create(setup, diagnostics);
   if (!simulation ||
       !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics); }, 1, options.min_seconds, row)) {
     row.status = failure_text(diagnostics);
@@ -222,7 +246,7 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   // undamped, docs/simulator.md): its rows run with alpha = 20 /s, which changes no kernel's work.
   if (integrator == Integrator::ForwardEuler) setup.mass_damping = 20.0;
   Row row;
-  row.model = model_name(setup);
+  row.model = model_label(setup);
   row.elements = element_count(setup);
   row.variant = "cuda";
   row.backend = "cuda";
@@ -236,10 +260,10 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   gpu_options.element_blocks_per_sm = element_blocks;
   gpu_options.sliced_springs = sliced_springs;
   gpu_options.slice_window = slice_window;
-  const auto simulation = gpu::GpuSimulation::create(setup, gpu_options, diagnostics);
+  const auto simulation = gpu_simulation(setup, diagnostics, gpu_options);
   row.graphs = launch_name(
-      simulation && launch == Launch::Persistent && !simulation->persistent_launch() ? Launch::Graphs : launch);
-  if (simulation && simulation->cluster_launch()) row.graphs += " in clusters";
+      simulation && launch == Launch::Persistent && !simulation->launches().persistent ? Launch::Graphs : launch);
+  if (simulation && simulation->launches().clusters) row.graphs += " in clusters";
   if (lanes > 0) row.graphs += (launch == Launch::Persistent ? " rows " : " lanes ") + std::to_string(lanes);
   if (element_blocks > 0) row.graphs += " element pass " + std::to_string(element_blocks) + " blocks/SM";
   if (!sliced_springs) row.graphs += " springs in CSR order";
@@ -254,7 +278,7 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
 }
 
 // `count` small scenes (different stiffness, hence different steps) in one batch, against the same scenes as
-// separate GpuSimulations advanced one after another.
+// separate simulations advanced one after another.
 std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, const Options& options) {
   std::vector<SimulationSetup> scenes;
   for (std::size_t s = 0; s < count; ++s) {
@@ -279,15 +303,15 @@ std::vector<Row> batch_rows(int cells, std::size_t count, Precision precision, c
     row.springs = springs;
     DiagnosticList diagnostics;
     if (batched) {
-      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu_options_for(Launch::Graphs), diagnostics);
+      const auto batch = gpu_batch(scenes, gpu_options_for(Launch::Graphs), diagnostics);
       if (!batch ||
           !time_steps([&](std::size_t n) { return batch->advance(n, diagnostics); }, 64, options.min_seconds, row)) {
         row.status = failure_text(diagnostics);
       }
     } else {
-      std::vector<std::unique_ptr<gpu::GpuSimulation>> singles;
+      std::vector<std::unique_ptr<Simulation>> singles;
       for (const auto& scene : scenes) {
-        singles.push_back(gpu::GpuSimulation::create(scene, gpu_options_for(Launch::Graphs), diagnostics));
+        singles.push_back(gpu_simulation(scene, diagnostics, gpu_options_for(Launch::Graphs)));
         if (!singles.back()) break;
       }
       const auto advance_all = [&](std::size_t n) {
@@ -366,11 +390,11 @@ std::vector<Row> cohort_rows(std::size_t count, const Options& options) {
     gpu::GpuOptions gpu_options = gpu_options_for(launch);
     gpu_options.gather_lanes = lanes < 0 ? 1 : lanes;
     gpu_options.sliced_springs = lanes >= 0;
-    const auto batch = gpu::GpuBatchSimulation::create(patients, gpu_options, diagnostics);
-    if (launch == Launch::Persistent && batch && !batch->persistent_launch()) continue;  // too large for one grid
+    const auto batch = gpu_batch(patients, gpu_options, diagnostics);
+    if (launch == Launch::Persistent && batch && !batch->launches().persistent) continue;  // too large for one grid
     Row timed = row;
     timed.graphs = launch_name(launch);
-    if (batch && batch->cluster_launch()) timed.graphs += " in clusters";
+    if (batch && batch->launches().clusters) timed.graphs += " in clusters";
     if (lanes > 0) timed.graphs += " lanes " + std::to_string(lanes);
     if (lanes < 0) timed.graphs += " lanes 1, springs in CSR order";
     if (!batch ||
@@ -543,18 +567,18 @@ int main(int argc, char** argv) {
   if (options.spring_cells > 0 || options.cohort_only) fem_sizes.clear();
   if (options.fem_only && options.fem_cells > 52) fem_sizes = {options.fem_cells};
   for (const int cells : fem_sizes) {
-    for (const ForceModel model : {ForceModel::CorotationalFem, ForceModel::Springs}) {
+    for (const bool with_springs : {false, true}) {
       const bool largest = cells > 52;
-      if (largest && model == ForceModel::Springs) continue;
+      if (largest && with_springs) continue;
       const auto start = std::chrono::steady_clock::now();
-      const SimulationSetup base = benchmark_element_box(cells, model);
+      const SimulationSetup base = benchmark_element_box(cells, with_springs);
       const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      std::cout << model_name(base) << " box " << cells << "^3: " << base.rest_positions.size() << " vertices, "
+      std::cout << model_label(base) << " box " << cells << "^3: " << base.rest_positions.size() << " vertices, "
                 << base.tetrahedra.size() << " tetrahedra, set up in " << format(setup_seconds, 2) << " s\n"
                 << std::flush;
       if (base.rest_positions.empty()) {
         Row row;
-        row.model = model == ForceModel::CorotationalFem ? "corotational_fem" : "springs+volume";
+        row.model = model_label(base);
         row.variant = "setup";
         row.status = "failed: the model was not built";
         rows.push_back(row);

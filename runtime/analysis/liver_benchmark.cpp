@@ -108,7 +108,7 @@ std::optional<MassPointResponse> simulate_mass_point(MassPointLaw law, double st
     return std::nullopt;
   }
   const SimulationSetup setup = mass_point_setup(law, stiffness, options);
-  auto simulation = CpuSimulation::create(setup, diagnostics);
+  auto simulation = Simulation::create(setup, diagnostics);
   if (!simulation) return std::nullopt;
   const auto steps = static_cast<std::size_t>(std::ceil(options.duration / options.time_step - 1e-9));
   MassPointResponse response;
@@ -118,8 +118,8 @@ std::optional<MassPointResponse> simulate_mass_point(MassPointLaw law, double st
   for (const std::size_t step : sample_steps(options.samples, steps)) {
     if (step > simulation->steps_taken() && !simulation->advance(step - simulation->steps_taken(), diagnostics))
       return std::nullopt;
-    const Point3 position = simulation->positions()[1];
-    const Point3 velocity = simulation->velocities()[1];
+    const Point3 position = simulation->positions(diagnostics)[1];
+    const Point3 velocity = simulation->velocities(diagnostics)[1];
     response.displacement.time.push_back(simulation->time());
     response.displacement.value.push_back(position[2] - options.rest_length);
     response.velocity.time.push_back(simulation->time());
@@ -186,6 +186,7 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
     return std::nullopt;
   }
   LiverBenchmarkReport report;
+  const std::size_t run_count = controllers.size() * patients.size() + moduli.size();
   auto reference = simulate_benchmark_reference(options, diagnostics);
   if (!reference) return std::nullopt;
   report.reference = std::move(*reference);
@@ -225,6 +226,7 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
         diagnostics.warning(SourceRange{}, "no-rule-fired",
                             "patient '" + patient.label + "': no rule of controller '" + controller.name +
                                 "' fired; its output is the system's no-fire value");
+      if (options.progress) options.progress(report.runs.size(), run_count);
       auto run = compare_modulus_with_benchmark(controller.name, patient.label,
                                                 evaluation.outputs.front() * *pascals, report.reference, options,
                                                 diagnostics);
@@ -233,6 +235,7 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
     }
   }
   for (const double modulus : moduli) {
+    if (options.progress) options.progress(report.runs.size(), run_count);
     auto run = compare_modulus_with_benchmark("constant", "E = " + format_number(modulus / 1000.0) + " kPa", modulus,
                                               report.reference, options, diagnostics);
     if (!run) return std::nullopt;

@@ -7,7 +7,7 @@
 // m x'' + gamma x' + k x = F_ext with k the controller's output and gamma = 2 zeta k / w, zeta = 0.9, w = sqrt(k/m)
 // (Eq. 3.6), against the benchmark Eq. (3.15) for one node: m x'' + (gamma0 + gamma1 |x - x0|) x' + F_s(X) = F_ext,
 // F_s(X) = K1 X + K2 X^3 up to Xc and linear beyond (kernels/spring_math.h). Here both are run by the simulator
-// itself (CpuSimulation, RK4, double): vertex 0 fixed at the origin, vertex 1 at (0, 0, l0), held in x and y, one
+// itself (a Simulation on the CPU, RK4, double): vertex 0 fixed at the origin, vertex 1 at (0, 0, l0), held in x and y, one
 // spring between them, a constant force F along z on vertex 1 from t = 0 (a step), starting at rest.
 //
 // What the thesis did not state, and what is assumed (docs/liver_fibrosis.md, "The thesis's experiment"):
@@ -20,6 +20,7 @@
 //   the controller with the benchmark; "benchmark law" (ControllerRun::benchmark_*) runs the benchmark's own law and
 //   nodal damping with K1 = k l0 (K2 / K1 and Xc kept) driven by the controller, as issue 10 item 7 asks. The
 //   reference is the benchmark with its own K1.
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +51,8 @@ struct LiverBenchmarkOptions {
   double area_over_length = 1e-3;  // m: k (N/m) = E (Pa) x area_over_length
   double rest_length = 1.0;        // m, l0 of the benchmark's spring
   SourceRange time_step_range;     // where the time step came from (a step the simulator refuses points there)
+  // Called before each run with (runs done, runs in all): thousands of patients take minutes.
+  std::function<void(std::size_t, std::size_t)> progress;
 };
 
 // Limits on the options (checked before anything is allocated).

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
 
 namespace fmpc::sim {
 
@@ -48,55 +49,49 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
   const auto youngs = per_element(spec.youngs_modulus, count, "Young's modulus", diagnostics);
   const auto poisson = per_element(spec.poisson_ratio, count, "Poisson ratio", diagnostics);
   if (!youngs || !poisson) return std::nullopt;
-  for (std::size_t e = 0; e < count; ++e) {
-    if (!((*youngs)[e] > 0.0) || !std::isfinite((*youngs)[e])) {
-      diagnostics.error(range, "tetrahedron " + std::to_string(e) + ": Young's modulus " + format_number((*youngs)[e]) +
-                                   " Pa is not a positive, finite number; fix the material value");
-      return std::nullopt;
-    }
-    if (!((*poisson)[e] >= 0.0 && (*poisson)[e] <= 0.499)) {
-      diagnostics.error(range, "tetrahedron " + std::to_string(e) + ": Poisson ratio " + format_number((*poisson)[e]) +
-                                   " is outside [0, 0.499] (0.5 is incompressible, which linear tetrahedra lock on)");
-      return std::nullopt;
-    }
-  }
+  ElementMaterial material;
+  material.youngs_modulus = std::move(*youngs);
+  material.poisson_ratio = std::move(*poisson);
+  material.where = range;
+  const ElementLawRow& row = element_law_row(spec.law);
+  auto build = row.build(material, diagnostics);
+  if (!build) return std::nullopt;
   Mesh scaled = mesh;
   for (Point3& p : scaled.points)
     for (double& coordinate : p) coordinate *= spec.length_unit;
   SimulationSetup setup;
-  setup.model = ForceModel::CorotationalFem;
   setup.rest_positions = scaled.points;
   setup.tetrahedra = scaled.tetrahedra;
   setup.springs.vertex_count = scaled.points.size();
   setup.springs.adjacency_offset.assign(scaled.points.size() + 1, 0);
-  auto field = tetrahedron_geometry(scaled.points, scaled.tetrahedra, kernels::TetrahedronLaw::CorotationalLinear,
-                                    diagnostics);
-  if (!field) return std::nullopt;
-  field->youngs_modulus = *youngs;
-  field->poisson_ratio = *poisson;
+  auto geometry = element_geometry(scaled.points, scaled.tetrahedra, diagnostics);
+  if (!geometry) return std::nullopt;
+  setup.elements.geometry = std::move(*geometry);
   setup.mass = lumped_masses(scaled, spec.mass, diagnostics);
   if (setup.mass.empty()) return std::nullopt;
   if (!(spec.damping_ratio >= 0.0) || !(spec.rayleigh_stiffness >= 0.0)) {
     diagnostics.error(range, "damping ratio and Rayleigh stiffness damping must be finite and non-negative");
     return std::nullopt;
   }
-  assign_element_damping(*field, setup.mass, spec.damping_ratio, spec.rayleigh_stiffness);
-  setup.tetrahedron_field = std::move(*field);
+  if (!add_element_term(setup, std::move(build->term), spec.damping_ratio, spec.rayleigh_stiffness, diagnostics))
+    return std::nullopt;
   return setup;
 }
 
-bool add_volume_term(SimulationSetup& setup, double bulk_modulus, double damping_ratio, double rayleigh_stiffness,
-                     DiagnosticList& diagnostics) {
+bool add_element_term(SimulationSetup& setup, ElementTerm term, double damping_ratio, double rayleigh_stiffness,
+                      DiagnosticList& diagnostics) {
   if (setup.tetrahedra.empty()) {
-    diagnostics.error(SourceRange{}, "the volume term acts on tetrahedra; the mesh has none (it is a surface mesh)");
+    diagnostics.error(SourceRange{}, std::string("an element term (") + element_law_row(term.law).keyword +
+                                         ") acts on tetrahedra; the mesh has none (it is a surface mesh)");
     return false;
   }
-  auto field = tetrahedron_geometry(setup.rest_positions, setup.tetrahedra, kernels::TetrahedronLaw::VolumePreservation,
-                                    diagnostics);
-  if (!field) return false;
-  field->bulk_modulus.assign(field->size(), bulk_modulus);
-  assign_element_damping(*field, setup.mass, damping_ratio, rayleigh_stiffness);
-  setup.tetrahedron_field = std::move(*field);
+  if (setup.elements.empty()) {
+    auto geometry = element_geometry(setup.rest_positions, setup.tetrahedra, diagnostics);
+    if (!geometry) return false;
+    setup.elements.geometry = std::move(*geometry);
+  }
+  assign_element_damping(setup.elements.geometry, term, setup.mass, damping_ratio, rayleigh_stiffness);
+  setup.elements.terms.push_back(std::move(term));
   return true;
 }
 

@@ -8,26 +8,29 @@
 // steps are read through vertex_scene (null for a single scene, which then uses `h`).
 #include <cuda_runtime_api.h>
 
+#include "kernels/element_laws.h"
 #include "kernels/implicit_math.h"
 #include "kernels/integrator_math.h"
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
 #include "kernels/tetrahedron_math.h"
+#include "runtime/gpu/launch_shapes.h"
 
 namespace fmpc::gpu {
 
-// Which internal-force struct of kernels/internal_force_math.h the per-vertex kernels are instantiated with: the
-// launchers dispatch on it once per launch (static dispatch inside the kernels).
-enum class GatherKind : int { Springs = 0, Elements = 1, SpringsAndElements = 2 };
+using kernels::kMostElementTerms;
 
-// A force model on the device: the springs (Springs, SpringsAndElements), and the tetrahedron field with the corner
-// forces its element pass writes and the per-vertex gather reads (Elements, SpringsAndElements).
+// A force model on the device: the springs (Springs, SpringsAndElements), and the element terms (kernels/
+// element_term.h) with the corner forces their passes write (the first term's, then each later one's added) and the
+// per-vertex gather reads (Elements, SpringsAndElements).
 template <typename Real>
 struct ForceModelView {
   GatherKind kind;
   kernels::SpringNetworkView<Real> springs;
-  kernels::TetrahedronFieldView<Real> field;
+  kernels::ElementTermView<Real> terms[kMostElementTerms];
+  int term_count;
+  int element_count;
   kernels::CornerForceView<Real> corners;    // corners.force == corner_force
   kernels::CornerForce<Real>* corner_force;  // 4 per element
   int element_blocks = 3;  // float: the element pass's register bound, 2 or 3 blocks per SM (GpuOptions)
@@ -48,8 +51,9 @@ template <typename Real>
 cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<Real>& network, const int* vertex_order,
                                   int vertex_count, kernels::SpringIncidence<Real>* record, cudaStream_t stream);
 
-// The element pass at `state`: every element's corner forces (kernels::tetrahedron_corner_forces); nothing for
-// GatherKind::Springs. Enqueued before every per-vertex kernel that gathers at that state.
+// The element pass at `state`: every element's corner forces (kernels::element_corner_forces), one launch per term
+// with its law a template argument, the later terms' forces added to the first's; nothing without terms. Enqueued
+// before every per-vertex kernel that gathers at that state.
 template <typename Real>
 cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
                                   cudaStream_t stream);
@@ -90,30 +94,6 @@ struct StepSize {
   Real h;
 };
 
-// Probes on a batch's vertices, applied around every step exactly as the CPU backend does (kernels/
-// integrator_math.h): before a step at t = (step_base + offset) h, displacement probes set their vertices' positions
-// and ramp velocity and force probes their share of the force; after it (t + h) displacement probes set the
-// positions again with zero velocity. step_base (device memory) is written before every chunk, so a captured graph
-// replays with the right times (a persistent launch has it by value instead); offset is the step's index within the
-// chunk. Every scene of a batch may have its own probe (ProbeScene): each probe vertex is written by one thread from
-// its own scene's values, so a scene's probe is bitwise the one it has when run alone.
-struct ProbeScene {
-  double target_x, target_y, target_z;
-  double ramp_time;
-  double h;
-  int count;  // the scene's probe vertices (a force probe shares its target equally among them)
-  bool force_mode;
-  bool has_base_force;  // force probes: whether base_force_* hold the vertices' own external force
-};
-// ProbeArguments' entry i as the probe kernels read it (kernels/probe_schedule.cuh, probe_entry), with the chunk's
-// first step; the persistent kernel keeps its probe vertices' entries in shared memory for a launch.
-struct ProbeEntry {
-  ProbeScene scene;
-  double start_x, start_y, start_z;
-  double base_force_x, base_force_y, base_force_z;  // force probes with a base force; else 0
-  unsigned long long step_base;
-  int vertex;
-};
 template <typename Real>
 struct ProbeArguments {
   const int* vertices;     // every probing scene's probe vertices, concatenated (batch vertex indices)
@@ -155,10 +135,6 @@ struct FusedStepArguments {
   int probe_offset;
   bool probe_next;
 };
-
-// Threads per vertex the lane kernels take: a power of two up to a warp, so a vertex's lanes are one aligned part of
-// a warp (their shuffles' width).
-constexpr bool valid_lanes(int lanes) { return lanes > 0 && lanes <= 32 && (lanes & (lanes - 1)) == 0; }
 
 // One fused kernel per step: gather the model's forces (springs over their CSR adjacency, elements' corner forces
 // from the element pass launched before it), add the loads, update the vertex. With lanes > 1, that many threads
@@ -245,10 +221,6 @@ struct BlockNeighbours {
   const int* block;      // the other blocks owning a neighbour of one of its vertices, ascending
   unsigned* steps_done;  // per block: the steps of this launch it has published (reset at the launch's start)
 };
-// Block b's count is steps_done[kBlockStepsStride b], one per 128-byte line: some forty blocks poll each count every
-// step, and counts sharing a line made every poll and publication of a line's blocks queue at one L2 slice.
-constexpr int kBlockStepsStride = 32;
-
 template <typename Real>
 struct PersistentEulerArguments {
   // in, out, probe_offset and probe_next are ignored: the kernel alternates state[0] and state[1] and applies the
@@ -260,8 +232,8 @@ struct PersistentEulerArguments {
   // The chunk's first step, for the probe's times: by value, so that no copy to the device precedes each launch
   // (step.probe.step_base is not read).
   unsigned long long step_base;
-  int blocks;               // grid size: at most persistent_euler_block_limit's
-  int rows;                 // vertices per block: block b takes [b rows, (b + 1) rows); 1..kPersistentThreads
+  int blocks;  // grid size: at most persistent_euler_block_limit's
+  int rows;    // vertices per block: block b takes [b rows, (b + 1) rows); 1..kPersistentThreads
   // The launch's checks: check_count of them, the last at its end (the cluster kernel takes one); check j before it
   // comes after step first_check + j check_every (counted from 1), on the state a launch ending there would hold
   // (before the probe's prescription for the next step).
@@ -279,17 +251,6 @@ struct PersistentEulerArguments {
   int most_neighbour_blocks;   // the most blocks a block waits for (springs alone)
   BlockNeighbours neighbours;  // springs alone
 };
-constexpr int kPersistentThreads = 256;  // per block
-// Dynamic shared memory of a persistent block of `rows` vertices with `records` CSR records that waits for
-// `neighbour_blocks` blocks: the records, their terms (three Reals), the vertices' probe entries and state (six
-// Reals), each record's vertex and the waited blocks' indices.
-template <typename Real>
-FMPC_HD constexpr long long persistent_euler_shared_bytes(long long rows, long long records,
-                                                          long long neighbour_blocks) {
-  return records * static_cast<long long>(sizeof(kernels::SpringIncidence<Real>) + 3 * sizeof(Real) + sizeof(int)) +
-         rows * static_cast<long long>(sizeof(ProbeEntry) + 6 * sizeof(Real)) +
-         neighbour_blocks * static_cast<long long>(sizeof(int));
-}
 // The most blocks of kPersistentThreads threads with `shared_bytes` of dynamic shared memory each that a persistent
 // launch may use (and raises the kernel's shared memory limit to `shared_bytes`, which its launches then need), every
 // block resident at once (cudaOccupancyMaxActiveBlocksPerMultiprocessor x multiprocessors); 0 where the device cannot
@@ -313,13 +274,6 @@ cudaError_t launch_persistent_euler(const PersistentEulerArguments<Real>& argume
 // records (model.springs.incidence) into shared memory once per launch. The terms are kernels::sum_spring_terms' in
 // CSR order and the step, probe and checks the persistent kernel's functions: the same bits. At the end both global
 // state buffers hold what the persistent kernel leaves there (the last state and the one before it).
-constexpr int kClusterRows = 1024;  // rows per block at most (one thread each)
-constexpr int kClusterBlocks = 16;  // blocks per cluster at most (Hopper's non-portable cluster size)
-struct ClusterBlock {
-  int first_vertex, end_vertex;    // its vertices (at most the launch's rows)
-  int window_first, window_count;  // the vertices its gathers read (its own where the cluster is one block)
-  int element_first, element_end;  // the elements whose inversion it checks at the end of a chunk
-};
 template <typename Real>
 struct ClusterEulerArguments {
   // step (with the CSR records: model.springs.incidence), state, first_parity, steps and checks as for
@@ -332,17 +286,6 @@ struct ClusterEulerArguments {
   int window_capacity;        // the longest window of a cluster of several blocks, a multiple of 4 (0: none)
   int shared_bytes;           // cluster_euler_shared_bytes(rows, window_capacity, the most records of a block)
 };
-// Shared memory of the state in a block of `rows` rows with windows of `capacity`: two published copies of six
-// arrays of `rows`, six arrays of `capacity` (a multiple of 4, so the records after them stay 16-byte aligned).
-template <typename Real>
-FMPC_HD constexpr long long cluster_euler_state_bytes(int rows, int capacity) {
-  return (12LL * rows + 6LL * capacity) * static_cast<long long>(sizeof(Real));
-}
-template <typename Real>
-FMPC_HD constexpr long long cluster_euler_shared_bytes(int rows, int capacity, long long records) {
-  return cluster_euler_state_bytes<Real>(rows, capacity) +
-         records * static_cast<long long>(sizeof(kernels::SpringIncidence<Real>));
-}
 // Whether the device launches clusters of `blocks` blocks of `rows` threads with `shared_bytes` each, one cluster
 // resident (compute capability 9.0 or newer; more than 8 blocks where the device allows non-portable sizes). False,
 // with cudaSuccess, where it does not.
@@ -381,25 +324,19 @@ struct ConjugateGradientScalars {
   double beta;       // rz_next / rz
 };
 
-// The element part of implicit Euler, in double: each element's linearisation at the step's start (rotation or
-// volume gradient, kernels::TetrahedronLinearisation), and per corner 3 values each of h^2 K v0, of the diagonal of
-// (h^2 + h beta) K_aa, and of (h^2 + h beta) K p for the conjugate gradient's current direction (fixed corners' p
-// taken as zero), gathered per vertex over the corner CSR.
+// The element part of implicit Euler, in double: each term's linearisation of each element at the step's start (its
+// law's Linearisation, e.g. a rotation or a volume gradient), and per corner 3 values each of h^2 K v0, of the
+// diagonal of (h^2 + h beta) K_aa, and of (h^2 + h beta) K p for the conjugate gradient's current direction (fixed
+// corners' p taken as zero), the terms summed in order, gathered per vertex over the corner CSR.
 struct ImplicitElements {
-  kernels::TetrahedronLaw law;
-  int count;
-  const int* corners;          // 4 per element
-  const double* rest_inverse;  // 9 per element
-  const double* rest_volume;
-  const double* youngs_modulus;  // null for the volume law
-  const double* poisson_ratio;
-  const double* bulk_modulus;             // null for the co-rotational law
-  const double* stiffness_damping;        // null: none
-  kernels::StrainTableView strain_table;  // strain null: none
-  kernels::TetrahedronLinearisation* linearisation;
-  double* rhs_part;       // 12 per element
-  double* diagonal_part;  // 12 per element
-  double* product;        // 12 per element
+  int count;  // elements; 0: none
+  int term_count;
+  const int* corners;  // 4 per element
+  kernels::ElementTermView<double> terms[kMostElementTerms];
+  void* linearisation[kMostElementTerms];  // per term: one of its law's Linearisation per element
+  double* rhs_part;                        // 12 per element
+  double* diagonal_part;                   // 12 per element
+  double* product;                         // 12 per element
 };
 
 template <typename Real>
@@ -481,14 +418,16 @@ struct EnergyArguments {
   const double* force_x;  // null: no external forces
   const double* force_y;
   const double* force_z;
-  ImplicitElements elements;  // ElementPotential: the field in double (the linearisation arrays unused)
+  // ElementPotential: one element term in double and the elements' corners.
+  kernels::ElementTermView<double> element_term;
+  const int* element_corners;
 };
 
 enum class EnergyTerm : int {
   Kinetic = 0,           // sum over vertices of m |v|^2 / 2
   SpringPotential = 1,   // sum over springs of spring_potential_energy
   LoadPotential = 2,     // sum over vertices of -(m g + f) . x
-  ElementPotential = 3,  // sum over elements of tetrahedron_elastic_energy
+  ElementPotential = 3,  // sum over elements of element_term's law's energy
 };
 
 // Sums the term over [begin, end) into *result (device memory); `partial` holds kEnergyBlocks doubles.

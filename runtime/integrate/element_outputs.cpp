@@ -1,42 +1,34 @@
-// What the tetrahedron field contributes to the host-side sums both backends share (double): internal forces at
-// chosen vertices (probes), elastic energy, element stresses for frames, and the inversion message.
-#include <cmath>
+// What the element terms contribute to the host-side sums both backends share (double): internal forces at chosen
+// vertices (probes), elastic energy, element stress outputs for frames, the model's name and the inversion message.
+// Generic over the laws: each term's law is visited once per call (kernels/element_laws.h).
 #include <sstream>
 
-#include "kernels/tetrahedron_math.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/integrate/simulation.h"
 
 namespace fmpc::sim {
 
 namespace {
 
-// Element e's material as the kernels read it, with the strain table where the co-rotational law uses one.
-kernels::TetrahedronMaterial<double> material_with_table(const SimulationSetup& setup, std::size_t e,
-                                                         const kernels::StrainTableView& table) {
-  kernels::TetrahedronMaterial<double> m = tetrahedron_material(*setup.tetrahedron_field, e);
-  if (table.strain && m.law == kernels::TetrahedronLaw::CorotationalLinear) m.strain_table = &table;
-  return m;
-}
-
 kernels::StrainTableView table_of(const SimulationSetup& setup) {
   return setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness) : kernels::StrainTableView{nullptr, nullptr, 0};
 }
 
-void corners(const SimulationSetup& setup, std::size_t e, const std::vector<Point3>& points, double out[4][3]) {
-  for (std::size_t a = 0; a < 4; ++a)
-    for (std::size_t i = 0; i < 3; ++i) out[a][i] = points[static_cast<std::size_t>(setup.tetrahedra[e][a])][i];
+// visit(Law, view) for each element term in list order, its view reading the strain table where its law does.
+template <typename Visit>
+void for_each_term(const SimulationSetup& setup, const kernels::StrainTableView& table, Visit visit) {
+  for (std::size_t t = 0; t < setup.elements.terms.size(); ++t) {
+    const kernels::ElementTermView<double> view = element_term_view(setup.elements, t, &table);
+    kernels::visit_element_law(view.law, [&](auto element_law) { visit(element_law, view); });
+  }
 }
 
 }  // namespace
 
-const char* to_string(ForceModel model) {
-  switch (model) {
-    case ForceModel::Springs:
-      return "springs";
-    case ForceModel::CorotationalFem:
-      return "corotational_fem";
-  }
-  return "springs";
+std::string model_name(const SimulationSetup& setup) {
+  if (setup.springs.size() > 0 || setup.elements.empty()) return "springs";
+  const char* keyword = element_law_row(setup.elements.terms.front().law).model_keyword;
+  return keyword != nullptr ? keyword : "springs";
 }
 
 std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vector<Point3>& positions,
@@ -59,64 +51,65 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
       for (std::size_t axis = 0; axis < 3; ++axis) out[i][axis] += f[axis];
     }
   }
-  if (!setup.tetrahedron_field) return out;
-  const TetrahedronField& field = *setup.tetrahedron_field;
+  if (setup.elements.empty()) return out;
+  const ElementGeometry& geometry = setup.elements.geometry;
   const kernels::StrainTableView table = table_of(setup);
+  // Per vertex the terms' corner forces in the backends' order: for each corner, term after term.
+  std::vector<kernels::ElementTermView<double>> views;
+  for (std::size_t t = 0; t < setup.elements.terms.size(); ++t)
+    views.push_back(element_term_view(setup.elements, t, &table));
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     const auto v = static_cast<std::size_t>(vertices[i]);
-    for (auto k = field.corner_offset[v]; k < field.corner_offset[v + 1]; ++k) {
-      const auto corner = static_cast<std::size_t>(field.corner_index[static_cast<std::size_t>(k)]);
+    for (auto k = geometry.corner_offset[v]; k < geometry.corner_offset[v + 1]; ++k) {
+      const auto corner = static_cast<std::size_t>(geometry.corner_index[static_cast<std::size_t>(k)]);
       const std::size_t e = corner / 4, c = corner % 4;
-      double x[4][3], u[4][3], f[4][3];
-      corners(setup, e, positions, x);
-      corners(setup, e, velocities, u);
-      kernels::tetrahedron_forces(material_with_table(setup, e, table), x, u, f);
-      for (std::size_t axis = 0; axis < 3; ++axis) out[i][axis] += f[c][axis];
+      double x[4][3], u[4][3], corner_force[3] = {0.0, 0.0, 0.0};
+      tetrahedron_corners(setup.tetrahedra, e, positions, x);
+      tetrahedron_corners(setup.tetrahedra, e, velocities, u);
+      for (std::size_t t = 0; t < views.size(); ++t) {
+        kernels::visit_element_law(views[t].law, [&](auto element_law) {
+          using Law = decltype(element_law);
+          double f[4][3];
+          Law::forces(Law::material(views[t], static_cast<int>(e)), x, u, f);
+          // The first term's force as it is, later ones added: the element pass's corner slot.
+          for (std::size_t axis = 0; axis < 3; ++axis)
+            corner_force[axis] = t == 0 ? f[c][axis] : corner_force[axis] + f[c][axis];
+        });
+      }
+      for (std::size_t axis = 0; axis < 3; ++axis) out[i][axis] += corner_force[axis];
     }
   }
   return out;
 }
 
 double element_elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions) {
-  if (!setup.tetrahedron_field) return 0.0;
-  const TetrahedronField& field = *setup.tetrahedron_field;
-  const kernels::StrainTableView table = table_of(setup);
   double energy = 0.0;
-  for (std::size_t e = 0; e < field.size(); ++e) {
-    double x[4][3];
-    corners(setup, e, positions, x);
-    energy += kernels::tetrahedron_elastic_energy(material_with_table(setup, e, table), x);
-  }
+  for_each_term(setup, table_of(setup), [&](auto element_law, const kernels::ElementTermView<double>& view) {
+    using Law = decltype(element_law);
+    double term_energy = 0.0;
+    for (std::size_t e = 0; e < setup.tetrahedra.size(); ++e) {
+      double x[4][3];
+      tetrahedron_corners(setup.tetrahedra, e, positions, x);
+      term_energy += Law::energy(Law::material(view, static_cast<int>(e)), x);
+    }
+    energy += term_energy;
+  });
   return energy;
 }
 
-std::vector<double> element_von_mises_stress(const SimulationSetup& setup, const std::vector<Point3>& positions) {
-  std::vector<double> out;
-  if (!setup.tetrahedron_field) return out;
-  const TetrahedronField& field = *setup.tetrahedron_field;
-  const kernels::StrainTableView table = table_of(setup);
-  out.resize(field.size());
-  for (std::size_t e = 0; e < field.size(); ++e) {
-    const kernels::TetrahedronMaterial<double> m = material_with_table(setup, e, table);
-    double x[4][3];
-    corners(setup, e, positions, x);
-    if (m.law == kernels::TetrahedronLaw::VolumePreservation) {
-      // A pure pressure has no deviatoric part: its von Mises stress is zero; the pressure's magnitude is what the
-      // volume term adds to the springs' (unrepresented) stress, so that is reported.
-      out[e] = std::abs(m.bulk_modulus * (kernels::tetrahedron_volume(x) - m.rest_volume) / m.rest_volume);
-      continue;
+std::vector<ElementStressOutput> element_stress_outputs(const SimulationSetup& setup,
+                                                        const std::vector<Point3>& positions) {
+  std::vector<ElementStressOutput> out;
+  for_each_term(setup, table_of(setup), [&](auto element_law, const kernels::ElementTermView<double>& view) {
+    using Law = decltype(element_law);
+    ElementStressOutput output{Law::kStressOutput, std::vector<double>(setup.tetrahedra.size())};
+    for (std::size_t e = 0; e < setup.tetrahedra.size(); ++e) {
+      double x[4][3];
+      tetrahedron_corners(setup.tetrahedra, e, positions, x);
+      output.values[e] = Law::stress_output(Law::material(view, static_cast<int>(e)), x);
     }
-    double modulus = m.youngs_modulus;
-    if (m.strain_table) {
-      double F[9], R[9], stretch[3];
-      kernels::corner_gradient(x, m.rest_inverse, F);
-      kernels::rotation_and_stretches(F, R, stretch);
-      modulus = kernels::strain_table_modulus(table, kernels::principal_strain_of_largest_magnitude(stretch));
-    }
-    double sigma[9];
-    kernels::corotational_stress(m.rest_inverse, modulus, m.poisson_ratio, x, sigma);
-    out[e] = kernels::von_mises_stress(sigma);
-  }
+    out.push_back(std::move(output));
+  });
   return out;
 }
 
@@ -128,9 +121,10 @@ std::string inversion_message(const SimulationSetup& setup, const InversionRepor
   if (report.first_step == 0) message << "at the start";
   else message << "at step " << report.first_step << " (t = " << report.first_time << " s)";
   message << " (" << report.current_count << " inverted then)";
-  if (setup.model == ForceModel::Springs && !setup.tetrahedron_field) {
+  if (setup.elements.empty()) {
     message << "; springs cannot tell an element from its mirror image: give the springs a volume term "
-               "(springs: {volume_term: true}) or use model: corotational_fem";
+               "(springs: {volume_term: true}) or use model: "
+            << default_fem_law().model_keyword;
   } else {
     message << "; the load is too large for the mesh here: refine it, lower the load, or raise the stiffness";
   }

@@ -1,5 +1,5 @@
 // The probe and the strain stiffness table: their checks, the probe's reading and the table's view, shared by the
-// CPU backend (cpu_simulation.cpp) and the CUDA backend (runtime/gpu).
+// CPU backend (cpu_engine.cpp) and the CUDA backend (runtime/gpu).
 #include <cmath>
 
 #include "kernels/integrator_math.h"

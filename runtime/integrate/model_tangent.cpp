@@ -1,7 +1,7 @@
 #include "runtime/integrate/model_tangent.h"
 
 #include "kernels/implicit_math.h"
-#include "kernels/tetrahedron_math.h"
+#include "kernels/element_laws.h"
 
 namespace fmpc::sim {
 
@@ -31,9 +31,9 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
   const auto dofs = static_cast<Eigen::Index>(3 * positions.size());
   Triplets stiffness, damping;
   const SpringNetwork& net = setup.springs;
-  const std::size_t elements = setup.tetrahedron_field ? setup.tetrahedron_field->size() : 0;
-  stiffness.reserve(36 * net.size() + 144 * elements);
-  damping.reserve(36 * net.size() + 144 * elements);
+  const std::size_t elements = setup.elements.empty() ? 0 : setup.elements.geometry.size();
+  stiffness.reserve(36 * net.size() + 144 * elements * setup.elements.terms.size());
+  damping.reserve(36 * net.size() + 144 * elements * setup.elements.terms.size());
   const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
   for (std::size_t s = 0; s < net.size(); ++s) {
     const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
@@ -53,31 +53,33 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
       for (int col = r; col < 3; ++col) d_block[kernels::symmetric_index(r, col)] = c * u[r] * u[col];
     add_spring_block(damping, a, b, d_block);
   }
-  if (setup.tetrahedron_field) {
-    const TetrahedronField& field = *setup.tetrahedron_field;
-    const kernels::StrainTableView table = setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness)
-                                                                  : kernels::StrainTableView{nullptr, nullptr, 0};
-    for (std::size_t e = 0; e < field.size(); ++e) {
-      kernels::TetrahedronMaterial<double> m = tetrahedron_material(field, e);
-      if (table.strain && m.law == kernels::TetrahedronLaw::CorotationalLinear) m.strain_table = &table;
-      const Tetrahedron& t = setup.tetrahedra[e];
-      double x[4][3];
-      for (std::size_t corner = 0; corner < 4; ++corner)
-        for (std::size_t i = 0; i < 3; ++i) x[corner][i] = positions[static_cast<std::size_t>(t[corner])][i];
-      kernels::TetrahedronLinearisation lin{};
-      kernels::linearise_tetrahedron(m, x, lin);
-      double K[144];
-      kernels::tetrahedron_stiffness_matrix(m, lin, K);
-      for (int row = 0; row < 12; ++row) {
-        for (int column = 0; column < 12; ++column) {
-          const int global_row = 3 * t[static_cast<std::size_t>(row / 3)] + row % 3;
-          const int global_column = 3 * t[static_cast<std::size_t>(column / 3)] + column % 3;
-          const double entry = K[12 * row + column];
-          stiffness.emplace_back(global_row, global_column, entry);
-          if (m.stiffness_damping != 0.0) damping.emplace_back(global_row, global_column, m.stiffness_damping * entry);
+  const kernels::StrainTableView table = setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness)
+                                                                : kernels::StrainTableView{nullptr, nullptr, 0};
+  for (std::size_t term = 0; term < setup.elements.terms.size(); ++term) {
+    const kernels::ElementTermView<double> view = element_term_view(setup.elements, term, &table);
+    kernels::visit_element_law(view.law, [&](auto element_law) {
+      using Law = decltype(element_law);
+      for (std::size_t e = 0; e < elements; ++e) {
+        const auto m = Law::material(view, static_cast<int>(e));
+        const Tetrahedron& t = setup.tetrahedra[e];
+        double x[4][3];
+        tetrahedron_corners(setup.tetrahedra, e, positions, x);
+        typename Law::Linearisation lin{};
+        Law::linearise(m, x, lin);
+        double K[144];
+        Law::stiffness_matrix(m, lin, K);
+        for (int row = 0; row < 12; ++row) {
+          for (int column = 0; column < 12; ++column) {
+            const int global_row = 3 * t[static_cast<std::size_t>(row / 3)] + row % 3;
+            const int global_column = 3 * t[static_cast<std::size_t>(column / 3)] + column % 3;
+            const double entry = K[12 * row + column];
+            stiffness.emplace_back(global_row, global_column, entry);
+            if (m.stiffness_damping != 0.0)
+              damping.emplace_back(global_row, global_column, m.stiffness_damping * entry);
+          }
         }
       }
-    }
+    });
   }
   ModelTangent tangent;
   tangent.stiffness.resize(dofs, dofs);

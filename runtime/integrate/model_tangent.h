@@ -3,7 +3,7 @@
 // stiffness K = -df/dx and the damping D = -df/dv of the springs (their blocks of kernels/implicit_math.h: k u u^T
 // plus the transverse term, the dashpot c u u^T) and of the tetrahedron field (kernels/tetrahedron_math.h: R K0 R^T or
 // the volume term's Gauss-Newton stiffness, and beta_e times it). The nodal and mass damping are per vertex and left
-// to the caller. Implicit Euler (cpu_simulation.cpp) and the static solver (static_equilibrium.h) both build their
+// to the caller. Implicit Euler (cpu_engine.cpp) and the static solver (static_equilibrium.h) both build their
 // systems from it, so a new force model adds its blocks here once.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wnull-dereference"

@@ -11,7 +11,8 @@
 #include "diagnostics/diagnostic.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
-#include "runtime/fem/tetrahedron_field.h"
+#include "runtime/fem/element_terms.h"
+#include "runtime/integrate/simulation_options.h"
 #include "runtime/mesh/mesh.h"
 #include "runtime/springs/spring_network.h"
 
@@ -20,18 +21,10 @@ namespace fmpc::sim {
 enum class Integrator { ForwardEuler, SemiImplicitEuler, VelocityVerlet, RungeKutta4, ImplicitEuler };
 enum class Precision { Float, Double };
 
-// What computes the internal forces (DESIGN section 7). Every integrator runs every model on both backends: the
-// integrators ask a model for its forces (and, for implicit Euler, its stiffness), never for its kind.
-enum class ForceModel {
-  Springs,          // the spring network, optionally with the volume term (tetrahedron_field, VolumePreservation)
-  CorotationalFem,  // linear tetrahedra with per-element rotation (tetrahedron_field, CorotationalLinear); no springs
-};
-
 // What happens when a tetrahedron turns inside out during a run: it is always counted and reported.
 enum class InversionPolicy { Warn, Stop };
 
 const char* to_string(Integrator integrator);
-const char* to_string(ForceModel model);
 
 struct ImplicitSolverOptions {
   // Conjugate-gradient iterations per step; 0: twice the unknowns (3 per vertex), Eigen's default. A fixed small
@@ -61,8 +54,8 @@ struct ProbeReading {
 
 // Table-driven stiffness k(strain) (DESIGN section 7): every step, each spring's strain X = (l - l0) / l0 is looked
 // up in modulus(X) (kernels/table_math.h, clamped to the table's ends) and k = modulus(X) * stiffness_per_modulus.
-// With the co-rotational FEM, each element's Young's modulus is modulus(X) at its principal strain of largest
-// magnitude (kernels/tetrahedron_math.h), and stiffness_per_modulus is empty.
+// An element term whose law takes its Young's modulus from a strain table (kStrainTableModulus) looks it up at the
+// law's strain measure (kernels/laws/), and stiffness_per_modulus is empty.
 struct StrainStiffnessTable {
   std::vector<double> strain;                 // breakpoints, strictly increasing, at least 2
   std::vector<double> modulus;                // Pa, one per breakpoint
@@ -74,15 +67,17 @@ struct SimulationSetup {
   std::vector<Point3> initial_positions;   // empty: the rest positions
   std::vector<Point3> initial_velocities;  // empty: at rest
   std::vector<double> mass;                // kg per vertex (lumped_masses)
-  ForceModel model = ForceModel::Springs;
-  // Springs: rest_length, stiffness, damping and adjacency filled in. CorotationalFem: no springs (vertex_count and
-  // an all-zero adjacency_offset only).
+  // What computes the internal forces (DESIGN section 7): a spring network and element terms, either or both; every
+  // integrator runs every combination on both backends, asking for forces (and, for implicit Euler, the stiffness),
+  // never for a kind. Springs: rest_length, stiffness, damping and adjacency filled in; a model of elements alone
+  // has none (vertex_count and an all-zero adjacency_offset only).
   SpringNetwork springs;
-  // The mesh's tetrahedra (positively oriented): inversions are counted on them in every model, and a tetrahedron
-  // field's arrays are parallel to them. Empty for triangle meshes.
+  // The mesh's tetrahedra (positively oriented): inversions are counted on them in every model, and the element
+  // terms' arrays are parallel to them. Empty for triangle meshes.
   std::vector<Tetrahedron> tetrahedra;
-  // CorotationalFem: the elements (CorotationalLinear). Springs: the volume term (VolumePreservation), when on.
-  std::optional<TetrahedronField> tetrahedron_field;
+  // The element terms (runtime/fem/element_terms.h): a finite-element model's law, or a term beside the springs (the
+  // volume term); empty: none. At most kernels::kMostElementTerms.
+  ElementTerms elements;
   // Rayleigh's mass-proportional damping alpha (1/s): a force -alpha m v on every free vertex (its stiffness-
   // proportional part is in the springs' dashpots and the elements' stiffness_damping).
   double mass_damping = 0.0;
@@ -121,6 +116,10 @@ struct SimulationSetup {
   std::optional<StrainStiffnessTable> strain_stiffness;  // replaces springs.stiffness every step
 };
 
+// The model's name as scenes spell it: "springs" for a spring network (with or without a term beside it), else the
+// scene `model:` keyword of its element law (the registry's model_keyword).
+std::string model_name(const SimulationSetup& setup);
+
 // Where vertex v starts: its initial position, or its rest position.
 const Point3& start_position(const SimulationSetup& setup, std::size_t v);
 
@@ -146,10 +145,15 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
                                     const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
                                     const std::vector<std::int32_t>& vertices);
 
-// Per tetrahedron at `positions` (double): the von Mises stress (Pa) of the co-rotational FEM, or of the volume
-// term's pressure kappa (V - V0) / V0 with springs (whose own stresses are not a continuum field); empty without
-// a tetrahedron field.
-std::vector<double> element_von_mises_stress(const SimulationSetup& setup, const std::vector<Point3>& positions);
+// Per element term, per tetrahedron at `positions` (double): the term's stress output (its law's stress_output, the
+// frames' cell array named by the law's kStressOutput: e.g. a von Mises stress, or the volume term's pressure beside
+// springs, whose own stresses are not a continuum field); empty without element terms.
+struct ElementStressOutput {
+  const char* name;            // the cell array's name
+  std::vector<double> values;  // one per tetrahedron
+};
+std::vector<ElementStressOutput> element_stress_outputs(const SimulationSetup& setup,
+                                                        const std::vector<Point3>& positions);
 
 // The CG iteration cap of one implicit step: options.max_iterations, or twice the unknowns when it is 0.
 int implicit_iteration_limit(const SimulationSetup& setup);
@@ -158,11 +162,10 @@ int implicit_iteration_limit(const SimulationSetup& setup);
 bool validate_loads(const SimulationSetup& setup, DiagnosticList& diagnostics);
 
 // Elastic energy at `positions` (J): of the springs, 1/2 k (l - l0)^2 for the linear law, the integral of F_s for
-// Basafa-Farahmand; of the elements, V0 (mu eps:eps + lambda/2 tr(eps)^2) (co-rotational) or kappa (V - V0)^2 /
-// (2 V0) (volume term). With a strain table, k (E) is the table's value at the current strain (an approximation:
-// the integral of the varying modulus is not taken).
+// Basafa-Farahmand; of each element term, its law's energy. With a strain table, k (E) is the table's value at the
+// current strain (an approximation: the integral of the varying modulus is not taken).
 double elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions);
-// The tetrahedron field's share of elastic_energy.
+// The element terms' share of elastic_energy.
 double element_elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions);
 // Kinetic energy 1/2 m |v|^2 summed over the vertices (J).
 double kinetic_energy(const SimulationSetup& setup, const std::vector<Point3>& velocities);
@@ -200,7 +203,8 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics);
 std::optional<StabilityReport> check_stability(const SimulationSetup& setup, DiagnosticList& diagnostics);
 
 struct NonFiniteReport {
-  std::size_t step = 0;  // the step that produced the first non-finite value (1-based)
+  std::size_t scene = 0;  // index in the batch
+  std::size_t step = 0;   // the step that produced the first non-finite value (1-based)
   double time = 0.0;
   std::int32_t vertex = -1;  // the first vertex with a non-finite position or velocity
   std::int32_t spring = -1;  // the spring at that vertex that is non-finite or the most strained
@@ -217,8 +221,8 @@ struct InversionReport {
   std::size_t current_count = 0;    // at the last check
 };
 
-// Steps between two NaN/Inf and inversion checks of the GPU backend, and between two inversion checks of the CPU
-// backend (which checks NaN/Inf every step).
+// Steps between two NaN/Inf and inversion checks (Simulation::advance's default; the CPU backend also finds NaN/Inf at
+// the step that makes it).
 constexpr std::size_t kCheckEvery = 64;
 
 // The message of a first inversion ("tetrahedron 12 (vertices ...) turned inside out at step 37 (t = ... s); ...").
@@ -244,33 +248,110 @@ struct SimulationResult {
   int implicit_max_iterations_used = 0;
 };
 
-// A running simulation on the CPU (float or double state, multi-threaded, deterministic).
-class CpuSimulation {
- public:
-  // Checks the setup (sizes, indices, masses, rest lengths, stability); returns null after appending errors.
-  // The simulation keeps its own copy of the setup.
-  static std::unique_ptr<CpuSimulation> create(const SimulationSetup& setup, DiagnosticList& diagnostics);
-  virtual ~CpuSimulation() = default;
+class SteppingEngine;
 
-  // Advances `steps` steps; stops early (returning false, with an error naming step, vertex and spring) when a
-  // position or velocity becomes NaN or infinite, when a vertex moves beyond the displacement the nodal damping's
-  // bound assumed, or (on_inversion: stop) when a tetrahedron turns inside out. A first inversion under
-  // on_inversion: warn appends a warning (code `inverted-elements`) and the run goes on.
-  virtual bool advance(std::size_t steps, DiagnosticList& diagnostics) = 0;
-  virtual std::size_t steps_taken() const = 0;
-  virtual double time() const = 0;
-  virtual std::vector<Point3> positions() const = 0;
-  virtual std::vector<Point3> velocities() const = 0;
-  virtual double kinetic_energy() const = 0;
-  virtual double potential_energy() const = 0;
-  virtual const StabilityReport& stability() const = 0;
-  virtual const std::optional<NonFiniteReport>& non_finite() const = 0;
-  virtual const InversionReport& inversions() const = 0;
-  virtual int implicit_max_iterations_used() const = 0;
-  // The probe's displacement and force now; zeros without a probe.
-  virtual ProbeReading probe_reading() const = 0;
-  // The stiffness of every spring now (N/m): springs.stiffness, or the last table lookup with a strain table.
-  virtual std::vector<double> current_stiffness() const = 0;
+// Which persistent launches a CUDA run uses (GpuOptions): for tests and benchmarks that measure them.
+struct SimulationLaunches {
+  bool persistent = false;  // chunks of steps in one launch (a cooperative grid or clusters)
+  bool clusters = false;    // in thread-block clusters
+};
+
+// A running simulation: a batch of one or more scenes advanced together on one backend (the CPU: each scene's
+// vertices on worker threads, the scenes of a batch side by side; CUDA: one launch per kernel for the whole batch,
+// runtime/gpu/gpu_simulation.h), float or double state, deterministic. Both backends are written under one run
+// supervisor (runtime/integrate/run_supervisor.cpp): NaN/Inf and inversion checks every `check_every` steps and at
+// the end of each advance, the first non-finite step and the first inversion located exactly by replay from the
+// last checkpoint (the steps are deterministic), the inversion policy, and the messages. A NaN/Inf in any scene
+// stops the whole batch.
+class Simulation {
+ public:
+  // Checks every scene (sizes, indices, masses, rest lengths, stability; errors of a batch name the scene) and what
+  // the backend cannot run together (the CUDA backend's batches share their integrator, precision, laws and loads:
+  // an error names the first scene that differs), then builds the backend's state. Null after appending errors.
+  static std::unique_ptr<Simulation> create(std::vector<SimulationSetup> scenes, const SimulationOptions& options,
+                                            DiagnosticList& diagnostics);
+  // One scene.
+  static std::unique_ptr<Simulation> create(const SimulationSetup& setup, DiagnosticList& diagnostics,
+                                            const SimulationOptions& options = {});
+  ~Simulation();
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  // Advances `steps` steps, checking for NaN/Inf, inversions and the nodal damping's displacement bound every
+  // `check_every` steps counted from the run's start (0: only at the end) and at the end. Stops early (returning
+  // false, with an error naming the exact step, scene, vertex and spring) at a non-finite position or velocity, a
+  // vertex beyond the displacement the nodal damping's bound assumed, or (on_inversion: stop) a tetrahedron turned
+  // inside out; a first inversion under on_inversion: warn appends a warning (code `inverted-elements`) and the
+  // run goes on. After a false return every advance returns false.
+  bool advance(std::size_t steps, DiagnosticList& diagnostics, std::size_t check_every = kCheckEvery);
+
+  std::size_t scene_count() const;
+  std::size_t steps_taken() const;
+  double time(std::size_t scene = 0) const;
+  const SimulationSetup& setup(std::size_t scene = 0) const;
+  const StabilityReport& stability(std::size_t scene = 0) const;
+  Backend backend() const;
+  SimulationLaunches launches() const;
+  const std::optional<NonFiniteReport>& non_finite() const;
+  // Inverted tetrahedra of a scene (InversionReport): at every check, the first step exact by replay.
+  const InversionReport& inversions(std::size_t scene = 0) const;
+  // The most conjugate-gradient iterations one implicit step needed (0 for the explicit schemes).
+  int implicit_max_iterations_used() const;
+
+  // The state, read back (from the device on CUDA). After a device error (appended) the vectors are empty and the
+  // optionals nullopt. Energies: kinetic 1/2 m |v|^2, elastic (springs and element
+  // terms), potential (elastic and the loads' -(m g + f) . x); on CUDA reduced on the device in double with a fixed
+  // summation tree (the same bits on every run, the last bits may differ from the host's sums).
+  std::vector<Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const;
+  std::vector<Point3> positions(DiagnosticList& diagnostics) const { return positions(0, diagnostics); }
+  std::vector<Point3> velocities(std::size_t scene, DiagnosticList& diagnostics) const;
+  std::vector<Point3> velocities(DiagnosticList& diagnostics) const { return velocities(0, diagnostics); }
+  // Every scene's positions (and, given, velocities) now, in one download per array on CUDA (what a cohort reads at
+  // every output event); false after a device error.
+  bool scene_states(std::vector<std::vector<Point3>>& positions, std::vector<std::vector<Point3>>* velocities,
+                    DiagnosticList& diagnostics) const;
+  std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList& diagnostics) const;
+  std::optional<double> kinetic_energy(DiagnosticList& diagnostics) const { return kinetic_energy(0, diagnostics); }
+  std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const;
+  std::optional<double> potential_energy(DiagnosticList& diagnostics) const { return potential_energy(0, diagnostics); }
+  std::optional<double> elastic_energy(std::size_t scene, DiagnosticList& diagnostics) const;
+  std::optional<double> elastic_energy(DiagnosticList& diagnostics) const { return elastic_energy(0, diagnostics); }
+  // The largest distance of a vertex from its start (initial or rest positions): on CUDA reduced on the device, the
+  // same bits as the host's computation on positions(), without moving the state to the host.
+  std::optional<double> largest_displacement(std::size_t scene, DiagnosticList& diagnostics) const;
+  std::optional<double> largest_displacement(DiagnosticList& diagnostics) const {
+    return largest_displacement(0, diagnostics);
+  }
+  // Whether energies and the largest displacement are reduced where the state lives (CUDA) rather than from
+  // positions() and velocities() on the host.
+  bool reduces_in_place() const;
+  // The probe's displacement and force now (read_probe on the state); zeros without a probe.
+  ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const;
+  ProbeReading probe_reading(DiagnosticList& diagnostics) const { return probe_reading(0, diagnostics); }
+  // Every spring's stiffness now (N/m): the setup's, or a strain table's last lookup.
+  std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const;
+  std::vector<double> current_stiffness(DiagnosticList& diagnostics) const { return current_stiffness(0, diagnostics); }
+
+ private:
+  Simulation(std::vector<SimulationSetup> scenes, std::vector<StabilityReport> stability, Backend backend);
+  bool locate_non_finite(int vertex, DiagnosticList& diagnostics);
+  bool check_displacement_bound(DiagnosticList& diagnostics);
+  bool check_inversions(DiagnosticList& diagnostics);
+  bool needs_checkpoints() const;
+  bool displacement_bound_checked(std::size_t scene) const;
+  std::size_t scene_of(int vertex) const;
+  std::int32_t culprit_spring(std::size_t scene, std::size_t vertex, DiagnosticList& diagnostics) const;
+  bool fail();
+
+  std::vector<SimulationSetup> scenes_;
+  std::vector<StabilityReport> stability_;
+  std::unique_ptr<SteppingEngine> engine_;
+  Backend backend_;
+  std::vector<int> vertex_begin_;  // scene s owns batch vertices [vertex_begin_[s], vertex_begin_[s + 1])
+  std::vector<InversionReport> inversions_;
+  std::optional<NonFiniteReport> non_finite_;
+  std::size_t restores_ = 0;
+  bool failed_ = false;
 };
 
 // create + advance(step_count) with samples every record_every steps.

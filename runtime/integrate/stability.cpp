@@ -3,7 +3,7 @@
 #include <sstream>
 
 #include "kernels/integrator_math.h"
-#include "kernels/tetrahedron_math.h"
+#include "kernels/element_laws.h"
 #include "runtime/integrate/simulation.h"
 
 namespace fmpc::sim {
@@ -97,18 +97,24 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
     if (k > 0.0) spring_ratio_min = std::min(spring_ratio_min, c / k);
   }
   double element_ratio_min = std::numeric_limits<double>::infinity();  // min_e beta_e
-  if (setup.tetrahedron_field) {
-    const TetrahedronField& field = *setup.tetrahedron_field;
-    for (std::size_t e = 0; e < field.size(); ++e) {
-      const kernels::TetrahedronMaterial<double> m = tetrahedron_material(field, e);
-      const bool table = setup.strain_stiffness && m.law == kernels::TetrahedronLaw::CorotationalLinear;
-      const double bound = kernels::tetrahedron_stiffness_bound(m, table ? table_modulus_max : m.youngs_modulus);
-      for (const auto v : setup.tetrahedra[e]) {
-        stiffness_sum[static_cast<std::size_t>(v)] += bound;
-        damping_sum[static_cast<std::size_t>(v)] += m.stiffness_damping * bound;
+  // Each element term's bound at the largest modulus the run can give it (a strain table's largest where its law
+  // reads one), its damping beta_e times that.
+  const kernels::StrainTableView table = setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness)
+                                                                : kernels::StrainTableView{nullptr, nullptr, 0};
+  for (std::size_t term = 0; term < setup.elements.terms.size(); ++term) {
+    const kernels::ElementTermView<double> view = element_term_view(setup.elements, term, &table);
+    kernels::visit_element_law(view.law, [&](auto element_law) {
+      using Law = decltype(element_law);
+      for (std::size_t e = 0; e < setup.elements.geometry.size(); ++e) {
+        const auto m = Law::material(view, static_cast<int>(e));
+        const double bound = Law::stiffness_bound(m);
+        for (const auto v : setup.tetrahedra[e]) {
+          stiffness_sum[static_cast<std::size_t>(v)] += bound;
+          damping_sum[static_cast<std::size_t>(v)] += m.stiffness_damping * bound;
+        }
+        element_ratio_min = std::min(element_ratio_min, m.stiffness_damping);
       }
-      element_ratio_min = std::min(element_ratio_min, m.stiffness_damping);
-    }
+    });
   }
   double omega_squared_max = 0.0, mass_damping_min = std::numeric_limits<double>::infinity();
   for (std::size_t v = 0; v < n; ++v) {

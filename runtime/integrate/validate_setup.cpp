@@ -6,6 +6,66 @@ namespace fmpc::sim {
 
 namespace {
 bool finite_point(const Point3& p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
+
+// The element terms as the backends read them: a known law (kernels::visit_element_law takes any index), at most
+// what the GPU backend holds, each of its law's parameters and its damping one per element, finite (a builder from
+// runtime/fem/element_law_registry.h checks the physical ranges with the scene's names; this catches setups built
+// by hand), and the geometry's arrays parallel to the tetrahedra.
+bool validate_element_terms(const SimulationSetup& setup, const SourceRange& range, DiagnosticList& diagnostics) {
+  const ElementTerms& elements = setup.elements;
+  if (elements.empty()) return true;
+  const std::size_t count = setup.tetrahedra.size();
+  const ElementGeometry& geometry = elements.geometry;
+  if (geometry.size() != count || geometry.rest_inverse.size() != 9 * count ||
+      geometry.corner_offset.size() != setup.rest_positions.size() + 1 || geometry.corner_index.size() != 4 * count ||
+      geometry.corner_slot.size() != 4 * count) {
+    diagnostics.error(range, "the element terms' geometry does not match the " + std::to_string(count) +
+                                 " tetrahedra; build it with element_geometry from the same mesh");
+    return false;
+  }
+  if (elements.terms.size() > static_cast<std::size_t>(kernels::kMostElementTerms)) {
+    diagnostics.error(range, std::to_string(elements.terms.size()) + " element terms given; a model takes at most " +
+                                 std::to_string(kernels::kMostElementTerms));
+    return false;
+  }
+  for (std::size_t t = 0; t < elements.terms.size(); ++t) {
+    const ElementTerm& term = elements.terms[t];
+    const std::string name = "element term " + std::to_string(t);
+    if (term.law < 0 || term.law >= kernels::ElementLaws::count) {
+      diagnostics.error(range, name + " has law " + std::to_string(term.law) + ", which is not one of the " +
+                                   std::to_string(kernels::ElementLaws::count) + " element laws");
+      return false;
+    }
+    const int parameters = kernels::visit_element_law(term.law, [](auto element_law) { return decltype(element_law)::kParameterCount; });
+    for (int p = 0; p < kernels::kMostLawParameters; ++p) {
+      const std::vector<double>& values = term.parameter[p];
+      if (values.size() != (p < parameters ? count : 0)) {
+        diagnostics.error(range, name + " has " + std::to_string(values.size()) + " values of parameter " +
+                                     std::to_string(p) + " for " + std::to_string(count) +
+                                     " tetrahedra; its law takes " + std::to_string(parameters) +
+                                     " parameters, one per element each");
+        return false;
+      }
+      for (const double value : values)
+        if (!std::isfinite(value)) {
+          diagnostics.error(range, name + " has a NaN or infinite parameter " + std::to_string(p));
+          return false;
+        }
+    }
+    if (!term.stiffness_damping.empty() && term.stiffness_damping.size() != count) {
+      diagnostics.error(range, name + " has " + std::to_string(term.stiffness_damping.size()) +
+                                   " damping values for " + std::to_string(count) + " tetrahedra; give one each or none");
+      return false;
+    }
+    for (const double beta : term.stiffness_damping)
+      if (!(beta >= 0.0) || !std::isfinite(beta)) {
+        diagnostics.error(range, name + " has stiffness damping " + std::to_string(beta) +
+                                     "; it must be finite and non-negative");
+        return false;
+      }
+  }
+  return true;
+}
 }  // namespace
 
 bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
@@ -127,6 +187,7 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                                    std::to_string(n) + " vertices, numbered from 0)");
     }
   }
+  if (!validate_element_terms(setup, range, diagnostics)) return false;
   if (setup.law == kernels::SpringLaw::BasafaFarahmand &&
       (!(setup.basafa_k2_over_k1 >= 0.0) || !(setup.basafa_xc > 0.0))) {
     diagnostics.error(range, "the Basafa-Farahmand law needs K2/K1 >= 0 and Xc > 0");

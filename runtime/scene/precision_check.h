@@ -11,9 +11,9 @@
 namespace fmpc::sim {
 
 // Why the precision check does not run for this run, or nullopt when it does (outputs.precision_check, and `auto`'s
-// limit on the vertex-steps).
-std::optional<std::string> precision_check_skipped(const Scene& scene, const SimulationSetup& setup,
-                                                   const SceneRunResult& run);
+// limit on the run's stepping time, `stepping_seconds`).
+std::optional<std::string> precision_check_skipped(const Scene& scene, const SceneRunResult& run,
+                                                   double stepping_seconds);
 
 // The setup of the rerun: the other precision at the run's step.
 SimulationSetup precision_check_setup(const SimulationSetup& setup, const SceneRunResult& run);
@@ -21,9 +21,5 @@ SimulationSetup precision_check_setup(const SimulationSetup& setup, const SceneR
 // The rerun's final state (null: it did not complete) against the run's final answers, warned about when they differ.
 PrecisionCheckResult compare_precision(const Scene& scene, const SimulationSetup& setup, const SceneRunResult& run,
                                        const SceneState* other_run, DiagnosticList& diagnostics);
-
-// The scene again in the other precision, to its last step, compared with the run's final answers.
-PrecisionCheckResult check_precision(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
-                                     const SceneRunResult& run, DiagnosticList& diagnostics);
 
 }  // namespace fmpc::sim

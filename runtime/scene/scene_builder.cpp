@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -12,6 +13,7 @@
 #include "compiler/frontend/rule_file_loader.h"
 #include "diagnostics/number_format.h"
 #include "kernels/table_math.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/fem/fem_model_builder.h"
 #include "runtime/io/input_file.h"
 #include "runtime/mesh/generated_mesh.h"
@@ -362,13 +364,14 @@ std::optional<std::vector<double>> regional_values(const RegionalValue& value, c
   return out;
 }
 
-// The co-rotational FEM: Young's modulus per element from the material source (at each element's centroid for
-// regions), the Poisson ratio, masses and damping.
+// A finite-element model of the scene's element law: Young's modulus per element from the material source (at each
+// element's centroid for regions), the Poisson ratio, masses and damping.
 std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, const LoadedRules* loaded,
                                          DiagnosticList& diagnostics) {
   const SceneMaterial& material = scene.material;
   const std::vector<Point3> centroids = tetrahedron_centroids(built.mesh);
   FemModelSpec spec;
+  spec.law = scene.element_law;
   spec.length_unit = scene.mesh.unit;
   spec.mass = scene.mass;
   spec.damping_ratio = scene.damping.ratio;
@@ -420,13 +423,14 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   return setup;
 }
 
-// Springs with the volume term reaching the scene's Poisson ratio (calibrate_volume_term): the springs' stiffness is
-// scaled to the calibrated E_s / E, and each element gets kappa = (kappa / E) E at its centroid (one value for a
-// constant material).
-bool add_calibrated_volume_term(const Scene& scene, const BuiltScene& built, const LoadedRules* loaded,
-                                SimulationSetup& setup, std::string& description, DiagnosticList& diagnostics) {
+// Springs with the element law that goes beside them (springs: {volume_term: true}) reaching the scene's Poisson
+// ratio: the law's builder gives each element its parameters at the element's Young's modulus (at its centroid; one
+// value for a constant material) and the factor the springs' stiffness is scaled by.
+bool add_term_beside_springs(const Scene& scene, const BuiltScene& built, const LoadedRules* loaded,
+                             SimulationSetup& setup, std::string& description, DiagnosticList& diagnostics) {
   const SceneMaterial& material = scene.material;
   const SourceRange where = scene.range_of("springs");
+  const std::string fem = default_fem_law().model_keyword;
   if (built.mesh.tetrahedra.empty()) {
     diagnostics.error(where, "springs.volume_term: the volume term acts on tetrahedra; this mesh has only triangles");
     return false;
@@ -439,41 +443,40 @@ bool add_calibrated_volume_term(const Scene& scene, const BuiltScene& built, con
   }
   if (setup.strain_stiffness) {
     diagnostics.error(where, "springs.volume_term: a strain-dependent modulus is not supported with the volume term; "
-                             "use model: corotational_fem for strain-dependent tissue");
+                             "use model: " + fem + " for strain-dependent tissue");
     return false;
   }
   const RegionalValue poisson = material.poisson_ratio.value_or(RegionalValue{kDefaultPoissonRatio, true, {}});
   if (!poisson.regions.empty()) {
     diagnostics.error(scene.range_of("material.poisson_ratio"),
                       "material.poisson_ratio: springs with the volume term take one ratio for the whole scene; use "
-                      "model: corotational_fem for a ratio per region");
+                      "model: " + fem + " for a ratio per region");
     return false;
   }
-  // The calibration is linear in E: its factors at E = 1 Pa scale the springs and give kappa per unit modulus.
-  const auto unit = calibrate_volume_term(1.0, poisson.value, material.mapping, scene.range_of("material.poisson_ratio"),
-                                          diagnostics);
-  if (!unit) return false;
-  for (double& k : setup.springs.stiffness) k *= unit->spring_modulus;
   // Young's modulus per element: constant, or the rules at each element's centroid.
-  std::vector<double> modulus(built.mesh.tetrahedra.size(), material.value * 1000.0);
+  ElementMaterial element_material;
+  element_material.youngs_modulus.assign(built.mesh.tetrahedra.size(), material.value * 1000.0);
+  element_material.poisson_ratio.assign(built.mesh.tetrahedra.size(), poisson.value);
+  element_material.spring_mapping = material.mapping;
+  element_material.where = scene.range_of("material.poisson_ratio");
   if (built.material) {
     if (built.material->modulus_min == built.material->modulus_max) {
-      std::fill(modulus.begin(), modulus.end(), built.material->modulus_min);
+      std::fill(element_material.youngs_modulus.begin(), element_material.youngs_modulus.end(),
+                built.material->modulus_min);
     } else {
       BuiltScene scratch;
       const auto per_element = bind_fuzzy_material(scene, tetrahedron_centroids(built.mesh), MaterialPoint::ElementCentroid,
                                                     scratch, loaded, diagnostics);
       if (!per_element) return false;
-      modulus = per_element->modulus_per_spring;
+      element_material.youngs_modulus = per_element->modulus_per_spring;
     }
   }
-  if (!add_volume_term(setup, 1.0, scene.damping.ratio, scene.rayleigh.stiffness, diagnostics)) return false;
-  TetrahedronField& field = *setup.tetrahedron_field;
-  for (std::size_t e = 0; e < field.size(); ++e) field.bulk_modulus[e] = unit->bulk_modulus * modulus[e];
-  // The damping coefficients were sized for kappa = 1 Pa; beta_e = 2 zeta / omega_e scales as 1 / sqrt(kappa).
-  assign_element_damping(field, setup.mass, scene.damping.ratio, scene.rayleigh.stiffness);
-  description += "; volume term (Teschner et al. 2004) for nu = " + format_number(poisson.value) + ": springs at " +
-                 format_number(unit->spring_modulus) + " E, kappa = " + format_number(unit->bulk_modulus) + " E";
+  auto build = element_law_beside_springs().build(element_material, diagnostics);
+  if (!build) return false;
+  for (double& k : setup.springs.stiffness) k *= build->spring_modulus_scale;
+  if (!add_element_term(setup, std::move(build->term), scene.damping.ratio, scene.rayleigh.stiffness, diagnostics))
+    return false;
+  description += build->description;
   return true;
 }
 
@@ -549,7 +552,7 @@ std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& bui
     if (!assign_damping(setup->springs, setup->mass, scene.damping, diagnostics)) return std::nullopt;
   }
   if (scene.volume_term) {
-    if (!add_calibrated_volume_term(scene, built, loaded, *setup, built.stiffness_description, diagnostics))
+    if (!add_term_beside_springs(scene, built, loaded, *setup, built.stiffness_description, diagnostics))
       return std::nullopt;
     // The springs were scaled to the calibrated modulus: their dashpots follow.
     if (!assign_damping(setup->springs, setup->mass, scene.damping, diagnostics)) return std::nullopt;
@@ -607,6 +610,34 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
         picked.reset();
         break;
       }
+    }
+    if (picked && probe.mode == ProbeLoad::Mode::Displacement) {
+      // A travel far outside the mesh's scale is a unit mistake (5 m on a mesh in millimetres ran and reported
+      // 5,000 mm), and a travel given at once is an instant step; both ran without a word.
+      Point3 low = built.mesh.points.empty() ? Point3{} : built.mesh.points.front(), high = low;
+      for (const Point3& p : built.mesh.points)
+        for (std::size_t a = 0; a < 3; ++a) low[a] = std::min(low[a], p[a]), high[a] = std::max(high[a], p[a]);
+      const double size = distance(low, high);
+      const double travel = std::sqrt(probe.target[0] * probe.target[0] + probe.target[1] * probe.target[1] +
+                                      probe.target[2] * probe.target[2]);
+      const auto digits = [](double value) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.3g", value);
+        return std::string(text);
+      };
+      if (size > 0.0 && (travel > size || (travel > 0.0 && travel < 1e-6 * size)))
+        diagnostics.warning(scene.range_of("loads.probe.displacement"), "probe-load",
+                            "loads.probe.displacement: the probe travels " + format_number(travel) + " m, " +
+                                digits(travel / size) + " times the mesh's size (" + digits(size) +
+                                " m, its bounding box's diagonal)" +
+                                (travel > size ? ", further than the whole mesh" : ", below what float can resolve") +
+                                ": displacements are in metres whatever mesh.units says",
+                            {"check the units: 5 mm is 0.005"});
+      if (probe.ramp == 0.0)
+        diagnostics.warning(scene.range_of("loads.probe"), "probe-load",
+                            "loads.probe.ramp is 0: the probe moves its whole travel in the first step, an instant "
+                            "step that shakes the mesh (and its reaction force) at the highest frequencies",
+                            {"give a ramp of several of the mesh's vibration periods, e.g. a tenth of the duration"});
     }
     if (picked) {
       ProbeLoad load;
@@ -668,7 +699,7 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
   built.mesh = std::move(*mesh);
   for (unsigned level = 0; level < refinements; ++level) built.mesh = subdivide_tetrahedra(built.mesh);
   std::optional<SimulationSetup> setup =
-      scene.model == ForceModel::CorotationalFem ? build_fem(scene, built, rules, diagnostics)
+      scene.model == ForceModel::Elements ? build_fem(scene, built, rules, diagnostics)
                                                  : build_springs(scene, built, rules, diagnostics);
   if (!setup) return std::nullopt;
   return finish_scene(scene, repair, std::move(built), std::move(*setup), errors, diagnostics);

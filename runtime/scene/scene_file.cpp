@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/scene/scene_file_parser.h"
 #include "runtime/scene/scene_file_yaml.h"
 
@@ -41,7 +42,10 @@ const char* scene_name(StiffnessMapping mapping) {
   return "van_gelder_1998";
 }
 
-const char* scene_name(ForceModel model) { return to_string(model); }
+std::string model_keyword(const Scene& scene) {
+  if (scene.model == ForceModel::Springs) return "springs";
+  return element_law_row(scene.element_law).model_keyword;
+}
 
 SourceRange Scene::range_of(const std::string& field) const {
   const auto found = ranges.find(field);

@@ -135,8 +135,8 @@ struct SceneOutputs {
   bool csv = true;
   bool summary = true;
   bool plot = true;  // force-displacement PNG (needs a probe)
-  // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the scene's work is
-  // at most kPrecisionCheckWork vertex-steps; on always; off never.
+  // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the run's stepping
+  // took at most kPrecisionCheckSeconds (the check costs about as much again); on always; off never.
   enum class PrecisionCheck { Auto, On, Off } precision_check = PrecisionCheck::Auto;
 };
 
@@ -149,10 +149,15 @@ struct SceneRayleigh {
 
 constexpr double kDefaultPoissonRatio = 0.45;
 
+// The scene's `model:` (docs/scenes.md): a spring network (with springs: {volume_term: true}, the element law beside
+// springs with it), or a finite-element model of one element law (runtime/fem/element_law_registry.h).
+enum class ForceModel { Springs, Elements };
+
 struct Scene {
   std::string path;  // the scene file
   std::string name;  // `name`, or the file's stem
   ForceModel model = ForceModel::Springs;
+  int element_law = 0;  // model Elements: the law's index in element_law_rows()
   SceneMesh mesh;
   SceneMaterial material;
   MassSpec mass;
@@ -203,6 +208,7 @@ std::optional<Scene> parse_scene(const std::string& path, const std::string& tex
 const char* to_string(SceneBackend backend);
 const char* scene_name(Integrator integrator);  // the scene spelling: "semi_implicit_euler", ...
 const char* scene_name(StiffnessMapping mapping);  // the scene spelling: "van_gelder_1998", ...
-const char* scene_name(ForceModel model);  // "springs", "corotational_fem"
+// The scene spelling of its model: "springs", or the element law's model keyword.
+std::string model_keyword(const Scene& scene);
 
 }  // namespace fmpc::sim

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
 
 namespace fmpc::sim {
 
@@ -27,9 +28,18 @@ void SceneParser::parse(const YAML::Node& root) {
                                         "; give the scene a 'name'");
   }
   if (root["model"]) {
-    static const std::vector<std::string> names = {"springs", "corotational_fem"};
-    if (auto i = keyword(root["model"], "model", names, "a force model"))
-      scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::CorotationalFem;
+    // "springs", then each element law's model keyword, in the registry's order.
+    std::vector<std::string> names = {"springs"};
+    std::vector<int> laws = {-1};
+    for (const ElementLawRow& row : element_law_rows()) {
+      if (row.model_keyword == nullptr) continue;
+      names.push_back(row.model_keyword);
+      laws.push_back(row.law);
+    }
+    if (auto i = keyword(root["model"], "model", names, "a force model")) {
+      scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::Elements;
+      if (*i > 0) scene_.element_law = laws[*i];
+    }
   }
   if (root["on_inversion"]) {
     static const std::vector<std::string> names = {"warn", "stop"};
@@ -86,7 +96,7 @@ void SceneParser::parse(const YAML::Node& root) {
     if (auto value = integer(root["threads"], "threads", 0, 256)) scene_.threads = static_cast<unsigned>(*value);
   }
   if (root["outputs"]) parse_outputs(root["outputs"]);
-  if (scene_.model == ForceModel::CorotationalFem) check_fem_fields(root);
+  if (scene_.model == ForceModel::Elements) check_fem_fields(root);
   if (scene_.model == ForceModel::Springs && scene_.material.poisson_ratio && !scene_.volume_term) {
     diagnostics_.error(scene_.range_of("material.poisson_ratio"),
                        "material.poisson_ratio: springs alone have nu = 1/4 (central springs obey the Cauchy "
@@ -99,6 +109,20 @@ void SceneParser::parse(const YAML::Node& root) {
       error(root["dt"], "dt", "duration " + format_number(scene_.duration) + " s / dt " + format_number(*scene_.dt) +
                                   " s is " + format_number(steps) + " steps; the limit is " +
                                   format_number(kMaxSimulationSteps) + ": raise dt or shorten the duration");
+  }
+  // Mass damping alpha bounds an explicit scheme's step by 2 / alpha (v' = -alpha v taken explicitly grows once
+  // h alpha > 2): alpha = 1e300 left no step, and the stability analysis told a damped semi-implicit scene to "add
+  // damping", with no line. Said here, at the field, with the numbers.
+  if (scene_.rayleigh.mass > 0.0 && scene_.integrator != Integrator::ImplicitEuler) {
+    const double steps = std::ceil(scene_.duration * scene_.rayleigh.mass / 2.0);
+    if (!(steps <= kMaxSimulationSteps))
+      diagnostics_.error(scene_.range_of("damping.rayleigh.mass"),
+                         "damping.rayleigh.mass: alpha = " + format_number(scene_.rayleigh.mass) + " 1/s allows " +
+                             std::string(scene_name(scene_.integrator)) + " steps of at most 2 / alpha = " +
+                             format_number(2.0 / scene_.rayleigh.mass) + " s: " + format_number(steps) +
+                             " steps over the duration, above the limit of " + format_number(kMaxSimulationSteps),
+                         {"lower alpha (a damping ratio zeta at angular frequency w is alpha = 2 zeta w), or use "
+                          "integrator: implicit_euler, whose damping has no step limit"});
   }
 }
 

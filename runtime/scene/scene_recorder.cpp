@@ -92,15 +92,12 @@ void SceneRecorder::record(const SceneState& state, bool frame, bool sample, Dia
   if (write_frame) {
     const std::string name = frame_name(frames_.size());
     if (!vtu_cells_) vtu_cells_ = encode_vtu_cells(built_.mesh, vtu_options_, diagnostics);
-    // Element stresses as cell data where the cells are the elements: the FEM's von Mises stress, or the volume
-    // term's pressure magnitude (springs carry no continuum stress).
-    std::vector<double> stress;
+    // Element stresses as cell data where the cells are the elements: each element term's stress output (its law's:
+    // a von Mises stress, or the volume term's pressure magnitude; springs carry no continuum stress).
     std::vector<VtuArray> cell_data;
-    if (setup.tetrahedron_field && vtu_cells_ && vtu_cells_->size() == setup.tetrahedra.size()) {
-      stress = element_von_mises_stress(setup, positions);
-      cell_data.push_back(vtu_scalars(
-          setup.model == ForceModel::CorotationalFem ? "von_mises_stress_Pa" : "volume_term_pressure_Pa", stress));
-    }
+    if (!setup.elements.empty() && vtu_cells_ && vtu_cells_->size() == setup.tetrahedra.size())
+      for (const ElementStressOutput& stress : element_stress_outputs(setup, positions))
+        cell_data.push_back(vtu_scalars(stress.name, stress.values));
     const auto vtu = vtu_cells_ ? vtu_document(positions, *vtu_cells_,
                                                {vtu_vectors("displacement", displacement),
                                                 vtu_vectors("velocity", velocities)},
@@ -197,7 +194,7 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
   json["scene"] = scene.name;
   json["scene_file"] = scene.path;
   json["completed"] = result.completed;
-  json["model"] = scene_name(setup.model);
+  json["model"] = model_name(setup);
   json["inverted_elements"] = result.inversions.largest_count;
   json["backend"] = options.backend;
   json["precision"] = setup.precision == Precision::Float ? "float" : "double";
@@ -223,7 +220,7 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
   mesh["tetrahedra"] = built.mesh.tetrahedra.size();
   mesh["triangles"] = built.mesh.triangles.size();
   mesh["springs"] = setup.springs.size();
-  mesh["volume_term"] = setup.model == ForceModel::Springs && setup.tetrahedron_field.has_value();
+  mesh["volume_term"] = setup.springs.size() > 0 && !setup.elements.empty();
   mesh["fixed_vertices"] = setup.fixed_vertices.size();
   mesh["metres_per_unit"] = scene.mesh.unit;
   JsonDocument& material = json["stiffness"];

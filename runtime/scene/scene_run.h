@@ -34,8 +34,13 @@ struct ProbeCurvePoint {
 // `precision-dependent`): an equilibrium that rounding breaks (a symmetric load that buckles either way), or a
 // near-inversion.
 constexpr double kPrecisionTolerance = 0.01;
-// `auto` checks scenes of at most this many vertex-steps (about a second on one core): the check doubles the run.
-constexpr double kPrecisionCheckWork = 2e8;
+// `auto` checks a run whose stepping took at most this long (s, measured): the check runs it again, so it costs about
+// as much. A bound on vertex-steps (2e8) once let an FEM run whose elements cost far more than its vertices be
+// doubled (35 s of stepping, 80.5 s in all).
+constexpr double kPrecisionCheckSeconds = 1.0;
+// Displacements below this share of the mesh's size (its bounding box's diagonal) are not compared: float rounds
+// positions to about 6e-8 of it, and a scene that barely moves (1e-7 mm) once differed by "100%".
+constexpr double kPrecisionDisplacementFloor = 1e-5;
 
 struct PrecisionCheckResult {
   bool ran = false;
@@ -97,6 +102,9 @@ std::size_t remove_stale_files(const std::vector<std::filesystem::path>& earlier
 // Where a run writes when its caller names no folder: the scene's outputs.directory, else SCENE-NAME_output.
 std::string default_output_directory(const Scene& scene);
 
+// The backend SceneRunOptions::backend names ("cuda": Backend::Cuda, else the CPU).
+Backend run_backend(const std::string& name);
+
 // Steps: scene.steps when set, else ceil(duration / dt) (dt from the stability check when `auto`).
 // Returns nullopt when the simulation could not start or an output could not be written (errors appended).
 std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
@@ -113,15 +121,15 @@ struct CohortPatient {
 };
 
 struct CohortRunOptions {
-  std::string backend = "cpu";  // "cuda": every patient in one GpuBatchSimulation; "cpu": patients side by side
-  unsigned threads = 0;         // CPU workers, each running whole patients one at a time (0: every hardware thread)
-  // (done, total): patients on the CPU, steps on CUDA; called under a lock, from any thread.
+  std::string backend = "cpu";  // every patient in one Simulation batch on this backend ("cpu" or "cuda")
+  unsigned threads = 0;         // CPU workers stepping and writing patients side by side (0: every hardware thread)
+  // (steps done, steps planned) after each output event.
   std::function<void(std::size_t, std::size_t)> progress;
 };
 
 struct CohortRunResult {
   // Per patient, in the order given: nullopt when it could not start or its outputs could not be written (errors
-  // appended). On CUDA a non-finite state in one patient stops the batch: every patient then has completed: false.
+  // appended). A non-finite state in one patient stops the batch: every patient then has completed: false.
   std::vector<std::optional<SceneRunResult>> patients;
   double wall_seconds = 0.0;  // all patients: stepping and recording (outputs and the precision check excluded)
   double spring_steps = 0.0;  // the sum over patients of springs x steps taken

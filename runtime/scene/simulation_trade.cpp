@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -12,28 +13,37 @@
 #include <utility>
 
 #include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
+#include "runtime/io/memory_limit.h"
+#include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_refinement.h"
 #include "runtime/scene/scene_builder.h"
 
 namespace fmpc::sim {
 
-const char* trade_model_name(TradeModel model) {
-  switch (model) {
-    case TradeModel::SpringsVanGelder:
-      return "springs_van_gelder";
-    case TradeModel::SpringsLloyd:
-      return "springs_lloyd";
-    case TradeModel::SpringsVolumeTerm:
-      return "springs_volume_term";
-    case TradeModel::CorotationalFem:
-      return "corotational_fem";
-  }
-  return "?";
+int TradeModel::rank() const {
+  if (element_law < 0) return mapping == StiffnessMapping::LloydSzekelyHarders2007 ? 1 : 0;
+  const int laws = static_cast<int>(element_law_rows().size());
+  return 2 + element_law + (element_law_row(element_law).beside_springs ? 0 : laws);
+}
+
+std::vector<TradeModel> trade_models() {
+  std::vector<TradeModel> models{TradeModel{-1, StiffnessMapping::VanGelder1998},
+                                 TradeModel{-1, StiffnessMapping::LloydSzekelyHarders2007}};
+  for (const ElementLawRow& row : element_law_rows()) models.push_back(TradeModel{row.law, StiffnessMapping::VanGelder1998});
+  std::sort(models.begin(), models.end());
+  return models;
+}
+
+TradeModel trade_reference_model() { return TradeModel{default_fem_law().law, StiffnessMapping::VanGelder1998}; }
+
+std::string trade_model_name(const TradeModel& model) {
+  if (model.element_law >= 0) return element_law_row(model.element_law).trade_name;
+  return model.mapping == StiffnessMapping::LloydSzekelyHarders2007 ? "springs_lloyd" : "springs_van_gelder";
 }
 
 std::optional<TradeModel> parse_trade_model(const std::string& name) {
-  for (const TradeModel model : {TradeModel::SpringsVanGelder, TradeModel::SpringsLloyd,
-                                 TradeModel::SpringsVolumeTerm, TradeModel::CorotationalFem})
+  for (const TradeModel& model : trade_models())
     if (name == trade_model_name(model)) return model;
   return std::nullopt;
 }
@@ -56,18 +66,14 @@ double process_cpu_seconds() {
   return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
-const char* short_model(TradeModel model) {
-  switch (model) {
-    case TradeModel::SpringsVanGelder:
-      return "springs VG";
-    case TradeModel::SpringsLloyd:
-      return "springs LSH";
-    case TradeModel::SpringsVolumeTerm:
-      return "springs+volume";
-    case TradeModel::CorotationalFem:
-      return "FEM";
-  }
-  return "?";
+std::string short_model(const TradeModel& model) {
+  if (model.element_law >= 0) return element_law_row(model.element_law).trade_label;
+  return model.mapping == StiffnessMapping::LloydSzekelyHarders2007 ? "springs LSH" : "springs VG";
+}
+
+// Whether the model has springs (alone or with a law beside them).
+bool has_springs(const TradeModel& model) {
+  return model.element_law < 0 || element_law_row(model.element_law).beside_springs;
 }
 
 const char* short_integrator(Integrator integrator) {
@@ -94,7 +100,7 @@ std::string short_number(double value) {
 
 // One run: what it is (the map key orders and deduplicates runs).
 struct RunKey {
-  TradeModel model = TradeModel::CorotationalFem;
+  TradeModel model = trade_reference_model();
   Precision precision = Precision::Double;
   Integrator integrator = Integrator::SemiImplicitEuler;
   double dt_factor = 1.0;
@@ -105,7 +111,7 @@ struct RunKey {
 };
 
 std::string label(const RunKey& key) {
-  std::string text = std::string(short_model(key.model)) + (key.precision == Precision::Float ? " f32 " : " f64 ") +
+  std::string text = short_model(key.model) + (key.precision == Precision::Float ? " f32 " : " f64 ") +
                      short_integrator(key.integrator);
   if (key.dt_factor != 1.0) text += " x" + short_number(key.dt_factor);
   return text + " r" + std::to_string(key.refinements);
@@ -117,14 +123,14 @@ struct RunOutcome {
   double extent = 0.0;               // m, the diagonal of the rest positions' bounding box
 };
 
-Scene variant_scene(const Scene& scene, TradeModel model, double duration) {
+Scene variant_scene(const Scene& scene, const TradeModel& model, double duration) {
   Scene variant = scene;
   variant.duration = duration;
   variant.steps.reset();
-  variant.volume_term = model == TradeModel::SpringsVolumeTerm;
-  variant.model = model == TradeModel::CorotationalFem ? ForceModel::CorotationalFem : ForceModel::Springs;
-  if (model == TradeModel::SpringsVanGelder) variant.material.mapping = StiffnessMapping::VanGelder1998;
-  if (model == TradeModel::SpringsLloyd) variant.material.mapping = StiffnessMapping::LloydSzekelyHarders2007;
+  variant.volume_term = model.element_law >= 0 && element_law_row(model.element_law).beside_springs;
+  variant.model = has_springs(model) ? ForceModel::Springs : ForceModel::Elements;
+  if (!has_springs(model)) variant.element_law = model.element_law;
+  if (model.element_law < 0) variant.material.mapping = model.mapping;
   return variant;
 }
 
@@ -146,11 +152,13 @@ double memory_estimate(const SimulationSetup& setup, std::size_t edges) {
   // Springs: rest length, stiffness, damping; CSR offset, spring and neighbour per endpoint.
   if (springs > 0.0)
     bytes += springs * (real * (setup.springs.damping.empty() ? 2.0 : 3.0)) + (vertices + 1.0) * 4.0 + springs * 16.0;
-  if (setup.tetrahedron_field) {
-    const TetrahedronField& field = *setup.tetrahedron_field;
-    const double per_element = 9.0 + 1.0 + (field.youngs_modulus.empty() ? 0.0 : 1.0) +
-                               (field.poisson_ratio.empty() ? 0.0 : 1.0) + (field.bulk_modulus.empty() ? 0.0 : 1.0) +
-                               (field.stiffness_damping.empty() ? 0.0 : 1.0) + 12.0;  // + the corner forces
+  if (!setup.elements.empty()) {
+    // Dm^-1 and V0, each term's parameters and damping, the corner forces.
+    double per_element = 9.0 + 1.0 + 12.0;
+    for (const ElementTerm& term : setup.elements.terms) {
+      for (const std::vector<double>& parameter : term.parameter) per_element += parameter.empty() ? 0.0 : 1.0;
+      per_element += term.stiffness_damping.empty() ? 0.0 : 1.0;
+    }
     bytes += elements * per_element * real + (vertices + 1.0) * 4.0 + elements * 16.0;
   }
   switch (setup.integrator) {
@@ -208,17 +216,18 @@ bool check_comparable(const Scene& scene, const SimulationTradeOptions& options,
     diagnostics.error(scene.range_of("damping"),
                       "damping: " + why + ", which is damped by `ratio` and `rayleigh`; per-spring dashpot settings "
                       "(coefficient, natural_frequency) have no counterpart there");
-  const bool volume_term = std::find(options.models.begin(), options.models.end(), TradeModel::SpringsVolumeTerm) !=
-                           options.models.end();
-  if (volume_term) {
+  // A law beside springs takes one Poisson ratio and no strain-dependent modulus (scene_builder's checks).
+  for (const TradeModel& model : options.models) {
+    if (model.element_law < 0 || !element_law_row(model.element_law).beside_springs) continue;
+    const std::string name = trade_model_name(model);
     for (const InputBinding& binding : scene.material.bindings)
       if (binding.kind == InputBinding::Kind::Strain)
         diagnostics.error(scene.range_of("material.inputs." + binding.input),
-                          "material.inputs." + binding.input + ": the springs_volume_term variant cannot take a "
+                          "material.inputs." + binding.input + ": the " + name + " variant cannot take a "
                           "strain-dependent modulus; leave it out with --models");
     if (scene.material.poisson_ratio && !scene.material.poisson_ratio->regions.empty())
       diagnostics.error(scene.range_of("material.poisson_ratio"),
-                        "material.poisson_ratio: the springs_volume_term variant takes one ratio for the whole "
+                        "material.poisson_ratio: the " + name + " variant takes one ratio for the whole "
                         "scene; leave it out with --models");
   }
   return diagnostics.error_count() == errors;
@@ -229,7 +238,7 @@ class TradeRunner {
   TradeRunner(const Scene& scene, double duration) : scene_(scene), duration_(duration) {}
 
   // The scene built for `model` on `refinements`, the last one kept (runs are ordered by refinement and model).
-  const BuiltScene* built(TradeModel model, unsigned refinements, DiagnosticList& diagnostics) {
+  const BuiltScene* built(const TradeModel& model, unsigned refinements, DiagnosticList& diagnostics) {
     if (built_ && built_model_ == model && built_refinements_ == refinements) return &*built_;
     built_.reset();
     DiagnosticList build_diagnostics;
@@ -237,7 +246,7 @@ class TradeRunner {
     if (!scene) {
       for (const Diagnostic& d : build_diagnostics.items())
         if (d.severity == Severity::Error) diagnostics.error(d.range, d.message, d.notes);
-      diagnostics.error(scene_.range_of("model"), "the " + std::string(trade_model_name(model)) +
+      diagnostics.error(scene_.range_of("model"), "the " + trade_model_name(model) +
                                                        " variant cannot be built from this scene (above); leave it "
                                                        "out with --models");
       return nullptr;
@@ -257,7 +266,7 @@ class TradeRunner {
     if (!report || !(automatic_step_ > 0.0) || !std::isfinite(automatic_step_)) {
       for (const Diagnostic& d : stability_diagnostics.items())
         if (d.severity == Severity::Error) diagnostics.error(d.range, d.message, d.notes);
-      diagnostics.error(scene_.range_of("model"), "the " + std::string(trade_model_name(model)) +
+      diagnostics.error(scene_.range_of("model"), "the " + trade_model_name(model) +
                                                        " variant has no automatic step to scale (above)");
       built_.reset();
       return nullptr;
@@ -265,18 +274,39 @@ class TradeRunner {
     return &*built_;
   }
 
+  // What `key` will cost, from the scene's own mesh (see TradePlan); nullopt when the model cannot be built.
+  struct Estimate {
+    double tetrahedra = 0.0, steps = 0.0, memory_bytes = 0.0;
+  };
+  std::optional<Estimate> estimate(const RunKey& key, DiagnosticList& diagnostics) {
+    const BuiltScene* scene = built(key.model, 0, diagnostics);
+    if (!scene) return std::nullopt;
+    const double scale = std::pow(8.0, key.refinements);
+    Estimate e;
+    e.tetrahedra = static_cast<double>(scene->mesh.tetrahedra.size()) * scale;
+    const double step = key.dt_factor * automatic_step_ / std::pow(2.0, key.refinements);
+    e.steps = std::max(1.0, std::ceil(duration_ / step * (1.0 - 1e-12)));
+    SimulationSetup setup = scene->setup;
+    setup.precision = key.precision;
+    setup.integrator = key.integrator;
+    // The run's arrays, and the refined mesh and its setup while it is built (generated_mesh.h's measured figure).
+    e.memory_bytes = memory_estimate(setup, edges_) * scale +
+                     static_cast<double>(kEstimatedBytesPerTetrahedron) * e.tetrahedra;
+    return e;
+  }
+
   // Runs one variant to the duration; nullopt when it could not be built (errors appended). A run that stops
   // (non-finite, inversion under on_inversion: stop, a conjugate gradient at its cap) is an outcome saying why.
-  std::optional<RunOutcome> run(const RunKey& key, std::size_t coarse_vertices, DiagnosticList& diagnostics) {
+  // `stepped` is told (steps taken, steps of the run) every hundredth of the run.
+  std::optional<RunOutcome> run(const RunKey& key, std::size_t coarse_vertices, DiagnosticList& diagnostics,
+                                const std::function<void(std::size_t, std::size_t)>& stepped = {}) {
     const BuiltScene* scene = built(key.model, key.refinements, diagnostics);
     if (!scene) return std::nullopt;
     RunOutcome outcome;
     SimulationTradeRow& row = outcome.row;
     row.variant = label(key);
     row.model = key.model;
-    row.mapping = key.model == TradeModel::SpringsLloyd      ? StiffnessMapping::LloydSzekelyHarders2007
-                  : key.model == TradeModel::SpringsVanGelder ? StiffnessMapping::VanGelder1998
-                                                              : scene_.material.mapping;
+    row.mapping = key.model.element_law < 0 ? key.model.mapping : scene_.material.mapping;
     row.precision = key.precision;
     row.integrator = {key.integrator, key.dt_factor};
     row.refinements = key.refinements;
@@ -298,14 +328,22 @@ class TradeRunner {
       for (std::size_t a = 0; a < 3; ++a) low[a] = std::min(low[a], p[a]), high[a] = std::max(high[a], p[a]);
     outcome.extent = distance(low, high);
     DiagnosticList run_diagnostics;
-    auto simulation = CpuSimulation::create(setup, run_diagnostics);
+    auto simulation = Simulation::create(setup, run_diagnostics);
     if (simulation) {
       const double start = process_cpu_seconds();
-      row.completed = simulation->advance(row.steps, run_diagnostics);
+      // In hundredths, so that progress is told during a run of hours (advance resumes where it stopped).
+      const std::size_t chunk = std::max<std::size_t>(1, row.steps / 100);
+      row.completed = true;
+      for (std::size_t done = 0; done < row.steps && row.completed;) {
+        const std::size_t now = std::min(chunk, row.steps - done);
+        row.completed = simulation->advance(now, run_diagnostics);
+        done += now;
+        if (stepped) stepped(done, row.steps);
+      }
       row.cpu_seconds = process_cpu_seconds() - start;
       row.steps_per_second = static_cast<double>(simulation->steps_taken()) / std::max(row.cpu_seconds, 1e-9);
       row.inverted_elements = simulation->inversions().largest_count;
-      const std::vector<Point3> positions = simulation->positions();
+      const std::vector<Point3> positions = simulation->positions(run_diagnostics);
       outcome.displacement.resize(coarse_vertices);
       for (std::size_t v = 0; v < coarse_vertices; ++v) {
         const Point3& start_point = start_position(setup, v);
@@ -315,7 +353,7 @@ class TradeRunner {
       }
       if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement) {
         const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
-        if (length > 0.0) row.final_probe_force = dot(simulation->probe_reading().force, setup.probe->target) / length;
+        if (length > 0.0) row.final_probe_force = dot(simulation->probe_reading(run_diagnostics).force, setup.probe->target) / length;
       }
     }
     if (!row.completed) {
@@ -333,7 +371,7 @@ class TradeRunner {
   const Scene& scene_;
   double duration_;
   std::optional<BuiltScene> built_;
-  TradeModel built_model_ = TradeModel::CorotationalFem;
+  TradeModel built_model_ = trade_reference_model();
   unsigned built_refinements_ = 0;
   std::size_t edges_ = 0;
   double automatic_step_ = 0.0;
@@ -349,10 +387,8 @@ std::string csv_field(const std::string& text) {
   return quoted + "\"";
 }
 
-const char* model_column(TradeModel model) {
-  return model == TradeModel::CorotationalFem ? "corotational_fem" : model == TradeModel::SpringsVolumeTerm
-                                                                         ? "springs_volume_term"
-                                                                         : "springs";
+std::string model_column(const TradeModel& model) {
+  return model.element_law >= 0 ? trade_model_name(model) : std::string("springs");
 }
 
 std::string status_text(const SimulationTradeRow& row) {
@@ -398,7 +434,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   std::size_t coarse_vertices = 0;
   {
     DiagnosticList build_diagnostics;
-    const auto coarse = build_scene(variant_scene(scene, TradeModel::SpringsVanGelder, duration), build_diagnostics);
+    const auto coarse = build_scene(variant_scene(scene, TradeModel{}, duration), build_diagnostics);
     if (!coarse) {
       diagnostics.append(build_diagnostics);
       return std::nullopt;
@@ -421,7 +457,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   }
 
   // Every run once: the reference, its two convergence checks, the variants.
-  const RunKey reference{TradeModel::CorotationalFem, Precision::Double, Integrator::SemiImplicitEuler,
+  const RunKey reference{trade_reference_model(), Precision::Double, Integrator::SemiImplicitEuler,
                          options.reference_dt_factor, reference_level};
   RunKey time_check = reference;
   time_check.dt_factor = 2.0 * options.reference_dt_factor;
@@ -449,10 +485,62 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   planned.insert(planned.begin(), reference);  // first: nothing is compared without it
 
   TradeRunner runner(scene, duration);
+  // The plan, checked before anything runs: every run's steps, the largest run's memory, the work in all.
+  TradePlan plan;
+  plan.runs = planned.size();
+  std::vector<double> work(planned.size());
+  const MemoryLimit memory = memory_limit();
+  for (std::size_t i = 0; i < planned.size(); ++i) {
+    const RunKey& key = planned[i];
+    const auto estimate = runner.estimate(key, diagnostics);
+    if (!estimate) return std::nullopt;
+    // The reference and its checks take their step from --reference-dt-factor, the variants from --integrators.
+    const bool reference_run = std::none_of(variants.begin(), variants.end(),
+                                            [&](const RunKey& v) { return !(v < key) && !(key < v); });
+    if (!(estimate->steps <= kMaxSimulationSteps)) {
+      diagnostics.error(nowhere, "the run " + label(key) + " would take " + short_number(estimate->steps) +
+                                     " steps (" + short_number(duration) + " s at about " +
+                                     short_number(duration / estimate->steps) + " s a step); the limit is " +
+                                     format_number(kMaxSimulationSteps) + " steps a run, as for simulate",
+                        {"shorten --duration, or raise " +
+                         std::string(reference_run ? "--reference-dt-factor" : "the step factor of --integrators " +
+                                                                                   std::string(scene_name(key.integrator)))});
+      return std::nullopt;
+    }
+    if (memory.bytes > 0 && estimate->memory_bytes > static_cast<double>(memory.bytes)) {
+      diagnostics.error(scene.range_of("mesh"),
+                        "mesh: the run " + label(key) + " needs an estimated " + gibibytes_text(estimate->memory_bytes) +
+                            " (" + short_number(estimate->tetrahedra) + " tetrahedra); the limit is " +
+                            memory.source + ", " + gibibytes_text(static_cast<double>(memory.bytes)),
+                        {"lower --refinements or --reference-refinements, or coarsen the mesh"});
+      return std::nullopt;
+    }
+    work[i] = estimate->tetrahedra * estimate->steps;
+    plan.element_steps += work[i];
+    plan.largest_tetrahedra = std::max(plan.largest_tetrahedra, estimate->tetrahedra);
+    plan.largest_steps = std::max(plan.largest_steps, estimate->steps);
+    plan.largest_memory_bytes = std::max(plan.largest_memory_bytes, estimate->memory_bytes);
+  }
+  if (!(plan.element_steps <= kMaxTradeWork)) {
+    diagnostics.error(nowhere, "the trade's " + std::to_string(plan.runs) + " runs would take about " +
+                                   short_number(plan.element_steps) + " element-steps (tetrahedra x steps); the "
+                                   "limit is " + format_number(kMaxTradeWork),
+                      {"fewer --refinements, models, precisions or integrators, a larger step factor, or a shorter "
+                       "--duration"});
+    return std::nullopt;
+  }
+  if (options.plan) options.plan(plan);
+  double work_done = 0.0;
   std::map<RunKey, RunOutcome> outcomes;
   for (std::size_t i = 0; i < planned.size(); ++i) {
     if (options.progress) options.progress(i, planned.size(), (i == 0 ? "reference " : "") + label(planned[i]));
-    auto outcome = runner.run(planned[i], coarse_vertices, diagnostics);
+    const auto stepped = [&](std::size_t steps, std::size_t steps_in_run) {
+      if (options.work_progress)
+        options.work_progress(work_done + work[i] * static_cast<double>(steps) / static_cast<double>(steps_in_run),
+                              plan.element_steps);
+    };
+    auto outcome = runner.run(planned[i], coarse_vertices, diagnostics, stepped);
+    work_done += work[i];
     if (!outcome) return std::nullopt;
     if (i == 0) {
       if (!outcome->row.completed) {
@@ -525,7 +613,7 @@ std::string simulation_trade_csv(const SimulationTradeResult& result) {
   for (std::size_t c = 0; c < columns.size(); ++c) csv << (c ? "," : "") << columns[c];
   csv << '\n';
   for (const SimulationTradeRow& row : result.rows) {
-    const bool springs = row.model != TradeModel::CorotationalFem;
+    const bool springs = has_springs(row.model);
     const auto error_text = [&](double value) { return row.completed ? format_number(value) : std::string(); };
     csv << csv_field(row.variant) << ',' << model_column(row.model) << ','
         << (row.precision == Precision::Float ? "float" : "double") << ',' << scene_name(row.integrator.integrator)

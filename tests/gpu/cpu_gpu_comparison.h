@@ -17,6 +17,22 @@
 
 namespace fmpc::gpu_test {
 
+// A simulation on the CUDA backend (one scene, or a batch) and on the CPU: the one interface, sim::Simulation.
+inline std::unique_ptr<sim::Simulation> gpu_simulation(const sim::SimulationSetup& setup, DiagnosticList& diagnostics,
+                                                       const sim::GpuOptions& options = {}) {
+  sim::SimulationOptions cuda;
+  cuda.backend = sim::Backend::Cuda;
+  cuda.gpu = options;
+  return sim::Simulation::create(setup, diagnostics, cuda);
+}
+inline std::unique_ptr<sim::Simulation> gpu_batch(std::vector<sim::SimulationSetup> scenes,
+                                                  const sim::GpuOptions& options, DiagnosticList& diagnostics) {
+  sim::SimulationOptions cuda;
+  cuda.backend = sim::Backend::Cuda;
+  cuda.gpu = options;
+  return sim::Simulation::create(std::move(scenes), cuda, diagnostics);
+}
+
 inline const char* name_of(sim::Precision precision) {
   return precision == sim::Precision::Float ? "float" : "double";
 }
@@ -59,15 +75,15 @@ struct Difference {
 inline Difference cpu_gpu_difference(const sim::SimulationSetup& setup, std::size_t steps,
                                      const gpu::GpuOptions& options) {
   DiagnosticList diagnostics;
-  const auto cpu = sim::CpuSimulation::create(setup, diagnostics);
-  const auto device = gpu::GpuSimulation::create(setup, options, diagnostics);
+  const auto cpu = sim::Simulation::create(setup, diagnostics);
+  const auto device = gpu_simulation(setup, diagnostics, options);
   if (!cpu || !device || !cpu->advance(steps, diagnostics) || !device->advance(steps, diagnostics)) {
     note("setup or run failed: " + describe(diagnostics));
     return {};
   }
   Difference difference;
-  difference.positions = max_difference(cpu->positions(), device->positions(diagnostics));
-  difference.velocities = max_difference(cpu->velocities(), device->velocities(diagnostics));
+  difference.positions = max_difference(cpu->positions(diagnostics), device->positions(diagnostics));
+  difference.velocities = max_difference(cpu->velocities(diagnostics), device->velocities(diagnostics));
   if (diagnostics.has_errors()) {
     note("errors: " + describe(diagnostics));
     return {};
@@ -95,19 +111,19 @@ struct SceneDifference {
 inline SceneDifference scene_difference(const sim::SimulationSetup& setup, std::size_t steps) {
   SceneDifference out;
   DiagnosticList diagnostics;
-  const auto cpu = sim::CpuSimulation::create(setup, diagnostics);
-  const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+  const auto cpu = sim::Simulation::create(setup, diagnostics);
+  const auto device = gpu_simulation(setup, diagnostics);
   if (!cpu || !device || !cpu->advance(steps, diagnostics) || !device->advance(steps, diagnostics)) {
     note("setup or run failed: " + describe(diagnostics));
     return out;
   }
-  out.state.positions = max_difference(cpu->positions(), device->positions(diagnostics));
-  out.state.velocities = max_difference(cpu->velocities(), device->velocities(diagnostics));
-  const sim::ProbeReading a = cpu->probe_reading(), b = device->probe_reading(diagnostics);
+  out.state.positions = max_difference(cpu->positions(diagnostics), device->positions(diagnostics));
+  out.state.velocities = max_difference(cpu->velocities(diagnostics), device->velocities(diagnostics));
+  const sim::ProbeReading a = cpu->probe_reading(diagnostics), b = device->probe_reading(diagnostics);
   out.probe_force = 0.0;
   for (std::size_t axis = 0; axis < 3; ++axis)
     out.probe_force = std::max(out.probe_force, std::abs(a.force[axis] - b.force[axis]));
-  const std::vector<double> k_cpu = cpu->current_stiffness(), k_gpu = device->current_stiffness(diagnostics);
+  const std::vector<double> k_cpu = cpu->current_stiffness(diagnostics), k_gpu = device->current_stiffness(diagnostics);
   out.stiffness = k_cpu.size() == k_gpu.size() ? 0.0 : std::numeric_limits<double>::infinity();
   for (std::size_t s = 0; s < k_cpu.size() && s < k_gpu.size(); ++s)
     out.stiffness = std::max(out.stiffness, std::abs(k_cpu[s] - k_gpu[s]));
@@ -131,8 +147,8 @@ inline void check_implicit_against_cpu(const sim::SimulationSetup& setup, const 
   FMPC_EXPECT(d.state.positions <= tolerance);
   FMPC_EXPECT(d.state.velocities <= 100.0 * tolerance);
   DiagnosticList diagnostics;
-  const auto first = gpu::GpuSimulation::create(setup, diagnostics);
-  const auto second = gpu::GpuSimulation::create(setup, diagnostics);
+  const auto first = gpu_simulation(setup, diagnostics);
+  const auto second = gpu_simulation(setup, diagnostics);
   FMPC_REQUIRE(first && second && first->advance(50, diagnostics) && second->advance(50, diagnostics, 7));
   FMPC_EXPECT(bitwise_equal(first->positions(diagnostics), second->positions(diagnostics)));
   FMPC_EXPECT(first->implicit_max_iterations_used() > 0);

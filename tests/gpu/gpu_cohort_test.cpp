@@ -78,27 +78,27 @@ FMPC_GPU_TEST(cohort_batch_bitwise, "a batch of 7 probed patients gives each its
       }
       const std::size_t steps = 1500;  // past every ramp: the hold is checked too
       DiagnosticList diagnostics;
-      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      const auto batch = gpu_batch(scenes, gpu::GpuOptions{}, diagnostics);
       FMPC_REQUIRE(batch && batch->advance(700, diagnostics) && batch->advance(steps - 700, diagnostics, 50));
       std::vector<std::vector<Point3>> all_positions, all_velocities;
       FMPC_REQUIRE(batch->scene_states(all_positions, &all_velocities, diagnostics));
       FMPC_REQUIRE(all_positions.size() == scenes.size());
       double largest_cpu_difference = 0.0;
       for (std::size_t s = 0; s < scenes.size(); ++s) {
-        const auto single = gpu::GpuSimulation::create(scenes[s], diagnostics);
+        const auto single = gpu_simulation(scenes[s], diagnostics);
         FMPC_REQUIRE(single && single->advance(steps, diagnostics));
-        const auto cpu = CpuSimulation::create(scenes[s], diagnostics);
+        const auto cpu = sim::Simulation::create(scenes[s], diagnostics);
         FMPC_REQUIRE(cpu && cpu->advance(steps, diagnostics));
         const std::vector<Point3> positions = batch->positions(s, diagnostics);
         FMPC_EXPECT(bitwise_equal(positions, single->positions(diagnostics)));
         FMPC_EXPECT(bitwise_equal(batch->velocities(s, diagnostics), single->velocities(diagnostics)));
         FMPC_EXPECT(bitwise_equal(all_positions[s], positions));
         FMPC_EXPECT(bitwise_equal(all_velocities[s], single->velocities(diagnostics)));
-        FMPC_EXPECT(bitwise_equal(positions, cpu->positions()));
-        FMPC_EXPECT(bitwise_equal(batch->velocities(s, diagnostics), cpu->velocities()));
-        largest_cpu_difference = std::max(largest_cpu_difference, max_difference(positions, cpu->positions()));
+        FMPC_EXPECT(bitwise_equal(positions, cpu->positions(diagnostics)));
+        FMPC_EXPECT(bitwise_equal(batch->velocities(s, diagnostics), cpu->velocities(diagnostics)));
+        largest_cpu_difference = std::max(largest_cpu_difference, max_difference(positions, cpu->positions(diagnostics)));
         const ProbeReading in_batch = batch->probe_reading(s, diagnostics), alone = single->probe_reading(diagnostics),
-                           on_cpu = cpu->probe_reading();
+                           on_cpu = cpu->probe_reading(diagnostics);
         for (std::size_t axis = 0; axis < 3; ++axis) {
           FMPC_EXPECT(std::memcmp(&in_batch.force[axis], &alone.force[axis], sizeof(double)) == 0);
           FMPC_EXPECT(std::memcmp(&in_batch.displacement[axis], &alone.displacement[axis], sizeof(double)) == 0);

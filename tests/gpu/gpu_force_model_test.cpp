@@ -13,7 +13,8 @@
 #include <vector>
 
 #include "runtime/fem/fem_model_builder.h"
-#include "runtime/fem/tetrahedron_field.h"
+#include "runtime/fem/element_law_registry.h"
+#include "tests/support/volume_term.h"
 #include "runtime/gpu/gpu_simulation.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/scene/spring_model_builder.h"
@@ -144,7 +145,7 @@ FMPC_GPU_TEST(force_models_match_cpu, "FEM and springs with the volume term: eve
 FMPC_GPU_TEST(force_models_held_axes, "a held axis stays at rest on the GPU, the free axes move", true) {
   const SimulationSetup setup = held_box(Model::Fem, Precision::Double, Integrator::SemiImplicitEuler);
   DiagnosticList diagnostics;
-  const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+  const auto run = gpu_simulation(setup, diagnostics);
   FMPC_REQUIRE(run && run->advance(500, diagnostics));
   const auto positions = run->positions(diagnostics);
   double moved_free = 0.0;
@@ -182,11 +183,11 @@ FMPC_GPU_TEST(force_models_bitwise,
         gpu::GpuOptions plain;
         plain.use_graphs = false;
         plain.persistent = false;  // the Euler schemes' default run is persistent: compared with the per-step kernels
-        const auto reference = gpu::GpuSimulation::create(setup, plain, diagnostics);
+        const auto reference = gpu_simulation(setup, diagnostics, plain);
         FMPC_REQUIRE(reference && reference->advance(600, diagnostics, 1));
         const auto expected = reference->positions(diagnostics);
         const auto expected_potential = reference->potential_energy(diagnostics);
-        const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+        const auto run = gpu_simulation(setup, diagnostics);
         FMPC_REQUIRE(run && run->advance(1, diagnostics) && run->advance(65, diagnostics, 64) &&
                      run->advance(534, diagnostics, 0));
         FMPC_EXPECT(bitwise_equal(run->positions(diagnostics), expected));
@@ -198,7 +199,7 @@ FMPC_GPU_TEST(force_models_bitwise,
           one_thread.persistent = false;
           one_thread.gather_lanes = 1;
           one_thread.sliced_springs = sliced;
-          const auto stepped = gpu::GpuSimulation::create(setup, one_thread, diagnostics);
+          const auto stepped = gpu_simulation(setup, diagnostics, one_thread);
           FMPC_REQUIRE(stepped && stepped->advance(600, diagnostics, 64));
           FMPC_EXPECT(bitwise_equal(stepped->positions(diagnostics), expected));
         }
@@ -213,14 +214,14 @@ FMPC_GPU_TEST(force_models_energy, "the elements' potential energy on the GPU eq
   for (const Model model : kModels) {
     const SimulationSetup setup = hanging_box(model, Precision::Double, Integrator::RungeKutta4);
     DiagnosticList diagnostics;
-    const auto cpu = CpuSimulation::create(setup, diagnostics);
-    const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+    const auto cpu = sim::Simulation::create(setup, diagnostics);
+    const auto device = gpu_simulation(setup, diagnostics);
     FMPC_REQUIRE(cpu && device && cpu->advance(300, diagnostics) && device->advance(300, diagnostics));
     const auto potential = device->potential_energy(diagnostics);
     FMPC_REQUIRE(potential);
     note(std::string(name_of(model)) + ": potential energy GPU " + std::to_string(*potential) + " J, CPU " +
-         std::to_string(cpu->potential_energy()) + " J");
-    FMPC_EXPECT_WITHIN(*potential, cpu->potential_energy(), 1e-10 * std::abs(cpu->potential_energy()) + 1e-12);
+         std::to_string(*cpu->potential_energy(diagnostics)) + " J");
+    FMPC_EXPECT_WITHIN(*potential, *cpu->potential_energy(diagnostics), 1e-10 * std::abs(*cpu->potential_energy(diagnostics)) + 1e-12);
   }
 }
 
@@ -229,8 +230,8 @@ FMPC_GPU_TEST(inversions_match_cpu, "inversions: the GPU finds the CPU's first s
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     SimulationSetup setup = thrown_corner(precision);
     DiagnosticList cpu_diagnostics, gpu_diagnostics;
-    const auto cpu = CpuSimulation::create(setup, cpu_diagnostics);
-    const auto device = gpu::GpuSimulation::create(setup, gpu_diagnostics);
+    const auto cpu = sim::Simulation::create(setup, cpu_diagnostics);
+    const auto device = gpu_simulation(setup, gpu_diagnostics);
     FMPC_REQUIRE(cpu && device && cpu->advance(1000, cpu_diagnostics) && device->advance(1000, gpu_diagnostics));
     const InversionReport& a = cpu->inversions();
     const InversionReport& b = device->inversions();
@@ -244,18 +245,18 @@ FMPC_GPU_TEST(inversions_match_cpu, "inversions: the GPU finds the CPU's first s
     FMPC_EXPECT(!gpu_diagnostics.items().empty() && gpu_diagnostics.items()[0].code == "inverted-elements");
     // The persistent run found the inversion in a chunk with the next one launched ahead, took that one back and
     // replayed from the checkpoint: it goes on with the per-step kernels' bits.
-    FMPC_EXPECT(device->persistent_launch());
+    FMPC_EXPECT(device->launches().persistent);
     gpu::GpuOptions per_step;
     per_step.persistent = false;
     DiagnosticList reference_diagnostics;
-    const auto reference = gpu::GpuSimulation::create(setup, per_step, reference_diagnostics);
+    const auto reference = gpu_simulation(setup, reference_diagnostics, per_step);
     FMPC_REQUIRE(reference && reference->advance(1000, reference_diagnostics));
     FMPC_EXPECT(reference->inversions().first_step == b.first_step);
     FMPC_EXPECT(bitwise_equal(device->positions(gpu_diagnostics), reference->positions(reference_diagnostics)));
     FMPC_EXPECT(bitwise_equal(device->velocities(gpu_diagnostics), reference->velocities(reference_diagnostics)));
     setup.on_inversion = InversionPolicy::Stop;
     DiagnosticList stopped;
-    const auto stop = gpu::GpuSimulation::create(setup, stopped);
+    const auto stop = gpu_simulation(setup, stopped);
     FMPC_REQUIRE(stop);
     FMPC_EXPECT(!stop->advance(1000, stopped));
     FMPC_EXPECT(stop->steps_taken() == a.first_step);
@@ -264,12 +265,12 @@ FMPC_GPU_TEST(inversions_match_cpu, "inversions: the GPU finds the CPU's first s
   // In a batch, the inversion is the scene's thrown through alone (at 1 m/s the springs throw the corner back).
   std::vector<SimulationSetup> scenes{thrown_corner(Precision::Double, 1.0), thrown_corner(Precision::Double)};
   DiagnosticList diagnostics;
-  const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+  const auto batch = gpu_batch(scenes, gpu::GpuOptions{}, diagnostics);
   FMPC_REQUIRE(batch && batch->advance(1000, diagnostics));
   FMPC_EXPECT(batch->inversions(0).largest_count == 0);
   FMPC_EXPECT(batch->inversions(1).largest_count == 1);
   DiagnosticList single;
-  const auto alone = CpuSimulation::create(scenes[1], single);
+  const auto alone = sim::Simulation::create(scenes[1], single);
   FMPC_REQUIRE(alone && alone->advance(1000, single));
   FMPC_EXPECT(batch->inversions(1).first_step == alone->inversions().first_step);
 }
@@ -284,7 +285,7 @@ FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and i
                                           Integrator::ImplicitEuler}) {
         const SimulationSetup setup = held_box(model, precision, integrator);
         DiagnosticList diagnostics;
-        const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+        const auto run = gpu_simulation(setup, diagnostics);
         FMPC_REQUIRE(run && run->advance(9, diagnostics, 4));
         FMPC_EXPECT(run->potential_energy(diagnostics).has_value());
         FMPC_EXPECT(run->kinetic_energy(diagnostics).has_value());
@@ -294,7 +295,7 @@ FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and i
       std::vector<SimulationSetup> scenes{hanging_box(model, precision, Integrator::VelocityVerlet, 1, 1, 1),
                                           hanging_box(model, precision, Integrator::VelocityVerlet, 2, 3, 1)};
       DiagnosticList diagnostics;
-      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      const auto batch = gpu_batch(scenes, gpu::GpuOptions{}, diagnostics);
       FMPC_REQUIRE(batch && batch->advance(30, diagnostics, 16));
       FMPC_EXPECT(batch->potential_energy(1, diagnostics).has_value());
       if (diagnostics.has_errors()) note(describe(diagnostics));
@@ -305,7 +306,7 @@ FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and i
     SimulationSetup setup = thrown_corner(Precision::Float);
     setup.on_inversion = policy;
     DiagnosticList diagnostics;
-    const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+    const auto run = gpu_simulation(setup, diagnostics);
     FMPC_REQUIRE(run);
     FMPC_EXPECT(run->advance(600, diagnostics, 64) == (policy == InversionPolicy::Warn));
     FMPC_EXPECT(run->inversions().largest_count == 1);

@@ -151,7 +151,7 @@ FMPC_GPU_TEST(single_scene_refused, "implicit Euler and strain tables refuse a b
     std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
     for (SimulationSetup& scene : scenes) scene.integrator = Integrator::ImplicitEuler;
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics));
+    FMPC_EXPECT(!gpu_batch(scenes, gpu::GpuOptions{}, diagnostics));
     FMPC_REQUIRE(diagnostics.error_count() == 1);
     FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 0: implicit Euler runs one scene at a time", 0) == 0);
   }
@@ -159,7 +159,7 @@ FMPC_GPU_TEST(single_scene_refused, "implicit Euler and strain tables refuse a b
     std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
     scenes[1].strain_stiffness = StrainStiffnessTable{};
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics));
+    FMPC_EXPECT(!gpu_batch(scenes, gpu::GpuOptions{}, diagnostics));
     FMPC_REQUIRE(diagnostics.error_count() == 1);
     FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 1: a scene with table-driven stiffness", 0) == 0);
   }
@@ -167,7 +167,7 @@ FMPC_GPU_TEST(single_scene_refused, "implicit Euler and strain tables refuse a b
     SimulationSetup setup = hanging_box(BoxScene{});
     setup.probe = ProbeLoad{};  // no vertices: the shared validation names the problem
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuSimulation::create(setup, diagnostics));
+    FMPC_EXPECT(!gpu_simulation(setup, diagnostics));
     FMPC_EXPECT(first_error(diagnostics) == "the probe has no vertices");
   }
 }
@@ -176,14 +176,14 @@ FMPC_GPU_TEST(batch_refusals, "a batch refuses no scenes, mixed shared fields an
   const gpu::GpuOptions options;
   {
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuBatchSimulation::create({}, options, diagnostics));
+    FMPC_EXPECT(!gpu_batch({}, options, diagnostics));
     FMPC_EXPECT(diagnostics.error_count() == 1);
   }
   {
     std::vector<SimulationSetup> scenes(3, hanging_box(BoxScene{}));
     scenes[2].gravity = {0.0, 0.0, -9.81};
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, options, diagnostics));
+    FMPC_EXPECT(!gpu_batch(scenes, options, diagnostics));
     FMPC_REQUIRE(diagnostics.error_count() == 1);
     FMPC_EXPECT(diagnostics.items()[0].message ==
                 "scene 2 differs from scene 0 in its gravity; the scenes of one "
@@ -193,14 +193,14 @@ FMPC_GPU_TEST(batch_refusals, "a batch refuses no scenes, mixed shared fields an
     std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
     scenes[1].precision = Precision::Float;
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, options, diagnostics));
+    FMPC_EXPECT(!gpu_batch(scenes, options, diagnostics));
     FMPC_EXPECT(diagnostics.items().at(0).message.find("in its precision") != std::string::npos);
   }
   {
     std::vector<SimulationSetup> scenes(2, hanging_box(BoxScene{}));
     scenes[1].mass.pop_back();
     DiagnosticList diagnostics;
-    FMPC_EXPECT(!gpu::GpuBatchSimulation::create(scenes, options, diagnostics));
+    FMPC_EXPECT(!gpu_batch(scenes, options, diagnostics));
     FMPC_REQUIRE(diagnostics.has_errors());
     FMPC_EXPECT(diagnostics.items()[0].message.rfind("scene 1: masses:", 0) == 0);
   }
@@ -255,7 +255,7 @@ FMPC_GPU_TEST(bitwise_reproducible, "runs are bitwise identical: run to run, gra
       gpu::GpuOptions plain;
       plain.use_graphs = false;
       plain.persistent = false;
-      const auto reference = gpu::GpuSimulation::create(setup, plain, diagnostics);
+      const auto reference = gpu_simulation(setup, diagnostics, plain);
       FMPC_REQUIRE(reference && reference->advance(1000, diagnostics, 1));
       const auto expected_x = reference->positions(diagnostics);
       const auto expected_v = reference->velocities(diagnostics);
@@ -264,7 +264,7 @@ FMPC_GPU_TEST(bitwise_reproducible, "runs are bitwise identical: run to run, gra
       FMPC_REQUIRE(expected_kinetic && expected_potential);
       // Graphs, in uneven pieces: 0, 1, 3 (checked every 2), 65 (every 64), 931 (every 0 = at the end).
       for (int repeat = 0; repeat < 2; ++repeat) {
-        const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+        const auto run = gpu_simulation(setup, diagnostics);
         FMPC_REQUIRE(run);
         FMPC_REQUIRE(run->advance(0, diagnostics));
         FMPC_REQUIRE(run->advance(1, diagnostics));
@@ -291,20 +291,20 @@ FMPC_GPU_TEST(energy_matches_cpu, "device energy reductions match the CPU's sums
     for (const SimulationSetup& setup :
          {hanging_box(BoxScene{3, 5, 2, 5000.0, precision}), nonlinear_box(precision, Integrator::RungeKutta4)}) {
       DiagnosticList diagnostics;
-      const auto cpu = CpuSimulation::create(setup, diagnostics);
-      const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+      const auto cpu = sim::Simulation::create(setup, diagnostics);
+      const auto device = gpu_simulation(setup, diagnostics);
       FMPC_REQUIRE(cpu && device && cpu->advance(300, diagnostics) && device->advance(300, diagnostics));
       const auto kinetic = device->kinetic_energy(diagnostics);
       const auto potential = device->potential_energy(diagnostics);
       FMPC_REQUIRE(kinetic && potential);
       // Same terms in double, summed in another order: relative rounding only.
-      FMPC_EXPECT_WITHIN(*kinetic, cpu->kinetic_energy(), 1e-10 * std::abs(cpu->kinetic_energy()) + 1e-300);
-      FMPC_EXPECT_WITHIN(*potential, cpu->potential_energy(), 1e-10 * std::abs(cpu->potential_energy()) + 1e-12);
+      FMPC_EXPECT_WITHIN(*kinetic, *cpu->kinetic_energy(diagnostics), 1e-10 * std::abs(*cpu->kinetic_energy(diagnostics)) + 1e-300);
+      FMPC_EXPECT_WITHIN(*potential, *cpu->potential_energy(diagnostics), 1e-10 * std::abs(*cpu->potential_energy(diagnostics)) + 1e-12);
       FMPC_EXPECT(*kinetic > 0.0);
       // The elastic part alone (what a scene's time_series.csv reports) against the host's sum on the CPU state.
       const auto elastic = device->elastic_energy(diagnostics);
       FMPC_REQUIRE(elastic.has_value());
-      const double host_elastic = sim::elastic_energy(setup, cpu->positions());
+      const double host_elastic = sim::elastic_energy(setup, cpu->positions(diagnostics));
       FMPC_EXPECT_WITHIN(*elastic, host_elastic, 1e-10 * std::abs(host_elastic) + 1e-300);
       FMPC_EXPECT(host_elastic > 0.0);
     }
@@ -327,7 +327,7 @@ FMPC_GPU_TEST(largest_displacement_matches_host,
     scenes.push_back(moved);
     for (SimulationSetup& scene : scenes) scene.gravity = {0.0, -9.81, 0.0};
     DiagnosticList diagnostics;
-    const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+    const auto batch = gpu_batch(scenes, gpu::GpuOptions{}, diagnostics);
     FMPC_REQUIRE(batch && batch->advance(333, diagnostics, 100));
     for (std::size_t s = 0; s < scenes.size(); ++s) {
       const std::vector<Point3> positions = batch->positions(s, diagnostics);
@@ -339,7 +339,7 @@ FMPC_GPU_TEST(largest_displacement_matches_host,
       FMPC_REQUIRE(device.has_value());
       FMPC_EXPECT(std::memcmp(&*device, &host, sizeof(double)) == 0);
       FMPC_EXPECT(host > 0.0);
-      const auto single = gpu::GpuSimulation::create(scenes[s], diagnostics);
+      const auto single = gpu_simulation(scenes[s], diagnostics);
       FMPC_REQUIRE(single && single->advance(333, diagnostics, 100));
       const auto alone = single->largest_displacement(diagnostics);
       FMPC_REQUIRE(alone.has_value());
@@ -358,12 +358,12 @@ FMPC_GPU_TEST(batch_equals_single, "a batch of odd-sized scenes gives each scene
       scenes.push_back(hanging_box(BoxScene{7, 6, 5, 9000.0, precision, integrator, 4}));
       for (SimulationSetup& scene : scenes) scene.gravity = {0.0, -9.81, 0.0};
       DiagnosticList diagnostics;
-      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      const auto batch = gpu_batch(scenes, gpu::GpuOptions{}, diagnostics);
       FMPC_REQUIRE(batch);
       FMPC_REQUIRE(batch->scene_count() == scenes.size());
       FMPC_REQUIRE(batch->advance(500, diagnostics, 100));
       for (std::size_t s = 0; s < scenes.size(); ++s) {
-        const auto single = gpu::GpuSimulation::create(scenes[s], diagnostics);
+        const auto single = gpu_simulation(scenes[s], diagnostics);
         FMPC_REQUIRE(single && single->advance(500, diagnostics, 100));
         FMPC_EXPECT(batch->stability(s).time_step == single->stability().time_step);
         FMPC_EXPECT(bitwise_equal(batch->positions(s, diagnostics), single->positions(diagnostics)));
@@ -415,9 +415,9 @@ FMPC_GPU_TEST(persistent_equals_per_step,
         gpu::GpuOptions per_step;
         per_step.persistent = false;
         per_step.gather_lanes = 1;
-        const auto reference = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
+        const auto reference = gpu_batch(scenes, per_step, diagnostics);
         FMPC_REQUIRE(reference && reference->advance(1000, diagnostics));
-        FMPC_EXPECT(!reference->persistent_launch());
+        FMPC_EXPECT(!reference->launches().persistent);
         // Persistent in clusters (-1) or on the cooperative grid with `rows` vertices per block (0: automatic; 1: a
         // block per vertex; 7: blocks that split the rows of the boxes; 256: the most), and per step with `lanes`
         // threads per vertex: one, two (several rounds over a vertex's entries), eight, a whole warp.
@@ -434,16 +434,16 @@ FMPC_GPU_TEST(persistent_equals_per_step,
               clusters ? gpu::GpuOptions::PersistentKind::Clusters : gpu::GpuOptions::PersistentKind::Grid;
           options.persistent_rows = std::max(launch.rows, 0);
           options.gather_lanes = launch.lanes;
-          const auto run = gpu::GpuBatchSimulation::create(scenes, options, diagnostics);
+          const auto run = gpu_batch(scenes, options, diagnostics);
           FMPC_REQUIRE(run);
-          FMPC_EXPECT(run->persistent_launch() == persistent);
+          FMPC_EXPECT(run->launches().persistent == persistent);
           // Every float case fits one cluster of a Hopper GPU (the 20^3 box's double records, 238 KB per block, do
           // not: it stays on the cooperative grid).
-          if (clusters && clusters_available() && precision == Precision::Float) FMPC_EXPECT(run->cluster_launch());
-          if (persistent && !clusters) FMPC_EXPECT(!run->cluster_launch());
+          if (clusters && clusters_available() && precision == Precision::Float) FMPC_EXPECT(run->launches().clusters);
+          if (persistent && !clusters) FMPC_EXPECT(!run->launches().clusters);
           if (clusters)
             note(std::string(name_of(precision)) + ", case " + std::to_string(c) + ": " +
-                 (run->cluster_launch() ? "clusters" : "cooperative grid"));
+                 (run->launches().clusters ? "clusters" : "cooperative grid"));
           // 300 steps checked every 64: persistent chunks launched ahead of the previous one's checks.
           FMPC_REQUIRE(run->advance(1, diagnostics) && run->advance(3, diagnostics, 2) &&
                        run->advance(65, diagnostics, 64) && run->advance(300, diagnostics, 64) &&
@@ -480,9 +480,9 @@ FMPC_GPU_TEST(persistent_long_launch, "persistent launches in pieces beyond 2^20
   setup.probe->ramp_time = 1.2 * static_cast<double>(steps) * stability->time_step;
   gpu::GpuOptions per_step;
   per_step.persistent = false;
-  const auto reference = gpu::GpuSimulation::create(setup, per_step, diagnostics);
-  const auto run = gpu::GpuSimulation::create(setup, diagnostics);
-  FMPC_REQUIRE(reference && run && run->persistent_launch());
+  const auto reference = gpu_simulation(setup, diagnostics, per_step);
+  const auto run = gpu_simulation(setup, diagnostics);
+  FMPC_REQUIRE(reference && run && run->launches().persistent);
   FMPC_REQUIRE(reference->advance(steps, diagnostics, 0) && run->advance(steps, diagnostics, 0));
   FMPC_EXPECT(run->steps_taken() == steps);
   FMPC_EXPECT(bitwise_equal(run->positions(diagnostics), reference->positions(diagnostics)));
@@ -515,14 +515,14 @@ FMPC_GPU_TEST(sliced_springs_bitwise, "the sliced spring layout gives the CSR or
         csr.persistent = false;
         csr.gather_lanes = 1;
         csr.sliced_springs = false;
-        const auto reference = gpu::GpuBatchSimulation::create(cases[c], csr, diagnostics);
+        const auto reference = gpu_batch(cases[c], csr, diagnostics);
         FMPC_REQUIRE(reference && reference->advance(700, diagnostics, 64));
         // The default window, none (32: each warp keeps its vertices) and a whole block.
         for (const int window : {0, 32, 256}) {
           gpu::GpuOptions sliced = csr;
           sliced.sliced_springs = true;
           sliced.slice_window = window;
-          const auto run = gpu::GpuBatchSimulation::create(cases[c], sliced, diagnostics);
+          const auto run = gpu_batch(cases[c], sliced, diagnostics);
           FMPC_REQUIRE(run && run->advance(1, diagnostics) && run->advance(699, diagnostics, 64));
           for (std::size_t s = 0; s < cases[c].size(); ++s) {
             const ProbeReading a = run->probe_reading(s, diagnostics), b = reference->probe_reading(s, diagnostics);
@@ -554,7 +554,7 @@ FMPC_GPU_TEST(non_finite_located, "NaN/Inf stops the run naming the exact step, 
     setup.time_step = 40.0 * stability->critical_time_step;
     setup.refuse_unstable_time_step = false;
     DiagnosticList cpu_diagnostics;
-    const auto cpu = CpuSimulation::create(setup, cpu_diagnostics);
+    const auto cpu = sim::Simulation::create(setup, cpu_diagnostics);
     FMPC_REQUIRE(cpu);
     FMPC_EXPECT(!cpu->advance(100000, cpu_diagnostics));
     FMPC_REQUIRE(cpu->non_finite());
@@ -564,15 +564,15 @@ FMPC_GPU_TEST(non_finite_located, "NaN/Inf stops the run naming the exact step, 
         DiagnosticList diagnostics;
         gpu::GpuOptions options;
         options.persistent_kind = kind;
-        const auto run = gpu::GpuSimulation::create(setup, options, diagnostics);
+        const auto run = gpu_simulation(setup, diagnostics, options);
         FMPC_REQUIRE(run);
-        FMPC_EXPECT(run->cluster_launch() ==
+        FMPC_EXPECT(run->launches().clusters ==
                     (kind == gpu::GpuOptions::PersistentKind::Clusters && clusters_available()));
         FMPC_EXPECT(!run->advance(100000, diagnostics, check_every));
         FMPC_REQUIRE(run->non_finite());
         const NonFiniteReport& report = *run->non_finite();
         std::ostringstream line;
-        line << name_of(precision) << (run->cluster_launch() ? ", in a cluster" : ", grid") << ", check every "
+        line << name_of(precision) << (run->launches().clusters ? ", in a cluster" : ", grid") << ", check every "
              << check_every << ": GPU step " << report.step << " vertex " << report.vertex << " spring "
              << report.spring << "; CPU step " << cpu->non_finite()->step << " vertex " << cpu->non_finite()->vertex
              << " spring " << cpu->non_finite()->spring;
@@ -599,7 +599,7 @@ FMPC_GPU_TEST(non_finite_names_scene, "a NaN in one scene of a batch names that 
   scenes[1].time_step = 40.0 * stability->critical_time_step;
   scenes[1].refuse_unstable_time_step = false;
   DiagnosticList diagnostics;
-  const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+  const auto batch = gpu_batch(scenes, gpu::GpuOptions{}, diagnostics);
   FMPC_REQUIRE(batch);
   FMPC_EXPECT(!batch->advance(100000, diagnostics));
   FMPC_REQUIRE(batch->non_finite());
@@ -615,25 +615,25 @@ FMPC_GPU_TEST(sanitizer_smoke, "sanitizer smoke: every kernel on tiny scenes", t
       std::vector<SimulationSetup> scenes{single_tetrahedron(precision, integrator),
                                           hanging_box(BoxScene{2, 1, 3, 5000.0, precision, integrator, 5})};
       DiagnosticList diagnostics;
-      const auto batch = gpu::GpuBatchSimulation::create(scenes, gpu::GpuOptions{}, diagnostics);
+      const auto batch = gpu_batch(scenes, gpu::GpuOptions{}, diagnostics);
       FMPC_REQUIRE(batch && batch->advance(20, diagnostics, 8));
       // The Euler schemes run persistent by default (on the cooperative grid, as these fit it); in clusters (one
       // block per cluster) and their per-step kernels too.
       gpu::GpuOptions in_clusters;
       in_clusters.persistent_kind = gpu::GpuOptions::PersistentKind::Clusters;
-      const auto clustered = gpu::GpuBatchSimulation::create(scenes, in_clusters, diagnostics);
+      const auto clustered = gpu_batch(scenes, in_clusters, diagnostics);
       FMPC_REQUIRE(clustered && clustered->advance(20, diagnostics, 8));
       // A scene alone of 720 vertices: a cluster of three blocks that copy their windows from each other.
       const std::vector<SimulationSetup> alone{hanging_box(BoxScene{9, 8, 7, 5000.0, precision, integrator, 5})};
-      const auto spread = gpu::GpuBatchSimulation::create(alone, in_clusters, diagnostics);
+      const auto spread = gpu_batch(alone, in_clusters, diagnostics);
       FMPC_REQUIRE(spread && spread->advance(20, diagnostics, 8));
       gpu::GpuOptions per_step;
       per_step.persistent = false;
-      const auto stepped = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
+      const auto stepped = gpu_batch(scenes, per_step, diagnostics);
       FMPC_REQUIRE(stepped && stepped->advance(20, diagnostics, 8));
       // One thread per vertex: the springs' sliced layout in every integrator's kernels.
       per_step.gather_lanes = 1;
-      const auto sliced = gpu::GpuBatchSimulation::create(scenes, per_step, diagnostics);
+      const auto sliced = gpu_batch(scenes, per_step, diagnostics);
       FMPC_REQUIRE(sliced && sliced->advance(20, diagnostics, 8));
       FMPC_EXPECT(batch->kinetic_energy(1, diagnostics).has_value());
       FMPC_EXPECT(batch->potential_energy(1, diagnostics).has_value());
@@ -648,7 +648,7 @@ FMPC_GPU_TEST(sanitizer_smoke, "sanitizer smoke: every kernel on tiny scenes", t
   setup.time_step = 40.0 * check_stability(setup, probe)->critical_time_step;
   setup.refuse_unstable_time_step = false;
   DiagnosticList diagnostics;
-  const auto run = gpu::GpuSimulation::create(setup, diagnostics);
+  const auto run = gpu_simulation(setup, diagnostics);
   FMPC_REQUIRE(run);
   FMPC_EXPECT(!run->advance(5000, diagnostics, 16));
   FMPC_EXPECT(run->non_finite().has_value());
@@ -687,12 +687,12 @@ FMPC_GPU_TEST(strain_table_matches_cpu, "table-driven stiffness k(strain): GPU e
   // Device energy with a strain table: k at the current strain, as the CPU's elastic_energy.
   const SimulationSetup setup = strain_table_box(Precision::Double, Integrator::SemiImplicitEuler);
   DiagnosticList diagnostics;
-  const auto cpu = CpuSimulation::create(setup, diagnostics);
-  const auto device = gpu::GpuSimulation::create(setup, diagnostics);
+  const auto cpu = sim::Simulation::create(setup, diagnostics);
+  const auto device = gpu_simulation(setup, diagnostics);
   FMPC_REQUIRE(cpu && device && cpu->advance(500, diagnostics) && device->advance(500, diagnostics));
   const auto potential = device->potential_energy(diagnostics);
   FMPC_REQUIRE(potential);
-  FMPC_EXPECT_WITHIN(*potential, cpu->potential_energy(), 1e-10 * std::abs(cpu->potential_energy()) + 1e-12);
+  FMPC_EXPECT_WITHIN(*potential, *cpu->potential_energy(diagnostics), 1e-10 * std::abs(*cpu->potential_energy(diagnostics)) + 1e-12);
 }
 
 FMPC_GPU_TEST(undamped_network, "a network without dashpots (no damping array) matches the CPU", true) {
@@ -732,7 +732,7 @@ FMPC_GPU_TEST(sanitizer_scene_features, "sanitizer smoke: probe, strain table an
     implicit.springs.damping.clear();
     for (const SimulationSetup* setup : {&probed, &table, &implicit}) {
       DiagnosticList diagnostics;
-      const auto run = gpu::GpuSimulation::create(*setup, diagnostics);
+      const auto run = gpu_simulation(*setup, diagnostics);
       FMPC_REQUIRE(run && run->advance(12, diagnostics, 5));
       FMPC_EXPECT(run->potential_energy(diagnostics).has_value());
       FMPC_EXPECT(!run->current_stiffness(diagnostics).empty());

@@ -1,5 +1,8 @@
 #include "tests/support/elastic_problem.h"
 
+#include "runtime/fem/element_law_registry.h"
+#include "tests/support/volume_term.h"
+
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdlib>
@@ -10,6 +13,7 @@
 #include "runtime/fem/fem_model_builder.h"
 #include "runtime/integrate/static_equilibrium.h"
 #include "runtime/scene/spring_model_builder.h"
+#include "tests/support/volume_term.h"
 
 namespace fmpc::testing {
 

@@ -43,7 +43,9 @@ TEST_CASE("GPU: a batch of implicit Euler scenes is refused before touching the 
   SimulationSetup setup = hanging_box(Precision::Double);
   setup.integrator = Integrator::ImplicitEuler;
   DiagnosticList diagnostics;
-  CHECK_FALSE(gpu::GpuBatchSimulation::create({setup, setup}, gpu::GpuOptions{}, diagnostics));
+  SimulationOptions cuda;
+  cuda.backend = Backend::Cuda;
+  CHECK_FALSE(Simulation::create({setup, setup}, cuda, diagnostics));
   CHECK_THAT(diagnostics.items()[0].message, Catch::StartsWith("scene 0: implicit Euler runs one scene at a time"));
 }
 
@@ -56,13 +58,15 @@ TEST_CASE("GPU: the fused kernel matches the CPU loop to rounding (float and dou
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     SimulationSetup setup = hanging_box(precision);
     DiagnosticList diagnostics;
-    const auto cpu = CpuSimulation::create(setup, diagnostics);
-    const auto gpu_run = gpu::GpuSimulation::create(setup, diagnostics);
+    const auto cpu = Simulation::create(setup, diagnostics);
+    SimulationOptions cuda;
+    cuda.backend = Backend::Cuda;
+    const auto gpu_run = Simulation::create(setup, diagnostics, cuda);
     REQUIRE(cpu);
     REQUIRE(gpu_run);
     REQUIRE(cpu->advance(200, diagnostics));
     REQUIRE(gpu_run->advance(200, diagnostics));
-    const auto a = cpu->positions();
+    const auto a = cpu->positions(diagnostics);
     const auto b = gpu_run->positions(diagnostics);
     REQUIRE(a.size() == b.size());
     const double tolerance = precision == Precision::Float ? 1e-6 : 1e-14;

@@ -123,7 +123,7 @@ TEST_CASE("critical time step: the Gershgorin bound, auto dt, and refusal with t
         "dt: time step 0.1 s exceeds the semi-implicit Euler stability limit 0.0707107 s (h <= 2 / (beta/2 + "
         "sqrt(w^2 + beta^2/4)) with w_max = 28.2843 rad/s at vertex 1, beta_max = 0 1/s); use dt <= 0.0565685 s, "
         "dt auto, or implicit Euler");
-  CHECK_FALSE(CpuSimulation::create(setup, diagnostics));
+  CHECK_FALSE(Simulation::create(setup, diagnostics));
 
   setup.integrator = Integrator::ForwardEuler;
   setup.time_step.reset();

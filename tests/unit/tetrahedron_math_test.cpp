@@ -1,5 +1,5 @@
-// kernels/tetrahedron_math.h: rotation extraction, co-rotated forces and the volume term, their stiffness, bounds
-// and stresses. Seeded property tests over thousands of elements (random shapes, slivers, rotations, inverted, flat
+// kernels/tetrahedron_math.h and kernels/laws/: rotation extraction, co-rotated forces and the volume term, their
+// stiffness, bounds and stresses. Seeded property tests over thousands of elements (random shapes, slivers, rotations, inverted, flat
 // and collapsed deformations), each checked against an independent statement (orthogonality, energy gradients by
 // finite differences, rigid-motion invariance, eigenvalues from Eigen).
 #include <Eigen/Dense>
@@ -9,7 +9,7 @@
 #include <limits>
 #include <random>
 
-#include "kernels/tetrahedron_math.h"
+#include "kernels/element_laws.h"
 
 using namespace fmpc::kernels;
 
@@ -82,9 +82,8 @@ Element random_element(std::mt19937_64& rng, double aspect) {
   return e;
 }
 
-TetrahedronMaterial<double> corotational(const Element& e, double E, double nu, double beta = 0.0) {
-  TetrahedronMaterial<double> m{};
-  m.law = TetrahedronLaw::CorotationalLinear;
+CorotationalLinear::Material<double> corotational(const Element& e, double E, double nu, double beta = 0.0) {
+  CorotationalLinear::Material<double> m{};
   m.rest_inverse = e.rest_inverse;
   m.rest_volume = e.volume;
   m.youngs_modulus = E;
@@ -199,10 +198,10 @@ TEST_CASE("rotation extraction: collapsed, line-like, pure rotation, NaN", "[fem
   double x[4][3], v[4][3] = {}, f[4][3];
   std::copy(&e.rest[0][0], &e.rest[0][0] + 12, &x[0][0]);
   x[2][1] = std::numeric_limits<double>::quiet_NaN();
-  tetrahedron_forces(corotational(e, 1000.0, 0.3), x, v, f);
+  CorotationalLinear::forces(corotational(e, 1000.0, 0.3), x, v, f);
   for (int a = 0; a < 4; ++a) CHECK(std::isnan(f[a][0] + f[a][1] + f[a][2]));
   x[2][1] = std::numeric_limits<double>::infinity();
-  tetrahedron_forces(corotational(e, 1000.0, 0.3), x, v, f);
+  CorotationalLinear::forces(corotational(e, 1000.0, 0.3), x, v, f);
   for (int a = 0; a < 4; ++a) CHECK(!std::isfinite(f[a][0] + f[a][1] + f[a][2]));
 }
 
@@ -213,20 +212,20 @@ TEST_CASE("co-rotated forces: zero under rigid motion, the energy's gradient, mo
   for (int n = 0; n < 2000; ++n) {
     const Element e = random_element(rng, n % 4 == 0 ? 8.0 : 2.0);
     const double E = 5000.0, nu = nu_pick(rng);
-    const TetrahedronMaterial<double> m = corotational(e, E, nu);
+    const CorotationalLinear::Material<double> m = corotational(e, E, nu);
     const double t[3] = {shift(rng), shift(rng), shift(rng)};
     double zero_v[4][3] = {};
     // Rigid motion: no force.
     double x[4][3], f[4][3];
     deform(e, random_rotation(rng), t, x);
-    tetrahedron_forces(m, x, zero_v, f);
+    CorotationalLinear::forces(m, x, zero_v, f);
     const double scale = E * std::cbrt(e.volume) * std::cbrt(e.volume);  // N for a unit strain
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i) worst_rigid = std::max(worst_rigid, std::abs(f[a][i]) / scale);
     // A general deformation: forces sum to zero, no net torque, and equal -dW/dx (central differences).
     const Matrix F = deformation(random_rotation(rng), {stretch(rng), stretch(rng), stretch(rng)}, random_rotation(rng));
     deform(e, F, t, x);
-    tetrahedron_forces(m, x, zero_v, f);
+    CorotationalLinear::forces(m, x, zero_v, f);
     double sum[3] = {0, 0, 0}, torque[3] = {0, 0, 0};
     for (int a = 0; a < 4; ++a) {
       double c[3];
@@ -248,7 +247,7 @@ TEST_CASE("co-rotated forces: zero under rigid motion, the energy's gradient, mo
         std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
         plus[a][i] += h;
         minus[a][i] -= h;
-        const double gradient = (tetrahedron_elastic_energy(m, plus) - tetrahedron_elastic_energy(m, minus)) / (2 * h);
+        const double gradient = (CorotationalLinear::energy(m, plus) - CorotationalLinear::energy(m, minus)) / (2 * h);
         worst_gradient = std::max(worst_gradient, std::abs(f[a][i] + gradient) / scale);
       }
     }
@@ -263,14 +262,14 @@ TEST_CASE("co-rotated damping dissipates; an inverted element is pushed back to 
   std::uniform_real_distribution<double> velocity(-1.0, 1.0);
   for (int n = 0; n < 1000; ++n) {
     const Element e = random_element(rng, 3.0);
-    const TetrahedronMaterial<double> m = corotational(e, 3000.0, 0.3, 0.01);
+    const CorotationalLinear::Material<double> m = corotational(e, 3000.0, 0.3, 0.01);
     double x[4][3], v[4][3], f[4][3], undamped[4][3], still[4][3] = {};
     const double t[3] = {0, 0, 0};
     deform(e, deformation(random_rotation(rng), {1.1, 0.95, 0.9}, random_rotation(rng)), t, x);
     for (auto& corner : v)
       for (double& c : corner) c = velocity(rng);
-    tetrahedron_forces(m, x, v, f);
-    tetrahedron_forces(m, x, still, undamped);
+    CorotationalLinear::forces(m, x, v, f);
+    CorotationalLinear::forces(m, x, still, undamped);
     double power = 0.0;
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i) power += (f[a][i] - undamped[a][i]) * v[a][i];
@@ -278,7 +277,7 @@ TEST_CASE("co-rotated damping dissipates; an inverted element is pushed back to 
   }
   // Push corner 3 through the opposite face: the force on it points back along the face normal.
   const Element e = random_element(rng, 1.5);
-  const TetrahedronMaterial<double> m = corotational(e, 3000.0, 0.45);
+  const CorotationalLinear::Material<double> m = corotational(e, 3000.0, 0.45);
   double x[4][3], f[4][3], still[4][3] = {};
   std::copy(&e.rest[0][0], &e.rest[0][0] + 12, &x[0][0]);
   double normal[3], e1[3], e2[3];
@@ -290,12 +289,10 @@ TEST_CASE("co-rotated damping dissipates; an inverted element is pushed back to 
   const double height = 6.0 * e.volume / std::sqrt(dot3(normal, normal));
   for (int i = 0; i < 3; ++i) x[3][i] -= 1.5 * height * normal[i] / std::sqrt(dot3(normal, normal));
   REQUIRE(tetrahedron_volume(x) < 0.0);
-  tetrahedron_forces(m, x, still, f);
+  CorotationalLinear::forces(m, x, still, f);
   CHECK(dot3(f[3], normal) > 0.0);
-  TetrahedronMaterial<double> volume_term = m;
-  volume_term.law = TetrahedronLaw::VolumePreservation;
-  volume_term.bulk_modulus = 1000.0;
-  tetrahedron_forces(volume_term, x, still, f);
+  const VolumePreservation::Material<double> volume_term{e.rest_inverse, e.volume, 1000.0, 0.0};
+  VolumePreservation::forces(volume_term, x, still, f);
   CHECK(dot3(f[3], normal) > 0.0);
 }
 
@@ -304,17 +301,13 @@ TEST_CASE("volume term: Teschner's constraint energy and its gradient", "[fem]")
   std::uniform_real_distribution<double> stretch(0.5, 1.6);
   for (int n = 0; n < 1000; ++n) {
     const Element e = random_element(rng, 4.0);
-    TetrahedronMaterial<double> m{};
-    m.law = TetrahedronLaw::VolumePreservation;
-    m.rest_inverse = e.rest_inverse;
-    m.rest_volume = e.volume;
-    m.bulk_modulus = 2.0e4;
+    const VolumePreservation::Material<double> m{e.rest_inverse, e.volume, 2.0e4, 0.0};
     double x[4][3], f[4][3], still[4][3] = {};
     const double t[3] = {0.1, 0.2, 0.3};
     deform(e, deformation(random_rotation(rng), {stretch(rng), stretch(rng), stretch(rng)}, random_rotation(rng)), t, x);
-    tetrahedron_forces(m, x, still, f);
+    VolumePreservation::forces(m, x, still, f);
     const double change = tetrahedron_volume(x) - e.volume;
-    CHECK(tetrahedron_elastic_energy(m, x) == Approx(m.bulk_modulus * change * change / (2 * e.volume)).epsilon(1e-12));
+    CHECK(VolumePreservation::energy(m, x) == Approx(m.bulk_modulus * change * change / (2 * e.volume)).epsilon(1e-12));
     const double h = 1e-7 * std::cbrt(e.volume), scale = m.bulk_modulus * std::cbrt(e.volume) * std::cbrt(e.volume);
     for (int a = 0; a < 4; ++a) {
       for (int i = 0; i < 3; ++i) {
@@ -323,7 +316,7 @@ TEST_CASE("volume term: Teschner's constraint energy and its gradient", "[fem]")
         std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
         plus[a][i] += h;
         minus[a][i] -= h;
-        const double gradient = (tetrahedron_elastic_energy(m, plus) - tetrahedron_elastic_energy(m, minus)) / (2 * h);
+        const double gradient = (VolumePreservation::energy(m, plus) - VolumePreservation::energy(m, minus)) / (2 * h);
         CHECK(std::abs(f[a][i] + gradient) < 1e-6 * scale);
       }
     }
@@ -337,20 +330,20 @@ TEST_CASE("element stiffness: blocks are the forces' derivative at rest, the bou
   for (int n = 0; n < 1000; ++n) {
     const Element e = random_element(rng, n % 3 == 0 ? 10.0 : 2.0);
     const double nu = n == 0 ? 0.0 : n == 1 ? 0.499 : nu_pick(rng);
-    TetrahedronMaterial<double> m = corotational(e, 4000.0, nu);
+    CorotationalLinear::Material<double> m = corotational(e, 4000.0, nu);
     // At a rigidly rotated rest shape the co-rotated stiffness R K0 R^T is the exact derivative of the forces.
     const Matrix Q = random_rotation(rng);
     const double t[3] = {0.01, -0.02, 0.03};
     double x[4][3], still[4][3] = {};
     deform(e, Q, t, x);
-    TetrahedronLinearisation lin{};
-    linearise_tetrahedron(m, x, lin);
+    CorotationalLinear::Linearisation lin{};
+    CorotationalLinear::linearise(m, x, lin);
     REQUIRE(max_difference(lin.rotation, Q.data(), 9) < 1e-12);
     Eigen::Matrix<double, 12, 12> K;
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b) {
         double block[9];
-        tetrahedron_stiffness_block(m, lin, a, b, block);
+        CorotationalLinear::stiffness_block(m, lin, a, b, block);
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j) K(3 * a + i, 3 * b + j) = block[3 * i + j];
       }
@@ -363,15 +356,15 @@ TEST_CASE("element stiffness: blocks are the forces' derivative at rest, the bou
         std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
         plus[b][j] += h;
         minus[b][j] -= h;
-        tetrahedron_forces(m, plus, still, fp);
-        tetrahedron_forces(m, minus, still, fm);
+        CorotationalLinear::forces(m, plus, still, fp);
+        CorotationalLinear::forces(m, minus, still, fm);
         for (int a = 0; a < 4; ++a)
           for (int i = 0; i < 3; ++i) CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * scale);
       }
     }
     // The whole matrix at once is the blocks.
     double whole[144];
-    tetrahedron_stiffness_matrix(m, lin, whole);
+    CorotationalLinear::stiffness_matrix(m, lin, whole);
     for (int r = 0; r < 12; ++r)
       for (int c = 0; c < 12; ++c) CHECK(whole[12 * r + c] == Approx(K(r, c)).margin(1e-12 * scale));
     // The action is the blocks' product.
@@ -379,13 +372,13 @@ TEST_CASE("element stiffness: blocks are the forces' derivative at rest, the bou
     Eigen::Matrix<double, 12, 1> pv;
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i) p[a][i] = pv[3 * a + i] = std::sin(1.0 + 3 * a + i);
-    tetrahedron_stiffness_action(m, lin, p, out);
+    CorotationalLinear::stiffness_action(m, lin, p, out);
     const Eigen::Matrix<double, 12, 1> product = K * pv;
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i) CHECK(out[a][i] == Approx(product[3 * a + i]).margin(1e-12 * scale));
     // The bound is above the largest eigenvalue, and not far above it.
     const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>>(K).eigenvalues().maxCoeff();
-    const double bound = tetrahedron_stiffness_bound(m, 4000.0);
+    const double bound = CorotationalLinear::stiffness_bound(m);
     CHECK(bound >= largest * (1 - 1e-12));
     loosest = std::max(loosest, bound / largest);
   }

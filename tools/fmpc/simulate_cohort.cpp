@@ -59,7 +59,7 @@ void append_build_diagnostics(const DiagnosticList& from, const std::string& lab
 // The size that the cohort's limit counts: springs, or tetrahedra with the FEM.
 double model_size(const sim::SimulationSetup& setup) {
   return static_cast<double>(setup.springs.size()) +
-         (setup.model == sim::ForceModel::CorotationalFem ? static_cast<double>(setup.tetrahedra.size()) : 0.0);
+         (setup.springs.size() == 0 ? static_cast<double>(setup.tetrahedra.size()) : 0.0);
 }
 
 struct CohortMember {
@@ -320,7 +320,7 @@ int run_cohort_command(const SimulateOptions& options) {
   run_options.threads = scene->threads;
   ProgressLine progress("simulate");
   run_options.progress = [&](std::size_t done, std::size_t total) {
-    progress.show_fraction(done, total, backend->backend == "cuda" ? "step" : "patient");
+    progress.show_fraction(done, total, "step");
   };
   const std::optional<sim::CohortRunResult> run = sim::run_cohort(patients, run_options, diagnostics);
   progress.finish();
@@ -390,7 +390,7 @@ int run_cohort_command(const SimulateOptions& options) {
                              : "")
             << ", " << sim::scene_name(setup.integrator) << ", "
             << (setup.precision == sim::Precision::Float ? "float" : "double") << ", " << backend->backend << "\n"
-            << "  model: " << sim::scene_name(setup.model) << "; per patient " << members.front().built->mesh.points.size()
+            << "  model: " << sim::model_name(setup) << "; per patient " << members.front().built->mesh.points.size()
             << " vertices, " << setup.springs.size() << " springs\n";
   if (e_hi >= e_lo) std::cout << "  E from the rules: " << six_digits(e_lo) << " to " << six_digits(e_hi) << " kPa\n";
   std::cout << "  completed: " << completed << " of " << members.size() << "; with inverted elements: " << inverted

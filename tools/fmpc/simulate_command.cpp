@@ -213,7 +213,7 @@ int run_simulate(const SimulateOptions& options) {
   std::cout << scene->name << ": " << result->steps_taken << " steps of " << six_digits(result->stability.time_step)
             << " s" << (result->stability.automatic ? " (auto)" : "") << ", " << sim::scene_name(setup.integrator)
             << ", " << (setup.precision == sim::Precision::Float ? "float" : "double") << ", " << backend->backend << "\n"
-            << "  model: " << sim::scene_name(setup.model) << "; mesh: " << built->mesh.points.size() << " vertices, "
+            << "  model: " << sim::model_name(setup) << "; mesh: " << built->mesh.points.size() << " vertices, "
             << built->mesh.tetrahedra.size() << " tetrahedra, " << setup.springs.size() << " springs, "
             << setup.fixed_vertices.size() << " fixed\n"
             << "  stiffness: " << built->stiffness_description << "\n"

@@ -7,15 +7,17 @@
 #pragma GCC diagnostic pop
 #include <algorithm>
 #include <cmath>
-#include <sstream>
+#include <limits>
 
 #include "kernels/implicit_math.h"
 #include "kernels/integrator_math.h"
+#include "kernels/element_laws.h"
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
 #include "runtime/integrate/model_tangent.h"
 #include "runtime/integrate/simulation.h"
+#include "runtime/integrate/stepping_engine.h"
 #include "runtime/integrate/worker_pool.h"
 
 namespace fmpc::sim {
@@ -32,10 +34,33 @@ struct Vector3Arrays {
   }
 };
 
-template <typename Real>
-class CpuSimulationImpl final : public CpuSimulation {
+// One scene's state and steps on the CPU, what CpuEngine runs side by side (a virtual call per scene and step
+// chunk, never per element).
+class CpuSceneBase {
  public:
-  CpuSimulationImpl(const SimulationSetup& setup, const StabilityReport& stability)
+  virtual ~CpuSceneBase() = default;
+  virtual std::size_t steps_taken() const = 0;
+  // Steps to `end` or, earlier, to the first step that leaves a non-finite position or velocity.
+  virtual void run_to(std::size_t end, DiagnosticList& diagnostics) = 0;
+  // The smallest vertex with a non-finite position or velocity now, or the vertex count.
+  virtual std::size_t first_non_finite_vertex() const = 0;
+  virtual InversionCount count_inversions() const = 0;
+  virtual void save_checkpoint() = 0;
+  virtual void restore_checkpoint() = 0;
+  virtual int implicit_max_iterations_used() const = 0;
+  virtual std::vector<Point3> positions() const = 0;
+  virtual std::vector<Point3> velocities() const = 0;
+  virtual double kinetic_energy() const = 0;
+  virtual double potential_energy() const = 0;
+  virtual ProbeReading probe_reading() const = 0;
+  virtual std::vector<double> current_stiffness() const = 0;
+  virtual const SimulationSetup& setup() const = 0;
+};
+
+template <typename Real>
+class CpuScene final : public CpuSceneBase {
+ public:
+  CpuScene(const SimulationSetup& setup, const StabilityReport& stability)
       : setup_(setup), stability_(stability), pool_(std::max(1u, setup.threads)), n_(setup.rest_positions.size()) {
     const SpringNetwork& net = setup_.springs;
     const auto convert = [](const std::vector<double>& in) {
@@ -93,30 +118,35 @@ class CpuSimulationImpl final : public CpuSimulation {
     network_view_.law.k2_over_k1 = static_cast<Real>(setup.basafa_k2_over_k1);
     network_view_.law.xc = static_cast<Real>(setup.basafa_xc);
     for (const Tetrahedron& t : setup.tetrahedra) corners_.insert(corners_.end(), t.begin(), t.end());
-    if (setup_.tetrahedron_field) {
-      const TetrahedronField& field = *setup_.tetrahedron_field;
-      field_rest_inverse_ = convert(field.rest_inverse);
-      field_rest_volume_ = convert(field.rest_volume);
-      field_youngs_modulus_ = convert(field.youngs_modulus);
-      field_poisson_ratio_ = convert(field.poisson_ratio);
-      field_bulk_modulus_ = convert(field.bulk_modulus);
-      field_damping_ = convert(field.stiffness_damping);
-      corner_force_.assign(4 * field.size(), kernels::CornerForce<Real>{});
-      const auto data_or_null = [](const std::vector<Real>& values) { return values.empty() ? nullptr : values.data(); };
-      field_view_.law = field.law;
-      field_view_.count = static_cast<int>(field.size());
-      field_view_.corners = corners_.data();
-      field_view_.corner_slot = field.corner_slot.data();
-      field_view_.rest_inverse = field_rest_inverse_.data();
-      field_view_.rest_volume = field_rest_volume_.data();
-      field_view_.youngs_modulus = data_or_null(field_youngs_modulus_);
-      field_view_.poisson_ratio = data_or_null(field_poisson_ratio_);
-      field_view_.bulk_modulus = data_or_null(field_bulk_modulus_);
-      field_view_.stiffness_damping = data_or_null(field_damping_);
-      field_view_.strain_table = {nullptr, nullptr, 0};
-      if (setup_.strain_stiffness && field.law == kernels::TetrahedronLaw::CorotationalLinear)
-        field_view_.strain_table = strain_table_view(*setup_.strain_stiffness);
-      corner_view_ = {field.corner_offset.data(), field.corner_index.data(), corner_force_.data()};
+    if (!setup_.elements.empty()) {
+      const ElementGeometry& geometry = setup_.elements.geometry;
+      rest_inverse_ = convert(geometry.rest_inverse);
+      rest_volume_ = convert(geometry.rest_volume);
+      corner_force_.assign(4 * geometry.size(), kernels::CornerForce<Real>{});
+      const kernels::StrainTableView table = setup_.strain_stiffness ? strain_table_view(*setup_.strain_stiffness)
+                                                                     : kernels::StrainTableView{nullptr, nullptr, 0};
+      for (const ElementTerm& term : setup_.elements.terms) {
+        TermArrays arrays;
+        for (int p = 0; p < kernels::kMostLawParameters; ++p) arrays.parameter[p] = convert(term.parameter[p]);
+        arrays.damping = convert(term.stiffness_damping);
+        term_arrays_.push_back(std::move(arrays));
+        const TermArrays& held = term_arrays_.back();
+        const auto data_or_null = [](const std::vector<Real>& values) {
+          return values.empty() ? nullptr : values.data();
+        };
+        kernels::ElementTermView<Real> view{};
+        view.law = term.law;
+        view.count = static_cast<int>(geometry.size());
+        view.corners = corners_.data();
+        view.corner_slot = geometry.corner_slot.data();
+        view.rest_inverse = rest_inverse_.data();
+        view.rest_volume = rest_volume_.data();
+        for (int p = 0; p < kernels::kMostLawParameters; ++p) view.parameter[p] = data_or_null(held.parameter[p]);
+        view.stiffness_damping = data_or_null(held.damping);
+        view.strain_table = reads_strain_table(term) ? table : kernels::StrainTableView{nullptr, nullptr, 0};
+        term_views_.push_back(view);
+      }
+      corner_view_ = {geometry.corner_offset.data(), geometry.corner_index.data(), corner_force_.data()};
     }
     loads_.mass = mass_.data();
     loads_.fixed = fixed_.data();
@@ -143,17 +173,13 @@ class CpuSimulationImpl final : public CpuSimulation {
       for (auto& k : rk_velocity_) k.resize(n_);
       for (auto& k : rk_acceleration_) k.resize(n_);
     }
-    if (!setup_.tetrahedra.empty()) save_checkpoint();
   }
 
-  bool advance(std::size_t steps, DiagnosticList& diagnostics) override {
-    if (stopped_) return false;
-    for (std::size_t i = 0; i < steps; ++i) {
-      if (!one_step(diagnostics)) return fail();
-      if (steps_taken_ % kCheckEvery == 0 && !check(diagnostics)) return fail();
+  void run_to(std::size_t end, DiagnosticList& diagnostics) override {
+    while (steps_taken_ < end) {
+      one_step(diagnostics);
+      if (first_non_finite_vertex() < n_) return;
     }
-    if (steps_taken_ % kCheckEvery != 0 && !check(diagnostics)) return fail();
-    return true;
   }
 
   ProbeReading probe_reading() const override {
@@ -167,13 +193,11 @@ class CpuSimulationImpl final : public CpuSimulation {
   }
 
   std::size_t steps_taken() const override { return steps_taken_; }
-  double time() const override { return static_cast<double>(steps_taken_) * stability_.time_step; }
+  double time() const { return static_cast<double>(steps_taken_) * stability_.time_step; }
   std::vector<Point3> positions() const override { return to_points(position_); }
   std::vector<Point3> velocities() const override { return to_points(velocity_); }
-  const StabilityReport& stability() const override { return stability_; }
-  const std::optional<NonFiniteReport>& non_finite() const override { return non_finite_; }
-  const InversionReport& inversions() const override { return inversions_; }
   int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
+  const SimulationSetup& setup() const override { return setup_; }
 
   double kinetic_energy() const override { return sim::kinetic_energy(setup_, velocities()); }
 
@@ -199,12 +223,24 @@ class CpuSimulationImpl final : public CpuSimulation {
   // the model's forces, dispatched once per call.
   void accelerations(const Vector3Arrays<Real>& p, const Vector3Arrays<Real>& v, Vector3Arrays<Real>& a) {
     const kernels::StateView<Real> state = view(p, v);
-    if (setup_.tetrahedron_field) {
-      pool_.run(static_cast<std::size_t>(field_view_.count), [&](std::size_t begin, std::size_t end) {
-        for (std::size_t e = begin; e < end; ++e)
-          kernels::tetrahedron_corner_forces(static_cast<int>(e), field_view_, state, corner_force_.data());
-      });
-      if (setup_.model == ForceModel::CorotationalFem) {
+    if (!term_views_.empty()) {
+      // Each term's pass in list order: the first writes the corner forces, the later ones add to them.
+      for (std::size_t term = 0; term < term_views_.size(); ++term) {
+        const kernels::ElementTermView<Real>& field = term_views_[term];
+        kernels::visit_element_law(field.law, [&](auto element_law) {
+          using Law = decltype(element_law);
+          pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
+            for (std::size_t e = begin; e < end; ++e) {
+              if (term == 0) {
+                kernels::element_corner_forces<Law, false>(static_cast<int>(e), field, state, corner_force_.data());
+              } else {
+                kernels::element_corner_forces<Law, true>(static_cast<int>(e), field, state, corner_force_.data());
+              }
+            }
+          });
+        });
+      }
+      if (setup_.springs.size() == 0) {
         vertex_pass(kernels::ElementForces<Real>{corner_view_}, state, a);
       } else {
         vertex_pass(kernels::SpringAndElementForces<Real>{network_view_, corner_view_}, state, a);
@@ -223,57 +259,15 @@ class CpuSimulationImpl final : public CpuSimulation {
     });
   }
 
-  bool one_step(DiagnosticList& diagnostics) {
+  void one_step(DiagnosticList& diagnostics) {
     apply_probe(time(), true);
     if (setup_.strain_stiffness && !setup_.springs.stiffness.empty()) look_up_stiffness();
-    if (!step(diagnostics)) return false;
+    step(diagnostics);
     ++steps_taken_;
     apply_probe(time(), false);
-    return check_finite(diagnostics);
   }
 
-  bool fail() {
-    stopped_ = true;
-    return false;
-  }
-
-  // The checks made every kCheckEvery steps and at the end of every advance: inversions (the first one located
-  // exactly by replaying from the last check) and the displacement the nodal damping's bound assumed.
-  bool check(DiagnosticList& diagnostics) {
-    if (!check_displacement_bound(diagnostics)) return false;
-    if (setup_.tetrahedra.empty()) return true;
-    InversionCount found = count_inversions();
-    if (found.count > 0 && inversions_.largest_count == 0) {
-      // Replay from the last check without an inversion, one step at a time, to the first step with one.
-      const std::size_t failed_by = steps_taken_;
-      restore_checkpoint();
-      found = count_inversions();
-      while (steps_taken_ < failed_by && found.count == 0) {
-        if (!one_step(diagnostics)) return false;
-        found = count_inversions();
-      }
-      inversions_.first_step = steps_taken_;
-      inversions_.first_time = time();
-      inversions_.first_element = found.first;
-      inversions_.largest_count = found.count;
-      inversions_.current_count = found.count;
-      if (setup_.on_inversion == InversionPolicy::Stop) {
-        diagnostics.error(setup_.source_range, inversion_message(setup_, inversions_) + "; the scene's on_inversion is stop");
-        return false;
-      }
-      diagnostics.warning(setup_.source_range, "inverted-elements", inversion_message(setup_, inversions_));
-      while (steps_taken_ < failed_by) {
-        if (!one_step(diagnostics)) return false;
-      }
-      found = count_inversions();
-    }
-    inversions_.current_count = found.count;
-    inversions_.largest_count = std::max(inversions_.largest_count, found.count);
-    if (inversions_.largest_count == 0) save_checkpoint();
-    return true;
-  }
-
-  InversionCount count_inversions() const {
+  InversionCount count_inversions() const override {
     InversionCount found;
     for (std::size_t e = 0; e < setup_.tetrahedra.size(); ++e) {
       if (!kernels::tetrahedron_inverted(static_cast<int>(e), corners_.data(), position_.x.data(), position_.y.data(),
@@ -285,30 +279,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     return found;
   }
 
-  bool check_displacement_bound(DiagnosticList& diagnostics) {
-    if (!(setup_.nodal_damping_gamma1 > 0.0) || !std::isfinite(stability_.assumed_displacement_max)) return true;
-    for (std::size_t v = 0; v < n_; ++v) {
-      const double dx = static_cast<double>(position_.x[v]) - setup_.rest_positions[v][0];
-      const double dy = static_cast<double>(position_.y[v]) - setup_.rest_positions[v][1];
-      const double dz = static_cast<double>(position_.z[v]) - setup_.rest_positions[v][2];
-      const double moved = std::sqrt(dx * dx + dy * dy + dz * dz);
-      if (moved <= stability_.assumed_displacement_max) continue;
-      diagnostics.error(setup_.source_range, displacement_bound_message(v, moved, steps_taken_));
-      return false;
-    }
-    return true;
-  }
-
-  std::string displacement_bound_message(std::size_t v, double moved, std::size_t step) const {
-    std::ostringstream message;
-    message << "vertex " << v << " moved " << moved << " m from rest by step " << step
-            << ", beyond the " << stability_.assumed_displacement_max
-            << " m the stable time step assumed for the nodal damping gamma1 |x - x0| (gamma1 = "
-            << setup_.nodal_damping_gamma1 << " N s/m^2); give a smaller dt explicitly or lower gamma1";
-    return message.str();
-  }
-
-  void save_checkpoint() {
+  void save_checkpoint() override {
     checkpoint_position_ = position_;
     checkpoint_velocity_ = velocity_;
     checkpoint_acceleration_ = acceleration_;
@@ -316,7 +287,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     checkpoint_step_ = steps_taken_;
   }
 
-  void restore_checkpoint() {
+  void restore_checkpoint() override {
     position_ = checkpoint_position_;
     velocity_ = checkpoint_velocity_;
     acceleration_ = checkpoint_acceleration_;
@@ -444,9 +415,8 @@ class CpuSimulationImpl final : public CpuSimulation {
       const double dy = static_cast<double>(position_.y[i]) - setup_.rest_positions[i][1];
       const double dz = static_cast<double>(position_.z[i]) - setup_.rest_positions[i][2];
       const double diagonal =
-          setup_.mass[i] + h * (setup_.nodal_damping_gamma0 +
-                                setup_.nodal_damping_gamma1 * std::sqrt(dx * dx + dy * dy + dz * dz) +
-                                setup_.mass_damping * setup_.mass[i]);
+          kernels::implicit_vertex_diagonal(setup_.mass[i], h, setup_.nodal_damping_gamma0, setup_.nodal_damping_gamma1,
+                                            std::sqrt(dx * dx + dy * dy + dz * dz), setup_.mass_damping);
       for (std::size_t axis = 0; axis < 3; ++axis) {
         const auto dof = static_cast<Eigen::Index>(3 * i + axis);
         // A held axis is an identity row with a zero right-hand side.
@@ -470,11 +440,9 @@ class CpuSimulationImpl final : public CpuSimulation {
     implicit_iterations_max_ = std::max(implicit_iterations_max_, static_cast<int>(solver.iterations()));
     if (solver.info() != Eigen::Success && !cg_warning_given_) {
       cg_warning_given_ = true;
-      std::ostringstream message;
-      message << "implicit Euler: conjugate gradient stopped at step " << steps_taken_ + 1 << " after "
-              << solver.iterations() << " iterations with relative residual " << solver.error() << " (tolerance "
-              << setup_.implicit.tolerance << "); raise max_iterations or use a smaller dt";
-      diagnostics.warning(setup_.source_range, "cg-not-converged", message.str());
+      diagnostics.warning(setup_.source_range, "cg-not-converged",
+                          cg_stopped_message(steps_taken_ + 1, static_cast<int>(solver.iterations()), solver.error(),
+                                             setup_.implicit.tolerance));
     }
     for (std::size_t i = 0; i < n_; ++i) {
       if (fixed_[i] == kernels::kAllAxesFixed) continue;
@@ -492,56 +460,14 @@ class CpuSimulationImpl final : public CpuSimulation {
     return kernels::axis_fixed(fixed_[static_cast<std::size_t>(dof / 3)], static_cast<int>(dof % 3));
   }
 
-  bool check_finite(DiagnosticList& diagnostics) {
+  std::size_t first_non_finite_vertex() const override {
     for (std::size_t v = 0; v < n_; ++v) {
-      if (std::isfinite(position_.x[v]) && std::isfinite(position_.y[v]) && std::isfinite(position_.z[v]) &&
-          std::isfinite(velocity_.x[v]) && std::isfinite(velocity_.y[v]) && std::isfinite(velocity_.z[v])) {
-        continue;
-      }
-      NonFiniteReport report;
-      report.step = steps_taken_;
-      report.time = time();
-      report.vertex = static_cast<std::int32_t>(v);
-      report.spring = culprit_spring(v);
-      non_finite_ = report;
-      std::ostringstream message;
-      message << "the simulation became non-finite at step " << report.step << " (t = " << report.time << " s): vertex "
-              << v << " has a NaN or infinite position or velocity";
-      if (report.spring >= 0) {
-        const auto s = static_cast<std::size_t>(report.spring);
-        message << "; its most strained spring is " << report.spring << " (vertices " << setup_.springs.first[s]
-                << " and " << setup_.springs.second[s] << ")";
-      }
-      message << "; lower dt, raise damping, or check the loads";
-      diagnostics.error(setup_.source_range, message.str());
-      return false;
+      if (!(std::isfinite(position_.x[v]) && std::isfinite(position_.y[v]) && std::isfinite(position_.z[v]) &&
+            std::isfinite(velocity_.x[v]) && std::isfinite(velocity_.y[v]) && std::isfinite(velocity_.z[v])))
+        return v;
     }
-    return true;
+    return n_;
   }
-
-  // The spring at v whose length is non-finite, or else the one with the largest |strain|.
-  std::int32_t culprit_spring(std::size_t v) const {
-    const SpringNetwork& net = setup_.springs;
-    std::int32_t best = -1;
-    double worst = -1.0;
-    for (auto e = net.adjacency_offset[v]; e < net.adjacency_offset[v + 1]; ++e) {
-      const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
-      const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
-      const double dx = static_cast<double>(position_.x[b]) - static_cast<double>(position_.x[a]);
-      const double dy = static_cast<double>(position_.y[b]) - static_cast<double>(position_.y[a]);
-      const double dz = static_cast<double>(position_.z[b]) - static_cast<double>(position_.z[a]);
-      const double length = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const double strain = std::isfinite(length) ? std::abs(length - net.rest_length[s]) / net.rest_length[s]
-                                                  : std::numeric_limits<double>::infinity();
-      if (strain > worst) {
-        worst = strain;
-        best = static_cast<std::int32_t>(s);
-      }
-      if (!std::isfinite(strain)) break;
-    }
-    return best;
-  }
-
 
   // Displacement probes: positions (and, before a step, the ramp's velocity) of the probe vertices at time t.
   // Force probes: their share of the force for the step from t.
@@ -598,7 +524,7 @@ class CpuSimulationImpl final : public CpuSimulation {
     return out;
   }
 
-  const SimulationSetup setup_;  // a copy: the views below point into it
+  const SimulationSetup& setup_;  // the Simulation's: the views below point into it
   StabilityReport stability_;
   WorkerPool pool_;
   std::size_t n_;
@@ -611,17 +537,19 @@ class CpuSimulationImpl final : public CpuSimulation {
   kernels::VertexLoads<Real> loads_{};
   std::vector<int> corners_;  // 4 per tetrahedron
   std::vector<std::int32_t> neighbour_;  // the other endpoint of each CSR entry (adjacency_neighbours)
-  std::vector<Real> field_rest_inverse_, field_rest_volume_, field_youngs_modulus_, field_poisson_ratio_,
-      field_bulk_modulus_, field_damping_;
+  // The element terms in Real: the geometry the terms share, each term's parameters and damping, and its view.
+  struct TermArrays {
+    std::vector<Real> parameter[kernels::kMostLawParameters];
+    std::vector<Real> damping;
+  };
+  std::vector<Real> rest_inverse_, rest_volume_;
+  std::vector<TermArrays> term_arrays_;  // the views point into its vectors' buffers, which moves keep
+  std::vector<kernels::ElementTermView<Real>> term_views_;
   std::vector<kernels::CornerForce<Real>> corner_force_;
-  kernels::TetrahedronFieldView<Real> field_view_{};
   kernels::CornerForceView<Real> corner_view_{};
   Real h_ = Real(0);
   bool have_acceleration_ = false;
   std::size_t steps_taken_ = 0;
-  std::optional<NonFiniteReport> non_finite_;
-  InversionReport inversions_;
-  bool stopped_ = false;
   Vector3Arrays<Real> checkpoint_position_, checkpoint_velocity_, checkpoint_acceleration_;
   bool checkpoint_have_acceleration_ = false;
   std::size_t checkpoint_step_ = 0;
@@ -630,76 +558,144 @@ class CpuSimulationImpl final : public CpuSimulation {
   bool cg_warning_given_ = false;
 };
 
+// The CPU engine of a batch: each scene's CpuScene, run side by side on a pool of workers over the scenes (a scene's
+// own vertex loops use its setup's threads); one check per run. A scene alone stops at the step that made it
+// non-finite (exact, as its steps check every vertex); in a batch the others run on, so the supervisor replays.
+class CpuEngine final : public SteppingEngine {
+ public:
+  CpuEngine(const std::vector<SimulationSetup>& scenes, const std::vector<StabilityReport>& stability,
+            unsigned batch_threads)
+      : pool_(scenes.size() > 1 ? resolve_thread_count(batch_threads, scenes.size(), 2) : 1) {
+    vertex_begin_.push_back(0);
+    for (std::size_t s = 0; s < scenes.size(); ++s) {
+      if (scenes[s].precision == Precision::Float) {
+        scenes_.push_back(std::make_unique<CpuScene<float>>(scenes[s], stability[s]));
+      } else {
+        scenes_.push_back(std::make_unique<CpuScene<double>>(scenes[s], stability[s]));
+      }
+      vertex_begin_.push_back(vertex_begin_.back() + scenes[s].rest_positions.size());
+    }
+  }
+
+  const char* label() const override { return ""; }
+  std::size_t steps_taken() const override {
+    std::size_t least = scenes_.front()->steps_taken();
+    for (const auto& scene : scenes_) least = std::min(least, scene->steps_taken());
+    return least;
+  }
+  std::size_t checks_per_run() const override { return 1; }
+  std::size_t most_steps_per_run() const override { return std::numeric_limits<std::size_t>::max(); }
+
+  bool run(const std::vector<std::size_t>& ends, DiagnosticList& diagnostics) override {
+    const std::size_t end = ends.back();
+    if (scenes_.size() == 1) {
+      scenes_.front()->run_to(end, diagnostics);
+      return true;
+    }
+    // Each scene's warnings into its own list, appended in scene order: the same text whatever the scheduling.
+    std::vector<DiagnosticList> scene_diagnostics(scenes_.size());
+    pool_.run(
+        scenes_.size(),
+        [&](std::size_t begin, std::size_t stop) {
+          for (std::size_t s = begin; s < stop; ++s) scenes_[s]->run_to(end, scene_diagnostics[s]);
+        },
+        1);
+    for (std::size_t s = 0; s < scenes_.size(); ++s) {
+      for (Diagnostic diagnostic : scene_diagnostics[s].items()) {
+        diagnostic.message = "scene " + std::to_string(s) + ": " + diagnostic.message;
+        diagnostics.add(std::move(diagnostic));
+      }
+    }
+    return true;
+  }
+  void select_check(std::size_t) override {}
+  std::optional<int> first_non_finite_vertex(DiagnosticList&) override {
+    for (std::size_t s = 0; s < scenes_.size(); ++s) {
+      const std::size_t v = scenes_[s]->first_non_finite_vertex();
+      if (v < vertex_begin_[s + 1] - vertex_begin_[s]) return static_cast<int>(vertex_begin_[s] + v);
+    }
+    return static_cast<int>(vertex_begin_.back());
+  }
+  bool non_finite_is_exact() const override { return scenes_.size() == 1; }
+  bool count_inverted(std::vector<unsigned>& counts, std::vector<int>& firsts, DiagnosticList&) override {
+    counts.resize(scenes_.size());
+    firsts.resize(scenes_.size());
+    for (std::size_t s = 0; s < scenes_.size(); ++s) {
+      const InversionCount found = scenes_[s]->count_inversions();
+      counts[s] = static_cast<unsigned>(found.count);
+      firsts[s] = found.first;
+    }
+    return true;
+  }
+  bool save_checkpoint(DiagnosticList&) override {
+    for (const auto& scene : scenes_) scene->save_checkpoint();
+    return true;
+  }
+  bool restore_checkpoint(DiagnosticList&) override {
+    for (const auto& scene : scenes_) scene->restore_checkpoint();
+    return true;
+  }
+  int implicit_max_iterations_used() const override {
+    int most = 0;
+    for (const auto& scene : scenes_) most = std::max(most, scene->implicit_max_iterations_used());
+    return most;
+  }
+
+  std::vector<Point3> positions(std::size_t scene, DiagnosticList&) const override {
+    return scenes_[scene]->positions();
+  }
+  std::vector<Point3> velocities(std::size_t scene, DiagnosticList&) const override {
+    return scenes_[scene]->velocities();
+  }
+  bool scene_states(std::vector<std::vector<Point3>>& positions, std::vector<std::vector<Point3>>* velocities,
+                    DiagnosticList&) const override {
+    positions.resize(scenes_.size());
+    if (velocities != nullptr) velocities->resize(scenes_.size());
+    for (std::size_t s = 0; s < scenes_.size(); ++s) {
+      positions[s] = scenes_[s]->positions();
+      if (velocities != nullptr) (*velocities)[s] = scenes_[s]->velocities();
+    }
+    return true;
+  }
+  std::optional<double> kinetic_energy(std::size_t scene, DiagnosticList&) const override {
+    return scenes_[scene]->kinetic_energy();
+  }
+  std::optional<double> potential_energy(std::size_t scene, DiagnosticList&) const override {
+    return scenes_[scene]->potential_energy();
+  }
+  std::optional<double> elastic_energy(std::size_t scene, DiagnosticList&) const override {
+    return sim::elastic_energy(setup_of(scene), scenes_[scene]->positions());
+  }
+  std::optional<double> largest_displacement(std::size_t scene, DiagnosticList&) const override {
+    const std::vector<Point3> now = scenes_[scene]->positions();
+    const SimulationSetup& setup = setup_of(scene);
+    const std::vector<Point3>& start = setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
+    double largest = 0.0;
+    for (std::size_t v = 0; v < now.size() && v < start.size(); ++v) largest = std::max(largest, distance(now[v], start[v]));
+    return largest;
+  }
+  bool reduces_in_place() const override { return false; }
+  ProbeReading probe_reading(std::size_t scene, DiagnosticList&) const override {
+    return scenes_[scene]->probe_reading();
+  }
+  std::vector<double> current_stiffness(std::size_t scene, DiagnosticList&) const override {
+    return scenes_[scene]->current_stiffness();
+  }
+
+ private:
+  const SimulationSetup& setup_of(std::size_t scene) const { return scenes_[scene]->setup(); }
+
+  std::vector<std::unique_ptr<CpuSceneBase>> scenes_;
+  std::vector<std::size_t> vertex_begin_;
+  mutable WorkerPool pool_;
+};
+
 }  // namespace
 
-double elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions) {
-  const SpringNetwork& net = setup.springs;
-  const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
-  double energy = 0.0;
-  for (std::size_t s = 0; s < net.size(); ++s) {
-    const Point3& a = positions[static_cast<std::size_t>(net.first[s])];
-    const Point3& b = positions[static_cast<std::size_t>(net.second[s])];
-    const double length = distance(a, b);
-    const double rest = net.rest_length[s];
-    const double k = setup.strain_stiffness
-                         ? kernels::strain_table_stiffness(strain_table_view(*setup.strain_stiffness), b[0] - a[0],
-                                                           b[1] - a[1], b[2] - a[2], rest,
-                                                           setup.strain_stiffness->stiffness_per_modulus[s])
-                         : net.stiffness[s];
-    energy += kernels::spring_potential_energy(length, rest, k, law);
-  }
-  if (setup.tetrahedron_field) energy += element_elastic_energy(setup, positions);
-  return energy;
-}
-
-double kinetic_energy(const SimulationSetup& setup, const std::vector<Point3>& velocities) {
-  double energy = 0.0;
-  for (std::size_t v = 0; v < velocities.size(); ++v) {
-    const Point3& u = velocities[v];
-    energy += 0.5 * setup.mass[v] * (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-  }
-  return energy;
-}
-
-std::unique_ptr<CpuSimulation> CpuSimulation::create(const SimulationSetup& setup, DiagnosticList& diagnostics) {
-  const std::optional<StabilityReport> stability = check_stability(setup, diagnostics);  // validates the setup first
-  if (!stability) return nullptr;
-  if (setup.precision == Precision::Float) return std::make_unique<CpuSimulationImpl<float>>(setup, *stability);
-  return std::make_unique<CpuSimulationImpl<double>>(setup, *stability);
-}
-
-SimulationResult simulate(const SimulationSetup& setup, DiagnosticList& diagnostics) {
-  SimulationResult result;
-  const auto simulation = CpuSimulation::create(setup, diagnostics);
-  if (!simulation) return result;
-  result.stability = simulation->stability();
-  const auto record = [&] {
-    Sample sample;
-    sample.step = simulation->steps_taken();
-    sample.time = simulation->time();
-    const std::vector<Point3> positions = simulation->positions();
-    for (const auto v : setup.recorded_vertices) sample.positions.push_back(positions[static_cast<std::size_t>(v)]);
-    sample.kinetic_energy = simulation->kinetic_energy();
-    sample.potential_energy = simulation->potential_energy();
-    result.samples.push_back(std::move(sample));
-  };
-  if (setup.record_every > 0) record();
-  bool ok = true;
-  std::size_t remaining = setup.step_count;
-  while (ok && remaining > 0) {
-    const std::size_t chunk = setup.record_every > 0 ? std::min(setup.record_every, remaining) : remaining;
-    ok = simulation->advance(chunk, diagnostics);
-    remaining -= chunk;
-    if (ok && setup.record_every > 0) record();
-  }
-  result.completed = ok;
-  result.steps_taken = simulation->steps_taken();
-  result.positions = simulation->positions();
-  result.velocities = simulation->velocities();
-  result.non_finite = simulation->non_finite();
-  result.inversions = simulation->inversions();
-  result.implicit_max_iterations_used = simulation->implicit_max_iterations_used();
-  return result;
+std::unique_ptr<SteppingEngine> create_cpu_engine(const std::vector<SimulationSetup>& scenes,
+                                                  const std::vector<StabilityReport>& stability,
+                                                  unsigned batch_threads) {
+  return std::make_unique<CpuEngine>(scenes, stability, batch_threads);
 }
 
 }  // namespace fmpc::sim

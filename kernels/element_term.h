@@ -1,0 +1,90 @@
+#pragma once
+// An element term: one material law acting on a mesh's tetrahedra, as plain arrays (structure of arrays, element-
+// major) that the CPU loops, the CUDA kernels and the host's sums read alike. A run holds a list of terms over the same
+// tetrahedra, summed in list order (an elastic law, a viscous one, the volume term beside springs). Each law is a
+// struct in kernels/laws/ (its parameters, forces, the action of its stiffness, energy, stiffness bound and stress
+// output); kernels/element_laws.h lists them, and everything here is generic over the law.
+#include "kernels/fmpc_hd.h"
+#include "kernels/spring_math.h"
+#include "kernels/strain_table_math.h"
+#include "kernels/tetrahedron_math.h"
+
+namespace fmpc::kernels {
+
+// The most per-element parameters a law has (its kParameterCount).
+constexpr int kMostLawParameters = 4;
+// The most element terms a run holds (sim::validate_setup refuses more; the GPU's views hold this many).
+constexpr int kMostElementTerms = 4;
+
+// One term's arrays; the geometry (corners, corner_slot, rest_inverse, rest_volume) is shared by the run's terms.
+template <typename Real>
+struct ElementTermView {
+  int law;                                    // the law's index in ElementLaws (kernels/element_laws.h)
+  int count;                                  // elements
+  const int* corners;                         // 4 per element
+  const int* corner_slot;                     // 4 per element: where each corner's force goes (CornerForceView's order)
+  const Real* rest_inverse;                   // Dm^-1, 9 per element (1/m)
+  const Real* rest_volume;                    // V0 (m^3)
+  const Real* parameter[kMostLawParameters];  // the law's parameters in its order, one per element each
+  const Real* stiffness_damping;              // beta (s) per element; null: undamped
+  StrainTableView strain_table;  // E(strain) for a law whose modulus a strain table replaces; strain null: none
+};
+
+// Element e's corners' positions and, where `velocities`, velocities [corner][axis].
+template <typename Real>
+FMPC_HD void element_corners(int e, const int* corners, const StateView<Real>& s, bool velocities, Real x[4][3],
+                             Real v[4][3]) {
+  for (int a = 0; a < 4; ++a) {
+    const int vertex = corners[4 * e + a];
+    x[a][0] = s.x[vertex];
+    x[a][1] = s.y[vertex];
+    x[a][2] = s.z[vertex];
+    if (velocities) {
+      v[a][0] = s.vx[vertex];
+      v[a][1] = s.vy[vertex];
+      v[a][2] = s.vz[vertex];
+    }
+  }
+}
+
+// The element pass of one term: element e's four corner forces into force[corner_slot[4 e + a]] (the vertex-major
+// layout CornerForceView reads), written by the run's first term and added to by each later one (Accumulate), so
+// that a vertex's gather sums the terms in list order. Velocities are read only where the term has stiffness
+// damping: the laws read them for nothing else, and they are half the pass's gathered bytes.
+template <typename Law, bool Accumulate, typename Real>
+FMPC_HD void element_corner_forces(int e, const ElementTermView<Real>& t, const StateView<Real>& s,
+                                   CornerForce<Real>* force) {
+  Real x[4][3], v[4][3] = {}, out[4][3];
+  element_corners(e, t.corners, s, t.stiffness_damping != nullptr, x, v);
+  Law::forces(Law::material(t, e), x, v, out);
+  for (int a = 0; a < 4; ++a) {
+    CornerForce<Real>& to = force[t.corner_slot[4 * e + a]];
+    if (Accumulate) {
+      to = {to.x + out[a][0], to.y + out[a][1], to.z + out[a][2], Real(0)};
+    } else {
+      to = {out[a][0], out[a][1], out[a][2], Real(0)};
+    }
+  }
+}
+
+// Whether element e of `corners` is inverted or flat at positions s (signed volume <= 0), for the inversion count.
+template <typename Real>
+FMPC_HD bool tetrahedron_inverted(int e, const int* corners, const Real* x, const Real* y, const Real* z) {
+  Real p[4][3];
+  for (int a = 0; a < 4; ++a) {
+    const int vertex = corners[4 * e + a];
+    p[a][0] = x[vertex];
+    p[a][1] = y[vertex];
+    p[a][2] = z[vertex];
+  }
+  return !(tetrahedron_volume(p) > Real(0));
+}
+
+// The largest modulus a strain table gives (Pa): a law's stiffness bound over a run whose modulus follows it.
+FMPC_HD double strain_table_largest_modulus(const StrainTableView& table) {
+  double largest = table.modulus[0];
+  for (int i = 1; i < table.count; ++i) largest = table.modulus[i] > largest ? table.modulus[i] : largest;
+  return largest;
+}
+
+}  // namespace fmpc::kernels

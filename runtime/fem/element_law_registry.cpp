@@ -1,0 +1,125 @@
+#include "runtime/fem/element_law_registry.h"
+
+#include <cmath>
+#include <string>
+
+#include "diagnostics/number_format.h"
+
+namespace fmpc::sim {
+
+namespace {
+
+std::optional<ElementLawBuild> build_corotational_linear(const ElementMaterial& material, DiagnosticList& diagnostics) {
+  using Law = kernels::CorotationalLinear;
+  const std::size_t count = material.youngs_modulus.size();
+  for (std::size_t e = 0; e < count; ++e) {
+    const double youngs = material.youngs_modulus[e], poisson = material.poisson_ratio[e];
+    if (!(youngs > 0.0) || !std::isfinite(youngs)) {
+      diagnostics.error(material.where, "tetrahedron " + std::to_string(e) + ": Young's modulus " +
+                                            format_number(youngs) +
+                                            " Pa is not a positive, finite number; fix the material value");
+      return std::nullopt;
+    }
+    if (!(poisson >= 0.0 && poisson <= 0.499)) {
+      diagnostics.error(material.where, "tetrahedron " + std::to_string(e) + ": Poisson ratio " +
+                                            format_number(poisson) +
+                                            " is outside [0, 0.499] (0.5 is incompressible, which linear tetrahedra "
+                                            "lock on)");
+      return std::nullopt;
+    }
+  }
+  ElementLawBuild build;
+  build.term.law = kernels::element_law_index<Law>;
+  build.term.parameter[Law::kYoungsModulus] = material.youngs_modulus;
+  build.term.parameter[Law::kPoissonRatio] = material.poisson_ratio;
+  return build;
+}
+
+// One ratio for the whole term (the caller refuses a ratio per region): kappa per element scales with its E.
+std::optional<ElementLawBuild> build_volume_preservation(const ElementMaterial& material, DiagnosticList& diagnostics) {
+  using Law = kernels::VolumePreservation;
+  const double poisson = material.poisson_ratio.empty() ? 0.0 : material.poisson_ratio.front();
+  // The calibration is linear in E: its factors at E = 1 Pa scale the springs and give kappa per unit modulus.
+  const auto unit = calibrate_volume_term(1.0, poisson, material.spring_mapping, material.where, diagnostics);
+  if (!unit) return std::nullopt;
+  ElementLawBuild build;
+  build.term.law = kernels::element_law_index<Law>;
+  std::vector<double>& kappa = build.term.parameter[Law::kBulkModulus];
+  kappa.resize(material.youngs_modulus.size());
+  for (std::size_t e = 0; e < kappa.size(); ++e) kappa[e] = unit->bulk_modulus * material.youngs_modulus[e];
+  build.spring_modulus_scale = unit->spring_modulus;
+  build.description = "; volume term (Teschner et al. 2004) for nu = " + format_number(poisson) + ": springs at " +
+                      format_number(unit->spring_modulus) + " E, kappa = " + format_number(unit->bulk_modulus) + " E";
+  return build;
+}
+
+}  // namespace
+
+const std::vector<ElementLawRow>& element_law_rows() {
+  static const std::vector<ElementLawRow> rows = {
+      {"corotational", "corotational_fem", false, "corotational_fem", "FEM",
+       "co-rotational linear elasticity on linear tetrahedra (Mueller & Gross 2004; Nesme, Payan & Faure 2005), "
+       "E and nu per element, E optionally from a strain table",
+       kernels::element_law_index<kernels::CorotationalLinear>, kernels::CorotationalLinear::kStressOutput,
+       build_corotational_linear},
+      {"volume_preservation", nullptr, true, "springs_volume_term", "springs+volume",
+       "the volume term beside springs (Teschner et al. 2004), kappa calibrated with the springs to E and nu",
+       kernels::element_law_index<kernels::VolumePreservation>, kernels::VolumePreservation::kStressOutput,
+       build_volume_preservation},
+  };
+  return rows;
+}
+
+const ElementLawRow& element_law_row(int law) { return element_law_rows().at(static_cast<std::size_t>(law)); }
+
+const ElementLawRow* element_law_by_model_keyword(const std::string& name) {
+  for (const ElementLawRow& row : element_law_rows())
+    if (row.model_keyword != nullptr && name == row.model_keyword) return &row;
+  return nullptr;
+}
+
+const ElementLawRow* element_law_by_trade_name(const std::string& name) {
+  for (const ElementLawRow& row : element_law_rows())
+    if (name == row.trade_name) return &row;
+  return nullptr;
+}
+
+const ElementLawRow& element_law_beside_springs() {
+  for (const ElementLawRow& row : element_law_rows())
+    if (row.beside_springs) return row;
+  return element_law_rows().front();
+}
+
+const ElementLawRow& default_fem_law() {
+  for (const ElementLawRow& row : element_law_rows())
+    if (row.model_keyword != nullptr) return row;
+  return element_law_rows().front();
+}
+
+std::optional<VolumeTermCalibration> calibrate_volume_term(double youngs_modulus, double poisson_ratio,
+                                                           StiffnessMapping mapping, const SourceRange& where,
+                                                           DiagnosticList& diagnostics) {
+  if (!(poisson_ratio >= 0.25 && poisson_ratio <= 0.499)) {
+    diagnostics.error(where, "material.poisson_ratio: " + format_number(poisson_ratio) +
+                                 " cannot be reached by springs with the volume term: central springs have nu = 1/4 "
+                                 "(Cauchy relation lambda = mu) and the volume term can only add to lambda; give a "
+                                 "ratio in [0.25, 0.499], or use model: corotational_fem for any ratio in [0, 0.499]");
+    return std::nullopt;
+  }
+  if (mapping != StiffnessMapping::VanGelder1998 && mapping != StiffnessMapping::LloydSzekelyHarders2007) {
+    diagnostics.error(where,
+                      "the volume term needs a Young's modulus mapping (van_gelder_1998 or "
+                      "lloyd_szekely_harders_2007) for the springs beside it");
+    return std::nullopt;
+  }
+  double mu = 0.0, lambda = 0.0;
+  kernels::lame_parameters(youngs_modulus, poisson_ratio, mu, lambda);
+  // mu_springs = (2/5) c E_s with c = 1 (Van Gelder) or 24/25 (Lloyd).
+  const double c = mapping == StiffnessMapping::LloydSzekelyHarders2007 ? 24.0 / 25.0 : 1.0;
+  VolumeTermCalibration calibration;
+  calibration.spring_modulus = 2.5 * mu / c;
+  calibration.bulk_modulus = lambda - mu;
+  return calibration;
+}
+
+}  // namespace fmpc::sim

@@ -1,0 +1,73 @@
+#pragma once
+// The element laws' registry (docs/simulator.md, "Adding a law"): one row per law of kernels/element_laws.h, in the
+// same order, with what the rest of fmpc needs to know about it: its scene keywords, how its per-element parameters
+// are built from a scene's material, its name in `fmpc trade`, its frames' cell data and its documentation. Scene
+// parsing, the model builders, the trade and the outputs go through these rows; nothing outside a law's kernels
+// header and this registry names a law (tests/unit/law_unit_test.cpp checks it).
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "diagnostics/diagnostic.h"
+#include "runtime/fem/element_terms.h"
+#include "runtime/springs/spring_network.h"
+
+namespace fmpc::sim {
+
+// What a law's builder gets: the scene's material per element.
+struct ElementMaterial {
+  std::vector<double> youngs_modulus;                                 // Pa, one per element
+  std::vector<double> poisson_ratio;                                  // one per element
+  StiffnessMapping spring_mapping = StiffnessMapping::VanGelder1998;  // beside springs: their Young's modulus mapping
+  SourceRange where;                                                  // the material's place in the scene, for errors
+};
+
+struct ElementLawBuild {
+  ElementTerm term;  // its law and parameters (no damping yet)
+  // Beside springs: the factor the springs' stiffness (from the mapping at E) is scaled by so that the springs and
+  // the term together have the material's E and nu.
+  double spring_modulus_scale = 1.0;
+  std::string description;  // appended to the run's stiffness description
+};
+
+struct ElementLawRow {
+  const char* keyword;        // the law's own name (fem: {law: KEYWORD} in scene files)
+  const char* model_keyword;  // the scene's `model:` value that selects this law alone on linear tetrahedra; null: none
+  // Beside a spring network (springs: {volume_term: true}) rather than a model of its own.
+  bool beside_springs;
+  const char* trade_name;     // fmpc trade --models
+  const char* trade_label;    // the trade's short variant label
+  const char* description;    // one line for docs and --help, with its source
+  int law;                    // index in kernels::ElementLaws
+  const char* stress_output;  // the frames' cell array (the law's kStressOutput)
+  // The term's parameters from the material, checked (an error names the element and the field); nullopt after
+  // appending errors.
+  std::optional<ElementLawBuild> (*build)(const ElementMaterial& material, DiagnosticList& diagnostics);
+};
+
+// Every row, in kernels::ElementLaws' order.
+const std::vector<ElementLawRow>& element_law_rows();
+const ElementLawRow& element_law_row(int law);
+// The row whose model_keyword (or trade_name) is `name`; null when none is.
+const ElementLawRow* element_law_by_model_keyword(const std::string& name);
+const ElementLawRow* element_law_by_trade_name(const std::string& name);
+// The law a spring network takes beside it (beside_springs).
+const ElementLawRow& element_law_beside_springs();
+// The finite-element model messages recommend and a model built without a law takes: the first row with a
+// model_keyword.
+const ElementLawRow& default_fem_law();
+
+// Springs plus the volume term reaching a Young's modulus E and Poisson ratio nu (docs/simulator.md): a central
+// spring network obeys the Cauchy relation lambda = mu, with mu = 2 E_s / 5 for the Van Gelder mapping at E_s (the
+// bulk modulus 2 E_s / 3 is exact for every tetrahedron, docs/simulator.md) and 24/25 of it for Lloyd's. The springs
+// take E_s so that their mu is the target's, the volume term the rest of lambda: kappa = lambda - mu =
+// E (4 nu - 1) / (2 (1 + nu)(1 - 2 nu)). nu below 1/4 would need a negative kappa: an error naming the field.
+struct VolumeTermCalibration {
+  double spring_modulus = 0.0;  // E_s, Pa, for the spring mapping
+  double bulk_modulus = 0.0;    // kappa, Pa
+};
+std::optional<VolumeTermCalibration> calibrate_volume_term(double youngs_modulus, double poisson_ratio,
+                                                           StiffnessMapping mapping, const SourceRange& where,
+                                                           DiagnosticList& diagnostics);
+
+}  // namespace fmpc::sim

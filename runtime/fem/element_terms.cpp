@@ -1,0 +1,148 @@
+#include "runtime/fem/element_terms.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "diagnostics/number_format.h"
+
+namespace fmpc::sim {
+
+std::optional<ElementGeometry> element_geometry(const std::vector<Point3>& points,
+                                                const std::vector<Tetrahedron>& tetrahedra,
+                                                DiagnosticList& diagnostics) {
+  ElementGeometry geometry;
+  const std::size_t count = tetrahedra.size();
+  geometry.rest_inverse.resize(9 * count);
+  geometry.rest_volume.resize(count);
+  for (std::size_t e = 0; e < count; ++e) {
+    const Tetrahedron& t = tetrahedra[e];
+    for (const std::int32_t v : t) {
+      if (v < 0 || static_cast<std::size_t>(v) >= points.size()) {
+        diagnostics.error(SourceRange{}, "tetrahedron " + std::to_string(e) + " refers to vertex " + std::to_string(v) +
+                                             " of " + std::to_string(points.size()) +
+                                             "; repair the mesh first (repair_mesh)");
+        return std::nullopt;
+      }
+    }
+    double x[4][3], longest = 0.0;
+    tetrahedron_corners(tetrahedra, e, points, x);
+    for (std::size_t a = 0; a < 4; ++a)
+      for (std::size_t b = a + 1; b < 4; ++b)
+        longest =
+            std::max(longest, distance(points[static_cast<std::size_t>(t[a])], points[static_cast<std::size_t>(t[b])]));
+    const double volume = kernels::tetrahedron_volume(x);
+    // The mesh check's test for a degenerate element (docs/simulator.md), and the orientation every mesh keeps.
+    if (!(volume > 1e-9 * longest * longest * longest)) {
+      diagnostics.error(SourceRange{}, "tetrahedron " + std::to_string(e) + " (vertices " + std::to_string(t[0]) +
+                                           ", " + std::to_string(t[1]) + ", " + std::to_string(t[2]) + ", " +
+                                           std::to_string(t[3]) + ") has rest volume " + format_number(volume) +
+                                           " m^3; an element needs a positive volume: repair the mesh (repair_mesh "
+                                           "drops degenerate and re-orients inverted elements)");
+      return std::nullopt;
+    }
+    // Dm = [X1 - X0, X2 - X0, X3 - X0] (columns); its inverse by the adjugate, det Dm = 6 V.
+    double dm[9];
+    for (std::size_t i = 0; i < 3; ++i)
+      for (std::size_t a = 0; a < 3; ++a) dm[3 * i + a] = x[a + 1][i] - x[0][i];
+    const double det = kernels::determinant3(dm);
+    double* inverse = geometry.rest_inverse.data() + 9 * e;
+    inverse[0] = (dm[4] * dm[8] - dm[5] * dm[7]) / det;
+    inverse[1] = (dm[2] * dm[7] - dm[1] * dm[8]) / det;
+    inverse[2] = (dm[1] * dm[5] - dm[2] * dm[4]) / det;
+    inverse[3] = (dm[5] * dm[6] - dm[3] * dm[8]) / det;
+    inverse[4] = (dm[0] * dm[8] - dm[2] * dm[6]) / det;
+    inverse[5] = (dm[2] * dm[3] - dm[0] * dm[5]) / det;
+    inverse[6] = (dm[3] * dm[7] - dm[4] * dm[6]) / det;
+    inverse[7] = (dm[1] * dm[6] - dm[0] * dm[7]) / det;
+    inverse[8] = (dm[0] * dm[4] - dm[1] * dm[3]) / det;
+    geometry.rest_volume[e] = volume;
+  }
+  geometry.corner_offset.assign(points.size() + 1, 0);
+  for (const Tetrahedron& t : tetrahedra)
+    for (const std::int32_t v : t) ++geometry.corner_offset[static_cast<std::size_t>(v) + 1];
+  for (std::size_t v = 0; v < points.size(); ++v) geometry.corner_offset[v + 1] += geometry.corner_offset[v];
+  geometry.corner_index.resize(4 * count);
+  geometry.corner_slot.resize(4 * count);
+  std::vector<std::int32_t> next(geometry.corner_offset.begin(), geometry.corner_offset.end() - 1);
+  for (std::size_t e = 0; e < count; ++e)
+    for (std::size_t c = 0; c < 4; ++c) {
+      const std::int32_t slot = next[static_cast<std::size_t>(tetrahedra[e][c])]++;
+      geometry.corner_index[static_cast<std::size_t>(slot)] = static_cast<std::int32_t>(4 * e + c);
+      geometry.corner_slot[4 * e + c] = slot;
+    }
+  return geometry;
+}
+
+kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, std::size_t term,
+                                                   const kernels::StrainTableView* table) {
+  const ElementTerm& t = terms.terms[term];
+  kernels::ElementTermView<double> view{};
+  view.law = t.law;
+  view.count = static_cast<int>(terms.geometry.size());
+  view.corners = nullptr;
+  view.corner_slot = terms.geometry.corner_slot.data();
+  view.rest_inverse = terms.geometry.rest_inverse.data();
+  view.rest_volume = terms.geometry.rest_volume.data();
+  for (int p = 0; p < kernels::kMostLawParameters; ++p)
+    view.parameter[p] = t.parameter[p].empty() ? nullptr : t.parameter[p].data();
+  view.stiffness_damping = t.stiffness_damping.empty() ? nullptr : t.stiffness_damping.data();
+  view.strain_table = table && reads_strain_table(t) ? *table : kernels::StrainTableView{nullptr, nullptr, 0};
+  return view;
+}
+
+bool reads_strain_table(const ElementTerm& term) {
+  return kernels::visit_element_law(term.law,
+                                    [](auto element_law) { return decltype(element_law)::kStrainTableModulus; });
+}
+
+void assign_element_damping(const ElementGeometry& geometry, ElementTerm& term, const std::vector<double>& vertex_mass,
+                            double ratio, double rayleigh_stiffness) {
+  term.stiffness_damping.clear();
+  if (ratio == 0.0 && rayleigh_stiffness == 0.0) return;
+  double total_mass = 0.0, total_volume = 0.0;
+  for (const double m : vertex_mass) total_mass += m;
+  for (const double v : geometry.rest_volume) total_volume += v;
+  const double density = total_volume > 0.0 ? total_mass / total_volume : 0.0;
+  std::vector<double> damping(geometry.size());
+  kernels::ElementTermView<double> view{};
+  view.law = term.law;
+  view.count = static_cast<int>(geometry.size());
+  view.rest_inverse = geometry.rest_inverse.data();
+  view.rest_volume = geometry.rest_volume.data();
+  for (int p = 0; p < kernels::kMostLawParameters; ++p)
+    view.parameter[p] = term.parameter[p].empty() ? nullptr : term.parameter[p].data();
+  view.stiffness_damping = nullptr;
+  view.strain_table = {nullptr, nullptr, 0};
+  kernels::visit_element_law(term.law, [&](auto element_law) {
+    using Law = decltype(element_law);
+    for (std::size_t e = 0; e < geometry.size(); ++e) {
+      const double stiffness = Law::stiffness_bound(Law::material(view, static_cast<int>(e)));
+      const double corner_mass = density * geometry.rest_volume[e] / 4.0;
+      const double omega = std::sqrt(stiffness / corner_mass);
+      damping[e] = (omega > 0.0 ? 2.0 * ratio / omega : 0.0) + rayleigh_stiffness;
+    }
+  });
+  term.stiffness_damping = std::move(damping);
+}
+
+InversionCount count_inverted_tetrahedra(const std::vector<Tetrahedron>& tetrahedra,
+                                         const std::vector<Point3>& positions) {
+  InversionCount result;
+  for (std::size_t e = 0; e < tetrahedra.size(); ++e) {
+    double x[4][3];
+    tetrahedron_corners(tetrahedra, e, positions, x);
+    if (kernels::tetrahedron_volume(x) > 0.0) continue;
+    if (result.count == 0) result.first = static_cast<std::int32_t>(e);
+    ++result.count;
+  }
+  return result;
+}
+
+void tetrahedron_corners(const std::vector<Tetrahedron>& tetrahedra, std::size_t e, const std::vector<Point3>& points,
+                         double out[4][3]) {
+  for (std::size_t a = 0; a < 4; ++a)
+    for (std::size_t i = 0; i < 3; ++i) out[a][i] = points[static_cast<std::size_t>(tetrahedra[e][a])][i];
+}
+
+}  // namespace fmpc::sim

@@ -1,0 +1,72 @@
+#pragma once
+// How the CUDA backend launches a batch's steps, chosen once when the simulation is created: a pure function of the
+// batch's shape, the GpuOptions and what the device answers about its kernels (DeviceLaunchLimits), so that it is
+// unit-tested on machines without a GPU (tests/unit/launch_plan_test.cpp) with the answers given. No CUDA headers.
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "runtime/gpu/launch_shapes.h"
+#include "runtime/integrate/simulation_options.h"
+
+namespace fmpc::gpu {
+
+// The device's answers, as functions (the CUDA backend asks the device; a query's device error is nullopt and stops
+// the plan). persistent_blocks: how many blocks of kPersistentThreads threads with `shared_bytes` of dynamic shared
+// memory each the cooperative persistent kernel of `kind` keeps resident at once on the whole device (0: none, or no
+// cooperative launches). cluster_fits: whether clusters of `blocks` blocks of `rows` threads with `shared_bytes` each
+// run with one cluster resident.
+struct DeviceLaunchLimits {
+  std::function<std::optional<int>(GatherKind kind, long long shared_bytes)> persistent_blocks;
+  std::function<std::optional<bool>(int blocks, int rows, long long shared_bytes)> cluster_fits;
+};
+
+// What the plan reads of the concatenated batch (runtime/gpu/batch_concatenation.h).
+struct BatchShape {
+  GatherKind kind = GatherKind::Springs;
+  bool double_precision = false;
+  bool fused_scheme = false;          // forward or semi-implicit Euler: one kernel per step
+  bool strain_table = false;          // a lookup between steps (no persistent launch)
+  bool probe_vertices_unique = true;  // every probe vertex listed once (else the per-step probe kernel)
+  int vertex_count = 0;
+  int element_count = 0;
+  std::size_t scene_count = 1;
+  const int* offset = nullptr;     // the springs' CSR offsets, vertex_count + 1
+  const int* neighbour = nullptr;  // each CSR entry's other vertex
+  std::vector<int> vertex_begin;   // scene_count + 1
+  std::vector<int> element_begin;  // scene_count + 1
+};
+
+struct LaunchPlan {
+  int gather_lanes = 1;  // threads per vertex of the per-step fused kernel
+  // The cooperative persistent grid (0 blocks: none): blocks of `rows` vertices, the most CSR records of a block and
+  // blocks it waits for, and (springs alone) each block's waited blocks as CSR (BlockNeighbours).
+  int grid_blocks = 0;
+  int grid_rows = 0;
+  int grid_block_records = 0;
+  int grid_most_waited = 0;
+  std::vector<int> neighbour_offset, neighbour_block;
+  // Thread-block clusters (no blocks: none).
+  std::vector<ClusterBlock> cluster_blocks;
+  int cluster_size = 0;  // blocks per cluster
+  int cluster_rows = 0;
+  int cluster_window_capacity = 0;
+  int cluster_shared_bytes = 0;
+  // A persistent launch's checks (checkpoint slots on the grid, one in clusters) and each check's result slots.
+  std::size_t persistent_checks = 1;
+  std::size_t check_slot_stride = 1;
+
+  bool persistent() const { return grid_blocks > 0 || !cluster_blocks.empty(); }
+};
+
+// A persistent launch on the cooperative grid takes a check per checkpoint slot that fits this (the 20^3 box's float
+// state, 217 KiB, fits many), up to kMostPersistentChecks (4,096 steps at the 64 between checks).
+constexpr std::size_t kPersistentCheckpointBytes = std::size_t{64} << 20;
+constexpr std::size_t kMostPersistentChecks = 64;
+
+// The plan; nullopt when a device query failed (its caller has the error).
+std::optional<LaunchPlan> plan_launches(const BatchShape& batch, const sim::GpuOptions& options,
+                                        const DeviceLaunchLimits& device);
+
+}  // namespace fmpc::gpu

@@ -1,0 +1,332 @@
+// The CUDA backend's launch plan (runtime/gpu/launch_plan.h) and batch admission (runtime/gpu/
+// batch_concatenation.h), on machines without a GPU: the device's answers are given by fake DeviceLaunchLimits.
+#include "runtime/gpu/launch_plan.h"
+
+#include <algorithm>
+#include <array>
+#include <catch2/catch.hpp>
+#include <random>
+#include <set>
+#include <vector>
+
+#include "runtime/gpu/batch_concatenation.h"
+#include "runtime/gpu/gpu_simulation.h"
+#include "runtime/mesh/generated_mesh.h"
+
+using namespace fmpc;
+using namespace fmpc::gpu;
+
+namespace {
+
+// The springs' CSR of a grid of nx x ny x nz vertices joined to their axis neighbours, scenes after one another.
+struct GridBatch {
+  std::vector<int> offset{0}, neighbour;
+  BatchShape shape;
+
+  GridBatch(int nx, int ny, int nz) : GridBatch(std::vector<std::array<int, 3>>{{nx, ny, nz}}) {}
+  explicit GridBatch(const std::vector<std::array<int, 3>>& scenes) {
+    shape.vertex_begin = {0};
+    shape.element_begin = {0};
+    int base = 0;
+    for (const auto& [nx, ny, nz] : scenes) {
+      for (int z = 0; z < nz; ++z)
+        for (int y = 0; y < ny; ++y)
+          for (int x = 0; x < nx; ++x) {
+            const auto add = [&](int i, int j, int k) {
+              if (i >= 0 && i < nx && j >= 0 && j < ny && k >= 0 && k < nz)
+                neighbour.push_back(base + (k * ny + j) * nx + i);
+            };
+            add(x - 1, y, z);
+            add(x + 1, y, z);
+            add(x, y - 1, z);
+            add(x, y + 1, z);
+            add(x, y, z - 1);
+            add(x, y, z + 1);
+            offset.push_back(static_cast<int>(neighbour.size()));
+          }
+      base += nx * ny * nz;
+      shape.vertex_begin.push_back(base);
+      shape.element_begin.push_back(0);
+    }
+    shape.vertex_count = base;
+    shape.scene_count = scenes.size();
+    shape.fused_scheme = true;
+    shape.offset = offset.data();
+    shape.neighbour = neighbour.data();
+  }
+};
+
+// A device that keeps `resident` persistent blocks whose shared memory fits `shared_limit` bytes (none beyond), and
+// clusters of up to `most_cluster_blocks` blocks within the same limit. Counts its queries.
+struct FakeDevice {
+  int resident = 264;
+  long long shared_limit = 227 * 1024;
+  int most_cluster_blocks = 16;
+  bool fail = false;
+  int queries = 0;
+
+  DeviceLaunchLimits limits() {
+    DeviceLaunchLimits limits;
+    limits.persistent_blocks = [this](GatherKind, long long bytes) -> std::optional<int> {
+      ++queries;
+      if (fail) return std::nullopt;
+      return bytes <= shared_limit ? resident : 0;
+    };
+    limits.cluster_fits = [this](int blocks, int rows, long long bytes) -> std::optional<bool> {
+      ++queries;
+      if (fail) return std::nullopt;
+      return blocks <= most_cluster_blocks && rows <= kClusterRows && bytes <= shared_limit;
+    };
+    return limits;
+  }
+};
+
+sim::GpuOptions options_with(sim::GpuOptions::PersistentKind kind) {
+  sim::GpuOptions options;
+  options.persistent_kind = kind;
+  return options;
+}
+
+}  // namespace
+
+TEST_CASE("Launch plan: the fused kernel's lanes follow the mesh's size, the model and a valid setting",
+          "[gpu][plan]") {
+  FakeDevice device;
+  sim::GpuOptions options;
+  options.persistent = false;
+  GridBatch box(21, 21, 21);  // the 20^3 box's 9,261 vertices
+  CHECK(plan_launches(box.shape, options, device.limits())->gather_lanes == 8);
+  box.shape.vertex_count = 1 << 16;  // 2^16 x 4 = 2^18: the most lanes that keep within 2^18 threads
+  CHECK(plan_launches(box.shape, options, device.limits())->gather_lanes == 4);
+  box.shape.vertex_count = (1 << 18) + 1;
+  CHECK(plan_launches(box.shape, options, device.limits())->gather_lanes == 1);
+  box.shape.vertex_count = 9261;
+  box.shape.kind = GatherKind::Elements;
+  CHECK(plan_launches(box.shape, options, device.limits())->gather_lanes == 4);
+  for (const int lanes : {1, 2, 16, 32}) {
+    options.gather_lanes = lanes;
+    CHECK(plan_launches(box.shape, options, device.limits())->gather_lanes == lanes);
+  }
+  for (const int invalid : {3, 64, -2}) {  // not a power of two up to a warp: automatic
+    options.gather_lanes = invalid;
+    CHECK(plan_launches(box.shape, options, device.limits())->gather_lanes == 4);
+  }
+  // Even a setting keeps vertices x lanes within 2^30.
+  options.gather_lanes = 32;
+  box.shape.vertex_count = 1 << 26;
+  CHECK(plan_launches(box.shape, options, device.limits())->gather_lanes == 16);
+  CHECK(device.queries == 0);  // nothing persistent was asked for: the device is never queried
+}
+
+TEST_CASE("Launch plan: no persistent launch where a step needs its own launches", "[gpu][plan]") {
+  FakeDevice device;
+  GridBatch box(21, 21, 21);
+  const auto not_persistent = [&](const BatchShape& shape, const sim::GpuOptions& options) {
+    const std::optional<LaunchPlan> plan = plan_launches(shape, options, device.limits());
+    REQUIRE(plan);
+    CHECK_FALSE(plan->persistent());
+    CHECK(plan->persistent_checks == 1);
+    CHECK(plan->neighbour_offset.empty());
+  };
+  sim::GpuOptions off;
+  off.persistent = false;
+  not_persistent(box.shape, off);
+  BatchShape shape = box.shape;
+  shape.strain_table = true;
+  not_persistent(shape, {});
+  shape = box.shape;
+  shape.probe_vertices_unique = false;
+  not_persistent(shape, {});
+  shape = box.shape;
+  shape.fused_scheme = false;  // Verlet, RK4, implicit Euler
+  not_persistent(shape, {});
+  shape = box.shape;
+  shape.vertex_count = 0;
+  not_persistent(shape, {});
+  CHECK(device.queries == 0);
+}
+
+TEST_CASE("Launch plan: the cooperative grid takes the fewest rows whose blocks are all resident", "[gpu][plan]") {
+  FakeDevice device;
+  device.resident = 258;  // the 20^3 box on an H100: 36 rows, 258 blocks (sim::GpuOptions)
+  GridBatch box(21, 21, 21);
+  const std::optional<LaunchPlan> plan = plan_launches(box.shape, {}, device.limits());
+  REQUIRE(plan);
+  CHECK(plan->grid_rows == 36);
+  CHECK(plan->grid_blocks == 258);
+  CHECK(plan->cluster_blocks.empty());
+  // Each block waits for exactly the other blocks owning a neighbour of its vertices.
+  REQUIRE(plan->neighbour_offset.size() == 259);
+  int most = 0;
+  for (int b = 0; b < 258; ++b) {
+    std::set<int> owners;
+    const auto at = [](int i) { return static_cast<std::size_t>(i); };
+    for (int v = b * 36; v < std::min(9261, (b + 1) * 36); ++v)
+      for (int e = box.offset[at(v)]; e < box.offset[at(v) + 1]; ++e)
+        if (box.neighbour[at(e)] / 36 != b) owners.insert(box.neighbour[at(e)] / 36);
+    const auto first = plan->neighbour_block.begin();
+    const std::vector<int> planned(first + plan->neighbour_offset[at(b)], first + plan->neighbour_offset[at(b) + 1]);
+    CHECK(planned == std::vector<int>(owners.begin(), owners.end()));
+    most = std::max(most, static_cast<int>(owners.size()));
+  }
+  CHECK(plan->grid_most_waited == most);
+  // 64 MiB of float checkpoints fit 301 states of 9,261 vertices: the most checks, 64.
+  CHECK(plan->persistent_checks == kMostPersistentChecks);
+  CHECK(plan->check_slot_stride == 1);
+}
+
+TEST_CASE("Launch plan: a rows setting that does not fit takes the nearest that does, more rows first", "[gpu][plan]") {
+  FakeDevice device;
+  device.resident = 258;
+  GridBatch box(21, 21, 21);
+  sim::GpuOptions options;
+  options.persistent_rows = 100;  // fits: 93 blocks
+  CHECK(plan_launches(box.shape, options, device.limits())->grid_rows == 100);
+  options.persistent_rows = 10;  // 927 blocks are not resident: the fewest that are
+  CHECK(plan_launches(box.shape, options, device.limits())->grid_rows == 36);
+  options.persistent_rows = 4096;  // more than a block's threads
+  CHECK(plan_launches(box.shape, options, device.limits())->grid_rows == kPersistentThreads);
+  // Shared memory bounds the rows from above: about 40 rows' state and records fit, so a setting of 200 comes down
+  // to the most rows whose block fits.
+  device.shared_limit = persistent_euler_shared_bytes<float>(40, 40 * 6, 0);
+  options.persistent_rows = 200;
+  const std::optional<LaunchPlan> plan = plan_launches(box.shape, options, device.limits());
+  REQUIRE(plan->grid_blocks > 0);
+  CHECK(plan->grid_rows >= 36);
+  CHECK(plan->grid_rows < 200);
+  CHECK(persistent_euler_shared_bytes<float>(plan->grid_rows, plan->grid_block_records, plan->grid_most_waited) <=
+        device.shared_limit);
+  options.persistent_rows = plan->grid_rows + 1;
+  CHECK(plan_launches(box.shape, options, device.limits())->grid_rows == plan->grid_rows);
+}
+
+TEST_CASE("Launch plan: clusters where the grid does not fit, and as preferred", "[gpu][plan]") {
+  FakeDevice device;
+  device.resident = 258;
+  SECTION("one scene spreads over 16 blocks of at least 256 rows") {
+    GridBatch box(21, 21, 21);
+    const auto plan =
+        plan_launches(box.shape, options_with(sim::GpuOptions::PersistentKind::Clusters), device.limits());
+    REQUIRE(plan);
+    CHECK(plan->grid_blocks == 0);
+    CHECK(plan->cluster_size == 16);
+    CHECK(plan->cluster_rows == 608);  // the 20^3 box: 16 blocks of 608 (docs/simulator.md)
+    CHECK(plan->persistent_checks == 1);
+  }
+  SECTION("a thousand small scenes: one block each, scenes never split") {
+    GridBatch cohort(std::vector<std::array<int, 3>>(1000, {8, 10, 5}));  // 400 vertices each
+    const auto plan = plan_launches(cohort.shape, {}, device.limits());   // automatic: too many for the grid
+    REQUIRE(plan);
+    CHECK(plan->grid_blocks == 0);
+    CHECK(plan->cluster_size == 1);
+    CHECK(plan->cluster_rows == 416);
+    REQUIRE(plan->cluster_blocks.size() == 1000);
+    for (std::size_t s = 0; s < 1000; ++s) {
+      CHECK(plan->cluster_blocks[s].first_vertex == cohort.shape.vertex_begin[s]);
+      CHECK(plan->cluster_blocks[s].end_vertex == cohort.shape.vertex_begin[s + 1]);
+    }
+  }
+  SECTION("a scene beyond 16 x 1,024 vertices has no cluster; nor has anything where no shape fits") {
+    GridBatch large(40, 40, 11);  // 17,600 vertices
+    device.resident = 1;
+    auto plan = plan_launches(large.shape, options_with(sim::GpuOptions::PersistentKind::Clusters), device.limits());
+    REQUIRE(plan);
+    CHECK_FALSE(plan->persistent());
+    GridBatch box(21, 21, 21);
+    device.shared_limit = 1024;
+    plan = plan_launches(box.shape, options_with(sim::GpuOptions::PersistentKind::Clusters), device.limits());
+    REQUIRE(plan);
+    CHECK_FALSE(plan->persistent());
+  }
+  SECTION("elements never run in clusters") {
+    GridBatch box(21, 21, 21);
+    box.shape.kind = GatherKind::SpringsAndElements;
+    device.resident = 0;
+    const auto plan =
+        plan_launches(box.shape, options_with(sim::GpuOptions::PersistentKind::Clusters), device.limits());
+    REQUIRE(plan);
+    CHECK_FALSE(plan->persistent());
+  }
+}
+
+TEST_CASE("Launch plan: cluster blocks cover every vertex once and their windows hold every neighbour (seeded)",
+          "[gpu][plan]") {
+  std::mt19937 random(20261127);
+  for (int trial = 0; trial < 40; ++trial) {
+    std::vector<std::array<int, 3>> scenes(1 + random() % 30);
+    for (auto& scene : scenes)
+      scene = {1 + static_cast<int>(random() % 12), 1 + static_cast<int>(random() % 12),
+               1 + static_cast<int>(random() % 12)};
+    GridBatch batch(scenes);
+    FakeDevice device;
+    device.resident = 0;
+    const auto plan = plan_launches(batch.shape, {}, device.limits());
+    REQUIRE(plan);
+    REQUIRE_FALSE(plan->cluster_blocks.empty());
+    const auto at = [](int i) { return static_cast<std::size_t>(i); };
+    std::vector<int> owner(at(batch.shape.vertex_count), -1);
+    for (std::size_t b = 0; b < plan->cluster_blocks.size(); ++b) {
+      const ClusterBlock& block = plan->cluster_blocks[b];
+      REQUIRE(block.end_vertex - block.first_vertex <= plan->cluster_rows);
+      if (plan->cluster_size > 1) REQUIRE(block.window_count <= plan->cluster_window_capacity);
+      for (int v = block.first_vertex; v < block.end_vertex; ++v) {
+        REQUIRE(owner[at(v)] == -1);
+        owner[at(v)] = static_cast<int>(b);
+        for (int e = batch.offset[at(v)]; e < batch.offset[at(v) + 1]; ++e) {
+          REQUIRE(batch.neighbour[at(e)] >= block.window_first);
+          REQUIRE(batch.neighbour[at(e)] < block.window_first + block.window_count);
+        }
+      }
+    }
+    REQUIRE(std::count(owner.begin(), owner.end(), -1) == 0);
+    // A vertex and its neighbours are in one cluster: clusters never split a scene.
+    for (int v = 0; v < batch.shape.vertex_count; ++v)
+      for (int e = batch.offset[at(v)]; e < batch.offset[at(v) + 1]; ++e)
+        REQUIRE(owner[at(v)] / plan->cluster_size == owner[at(batch.neighbour[at(e)])] / plan->cluster_size);
+  }
+}
+
+TEST_CASE("Launch plan: checks per persistent launch, their result slots, and a failed device query", "[gpu][plan]") {
+  FakeDevice device;
+  device.resident = 1 << 20;
+  GridBatch box(64, 64, 64);  // 262,144 vertices: 6 MiB of float state, 10 checkpoints in 64 MiB
+  auto plan = plan_launches(box.shape, {}, device.limits());
+  REQUIRE(plan->grid_blocks > 0);
+  CHECK(plan->persistent_checks == 10);
+  box.shape.double_precision = true;
+  CHECK(plan_launches(box.shape, {}, device.limits())->persistent_checks == 5);
+  box.shape.element_count = 7;
+  box.shape.scene_count = 3;
+  CHECK(plan_launches(box.shape, {}, device.limits())->check_slot_stride == 7);  // non-finite + 2 per scene
+  device.fail = true;
+  CHECK_FALSE(plan_launches(box.shape, {}, device.limits()));
+}
+
+TEST_CASE("GPU batch admission: what scenes must share is named, on machines without a GPU", "[gpu][batch]") {
+  DiagnosticList diagnostics;
+  sim::BoxSpec spec;
+  spec.cells_x = spec.cells_y = spec.cells_z = 2;
+  const sim::Mesh box = sim::generate_box(spec, diagnostics);
+  sim::SimulationSetup setup;
+  setup.rest_positions = box.points;
+  setup.springs = sim::springs_from_tetrahedra(box, diagnostics);
+  std::vector<sim::SimulationSetup> scenes(2, setup);
+  CHECK(batch_accepts(scenes, 1, diagnostics));
+  scenes[1].integrator = sim::Integrator::RungeKutta4;
+  CHECK_FALSE(batch_accepts(scenes, 1, diagnostics));
+  CHECK(
+      diagnostics.items().back().message ==
+      "scene 1 differs from scene 0 in its integrator; the scenes of one GPU batch share it: run it in another batch");
+  scenes[1] = setup;
+  scenes[1].gravity[2] = -9.81;
+  CHECK_FALSE(batch_accepts(scenes, 1, diagnostics));
+  CHECK(diagnostics.items().back().message.find("in its gravity;") != std::string::npos);
+  scenes[1] = setup;
+  scenes[1].integrator = sim::Integrator::ImplicitEuler;
+  scenes[0].integrator = sim::Integrator::ImplicitEuler;
+  CHECK_FALSE(batch_accepts(scenes, 1, diagnostics));
+  CHECK(diagnostics.items().back().message.rfind("scene 1: implicit Euler runs one scene at a time", 0) == 0);
+  scenes.resize(1);
+  CHECK(batch_accepts(scenes, 0, diagnostics));  // alone, implicit Euler is accepted
+  CHECK(gather_kind(setup) == GatherKind::Springs);
+}

@@ -1,0 +1,277 @@
+// The element laws as units (issue 25, item 1; docs/simulator.md, "Adding a law"): every law of kernels::ElementLaws
+// has its registry row, passes the same physical checks (forces are the energy's negative gradient, the stiffness
+// blocks are the forces' derivative, the whole matrix and the action agree with the blocks, the stable step's bound
+// holds the largest eigenvalue), and no source file outside its kernels header and the registry names it.
+#include <Eigen/Dense>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "kernels/element_laws.h"
+#include "runtime/fem/element_law_registry.h"
+
+using namespace fmpc;
+using namespace fmpc::sim;
+
+namespace {
+
+std::string read_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The text with comments removed (// to the end of the line, /* ... */), string literals kept.
+std::string without_comments(const std::string& text) {
+  std::string out;
+  bool in_string = false, in_char = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string || in_char) {
+      out += c;
+      if (c == '\\' && i + 1 < text.size()) {
+        out += text[++i];
+      } else if ((in_string && c == '"') || (in_char && c == '\'')) {
+        in_string = in_char = false;
+      }
+      continue;
+    }
+    if (c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
+      while (i < text.size() && text[i] != '\n') ++i;
+      out += '\n';
+      continue;
+    }
+    if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+      i += 2;
+      while (i + 1 < text.size() && !(text[i] == '*' && text[i + 1] == '/')) ++i;
+      ++i;
+      continue;
+    }
+    in_string = c == '"';
+    in_char = c == '\'';
+    out += c;
+  }
+  return out;
+}
+
+// A regular tetrahedron of 1 cm, slightly distorted, positively oriented; Dm^-1 and V0.
+struct Element {
+  double rest[4][3];
+  double rest_inverse[9];
+  double volume;
+};
+
+Element test_element() {
+  Element e{{{0, 0, 0}, {0.011, 0.001, 0}, {0.005, 0.009, 0.001}, {0.004, 0.003, 0.0095}}, {}, 0.0};
+  double dm[9];
+  for (int i = 0; i < 3; ++i)
+    for (int a = 0; a < 3; ++a) dm[3 * i + a] = e.rest[a + 1][i] - e.rest[0][i];
+  const Eigen::Matrix3d inverse = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(dm).inverse();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) e.rest_inverse[3 * i + j] = inverse(i, j);
+  e.volume = kernels::tetrahedron_volume(e.rest);
+  return e;
+}
+
+}  // namespace
+
+TEST_CASE("every element law has its registry row, in kernels::ElementLaws' order", "[fem][law]") {
+  const std::vector<ElementLawRow>& rows = element_law_rows();
+  REQUIRE(static_cast<int>(rows.size()) == kernels::ElementLaws::count);
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const ElementLawRow& row = rows[i];
+    INFO("row " << i << ": " << row.keyword);
+    CHECK(row.law == static_cast<int>(i));
+    CHECK(&element_law_row(row.law) == &row);
+    CHECK(row.build != nullptr);
+    CHECK(std::string(row.description).size() > 20);
+    const char* stress =
+        kernels::visit_element_law(row.law, [](auto element_law) { return decltype(element_law)::kStressOutput; });
+    CHECK(std::string(row.stress_output) == stress);
+    // No two laws share a name: scenes and --models tell the laws apart by them (a law may use one name twice).
+    std::set<std::string> own = {row.keyword, row.trade_name};
+    if (row.model_keyword != nullptr) {
+      own.insert(row.model_keyword);
+      CHECK(element_law_by_model_keyword(row.model_keyword) == &row);
+    }
+    for (const std::string& name : own) CHECK(names.insert(name).second);
+    CHECK(element_law_by_trade_name(row.trade_name) == &row);
+  }
+  CHECK(element_law_beside_springs().beside_springs);
+  CHECK(default_fem_law().model_keyword != nullptr);
+}
+
+TEST_CASE("every element law: forces are -dW/dx, blocks are -df/dx, matrix and action agree, the bound holds",
+          "[fem][law]") {
+  const Element e = test_element();
+  std::mt19937_64 rng(25);
+  std::uniform_real_distribution<double> jitter(-0.08, 0.08);
+  for (const ElementLawRow& row : element_law_rows()) {
+    INFO("law " << row.keyword);
+    // The law's own parameters for E = 5 kPa, nu = 0.3 from its builder, one element.
+    ElementMaterial material;
+    material.youngs_modulus = {5000.0};
+    material.poisson_ratio = {0.3};
+    DiagnosticList diagnostics;
+    const auto build = row.build(material, diagnostics);
+    REQUIRE(build);
+    REQUIRE(build->term.law == row.law);
+    kernels::ElementTermView<double> view{};
+    view.law = row.law;
+    view.count = 1;
+    view.rest_inverse = e.rest_inverse;
+    view.rest_volume = &e.volume;
+    for (int p = 0; p < kernels::kMostLawParameters; ++p)
+      view.parameter[p] = build->term.parameter[p].empty() ? nullptr : build->term.parameter[p].data();
+    kernels::visit_element_law(row.law, [&](auto element_law) {
+      using Law = decltype(element_law);
+      const auto m = Law::material(view, 0);
+      double still[4][3] = {};
+      for (int n = 0; n < 50; ++n) {
+        // A random deformation of up to 8 % per coordinate, rigidly shifted.
+        double x[4][3], f[4][3];
+        for (int a = 0; a < 4; ++a)
+          for (int i = 0; i < 3; ++i) x[a][i] = e.rest[a][i] * (1.0 + jitter(rng)) + 0.02;
+        Law::forces(m, x, still, f);
+        const double scale = 5000.0 * 1e-4;  // N: E l^2 for l = 1 cm
+        const double h = 1e-9;
+        for (int a = 0; a < 4; ++a)
+          for (int i = 0; i < 3; ++i) {
+            double plus[4][3], minus[4][3];
+            std::copy(&x[0][0], &x[0][0] + 12, &plus[0][0]);
+            std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
+            plus[a][i] += h;
+            minus[a][i] -= h;
+            const double gradient = (Law::energy(m, plus) - Law::energy(m, minus)) / (2 * h);
+            CHECK(std::abs(f[a][i] + gradient) < 1e-5 * scale);
+          }
+        double sum[3] = {0, 0, 0};
+        for (int a = 0; a < 4; ++a)
+          for (int i = 0; i < 3; ++i) sum[i] += f[a][i];
+        for (int i = 0; i < 3; ++i) CHECK(std::abs(sum[i]) < 1e-12 * scale);
+      }
+      // At rest the tangent blocks are the forces' derivative; the matrix, the action and the bound agree with them.
+      double x[4][3];
+      std::copy(&e.rest[0][0], &e.rest[0][0] + 12, &x[0][0]);
+      typename Law::Linearisation lin{};
+      Law::linearise(m, x, lin);
+      Eigen::Matrix<double, 12, 12> K;
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b) {
+          double block[9];
+          Law::stiffness_block(m, lin, a, b, block);
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) K(3 * a + i, 3 * b + j) = block[3 * i + j];
+        }
+      const double largest_entry = K.cwiseAbs().maxCoeff();
+      REQUIRE(largest_entry > 0.0);
+      const double h = 1e-8;
+      for (int b = 0; b < 4; ++b)
+        for (int j = 0; j < 3; ++j) {
+          double plus[4][3], minus[4][3], fp[4][3], fm[4][3];
+          std::copy(&x[0][0], &x[0][0] + 12, &plus[0][0]);
+          std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
+          plus[b][j] += h;
+          minus[b][j] -= h;
+          Law::forces(m, plus, still, fp);
+          Law::forces(m, minus, still, fm);
+          for (int a = 0; a < 4; ++a)
+            for (int i = 0; i < 3; ++i)
+              CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * largest_entry);
+        }
+      double whole[144];
+      Law::stiffness_matrix(m, lin, whole);
+      double p[4][3], out[4][3];
+      Eigen::Matrix<double, 12, 1> pv;
+      for (int a = 0; a < 4; ++a)
+        for (int i = 0; i < 3; ++i) p[a][i] = pv[3 * a + i] = std::sin(1.0 + 3 * a + i);
+      Law::stiffness_action(m, lin, p, out);
+      const Eigen::Matrix<double, 12, 1> product = K * pv;
+      for (int r = 0; r < 12; ++r) {
+        for (int c = 0; c < 12; ++c) CHECK(whole[12 * r + c] == Approx(K(r, c)).margin(1e-12 * largest_entry));
+        CHECK(out[r / 3][r % 3] == Approx(product[r]).margin(1e-12 * largest_entry));
+      }
+      const double eigenvalue =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>>(K).eigenvalues().maxCoeff();
+      CHECK(Law::stiffness_bound(m) >= eigenvalue * (1 - 1e-12));
+      // At rest: no force, no energy, no stress output.
+      double f[4][3];
+      Law::forces(m, x, still, f);
+      for (int a = 0; a < 4; ++a)
+        for (int i = 0; i < 3; ++i) CHECK(std::abs(f[a][i]) < 1e-12 * 5000.0 * 1e-4);
+      CHECK(std::abs(Law::energy(m, x)) < 1e-18);
+      CHECK(std::abs(Law::stress_output(m, x)) < 1e-9 * 5000.0);
+    });
+  }
+}
+
+TEST_CASE("a law is named only in its kernels header and the registry", "[fem][law]") {
+  const std::filesystem::path root = FMPC_SOURCE_DIR;
+  // The laws' type names, from ElementLaws' definition; their headers are kernels/laws/*.h.
+  const std::string laws_header = read_file(root / "kernels/element_laws.h");
+  std::smatch list;
+  REQUIRE(std::regex_search(laws_header, list, std::regex(R"(using ElementLaws = ElementLawList<([^>]*)>;)")));
+  std::vector<std::string> types;
+  {
+    std::istringstream names(list[1].str());
+    for (std::string name; std::getline(names, name, ',');) {
+      name.erase(0, name.find_first_not_of(' '));
+      name.erase(name.find_last_not_of(' ') + 1);
+      types.push_back(name);
+    }
+  }
+  REQUIRE(static_cast<int>(types.size()) == kernels::ElementLaws::count);
+  // What names a law: its type name (an identifier) and its registry names (whole string literals).
+  struct Name {
+    std::regex pattern;
+    std::string text;
+    std::filesystem::path home;  // the law's header, where its name may appear
+  };
+  std::vector<Name> names;
+  std::map<std::string, std::filesystem::path> header_of;
+  for (const auto& entry : std::filesystem::directory_iterator(root / "kernels/laws")) {
+    const std::string text = without_comments(read_file(entry.path()));
+    for (const std::string& type : types)
+      if (std::regex_search(text, std::regex("struct " + type + R"(\s*\{)"))) header_of[type] = entry.path();
+  }
+  for (std::size_t law = 0; law < types.size(); ++law) {
+    INFO("law " << types[law]);
+    REQUIRE(header_of.count(types[law]) == 1);
+    const std::filesystem::path home = header_of[types[law]];
+    names.push_back({std::regex("\\b" + types[law] + "\\b"), types[law], home});
+    const ElementLawRow& row = element_law_row(static_cast<int>(law));
+    for (const char* literal : {row.keyword, row.model_keyword, row.trade_name})
+      if (literal != nullptr)
+        names.push_back({std::regex("\"" + std::string(literal) + "\""), "\"" + std::string(literal) + "\"", home});
+  }
+  const std::set<std::filesystem::path> registry = {root / "kernels/element_laws.h",
+                                                    root / "runtime/fem/element_law_registry.h",
+                                                    root / "runtime/fem/element_law_registry.cpp"};
+  std::vector<std::string> offenders;
+  std::size_t files = 0;
+  for (const char* folder : {"runtime", "kernels", "tools", "python", "bench", "compiler"}) {
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(root / folder)) {
+      const std::string extension = entry.path().extension().string();
+      if (!entry.is_regular_file() ||
+          (extension != ".h" && extension != ".cpp" && extension != ".cu" && extension != ".cuh" && extension != ".py"))
+        continue;
+      if (registry.count(entry.path())) continue;
+      ++files;
+      const std::string text = without_comments(read_file(entry.path()));
+      for (const Name& name : names)
+        if (entry.path() != name.home && std::regex_search(text, name.pattern))
+          offenders.push_back(std::filesystem::relative(entry.path(), root).string() + " names " + name.text);
+    }
+  }
+  CHECK(files > 100);
+  for (const std::string& offender : offenders) FAIL_CHECK(offender);
+}
