@@ -13,11 +13,11 @@ function(fmpc_unity_group target name)
   endforeach()
 endfunction()
 
-# fmpc_unity_build(TARGET GROUPS_FILE): TARGET compiles its unity groups (GROUPS_FILE) as one source each when
-# FMPC_UNITY_BUILD is on; the groups are recorded either way.
-function(fmpc_unity_build target groups_file)
+# fmpc_unity_build(GROUPS_FILE TARGET...): the TARGETs compile their unity groups (GROUPS_FILE) as one source each
+# when FMPC_UNITY_BUILD is on; the groups are recorded either way.
+function(fmpc_unity_build groups_file)
   if(FMPC_UNITY_BUILD)
-    set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
+    set_target_properties(${ARGN} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
   endif()
   include(${groups_file})
 endfunction()

@@ -9,9 +9,14 @@ fmpc_unity_group(fmpc_compiler compiler_frontend
   frontend/ir_printer.cpp
   frontend/rule_file_loader.cpp
   frontend/utf8.cpp
+  frontend/fmpc_tokens.cpp
+  frontend/fmpc_token_repair.cpp
+  frontend/fmpc_parameter_edit.cpp
   sema/lower_fmpc.cpp
   ir/fuzzy_system.cpp
-  ir/content_hash.cpp)
+  ir/content_hash.cpp
+  ir/system_names.cpp
+  ir/units.cpp)
 fmpc_unity_group(fmpc_compiler compiler_interchange
   frontend/fcl.cpp
   frontend/fll.cpp
@@ -37,6 +42,8 @@ fmpc_unity_group(fmpc_compiler compiler_emitters
   backend/cpp/emit_type2.cpp
   backend/cpp/evaluator_emitter.cpp
   backend/cpp/lane_batch_emitter.cpp
+  backend/cpp/namespace_name.cpp
+  eval/rule_contributions.cpp
   passes/fuse_consequents.cpp
   passes/prune_rules.cpp)
 fmpc_unity_group(fmpc_compiler compiler_tables_lint
@@ -47,4 +54,10 @@ fmpc_unity_group(fmpc_compiler compiler_tables_lint
   backend/table/table_estimate.cpp
   backend/table/table_grid.cpp
   backend/table/table_points.cpp
-  sema/lint.cpp)
+  sema/lint.cpp
+  eval/agreement.cpp)
+fmpc_unity_group(fmpc_compiler compiler_eval_reports
+  eval/control_surface.cpp
+  eval/nelder_mead.cpp
+  eval/system_diff.cpp
+  eval/tuning.cpp)

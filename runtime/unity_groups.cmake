@@ -15,18 +15,22 @@ fmpc_unity_group(fmpc_runtime runtime_models
   springs/sliced_springs.cpp
   springs/spring_network.cpp
   fem/fem_model_builder.cpp
-  fem/tetrahedron_field.cpp
+  fem/element_law_registry.cpp
+  fem/element_terms.cpp
   integrate/element_outputs.cpp
   integrate/loads.cpp
   integrate/model_tangent.cpp
   integrate/stability.cpp
   integrate/worker_pool.cpp)
 fmpc_unity_group(fmpc_runtime runtime_integrate
-  integrate/cpu_simulation.cpp
+  integrate/cpu_engine.cpp
+  integrate/run_supervisor.cpp
+  integrate/simulate.cpp
   integrate/static_equilibrium.cpp
   integrate/validate_setup.cpp)
 fmpc_unity_group(fmpc_runtime runtime_io
   io/atomic_file.cpp
+  io/memory_limit.cpp
   io/input_file.cpp
   io/json_text.cpp
   io/rule_file_input.cpp
@@ -50,4 +54,7 @@ fmpc_unity_group(fmpc_runtime runtime_scene_run
   scene/simulation_trade.cpp
   scene/spring_model_builder.cpp
   scene/cohort_run.cpp
-  scene/precision_check.cpp)
+  scene/precision_check.cpp
+  scene/scene_batch_run.cpp
+  gpu/batch_concatenation.cpp
+  gpu/launch_plan.cpp)

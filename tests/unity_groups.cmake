@@ -29,7 +29,9 @@ fmpc_unity_group(fmpc_tests tests_3
   unit/emit_cpp_test.cpp
   differential/fuzzylite_formats_test.cpp
   unit/sim_gpu_test.cpp
-  support/fmpc_process.cpp)
+  support/fmpc_process.cpp
+  unit/studio_api_test.cpp
+  unit/studio_edits_test.cpp)
 fmpc_unity_group(fmpc_tests tests_4
   unit/type2_compile_test.cpp
   unit/lint_test.cpp
@@ -45,7 +47,9 @@ fmpc_unity_group(fmpc_tests tests_5
 fmpc_unity_group(fmpc_tests tests_6
   unit/table_arrays_test.cpp
   unit/curve_similarity_test.cpp
-  differential/round_trip_test.cpp)
+  differential/round_trip_test.cpp
+  unit/lsp_test.cpp
+  unit/tune_test.cpp)
 fmpc_unity_group(fmpc_tests tests_7
   unit/setup_equivalence_test.cpp
   unit/type_reduction_test.cpp
@@ -54,7 +58,11 @@ fmpc_unity_group(fmpc_tests tests_7
 fmpc_unity_group(fmpc_tests tests_8
   unit/table_builder_test.cpp
   support/generated_program.cpp
-  unit/unity_groups_test.cpp)
+  unit/unity_groups_test.cpp
+  unit/rule_contributions_test.cpp
+  unit/system_diff_test.cpp
+  unit/hostile_readers_test.cpp
+  unit/agreement_test.cpp)
 fmpc_unity_group(fmpc_tests tests_9
   unit/vtk_xml_test.cpp
   unit/scene_material_test.cpp
@@ -62,7 +70,10 @@ fmpc_unity_group(fmpc_tests tests_9
 fmpc_unity_group(fmpc_tests tests_10
   unit/fuzzy_math_test.cpp
   unit/cell_bound_test.cpp
-  unit/sliced_springs_test.cpp)
+  unit/sliced_springs_test.cpp
+  unit/generated_code_injection_test.cpp
+  unit/launch_plan_test.cpp
+  unit/law_unit_test.cpp)
 fmpc_unity_group(fmpc_tests tests_11
   unit/mesh_refinement_test.cpp
   unit/plot_test.cpp

@@ -1,5 +1,5 @@
-// Unity groups (cmake/FmpcUnityGroups.cmake; compiler/, runtime/ and tests/ unity_groups.cmake): a group's files
-// compile as one source, so their file-scope helpers (anonymous namespaces, statics) share one scope. Two files
+// Unity groups (cmake/FmpcUnityGroups.cmake; compiler/, runtime/, tools/ and tests/ unity_groups.cmake): a group's
+// files compile as one source, so their file-scope helpers (anonymous namespaces, statics) share one scope. Two files
 // defining the same such name would clash or, where the parameters differ, overload silently and change which
 // function a call reaches. No group may hold two files that define the same file-scope name.
 #include <catch2/catch.hpp>
@@ -21,16 +21,47 @@ std::string identifier_at_start(const std::string& text) {
   return text.substr(0, end);
 }
 
+// Where a raw string literal that `line` opens without closing it ends: its `)delimiter"`, or "" if none is open.
+std::string open_raw_string_end(const std::string& line) {
+  for (std::size_t at = line.find("R\""); at != std::string::npos; at = line.find("R\"", at + 1)) {
+    const std::size_t open = line.find('(', at + 2);
+    if (open == std::string::npos) break;
+    const std::string closing = ")" + line.substr(at + 2, open - at - 2) + "\"";
+    const std::size_t closed = line.find(closing, open + 1);
+    if (closed == std::string::npos) return closing;
+    at = closed;
+  }
+  return "";
+}
+
+// A line such as `TEST_CASE("...", "[tag]") {`: an all-capitals name called like a function.
+bool macro_call(const std::string& line) {
+  const std::string name = identifier_at_start(line);
+  if (name.empty() || line.size() == name.size() || line[name.size()] != '(') return false;
+  for (char c : name)
+    if (std::islower(static_cast<unsigned char>(c))) return false;
+  return true;
+}
+
 // The names a C++ source defines at file scope with internal linkage: the declarations that start a line inside
 // `namespace {` ... `}  // namespace` (the project's formatting), and `static` declarations at the start of a line.
 // A declaration's name is the one after struct / class / enum / union or `using`, or else the identifier before
-// its first `(`, `=`, `[`, `{` or `;` outside angle brackets. Templates' own lines, operators, namespace aliases
-// and using-directives name nothing that could clash.
+// its first `(`, `=`, `[`, `{` or `;` outside angle brackets. Templates' own lines, operators, namespace aliases,
+// using-directives and macro calls (TEST_CASE: Catch numbers its names by __COUNTER__) name nothing that could
+// clash, and neither do the lines of a raw string literal (a rule file's text in a test).
 std::set<std::string> file_scope_names(const std::string& text) {
   std::set<std::string> names;
   bool anonymous = false;
+  std::string raw_string_end;
   std::istringstream lines(text);
   for (std::string line; std::getline(lines, line);) {
+    if (!raw_string_end.empty()) {
+      const std::size_t closed = line.find(raw_string_end);
+      if (closed == std::string::npos) continue;
+      raw_string_end = open_raw_string_end(line.substr(closed + raw_string_end.size()));
+      continue;
+    }
+    raw_string_end = open_raw_string_end(line);
     if (line == "namespace {") {
       anonymous = true;
       continue;
@@ -42,7 +73,7 @@ std::set<std::string> file_scope_names(const std::string& text) {
     if (!anonymous && !begins_with(line, "static ")) continue;
     if (line.empty() || !(std::isalpha(static_cast<unsigned char>(line[0])) || line[0] == '_')) continue;
     if (begins_with(line, "template") || begins_with(line, "namespace ") || begins_with(line, "using namespace") ||
-        line.find("operator") != std::string::npos)
+        line.find("operator") != std::string::npos || macro_call(line))
       continue;
     std::string rest = line;
     while (begins_with(rest, "static ") || begins_with(rest, "inline ") || begins_with(rest, "constexpr "))
@@ -119,13 +150,19 @@ TEST_CASE("file-scope names: anonymous namespaces and statics, not members, temp
       "using ClauseKey = std::tuple<int, int>;\n"
       "std::function<void(int)> callback = nullptr;\n"
       "bool operator<(const Frame&, const Frame&);\n"
+      "const char* const kRules = R\"rules(input x in [0, 1] kPa\n"
+      "output y in [0, 2] kPa\n"
+      "if x is low then y is high)rules\";\n"
+      "TEST_CASE(\"a test's own name\", \"[t]\") {\n"
+      "  CHECK(true);\n"
+      "}\n"
       "int Frame::member(int x) { return x; }\n"
       "}  // namespace\n"
       "static int counter;\n"
       "static_assert(true, \"not a name\");\n"
       "}  // namespace fmpc\n";
   CHECK(file_scope_names(text) == std::set<std::string>{"kNaN", "kNames", "table_of", "twice", "Frame", "Kind",
-                                                        "ClauseKey", "callback", "counter"});
+                                                        "ClauseKey", "callback", "kRules", "counter"});
 }
 
 TEST_CASE("no unity group holds two files that define the same file-scope name", "[build]") {
@@ -135,9 +172,10 @@ TEST_CASE("no unity group holds two files that define the same file-scope name",
     const std::size_t bar = line.find('|');
     if (bar != std::string::npos) groups[line.substr(0, bar)].push_back(line.substr(bar + 1));
   }
-  // The compiler's, the runtime's and the tests' groups.
+  // The compiler's, the runtime's, the tools' and the tests' groups.
   CHECK(groups.count("compiler_emitters") == 1);
   CHECK(groups.count("runtime_scene_file") == 1);
+  CHECK(groups.count("tools_studio_server") == 1);
   CHECK(groups.count("tests_0") == 1);
   std::size_t files = 0;
   for (const auto& [group, paths] : groups) {
