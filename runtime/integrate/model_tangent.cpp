@@ -53,33 +53,24 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
       for (int col = r; col < 3; ++col) d_block[kernels::symmetric_index(r, col)] = c * u[r] * u[col];
     add_spring_block(damping, a, b, d_block);
   }
-  const kernels::StrainTableView table = setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness)
-                                                                : kernels::StrainTableView{nullptr, nullptr, 0};
-  for (std::size_t term = 0; term < setup.elements.terms.size(); ++term) {
-    const kernels::ElementTermView<double> view = element_term_view(setup.elements, term, &table);
-    kernels::visit_element_law(view.law, [&](auto element_law) {
-      using Law = decltype(element_law);
-      for (std::size_t e = 0; e < elements; ++e) {
-        const auto m = Law::material(view, static_cast<int>(e));
-        const Tetrahedron& t = setup.tetrahedra[e];
-        double x[4][3];
-        tetrahedron_corners(setup.tetrahedra, e, positions, x);
-        typename Law::Linearisation lin{};
-        Law::linearise(m, x, lin);
-        double K[144];
-        Law::stiffness_matrix(m, lin, K);
-        for (int row = 0; row < 12; ++row) {
-          for (int column = 0; column < 12; ++column) {
-            const int global_row = 3 * t[static_cast<std::size_t>(row / 3)] + row % 3;
-            const int global_column = 3 * t[static_cast<std::size_t>(column / 3)] + column % 3;
-            const double entry = K[12 * row + column];
-            stiffness.emplace_back(global_row, global_column, entry);
-            if (m.stiffness_damping != 0.0)
-              damping.emplace_back(global_row, global_column, m.stiffness_damping * entry);
-          }
+  const ElementTangents tangents(setup);
+  for (std::size_t term = 0; term < tangents.term_count(); ++term) {
+    for (std::size_t e = 0; e < elements; ++e) {
+      const Tetrahedron& t = setup.tetrahedra[e];
+      double x[4][3];
+      tetrahedron_corners(setup.tetrahedra, e, positions, x);
+      double K[144];
+      const double beta = tangents.stiffness(term, e, x, K);
+      for (int row = 0; row < 12; ++row) {
+        for (int column = 0; column < 12; ++column) {
+          const int global_row = 3 * t[static_cast<std::size_t>(row / 3)] + row % 3;
+          const int global_column = 3 * t[static_cast<std::size_t>(column / 3)] + column % 3;
+          const double entry = K[12 * row + column];
+          stiffness.emplace_back(global_row, global_column, entry);
+          if (beta != 0.0) damping.emplace_back(global_row, global_column, beta * entry);
         }
       }
-    });
+    }
   }
   ModelTangent tangent;
   tangent.stiffness.resize(dofs, dofs);
@@ -87,6 +78,24 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
   tangent.stiffness.setFromTriplets(stiffness.begin(), stiffness.end());
   tangent.damping.setFromTriplets(damping.begin(), damping.end());
   return tangent;
+}
+
+ElementTangents::ElementTangents(const SimulationSetup& setup) {
+  if (setup.strain_stiffness) table_ = strain_table_view(*setup.strain_stiffness);
+  for (std::size_t term = 0; term < setup.elements.terms.size(); ++term)
+    views_.push_back(element_term_view(setup.elements, term, &table_));
+}
+
+double ElementTangents::stiffness(std::size_t term, std::size_t e, const double corners[4][3], double* K) const {
+  const kernels::ElementTermView<double>& view = views_[term];
+  return kernels::visit_element_law(view.law, [&](auto element_law) {
+    using Law = decltype(element_law);
+    const auto m = Law::material(view, static_cast<int>(e));
+    typename Law::Linearisation lin{};
+    Law::linearise(m, corners, lin);
+    Law::stiffness_matrix(m, lin, K);
+    return static_cast<double>(m.stiffness_damping);
+  });
 }
 
 }  // namespace fmpc::sim

@@ -25,4 +25,25 @@ struct ModelTangent {
 ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point3>& positions,
                            const std::vector<double>& spring_stiffness);
 
+// The element terms' tangent one element at a time, for an assembler that places the blocks itself (implicit Euler's
+// fixed pattern, implicit_system.h): the one place that asks a law for its stiffness, so that model_tangent and the
+// assemblers stay apart from the laws' linearisation. Reads the setup for its life; not copyable (its views point at
+// its own strain table view).
+class ElementTangents {
+ public:
+  explicit ElementTangents(const SimulationSetup& setup);
+  ElementTangents(const ElementTangents&) = delete;
+  ElementTangents& operator=(const ElementTangents&) = delete;
+
+  std::size_t term_count() const { return views_.size(); }
+  // Term `term`'s 12 x 12 stiffness of element e with its corners at `corners` [corner][axis] (row-major,
+  // K[12 (3 a + i) + 3 b + j] couples corner a's axis i to corner b's axis j, the tetrahedron's corners in order),
+  // linearised there by the term's law; returns the element's stiffness damping beta_e (s), 0 when undamped.
+  double stiffness(std::size_t term, std::size_t e, const double corners[4][3], double* K) const;
+
+ private:
+  kernels::StrainTableView table_{nullptr, nullptr, 0};
+  std::vector<kernels::ElementTermView<double>> views_;
+};
+
 }  // namespace fmpc::sim
