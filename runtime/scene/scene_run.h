@@ -133,8 +133,9 @@ struct CohortRunResult {
   // Per patient, in the order given: nullopt when it could not start or its outputs could not be written (errors
   // appended). A non-finite state in one patient stops the batch: every patient then has completed: false.
   std::vector<std::optional<SceneRunResult>> patients;
-  double wall_seconds = 0.0;  // all patients: stepping and recording (outputs and the precision check excluded)
-  double spring_steps = 0.0;  // the sum over patients of springs x steps taken
+  double wall_seconds = 0.0;      // all patients: stepping and recording (outputs and the precision check excluded)
+  double stepping_seconds = 0.0;  // the simulator's advance calls alone (their checks included)
+  double spring_steps = 0.0;      // the sum over patients of springs x steps taken
 };
 
 // Checks every patient's setup (the stability check included) and gives them one time step: the scene's dt when
