@@ -135,8 +135,8 @@ struct SceneOutputs {
   bool csv = true;
   bool summary = true;
   bool plot = true;  // force-displacement PNG (needs a probe)
-  // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the scene's work is
-  // at most kPrecisionCheckWork vertex-steps; on always; off never.
+  // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the run's stepping
+  // took at most kPrecisionCheckSeconds (the check costs about as much again); on always; off never.
   enum class PrecisionCheck { Auto, On, Off } precision_check = PrecisionCheck::Auto;
   // A cohort's patients (docs/cohorts.md) write summary.json and time_series.csv each, and cohort.csv beside them;
   // their frames and force-displacement pictures only when asked (`cohort: {frames: true, plot: true}`): a
