@@ -18,14 +18,16 @@ namespace {
 // step).
 constexpr std::size_t kElementRun = 64;
 
-void colour_element_runs(const std::vector<Tetrahedron>& tetrahedra, std::size_t vertex_count,
+// `nodes`: N per element.
+void colour_element_runs(const std::vector<std::int32_t>& nodes, std::size_t N, std::size_t vertex_count,
                          std::vector<std::int32_t>& order, std::vector<std::int32_t>& offsets) {
-  const std::size_t runs = (tetrahedra.size() + kElementRun - 1) / kElementRun;
+  const std::size_t elements = nodes.size() / N;
+  const std::size_t runs = (elements + kElementRun - 1) / kElementRun;
   // The runs at each vertex, increasing.
   std::vector<std::vector<std::int32_t>> at(vertex_count);
-  for (std::size_t e = 0; e < tetrahedra.size(); ++e)
-    for (const auto vertex : tetrahedra[e]) {
-      std::vector<std::int32_t>& list = at[static_cast<std::size_t>(vertex)];
+  for (std::size_t e = 0; e < elements; ++e)
+    for (std::size_t a = 0; a < N; ++a) {
+      std::vector<std::int32_t>& list = at[static_cast<std::size_t>(nodes[N * e + a])];
       const auto run = static_cast<std::int32_t>(e / kElementRun);
       if (list.empty() || list.back() != run) list.push_back(run);
     }
@@ -33,15 +35,14 @@ void colour_element_runs(const std::vector<Tetrahedron>& tetrahedra, std::size_t
   std::vector<char> taken;
   for (std::size_t run = 0; run < runs; ++run) {
     taken.assign(taken.size(), 0);
-    const std::size_t end = std::min(tetrahedra.size(), (run + 1) * kElementRun);
-    for (std::size_t e = run * kElementRun; e < end; ++e)
-      for (const auto vertex : tetrahedra[e])
-        for (const std::int32_t other : at[static_cast<std::size_t>(vertex)]) {
-          const std::int32_t c = colour[static_cast<std::size_t>(other)];
-          if (c < 0) continue;
-          if (static_cast<std::size_t>(c) >= taken.size()) taken.resize(static_cast<std::size_t>(c) + 1, 0);
-          taken[static_cast<std::size_t>(c)] = 1;
-        }
+    const std::size_t end = std::min(elements, (run + 1) * kElementRun);
+    for (std::size_t k = N * run * kElementRun; k < N * end; ++k)
+      for (const std::int32_t other : at[static_cast<std::size_t>(nodes[k])]) {
+        const std::int32_t c = colour[static_cast<std::size_t>(other)];
+        if (c < 0) continue;
+        if (static_cast<std::size_t>(c) >= taken.size()) taken.resize(static_cast<std::size_t>(c) + 1, 0);
+        taken[static_cast<std::size_t>(c)] = 1;
+      }
     std::size_t chosen = 0;
     while (chosen < taken.size() && taken[chosen] != 0) ++chosen;
     colour[run] = static_cast<std::int32_t>(chosen);
@@ -70,7 +71,8 @@ ImplicitSystem::ImplicitSystem(const SimulationSetup& setup, const std::vector<u
   const SpringNetwork& net = setup.springs;
   const bool elements = !setup.elements.empty();
   const ElementGeometry& geometry = setup.elements.geometry;
-  // Each row's columns: itself, its springs' other ends and (with element terms) its tetrahedra's other corners.
+  // Each row's columns: itself, its springs' other ends and (with element terms) its elements' other nodes.
+  const auto N = static_cast<std::size_t>(tangents_.nodes());
   row_offset_.assign(n_ + 1, 0);
   std::vector<std::int32_t> scratch;
   std::vector<std::vector<std::int32_t>> rows(n_);
@@ -82,8 +84,9 @@ ImplicitSystem::ImplicitSystem(const SimulationSetup& setup, const std::vector<u
         scratch.push_back(adjacency_neighbour(net, i, static_cast<std::size_t>(k)));
     if (elements)
       for (auto k = geometry.corner_offset[i]; k < geometry.corner_offset[i + 1]; ++k) {
-        const Tetrahedron& t = setup.tetrahedra[static_cast<std::size_t>(geometry.corner_index[static_cast<std::size_t>(k)] / 4)];
-        scratch.insert(scratch.end(), t.begin(), t.end());
+        const std::size_t e = static_cast<std::size_t>(geometry.corner_index[static_cast<std::size_t>(k)]) / N;
+        scratch.insert(scratch.end(), geometry.nodes.begin() + static_cast<std::ptrdiff_t>(N * e),
+                       geometry.nodes.begin() + static_cast<std::ptrdiff_t>(N * e + N));
       }
     std::sort(scratch.begin(), scratch.end());
     scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
@@ -108,14 +111,16 @@ ImplicitSystem::ImplicitSystem(const SimulationSetup& setup, const std::vector<u
             find_block(row_offset_, column_, i, neighbour_[static_cast<std::size_t>(k)]);
   }
   if (elements) {
-    element_block_.resize(16 * setup.tetrahedra.size());
-    for (std::size_t e = 0; e < setup.tetrahedra.size(); ++e) {
-      const Tetrahedron& t = setup.tetrahedra[e];
-      for (std::size_t a = 0; a < 4; ++a)
-        for (std::size_t b = 0; b < 4; ++b)
-          element_block_[16 * e + 4 * a + b] = find_block(row_offset_, column_, static_cast<std::size_t>(t[a]), t[b]);
+    element_count_ = geometry.size();
+    element_block_.resize(N * N * element_count_);
+    for (std::size_t e = 0; e < element_count_; ++e) {
+      const std::int32_t* node = tangents_.element_nodes(e);
+      for (std::size_t a = 0; a < N; ++a)
+        for (std::size_t b = 0; b < N; ++b)
+          element_block_[N * N * e + N * a + b] =
+              find_block(row_offset_, column_, static_cast<std::size_t>(node[a]), node[b]);
     }
-    colour_element_runs(setup.tetrahedra, n_, colour_order_, colour_offset_);
+    colour_element_runs(geometry.nodes, N, n_, colour_order_, colour_offset_);
   }
   row_touches_held_.assign(n_, 0);
   for (std::size_t i = 0; i < n_; ++i) {
@@ -150,7 +155,7 @@ void ImplicitSystem::assemble(const std::vector<double>& x, const std::vector<do
         [&](std::size_t begin, std::size_t end) {
           for (std::size_t k = begin; k < end; ++k) {
             const auto run = static_cast<std::size_t>(colour_order_[first + k]);
-            const std::size_t last = std::min(setup_.tetrahedra.size(), (run + 1) * kElementRun);
+            const std::size_t last = std::min(element_count_, (run + 1) * kElementRun);
             for (std::size_t e = run * kElementRun; e < last; ++e) assemble_element(e, x, v, h, rhs);
           }
         },
@@ -217,29 +222,31 @@ void ImplicitSystem::assemble_rows(std::size_t begin, std::size_t end, const std
 
 void ImplicitSystem::assemble_element(std::size_t e, const std::vector<double>& x, const std::vector<double>& v,
                                       double h, std::vector<double>& rhs) {
-  const Tetrahedron& t = setup_.tetrahedra[e];
-  double corners[4][3], velocity[12];
-  for (std::size_t c = 0; c < 4; ++c)
+  constexpr std::size_t kMost = static_cast<std::size_t>(kMostElementNodes);
+  const auto N = static_cast<std::size_t>(tangents_.nodes());
+  const std::int32_t* node = tangents_.element_nodes(e);
+  double corners[3 * kMost], velocity[3 * kMost];
+  for (std::size_t c = 0; c < N; ++c)
     for (std::size_t axis = 0; axis < 3; ++axis) {
-      corners[c][axis] = x[3 * static_cast<std::size_t>(t[c]) + axis];
-      velocity[3 * c + axis] = v[3 * static_cast<std::size_t>(t[c]) + axis];
+      corners[3 * c + axis] = x[3 * static_cast<std::size_t>(node[c]) + axis];
+      velocity[3 * c + axis] = v[3 * static_cast<std::size_t>(node[c]) + axis];
     }
   for (std::size_t term = 0; term < tangents_.term_count(); ++term) {
-    double K[144];
+    double K[9 * kMost * kMost];
     const double beta = tangents_.stiffness(term, e, corners, K);
     const double scale = h * h + h * beta;
-    for (std::size_t a = 0; a < 4; ++a) {
+    for (std::size_t a = 0; a < N; ++a) {
       double kv[3] = {0.0, 0.0, 0.0};
-      for (std::size_t b = 0; b < 4; ++b) {
-        double* block = &values_[9 * static_cast<std::size_t>(element_block_[16 * e + 4 * a + b])];
+      for (std::size_t b = 0; b < N; ++b) {
+        double* block = &values_[9 * static_cast<std::size_t>(element_block_[N * N * e + N * a + b])];
         for (std::size_t i = 0; i < 3; ++i)
           for (std::size_t j = 0; j < 3; ++j) {
-            const double entry = K[12 * (3 * a + i) + 3 * b + j];
+            const double entry = K[3 * N * (3 * a + i) + 3 * b + j];
             block[3 * i + j] += scale * entry;
             kv[i] += entry * velocity[3 * b + j];
           }
       }
-      double* r = &rhs[3 * static_cast<std::size_t>(t[a])];
+      double* r = &rhs[3 * static_cast<std::size_t>(node[a])];
       for (std::size_t i = 0; i < 3; ++i) r[i] -= h * (h * kv[i]);
     }
   }

@@ -2,7 +2,7 @@
 // Implicit Euler's linear system on the CPU (Baraff & Witkin 1998, Eq. 16; kernels/implicit_math.h):
 //   (M + h D + h^2 K) dv = h (f0 - h K v0)
 // in a block-sparse pattern fixed when the simulation is created: one 3 x 3 block per pair of vertices that share a
-// spring or (with element terms) a tetrahedron, both triangles stored, each row's blocks in column order. Internal
+// spring or (with element terms) an element, both triangles stored, each row's blocks in column order. Internal
 // to runtime/integrate (cpu_engine.cpp's implicit step, implicit_solver.h).
 //
 // Every step is assembled in parallel with the same bits for any thread count: each row's vertex term and springs
@@ -80,7 +80,8 @@ class ImplicitSystem {
   std::vector<double> values_;            // 9 per block
   std::vector<std::int32_t> spring_block_;   // per CSR entry of the springs' adjacency: the block (row, neighbour)
   std::vector<std::int32_t> neighbour_;      // per CSR entry: the other end
-  std::vector<std::int32_t> element_block_;  // 16 per element: the block (corner a's row, corner b's column)
+  std::size_t element_count_ = 0;
+  std::vector<std::int32_t> element_block_;  // N^2 per element: the block (node a's row, node b's column)
   std::vector<std::int32_t> colour_order_;   // the runs of elements, colour by colour, increasing within a colour
   std::vector<std::int32_t> colour_offset_;  // colours + 1
   std::vector<unsigned char> row_touches_held_;  // whether row i or a column of it is held

@@ -32,8 +32,10 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
   Triplets stiffness, damping;
   const SpringNetwork& net = setup.springs;
   const std::size_t elements = setup.elements.empty() ? 0 : setup.elements.geometry.size();
-  stiffness.reserve(36 * net.size() + 144 * elements * setup.elements.terms.size());
-  damping.reserve(36 * net.size() + 144 * elements * setup.elements.terms.size());
+  const std::size_t element_entries =
+      setup.elements.empty() ? 0 : 9 * setup.elements.geometry.nodes.size() * setup.elements.geometry.nodes_per_element;
+  stiffness.reserve(36 * net.size() + element_entries * setup.elements.terms.size());
+  damping.reserve(36 * net.size() + element_entries * setup.elements.terms.size());
   const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
   for (std::size_t s = 0; s < net.size(); ++s) {
     const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
@@ -54,18 +56,19 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
     add_spring_block(damping, a, b, d_block);
   }
   const ElementTangents tangents(setup);
+  const auto nodes = static_cast<std::size_t>(tangents.nodes()), size = 3 * nodes;
+  std::vector<double> x(3 * nodes), K(size * size);
   for (std::size_t term = 0; term < tangents.term_count(); ++term) {
     for (std::size_t e = 0; e < elements; ++e) {
-      const Tetrahedron& t = setup.tetrahedra[e];
-      double x[4][3];
-      tetrahedron_corners(setup.tetrahedra, e, positions, x);
-      double K[144];
-      const double beta = tangents.stiffness(term, e, x, K);
-      for (int row = 0; row < 12; ++row) {
-        for (int column = 0; column < 12; ++column) {
-          const int global_row = 3 * t[static_cast<std::size_t>(row / 3)] + row % 3;
-          const int global_column = 3 * t[static_cast<std::size_t>(column / 3)] + column % 3;
-          const double entry = K[12 * row + column];
+      const std::int32_t* node = tangents.element_nodes(e);
+      for (std::size_t a = 0; a < nodes; ++a)
+        for (std::size_t i = 0; i < 3; ++i) x[3 * a + i] = positions[static_cast<std::size_t>(node[a])][i];
+      const double beta = tangents.stiffness(term, e, x.data(), K.data());
+      for (std::size_t row = 0; row < size; ++row) {
+        for (std::size_t column = 0; column < size; ++column) {
+          const auto global_row = static_cast<int>(3 * static_cast<std::size_t>(node[row / 3]) + row % 3);
+          const auto global_column = static_cast<int>(3 * static_cast<std::size_t>(node[column / 3]) + column % 3);
+          const double entry = K[size * row + column];
           stiffness.emplace_back(global_row, global_column, entry);
           if (beta != 0.0) damping.emplace_back(global_row, global_column, beta * entry);
         }
@@ -80,22 +83,26 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
   return tangent;
 }
 
-ElementTangents::ElementTangents(const SimulationSetup& setup) {
+ElementTangents::ElementTangents(const SimulationSetup& setup) : geometry_(setup.elements.geometry) {
   if (setup.strain_stiffness) table_ = strain_table_view(*setup.strain_stiffness);
   for (std::size_t term = 0; term < setup.elements.terms.size(); ++term)
     views_.push_back(element_term_view(setup.elements, term, &table_));
 }
 
-double ElementTangents::stiffness(std::size_t term, std::size_t e, const double corners[4][3], double* K) const {
+double ElementTangents::stiffness(std::size_t term, std::size_t e, const double* x, double* K) const {
   const kernels::ElementTermView<double>& view = views_[term];
-  return kernels::visit_element_law(view.law, [&](auto element_law) {
+  kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
+    using Element = decltype(kind);
     using Law = decltype(element_law);
-    const auto m = Law::material(view, static_cast<int>(e));
-    typename Law::Linearisation lin{};
-    Law::linearise(m, corners, lin);
-    Law::stiffness_matrix(m, lin, K);
-    return static_cast<double>(m.stiffness_damping);
+    constexpr int N = Element::kNodes;
+    double nodes[N][3];
+    for (int a = 0; a < N; ++a)
+      for (int i = 0; i < 3; ++i) nodes[a][i] = x[3 * a + i];
+    typename Element::template Linearisation<Law> lin{};
+    Element::template linearise<Law>(view, static_cast<int>(e), nodes, lin);
+    Element::template stiffness_matrix<Law>(view, static_cast<int>(e), lin, K);
   });
+  return view.stiffness_damping != nullptr ? view.stiffness_damping[e] : 0.0;
 }
 
 }  // namespace fmpc::sim
