@@ -13,12 +13,16 @@
 
 namespace fmpc::sim {
 
-// The lower triangle of the system in Eigen's compressed columns, with where each entry's value lives among the
-// system's blocks, and its LDL^T factorisation (symbolic analysis once, at the first step).
+// The system permuted once by an AMD ordering (P A P^T) and stored as its upper triangle in Eigen's compressed
+// columns, with where each entry's value lives among the system's blocks, and its LDL^T factorisation (symbolic
+// analysis once, at the first step). Permuting here rather than through SimplicialLDLT's own ordering lets Eigen
+// factorise the stored matrix in place: with an ordering it copies the permuted matrix at every factorisation.
 struct ImplicitSolver::Factorisation {
-  Eigen::SparseMatrix<double> lower;
+  Eigen::SparseMatrix<double> upper;
   std::vector<std::size_t> source;  // per stored entry: its index in the system's block values
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt;
+  std::vector<int> permuted;        // per unknown i: P(i), its row in the permuted system
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
+  Eigen::VectorXd b, x;  // in the permuted order
   bool analysed = false;
 };
 
@@ -51,24 +55,39 @@ ImplicitSolver::ImplicitSolver(const SimulationSetup& setup, const std::vector<u
   partial_.assign(3 * system_.chunks(), 0.0);
   if (method_ == ImplicitMethod::Direct) {
     factorisation_ = std::make_unique<Factorisation>();
-    // Each lower entry once (the pattern has no duplicates); its value is its source index + 1 until it is read.
+    Factorisation& f = *factorisation_;
+    const auto size = static_cast<Eigen::Index>(dofs);
+    // Every entry of the pattern (both triangles); its value is its source index + 1 until it is read.
     std::vector<Eigen::Triplet<double>> entries;
     for (std::size_t i = 0; i < system_.vertices(); ++i)
       for (std::size_t k = system_.row_offset(i); k < system_.row_offset(i + 1); ++k) {
         const auto j = static_cast<std::size_t>(system_.column(k));
         for (std::size_t r = 0; r < 3; ++r)
           for (std::size_t c = 0; c < 3; ++c)
-            if (3 * i + r >= 3 * j + c)
-              entries.emplace_back(static_cast<int>(3 * i + r), static_cast<int>(3 * j + c),
-                                   static_cast<double>(9 * k + 3 * r + c + 1));
+            entries.emplace_back(static_cast<int>(3 * i + r), static_cast<int>(3 * j + c),
+                                 static_cast<double>(9 * k + 3 * r + c + 1));
       }
-    Eigen::SparseMatrix<double>& lower = factorisation_->lower;
-    lower.resize(static_cast<Eigen::Index>(dofs), static_cast<Eigen::Index>(dofs));
-    lower.setFromTriplets(entries.begin(), entries.end());
-    lower.makeCompressed();
-    factorisation_->source.resize(static_cast<std::size_t>(lower.nonZeros()));
-    for (std::size_t k = 0; k < factorisation_->source.size(); ++k)
-      factorisation_->source[k] = static_cast<std::size_t>(lower.valuePtr()[k]) - 1;
+    Eigen::SparseMatrix<double> full(size, size);
+    full.setFromTriplets(entries.begin(), entries.end());
+    // Eigen's orderings give the inverse permutation (SimplicialCholeskyBase::ordering does the same).
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
+    Eigen::AMDOrdering<int>()(full, inverse);
+    const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> permutation = inverse.inverse();
+    f.permuted.assign(permutation.indices().data(), permutation.indices().data() + dofs);
+    std::vector<Eigen::Triplet<double>> upper;
+    for (const Eigen::Triplet<double>& entry : entries) {
+      const int row = f.permuted[static_cast<std::size_t>(entry.row())];
+      const int column = f.permuted[static_cast<std::size_t>(entry.col())];
+      if (row <= column) upper.emplace_back(row, column, entry.value());
+    }
+    f.upper.resize(size, size);
+    f.upper.setFromTriplets(upper.begin(), upper.end());
+    f.upper.makeCompressed();
+    f.source.resize(static_cast<std::size_t>(f.upper.nonZeros()));
+    for (std::size_t k = 0; k < f.source.size(); ++k)
+      f.source[k] = static_cast<std::size_t>(f.upper.valuePtr()[k]) - 1;
+    f.b.resize(size);
+    f.x.resize(size);
   }
 }
 
@@ -121,30 +140,35 @@ double ImplicitSolver::residual(const std::vector<double>& b, const std::vector<
 bool ImplicitSolver::direct(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool,
                             ImplicitSolve& solve) {
   Factorisation& f = *factorisation_;
-  double* values = f.lower.valuePtr();
+  double* values = f.upper.valuePtr();
   const double* blocks = system_.value(0);
   for (std::size_t k = 0; k < f.source.size(); ++k) values[k] = blocks[f.source[k]];
   if (!f.analysed) {
-    f.ldlt.analyzePattern(f.lower);
+    f.ldlt.analyzePattern(f.upper);
     f.analysed = true;
   }
-  f.ldlt.factorize(f.lower);
+  f.ldlt.factorize(f.upper);
   if (f.ldlt.info() != Eigen::Success) return false;
-  const auto dofs = static_cast<Eigen::Index>(system_.dofs());
+  const std::size_t dofs = system_.dofs();
   double b2 = 0.0;
   for (const double value : b) b2 += value * value;
   const double threshold = std::max(tolerance_ * tolerance_ * b2, std::numeric_limits<double>::min());
-  Eigen::Map<Eigen::VectorXd> solution(x.data(), dofs);
-  solution = f.ldlt.solve(Eigen::Map<const Eigen::VectorXd>(b.data(), dofs));
+  // x += A^-1 r through the permuted factorisation (x = 0 at the start, r = b).
+  const auto correct = [&](const std::vector<double>& r, bool first) {
+    for (std::size_t d = 0; d < dofs; ++d) f.b[f.permuted[d]] = r[d];
+    f.x = f.ldlt.solve(f.b);
+    for (std::size_t d = 0; d < dofs; ++d) x[d] = (first ? 0.0 : x[d]) + f.x[f.permuted[d]];
+  };
+  correct(b, true);
   solve.iterations = 1;
   double r2 = residual(b, x, r_, pool);
   // Iterative refinement: each further solve corrects by the factorisation's answer to the residual.
   while (!(r2 < threshold) && solve.iterations < limit_) {
-    solution += f.ldlt.solve(Eigen::Map<const Eigen::VectorXd>(r_.data(), dofs));
+    correct(r_, false);
     ++solve.iterations;
     r2 = residual(b, x, r_, pool);
   }
-  for (std::size_t d = 0; d < system_.dofs(); ++d)
+  for (std::size_t d = 0; d < dofs; ++d)
     if (system_.dof_held(d)) x[d] = 0.0;
   solve.relative_residual = std::sqrt(r2 / b2);
   solve.converged = r2 < threshold;
