@@ -35,9 +35,9 @@ enum class ImplicitMethod {
 };
 
 // Automatic's threshold: free unknowns (3 per vertex, less the held axes) up to which the CPU factorises. Measured
-// in docs/simulator.md ("Implicit Euler's solvers"): SOFA's liver (540 free unknowns, stiff against its masses at
-// dt 0.02) factorises and solves in less time than the CG takes to 1e-10; a box of 1,344 free unknowns already
-// factorises 1.6 to 4 times slower than the CG converges (a 3-D mesh's factor fills in).
+// in docs/simulator.md ("Implicit Euler's solvers"): SOFA's liver (534 free unknowns, stiff against its masses at dt
+// 0.02) factorises faster than the CG reaches 1e-10; a box of 1,944 factorises 4.8 times slower than the CG (fill).
+// Size is half of it: a small, well-conditioned system is faster with the CG (the table there).
 inline constexpr std::size_t kDirectSolverMostUnknowns = 1000;
 
 const char* to_string(ImplicitMethod method);  // "auto", "direct", "cg": the scene's spelling
