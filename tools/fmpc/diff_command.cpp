@@ -6,6 +6,7 @@
 #include <cctype>
 #include <iostream>
 
+#include "runtime/io/input_file.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/report_output.h"
 #include "tools/fmpc/rule_file_session.h"

@@ -5,6 +5,7 @@
 
 #include <iostream>
 
+#include "runtime/io/input_file.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/report_output.h"
 #include "tools/fmpc/rule_file_session.h"
