@@ -16,6 +16,7 @@
 #include "kernels/fuzzy_math.h"
 #include "kernels/type2_math.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/patient_data.h"
 #include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
@@ -39,7 +40,8 @@ struct PlotOptions {
   std::optional<double> z_max;
   std::string terms;   // --terms VAR
   bool rules = false;  // --rules
-  std::string image;
+  std::vector<std::string> images;  // -o/--output, as given
+  std::string image;                // the one file among them (output_file_argument)
 };
 
 // The most rule rows the rule viewer draws before it keeps only the rules that fire.
@@ -303,7 +305,7 @@ int plot_rules(const FuzzySystem& system, const std::vector<double>& point, cons
   return status;
 }
 
-int run_plot(const PlotOptions& options) {
+int run_plot(PlotOptions options) {
   LoadedRuleFile file = load_rule_file_from_disk(options.file);
   if (file.diagnostics.has_errors()) {
     print_diagnostics(file.diagnostics, file.sources, std::cerr);
@@ -316,12 +318,14 @@ int run_plot(const PlotOptions& options) {
     return kExitErrors;
   }
   const FuzzySystem& system = *found;
+  options.image = output_file_argument(options.images, system, diagnostics);
   const int modes = !options.terms.empty() + options.rules + (!options.x.empty() || !options.y.empty());
-  if (modes != 1) {
-    diagnostics.error(kCommandLine,
-                      modes == 0 ? "nothing to plot: give --x IN --y IN (a surface), --terms VAR or --rules"
-                                 : "give one of --x/--y (a surface), --terms VAR or --rules",
-                      {"fmpc plot --help lists the options of each"});
+  if (modes != 1 || diagnostics.has_errors()) {
+    if (modes != 1)
+      diagnostics.error(kCommandLine,
+                        modes == 0 ? "nothing to plot: give --x IN --y IN (a surface), --terms VAR or --rules"
+                                   : "give one of --x/--y (a surface), --terms VAR or --rules",
+                        {"fmpc plot --help lists the options of each"});
     print_diagnostics(diagnostics, file.sources, std::cerr);
     return kExitErrors;
   }
@@ -342,7 +346,7 @@ int run_plot(const PlotOptions& options) {
                       {"a surface needs two different inputs"});
   int io = 0;
   if (!options.output_variable.empty())
-    io = find_variable(system.outputs, options.output_variable, "output", SourceRange{"argument --output", 0, 0, 0, 0},
+    io = find_variable(system.outputs, options.output_variable, "output", SourceRange{"argument --output-variable", 0, 0, 0, 0},
                        diagnostics);
   else if (system.outputs.empty())
     diagnostics.error(system.range, "system '" + system.name + "' has no output to plot");
@@ -458,12 +462,14 @@ void register_plot_command(CLI::App& app, int& exit_code) {
                     "crisp output, at the point --fix gives (other inputs mid-range)");
   command->add_option("--fix", options->fixes,
                       "NAME=VALUE for an input not on an axis, or of the rule viewer's point (repeatable)");
-  command->add_option("--output", options->output_variable, "Surface: output to plot (default: the first)");
+  command->add_option("--output-variable", options->output_variable, "Surface: output to plot (default: the first)");
   command->add_option("--system", options->system, "Which system of the file (when it holds several)");
   command->add_option("--resolution", options->resolution, "Surface: grid points per axis")->check(CLI::Range(2, 1001));
   command->add_option("--zmin", options->z_min, "Surface: output value at the bottom of the colour scale");
   command->add_option("--zmax", options->z_max, "Surface: output value at the top of the colour scale");
-  command->add_option("-o,--image,--png", options->image, "Picture to write: .svg for SVG, else PNG")->required();
+  command->add_option("-o,--output,--image,--png", options->images, "Picture to write: .svg for SVG, else PNG")
+      ->required()
+      ->allow_extra_args(false);
   command->callback([options, &exit_code] { exit_code = run_plot(*options); });
 }
 
