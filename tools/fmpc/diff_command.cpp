@@ -8,6 +8,7 @@
 
 #include "runtime/io/input_file.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/report_output.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/version_diff_report.h"

@@ -13,6 +13,7 @@
 #include "compiler/frontend/fmpc_language.h"
 #include "diagnostics/number_format.h"
 #include "kernels/type2_math.h"
+#include "runtime/io/input_file.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"

@@ -17,6 +17,7 @@
 #include "compiler/frontend/matlab_fis.h"
 #include "compiler/sema/check.h"
 #include "diagnostics/number_format.h"
+#include "runtime/io/input_file.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
