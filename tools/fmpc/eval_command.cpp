@@ -45,13 +45,6 @@ struct EvalOptions {
 
 std::string with_unit(double value, const Variable& variable) { return value_with_unit(value, variable.unit); }
 
-// Four significant digits: what a reader compares at a glance (the CSV keeps every digit).
-std::string four_digits(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", value);
-  return text;
-}
-
 // Each antecedent clause's grade at `inputs` (hedge, then negation: MATLAB's order, as the interpreter), so that
 // --explain shows why a rule fired as strongly as it did. Interval type-2 clauses show [lower, upper].
 std::string clause_grades(const FuzzySystem& system, std::size_t rule_index, const std::vector<double>& inputs) {

@@ -16,6 +16,7 @@
 #include "kernels/fuzzy_math.h"
 #include "kernels/type2_math.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/evaluation_points.h"
 #include "tools/fmpc/patient_data.h"
 #include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
@@ -47,19 +48,13 @@ struct PlotOptions {
 // The most rule rows the rule viewer draws before it keeps only the rules that fire.
 constexpr std::size_t kMaxRuleRows = 40;
 
-std::vector<std::string> names_of(const std::vector<Variable>& variables) {
-  std::vector<std::string> names;
-  for (const Variable& v : variables) names.push_back(v.name);
-  return names;
-}
-
 // Index of the variable called `name` among `variables`, or -1 with a located error naming the choices.
 int find_variable(const std::vector<Variable>& variables, const std::string& name, const std::string& role,
                   const SourceRange& where, DiagnosticList& diagnostics) {
   for (std::size_t i = 0; i < variables.size(); ++i)
     if (variables[i].name == name) return static_cast<int>(i);
   std::vector<std::string> notes;
-  const std::vector<std::string> names = names_of(variables);
+  const std::vector<std::string> names = variable_names(variables);
   if (auto suggestion = closest_name(name, names)) notes.push_back("did you mean '" + *suggestion + "'?");
   std::string list;
   for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
@@ -117,7 +112,7 @@ int plot_terms(const FuzzySystem& system, const PlotOptions& options, Diagnostic
     variable = &system.outputs[static_cast<std::size_t>(system.find_output(options.terms))];
     is_output = true;
   } else {
-    std::vector<std::string> names = names_of(system.inputs);
+    std::vector<std::string> names = variable_names(system.inputs);
     for (const Variable& v : system.outputs) names.push_back(v.name);
     std::vector<std::string> notes;
     if (auto suggestion = closest_name(options.terms, names)) notes.push_back("did you mean '" + *suggestion + "'?");

@@ -47,12 +47,6 @@ struct TuneOptions {
   std::string system;
 };
 
-std::string tune_digits4(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", value);
-  return text;
-}
-
 // `value` to `digits` significant digits, as the shortest text that reads back as it.
 double tune_rounded(double value, int digits) {
   char text[64];
@@ -275,15 +269,15 @@ int run_tune(const TuneOptions& options) {
         << ")\n\n| fold | patients | RMSE before | RMSE after | evaluations |\n|---:|---:|---:|---:|---:|\n";
     for (std::size_t f = 0; f < result.folds.size(); ++f) {
       const FoldResult& fold = result.folds[f];
-      out << "| " << f + 1 << " | " << fold.patients << " | " << tune_digits4(fold.rmse_before) << unit << " | "
-          << tune_digits4(fold.rmse_after) << unit << " | " << fold.evaluations << (fold.converged ? "" : " (cap)")
+      out << "| " << f + 1 << " | " << fold.patients << " | " << four_digits(fold.rmse_before) << unit << " | "
+          << four_digits(fold.rmse_after) << unit << " | " << fold.evaluations << (fold.converged ? "" : " (cap)")
           << " |\n";
     }
-    out << "| all | " << tuning.measured.size() << " | " << tune_digits4(result.held_out_rmse_before) << unit << " | "
-        << tune_digits4(result.held_out_rmse_after) << unit << " | |\n";
+    out << "| all | " << tuning.measured.size() << " | " << four_digits(result.held_out_rmse_before) << unit << " | "
+        << four_digits(result.held_out_rmse_after) << unit << " | |\n";
   }
   out << "\n## Parameters (fitted on all " << tuning.measured.size() << " patients: RMSE "
-      << tune_digits4(result.rmse_before) << unit << " before, " << tune_digits4(written_rmse) << unit
+      << four_digits(result.rmse_before) << unit << " before, " << four_digits(written_rmse) << unit
       << " as written)\n\n| parameter | before | after | bounds |\n|---|---:|---:|---|\n";
   for (std::size_t i = 0; i < parameters.size(); ++i)
     out << "| " << parameters[i].name << " | " << format_number(parameters[i].value) << " | "
@@ -296,7 +290,7 @@ int run_tune(const TuneOptions& options) {
         << format_number(parameters[i].upper) << "]: " << parameters[i].bound << " |\n";
   if (!result.search.converged)
     out << "\nThe search stopped at its cap of " << result.search.evaluations
-        << " evaluations, the simplex's RMSE values still " << tune_digits4(result.search.value_spread)
+        << " evaluations, the simplex's RMSE values still " << four_digits(result.search.value_spread)
         << unit << " apart: raise --max-evaluations for a closer fit.\n";
   else
     out << "\nThe search converged after " << result.search.evaluations << " evaluations.\n";
