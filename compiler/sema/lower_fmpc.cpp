@@ -8,6 +8,7 @@
 #include "compiler/frontend/fmpc_ast.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/ir/system_names.h"
+#include "compiler/ir/units.h"
 #include "diagnostics/number_format.h"
 
 namespace fmpc {
@@ -50,41 +51,6 @@ std::vector<std::string> did_you_mean(const std::string& name, const std::vector
   if (auto suggestion = closest_name(name, candidates)) return {"did you mean " + in_quotes(*suggestion) + "?"};
   return {};
 }
-
-// ---------------------------------------------------------------------------------------------------------------
-// Units: SI prefixes of Pa, m, s, N and g, plus % and dimensionless. Every conversion is a power of ten, so a value
-// is scaled by one correctly rounded multiplication or division.
-
-struct UnitMeaning {
-  const char* dimension;
-  int exponent;  // value in the base unit = value * 10^exponent
-};
-
-std::optional<UnitMeaning> unit_meaning(const std::string& unit) {
-  if (unit == "dimensionless") return UnitMeaning{"dimensionless", 0};
-  if (unit == "%") return UnitMeaning{"dimensionless", -2};
-  static const std::vector<std::pair<std::string, const char*>> bases = {
-      {"Pa", "pressure"}, {"m", "length"}, {"s", "time"}, {"N", "force"}, {"g", "mass"}};
-  static const std::vector<std::pair<std::string, int>> prefixes = {
-      {"", 0},   {"da", 1}, {"h", 2},  {"k", 3},  {"M", 6},       {"G", 9},       {"T", 12},  {"d", -1},
-      {"c", -2}, {"m", -3}, {"u", -6}, {"\xC2\xB5", -6} /* micro sign */, {"\xCE\xBC", -6} /* Greek mu */,
-      {"n", -9}, {"p", -12}, {"f", -15}};
-  for (const auto& [base, dimension] : bases) {
-    if (unit.size() < base.size() || unit.compare(unit.size() - base.size(), base.size(), base) != 0) continue;
-    const std::string prefix = unit.substr(0, unit.size() - base.size());
-    for (const auto& [spelling, exponent] : prefixes)
-      if (prefix == spelling) return UnitMeaning{dimension, exponent};
-  }
-  return std::nullopt;
-}
-
-double scale_by_power_of_ten(double value, int exponent) {
-  double power = 1.0;
-  for (int i = 0; i < std::abs(exponent); ++i) power *= 10.0;  // exact up to 1e22
-  return exponent >= 0 ? value * power : value / power;
-}
-
-// ---------------------------------------------------------------------------------------------------------------
 
 class SystemLowering {
  public:

@@ -102,6 +102,7 @@ struct SceneFixed {
     Point3 point{0.0, 0.0, 0.0};
     Point3 normal{0.0, 0.0, 1.0};
     double tolerance = 1e-9;  // mesh units
+    std::string field;        // where the scene gives it ("fixed.plane", "hold[0].plane[1]"), for messages
   };
   std::vector<Plane> planes;
 };

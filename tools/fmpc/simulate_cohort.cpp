@@ -23,6 +23,7 @@
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/patients_file.h"
 #include "tools/fmpc/progress_line.h"
+#include "tools/fmpc/report_text.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/simulate_command.h"
 #include "tools/plot/heat_map.h"
@@ -35,13 +36,6 @@ namespace {
 // Past this many curves the overlay colours them by Young's modulus with a colour bar instead of naming each one in
 // a legend (a legend of more entries would run off the figure or shrink past reading).
 constexpr std::size_t kMaxLegendCurves = 10;
-
-// Young's modulus in a legend: four significant digits read at a glance (cohort.csv keeps every digit).
-std::string four_digits(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", value);
-  return text;
-}
 
 // One patient's build diagnostics as the cohort reports them: the first patient's in full (mesh repairs, assumed
 // units: the scene's own, said once), every patient's errors and rules that fired for no patient, and never the
