@@ -95,10 +95,12 @@ void SceneRecorder::record(const SceneState& state, bool frame, bool sample, Dia
     if (!vtu_cells_) vtu_cells_ = encode_vtu_cells(built_.mesh, vtu_options_, diagnostics);
     // Element stresses as cell data where the cells are the elements: each element term's stress output (its law's:
     // a von Mises stress, or the volume term's pressure magnitude; springs carry no continuum stress).
+    // The arrays point into the stresses' values, which must outlive the document's encoding.
+    std::vector<ElementStressOutput> stresses;
     std::vector<VtuArray> cell_data;
     if (!setup.elements.empty() && vtu_cells_ && vtu_cells_->size() == setup.tetrahedra.size())
-      for (const ElementStressOutput& stress : element_stress_outputs(setup, positions))
-        cell_data.push_back(vtu_scalars(stress.name, stress.values));
+      stresses = element_stress_outputs(setup, positions);
+    for (const ElementStressOutput& stress : stresses) cell_data.push_back(vtu_scalars(stress.name, stress.values));
     const auto vtu = vtu_cells_ ? vtu_document(positions, *vtu_cells_,
                                                {vtu_vectors("displacement", displacement),
                                                 vtu_vectors("velocity", velocities)},
