@@ -285,15 +285,7 @@ FMPC_HD void polar_rotation(const Real* unscaled, Real* R) {
     for (int iteration = 0; iteration < 24; ++iteration) {
       // X^-T = cofactor(X) / det X.
       Real cofactor[9];
-      cofactor[0] = X[4] * X[8] - X[5] * X[7];
-      cofactor[1] = X[5] * X[6] - X[3] * X[8];
-      cofactor[2] = X[3] * X[7] - X[4] * X[6];
-      cofactor[3] = X[2] * X[7] - X[1] * X[8];
-      cofactor[4] = X[0] * X[8] - X[2] * X[6];
-      cofactor[5] = X[1] * X[6] - X[0] * X[7];
-      cofactor[6] = X[1] * X[5] - X[2] * X[4];
-      cofactor[7] = X[2] * X[3] - X[0] * X[5];
-      cofactor[8] = X[0] * X[4] - X[1] * X[3];
+      cofactor3(X, cofactor);
       const Real detX = X[0] * cofactor[0] + X[1] * cofactor[1] + X[2] * cofactor[2];
       Real gamma = Real(1);
       if (scaled) {
