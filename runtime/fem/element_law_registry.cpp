@@ -84,6 +84,45 @@ const ElementLawRow* element_law_by_trade_name(const std::string& name) {
   return nullptr;
 }
 
+const ElementLawRow* fem_law_by_keyword(const std::string& name) {
+  for (const ElementLawRow& row : element_law_rows())
+    if (!row.beside_springs && name == row.keyword) return &row;
+  return nullptr;
+}
+
+std::vector<std::string> fem_law_keywords() {
+  std::vector<std::string> out;
+  for (const ElementLawRow& row : element_law_rows())
+    if (!row.beside_springs) out.emplace_back(row.keyword);
+  return out;
+}
+
+const std::vector<ElementKindRow>& element_kind_rows() {
+  static const std::vector<ElementKindRow> rows = {
+      {"linear",
+       "4-node linear tetrahedra, one point per element (Bonet & Wood, Nonlinear Continuum Mechanics for Finite "
+       "Element Analysis, 2nd ed., 9.4)",
+       kernels::element_kind_index<kernels::LinearTetrahedron>},
+  };
+  return rows;
+}
+
+const ElementKindRow& element_kind_row(int kind) { return element_kind_rows().at(static_cast<std::size_t>(kind)); }
+
+const ElementKindRow* element_kind_by_keyword(const std::string& name) {
+  for (const ElementKindRow& row : element_kind_rows())
+    if (name == row.keyword) return &row;
+  return nullptr;
+}
+
+const ElementKindRow& default_element_kind() { return element_kind_rows().front(); }
+
+std::vector<std::string> element_kind_keywords() {
+  std::vector<std::string> out;
+  for (const ElementKindRow& row : element_kind_rows()) out.emplace_back(row.keyword);
+  return out;
+}
+
 const ElementLawRow& element_law_beside_springs() {
   for (const ElementLawRow& row : element_law_rows())
     if (row.beside_springs) return row;
