@@ -64,7 +64,12 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
   Real x[N][3], v[N][3], out[N][3];
   const bool damped = t.stiffness_damping != nullptr;
   element_nodes<N>(e, t.corners, s, damped, x, v);
-  Element::template forces<Law>(t, e, x, damped ? v : nullptr, out);
+  // As in LinearTetrahedron::forces: a constant pointer in each branch lets the GPU keep x and v in registers.
+  if (damped) {
+    Element::template forces<Law>(t, e, x, v, out);
+  } else {
+    Element::template forces<Law>(t, e, x, static_cast<const Real(*)[3]>(nullptr), out);
+  }
   for (int a = 0; a < N; ++a) {
     CornerForce<Real>& to = force[t.corner_slot[N * e + a]];
     if (Accumulate) {

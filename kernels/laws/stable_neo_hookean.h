@@ -37,8 +37,10 @@ struct StableNeoHookean {
   struct Material {
     Real youngs_modulus;
     Real poisson_ratio;
-    Real stiffness_damping;               // beta (s)
-    const StrainTableView* strain_table;  // null: youngs_modulus
+    Real stiffness_damping;  // beta (s)
+    // By value, as the co-rotational law's: a pointer into the kernel's parameter would copy the whole
+    // ElementTermView to local memory in every thread. strain == null: youngs_modulus.
+    StrainTableView strain_table;
   };
 
   template <typename Real>
@@ -47,7 +49,7 @@ struct StableNeoHookean {
     m.youngs_modulus = t.parameter[kYoungsModulus][e];
     m.poisson_ratio = t.parameter[kPoissonRatio][e];
     m.stiffness_damping = t.stiffness_damping ? t.stiffness_damping[e] : Real(0);
-    m.strain_table = t.strain_table.strain ? &t.strain_table : nullptr;
+    m.strain_table = t.strain_table;
     return m;
   }
 
@@ -63,11 +65,11 @@ struct StableNeoHookean {
   template <typename Real>
   static FMPC_HD Parameters<Real> parameters(const Material<Real>& m, const Real* F) {
     Real modulus = m.youngs_modulus;
-    if (m.strain_table) {
+    if (m.strain_table.strain) {
       Real R[9], stretch[3];
       rotation_and_stretches(F, R, stretch);
       const Real strain = principal_strain_of_largest_magnitude(stretch);
-      modulus = static_cast<Real>(strain_table_modulus(*m.strain_table, static_cast<double>(strain)));
+      modulus = static_cast<Real>(strain_table_modulus(m.strain_table, static_cast<double>(strain)));
     }
     Parameters<Real> p;
     lame_parameters(modulus, m.poisson_ratio, p.mu, p.lambda);
@@ -192,7 +194,7 @@ struct StableNeoHookean {
   // theirs) at the largest modulus the run can give the point. Under large compression the tangent stiffens beyond
   // them (docs/simulator.md, "Stable neo-Hookean").
   static FMPC_HD void rest_lame(const Material<double>& m, double& mu, double& lambda) {
-    const double modulus = m.strain_table ? strain_table_largest_modulus(*m.strain_table) : m.youngs_modulus;
+    const double modulus = m.strain_table.strain ? strain_table_largest_modulus(m.strain_table) : m.youngs_modulus;
     lame_parameters(modulus, m.poisson_ratio, mu, lambda);
   }
 

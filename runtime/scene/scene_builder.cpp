@@ -665,10 +665,12 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
   setup->source_range = SourceRange{scene.path, 0, 0, 0, 0};
   setup->mass_damping = scene.rayleigh.mass;
   setup->on_inversion = scene.on_inversion;
-  // Automatic: one thread below 10,000 vertices, where a step takes microseconds and handing work to other
-  // threads costs more than it saves; otherwise up to 8.
+  setup->implicit = scene.solver;
+  // Automatic: one thread below 10,000 vertices (implicit Euler: 2,000, its step being a linear solve), where a
+  // step takes microseconds and handing work to other threads costs more than it saves; otherwise up to 8.
+  const std::size_t serial_below = scene.integrator == Integrator::ImplicitEuler ? 2000 : 10000;
   setup->threads = scene.threads > 0 ? scene.threads
-                   : built.mesh.points.size() < 10000
+                   : built.mesh.points.size() < serial_below
                        ? 1u
                        : std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
   if (diagnostics.error_count() != errors) return std::nullopt;

@@ -138,6 +138,11 @@ struct SceneOutputs {
   // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the run's stepping
   // took at most kPrecisionCheckSeconds (the check costs about as much again); on always; off never.
   enum class PrecisionCheck { Auto, On, Off } precision_check = PrecisionCheck::Auto;
+  // A cohort's patients (docs/cohorts.md) write summary.json and time_series.csv each, and cohort.csv beside them;
+  // their frames and force-displacement pictures only when asked (`cohort: {frames: true, plot: true}`): a
+  // thousand patients' 25 frames each were most of a cohort's time.
+  bool cohort_frames = false;
+  bool cohort_plot = false;
 };
 
 // Rayleigh damping C = alpha M + beta K (`damping: {rayleigh: {mass: ALPHA, stiffness: BETA}}`): alpha (1/s) acts on
@@ -178,6 +183,7 @@ struct Scene {
   std::optional<double> dt;  // nullopt: auto
   double duration = 1.0;     // s
   std::optional<std::size_t> steps;  // overrides duration (command line)
+  ImplicitSolverOptions solver;      // `solver` (implicit Euler's linear solver)
   SceneBackend backend = SceneBackend::Auto;
   Precision precision = Precision::Float;
   unsigned threads = 0;  // 0: hardware concurrency, at most 8

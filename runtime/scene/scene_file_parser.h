@@ -69,6 +69,7 @@ class SceneParser {
 
   // ---- the run's settings (scene_file_run.cpp) ----
   void parse_outputs(const YAML::Node& node);
+  void parse_solver(const YAML::Node& node);
 
   // ---- mesh, material and the material's companions (scene_file_material.cpp) ----
   void parse_mesh(const YAML::Node& node);

@@ -652,4 +652,97 @@ TEST_CASE("model: fem takes its law and element kind from the registries; corota
   CHECK(errors_of("fem: {law: corotational}\n" + base).front() ==
         "1:6: fem: 'fem' chooses the law and element of model: fem; this scene's model is springs (the default): "
         "write model: fem (model: corotational_fem is fem: {law: corotational, element: linear})");
+
+TEST_CASE("implicit Euler's solves in summary.json and the time series; steps at the cap warned once with the count",
+          "[scene][implicit]") {
+  // A soft FEM block sagging at a large step: the CG capped at 3 iterations cannot reach 1e-12.
+  const std::string text = R"yaml(name: implicit_block
+mesh: {box: {size: [0.02, 0.02, 0.02], cells: [2, 2, 2]}}
+model: corotational_fem
+material: {youngs_modulus: 2, poisson_ratio: 0.45}
+mass: {density: 1000}
+fixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}
+loads: {gravity: [0, 0, -9.81]}
+integrator: implicit_euler
+dt: 0.01
+duration: 0.2
+precision: double
+solver: {method: cg, tolerance: 1e-12, max_iterations: 3}
+outputs: {frames: 0, samples: 5, precision_check: off}
+)yaml";
+  const Scene scene = parse_text(text);
+  DiagnosticList diagnostics;
+  const auto built = build_scene(scene, diagnostics);
+  REQUIRE(built);
+  CHECK(built->setup.implicit.max_iterations == 3);
+  const auto dir = temporary_directory("implicit");
+  SceneRunOptions options;
+  options.output_directory = dir.string();
+  const auto result = run_scene(scene, *built, options, diagnostics);
+  REQUIRE(result);
+  REQUIRE(result->solver);
+  CHECK(result->solver->steps == 20);
+  CHECK(result->solver->capped_steps == 20);
+  // One warning for the run, located at `solver`, with the count and the residuals reached.
+  std::vector<Diagnostic> capped;
+  for (const Diagnostic& d : diagnostics.items())
+    if (d.code == "cg-not-converged") capped.push_back(d);
+  REQUIRE(capped.size() == 1);
+  CHECK(capped[0].range.line == 12);
+  CHECK(capped[0].range.column == 9);
+  CHECK(capped[0].message ==
+        "implicit Euler: 20 of 20 steps stopped at the cap of 3 conjugate-gradient iterations above the tolerance "
+        "1e-12 (the first at step 1 with relative residual " +
+            format_number(result->solver->first_capped_residual) + "); the largest relative residual reached was " +
+            format_number(result->solver->residual_max) + " at step " +
+            std::to_string(result->solver->residual_max_step) +
+            "; raise solver.max_iterations, loosen solver.tolerance or use a smaller dt");
+
+  const JsonDocument summary = JsonDocument::parse(read_text((dir / "summary.json").string()));
+  const JsonDocument& solver = summary["solver"];
+  CHECK(solver["method"] == "cg");
+  CHECK(solver["requested_method"] == "cg");
+  CHECK(solver["preconditioner"] == "block_jacobi");
+  CHECK(solver["warm_start"] == true);
+  CHECK(solver["tolerance"].get<double>() == 1e-12);
+  CHECK(solver["max_iterations"] == 3);
+  CHECK(solver["steps"] == 20);
+  CHECK(solver["iterations_max"] == 3);
+  CHECK(solver["capped_steps"] == 20);
+  CHECK(solver["first_capped_step"] == 1);
+  REQUIRE(solver["per_step"]["iterations"].size() == 20);
+  REQUIRE(solver["per_step"]["relative_residual"].size() == 20);
+  double largest = 0.0;
+  for (const auto& residual : solver["per_step"]["relative_residual"]) largest = std::max(largest, residual.get<double>());
+  CHECK(largest == solver["relative_residual_max"].get<double>());
+
+  // The time series: each row's worst step since the row before.
+  std::istringstream csv(read_text((dir / "time_series.csv").string()));
+  std::string header, line;
+  std::getline(csv, header);
+  CHECK(header == "time_s,kinetic_energy_J,elastic_energy_J,max_displacement_m,solver_iterations,"
+                  "solver_relative_residual");
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  REQUIRE(rows.size() == 5);
+  CHECK(rows.front().substr(rows.front().size() - 4) == ",0,0");  // step 0: no solve yet
+  CHECK(rows.back().find(",3,") != std::string::npos);
+
+  // The direct solver on the same scene: one solve a step, no warning.
+  Scene direct = scene;
+  direct.solver.method = ImplicitMethod::Direct;
+  direct.solver.max_iterations = 0;
+  const auto direct_built = build_scene(direct, diagnostics);
+  REQUIRE(direct_built);
+  DiagnosticList direct_diagnostics;
+  const auto direct_result = run_scene(direct, *direct_built, options, direct_diagnostics);
+  REQUIRE(direct_result);
+  CHECK(direct_result->solver->method == ImplicitMethod::Direct);
+  CHECK(direct_result->solver->iterations_max == 1);
+  CHECK(direct_result->solver->residual_max < 1e-12);
+  CHECK(direct_diagnostics.warning_count() == 0);
+  const JsonDocument direct_summary = JsonDocument::parse(read_text((dir / "summary.json").string()));
+  CHECK(direct_summary["solver"]["preconditioner"] == "none");
+  CHECK(direct_summary["solver"]["warm_start"] == false);
+  std::filesystem::remove_all(dir);
 }

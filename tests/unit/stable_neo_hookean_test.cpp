@@ -31,7 +31,9 @@ using Matrix9 = Eigen::Matrix<double, 9, 9>;
 
 constexpr double kE = 5000.0;
 
-Law::Material<double> material(double nu) { return Law::Material<double>{kE, nu, 0.0, nullptr}; }
+Law::Material<double> material(double nu) {
+  return Law::Material<double>{kE, nu, 0.0, kernels::StrainTableView{nullptr, nullptr, 0}};
+}
 
 // The paper's parameters (Smith, de Goes & Kim 2018, section 3.4 and eq. 14), written apart from the header.
 struct Paper {
@@ -228,7 +230,7 @@ TEST_CASE("stable neo-Hookean equals the co-rotational law in the small-strain l
   std::mt19937_64 rng(4);
   std::normal_distribution<double> normal;
   using Corotational = kernels::CorotationalLinear;
-  const Corotational::Material<double> linear{kE, 0.45, 0.0, nullptr};
+  const Corotational::Material<double> linear{kE, 0.45, 0.0, kernels::StrainTableView{nullptr, nullptr, 0}};
   double ratio_at[2] = {0.0, 0.0};
   for (int n = 0; n < 50; ++n) {
     const Matrix3 R = random_rotation(rng);
