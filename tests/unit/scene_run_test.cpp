@@ -41,6 +41,16 @@ Scene parse_text(const std::string& text, const std::string& path = "/tmp/fmpc_s
   return *scene;
 }
 
+// Every diagnostic of parsing `text` as "line:column: message".
+std::vector<std::string> errors_of(const std::string& text) {
+  DiagnosticList d;
+  parse_scene("s.yaml", text, d);
+  std::vector<std::string> out;
+  for (const Diagnostic& item : d.items())
+    out.push_back(std::to_string(item.range.line) + ":" + std::to_string(item.range.column) + ": " + item.message);
+  return out;
+}
+
 std::vector<std::string> messages(const DiagnosticList& diagnostics) {
   std::vector<std::string> out;
   for (const Diagnostic& d : diagnostics.items()) out.push_back(d.message);
@@ -528,14 +538,6 @@ TEST_CASE("scenes choose the force model; the FEM refuses spring settings, namin
   CHECK(springs->setup.springs.damping.size() == springs->setup.springs.size());
   CHECK(springs->setup.springs.damping.front() == Approx(0.01 * springs->setup.springs.stiffness.front()));
 
-  const auto errors_of = [](const std::string& text) {
-    DiagnosticList d;
-    parse_scene("s.yaml", text, d);
-    std::vector<std::string> out;
-    for (const Diagnostic& item : d.items())
-      out.push_back(std::to_string(item.range.line) + ":" + std::to_string(item.range.column) + ": " + item.message);
-    return out;
-  };
   const auto spring_only = errors_of("model: corotational_fem\n" + base +
                                      "material: {stiffness: 100, mapping: lloyd_szekely_harders_2007}\n"
                                      "law: basafa_farahmand\ndamping: {coefficient: 2}\nsprings: {bending: true}\n");
@@ -617,14 +619,6 @@ TEST_CASE("model: fem takes its law and element kind from the registries; corota
   CHECK(bare.element_kind == default_element_kind().kind);
   CHECK(diagnostics.error_count() == 0);
 
-  const auto errors_of = [](const std::string& text) {
-    DiagnosticList d;
-    parse_scene("s.yaml", text, d);
-    std::vector<std::string> out;
-    for (const Diagnostic& item : d.items())
-      out.push_back(std::to_string(item.range.line) + ":" + std::to_string(item.range.column) + ": " + item.message);
-    return out;
-  };
   const auto joined = [](const std::vector<std::string>& names) {
     std::string out;
     for (std::size_t i = 0; i < names.size(); ++i)
@@ -652,6 +646,7 @@ TEST_CASE("model: fem takes its law and element kind from the registries; corota
   CHECK(errors_of("fem: {law: corotational}\n" + base).front() ==
         "1:6: fem: 'fem' chooses the law and element of model: fem; this scene's model is springs (the default): "
         "write model: fem (model: corotational_fem is fem: {law: corotational, element: linear})");
+}
 
 TEST_CASE("implicit Euler's solves in summary.json and the time series; steps at the cap warned once with the count",
           "[scene][implicit]") {
