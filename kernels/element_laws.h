@@ -9,6 +9,7 @@
 #include "kernels/elements/linear_tetrahedron.h"
 #include "kernels/fmpc_hd.h"
 #include "kernels/laws/corotational_linear.h"
+#include "kernels/laws/stable_neo_hookean.h"
 #include "kernels/laws/volume_preservation.h"
 
 namespace fmpc::kernels {
@@ -18,7 +19,7 @@ struct TypeList {
   static constexpr int count = static_cast<int>(sizeof...(Types));
 };
 
-using ElementLaws = TypeList<CorotationalLinear, VolumePreservation>;
+using ElementLaws = TypeList<CorotationalLinear, VolumePreservation, StableNeoHookean>;
 using ElementKinds = TypeList<LinearTetrahedron>;
 
 // The dispatch over a list, defined twice: for host code (launchers, host loops) and for device code (a kernel that

@@ -167,8 +167,9 @@ struct SimulationSetup {
   std::optional<StrainStiffnessTable> strain_stiffness;  // replaces springs.stiffness every step
 };
 
-// The model's name as scenes spell it: "springs" for a spring network (with or without a term beside it), else the
-// scene `model:` keyword of its element law (the registry's model_keyword).
+// The model's name as scenes spell it: "springs" for a spring network (with or without a term beside it), the scene
+// `model:` keyword of its element law where it has one (the registry's model_keyword) on the default element kind,
+// else "fem" (the summary's "fem" field then names the law and the element kind).
 std::string model_name(const SimulationSetup& setup);
 
 // Where vertex v starts: its initial position, or its rest position.

@@ -424,6 +424,10 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   const std::vector<Point3> centroids = tetrahedron_centroids(built.mesh);
   FemModelSpec spec;
   spec.law = scene.element_law;
+  spec.element = scene.element_kind;
+  // "FEM (law corotational, element linear)": the registry's names, as the scene writes them.
+  const std::string model = std::string("FEM (law ") + element_law_row(scene.element_law).keyword + ", element " +
+                            element_kind_row(scene.element_kind).keyword + ")";
   spec.length_unit = scene.mesh.unit;
   spec.mass = scene.mass;
   spec.damping_ratio = scene.damping.ratio;
@@ -436,7 +440,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   switch (material.source) {
     case SceneMaterial::Source::YoungsModulus:
       spec.youngs_modulus = {material.value * 1000.0};  // kPa -> Pa
-      built.stiffness_description = "co-rotational FEM with E = " + format_number(material.value) + " kPa";
+      built.stiffness_description = model + " with E = " + format_number(material.value) + " kPa";
       break;
     case SceneMaterial::Source::Rules:
     case SceneMaterial::Source::Table: {
@@ -446,7 +450,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
       if (binding.strain.empty()) {
         spec.youngs_modulus = binding.modulus_per_spring;  // one per material point: here, per element
         built.stiffness_description =
-            "co-rotational FEM with E from '" + binding.system + "' output '" + binding.output +
+            model + " with E from '" + binding.system + "' output '" + binding.output +
             "': " + format_number(binding.modulus_min / 1000.0) +
             (binding.modulus_min == binding.modulus_max ? "" : " to " + format_number(binding.modulus_max / 1000.0)) +
             " kPa";
@@ -456,8 +460,8 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
         table.modulus = binding.strain_modulus;
         spec.youngs_modulus = {strain_table_rest_modulus(table)};
         strain_table = std::move(table);
-        built.stiffness_description = "co-rotational FEM with E(principal strain) from '" + binding.system +
-                                      "' output '" + binding.output + "', " + std::to_string(binding.strain.size()) +
+        built.stiffness_description = model + " with E(principal strain) from '" + binding.system + "' output '" +
+                                      binding.output + "', " + std::to_string(binding.strain.size()) +
                                       "-point table: " + format_number(binding.modulus_min / 1000.0) + " to " +
                                       format_number(binding.modulus_max / 1000.0) + " kPa";
       }

@@ -156,14 +156,17 @@ struct SceneRayleigh {
 constexpr double kDefaultPoissonRatio = 0.45;
 
 // The scene's `model:` (docs/scenes.md): a spring network (with springs: {volume_term: true}, the element law beside
-// springs with it), or a finite-element model of one element law (runtime/fem/element_law_registry.h).
+// springs with it), or a finite-element model of one element law on one element kind (`model: fem` with
+// `fem: {law, element}`, or a law's own model keyword such as `corotational_fem` on linear tetrahedra;
+// runtime/fem/element_law_registry.h).
 enum class ForceModel { Springs, Elements };
 
 struct Scene {
   std::string path;  // the scene file
   std::string name;  // `name`, or the file's stem
   ForceModel model = ForceModel::Springs;
-  int element_law = 0;  // model Elements: the law's index in element_law_rows()
+  int element_law = 0;   // model Elements: the law's index in element_law_rows()
+  int element_kind = 0;  // model Elements: the element kind's index in element_kind_rows()
   SceneMesh mesh;
   SceneMaterial material;
   MassSpec mass;
@@ -215,7 +218,8 @@ std::optional<Scene> parse_scene(const std::string& path, const std::string& tex
 const char* to_string(SceneBackend backend);
 const char* scene_name(Integrator integrator);  // the scene spelling: "semi_implicit_euler", ...
 const char* scene_name(StiffnessMapping mapping);  // the scene spelling: "van_gelder_1998", ...
-// The scene spelling of its model: "springs", or the element law's model keyword.
+// The scene spelling of its model: "springs", the element law's model keyword where it has one and the element kind
+// is the default, else "fem".
 std::string model_keyword(const Scene& scene);
 
 }  // namespace fmpc::sim

@@ -82,6 +82,8 @@ class SceneParser {
   void parse_damping(const YAML::Node& node);
   void parse_springs(const YAML::Node& node);
   void parse_law(const YAML::Node& node);
+  // `fem: {law, element}` (model: fem), through the law and element-kind registries.
+  void parse_fem(const YAML::Node& node);
 
   // ---- loads (scene_file_loads.cpp) ----
   void parse_fixed(const YAML::Node& node);

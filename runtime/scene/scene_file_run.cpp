@@ -13,8 +13,8 @@ void SceneParser::parse(const YAML::Node& root) {
                                     "docs/scenes.md");
     return;
   }
-  check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "hold",
-                       "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
+  check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fem", "fixed",
+                       "hold", "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
                        "on_inversion", "solver"});
   if (root["name"]) {
     if (auto name = text(root["name"], "name")) {
@@ -27,10 +27,11 @@ void SceneParser::parse(const YAML::Node& root) {
     diagnostics_.error(range(root), "name: the scene file's name '" + scene_.name + "' " + *problem +
                                         "; give the scene a 'name'");
   }
+  bool fem_keys = false;  // model: fem, whose law and element kind `fem` gives
   if (root["model"]) {
-    // "springs", then each element law's model keyword, in the registry's order.
-    std::vector<std::string> names = {"springs"};
-    std::vector<int> laws = {-1};
+    // "springs", "fem", then each element law's model keyword, in the registry's order.
+    std::vector<std::string> names = {"springs", "fem"};
+    std::vector<int> laws = {-1, default_fem_law().law};
     for (const ElementLawRow& row : element_law_rows()) {
       if (row.model_keyword == nullptr) continue;
       names.push_back(row.model_keyword);
@@ -39,6 +40,19 @@ void SceneParser::parse(const YAML::Node& root) {
     if (auto i = keyword(root["model"], "model", names, "a force model")) {
       scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::Elements;
       if (*i > 0) scene_.element_law = laws[*i];
+      scene_.element_kind = default_element_kind().kind;
+      fem_keys = *i == 1;
+    }
+  }
+  if (root["fem"]) {
+    if (fem_keys) {
+      parse_fem(root["fem"]);
+    } else {
+      const std::string given = root["model"] ? describe(root["model"]) : std::string("springs (the default)");
+      error(root["fem"], "fem",
+            "'fem' chooses the law and element of model: fem; this scene's model is " + given +
+                ": write model: fem (model: " + default_fem_law().model_keyword +
+                " is fem: {law: " + default_fem_law().keyword + ", element: " + default_element_kind().keyword + "})");
     }
   }
   if (root["on_inversion"]) {
@@ -129,6 +143,21 @@ void SceneParser::parse(const YAML::Node& root) {
                              " steps over the duration, above the limit of " + format_number(kMaxSimulationSteps),
                          {"lower alpha (a damping ratio zeta at angular frequency w is alpha = 2 zeta w), or use "
                           "integrator: implicit_euler, whose damping has no step limit"});
+  }
+}
+
+void SceneParser::parse_fem(const YAML::Node& node) {
+  remember(node, "fem");
+  if (!check_map(node, "fem", {"law", "element"})) return;
+  if (node["law"]) {
+    const std::vector<std::string> laws = fem_law_keywords();
+    if (auto i = keyword(node["law"], "fem.law", laws, "an element law"))
+      scene_.element_law = fem_law_by_keyword(laws[*i])->law;
+  }
+  if (node["element"]) {
+    const std::vector<std::string> kinds = element_kind_keywords();
+    if (auto i = keyword(node["element"], "fem.element", kinds, "an element kind"))
+      scene_.element_kind = element_kind_by_keyword(kinds[*i])->kind;
   }
 }
 

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/io/atomic_file.h"
 #include "runtime/io/input_file.h"
 #include "runtime/io/json_text.h"
@@ -215,6 +216,10 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
   json["scene_file"] = scene.path;
   json["completed"] = result.completed;
   json["model"] = model_name(setup);
+  if (setup.springs.size() == 0 && !setup.elements.empty()) {
+    json["fem"]["law"] = element_law_row(setup.elements.terms.front().law).keyword;
+    json["fem"]["element"] = element_kind_row(setup.elements.geometry.kind).keyword;
+  }
   json["inverted_elements"] = result.inversions.largest_count;
   json["backend"] = options.backend;
   json["precision"] = setup.precision == Precision::Float ? "float" : "double";
