@@ -94,8 +94,16 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
   constexpr int N = Element::kNodes;
   Real x[N][3], v[N][3], out[N][3];
   const bool damped = t.stiffness_damping != nullptr;
-  element_nodes<N>(e, t.corners, s, damped, x, v);
-  Element::template forces<Law>(t, e, x, damped ? v : nullptr, out);
+  // As in LinearTetrahedron::forces: a constant pointer in each branch lets the GPU keep x and v in registers. The
+  // nodes are read in each branch with a constant flag, so that the compiler sees v written where it is read (GCC 12
+  // reported v as uninitialised once a law's damped stress was inlined).
+  if (damped) {
+    element_nodes<N>(e, t.corners, s, true, x, v);
+    Element::template forces<Law>(t, e, x, v, out);
+  } else {
+    element_nodes<N>(e, t.corners, s, false, x, v);
+    Element::template forces<Law>(t, e, x, static_cast<const Real(*)[3]>(nullptr), out);
+  }
   for (int a = 0; a < N; ++a) {
     CornerForce<Real>& to = force[t.corner_slot[N * e + a]];
     if (Accumulate) {

@@ -14,7 +14,8 @@
 namespace fmpc::sim {
 
 struct FemModelSpec {
-  int law = default_fem_law().law;  // the element law (its index in element_law_rows())
+  int law = default_fem_law().law;            // the element law (its index in element_law_rows())
+  int element = default_element_kind().kind;  // the element kind (its index in element_kind_rows())
   // Pa: one value for every element, or one per tetrahedron of the mesh.
   std::vector<double> youngs_modulus;
   std::vector<double> poisson_ratio;  // one value, or one per tetrahedron; the law's builder checks the range

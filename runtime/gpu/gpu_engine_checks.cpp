@@ -55,6 +55,7 @@ template <typename Real>
 bool GpuEngine<Real>::save_checkpoint(DiagnosticList& diagnostics) {
   checkpoint_step_ = steps_taken_;
   checkpoint_has_acceleration_ = have_acceleration_;
+  implicit_log_.save(steps_taken_);
   // Persistent runs change the state only in their launches, which store the state they start from into the
   // checkpoint (PersistentEulerArguments::checkpoints): until the next one, the state held is the checkpoint. Six
   // copies per check were a fifth of the 20^3 box's time between checks (H100). At a check before the launch's
@@ -80,6 +81,7 @@ template <typename Real>
 bool GpuEngine<Real>::restore_checkpoint(DiagnosticList& diagnostics) {
   checks_pending_ = false;
   selected_inner_ = false;
+  implicit_log_.restore();
   if (checkpoint_in_state_) {
     steps_taken_ = checkpoint_step_;
     have_acceleration_ = checkpoint_has_acceleration_;

@@ -374,6 +374,8 @@ bool GpuEngine<Real>::upload_single_scene_features(DiagnosticList& diagnostics) 
       FMPC_CUDA_CHECK(array->allocate(3 * count), diagnostics, false);
     FMPC_CUDA_CHECK(cg_scalars_.allocate(1), diagnostics, false);
     FMPC_CUDA_CHECK(cg_partial_.allocate(2 * kEnergyBlocks), diagnostics, false);
+    implicit_log_ = sim::ImplicitSolverLog(sim::ImplicitMethod::ConjugateGradient, setup.implicit.tolerance,
+                                           sim::implicit_iteration_limit(setup));
   }
   return true;
 }

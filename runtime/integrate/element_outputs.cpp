@@ -31,7 +31,7 @@ void for_each_term(const SimulationSetup& setup, const kernels::StrainTableView&
 std::string model_name(const SimulationSetup& setup) {
   if (setup.springs.size() > 0 || setup.elements.empty()) return "springs";
   const char* keyword = element_law_row(setup.elements.terms.front().law).model_keyword;
-  return keyword != nullptr ? keyword : "springs";
+  return keyword != nullptr && setup.elements.geometry.kind == default_element_kind().kind ? keyword : "fem";
 }
 
 std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vector<Point3>& positions,

@@ -248,10 +248,9 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
   if (!(setup.stability_margin > 0.0 && setup.stability_margin <= 1.0)) {
     diagnostics.error(range, "the stability margin must lie in (0, 1]");
   }
-  if (setup.implicit.max_iterations < 0 || !(setup.implicit.tolerance > 0.0)) {
-    diagnostics.error(range,
-                      "implicit Euler needs a non-negative CG iteration cap (0: twice the unknowns) and a "
-                      "positive tolerance");
+  if (setup.implicit.max_iterations < 0 || !(setup.implicit.tolerance > 0.0 && setup.implicit.tolerance < 1.0)) {
+    diagnostics.error(range, "implicit Euler needs a non-negative CG iteration cap (0: twice the unknowns) and a "
+                             "relative tolerance in (0, 1)");
   }
   if (diagnostics.error_count() != errors_before) return false;
   return validate_loads(setup, diagnostics);

@@ -54,6 +54,7 @@ void SceneParser::parse_selection(const YAML::Node& node, const std::string& pre
         return;
       }
       SceneFixed::Plane plane;
+      plane.field = field;
       const auto point = vector3(p["point"], field + ".point", " (mesh units)");
       const auto normal = vector3(p["normal"], field + ".normal", "");
       if (!point || !normal) return;

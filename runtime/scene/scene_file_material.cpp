@@ -327,13 +327,13 @@ void SceneParser::parse_inputs(const YAML::Node& node) {
 
 // What only springs have is refused with the co-rotational FEM, naming the field.
 void SceneParser::check_fem_fields(const YAML::Node& root) {
-  const std::string why = " has no meaning for model: corotational_fem (it is a spring setting)";
+  const std::string why = " has no meaning for model: " + model_keyword(scene_) + " (it is a spring setting)";
   const YAML::Node material = root["material"];
   if (material && material.IsMap()) {
     for (const char* key : {"stiffness", "stiffness_over_length"})
       if (material[key])
         error(material[key], std::string("material.") + key,
-              "the co-rotational FEM takes Young's modulus (youngs_modulus, rules or table), not spring constants");
+              "a finite-element model takes Young's modulus (youngs_modulus, rules or table), not spring constants");
     // A mapping beside spring constants already has its own error (it needs Young's modulus).
     const bool modulus = material["youngs_modulus"] || material["rules"] || material["table"];
     for (const char* key : {"mapping", "thickness", "flexion_fraction"})
@@ -341,7 +341,8 @@ void SceneParser::check_fem_fields(const YAML::Node& root) {
         error(material[key], std::string("material.") + key, why.substr(1));
   }
   if (root["springs"]) error(root["springs"], "springs", why.substr(1));
-  if (root["law"]) error(root["law"], "law", why.substr(1) + "; the FEM's material is linear elastic (co-rotated)");
+  if (root["law"])
+    error(root["law"], "law", why.substr(1) + "; the FEM's material is its element law (fem: {law: ...})");
   const YAML::Node damping = root["damping"];
   if (damping && damping.IsMap()) {
     for (const char* key : {"coefficient", "natural_frequency"})

@@ -69,6 +69,7 @@ class SceneParser {
 
   // ---- the run's settings (scene_file_run.cpp) ----
   void parse_outputs(const YAML::Node& node);
+  void parse_solver(const YAML::Node& node);
 
   // ---- mesh, material and the material's companions (scene_file_material.cpp) ----
   void parse_mesh(const YAML::Node& node);
@@ -82,6 +83,8 @@ class SceneParser {
   void parse_damping(const YAML::Node& node);
   void parse_springs(const YAML::Node& node);
   void parse_law(const YAML::Node& node);
+  // `fem: {law, element}` (model: fem), through the law and element-kind registries.
+  void parse_fem(const YAML::Node& node);
 
   // ---- loads (scene_file_loads.cpp) ----
   void parse_fixed(const YAML::Node& node);

@@ -1,7 +1,6 @@
 // The pieces both simulator backends share (kernels/integrator_math.h, kernels/strain_table_math.h,
 // kernels/implicit_math.h, runtime/integrate/loads.cpp) and what a scene without damping allocates.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -42,7 +41,7 @@ SimulationSetup hanging_box(double damping_ratio) {
   return *setup;
 }
 
-bool same_bits(const std::vector<Point3>& a, const std::vector<Point3>& b) {
+bool same_positions(const std::vector<Point3>& a, const std::vector<Point3>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Point3)) == 0;
 }
 
@@ -65,7 +64,7 @@ TEST_CASE("loads: a scene without damping has no damping array and runs as zero 
       REQUIRE(run_b);
       REQUIRE(run_a->advance(300, diagnostics));
       REQUIRE(run_b->advance(300, diagnostics));
-      CHECK(same_bits(run_a->positions(diagnostics), run_b->positions(diagnostics)));
+      CHECK(same_positions(run_a->positions(diagnostics), run_b->positions(diagnostics)));
       CHECK_FALSE(diagnostics.has_errors());
     }
   }
