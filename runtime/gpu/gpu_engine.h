@@ -149,6 +149,10 @@ class GpuEngine final : public sim::SteppingEngine {
 
   bool enqueue_strain_lookup(const DeviceState<Real>& state, DiagnosticList& diagnostics);
 
+  // The stateful element terms' update after an accepted step, at `state` (the step's end); with `jump`, the history
+  // of a jump from rest to it (once, after upload: sim::prony_constants at dt = 0).
+  bool enqueue_point_state_update(const DeviceState<Real>& state, bool jump, DiagnosticList& diagnostics);
+
   // The probe kernels' time origin for the chunk about to be enqueued or replayed.
   bool set_step_base(DiagnosticList& diagnostics);
 
@@ -293,6 +297,7 @@ class GpuEngine final : public sim::SteppingEngine {
     DeviceArray<Real> damping;
     DeviceArray<double> damping_d;
     DeviceArray<unsigned char> linearisation;
+    DeviceArray<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
   };
   DeviceArray<Real> rest_inverse_, rest_volume_;
   DeviceArray<double> rest_inverse_d_, rest_volume_d_;

@@ -123,6 +123,9 @@ class CpuScene final : public CpuSceneBase {
         TermArrays arrays;
         for (int p = 0; p < kernels::kMostLawParameters; ++p) arrays.parameter[p] = convert(term.parameter[p]);
         arrays.damping = convert(term.stiffness_damping);
+        const int width = point_state_width(term);
+        const int points = static_cast<int>(geometry.size()) * points_per_element(geometry.kind);
+        arrays.state.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(points), Real(0));
         term_arrays_.push_back(std::move(arrays));
         const TermArrays& held = term_arrays_.back();
         const auto data_or_null = [](const std::vector<Real>& values) {
@@ -139,10 +142,16 @@ class CpuScene final : public CpuSceneBase {
         for (int p = 0; p < kernels::kMostLawParameters; ++p) view.parameter[p] = data_or_null(held.parameter[p]);
         view.stiffness_damping = data_or_null(held.damping);
         view.strain_table = reads_strain_table(term) ? table : kernels::StrainTableView{nullptr, nullptr, 0};
+        view.state = {width > 0 ? term_arrays_.back().state.data() : nullptr, width, points};
+        view.prony = kernels::PronyConstants<Real>{};
+        if (width > 0)
+          view.prony = prony_constants_in<Real>(term.prony, stability.time_step,
+                                                setup.integrator == Integrator::ImplicitEuler);
         term_views_.push_back(view);
       }
       corner_view_ = {geometry.corner_offset.data(), geometry.corner_index.data(), corner_force_.data()};
     }
+    update_point_state(true);
     loads_.mass = mass_.data();
     loads_.fixed = fixed_.data();
     loads_.rest_x = rest_.x.data();
@@ -182,7 +191,9 @@ class CpuScene final : public CpuSceneBase {
   }
 
   ProbeReading probe_reading() const override {
-    return read_probe(setup_, time(), positions(), velocities(), current_stiffness());
+    ElementTermStates states;
+    for (const TermArrays& arrays : term_arrays_) states.emplace_back(arrays.state.begin(), arrays.state.end());
+    return read_probe(setup_, time(), positions(), velocities(), current_stiffness(), &states);
   }
 
   std::vector<double> current_stiffness() const override {
@@ -267,6 +278,26 @@ class CpuScene final : public CpuSceneBase {
     step(diagnostics);
     ++steps_taken_;
     apply_probe(time(), false);
+    update_point_state(false);
+  }
+
+  // Each stateful term's state after an accepted step, at the positions held (the step's end, probe applied); with
+  // `jump`, the history of a jump from rest to the positions held (the start: prony_constants at dt = 0).
+  void update_point_state(bool jump) {
+    const kernels::StateView<Real> state = view(position_, velocity_);
+    for (std::size_t term = 0; term < term_views_.size(); ++term) {
+      kernels::ElementTermView<Real> field = term_views_[term];
+      if (field.prony.count == 0) continue;
+      if (jump) field.prony = prony_constants_in<Real>(setup_.elements.terms[term].prony, 0.0, false);
+      kernels::visit_element_term(field.element, field.law, [&](auto kind, auto element_law) {
+        using Element = decltype(kind);
+        using Law = decltype(element_law);
+        pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
+          for (std::size_t e = begin; e < end; ++e)
+            kernels::element_state_update<Element, Law>(static_cast<int>(e), field, state);
+        });
+      });
+    }
   }
 
   InversionCount count_inversions() const override {
@@ -287,6 +318,7 @@ class CpuScene final : public CpuSceneBase {
     checkpoint_acceleration_ = acceleration_;
     checkpoint_have_acceleration_ = have_acceleration_;
     checkpoint_step_ = steps_taken_;
+    for (TermArrays& arrays : term_arrays_) arrays.checkpoint_state = arrays.state;
     if (solver_) {
       checkpoint_warm_start_ = solver_->warm_start();
       log_.save(steps_taken_);
@@ -299,6 +331,9 @@ class CpuScene final : public CpuSceneBase {
     acceleration_ = checkpoint_acceleration_;
     have_acceleration_ = checkpoint_have_acceleration_;
     steps_taken_ = checkpoint_step_;
+    // Copied into the buffers the views point at.
+    for (TermArrays& arrays : term_arrays_) std::copy(arrays.checkpoint_state.begin(), arrays.checkpoint_state.end(),
+                                                      arrays.state.begin());
     if (solver_) {
       solver_->set_warm_start(checkpoint_warm_start_);
       log_.restore();
@@ -450,7 +485,7 @@ class CpuScene final : public CpuSceneBase {
     const ProbeLoad& probe = *setup_.probe;
     if (probe.mode == ProbeLoad::Mode::Force) {
       if (!before_step) return;
-      const double share = kernels::probe_ramp_share(t, probe.ramp_time);
+      const double share = kernels::probe_ramp_share(t, probe.ramp_time, probe.cycles);
       const double count = static_cast<double>(probe.vertices.size());
       for (const auto vertex : probe.vertices) {
         const auto v = static_cast<std::size_t>(vertex);
@@ -464,11 +499,14 @@ class CpuScene final : public CpuSceneBase {
     for (const auto vertex : probe.vertices) {
       const auto v = static_cast<std::size_t>(vertex);
       const Point3& start = start_position(setup_, v);
-      kernels::probe_prescribed_state(start[0], probe.target[0], t, probe.ramp_time, before_step, position_.x[v],
+      kernels::probe_prescribed_state(start[0], probe.target[0], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.x[v],
                                       velocity_.x[v]);
-      kernels::probe_prescribed_state(start[1], probe.target[1], t, probe.ramp_time, before_step, position_.y[v],
+      kernels::probe_prescribed_state(start[1], probe.target[1], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.y[v],
                                       velocity_.y[v]);
-      kernels::probe_prescribed_state(start[2], probe.target[2], t, probe.ramp_time, before_step, position_.z[v],
+      kernels::probe_prescribed_state(start[2], probe.target[2], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.z[v],
                                       velocity_.z[v]);
     }
   }
@@ -515,6 +553,7 @@ class CpuScene final : public CpuSceneBase {
   struct TermArrays {
     std::vector<Real> parameter[kernels::kMostLawParameters];
     std::vector<Real> damping;
+    std::vector<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
   };
   std::vector<Real> rest_inverse_, rest_volume_;
   std::vector<TermArrays> term_arrays_;  // the views point into its vectors' buffers, which moves keep

@@ -93,6 +93,9 @@ struct ProbeLoad {
   // Force: N, the total, shared equally by the probe vertices (added to any external force).
   Point3 target{0.0, 0.0, 0.0};
   double ramp_time = 0.0;  // s
+  // > 0: cyclic loading instead, a triangle wave up to target at ramp_time and back to zero at twice it, `cycles`
+  // times, then held at zero (kernels::probe_ramp_share).
+  int cycles = 0;
 };
 
 // What a probe measures at the current state.
@@ -187,15 +190,20 @@ kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table);
 // from their start, and the applied force (Force) or minus the internal forces (springs with their dashpots and the
 // springs' current `stiffness`, elements with their damping) on the probe vertices (Displacement). Zeros without a
 // probe or with mismatched sizes.
+// Per element term, its per-point state now in double (kernels/prony_viscoelasticity.h; empty for a term without
+// state): what the host's force sums need to include a viscoelastic term's history (the engines' probe readings).
+using ElementTermStates = std::vector<std::vector<double>>;
 ProbeReading read_probe(const SimulationSetup& setup, double time, const std::vector<Point3>& positions,
-                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness);
+                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
+                        const ElementTermStates* states = nullptr);
 
 // The internal force (N, in double) of the model on each of `vertices` at a state: springs (with `stiffness`, one per
 // spring, and their dashpots) and tetrahedron-field elements (their damping included; a strain table's modulus at
-// each element's strain).
+// each element's strain; with `states`, a stateful term's stress at the state's time: its history included).
 std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vector<Point3>& positions,
                                     const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
-                                    const std::vector<std::int32_t>& vertices);
+                                    const std::vector<std::int32_t>& vertices,
+                                    const ElementTermStates* states = nullptr);
 
 // Per element term, per tetrahedron at `positions` (double): the term's stress output (its law's stress_output, the
 // frames' cell array named by the law's kStressOutput: e.g. a von Mises stress, or the volume term's pressure beside

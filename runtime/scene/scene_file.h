@@ -83,6 +83,8 @@ struct SceneMaterial {
   bool mapping_given = false;
   // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.499].
   std::optional<RegionalValue> poisson_ratio;
+  // material.viscoelastic: {prony: [{weight, time}, ...]} (kernels/prony_viscoelasticity.h); empty: elastic. FEM only.
+  std::vector<PronyTerm> prony;
   double thickness = 1.0;        // m, membranes (triangle meshes)
   double flexion_fraction = 0.1;
 };
@@ -124,6 +126,7 @@ struct SceneProbe {
   double radius = 0.0;  // mesh units: the vertices within this distance of the first hit (0: the hit's nearest)
   Point3 target{0.0, 0.0, 0.0};  // m (displacement) or N (force)
   double ramp = 0.0;             // s
+  int cycles = 0;                // > 0: up to target and back over 2 ramp, this many times (ProbeLoad::cycles)
 };
 
 enum class SceneBackend { Auto, Cpu, Cuda };

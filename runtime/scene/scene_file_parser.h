@@ -76,6 +76,7 @@ class SceneParser {
   void parse_material(const YAML::Node& node);
   bool parse_regions(const YAML::Node& value, const std::string& field, std::vector<RegionValue>& out);
   std::optional<RegionalValue> poisson_ratio(const YAML::Node& node);
+  void parse_viscoelastic(const YAML::Node& node);
   void parse_inputs(const YAML::Node& node);
   void check_fem_fields(const YAML::Node& root);
   void parse_mass(const YAML::Node& node);

@@ -136,6 +136,9 @@ TEST_CASE("Launch plan: no persistent launch where a step needs its own launches
   shape.strain_table = true;
   not_persistent(shape, {});
   shape = box.shape;
+  shape.point_state = true;  // a viscoelastic term's update between steps
+  not_persistent(shape, {});
+  shape = box.shape;
   shape.probe_vertices_unique = false;
   not_persistent(shape, {});
   shape = box.shape;

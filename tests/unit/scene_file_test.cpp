@@ -328,7 +328,7 @@ TEST_CASE("unknown keys and keywords come with a suggestion", "[scene]") {
   CHECK(parsed.errors[0].rfind("3:1: integrater: unknown key; allowed:", 0) == 0);
   CHECK(parsed.errors[1] ==
         "4:31: loads.probe.displacment: unknown key in loads.probe; allowed: 'indices', 'ray', 'radius', "
-        "'displacement', 'force' or 'ramp'");
+        "'displacement', 'force', 'ramp' or 'cycles'");
   CHECK(parsed.errors[2] == "4:16: loads.probe: give one of 'displacement' or 'force'");
   CHECK(parsed.notes == std::vector<std::string>{"did you mean 'integrator'?", "did you mean 'displacement'?"});
   const Parsed keyword = parse(kMinimal + "integrator: implicit_eular\n");
