@@ -29,7 +29,9 @@ struct GridBatch {
     shape.vertex_begin = {0};
     shape.element_begin = {0};
     int base = 0;
-    for (const auto& [nx, ny, nz] : scenes) {
+    for (const std::array<int, 3>& cells : scenes) {
+      // Copies, not structured bindings: a lambda may not capture those before C++20 (clang refuses).
+      const int nx = cells[0], ny = cells[1], nz = cells[2];
       for (int z = 0; z < nz; ++z)
         for (int y = 0; y < ny; ++y)
           for (int x = 0; x < nx; ++x) {
