@@ -345,6 +345,14 @@ simulator_section() {
   section "simulator: benchmark"
   local args=(--out "$OUT")
   [[ $QUICK -eq 1 ]] && args+=(--quick)
+  # Implicit Euler's rows (issue 27 item 3) at SOFA's liver settings need its mesh: beside the repository, or carried.
+  local liver="$ROOT/../shared/data/sofa-liver/liver.msh"
+  [[ -f "$liver" ]] || liver="$CARRY/sofa-liver/liver.msh"
+  if [[ -f "$liver" ]]; then
+    args+=(--liver "$liver")
+  else
+    record "sim_bench: SOFA liver implicit rows skipped (no liver.msh; bench/run_gpu.sh --prepare carries it)"
+  fi
   if "$BUILD/bench/sim/fmpc_sim_bench" "${args[@]}" > "$OUT/sim_bench.log" 2>&1; then
     record "sim_bench: ok (sim_bench.csv, sim_bench.md)"
   else

@@ -161,8 +161,9 @@ class GpuEngine final : public sim::SteppingEngine {
   bool read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics);
 
   // One implicit Euler step: assemble, then Eigen's preconditioned conjugate gradient (same iteration, same
-  // stopping rule, same warning as the CPU backend), then v += dv, x += h v. The host reads |r|^2 once per
-  // iteration, so implicit steps are never captured into graphs.
+  // stopping rule, same warning as the CPU backend) stopping on the device, in one cooperative launch
+  // (LaunchPlan::cg_grid_blocks) or in chunks of per-iteration launches, then v += dv, x += h v. The host reads
+  // the solver's scalars once per launch or chunk, so implicit steps are never captured into graphs.
   bool implicit_solve(DiagnosticList& diagnostics);
 
   VerletArguments<Real> verlet_arguments() const;
@@ -268,6 +269,7 @@ class GpuEngine final : public sim::SteppingEngine {
   DeviceArray<double> implicit_rest_, implicit_blocks_, implicit_diagonal_, implicit_jacobi_, implicit_rhs_;
   DeviceArray<double> cg_x_, cg_r_, cg_z_, cg_p_, cg_ap_, cg_partial_;
   DeviceArray<ConjugateGradientScalars> cg_scalars_;
+  int cg_previous_iterations_ = 0;  // the last solve's iterations: the first chunk's length (per-iteration launches)
   unsigned long long step_base_host_ = 0;
   sim::ImplicitSolverLog implicit_log_;  // implicit Euler's solves (a batch of one scene)
   DeviceState<Real> state_[2];
