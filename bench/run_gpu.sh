@@ -25,7 +25,8 @@
 #               and 20^3 small box; reports as text in $OUT/profile_*.txt
 #   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
 #               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540); the
-#               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run
+#               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run;
+#               FUZZ_TARGETS="fll fcl ..." runs only those
 #   evaluator   bench/gpu/evaluator_gpu_bench.cu (nvcc alone): the generated CUDA evaluators (type-1 and interval
 #               type-2, float and double) and table lookups (2-D double and float; 5-D double and float at 9^5,
 #               7^5, 5^5; each in the grid and the sector-packed layout) on the liver rule base, each checked
@@ -590,8 +591,14 @@ fuzz_section() {
   fi
   # The targets carried (run_fuzzers.sh's own default list names targets a sanitizer build may lack: the Python
   # module's, without -DFMPC_PYTHON=ON).
-  local program targets=()
-  for program in "$UNPACKED"/bin/fuzz_*; do targets+=("${program##*/fuzz_}"); done
+  # FUZZ_TARGETS (space-separated names, e.g. "fll fcl python_arguments") narrows them, so that a call's cores go to
+  # the targets that still need CPU time.
+  local program name targets=()
+  for program in "$UNPACKED"/bin/fuzz_*; do
+    name=${program##*/fuzz_}
+    if [[ -z "${FUZZ_TARGETS:-}" || " $FUZZ_TARGETS " == *" $name "* ]]; then targets+=("$name"); fi
+  done
+  [[ ${#targets[@]} -gt 0 ]] || { fail "FUZZ_TARGETS='${FUZZ_TARGETS:-}' names no carried target"; return 1; }
   local jobs=${FUZZ_JOBS:-$(( JOBS / ${#targets[@]} > 0 ? JOBS / ${#targets[@]} : 1 ))}
   FMPC_FUZZ_BINARIES="$UNPACKED/bin" FMPC_FUZZ_SEEDS="$UNPACKED/seeds" \
     bash "$ROOT/tests/fuzz/run_fuzzers.sh" --jobs "$jobs" "$BUILD" "${FUZZ_SECONDS:-540}" "${targets[@]}" \
