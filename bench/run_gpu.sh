@@ -323,16 +323,25 @@ simulator_section() {
     if [[ -z "$sanitizer" ]]; then
       fail "compute-sanitizer not found"
     else
+      # The four tools at once (each instruments the same small scenes; racecheck alone takes minutes), each under
+      # SANITIZER_SECONDS (default 480): a tool cut off is reported as such with the last test it started.
       local tool
+      local -A pids=()
       for tool in memcheck racecheck initcheck synccheck; do
         local extra=()
         [[ $tool == memcheck ]] && extra=(--leak-check full)
-        "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
-          "$BUILD/tests/gpu/fmpc_gpu_tests" sanitizer > "$OUT/sanitizer_$tool.log" 2>&1
+        timeout "${SANITIZER_SECONDS:-480}" "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
+          "$BUILD/tests/gpu/fmpc_gpu_tests" sanitizer > "$OUT/sanitizer_$tool.log" 2>&1 &
+        pids[$tool]=$!
+      done
+      for tool in memcheck racecheck initcheck synccheck; do
+        wait "${pids[$tool]}"
         local rc=$?
         local errors
         errors=$(grep -E 'ERROR SUMMARY|RACECHECK SUMMARY' "$OUT/sanitizer_$tool.log" | tail -1)
-        if [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$OUT/sanitizer_$tool.log"; then
+        if [[ $rc -eq 124 ]]; then
+          fail "$tool: cut off after ${SANITIZER_SECONDS:-480} s in '$(grep -E '^\[ RUN' "$OUT/sanitizer_$tool.log" | tail -1)'"
+        elif [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$OUT/sanitizer_$tool.log"; then
           record "$tool: ok (${errors:-no summary line})"
         else
           fail "$tool: exit $rc (${errors:-see sanitizer_$tool.log})"
