@@ -4,6 +4,7 @@
 fmpc_unity_group(fmpc_tests tests_0
   unit/matlab_fis_test.cpp
   unit/fmpc_language_test.cpp
+  unit/fmpc_writer_test.cpp
   support/setup_reference.cpp
   unit/interpreter_test.cpp
   unit/tetrahedron_math_test.cpp
