@@ -149,6 +149,28 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
       jacobi[c] += system[kernels::symmetric_index(c, c)];
     }
   }
+  if (a.contact_blocks != nullptr) {
+    // The tools' contact at the step's start, as the CPU's add_contact_blocks: h^2 K_c on the free axes' block.
+    double* block = a.contact_blocks + 6 * v;
+    const double k = static_cast<double>(a.loads.contact.stiffness[v]);
+    const bool touching =
+        k > 0.0 && kernels::contact_stiffness_block(a.loads.contact, k, static_cast<double>(a.state.x[v]),
+                                                    static_cast<double>(a.state.y[v]),
+                                                    static_cast<double>(a.state.z[v]), block);
+    if (!touching) {
+      for (int i = 0; i < 6; ++i) block[i] = 0.0;
+    } else {
+      for (int i = 0; i < 6; ++i) block[i] *= a.h * a.h;
+      double free_velocity[3];
+      for (int c = 0; c < 3; ++c) free_velocity[c] = kernels::axis_fixed(held, c) ? 0.0 : own_velocity[c];
+      double kv[3];
+      kernels::symmetric_multiply(block, free_velocity, kv);
+      for (int c = 0; c < 3; ++c) {
+        b[c] -= kv[c];
+        jacobi[c] += block[kernels::symmetric_index(c, c)];
+      }
+    }
+  }
   if (a.elements.count > 0) {
     const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
     double kv[3] = {0.0, 0.0, 0.0}, element_diagonal[3] = {0.0, 0.0, 0.0};
@@ -190,6 +212,12 @@ __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
     for (int c = 0; c < 3; ++c) relative[c] = own[c] - (kernels::axis_fixed(other, c) ? 0.0 : a.p[3 * o + c]);
     double product[3];
     kernels::symmetric_multiply(a.blocks + 12 * s + 6, relative, product);
+    for (int c = 0; c < 3; ++c) sum[c] += product[c];
+  }
+  if (a.contact_blocks != nullptr) {
+    double free_own[3], product[3];
+    for (int c = 0; c < 3; ++c) free_own[c] = kernels::axis_fixed(held, c) ? 0.0 : own[c];
+    kernels::symmetric_multiply(a.contact_blocks + 6 * v, free_own, product);
     for (int c = 0; c < 3; ++c) sum[c] += product[c];
   }
   if (a.elements.count > 0) {

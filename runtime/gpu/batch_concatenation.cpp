@@ -188,6 +188,10 @@ const char* single_scene_feature(const sim::SimulationSetup& setup) {
     return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as a simulation of its "
            "own";
   }
+  if (!setup.tools.empty()) {
+    return "a scene with rigid tools runs on its own on the GPU (its tools' poses are the launch's); run it as a "
+           "simulation of its own";
+  }
   return nullptr;
 }
 

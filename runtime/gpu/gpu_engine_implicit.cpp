@@ -26,6 +26,7 @@ ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments() {
   a.vertex_count = n_;
   a.spring_count = spring_begin_.back();
   a.blocks = implicit_blocks_.data();
+  a.contact_blocks = loads_.contact.tool_count > 0 ? contact_blocks_.data() : nullptr;
   a.diagonal = implicit_diagonal_.data();
   a.inverse_jacobi = implicit_jacobi_.data();
   a.rhs = implicit_rhs_.data();

@@ -354,6 +354,9 @@ struct ImplicitArguments {
   int vertex_count;
   int spring_count;
   double* blocks;          // 12 per spring: K_s (6) then the system block (6)
+  // 6 per vertex: h^2 K_c, the tools' contact block at the step's start (kernels::contact_stiffness_block; zero
+  // where a vertex touches none); null without tools.
+  double* contact_blocks;
   double* diagonal;        // per vertex: m + h (gamma0 + gamma1 |x - x0|); 1 for fixed vertices
   double* inverse_jacobi;  // 3 per vertex
   double* rhs;             // 3 per vertex, b

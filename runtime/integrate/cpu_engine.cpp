@@ -55,6 +55,9 @@ class CpuSceneBase {
   virtual ProbeReading probe_reading() const = 0;
   virtual std::vector<double> current_stiffness() const = 0;
   virtual const SimulationSetup& setup() const = 0;
+  virtual void set_contact(const std::vector<double>& stiffness) = 0;
+  virtual void set_tool_shapes(const std::vector<kernels::ToolShape<double>>& shapes) = 0;
+  virtual void refresh_material() = 0;
 };
 
 template <typename Real>
@@ -172,6 +175,45 @@ class CpuScene final : public CpuSceneBase {
     if (scheme == Integrator::RungeKutta4) {
       for (auto& k : rk_velocity_) k.resize(n_);
       for (auto& k : rk_acceleration_) k.resize(n_);
+    }
+  }
+
+  // Contact: the stiffness per vertex and the tools' shapes, in Real, which loads_.contact points at.
+  void set_contact(const std::vector<double>& stiffness) override {
+    contact_stiffness_.assign(stiffness.begin(), stiffness.end());
+    loads_.contact.stiffness = contact_stiffness_.data();
+  }
+
+  void set_tool_shapes(const std::vector<kernels::ToolShape<double>>& shapes) override {
+    tools_.resize(shapes.size());
+    for (std::size_t t = 0; t < shapes.size(); ++t) {
+      const kernels::ToolShape<double>& s = shapes[t];
+      tools_[t] = {static_cast<Real>(s.ax), static_cast<Real>(s.ay), static_cast<Real>(s.az), static_cast<Real>(s.bx),
+                   static_cast<Real>(s.by), static_cast<Real>(s.bz), static_cast<Real>(s.radius)};
+    }
+    loads_.contact.tools = tools_.data();
+    loads_.contact.tool_count = static_cast<int>(tools_.size());
+  }
+
+  // The setup's material arrays were replaced with arrays of the same sizes: converted again into the buffers the
+  // views point at (their sizes, and so the views, are unchanged); the strain table's view is taken again.
+  void refresh_material() override {
+    const SpringNetwork& net = setup_.springs;
+    std::transform(net.stiffness.begin(), net.stiffness.end(), stiffness_.begin(),
+                   [](double k) { return static_cast<Real>(k); });
+    std::transform(net.damping.begin(), net.damping.end(), damping_.begin(),
+                   [](double c) { return static_cast<Real>(c); });
+    const kernels::StrainTableView table = setup_.strain_stiffness ? strain_table_view(*setup_.strain_stiffness)
+                                                                   : kernels::StrainTableView{nullptr, nullptr, 0};
+    for (std::size_t t = 0; t < term_arrays_.size(); ++t) {
+      const ElementTerm& term = setup_.elements.terms[t];
+      TermArrays& arrays = term_arrays_[t];
+      for (int p = 0; p < kernels::kMostLawParameters; ++p)
+        std::transform(term.parameter[p].begin(), term.parameter[p].end(), arrays.parameter[p].begin(),
+                       [](double value) { return static_cast<Real>(value); });
+      std::transform(term.stiffness_damping.begin(), term.stiffness_damping.end(), arrays.damping.begin(),
+                     [](double beta) { return static_cast<Real>(beta); });
+      if (reads_strain_table(term)) term_views_[t].strain_table = table;
     }
   }
 
@@ -427,23 +469,11 @@ class CpuScene final : public CpuSceneBase {
     Eigen::SparseMatrix<double> diagonal_part(static_cast<Eigen::Index>(dofs), static_cast<Eigen::Index>(dofs));
     diagonal_part.setFromTriplets(triplets_.begin(), triplets_.end());
     system += diagonal_part;
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
-                             Eigen::DiagonalPreconditioner<double>>
-        solver;
-    solver.setMaxIterations(implicit_iteration_limit(setup_));
-    solver.setTolerance(setup_.implicit.tolerance);
     // A right-hand side this small means the system is at rest to double precision; CG on denormals would only
     // report a spurious failure.
-    if (rhs.norm() < 1e-150) return true;
-    solver.compute(system);
-    const Eigen::VectorXd dv = solver.solve(rhs);
-    implicit_iterations_max_ = std::max(implicit_iterations_max_, static_cast<int>(solver.iterations()));
-    if (solver.info() != Eigen::Success && !cg_warning_given_) {
-      cg_warning_given_ = true;
-      diagnostics.warning(setup_.source_range, "cg-not-converged",
-                          cg_stopped_message(steps_taken_ + 1, static_cast<int>(solver.iterations()), solver.error(),
-                                             setup_.implicit.tolerance));
-    }
+    if (rhs.norm() < 1e-150 && loads_.contact.tool_count == 0) return true;
+    Eigen::VectorXd dv = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(dofs));
+    if (!solve_with_contact(system, rhs, v0, h, dv, diagnostics)) return true;
     for (std::size_t i = 0; i < n_; ++i) {
       if (fixed_[i] == kernels::kAllAxesFixed) continue;
       velocity_.x[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i)]);
@@ -454,6 +484,100 @@ class CpuScene final : public CpuSceneBase {
       position_.z[i] += h_ * velocity_.z[i];
     }
     return true;
+  }
+
+  // Solves system dv = rhs, with the tools' contact (kernels/contact_math.h) as an active set: the (vertex, tool)
+  // pairs inside at the step's start, then those the last solution predicts inside, until the set stays (each round
+  // warm-started from the last dv), at most kMostContactRounds rounds. False when the right-hand side is zero.
+  bool solve_with_contact(const Eigen::SparseMatrix<double>& system, const Eigen::VectorXd& rhs,
+                          const Eigen::VectorXd& v0, double h, Eigen::VectorXd& dv, DiagnosticList& diagnostics) {
+    const bool contact = loads_.contact.tool_count > 0;
+    if (contact) {
+      contact_active_.assign(n_, 0);
+      for (std::size_t i = 0; i < n_; ++i)
+        if (contact_stiffness_[i] > Real(0))
+          contact_active_[i] = static_cast<unsigned char>(kernels::contact_set(loads_.contact, x0(i, 0), x0(i, 1),
+                                                                               x0(i, 2), nullptr));
+    }
+    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
+                             Eigen::DiagonalPreconditioner<double>>
+        solver;
+    solver.setMaxIterations(implicit_iteration_limit(setup_));
+    solver.setTolerance(setup_.implicit.tolerance);
+    for (int round = 1;; ++round) {
+      Eigen::VectorXd b = rhs;
+      Eigen::SparseMatrix<double> matrix = system;
+      if (contact) matrix += contact_part(h, v0, b);
+      if (b.norm() < 1e-150) return false;
+      solver.compute(matrix);
+      dv = round == 1 ? Eigen::VectorXd(solver.solve(b)) : Eigen::VectorXd(solver.solveWithGuess(b, dv));
+      implicit_iterations_max_ = std::max(implicit_iterations_max_, static_cast<int>(solver.iterations()));
+      if (solver.info() != Eigen::Success && !cg_warning_given_) {
+        cg_warning_given_ = true;
+        diagnostics.warning(setup_.source_range, "cg-not-converged",
+                            cg_stopped_message(steps_taken_ + 1, static_cast<int>(solver.iterations()),
+                                               solver.error(), setup_.implicit.tolerance));
+      }
+      if (!contact || !contact_set_changes(h, v0, dv)) return true;
+      if (round == kernels::kMostContactRounds) {
+        if (!contact_warning_given_) {
+          contact_warning_given_ = true;
+          diagnostics.warning(setup_.source_range, "contact-not-settled",
+                              contact_unsettled_message(steps_taken_ + 1, kernels::kMostContactRounds));
+        }
+        return true;
+      }
+    }
+  }
+
+  double x0(std::size_t i, int axis) const {
+    return static_cast<double>(axis == 0 ? position_.x[i] : axis == 1 ? position_.y[i] : position_.z[i]);
+  }
+
+  // The contact's linear model for the active set (kernels::contact_linear_model) on the free axes: h^2 K_c into the
+  // returned matrix, and h (the model's force at x0 - f0's contact force) - h^2 K_c v0 into b.
+  Eigen::SparseMatrix<double> contact_part(double h, const Eigen::VectorXd& v0, Eigen::VectorXd& b) {
+    contact_triplets_.clear();
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!(contact_stiffness_[i] > Real(0))) continue;
+      double block[6], change[3];
+      kernels::contact_linear_model(loads_.contact, contact_active_[i], static_cast<double>(contact_stiffness_[i]),
+                                    x0(i, 0), x0(i, 1), x0(i, 2), block, change);
+      const auto base = static_cast<Eigen::Index>(3 * i);
+      for (int r = 0; r < 3; ++r) {
+        if (dof_held(base + r)) continue;
+        b[base + r] += h * change[r];
+        for (int c = 0; c < 3; ++c) {
+          const double entry = h * h * block[kernels::symmetric_index(r, c)];
+          if (dof_held(base + c) || entry == 0.0) continue;
+          b[base + r] -= entry * v0[base + c];
+          contact_triplets_.emplace_back(static_cast<int>(base + r), static_cast<int>(base + c), entry);
+        }
+      }
+    }
+    const auto dofs = static_cast<Eigen::Index>(3 * n_);
+    Eigen::SparseMatrix<double> part(dofs, dofs);
+    part.setFromTriplets(contact_triplets_.begin(), contact_triplets_.end());
+    return part;
+  }
+
+  // The active set the solution dv predicts (each vertex moved by h (v0 + dv) on its free axes); true where it
+  // differs from the one solved with, which it replaces.
+  bool contact_set_changes(double h, const Eigen::VectorXd& v0, const Eigen::VectorXd& dv) {
+    bool changed = false;
+    for (std::size_t i = 0; i < n_; ++i) {
+      if (!(contact_stiffness_[i] > Real(0))) continue;
+      double moved[3];
+      for (int axis = 0; axis < 3; ++axis) {
+        const auto dof = static_cast<Eigen::Index>(3 * i + axis);
+        moved[axis] = dof_held(dof) ? 0.0 : h * (v0[dof] + dv[dof]);
+      }
+      const auto set =
+          static_cast<unsigned char>(kernels::contact_set(loads_.contact, x0(i, 0), x0(i, 1), x0(i, 2), moved));
+      changed = changed || set != contact_active_[i];
+      contact_active_[i] = set;
+    }
+    return changed;
   }
 
   bool dof_held(Eigen::Index dof) const {
@@ -530,6 +654,8 @@ class CpuScene final : public CpuSceneBase {
   std::size_t n_;
   std::vector<Real> rest_length_, stiffness_, damping_, mass_;
   std::vector<unsigned char> fixed_;
+  std::vector<Real> contact_stiffness_;
+  std::vector<kernels::ToolShape<Real>> tools_;
   Vector3Arrays<Real> position_, velocity_, rest_, acceleration_, force_;
   Vector3Arrays<Real> stage_position_, stage_velocity_, next_acceleration_;
   Vector3Arrays<Real> rk_velocity_[4], rk_acceleration_[4];
@@ -553,9 +679,11 @@ class CpuScene final : public CpuSceneBase {
   Vector3Arrays<Real> checkpoint_position_, checkpoint_velocity_, checkpoint_acceleration_;
   bool checkpoint_have_acceleration_ = false;
   std::size_t checkpoint_step_ = 0;
-  std::vector<Eigen::Triplet<double>> triplets_;
+  std::vector<Eigen::Triplet<double>> triplets_, contact_triplets_;
+  std::vector<unsigned char> contact_active_;  // implicit Euler's contact set: bit t, tool t pushes the vertex
   int implicit_iterations_max_ = 0;
   bool cg_warning_given_ = false;
+  bool contact_warning_given_ = false;
 };
 
 // The CPU engine of a batch: each scene's CpuScene, run side by side on a pool of workers over the scenes (a scene's
@@ -680,6 +808,19 @@ class CpuEngine final : public SteppingEngine {
   }
   std::vector<double> current_stiffness(std::size_t scene, DiagnosticList&) const override {
     return scenes_[scene]->current_stiffness();
+  }
+  bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList&) override {
+    scenes_[scene]->set_contact(stiffness);
+    return true;
+  }
+  bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,
+                       DiagnosticList&) override {
+    scenes_[scene]->set_tool_shapes(shapes);
+    return true;
+  }
+  bool refresh_material(std::size_t scene, DiagnosticList&) override {
+    scenes_[scene]->refresh_material();
+    return true;
   }
 
  private:

@@ -21,6 +21,13 @@ std::string cg_stopped_message(std::size_t step, int iterations, double relative
   return message.str();
 }
 
+std::string contact_unsettled_message(std::size_t step, int rounds) {
+  return "implicit Euler: the vertices the tools push still changed after " + std::to_string(rounds) +
+         " solves at step " + std::to_string(step) +
+         "; the step went on with the last set (a tool moving further than its contact's depth in one step): "
+         "move it less per step or use a smaller dt";
+}
+
 std::unique_ptr<Simulation> Simulation::create(const SimulationSetup& setup, DiagnosticList& diagnostics,
                                                const SimulationOptions& options) {
   std::vector<SimulationSetup> one;
@@ -59,6 +66,14 @@ std::unique_ptr<Simulation> Simulation::create(std::vector<SimulationSetup> scen
       diagnostics.append(scene_diagnostics);
     }
     if (!report) return nullptr;
+    DiagnosticList tool_diagnostics;
+    if (!check_tools_outside(scenes[s], tool_diagnostics)) {
+      for (Diagnostic diagnostic : tool_diagnostics.items()) {
+        if (scenes.size() > 1) diagnostic.message = "scene " + std::to_string(s) + ": " + diagnostic.message;
+        diagnostics.add(std::move(diagnostic));
+      }
+      return nullptr;
+    }
     stability.push_back(*report);
   }
   std::unique_ptr<Simulation> simulation(new Simulation(std::move(scenes), std::move(stability), options.backend));
@@ -72,6 +87,7 @@ std::unique_ptr<Simulation> Simulation::create(std::vector<SimulationSetup> scen
   simulation->engine_ = create_cpu_engine(simulation->scenes_, simulation->stability_, options.batch_threads);
 #endif
   if (!simulation->engine_) return nullptr;
+  if (!simulation->start_tools(diagnostics)) return nullptr;
   if (simulation->needs_checkpoints() && !simulation->engine_->save_checkpoint(diagnostics)) return nullptr;
   return simulation;
 }
@@ -106,6 +122,7 @@ bool Simulation::advance(std::size_t steps, DiagnosticList& diagnostics, std::si
   std::size_t checks_per_run = engine_->checks_per_run();
   for (std::size_t scene = 0; scene < scenes_.size(); ++scene)
     if (displacement_bound_checked(scene)) checks_per_run = 1;
+  if (tools_move()) checks_per_run = 1;  // steps one at a time while a tool's path moves
   const std::size_t last = engine_->steps_taken() + steps;
   while (engine_->steps_taken() < last) {
     // Checks fall on multiples of check_every counted from the run's start, and at the end.
@@ -116,7 +133,7 @@ bool Simulation::advance(std::size_t steps, DiagnosticList& diagnostics, std::si
       if (!ends.empty() && at - start > engine_->most_steps_per_run()) break;
       ends.push_back(at);
     }
-    if (!engine_->run(ends, diagnostics)) return fail();
+    if (!run_engine(ends, diagnostics)) return fail();
     // Each check acted on in order as if its chunk had been run alone: acting on a check before the run's last
     // means restoring the checkpoint (a replay), after which the run's later steps are dropped.
     for (std::size_t check = 0; check < ends.size(); ++check) {
@@ -147,7 +164,7 @@ bool Simulation::locate_non_finite(int vertex, DiagnosticList& diagnostics) {
     ++restores_;
     std::optional<int> bad = vertex_begin_.back();
     while (engine_->steps_taken() < failed_by && *bad >= vertex_begin_.back()) {
-      if (!engine_->run({engine_->steps_taken() + 1}, diagnostics)) return fail();
+      if (!run_engine({engine_->steps_taken() + 1}, diagnostics)) return fail();
       bad = engine_->first_non_finite_vertex(diagnostics);
       if (!bad) return fail();
     }
@@ -265,7 +282,7 @@ bool Simulation::check_inversions(DiagnosticList& diagnostics) {
       }
       if (stop) return false;
       if (engine_->steps_taken() >= failed_by) break;
-      if (!engine_->run({engine_->steps_taken() + 1}, diagnostics)) return false;
+      if (!run_engine({engine_->steps_taken() + 1}, diagnostics)) return false;
     }
   }
   for (std::size_t scene = 0; scene < counts.size(); ++scene) {

@@ -60,7 +60,20 @@ class SteppingEngine {
   virtual bool reduces_in_place() const = 0;
   virtual ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  // The scene's positions where they live on a device (the state held, the stream finished); nullopt on the host.
+  virtual std::optional<DevicePositions> device_positions(std::size_t, DiagnosticList&) const { return std::nullopt; }
   virtual SimulationLaunches launches() const { return {}; }
+
+  // ---- rigid tools and the material, for the Simulation's setters ------------------------------------------------
+  // A scene with tools: its per-vertex contact stiffness (rigid_tools.h's contact_stiffness; given at creation and
+  // after a material change) and its tools' world shapes (given before the steps they act in). Scenes without tools
+  // are never given either.
+  virtual bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList& diagnostics) = 0;
+  virtual bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,
+                               DiagnosticList& diagnostics) = 0;
+  // The scene's material arrays in its setup (the springs' stiffness and damping, the element terms' parameters and
+  // damping, the strain table) were replaced by arrays of the same sizes between two steps: the engine takes them.
+  virtual bool refresh_material(std::size_t scene, DiagnosticList& diagnostics) = 0;
 };
 
 // The CPU engine of a batch whose every scene passed check_stability (`stability`, one each), its scenes stepped side
@@ -71,5 +84,9 @@ std::unique_ptr<SteppingEngine> create_cpu_engine(const std::vector<SimulationSe
 
 // The conjugate gradient's warning text (code `cg-not-converged`), the same for both backends.
 std::string cg_stopped_message(std::size_t step, int iterations, double relative_residual, double tolerance);
+
+// The warning (code `contact-not-settled`) of an implicit step whose tools' contact set still changed after `rounds`
+// solves (kernels/contact_math.h), the same for both backends.
+std::string contact_unsettled_message(std::size_t step, int rounds);
 
 }  // namespace fmpc::sim

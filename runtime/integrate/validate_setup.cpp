@@ -206,7 +206,7 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                              "positive tolerance");
   }
   if (diagnostics.error_count() != errors_before) return false;
-  return validate_loads(setup, diagnostics);
+  return validate_loads(setup, diagnostics) && validate_tools(setup, diagnostics);
 }
 
 }  // namespace fmpc::sim

@@ -42,7 +42,9 @@ SceneRecorder::SceneRecorder(const Scene& scene, const BuiltScene& built, const 
   frame_steps_ = scene.outputs.frames > 0 ? spread(scene.outputs.frames, total) : std::vector<std::size_t>{};
   write_csv_ = scene.outputs.csv && scene.outputs.samples > 0;
   with_probe_ = setup.probe.has_value();
-  sample_steps_ = write_csv_ || with_probe_ ? spread(std::max(scene.outputs.samples, 2), total)
+  for (const RigidTool& tool : setup.tools) tool_names_.push_back(tool.name);
+  tool_peaks_.assign(setup.tools.size(), 0.0);
+  sample_steps_ = write_csv_ || with_probe_ || !tool_names_.empty() ? spread(std::max(scene.outputs.samples, 2), total)
                                             : std::vector<std::size_t>{};
   events_.insert(frame_steps_.begin(), frame_steps_.end());
   events_.insert(sample_steps_.begin(), sample_steps_.end());
@@ -54,7 +56,7 @@ SceneRecorder::SceneRecorder(const Scene& scene, const BuiltScene& built, const 
       for (std::size_t i = 0; i < 3; ++i) probe_axis_[i] = setup.probe->target[i] / length;
   }
   if (write_csv_) {
-    const auto columns = time_series_columns(with_probe_);
+    const auto columns = time_series_columns(with_probe_, tool_names_);
     for (std::size_t i = 0; i < columns.size(); ++i) csv_ += (i ? "," : "") + columns[i];
     csv_ += "\n";
   }
@@ -129,6 +131,19 @@ void SceneRecorder::record_sample(const SceneState& state, double largest, const
                            reading.displacement[2], reading.force[0], reading.force[1], reading.force[2]});
   }
   row.insert(row.end(), {kinetic, elastic, largest});
+  if (!tool_names_.empty()) {
+    tool_readings_ = state.tool_readings(diagnostics);
+    if (tool_readings_.size() != tool_names_.size()) {  // a device error, already reported
+      outputs_ok_ = false;
+      return;
+    }
+    for (std::size_t t = 0; t < tool_readings_.size(); ++t) {
+      const ToolReading& reading = tool_readings_[t];
+      tool_peaks_[t] = std::max(tool_peaks_[t], std::sqrt(dot(reading.force, reading.force)));
+      row.insert(row.end(), {reading.force[0], reading.force[1], reading.force[2], reading.torque[0],
+                             reading.torque[1], reading.torque[2], static_cast<double>(reading.contacts)});
+    }
+  }
   if (write_csv_) {
     for (std::size_t i = 0; i < row.size(); ++i) csv_ += (i ? "," : "") + format_number(row[i]);
     csv_ += "\n";
@@ -253,6 +268,24 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
     probe["final_force_N"] = result.probe_curve.empty() ? 0.0 : result.probe_curve.back().force;
     probe["max_abs_force_N"] = max_force;
   }
+  if (!setup.tools.empty()) {
+    JsonDocument& tools = json["tools"] = JsonDocument::array();
+    for (std::size_t t = 0; t < setup.tools.size(); ++t) {
+      const RigidTool& tool = setup.tools[t];
+      JsonDocument entry = JsonDocument::object();
+      entry["name"] = tool.name;
+      entry["shape"] = tool.shape == RigidTool::Shape::Sphere ? "sphere" : "capsule";
+      entry["radius_m"] = tool.radius;
+      entry["length_m"] = tool.length;
+      const ToolReading last = t < tool_readings_.size() ? tool_readings_[t] : ToolReading{};
+      entry["final_force_N"] = {last.force[0], last.force[1], last.force[2]};
+      entry["final_torque_Nm"] = {last.torque[0], last.torque[1], last.torque[2]};
+      entry["final_contacts"] = last.contacts;
+      entry["max_force_N"] = tool_peaks_[t];
+      tools.push_back(entry);
+    }
+    json["contact_stiffness_ratio"] = setup.contact_stiffness_ratio;
+  }
   JsonDocument& inversions = json["inversions"];
   inversions["largest_count"] = result.inversions.largest_count;
   inversions["final_count"] = result.inversions.current_count;
@@ -283,11 +316,17 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
   return json_text(json);
 }
 
-std::vector<std::string> time_series_columns(bool with_probe) {
-  if (!with_probe) return {"time_s", "kinetic_energy_J", "elastic_energy_J", "max_displacement_m"};
-  return {"time_s",          "probe_displacement_m", "probe_force_N",    "probe_dx_m",        "probe_dy_m",
-          "probe_dz_m",      "probe_fx_N",           "probe_fy_N",       "probe_fz_N",        "kinetic_energy_J",
-          "elastic_energy_J", "max_displacement_m"};
+std::vector<std::string> time_series_columns(bool with_probe, const std::vector<std::string>& tools) {
+  std::vector<std::string> columns =
+      with_probe ? std::vector<std::string>{"time_s",        "probe_displacement_m", "probe_force_N", "probe_dx_m",
+                                            "probe_dy_m",    "probe_dz_m",           "probe_fx_N",    "probe_fy_N",
+                                            "probe_fz_N",    "kinetic_energy_J",     "elastic_energy_J",
+                                            "max_displacement_m"}
+                 : std::vector<std::string>{"time_s", "kinetic_energy_J", "elastic_energy_J", "max_displacement_m"};
+  for (const std::string& tool : tools)
+    for (const char* column : {"_fx_N", "_fy_N", "_fz_N", "_tx_Nm", "_ty_Nm", "_tz_Nm", "_contacts"})
+      columns.push_back(tool + column);
+  return columns;
 }
 
 std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory) {

@@ -144,7 +144,7 @@ std::optional<double> prepare_cohort(const std::vector<BuiltScene*>& patients, c
 std::optional<CohortRunResult> run_cohort(const std::vector<CohortPatient>& patients, const CohortRunOptions& options,
                                           DiagnosticList& diagnostics);
 
-// The CSV's header for a scene with or without a probe (docs/scenes.md lists the columns).
-std::vector<std::string> time_series_columns(bool with_probe);
+// The CSV's header for a scene with or without a probe and with its tools' names (docs/scenes.md lists the columns).
+std::vector<std::string> time_series_columns(bool with_probe, const std::vector<std::string>& tools = {});
 
 }  // namespace fmpc::sim
