@@ -150,25 +150,24 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
     }
   }
   if (a.contact_blocks != nullptr) {
-    // The tools' contact at the step's start, as the CPU's add_contact_blocks: h^2 K_c on the free axes' block.
+    // The tools' contact in the step's active set (kernels::contact_linear_model), as the CPU's contact_part: h^2 K_c
+    // on the free axes' block, h (the model's force at x0 - f0's) - h^2 K_c v0 into b.
     double* block = a.contact_blocks + 6 * v;
+    double change[3] = {0.0, 0.0, 0.0};
     const double k = static_cast<double>(a.loads.contact.stiffness[v]);
-    const bool touching =
-        k > 0.0 && kernels::contact_stiffness_block(a.loads.contact, k, static_cast<double>(a.state.x[v]),
-                                                    static_cast<double>(a.state.y[v]),
-                                                    static_cast<double>(a.state.z[v]), block);
-    if (!touching) {
-      for (int i = 0; i < 6; ++i) block[i] = 0.0;
-    } else {
-      for (int i = 0; i < 6; ++i) block[i] *= a.h * a.h;
-      double free_velocity[3];
-      for (int c = 0; c < 3; ++c) free_velocity[c] = kernels::axis_fixed(held, c) ? 0.0 : own_velocity[c];
-      double kv[3];
-      kernels::symmetric_multiply(block, free_velocity, kv);
-      for (int c = 0; c < 3; ++c) {
-        b[c] -= kv[c];
-        jacobi[c] += block[kernels::symmetric_index(c, c)];
-      }
+    for (int i = 0; i < 6; ++i) block[i] = 0.0;
+    if (k > 0.0)
+      kernels::contact_linear_model(a.loads.contact, a.contact_active[v], k, static_cast<double>(a.state.x[v]),
+                                    static_cast<double>(a.state.y[v]), static_cast<double>(a.state.z[v]), block,
+                                    change);
+    for (int i = 0; i < 6; ++i) block[i] *= a.h * a.h;
+    double free_velocity[3];
+    for (int c = 0; c < 3; ++c) free_velocity[c] = kernels::axis_fixed(held, c) ? 0.0 : own_velocity[c];
+    double kv[3];
+    kernels::symmetric_multiply(block, free_velocity, kv);
+    for (int c = 0; c < 3; ++c) {
+      b[c] += a.h * change[c] - kv[c];
+      jacobi[c] += block[kernels::symmetric_index(c, c)];
     }
   }
   if (a.elements.count > 0) {
@@ -320,6 +319,26 @@ __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
   a.state.z[v] += h * a.state.vz[v];
 }
 
+// The step's contact set (kernels::contact_set) of every vertex a tool can touch: at the state (predicted false),
+// or after moving by h (v0 + dv) on its free axes with dv the solution in x; each vertex whose set changes counts
+// into *contact_changes.
+template <typename Real>
+__global__ void contact_set_kernel(ImplicitArguments<Real> a, bool predicted) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count || !(a.loads.contact.stiffness[v] > Real(0))) return;
+  const unsigned char held = a.loads.fixed[v];
+  const double velocity[3] = {static_cast<double>(a.state.vx[v]), static_cast<double>(a.state.vy[v]),
+                              static_cast<double>(a.state.vz[v])};
+  double moved[3];
+  for (int c = 0; c < 3; ++c) moved[c] = kernels::axis_fixed(held, c) ? 0.0 : a.h * (velocity[c] + a.x[3 * v + c]);
+  const auto set = static_cast<unsigned char>(kernels::contact_set(
+      a.loads.contact, static_cast<double>(a.state.x[v]), static_cast<double>(a.state.y[v]),
+      static_cast<double>(a.state.z[v]), predicted ? moved : nullptr));
+  if (set == a.contact_active[v]) return;
+  a.contact_active[v] = set;
+  atomicAdd(a.contact_changes, 1u);
+}
+
 cudaError_t launch_dots(const double* first, const double* second, const double* third, const double* fourth, int count,
                         double* partial, ConjugateGradientScalars* scalars, CgStage stage, cudaStream_t stream) {
   dot_partial_kernel<<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(first, second, third, fourth, count, partial);
@@ -408,6 +427,13 @@ cudaError_t launch_cg_direction(const ImplicitArguments<Real>& a, cudaStream_t s
 }
 
 template <typename Real>
+cudaError_t launch_contact_set(const ImplicitArguments<Real>& a, bool predicted, cudaStream_t stream) {
+  if (a.vertex_count <= 0 || a.contact_blocks == nullptr) return cudaSuccess;
+  contact_set_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a, predicted);
+  return cudaGetLastError();
+}
+
+template <typename Real>
 cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_t stream) {
   if (a.vertex_count <= 0) return cudaSuccess;
   implicit_finish_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
@@ -417,6 +443,7 @@ cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_
 #define FMPC_IMPLICIT_STEP_LAUNCHERS(Real)                                                           \
   template cudaError_t launch_implicit_assemble<Real>(const ImplicitArguments<Real>&, cudaStream_t); \
   template cudaError_t launch_cg_start<Real>(const ImplicitArguments<Real>&, cudaStream_t);          \
+  template cudaError_t launch_contact_set<Real>(const ImplicitArguments<Real>&, bool, cudaStream_t); \
   template cudaError_t launch_cg_iteration<Real>(const ImplicitArguments<Real>&, cudaStream_t);      \
   template cudaError_t launch_cg_direction<Real>(const ImplicitArguments<Real>&, cudaStream_t);      \
   template cudaError_t launch_implicit_finish<Real>(const ImplicitArguments<Real>&, cudaStream_t);

@@ -171,6 +171,9 @@ class GpuEngine final : public sim::SteppingEngine {
   // stopping rule, same warning as the CPU backend), then v += dv, x += h v. The host reads |r|^2 once per
   // iteration, so implicit steps are never captured into graphs.
   bool implicit_solve(DiagnosticList& diagnostics);
+  // One solve of the assembled system (x = dv), warned about as on the CPU when it stops at its cap; at_rest where the
+  // right-hand side is zero to double precision (nothing solved: the step changes nothing).
+  bool conjugate_gradient(const ImplicitArguments<Real>& a, bool& at_rest, DiagnosticList& diagnostics);
 
   VerletArguments<Real> verlet_arguments() const;
 
@@ -314,7 +317,10 @@ class GpuEngine final : public sim::SteppingEngine {
   // The tools' contact (set_contact, set_tool_shapes): loads_.contact points at these.
   DeviceArray<kernels::ToolShape<Real>> tools_;
   DeviceArray<Real> contact_stiffness_;
-  DeviceArray<double> contact_blocks_;  // implicit Euler's h^2 K_c, 6 per vertex
+  DeviceArray<double> contact_blocks_;         // implicit Euler's h^2 K_c, 6 per vertex
+  DeviceArray<unsigned char> contact_active_;  // implicit Euler's contact set per vertex
+  DeviceArray<unsigned int> contact_changes_;
+  bool contact_warning_given_ = false;
   std::vector<kernels::ToolShape<Real>> tool_shapes_;
   StepSize<Real> step_{};
   std::map<std::pair<std::size_t, int>, std::unique_ptr<GraphExecutable>> graphs_;

@@ -29,8 +29,11 @@ bool GpuEngine<Real>::set_contact(std::size_t, const std::vector<double>& stiffn
   if (contact_stiffness_.size() == 0) {
     FMPC_CUDA_CHECK(contact_stiffness_.upload(to_real<Real>(stiffness)), diagnostics, false);
     FMPC_CUDA_CHECK(tools_.allocate(static_cast<std::size_t>(kernels::kMostTools)), diagnostics, false);
-    if (scheme() == sim::Integrator::ImplicitEuler)
+    if (scheme() == sim::Integrator::ImplicitEuler) {
       FMPC_CUDA_CHECK(contact_blocks_.allocate(6 * static_cast<std::size_t>(n_)), diagnostics, false);
+      FMPC_CUDA_CHECK(contact_active_.allocate(static_cast<std::size_t>(n_)), diagnostics, false);
+      FMPC_CUDA_CHECK(contact_changes_.allocate(1), diagnostics, false);
+    }
     // Allocated on the legacy stream, which the non-blocking stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
     loads_.contact.stiffness = contact_stiffness_.data();

@@ -26,7 +26,10 @@ ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments() {
   a.vertex_count = n_;
   a.spring_count = spring_begin_.back();
   a.blocks = implicit_blocks_.data();
-  a.contact_blocks = loads_.contact.tool_count > 0 ? contact_blocks_.data() : nullptr;
+  const bool contact = loads_.contact.tool_count > 0;
+  a.contact_blocks = contact ? contact_blocks_.data() : nullptr;
+  a.contact_active = contact ? contact_active_.data() : nullptr;
+  a.contact_changes = contact ? contact_changes_.data() : nullptr;
   a.diagonal = implicit_diagonal_.data();
   a.inverse_jacobi = implicit_jacobi_.data();
   a.rhs = implicit_rhs_.data();
@@ -50,12 +53,45 @@ bool GpuEngine<Real>::read_cg_scalars(ConjugateGradientScalars& scalars, Diagnos
 template <typename Real>
 bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
   const ImplicitArguments<Real> a = implicit_arguments();
-  FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
+  const bool contact = a.contact_blocks != nullptr;
+  // The tools' contact as an active set (kernels/contact_math.h): the pairs inside at the step's start, then those
+  // the solution predicts inside, solved again until the set stays, as on the CPU (each round's CG starts from zero
+  // where the CPU's starts from the last round's dv: the two agree to the solver's tolerance).
+  FMPC_CUDA_CHECK(launch_contact_set(a, false, stream_), diagnostics, false);
+  for (int round = 1;; ++round) {
+    FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
+    bool at_rest = false;
+    if (!conjugate_gradient(a, at_rest, diagnostics)) return false;
+    if (at_rest) return true;  // as the CPU backend: the step changes nothing
+    if (!contact) break;
+    unsigned int changes = 0;
+    FMPC_CUDA_CHECK(cudaMemsetAsync(a.contact_changes, 0, sizeof changes, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_contact_set(a, true, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(&changes, a.contact_changes, sizeof changes, cudaMemcpyDeviceToHost, stream_),
+                    diagnostics, false);
+    if (!synchronize(diagnostics)) return false;
+    if (changes == 0) break;
+    if (round == kernels::kMostContactRounds) {
+      if (!contact_warning_given_) {
+        contact_warning_given_ = true;
+        diagnostics.warning(scenes_.front().source_range, "contact-not-settled",
+                            sim::contact_unsettled_message(steps_taken_ + 1, kernels::kMostContactRounds));
+      }
+      break;
+    }
+  }
+  FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
+  return true;
+}
+
+template <typename Real>
+bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, bool& at_rest, DiagnosticList& diagnostics) {
   FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
   ConjugateGradientScalars scalars{};
   if (!read_cg_scalars(scalars, diagnostics)) return false;
   // As the CPU backend: a right-hand side this small means the system is at rest to double precision.
-  if (std::sqrt(scalars.rhs_norm2) < 1e-150) return true;
+  at_rest = std::sqrt(scalars.rhs_norm2) < 1e-150;
+  if (at_rest) return true;
   const sim::ImplicitSolverOptions& options = scenes_.front().implicit;
   const double threshold =
       std::max(options.tolerance * options.tolerance * scalars.rhs_norm2, std::numeric_limits<double>::min());
@@ -79,14 +115,15 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
     diagnostics.warning(scenes_.front().source_range, "cg-not-converged",
                         sim::cg_stopped_message(steps_taken_ + 1, iterations, error, options.tolerance));
   }
-  FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
   return true;
 }
 
 #define FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(Real)                                                                    \
   template ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments();                                         \
   template bool GpuEngine<Real>::read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics); \
-  template bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics);
+  template bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics);                                     \
+  template bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, bool& at_rest,              \
+                                                    DiagnosticList& diagnostics);
 FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(float)
 FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(double)
 #undef FMPC_GPU_ENGINE_IMPLICIT_MEMBERS

@@ -353,10 +353,12 @@ struct ImplicitArguments {
   double h;
   int vertex_count;
   int spring_count;
-  double* blocks;          // 12 per spring: K_s (6) then the system block (6)
-  // 6 per vertex: h^2 K_c, the tools' contact block at the step's start (kernels::contact_stiffness_block; zero
-  // where a vertex touches none); null without tools.
+  double* blocks;  // 12 per spring: K_s (6) then the system block (6)
+  // The tools' contact (null without tools): per vertex its h^2 K_c (6, kernels::contact_linear_model's block for
+  // its active set) and its active set (bit t: tool t pushes it), and the count of sets launch_contact_set changed.
   double* contact_blocks;
+  unsigned char* contact_active;
+  unsigned int* contact_changes;
   double* diagonal;        // per vertex: m + h (gamma0 + gamma1 |x - x0|); 1 for fixed vertices
   double* inverse_jacobi;  // 3 per vertex
   double* rhs;             // 3 per vertex, b
@@ -382,6 +384,11 @@ cudaError_t launch_cg_iteration(const ImplicitArguments<Real>& arguments, cudaSt
 // p = z + beta p, rz = rz_next.
 template <typename Real>
 cudaError_t launch_cg_direction(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
+// The contact's active set of every vertex a tool can touch (kernels::contact_set): at the state (predicted false:
+// the step's first set), or predicted from the solution in x; the vertices whose set changed are counted into
+// *contact_changes (preset by the caller). Nothing without tools.
+template <typename Real>
+cudaError_t launch_contact_set(const ImplicitArguments<Real>& arguments, bool predicted, cudaStream_t stream);
 // v += dv, x += h v on the free vertices (x and v in Real, as the CPU backend).
 template <typename Real>
 cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
