@@ -7,6 +7,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <cstdint>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -29,10 +30,14 @@ struct PySession {
 
 runtime::SessionOptions session_options(const std::string& backend) {
   runtime::SessionOptions options;
-  if (backend == "auto") options.backend = runtime::SessionOptions::Backend::Auto;
-  else if (backend == "cpu") options.backend = runtime::SessionOptions::Backend::Cpu;
-  else if (backend == "cuda") options.backend = runtime::SessionOptions::Backend::Cuda;
-  else raise_error(argument("backend"), "'" + backend + "' is not a backend; use 'auto', 'cpu' or 'cuda'");
+  if (backend == "auto")
+    options.backend = runtime::SessionOptions::Backend::Auto;
+  else if (backend == "cpu")
+    options.backend = runtime::SessionOptions::Backend::Cpu;
+  else if (backend == "cuda")
+    options.backend = runtime::SessionOptions::Backend::Cuda;
+  else
+    raise_error(argument("backend"), "'" + backend + "' is not a backend; use 'auto', 'cpu' or 'cuda'");
   return options;
 }
 
@@ -82,7 +87,8 @@ template <std::size_t N>
 std::array<double, N> numbers(const py::object& value, const std::string& name) {
   const py::array_t<double> array = py::array_t<double>::ensure(value);
   if (!array || array.ndim() != 1 || static_cast<std::size_t>(array.shape(0)) != N)
-    raise_error(argument(name), "expected " + std::to_string(N) + " numbers, got " + py::repr(value).cast<std::string>());
+    raise_error(argument(name),
+                "expected " + std::to_string(N) + " numbers, got " + py::repr(value).cast<std::string>());
   std::array<double, N> out{};
   for (std::size_t i = 0; i < N; ++i) out[i] = array.at(static_cast<py::ssize_t>(i));
   return out;
@@ -138,8 +144,10 @@ void bind_session(py::module_& m) {
             check(ok, s, diagnostics);
           },
           py::arg("time"), "Advances to at least `time` seconds (the GIL released while stepping)")
-      .def_property_readonly("time", [](const PySession& s) { return s.session->time(); }, "s")
-      .def_property_readonly("dt", [](const PySession& s) { return s.session->time_step(); }, "s, the time step")
+      .def_property_readonly(
+          "time", [](const PySession& s) { return s.session->time(); }, "s")
+      .def_property_readonly(
+          "dt", [](const PySession& s) { return s.session->time_step(); }, "s, the time step")
       .def_property_readonly("steps", [](const PySession& s) { return s.session->steps_taken(); })
       .def_property_readonly(
           "backend", [](const PySession& s) { return s.session->backend() == sim::Backend::Cuda ? "cuda" : "cpu"; })
@@ -228,6 +236,27 @@ void bind_session(py::module_& m) {
           },
           "Every vertex's velocity now (n x 3, m/s)")
       .def(
+          "device_positions",
+          [](const PySession& s) {
+            DiagnosticList diagnostics;
+            std::optional<runtime::DevicePositions> pointer;
+            {
+              const std::lock_guard<std::mutex> lock(s.mutex);
+              pointer = s.session->device_positions(diagnostics);
+            }
+            check(pointer.has_value(), s, diagnostics);
+            // Addresses, for a CUDA array interface (CuPy, PyTorch) of the caller's; valid until the next step.
+            py::dict out;
+            out["x"] = reinterpret_cast<std::uintptr_t>(pointer->x);
+            out["y"] = reinterpret_cast<std::uintptr_t>(pointer->y);
+            out["z"] = reinterpret_cast<std::uintptr_t>(pointer->z);
+            out["count"] = pointer->count;
+            out["dtype"] = pointer->double_precision ? "float64" : "float32";
+            return out;
+          },
+          "CUDA only: where the positions live on the device, no copy: x, y, z (addresses of `count` values each, "
+          "structure of arrays), count, dtype; fmpc.Error on the CPU")
+      .def(
           "energies",
           [](const PySession& s) {
             DiagnosticList diagnostics;
@@ -254,8 +283,7 @@ void bind_session(py::module_& m) {
             out["current_count"] = report.current_count;
             out["largest_count"] = report.largest_count;
             out["first_step"] = report.largest_count > 0 ? py::object(py::int_(report.first_step)) : py::none();
-            out["first_element"] =
-                report.largest_count > 0 ? py::object(py::int_(report.first_element)) : py::none();
+            out["first_element"] = report.largest_count > 0 ? py::object(py::int_(report.first_element)) : py::none();
             return out;
           },
           "Inverted tetrahedra: at the last check, the most at one check, and the first (step, element)")
