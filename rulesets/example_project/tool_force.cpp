@@ -1,4 +1,4 @@
-// A program that links fmpc::runtime (docs/runtime.md): it loads the tool scene, presses the instrument's tip 2 mm
+// A program that links fmpc::runtime (docs/runtime.md): it loads the tool scene, presses the instrument's tip 3 mm
 // into the tissue and slides it 1 cm across, posing it every millisecond as a haptic loop would, and prints the
 // force the tissue pushes back with; then it swaps the material for the rule file given (the clinician's last
 // edit) between two steps and prints the force again.
@@ -29,10 +29,10 @@ int main(int argc, char** argv) {
                 reading.force[1], reading.force[2], reading.contacts);
   };
   for (int t = 1; t <= 300; ++t) {
-    // 2 mm down over the first 100 ms, then 1 cm along x over the next 200 ms.
+    // 3 mm down over the first 100 ms, then 1 cm along x over the next 200 ms.
     fmpc::runtime::ToolPose pose;
     pose.position = start;
-    pose.position[2] -= 0.002 * std::min(1.0, t / 100.0);
+    pose.position[2] -= 0.003 * std::min(1.0, t / 100.0);
     pose.position[0] += 0.01 * std::max(0.0, (t - 100) / 200.0);
     if (!session->set_tool_pose(tip, pose, diagnostics) || !session->step_to(t * tick, diagnostics)) {
       std::fputs(session->render(diagnostics).c_str(), stderr);
