@@ -142,15 +142,24 @@ std::string render(const Diagnostic& diagnostic, const SourceFiles& sources) {
       }
       out << ' ' << number << " | " << lead << excerpt << '\n';
       // Tabs in the source are echoed in the caret line so that the caret stays under the column.
-      std::string pad(lead.size(), ' ');
-      for (std::size_t c = first; c < caret && c < text->size() && c < first + kMaxExcerptBytes; ++c)
-        pad += (*text)[c] == '\t' ? '\t' : ' ';
+      const auto pad_to = [&](std::size_t byte) {
+        std::string pad(lead.size(), ' ');
+        for (std::size_t c = first; c < byte && c < text->size() && c < first + kMaxExcerptBytes; ++c)
+          pad += (*text)[c] == '\t' ? '\t' : ' ';
+        return pad;
+      };
+      const std::string pad = pad_to(caret);
       std::size_t width = 1;
       if (r.end_line == r.line && r.end_column > r.column) width = static_cast<std::size_t>(r.end_column - r.column);
       width = std::min(width, kMaxExcerptBytes);
       out << ' ' << gutter << " | " << pad << '^' << std::string(width - 1, '~') << '\n';
-      if (diagnostic.fix && diagnostic.fix->range.line == r.line)
-        out << ' ' << gutter << " | " << pad << shortened(diagnostic.fix->replacement, kMaxExcerptBytes) << '\n';
+      // The fix-it's text starts where it goes (an insertion after the previous token, not under the caret).
+      if (diagnostic.fix && diagnostic.fix->range.line == r.line &&
+          diagnostic.fix->replacement.find_first_not_of(' ') != std::string::npos) {
+        const std::size_t at = static_cast<std::size_t>(std::max(diagnostic.fix->range.column, 1) - 1);
+        out << ' ' << gutter << " | " << (at >= first ? pad_to(at) : pad)
+            << shortened(diagnostic.fix->replacement, kMaxExcerptBytes) << '\n';
+      }
     }
   }
   for (const std::string& note : diagnostic.notes) out << "note: " << note << '\n';

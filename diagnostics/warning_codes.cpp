@@ -44,7 +44,9 @@ const std::vector<WarningCode>& warning_codes() {
       {"input-out-of-range", "eval"},
       {"no-rule-fired", "eval"},
       {"nan-output", "plot"},
+      {"missing-measurement", "validate, tune"},
       {"precision-dependent", "simulate"},
+      {"probe-load", "scene"},
       // meshes, scenes and the simulator
       {"mesh-ignored-elements", "scene"},
       {"mesh-repaired", "scene"},

@@ -35,11 +35,13 @@ unit : name | '%' ;
 // `upper gauss(...) lower gauss(...)`, or MATLAB's `lower scale 0.8 lag 0.1` after the MF.
 termDecl : name IS UPPER? mfCall (LOWER (lowerMf=mfCall | lowerScaleLag))? ;
 
-mfCall : family=name '(' (argument (',' argument)*)? ')' ;
+// Parameters are named. Positional ones, `gaussmf(0.91, 7.64)` or MATLAB's vector `gaussmf [0.91 7.64]`, are read
+// so that sema can refuse them with the named spelling (docs/language.md, "MATLAB's names").
+mfCall : family=name ('(' (argument (',' argument)*)? ')' | '[' (NUMBER ','?)* ']') ;
 
 lowerScaleLag : SCALE scale=NUMBER (LAG lag=NUMBER)? | LAG lag=NUMBER ;
 
-argument : name (NUMBER | interval) unit? ;
+argument : name? (NUMBER | interval) unit? ;
 
 interval : '[' low=NUMBER ',' high=NUMBER ']' ;
 

@@ -1,75 +1,95 @@
 #pragma once
-// The element laws (kernels/laws/), in registry order: ElementTermView::law is an index into this list, and
-// runtime/fem/element_law_registry.cpp has one row per entry (scene keyword, builder, trade name, docs). A new law is
-// a header in kernels/laws/, one entry here and its row there; nothing else names it (tests/unit/law_unit_test.cpp).
+// The element laws (kernels/laws/) and element kinds (kernels/elements/), each a list in registry order:
+// ElementTermView::law and ::element are indices into them. runtime/fem/element_law_registry.cpp has one row per law
+// (scene keyword, builder, trade name, docs). A new law is a header in kernels/laws/, one entry in ElementLaws and its
+// row; a new element kind a header in kernels/elements/ and one entry in ElementKinds; nothing else names either
+// (tests/unit/law_unit_test.cpp).
 #include <type_traits>
 
+#include "kernels/elements/linear_tetrahedron.h"
 #include "kernels/fmpc_hd.h"
 #include "kernels/laws/corotational_linear.h"
 #include "kernels/laws/volume_preservation.h"
 
 namespace fmpc::kernels {
 
-template <typename... Laws>
-struct ElementLawList {
-  static constexpr int count = static_cast<int>(sizeof...(Laws));
+template <typename... Types>
+struct TypeList {
+  static constexpr int count = static_cast<int>(sizeof...(Types));
 };
 
-using ElementLaws = ElementLawList<CorotationalLinear, VolumePreservation>;
+using ElementLaws = TypeList<CorotationalLinear, VolumePreservation>;
+using ElementKinds = TypeList<LinearTetrahedron>;
 
-// The dispatch over the list, defined twice: for host code (launchers, host loops) and for device code (a kernel
-// that meets a term's law at run time), because a host lambda may not be called from a __host__ __device__ function.
-#define FMPC_ELEMENT_LAW_VISIT(ANNOTATION, NAME)                              \
-  template <int Index, typename Visit, typename Law, typename... Rest>        \
-  ANNOTATION auto NAME##_from(int law, Visit& visit) {                        \
-    if constexpr (sizeof...(Rest) == 0) {                                     \
-      return visit(Law{});                                                    \
-    } else {                                                                  \
-      if (law == Index) return visit(Law{});                                  \
-      return NAME##_from<Index + 1, Visit, Rest...>(law, visit);              \
-    }                                                                         \
-  }                                                                           \
-  template <typename Visit, typename... Laws>                                 \
-  ANNOTATION auto NAME##_in(ElementLawList<Laws...>, int law, Visit& visit) { \
-    return NAME##_from<0, Visit, Laws...>(law, visit);                        \
+// The dispatch over a list, defined twice: for host code (launchers, host loops) and for device code (a kernel that
+// meets a term at run time), because a host lambda may not be called from a __host__ __device__ function.
+#define FMPC_TYPE_LIST_VISIT(ANNOTATION, NAME)                             \
+  template <int Index, typename Visit, typename First, typename... Rest>   \
+  ANNOTATION auto NAME##_from(int index, Visit& visit) {                   \
+    if constexpr (sizeof...(Rest) == 0) {                                  \
+      return visit(First{});                                               \
+    } else {                                                               \
+      if (index == Index) return visit(First{});                           \
+      return NAME##_from<Index + 1, Visit, Rest...>(index, visit);         \
+    }                                                                      \
+  }                                                                        \
+  template <typename Visit, typename... Types>                             \
+  ANNOTATION auto NAME##_in(TypeList<Types...>, int index, Visit& visit) { \
+    return NAME##_from<0, Visit, Types...>(index, visit);                  \
   }
 
 namespace detail {
-FMPC_ELEMENT_LAW_VISIT(inline, host_visit)
+FMPC_TYPE_LIST_VISIT(inline, host_visit)
 #if defined(__CUDACC__)
-FMPC_ELEMENT_LAW_VISIT(__device__ __forceinline__, device_visit)
+FMPC_TYPE_LIST_VISIT(__device__ __forceinline__, device_visit)
 #endif
-template <typename Law, typename First, typename... Rest>
-constexpr int law_position() {
-  if constexpr (std::is_same_v<Law, First>) {
+template <typename Type, typename First, typename... Rest>
+constexpr int type_position() {
+  if constexpr (std::is_same_v<Type, First>) {
     return 0;
   } else {
-    static_assert(sizeof...(Rest) > 0, "the law is not in ElementLaws");
-    return 1 + law_position<Law, Rest...>();
+    static_assert(sizeof...(Rest) > 0, "the type is not in the list");
+    return 1 + type_position<Type, Rest...>();
   }
 }
-template <typename Law, typename... Laws>
-constexpr int law_position_in(ElementLawList<Laws...>) {
-  return law_position<Law, Laws...>();
+template <typename Type, typename... Types>
+constexpr int type_position_in(TypeList<Types...>) {
+  return type_position<Type, Types...>();
 }
 }  // namespace detail
 
-// Law's index in ElementLaws (what ElementTermView::law holds for it).
+// Law's index in ElementLaws (what ElementTermView::law holds for it), and an element kind's in ElementKinds.
 template <typename Law>
-constexpr int element_law_index = detail::law_position_in<Law>(ElementLaws{});
+constexpr int element_law_index = detail::type_position_in<Law>(ElementLaws{});
+template <typename Element>
+constexpr int element_kind_index = detail::type_position_in<Element>(ElementKinds{});
 
 // visit(Law{}) for the law with index `law` (0 <= law < ElementLaws::count; the last law for any other index: the
-// setups' validation refuses such indices, sim::validate_setup). Every branch must return the same type. The one
-// place a law index becomes a type: launchers dispatch on it once (static dispatch in their kernels), host loops once
-// per term; visit_element_law_on_device serves a kernel that meets a term at run time.
+// setups' validation refuses such indices, sim::validate_setup). Every branch must return the same type.
 template <typename Visit>
 inline auto visit_element_law(int law, Visit&& visit) {
   return detail::host_visit_in(ElementLaws{}, law, visit);
 }
+
+// visit(Element{}, Law{}) for a term's element kind and law: the one place the indices become types. Launchers
+// dispatch once per launch (static dispatch in their kernels), host loops once per term; visit_element_term_on_device
+// serves a kernel that meets a term at run time.
+template <typename Visit>
+inline auto visit_element_term(int element, int law, Visit&& visit) {
+  auto by_element = [&](auto element_kind) {
+    auto by_law = [&](auto element_law) { return visit(element_kind, element_law); };
+    return detail::host_visit_in(ElementLaws{}, law, by_law);
+  };
+  return detail::host_visit_in(ElementKinds{}, element, by_element);
+}
 #if defined(__CUDACC__)
 template <typename Visit>
-__device__ __forceinline__ auto visit_element_law_on_device(int law, Visit&& visit) {
-  return detail::device_visit_in(ElementLaws{}, law, visit);
+__device__ __forceinline__ auto visit_element_term_on_device(int element, int law, Visit&& visit) {
+  auto by_element = [&](auto element_kind) {
+    auto by_law = [&](auto element_law) { return visit(element_kind, element_law); };
+    return detail::device_visit_in(ElementLaws{}, law, by_law);
+  };
+  return detail::device_visit_in(ElementKinds{}, element, by_element);
 }
 #endif
 

@@ -1,9 +1,14 @@
 #pragma once
-// An element term: one material law acting on a mesh's tetrahedra, as plain arrays (structure of arrays, element-
-// major) that the CPU loops, the CUDA kernels and the host's sums read alike. A run holds a list of terms over the same
-// tetrahedra, summed in list order (an elastic law, a viscous one, the volume term beside springs). Each law is a
-// struct in kernels/laws/ (its parameters, forces, the action of its stiffness, energy, stiffness bound and stress
-// output); kernels/element_laws.h lists them, and everything here is generic over the law.
+// An element term: one constitutive law acting on a mesh's elements of one kind, as plain arrays (structure of
+// arrays, element-major) that the CPU loops, the CUDA kernels and the host's sums read alike. A run holds a list of
+// terms over the same elements, summed in list order (an elastic law, a viscous one, the volume term beside springs).
+// Two independent axes, each a list in kernels/element_laws.h:
+// - a law (kernels/laws/) is the material at one point, a function of the deformation gradient F: its parameters
+//   (Material, material()), first_piola(F, dF/dt), energy_density(F), linearise(F) and stress_differential(dF) (the
+//   tangent implicit Euler uses), rest_lame (the small-strain Lame parameters for the stable step) and stress_output;
+// - an element kind (kernels/elements/) integrates a law over an element: its nodes, F at its points, the nodal
+//   forces, the tangent's action, energy, stress output and stiffness bound, each generic over the law.
+// Everything here is generic over both.
 #include "kernels/fmpc_hd.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
@@ -20,9 +25,10 @@ constexpr int kMostElementTerms = 4;
 template <typename Real>
 struct ElementTermView {
   int law;                                    // the law's index in ElementLaws (kernels/element_laws.h)
+  int element;                                // the element kind's index in ElementKinds (kernels/element_laws.h)
   int count;                                  // elements
-  const int* corners;                         // 4 per element
-  const int* corner_slot;                     // 4 per element: where each corner's force goes (CornerForceView's order)
+  const int* corners;                         // the element kind's kNodes per element
+  const int* corner_slot;                     // kNodes per element: where each node's force goes (CornerForceView)
   const Real* rest_inverse;                   // Dm^-1, 9 per element (1/m)
   const Real* rest_volume;                    // V0 (m^3)
   const Real* parameter[kMostLawParameters];  // the law's parameters in its order, one per element each
@@ -30,12 +36,12 @@ struct ElementTermView {
   StrainTableView strain_table;  // E(strain) for a law whose modulus a strain table replaces; strain null: none
 };
 
-// Element e's corners' positions and, where `velocities`, velocities [corner][axis].
-template <typename Real>
-FMPC_HD void element_corners(int e, const int* corners, const StateView<Real>& s, bool velocities, Real x[4][3],
-                             Real v[4][3]) {
-  for (int a = 0; a < 4; ++a) {
-    const int vertex = corners[4 * e + a];
+// Element e's node positions and, where `velocities`, velocities [node][axis].
+template <int Nodes, typename Real>
+FMPC_HD void element_nodes(int e, const int* nodes, const StateView<Real>& s, bool velocities, Real x[Nodes][3],
+                           Real v[Nodes][3]) {
+  for (int a = 0; a < Nodes; ++a) {
+    const int vertex = nodes[Nodes * e + a];
     x[a][0] = s.x[vertex];
     x[a][1] = s.y[vertex];
     x[a][2] = s.z[vertex];
@@ -47,18 +53,20 @@ FMPC_HD void element_corners(int e, const int* corners, const StateView<Real>& s
   }
 }
 
-// The element pass of one term: element e's four corner forces into force[corner_slot[4 e + a]] (the vertex-major
+// The element pass of one term: element e's node forces into force[corner_slot[kNodes e + a]] (the vertex-major
 // layout CornerForceView reads), written by the run's first term and added to by each later one (Accumulate), so
 // that a vertex's gather sums the terms in list order. Velocities are read only where the term has stiffness
 // damping: the laws read them for nothing else, and they are half the pass's gathered bytes.
-template <typename Law, bool Accumulate, typename Real>
-FMPC_HD void element_corner_forces(int e, const ElementTermView<Real>& t, const StateView<Real>& s,
-                                   CornerForce<Real>* force) {
-  Real x[4][3], v[4][3] = {}, out[4][3];
-  element_corners(e, t.corners, s, t.stiffness_damping != nullptr, x, v);
-  Law::forces(Law::material(t, e), x, v, out);
-  for (int a = 0; a < 4; ++a) {
-    CornerForce<Real>& to = force[t.corner_slot[4 * e + a]];
+template <typename Element, typename Law, bool Accumulate, typename Real>
+FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const StateView<Real>& s,
+                                 CornerForce<Real>* force) {
+  constexpr int N = Element::kNodes;
+  Real x[N][3], v[N][3], out[N][3];
+  const bool damped = t.stiffness_damping != nullptr;
+  element_nodes<N>(e, t.corners, s, damped, x, v);
+  Element::template forces<Law>(t, e, x, damped ? v : nullptr, out);
+  for (int a = 0; a < N; ++a) {
+    CornerForce<Real>& to = force[t.corner_slot[N * e + a]];
     if (Accumulate) {
       to = {to.x + out[a][0], to.y + out[a][1], to.z + out[a][2], Real(0)};
     } else {

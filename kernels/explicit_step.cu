@@ -20,30 +20,30 @@ namespace {
 // SM; bounded to 3 blocks it gets 80 registers and spills 20 bytes (ncu: the spills' local stores became the pass's
 // largest L2 traffic once the corner forces were written as vectors). ForceModelView::element_blocks picks the
 // instance; double keeps its registers (1).
-template <typename Real, typename Law, bool Accumulate, int MinBlocks>
+template <typename Real, typename Element, typename Law, bool Accumulate, int MinBlocks>
 __global__ void __launch_bounds__(kThreadsPerBlock, MinBlocks)
     element_forces_kernel(kernels::ElementTermView<Real> term, kernels::StateView<Real> state,
                           kernels::CornerForce<Real>* force) {
   const int e = vertex_index();
   if (e >= term.count) return;
-  kernels::element_corner_forces<Law, Accumulate>(e, term, state, force);
+  kernels::element_node_forces<Element, Law, Accumulate>(e, term, state, force);
 }
 
-// One term's element pass with its law and whether it adds to the corner forces as template arguments.
-template <typename Real, typename Law, bool Accumulate>
+// One term's element pass with its element kind, law and whether it adds to the node forces as template arguments.
+template <typename Real, typename Element, typename Law, bool Accumulate>
 cudaError_t launch_term_forces(const ForceModelView<Real>& model, const kernels::ElementTermView<Real>& term,
                                const kernels::StateView<Real>& state, cudaStream_t stream) {
   const int blocks = blocks_for(term.count);
   if constexpr (std::is_same_v<Real, float>) {
     if (model.element_blocks == 2) {
-      element_forces_kernel<Real, Law, Accumulate, 2>
+      element_forces_kernel<Real, Element, Law, Accumulate, 2>
           <<<blocks, kThreadsPerBlock, 0, stream>>>(term, state, model.corner_force);
       return cudaGetLastError();
     }
-    element_forces_kernel<Real, Law, Accumulate, 3>
+    element_forces_kernel<Real, Element, Law, Accumulate, 3>
         <<<blocks, kThreadsPerBlock, 0, stream>>>(term, state, model.corner_force);
   } else {
-    element_forces_kernel<Real, Law, Accumulate, 1>
+    element_forces_kernel<Real, Element, Law, Accumulate, 1>
         <<<blocks, kThreadsPerBlock, 0, stream>>>(term, state, model.corner_force);
   }
   return cudaGetLastError();
@@ -366,10 +366,11 @@ cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kerne
   if (model.kind == GatherKind::Springs || model.element_count <= 0) return cudaSuccess;
   for (int t = 0; t < model.term_count; ++t) {
     const kernels::ElementTermView<Real>& term = model.terms[t];
-    const cudaError_t status = kernels::visit_element_law(term.law, [&](auto element_law) {
+    const cudaError_t status = kernels::visit_element_term(term.element, term.law, [&](auto kind, auto element_law) {
+      using Element = decltype(kind);
       using Law = decltype(element_law);
-      return t == 0 ? launch_term_forces<Real, Law, false>(model, term, state, stream)
-                    : launch_term_forces<Real, Law, true>(model, term, state, stream);
+      return t == 0 ? launch_term_forces<Real, Element, Law, false>(model, term, state, stream)
+                    : launch_term_forces<Real, Element, Law, true>(model, term, state, stream);
     });
     if (status != cudaSuccess) return status;
   }

@@ -22,18 +22,20 @@ __global__ void implicit_spring_blocks_kernel(ImplicitArguments<Real> a) {
                                   a.blocks + 12 * s, a.blocks + 12 * s + 6);
 }
 
-// Element e's share of one term of the implicit system: its linearisation at the step's start (the term's law's, into
+// Element e's share of one term of the implicit system: its linearisation at the step's start (into
 // `linearisation`), h^2 K v0 for the right-hand side and the diagonal of (h^2 + h beta) K_aa for the preconditioner;
-// the first term writes them, each later one adds (Accumulate).
-template <typename Real, typename Law, bool Accumulate>
+// the first term writes them, each later one adds (Accumulate). Arrays of 3 values per node are indexed 3 (N e + a),
+// N nodes per element, as the node CSR's entries.
+template <typename Real, typename Element, typename Law, bool Accumulate>
 __global__ void implicit_element_kernel(ImplicitArguments<Real> a, kernels::ElementTermView<double> term,
-                                        typename Law::Linearisation* linearisation) {
+                                        typename Element::template Linearisation<Law>* linearisation) {
+  constexpr int N = Element::kNodes;
   const int e = vertex_index();
   const ImplicitElements& f = a.elements;
   if (e >= f.count) return;
-  double x[4][3], v[4][3], kv[4][3];
-  for (int c = 0; c < 4; ++c) {
-    const int vertex = f.corners[4 * e + c];
+  double x[N][3], v[N][3], kv[N][3], diagonal[N][3];
+  for (int c = 0; c < N; ++c) {
+    const int vertex = term.corners[N * e + c];
     x[c][0] = static_cast<double>(a.state.x[vertex]);
     x[c][1] = static_cast<double>(a.state.y[vertex]);
     x[c][2] = static_cast<double>(a.state.z[vertex]);
@@ -41,54 +43,56 @@ __global__ void implicit_element_kernel(ImplicitArguments<Real> a, kernels::Elem
     v[c][1] = static_cast<double>(a.state.vy[vertex]);
     v[c][2] = static_cast<double>(a.state.vz[vertex]);
   }
-  const auto m = Law::material(term, e);
-  typename Law::Linearisation lin;
-  Law::linearise(m, x, lin);
+  typename Element::template Linearisation<Law> lin;
+  Element::template linearise<Law>(term, e, x, lin);
   linearisation[e] = lin;
-  Law::stiffness_action(m, lin, v, kv);
-  const double scale = a.h * a.h + a.h * m.stiffness_damping;
-  for (int c = 0; c < 4; ++c) {
-    double block[9];
-    Law::stiffness_block(m, lin, c, c, block);
+  Element::template stiffness_action<Law>(term, e, lin, v, kv);
+  Element::template stiffness_diagonal<Law>(term, e, lin, diagonal);
+  const double beta = term.stiffness_damping ? term.stiffness_damping[e] : 0.0;
+  const double scale = a.h * a.h + a.h * beta;
+  for (int c = 0; c < N; ++c) {
     for (int i = 0; i < 3; ++i) {
-      double& rhs = f.rhs_part[12 * e + 3 * c + i];
-      double& diagonal = f.diagonal_part[12 * e + 3 * c + i];
+      double& rhs = f.rhs_part[3 * (N * e + c) + i];
+      double& out = f.diagonal_part[3 * (N * e + c) + i];
       rhs = Accumulate ? rhs + a.h * a.h * kv[c][i] : a.h * a.h * kv[c][i];
-      diagonal = Accumulate ? diagonal + scale * block[4 * i] : scale * block[4 * i];
+      out = Accumulate ? out + scale * diagonal[c][i] : scale * diagonal[c][i];
     }
   }
 }
 
-// (h^2 + h beta) K p of element e for one term, with the corners at fixed vertices taken as zero (their rows are
+// (h^2 + h beta) K p of element e for one term, with the nodes at fixed vertices taken as zero (their rows are
 // identity); the first term writes, each later one adds.
-template <typename Real, typename Law, bool Accumulate>
+template <typename Real, typename Element, typename Law, bool Accumulate>
 __global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a, kernels::ElementTermView<double> term,
-                                              const typename Law::Linearisation* linearisation) {
+                                              const typename Element::template Linearisation<Law>* linearisation) {
+  constexpr int N = Element::kNodes;
   const int e = vertex_index();
   const ImplicitElements& f = a.elements;
   if (e >= f.count) return;
-  double p[4][3], kp[4][3];
-  for (int c = 0; c < 4; ++c) {
-    const int vertex = f.corners[4 * e + c];
+  double p[N][3], kp[N][3];
+  for (int c = 0; c < N; ++c) {
+    const int vertex = term.corners[N * e + c];
     const unsigned char held = a.loads.fixed[vertex];
     for (int i = 0; i < 3; ++i) p[c][i] = kernels::axis_fixed(held, i) ? 0.0 : a.p[3 * vertex + i];
   }
-  const auto m = Law::material(term, e);
-  Law::stiffness_action(m, linearisation[e], p, kp);
-  const double scale = a.h * a.h + a.h * m.stiffness_damping;
-  for (int c = 0; c < 4; ++c)
+  Element::template stiffness_action<Law>(term, e, linearisation[e], p, kp);
+  const double beta = term.stiffness_damping ? term.stiffness_damping[e] : 0.0;
+  const double scale = a.h * a.h + a.h * beta;
+  for (int c = 0; c < N; ++c)
     for (int i = 0; i < 3; ++i) {
-      double& product = f.product[12 * e + 3 * c + i];
+      double& product = f.product[3 * (N * e + c) + i];
       product = Accumulate ? product + scale * kp[c][i] : scale * kp[c][i];
     }
 }
 
-// launch(Law, term index) for each element term, its law a template argument; the first error stops.
+// launch(Element, Law, term index) for each element term, its element kind and law template arguments; the first
+// error stops.
 template <typename Launch>
 cudaError_t for_each_term(const ImplicitElements& elements, Launch&& launch) {
   for (int t = 0; t < elements.term_count; ++t) {
-    const cudaError_t status = kernels::visit_element_law(elements.terms[t].law, [&](auto element_law) {
-      launch(element_law, t);
+    const kernels::ElementTermView<double>& term = elements.terms[t];
+    const cudaError_t status = kernels::visit_element_term(term.element, term.law, [&](auto kind, auto element_law) {
+      launch(kind, element_law, t);
       return cudaGetLastError();
     });
     if (status != cudaSuccess) return status;
@@ -362,14 +366,16 @@ cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStrea
     cudaError_t status = launch_element_forces(
         a.model, kernels::StateView<Real>{a.state.x, a.state.y, a.state.z, a.state.vx, a.state.vy, a.state.vz}, stream);
     if (status != cudaSuccess) return status;
-    status = for_each_term(a.elements, [&](auto element_law, int t) {
+    status = for_each_term(a.elements, [&](auto kind, auto element_law, int t) {
+      using Element = decltype(kind);
       using Law = decltype(element_law);
-      auto* linearisation = static_cast<typename Law::Linearisation*>(a.elements.linearisation[t]);
+      using Linearisation = typename Element::template Linearisation<Law>;
+      auto* linearisation = static_cast<Linearisation*>(a.elements.linearisation[t]);
       if (t == 0) {
-        implicit_element_kernel<Real, Law, false>
+        implicit_element_kernel<Real, Element, Law, false>
             <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
       } else {
-        implicit_element_kernel<Real, Law, true>
+        implicit_element_kernel<Real, Element, Law, true>
             <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
       }
     });
@@ -395,14 +401,16 @@ template <typename Real>
 cudaError_t launch_cg_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
   if (a.vertex_count <= 0) return cudaSuccess;
   if (a.elements.count > 0) {
-    const cudaError_t status = for_each_term(a.elements, [&](auto element_law, int t) {
+    const cudaError_t status = for_each_term(a.elements, [&](auto kind, auto element_law, int t) {
+      using Element = decltype(kind);
       using Law = decltype(element_law);
-      const auto* linearisation = static_cast<const typename Law::Linearisation*>(a.elements.linearisation[t]);
+      using Linearisation = typename Element::template Linearisation<Law>;
+      const auto* linearisation = static_cast<const Linearisation*>(a.elements.linearisation[t]);
       if (t == 0) {
-        implicit_element_apply_kernel<Real, Law, false>
+        implicit_element_apply_kernel<Real, Element, Law, false>
             <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
       } else {
-        implicit_element_apply_kernel<Real, Law, true>
+        implicit_element_apply_kernel<Real, Element, Law, true>
             <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
       }
     });

@@ -153,7 +153,7 @@ __device__ void block_spring_terms(const kernels::SpringLawParameters<Real>& law
 // The element pass of every term over the grid, thread `thread` of `stride` on its elements: each term's pass writes or
 // adds to the corner slots of the same elements, so the terms need no barrier between them. The term index is a
 // constant in each unrolled iteration (indexing the parameter's array with a run-time index would copy it to local
-// memory); the law is visited per element pass.
+// memory); the element kind and law are visited per element pass.
 template <typename Real>
 __device__ void grid_element_pass(const ForceModelView<Real>& model, const kernels::StateView<Real>& in, int thread,
                                   int stride) {
@@ -161,13 +161,14 @@ __device__ void grid_element_pass(const ForceModelView<Real>& model, const kerne
   for (int t = 0; t < kMostElementTerms; ++t) {
     if (t >= model.term_count) break;
     const kernels::ElementTermView<Real>& term = model.terms[t];
-    kernels::visit_element_law_on_device(term.law, [&](auto element_law) {
+    kernels::visit_element_term_on_device(term.element, term.law, [&](auto kind, auto element_law) {
+      using Element = decltype(kind);
       using Law = decltype(element_law);
       for (int e = thread; e < term.count; e += stride) {
         if (t == 0) {
-          kernels::element_corner_forces<Law, false>(e, term, in, model.corner_force);
+          kernels::element_node_forces<Element, Law, false>(e, term, in, model.corner_force);
         } else {
-          kernels::element_corner_forces<Law, true>(e, term, in, model.corner_force);
+          kernels::element_node_forces<Element, Law, true>(e, term, in, model.corner_force);
         }
       }
     });

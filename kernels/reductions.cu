@@ -34,16 +34,18 @@ __device__ double energy_term(const EnergyArguments<Real>& a, EnergyTerm term, i
     return kernels::spring_potential_energy(length, a.rest_length[i], k, a.law);
   }
   if (term == EnergyTerm::ElementPotential) {
-    double corners[4][3];
-    for (int c = 0; c < 4; ++c) {
-      const int vertex = a.element_corners[4 * i + c];
-      corners[c][0] = static_cast<double>(s.x[vertex]);
-      corners[c][1] = static_cast<double>(s.y[vertex]);
-      corners[c][2] = static_cast<double>(s.z[vertex]);
-    }
-    return kernels::visit_element_law_on_device(a.element_term.law, [&](auto element_law) {
-      using Law = decltype(element_law);
-      return Law::energy(Law::material(a.element_term, i), corners);
+    const kernels::ElementTermView<double>& term = a.element_term;
+    return kernels::visit_element_term_on_device(term.element, term.law, [&](auto kind, auto element_law) {
+      using Element = decltype(kind);
+      constexpr int N = Element::kNodes;
+      double x[N][3];
+      for (int c = 0; c < N; ++c) {
+        const int vertex = term.corners[N * i + c];
+        x[c][0] = static_cast<double>(s.x[vertex]);
+        x[c][1] = static_cast<double>(s.y[vertex]);
+        x[c][2] = static_cast<double>(s.z[vertex]);
+      }
+      return Element::template energy<decltype(element_law)>(term, i, x);
     });
   }
   const double x = static_cast<double>(s.x[i]), y = static_cast<double>(s.y[i]), z = static_cast<double>(s.z[i]);

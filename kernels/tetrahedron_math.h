@@ -56,6 +56,39 @@ FMPC_HD Real determinant3(const Real* m) {
   return m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) + m[2] * (m[3] * m[7] - m[4] * m[6]);
 }
 
+// The cofactor matrix cof(F) = det(F) F^-T (row-major), defined for every F: dJ = cof(F) : dF.
+template <typename Real>
+FMPC_HD void cofactor3(const Real* F, Real* C) {
+  C[0] = F[4] * F[8] - F[5] * F[7];
+  C[1] = F[5] * F[6] - F[3] * F[8];
+  C[2] = F[3] * F[7] - F[4] * F[6];
+  C[3] = F[2] * F[7] - F[1] * F[8];
+  C[4] = F[0] * F[8] - F[2] * F[6];
+  C[5] = F[1] * F[6] - F[0] * F[7];
+  C[6] = F[1] * F[5] - F[2] * F[4];
+  C[7] = F[2] * F[3] - F[0] * F[5];
+  C[8] = F[0] * F[4] - F[1] * F[3];
+}
+
+// det(F) - 1 without the cancellation of det(F) near 1: with H = F - I (exact for entries in [0.5, 2]),
+// det(I + H) - 1 = tr H + (tr(H)^2 - tr(H^2)) / 2 + det H. A volume change of 1e-6 keeps its relative precision.
+template <typename Real>
+FMPC_HD Real determinant_minus_one(const Real* F) {
+  const Real h0 = F[0] - Real(1), h4 = F[4] - Real(1), h8 = F[8] - Real(1);
+  const Real first = h0 + h4 + h8;
+  const Real second = h0 * h4 + h4 * h8 + h0 * h8 - F[1] * F[3] - F[5] * F[7] - F[2] * F[6];
+  const Real third = h0 * (h4 * h8 - F[5] * F[7]) - F[1] * (F[3] * h8 - F[5] * F[6]) + F[2] * (F[3] * F[7] - h4 * F[6]);
+  return first + second + third;
+}
+
+// A : B, the sum of the entries' products.
+template <typename Real>
+FMPC_HD Real contract3(const Real* A, const Real* B) {
+  Real sum = Real(0);
+  for (int i = 0; i < 9; ++i) sum += A[i] * B[i];
+  return sum;
+}
+
 // Signed volume (b - a) x (c - a) . (d - a) / 6 of four corners given as [corner][axis].
 template <typename Real>
 FMPC_HD Real tetrahedron_volume(const Real x[4][3]) {

@@ -4,6 +4,8 @@
 
 #include <stdexcept>
 
+#include "compiler/frontend/utf8.h"
+
 namespace py = pybind11;
 
 namespace fmpc::python {
@@ -21,13 +23,18 @@ std::string severity_name(Severity severity) {
 
 void set_error_class(PyObject* error) { error_class = error; }
 
+// Messages may quote any bytes of any file (a binary file read as a scene): a Python str takes UTF-8 only, so every
+// text goes through valid_utf8 (a bad byte becomes U+FFFD) instead of raising UnicodeDecodeError.
 std::vector<PyDiagnostic> to_python(const DiagnosticList& diagnostics, const SourceFiles& sources) {
   std::vector<PyDiagnostic> out;
   for (const Diagnostic& d : diagnostics.items()) {
     std::string text = render(d, sources);
     while (!text.empty() && text.back() == '\n') text.pop_back();
-    out.push_back(PyDiagnostic{severity_name(d.severity), d.code, d.message, d.range.file, d.range.line,
-                               d.range.column, d.range.end_line, d.range.end_column, d.notes, std::move(text)});
+    std::vector<std::string> notes;
+    for (const std::string& note : d.notes) notes.push_back(valid_utf8(note));
+    out.push_back(PyDiagnostic{severity_name(d.severity), valid_utf8(d.code), valid_utf8(d.message),
+                               valid_utf8(d.range.file), d.range.line, d.range.column, d.range.end_line,
+                               d.range.end_column, std::move(notes), valid_utf8(text)});
   }
   return out;
 }

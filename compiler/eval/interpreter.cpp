@@ -577,6 +577,15 @@ Evaluation Interpreter::evaluate(const std::vector<double>& inputs) {
 }
 Explanation Interpreter::explain(const std::vector<double>& inputs) { return state_->run(inputs, true); }
 
+Evaluation Interpreter::evaluate_without_rule(const std::vector<double>& inputs, std::size_t rule) {
+  double& weight = state_->system.rules.at(rule).weight;
+  const double kept = weight;
+  weight = 0.0;
+  Evaluation evaluation = std::move(state_->run(inputs, false).evaluation);
+  weight = kept;
+  return evaluation;
+}
+
 Evaluation evaluate(const FuzzySystem& system, const std::vector<double>& inputs) {
   return Interpreter(system).evaluate(inputs);
 }

@@ -90,6 +90,10 @@ class Interpreter {
 
   Evaluation evaluate(const std::vector<double>& inputs);
   Explanation explain(const std::vector<double>& inputs);
+  // The system without rule `rule` (its weight taken as 0: a rule that does not fire adds nothing to any aggregate
+  // or denominator, so this is exactly the evaluation of the system with the rule erased), for leave-one-rule-out
+  // contributions (rule_contributions.h) without copying the system per rule.
+  Evaluation evaluate_without_rule(const std::vector<double>& inputs, std::size_t rule);
 
  private:
   struct State;

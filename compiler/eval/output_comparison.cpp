@@ -22,8 +22,10 @@ std::string policy_text(const FuzzySystem& system) {
 
 std::string samples_text(int samples) { return samples == 0 ? "exact" : std::to_string(samples); }
 
-// The settings that decide outputs, each as "what: intended -> written" where they differ.
-void compare_settings(const FuzzySystem& a, const FuzzySystem& b, std::vector<std::string>& changes) {
+}  // namespace
+
+std::vector<std::string> setting_changes(const FuzzySystem& a, const FuzzySystem& b) {
+  std::vector<std::string> changes;
   const auto differ = [&](const std::string& what, const std::string& x, const std::string& y) {
     if (x != y) changes.push_back(what + " changes from " + x + " to " + y);
   };
@@ -40,6 +42,18 @@ void compare_settings(const FuzzySystem& a, const FuzzySystem& b, std::vector<st
     differ("the output sampling", samples_text(a.samples), samples_text(b.samples));
   }
   differ("the no-fire policy", policy_text(a), policy_text(b));
+  return changes;
+}
+
+namespace {
+
+// The settings that decide outputs, each as "what: intended -> written" where they differ, and the variables' ranges
+// (by position).
+void compare_settings(const FuzzySystem& a, const FuzzySystem& b, std::vector<std::string>& changes) {
+  for (std::string& change : setting_changes(a, b)) changes.push_back(std::move(change));
+  const auto differ = [&](const std::string& what, const std::string& x, const std::string& y) {
+    if (x != y) changes.push_back(what + " changes from " + x + " to " + y);
+  };
   for (const auto* variables : {&a.inputs, &a.outputs}) {
     const auto* others = variables == &a.inputs ? &b.inputs : &b.outputs;
     const char* role = variables == &a.inputs ? "input" : "output";
@@ -113,7 +127,10 @@ std::vector<std::string> output_changes(const FuzzySystem& intended, const Fuzzy
     double from = 0.0, to = 0.0;
   };
   std::vector<std::array<Largest, 3>> largest(intended.outputs.size());
-  for (const std::vector<double>& x : probe_points(intended, comparison.random_points)) {
+  const std::vector<std::vector<double>> points = probe_points(intended, comparison.random_points);
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const std::vector<double>& x = points[k];
+    if (comparison.progress) comparison.progress(k, points.size());
     const Evaluation p = a.evaluate(x), q = b.evaluate(x);
     for (std::size_t o = 0; o < intended.outputs.size(); ++o) {
       const double range = intended.outputs[o].max - intended.outputs[o].min;
@@ -142,6 +159,27 @@ std::vector<std::string> output_changes(const FuzzySystem& intended, const Fuzzy
                         format_number(l.from) + " to " + format_number(l.to) + " at " + point_text(intended, l.at) +
                         ")");
     }
+  return changes;
+}
+
+std::vector<std::string> name_changes(const FuzzySystem& intended, const FuzzySystem& written) {
+  std::vector<std::string> changes;
+  // "input 'a\"b' is written as 'a'b'", "term 'x' of output 'z' is written as ..."
+  const auto compare = [&](const std::string& what, const std::string& from, const std::string& to,
+                           const std::string& of = "") {
+    if (from != to) changes.push_back(what + " '" + from + "'" + of + " is written as '" + to + "'");
+  };
+  compare("system", intended.name, written.name);
+  const auto variables = [&](const std::vector<Variable>& from, const std::vector<Variable>& to, const char* role) {
+    for (std::size_t v = 0; v < from.size() && v < to.size(); ++v) {
+      compare(role, from[v].name, to[v].name);
+      for (std::size_t t = 0; t < from[v].terms.size() && t < to[v].terms.size(); ++t)
+        compare("term", from[v].terms[t].name, to[v].terms[t].name,
+                " of " + std::string(role) + " '" + from[v].name + "'");
+    }
+  };
+  variables(intended.inputs, written.inputs, "input");
+  variables(intended.outputs, written.outputs, "output");
   return changes;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 
 #include "compiler/frontend/fll.h"
@@ -21,7 +22,8 @@ struct Line {
   int column = 1;    // of the first non-blank character
 };
 
-// The text with comments replaced by spaces (columns kept), split into non-blank lines.
+// The text with comments replaced by spaces (columns kept), split into non-blank lines: each has a first word, as
+// lines and words are cut at the same blanks (kFuzzyliteBlanks).
 std::vector<Line> lines_of(std::string text) {
   for (std::size_t i = 0; i < text.size(); ++i) {
     if (text.compare(i, 2, "(*") == 0) {
@@ -39,9 +41,9 @@ std::vector<Line> lines_of(std::string text) {
   int number = 0;
   for (std::string line; std::getline(in, line);) {
     ++number;
-    const std::size_t first = line.find_first_not_of(" \t\r");
+    const std::size_t first = line.find_first_not_of(kFuzzyliteBlanks);
     if (first == std::string::npos) continue;
-    std::size_t last = line.find_last_not_of(" \t\r;");
+    std::size_t last = line.find_last_not_of(std::string(kFuzzyliteBlanks) + ";");
     if (last == std::string::npos || last < first) last = first;
     lines.push_back(Line{line.substr(first, last - first + 1), number, static_cast<int>(first) + 1});
   }
@@ -128,6 +130,9 @@ class FclReader {
       }
       system_.name = words.size() > 1 ? words[1] : "fcl";
       system_.range = at(line);
+      if (words.size() > 2)
+        diagnostics_.error(at(line, line.text.find(words[2], head.size() + words[1].size()), words[2].size()),
+                           "unexpected '" + words[2] + "' after FUNCTION_BLOCK " + words[1] + "; remove it");
       block_ = Block::FunctionBlock;
       return;
     }
@@ -140,6 +145,17 @@ class FclReader {
       if (block_ != expected) diagnostics_.error(at(line, 0, head.size()), head + " without " + opener);
       block_ = Block::FunctionBlock;
     };
+    // Block keywords take a name (FUZZIFY, DEFUZZIFY; FUNCTION_BLOCK and RULEBLOCK optionally) or nothing.
+    static const std::map<std::string, std::size_t> block_words = {
+        {"VAR_INPUT", 1},   {"VAR_OUTPUT", 1},    {"END_VAR", 1},       {"FUZZIFY", 2},
+        {"DEFUZZIFY", 2},   {"END_FUZZIFY", 1},   {"END_DEFUZZIFY", 1}, {"RULEBLOCK", 2},
+        {"END_RULEBLOCK", 1}, {"END_FUNCTION_BLOCK", 1}};
+    if (const auto arity = block_words.find(head); arity != block_words.end() && words.size() > arity->second) {
+      const std::size_t extra = line.text.find(words[arity->second], head.size());
+      diagnostics_.error(at(line, extra, words[arity->second].size()),
+                         "unexpected '" + words[arity->second] + "' after " +
+                             (arity->second == 1 ? head : head + " " + words[1]) + "; remove it");
+    }
     if (head == "VAR_INPUT") return open(Block::VarInput);
     if (head == "VAR_OUTPUT") return open(Block::VarOutput);
     if (head == "END_VAR") {
@@ -150,16 +166,35 @@ class FclReader {
     }
     if (head == "FUZZIFY" || head == "DEFUZZIFY") {
       open(head == "FUZZIFY" ? Block::Fuzzify : Block::Defuzzify);
+      keys_.open_section();
       const std::string name = words.size() > 1 ? words[1] : "";
+      block_title_ = head + " " + name;
       current_ = find(head == "FUZZIFY" ? system_.inputs : system_.outputs, name);
-      if (!current_)
-        diagnostics_.error(at(line, head.size() + 1, name.size()),
-                           "'" + name + "' is not declared in " + (head == "FUZZIFY" ? "VAR_INPUT" : "VAR_OUTPUT"));
+      const SourceRange name_at = at(line, name.empty() ? 0 : line.text.find(name, head.size()),
+                                     name.empty() ? head.size() : name.size());
+      if (!current_) {
+        diagnostics_.error(name_at, name.empty() ? head + " needs the name of a variable"
+                                                 : "'" + name + "' is not declared in " +
+                                                       (head == "FUZZIFY" ? "VAR_INPUT" : "VAR_OUTPUT"));
+        return;
+      }
+      // A second block for the same variable once added its terms to the first's and replaced its range.
+      const auto [first, inserted] = blocks_.emplace(head + " " + name, name_at);
+      if (!inserted) {
+        diagnostics_.error(name_at, "'" + name + "' has a second " + head + " block; give each variable one",
+                           {"the first is here: " + std::to_string(first->second.line) + ":" +
+                            std::to_string(first->second.column)});
+        current_ = nullptr;
+      }
       return;
     }
     if (head == "END_FUZZIFY") return close(Block::Fuzzify, "FUZZIFY");
     if (head == "END_DEFUZZIFY") return close(Block::Defuzzify, "DEFUZZIFY");
-    if (head == "RULEBLOCK") return open(Block::RuleBlock);
+    if (head == "RULEBLOCK") {
+      keys_.open_section();
+      block_title_ = "RULEBLOCK" + (words.size() > 1 ? " " + words[1] : std::string());
+      return open(Block::RuleBlock);
+    }
     if (head == "END_RULEBLOCK") return close(Block::RuleBlock, "RULEBLOCK");
     if (head == "END_FUNCTION_BLOCK") {
       if (block_ != Block::FunctionBlock)
@@ -179,14 +214,16 @@ class FclReader {
   }
 
   void declare(const Line& line, const std::vector<std::string>& words) {
-    // NAME : REAL  (also NAME: REAL)
-    std::string name = words[0];
-    if (!name.empty() && name.back() == ':') name.pop_back();
+    // NAME : REAL  (also NAME: REAL, NAME :REAL, NAME:REAL), and nothing else on the line.
+    const std::size_t colon = line.text.find(':');
+    const std::string name = fuzzylite_trimmed(line.text.substr(0, colon));
+    const std::vector<std::string> type =
+        colon == std::string::npos ? std::vector<std::string>{} : fuzzylite_words(line.text.substr(colon + 1));
     Variable variable;
-    variable.name = name;
+    variable.name = name.empty() ? words[0] : name;
     variable.range = at(line);
-    variable.name_range = at(line, 0, name.size());
-    if (line.text.find("REAL") == std::string::npos)
+    variable.name_range = at(line, 0, variable.name.size());
+    if (name.empty() || fuzzylite_words(name).size() != 1 || type != std::vector<std::string>{"REAL"})
       diagnostics_.error(at(line), "expected 'NAME : REAL;' (fmpc's variables are real numbers)");
     (block_ == Block::VarInput ? system_.inputs : system_.outputs).push_back(variable);
   }
@@ -203,7 +240,7 @@ class FclReader {
       offset = text.size();
       return {};
     }
-    offset = text.find_first_not_of(' ', assign + skip);
+    offset = text.find_first_not_of(kFuzzyliteBlanks, assign + skip);
     if (offset == std::string::npos) offset = text.size();
     return text.substr(offset);
   }
@@ -213,18 +250,21 @@ class FclReader {
     const std::string& head = words[0];
     std::size_t offset = 0;
     const std::string value = value_of(line.text, offset);
+    if (head != "TERM" && !keys_.once_in_section(head, at(line, 0, head.size()), block_title_, diagnostics_)) return;
     if (head == "RANGE") {
-      // (MIN .. MAX)
-      std::string inside = value;
-      for (char& c : inside)
-        if (c == '(' || c == ')') c = ' ';
-      const std::size_t dots = inside.find("..");
+      // Exactly (MIN .. MAX): one parenthesis on each side, two numbers around "..", nothing else (the reader once
+      // blanked every parenthesis, so that 100,000 unbalanced ones were a range).
+      const std::string range = fuzzylite_trimmed(value);
+      const std::size_t dots = range.find("..");
+      const bool framed = range.size() >= 2 && range.front() == '(' && range.back() == ')' &&
+                          range.find_first_of("()", 1) == range.size() - 1;
       const auto end_of = [&](const std::string& part) {
         const std::vector<std::string> w = fuzzylite_words(part);
         return w.size() == 1 ? fuzzylite_number(w[0]) : std::nullopt;
       };
-      const auto lo = dots == std::string::npos ? std::nullopt : end_of(inside.substr(0, dots));
-      const auto hi = dots == std::string::npos ? std::nullopt : end_of(inside.substr(dots + 2));
+      const auto lo = !framed || dots == std::string::npos ? std::nullopt : end_of(range.substr(1, dots - 1));
+      const auto hi = !framed || dots == std::string::npos ? std::nullopt
+                                                           : end_of(range.substr(dots + 2, range.size() - dots - 3));
       if (!lo || !hi) {
         diagnostics_.error(at(line, offset), "expected 'RANGE := (MIN .. MAX);'");
         return;
@@ -246,16 +286,22 @@ class FclReader {
                                              "write the term as a Triangle, Trapezoid or another family");
         return;
       }
+      // The name is the one word between TERM and ':='.
+      const std::vector<std::string> name_words = fuzzylite_words(line.text.substr(4, assign - 4));
+      if (name_words.size() != 1) {
+        diagnostics_.error(at(line), "expected 'TERM NAME := FAMILY NUMBERS...;' (one word for the name)");
+        return;
+      }
       Term term;
-      term.name = words[1];
+      term.name = name_words[0];
       term.range = at(line);
       if (parts.size() == 1 && fuzzylite_number(parts[0])) {  // "TERM NAME := 5;": an IEC singleton, a Constant
-        term.name_range = at(line, line.text.find(words[1], 4), words[1].size());
+        term.name_range = at(line, line.text.find(term.name, 4), term.name.size());
         term.mf = MembershipFunction{MfKind::Constant, {*fuzzylite_number(parts[0])}};
         current_->terms.push_back(term);
         return;
       }
-      term.name_range = at(line, line.text.find(words[1], 4), words[1].size());
+      term.name_range = at(line, line.text.find(term.name, 4), term.name.size());
       std::vector<double> numbers;
       for (std::size_t k = 1; k < parts.size(); ++k) {
         const auto n = fuzzylite_number(parts[k]);
@@ -276,6 +322,7 @@ class FclReader {
       return;
     }
     if (block_ == Block::Defuzzify && head == "METHOD") {
+      if (!keys_.one_value("METHOD", value, at(line, offset), diagnostics_)) return;
       if (const auto method = lookup(kFclMethods, value)) {
         method_ = *method;
       } else {
@@ -288,13 +335,16 @@ class FclReader {
       return;
     }
     if (block_ == Block::Defuzzify && head == "DEFAULT") {
-      const std::string number = fuzzylite_words(value).empty() ? "" : fuzzylite_words(value)[0];
-      const auto v = fuzzylite_number(number);
-      if (!v) {
+      // NUMBER, or NUMBER | NC (fuzzylite's lock-previous), and nothing else.
+      const std::size_t bar = value.find('|');
+      const std::vector<std::string> parts = fuzzylite_words(value.substr(0, bar));
+      const bool keeps_previous = bar != std::string::npos;
+      const auto v = parts.size() == 1 ? fuzzylite_number(parts[0]) : std::nullopt;
+      if (!v || (keeps_previous && fuzzylite_words(value.substr(bar + 1)) != std::vector<std::string>{"NC"})) {
         diagnostics_.error(at(line, offset), "expected 'DEFAULT := NUMBER;' or 'DEFAULT := nan;'");
         return;
       }
-      if (value.find("NC") != std::string::npos)
+      if (keeps_previous)
         diagnostics_.error(at(line, offset), "'NC' (keep the previous output) keeps a state fmpc's evaluators do not "
                                              "keep: give a number");
       defaults_.push_back({*v, at(line, offset), static_cast<std::size_t>(current_ - system_.outputs.data())});
@@ -311,6 +361,7 @@ class FclReader {
   }
 
   void accumulation(const Line& line, const std::string& value, std::size_t offset) {
+    if (!keys_.one_value("ACCU", value, at(line, offset), diagnostics_)) return;
     if (const auto norm = lookup(kFclSNorms, value)) {
       system_.aggregation = *norm;
     } else {
@@ -322,6 +373,10 @@ class FclReader {
     const std::string& head = words[0];
     std::size_t offset = 0;
     const std::string value = value_of(line.text, offset);
+    if (head == "AND" || head == "OR" || head == "ACT" || head == "ACCU") {
+      if (!keys_.once_in_section(head, at(line, 0, head.size()), block_title_, diagnostics_)) return;
+      if (head != "ACCU" && !keys_.one_value(head, value, at(line, offset), diagnostics_)) return;
+    }
     if (head == "AND" || head == "ACT") {
       if (const auto norm = lookup(kFclTNorms, value))
         (head == "AND" ? system_.and_method : system_.implication) = *norm;
@@ -360,8 +415,9 @@ class FclReader {
     for (const Default& d : defaults_) values[d.output] = d.value;
     if (!defaults_.empty()) set_no_fire_from_defaults(system_, values, defaults_.back().at, diagnostics_);
     else system_.no_fire = NoFirePolicy::Error;
+    const SystemNames names(system_);
     for (const auto& [text, where] : rules_)
-      if (auto rule = parse_fuzzylite_rule(text, where, system_, diagnostics_)) system_.rules.push_back(*rule);
+      if (auto rule = parse_fuzzylite_rule(text, where, system_, names, diagnostics_)) system_.rules.push_back(*rule);
   }
 
   std::string path_;
@@ -370,6 +426,9 @@ class FclReader {
   Block block_ = Block::None;
   Variable* current_ = nullptr;
   std::optional<Defuzzifier> method_;
+  std::string block_title_;                   // "FUZZIFY x", "RULEBLOCK rules": where a key was given twice
+  std::map<std::string, SourceRange> blocks_;  // "FUZZIFY x" -> where the first block for x opened
+  FuzzyliteKeys keys_;
   struct Default {
     double value;
     SourceRange at;

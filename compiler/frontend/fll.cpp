@@ -14,13 +14,6 @@ namespace fmpc {
 
 namespace {
 
-std::string trimmed(const std::string& text) {
-  const std::size_t first = text.find_first_not_of(" \t\r");
-  if (first == std::string::npos) return {};
-  const std::size_t last = text.find_last_not_of(" \t\r");
-  return text.substr(first, last - first + 1);
-}
-
 // Per-output settings FLL gives each output and fmpc gives the system: read per output, then reconciled.
 struct OutputSettings {
   std::string aggregation, defuzzifier, default_value;
@@ -46,7 +39,7 @@ class FllReader {
       ++number;
       const std::size_t comment = line.find('#');
       if (comment != std::string::npos) line.resize(comment);
-      const std::size_t first = line.find_first_not_of(" \t\r");
+      const std::size_t first = line.find_first_not_of(kFuzzyliteBlanks);
       if (first == std::string::npos) continue;
       const std::size_t colon = line.find(':', first);
       const auto at = [&](std::size_t column, std::size_t length) {
@@ -56,9 +49,9 @@ class FllReader {
         diagnostics_.error(at(first, line.size() - first), "expected 'key: value' (FLL)");
         continue;
       }
-      const std::string key = trimmed(line.substr(first, colon - first));
-      const std::size_t value_start = line.find_first_not_of(" \t", colon + 1);
-      const std::string value = value_start == std::string::npos ? "" : trimmed(line.substr(value_start));
+      const std::string key = fuzzylite_trimmed(line.substr(first, colon - first));
+      const std::size_t value_start = line.find_first_not_of(kFuzzyliteBlanks, colon + 1);
+      const std::string value = value_start == std::string::npos ? "" : fuzzylite_trimmed(line.substr(value_start));
       const SourceRange key_at = at(first, key.size());
       const SourceRange value_at =
           value_start == std::string::npos ? at(colon + 1, 0) : at(value_start, value.size());
@@ -77,6 +70,14 @@ class FllReader {
                 const SourceRange& value_at) {
     if (key == "Engine") {
       section_ = Section::Engine;
+      keys_.open_section();
+      if (engine_at_.valid()) {
+        diagnostics_.error(key_at, "a second 'Engine:'; an FLL file holds one engine, and fmpc reads it as one system",
+                           {"the first engine starts here: " + std::to_string(engine_at_.line) + ":" +
+                                std::to_string(engine_at_.column) + "; put each engine in a file of its own"});
+        return;
+      }
+      engine_at_ = key_at;
       system_.name = value.empty() ? "fll" : value;
       system_.range = key_at;
       return;
@@ -84,6 +85,7 @@ class FllReader {
     if (key == "InputVariable" || key == "OutputVariable") {
       const bool input = key == "InputVariable";
       section_ = input ? Section::Input : Section::Output;
+      keys_.open_section();
       Variable variable;
       variable.name = value;
       variable.range = key_at;
@@ -95,8 +97,11 @@ class FllReader {
     }
     if (key == "RuleBlock") {
       section_ = Section::RuleBlock;
+      keys_.open_section();
       return;
     }
+    // Every other key but `term` and `rule` once per section.
+    if (key != "term" && key != "rule" && !keys_.once_in_section(key, key_at, section_title(), diagnostics_)) return;
     if (key == "description") {
       if (section_ == Section::Engine) system_.description = value;
       else if (Variable* v = current_variable()) v->description = value;
@@ -125,6 +130,12 @@ class FllReader {
       case Section::RuleBlock: return "rule block";
       default: return "engine";
     }
+  }
+
+  // "input variable 'x'", "the engine": where a key was given twice.
+  std::string section_title() {
+    if (const Variable* v = current_variable()) return section_name() + " '" + v->name + "'";
+    return section_ == Section::RuleBlock ? "the rule block" : "the engine";
   }
 
   Variable* current_variable() {
@@ -217,6 +228,8 @@ class FllReader {
       rules_.push_back(RuleLine{value, value_at});
       return;
     }
+    if (key == "conjunction" || key == "implication" || key == "disjunction" || key == "activation")
+      if (!keys_.one_value(key, value, value_at, diagnostics_)) return;
     if (key == "conjunction" || key == "implication") {
       if (value == "none") return;
       const auto norm = tnorm_from_fuzzylite(value);
@@ -271,8 +284,10 @@ class FllReader {
       read_defuzzifier(s);
     }
     read_defaults();
+    const SystemNames names(system_);
     for (const RuleLine& line : rules_)
-      if (auto rule = parse_fuzzylite_rule(line.text, line.at, system_, diagnostics_)) system_.rules.push_back(*rule);
+      if (auto rule = parse_fuzzylite_rule(line.text, line.at, system_, names, diagnostics_))
+        system_.rules.push_back(*rule);
   }
 
   // Each output's default as a number (NaN where none was given), into the system's one policy.
@@ -334,6 +349,8 @@ class FllReader {
   Section section_ = Section::None;
   std::vector<OutputSettings> outputs_;
   std::vector<RuleLine> rules_;
+  SourceRange engine_at_;
+  FuzzyliteKeys keys_;
 };
 
 std::string defuzzifier_text(const FuzzySystem& system) {

@@ -46,7 +46,7 @@ struct Setting {
 };
 
 struct Argument {
-  Name name;
+  Name name;  // empty for a positional argument (refused by sema with the named spelling)
   Number value;  // the number, or the low end of an interval `[low, high]`
   std::optional<Name> unit;
   SourceRange range;
@@ -69,6 +69,7 @@ struct Term {
   std::optional<Number> lower_scale;     // `lower scale S [lag L]`
   std::optional<Number> lower_lag;       // `lower [scale S] lag L`
   SourceRange lower_range;               // the `lower ...` part, when present
+  SourceRange call_range;                // FAMILY(...) of the upper MF
   SourceRange range;
   Comments comments;
 };
@@ -124,7 +125,9 @@ struct File {
   Comments end_comments;  // own-line comments after the last item (only `leading` and `blank_line_before`)
 };
 
-// Parses `text`; nullopt when it has syntax errors, all of which are in `diagnostics` (sorted by position).
+// Parses `text`; its syntax errors are in `diagnostics` (sorted by position). nullopt when one of them could not be
+// repaired; a File when every one was (fmpc_token_repair.h: `.5`, `==`, `mL/min`, a missing ':' ...), read as the
+// fix-its say, so that the later steps can report their errors too. A File comes with errors only after repairs.
 std::optional<File> parse_fmpc(const std::string& path, const std::string& text, DiagnosticList& diagnostics);
 
 // Resolves names, named MF arguments and units. Systems with errors are left out of the result (their errors are
@@ -137,6 +140,9 @@ std::string print_fmpc(const File& file);
 // Reserved words: names spelled like these are quoted by the printer.
 bool is_reserved_word(const std::string& word);
 
+// A name as the language writes it: bare when it is an identifier and not a reserved word, else quoted.
+std::string name_as_written(const std::string& name);
+
 // The parameter names of an MF family in the language ("gauss" -> mean, sd) and its IR kind; nullopt for unknown
 // families. "linear" has no fixed names (its coefficients are named by input) and reports an empty list.
 struct FamilySignature {
@@ -145,9 +151,16 @@ struct FamilySignature {
   std::vector<const char*> parameters;  // in the language's canonical order
   std::vector<int> matlab_index;        // position of each parameter in MATLAB's params vector
   std::vector<bool> takes_unit;         // false for slopes
+  std::vector<const char*> matlab_parameters;  // MATLAB's documented names, in MATLAB's order: sigma, c
 };
 const FamilySignature* find_family(const std::string& name);
+// The family MATLAB calls `name` ("trimf" -> triangle), accepted as an alias (docs/language.md, "MATLAB's names");
+// nullptr when `name` is not one of MATLAB's names that differ from fmpc's.
+const FamilySignature* find_matlab_family(const std::string& name);
+// The fmpc family or MATLAB alias; `alias` tells which.
+const FamilySignature* find_family_or_alias(const std::string& name, bool* alias = nullptr);
 const FamilySignature& family_of(MfKind kind);
 std::vector<std::string> family_names();
+std::vector<std::string> matlab_family_names();  // the aliases: trimf, trapmf, ...
 
 }  // namespace fmpc::ast

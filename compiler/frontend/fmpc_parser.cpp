@@ -10,6 +10,8 @@
 #include "grammar/parse_depth_limit.h"
 #include "antlr4-runtime.h"
 #include "compiler/frontend/fmpc_ast.h"
+#include "compiler/frontend/fmpc_source_map.h"
+#include "compiler/frontend/fmpc_token_repair.h"
 #include "compiler/frontend/utf8.h"
 
 namespace fmpc::ast {
@@ -18,67 +20,6 @@ namespace {
 
 using grammar::FmpcLexer;
 using grammar::FmpcParser;
-
-// ANTLR indexes code points; SourceRange columns count bytes. This maps one to the other.
-class SourceMap {
- public:
-  SourceMap(std::string path, const std::string& text) : path_(std::move(path)), size_(text.size()) {
-    line_starts_.push_back(0);
-    for (std::size_t i = 0; i < text.size(); ++i) {
-      const auto byte = static_cast<unsigned char>(text[i]);
-      if ((byte & 0xC0) != 0x80) code_point_offsets_.push_back(i);
-      if (byte == '\n') line_starts_.push_back(i + 1);
-    }
-    code_point_offsets_.push_back(text.size());
-    const std::size_t last = text.find_last_not_of(" \t\r\n\f");
-    end_of_text_ = last == std::string::npos ? 0 : last + 1;
-  }
-
-  SourceRange bytes(std::size_t begin, std::size_t end) const {
-    SourceRange range;
-    range.file = path_;
-    position(begin, range.line, range.column);
-    position(end, range.end_line, range.end_column);
-    return range;
-  }
-
-  SourceRange token(const antlr4::Token* token) const {
-    if (token->getType() == antlr4::Token::EOF) return bytes(end_of_text_, end_of_text_);
-    return bytes(byte_of(token->getStartIndex()), byte_of(token->getStopIndex() + 1));
-  }
-
-  SourceRange span(const antlr4::Token* first, const antlr4::Token* last) const {
-    SourceRange range = token(first);
-    const SourceRange end = token(last);
-    range.end_line = end.end_line;
-    range.end_column = end.end_column;
-    return range;
-  }
-
-  SourceRange context(antlr4::ParserRuleContext* context) const {
-    return span(context->getStart(), context->getStop());
-  }
-
-  const std::string& path() const { return path_; }
-
- private:
-  std::size_t byte_of(std::size_t code_point) const {
-    return code_point < code_point_offsets_.size() ? code_point_offsets_[code_point] : size_;
-  }
-
-  void position(std::size_t byte, int& line, int& column) const {
-    const auto next = std::upper_bound(line_starts_.begin(), line_starts_.end(), byte);
-    const auto index = static_cast<std::size_t>(next - line_starts_.begin()) - 1;
-    line = static_cast<int>(index + 1);
-    column = static_cast<int>(byte - line_starts_[index] + 1);
-  }
-
-  std::string path_;
-  std::size_t size_;
-  std::size_t end_of_text_ = 0;
-  std::vector<std::size_t> code_point_offsets_;
-  std::vector<std::size_t> line_starts_;
-};
 
 bool is_name_token(std::size_t type) {
   switch (type) {
@@ -215,10 +156,16 @@ std::string join_alternatives(const std::vector<std::string>& alternatives) {
 
 // Reports syntax errors as "expected X after 'P', found 'T'" instead of ANTLR's "mismatched input"; recovery
 // stays ANTLR's (single-token insertion and deletion, then resynchronisation), so every error is reported.
+// A missing ':' or ',' (the only token the parser could take there) is inserted with a fix-it, and the parse goes
+// on as if it were written: such an error is a repair, and a file whose every syntax error is a repair still
+// yields its AST, so that the errors of the later steps are reported too.
 class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
  public:
   FmpcErrorStrategy(const SourceMap& source, DiagnosticList& diagnostics)
       : source_(source), diagnostics_(diagnostics) {}
+
+  // Whether a syntax error was met that the parser did not repair.
+  bool unrepaired() const { return unrepaired_; }
 
  protected:
   void reportNoViableAlternative(antlr4::Parser* parser, const antlr4::NoViableAltException& e) override {
@@ -243,6 +190,7 @@ class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
   // with a term ("NAME is") or a setting word. ANTLR's own resynchronisation stops at the first token that could
   // follow, which inside a rule is almost anything and produced cascades of errors.
   void recover(antlr4::Parser* parser, std::exception_ptr) override {
+    unrepaired_ = true;
     antlr4::TokenStream* tokens = parser->getTokenStream();
     const std::size_t index = tokens->index();
     if (index != recovered_at_index_) {
@@ -266,12 +214,22 @@ class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
   void reportMissingToken(antlr4::Parser* parser) override {
     if (inErrorRecoveryMode(parser)) return;
     beginErrorCondition(parser);
-    report(parser, parser->getCurrentToken(), getExpectedTokens(parser), parser->getContext());
+    const antlr4::misc::IntervalSet expected = getExpectedTokens(parser);
+    const std::string inserted =
+        expected.size() == 1 ? parser->getVocabulary().getLiteralName(static_cast<std::size_t>(expected.getMinElement()))
+                             : std::string();
+    if (inserted == "':'" || inserted == "','") {
+      report(parser, parser->getCurrentToken(), expected, parser->getContext(), inserted.substr(1, 1));
+      return;
+    }
+    report(parser, parser->getCurrentToken(), expected, parser->getContext());
   }
 
  private:
+  // `insertion`: the text the parser inserted to go on (a repair, reported with its fix-it); empty otherwise.
   void report(antlr4::Parser* parser, const antlr4::Token* found, const antlr4::misc::IntervalSet& expected,
-              antlr4::RuleContext* context) {
+              antlr4::RuleContext* context, const std::string& insertion = "") {
+    if (insertion.empty()) unrepaired_ = true;
     if (!found) return;
     antlr4::TokenStream* tokens = parser->getTokenStream();
     const antlr4::Token* previous = previous_visible_token(tokens, found);
@@ -294,7 +252,19 @@ class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
     bool end_expected = false;
     bool modifiers_expected = false;
     std::vector<std::string> keywords;
+    // Positional parameters and MATLAB's `[...]` vector are read only to be refused with the named spelling:
+    // messages do not offer them.
+    const std::size_t rule = context ? context->getRuleIndex() : static_cast<std::size_t>(FmpcParser::RuleFile);
+    const bool in_call = rule == FmpcParser::RuleMfCall || rule == FmpcParser::RuleArgument;
+    const bool parameter_expected = in_call && previous && (previous->getText() == "(" || previous->getText() == ",");
+    bool call_expected = false;
+    for (const ssize_t type : expected.toList())
+      call_expected = call_expected || parser->getVocabulary().getLiteralName(static_cast<std::size_t>(type)) == "'('";
     for (const ssize_t type : expected.toList()) {
+      if (parameter_expected && type == FmpcLexer::NUMBER) continue;
+      if ((call_expected || parameter_expected) &&
+          parser->getVocabulary().getLiteralName(static_cast<std::size_t>(type)) == "'['")
+        continue;
       if (type == static_cast<ssize_t>(antlr4::Token::EOF)) {
         end_expected = true;
       } else if (is_name_token(static_cast<std::size_t>(type))) {
@@ -325,7 +295,16 @@ class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
     message += ", found " + describe_found(found);
     for (const Diagnostic& existing : diagnostics_.items())
       if (existing.range.line == range.line && existing.range.column == range.column) return;
-    diagnostics_.error(range, message);
+    Diagnostic diagnostic;
+    diagnostic.range = range;
+    diagnostic.message = std::move(message);
+    if (!insertion.empty() && previous) {
+      SourceRange after_previous = source_.token(previous);
+      after_previous.line = after_previous.end_line;
+      after_previous.column = after_previous.end_column;
+      diagnostic.fix = FixIt{after_previous, insertion};
+    }
+    diagnostics_.add(std::move(diagnostic));
   }
 
   static bool starts_item(antlr4::TokenStream* tokens, std::size_t index) {
@@ -357,6 +336,7 @@ class FmpcErrorStrategy : public antlr4::DefaultErrorStrategy {
   const SourceMap& source_;
   DiagnosticList& diagnostics_;
   std::size_t last_error_line_ = 0;
+  bool unrepaired_ = false;
   std::size_t recovered_at_index_ = static_cast<std::size_t>(-1);
   std::set<std::size_t> recovered_in_states_;
 };
@@ -534,9 +514,16 @@ class AstBuilder {
 
   std::vector<Argument> build_arguments(FmpcParser::MfCallContext* call) {
     std::vector<Argument> arguments;
+    // MATLAB's vector `gaussmf [0.91 7.64]`: positional arguments, refused by sema with the named spelling.
+    for (antlr4::tree::TerminalNode* number_node : call->NUMBER()) {
+      Argument argument;
+      argument.value = number(number_node->getSymbol());
+      argument.range = argument.value.range;
+      arguments.push_back(std::move(argument));
+    }
     for (FmpcParser::ArgumentContext* argument_context : call->argument()) {
       Argument argument;
-      argument.name = name(argument_context->name());
+      if (argument_context->name()) argument.name = name(argument_context->name());
       if (FmpcParser::IntervalContext* interval = argument_context->interval()) {
         argument.value = number(interval->low);
         argument.high = number(interval->high);
@@ -556,6 +543,7 @@ class AstBuilder {
     FmpcParser::MfCallContext* upper = context->mfCall(0);
     term.family = name(upper->family);
     term.arguments = build_arguments(upper);
+    term.call_range = source_.context(upper);
     term.explicit_upper = context->UPPER() != nullptr;
     if (context->lowerMf) {
       LowerCall lower;
@@ -672,25 +660,6 @@ class AstBuilder {
   std::vector<Line> lines_;
 };
 
-void report_lexical_errors(const SourceMap& source, antlr4::CommonTokenStream& tokens,
-                           DiagnosticList& diagnostics) {
-  for (std::size_t i = 0; i < tokens.size(); ++i) {
-    const antlr4::Token* token = tokens.get(i);
-    const std::string text = token->getText();
-    if (token->getType() == FmpcLexer::STRING && (text.size() < 2 || text.back() != '"')) {
-      diagnostics.error(source.token(token), "unterminated quoted name: close it with '\"' on the same line");
-    } else if (token->getType() == FmpcLexer::ERROR_CHARACTER) {
-      std::string message = "unexpected character '" + text + "'";
-      const antlr4::Token* previous = i > 0 ? tokens.get(i - 1) : nullptr;
-      const bool glued_to_name = previous && previous->getStopIndex() + 1 == token->getStartIndex() &&
-                                 (previous->getType() == FmpcLexer::IDENTIFIER || previous->getType() == FmpcLexer::NUMBER);
-      if (text == "-" && !glued_to_name) message += "; a negative number is written without a space: -20";
-      else message += "; a name with this character must be quoted: \"F0-F1\"";
-      diagnostics.error(source.token(token), message);
-    }
-  }
-}
-
 }  // namespace
 
 std::optional<File> parse_fmpc(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
@@ -708,28 +677,37 @@ std::optional<File> parse_fmpc(const std::string& path, const std::string& text,
   antlr4::ANTLRInputStream input(text);
   FmpcLexer lexer(&input);
   lexer.removeErrorListeners();
-  antlr4::CommonTokenStream tokens(&lexer);
+  antlr4::CommonTokenStream lexed(&lexer);
+  lexed.fill();
+  RepairedTokens repaired = repair_tokens(source, lexed, syntax);
+  const bool lexically_repaired = !repaired.unrepaired;
+  antlr4::ListTokenSource token_source(std::move(repaired.tokens), path);
+  antlr4::CommonTokenStream tokens(&token_source);
   tokens.fill();
-  report_lexical_errors(source, tokens, syntax);
 
   FmpcParser parser(&tokens);
   parser.removeErrorListeners();
-  parser.setErrorHandler(std::make_shared<FmpcErrorStrategy>(source, syntax));
+  auto strategy = std::make_shared<FmpcErrorStrategy>(source, syntax);
+  parser.setErrorHandler(strategy);
   // Fmpc.g4 is flat (a file is a list of items, a rule a list of clauses), so no text nests deeply; the limit
   // stays as a guard should the grammar ever gain a recursive rule.
   const antlr4::Token* too_deep = nullptr;
   FmpcParser::FileContext* tree = grammar::parse_file_within_depth_limit(parser, &too_deep);
   if (!tree) syntax.error(source.token(too_deep), grammar::parse_depth_message());
 
-  if (syntax.has_errors()) {
+  // Errors the tokens or the parser could not repair leave no tree worth reading: report them and stop.
+  if (!tree || !lexically_repaired || strategy->unrepaired()) {
     syntax.sort_by_position();
     diagnostics.append(syntax);
     return std::nullopt;
   }
+  const std::size_t repairs = syntax.error_count();
   AstBuilder builder(source, tokens, syntax);
   File file = builder.build(tree);
+  const bool built = syntax.error_count() == repairs;
+  syntax.sort_by_position();
   diagnostics.append(syntax);
-  if (syntax.has_errors()) return std::nullopt;
+  if (!built) return std::nullopt;
   return file;
 }
 

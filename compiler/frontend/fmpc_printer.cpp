@@ -23,12 +23,7 @@ bool is_identifier(const std::string& text) {
   });
 }
 
-std::string name_text(const std::string& name) {
-  if (is_identifier(name) && !is_reserved_word(name)) return name;
-  return "\"" + name + "\"";
-}
-
-std::string name_text(const Name& name) { return name_text(name.text); }
+std::string name_text(const Name& name) { return name_as_written(name.text); }
 
 std::string unit_text(const Name& unit) { return unit.text == "%" ? unit.text : name_text(unit); }
 
@@ -165,11 +160,18 @@ class Printer {
   static std::string call_text(const Name& family_name, const std::vector<Argument>& source_arguments,
                                const std::vector<std::string>& inputs) {
     const bool linear = family_name.text == "linear";
+    const bool positional = std::any_of(source_arguments.begin(), source_arguments.end(), [](const Argument& a) {
+      return a.name.text.empty() && !a.name.quoted;
+    });
     std::vector<std::string> order;
+    Name shown_family = family_name;
     if (linear) {
       order = inputs;
-    } else if (const FamilySignature* family = find_family(family_name.text)) {
+    } else if (const FamilySignature* family = find_family_or_alias(family_name.text)) {
       order.assign(family->parameters.begin(), family->parameters.end());
+      // MATLAB's name (trimf) is written as fmpc's (triangle), unless positional parameters keep MATLAB's order
+      // meaningful (sema refuses those, with the named spelling).
+      if (!positional) shown_family.text = family->name;
     }
     std::vector<const Argument*> arguments;
     for (const Argument& argument : source_arguments) arguments.push_back(&argument);
@@ -180,17 +182,18 @@ class Printer {
     };
     std::stable_sort(arguments.begin(), arguments.end(),
                      [&](const Argument* a, const Argument* b) { return rank(a) < rank(b); });
-    std::string text = name_text(family_name) + "(";
+    std::string text = name_text(shown_family) + "(";
     for (std::size_t i = 0; i < arguments.size(); ++i) {
       const Argument& argument = *arguments[i];
       if (i > 0) text += ", ";
       // In linear(...) a quoted "offset" is an input of that name, a bare one the constant term.
       const bool quote = argument.name.quoted && argument.name.text == "offset";
-      text += quote ? "\"offset\"" : name_text(argument.name);
+      const bool named = !argument.name.text.empty() || argument.name.quoted;
+      text += quote ? "\"offset\" " : named ? name_text(argument.name) + " " : "";
       if (argument.high)
-        text += " [" + format_number(argument.value.value) + ", " + format_number(argument.high->value) + "]";
+        text += "[" + format_number(argument.value.value) + ", " + format_number(argument.high->value) + "]";
       else
-        text += " " + format_number(argument.value.value);
+        text += format_number(argument.value.value);
       if (argument.unit) text += " " + unit_text(*argument.unit);
     }
     return text + ")";
@@ -396,14 +399,22 @@ System system_of(const FuzzySystem& source) {
 
 }  // namespace
 
+std::string name_as_written(const std::string& name) {
+  if (is_identifier(name) && !is_reserved_word(name)) return name;
+  return "\"" + name + "\"";
+}
+
 std::string print_fmpc(const File& file) { return Printer().print(file); }
 
 }  // namespace ast
 
 std::optional<std::string> format_fmpc(const std::string& path, const std::string& text,
                                        DiagnosticList& diagnostics) {
-  std::optional<ast::File> file = ast::parse_fmpc(path, text, diagnostics);
-  if (!file) return std::nullopt;
+  DiagnosticList syntax;
+  std::optional<ast::File> file = ast::parse_fmpc(path, text, syntax);
+  diagnostics.append(syntax);
+  // A file read through repairs is not what its text says: the fix-its are the user's to make.
+  if (!file || syntax.has_errors()) return std::nullopt;
   return ast::print_fmpc(*file);
 }
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <sstream>
+#include <cstring>
 #include <utility>
 
 #include "diagnostics/number_format.h"
@@ -162,10 +162,10 @@ std::vector<Word> words_of(const std::string& text) {
   std::vector<Word> words;
   std::size_t i = 0;
   while (i < text.size()) {
-    while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
+    while (i < text.size() && is_fuzzylite_blank(text[i])) ++i;
     if (i >= text.size()) break;
     const std::size_t start = i;
-    while (i < text.size() && text[i] != ' ' && text[i] != '\t') ++i;
+    while (i < text.size() && !is_fuzzylite_blank(text[i])) ++i;
     words.push_back(Word{text.substr(start, i - start), static_cast<int>(start)});
   }
   return words;
@@ -179,7 +179,7 @@ std::string lower(std::string text) {
 }  // namespace
 
 std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRange& at, const FuzzySystem& system,
-                                         DiagnosticList& diagnostics) {
+                                         const SystemNames& names, DiagnosticList& diagnostics) {
   const std::vector<Word> words = words_of(text);
   const auto range_of = [&](const Word& w) {
     return SourceRange{at.file, at.line, at.column + w.offset, at.line,
@@ -203,14 +203,11 @@ std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRa
     // VARIABLE is [not] [hedge...] TERM
     const Word& variable_word = words[k];
     const std::vector<Variable>& variables = in_consequent ? system.outputs : system.inputs;
-    int variable = -1;
-    for (std::size_t v = 0; v < variables.size(); ++v)
-      if (variables[v].name == variable_word.text) variable = static_cast<int>(v);
+    const int variable = names.variable(in_consequent, variable_word.text);
     if (variable < 0) {
-      std::vector<std::string> names;
-      for (const Variable& v : variables) names.push_back(v.name);
       std::vector<std::string> notes;
-      if (auto suggestion = closest_name(variable_word.text, names)) notes.push_back("did you mean '" + *suggestion + "'?");
+      if (auto suggestion = closest_name(variable_word.text, names.variable_names(in_consequent)))
+        notes.push_back("did you mean '" + *suggestion + "'?");
       diagnostics.error(range_of(variable_word),
                         "'" + variable_word.text + "' is not an " + (in_consequent ? "output" : "input") + " variable",
                         notes);
@@ -250,12 +247,11 @@ std::optional<Rule> parse_fuzzylite_rule(const std::string& text, const SourceRa
     }
     clause.hedge = *hedge;
     const Variable& var = variables[static_cast<std::size_t>(variable)];
-    clause.term = var.find_term(words[term_at].text);
+    clause.term = names.term(in_consequent, variable, words[term_at].text);
     if (clause.term < 0) {
-      std::vector<std::string> names;
-      for (const Term& term : var.terms) names.push_back(term.name);
       std::vector<std::string> notes;
-      if (auto suggestion = closest_name(words[term_at].text, names)) notes.push_back("did you mean '" + *suggestion + "'?");
+      if (auto suggestion = closest_name(words[term_at].text, names.term_names(in_consequent, variable)))
+        notes.push_back("did you mean '" + *suggestion + "'?");
       diagnostics.error(range_of(words[term_at]),
                         "'" + words[term_at].text + "' is not a term of '" + var.name + "'", notes);
       return std::nullopt;
@@ -331,10 +327,17 @@ std::string fuzzylite_rule_text(const FuzzySystem& system, const Rule& rule, con
   return text;
 }
 
+bool is_fuzzylite_blank(char c) { return c != '\0' && std::strchr(kFuzzyliteBlanks, c) != nullptr; }
+
+std::string fuzzylite_trimmed(const std::string& text) {
+  const std::size_t first = text.find_first_not_of(kFuzzyliteBlanks);
+  if (first == std::string::npos) return {};
+  return text.substr(first, text.find_last_not_of(kFuzzyliteBlanks) - first + 1);
+}
+
 std::vector<std::string> fuzzylite_words(const std::string& text) {
-  std::istringstream in(text);
   std::vector<std::string> words;
-  for (std::string w; in >> w;) words.push_back(w);
+  for (const Word& word : words_of(text)) words.push_back(word.text);
   return words;
 }
 
@@ -383,6 +386,32 @@ void set_no_fire_from_defaults(FuzzySystem& system, const std::vector<double>& d
     diagnostics.error(where, "the outputs' defaults differ and are not each output's mid-range; fmpc systems have "
                              "one no-fire value (or mid-range, or an error) for all outputs");
   }
+}
+
+namespace {
+
+std::string position_of(const SourceRange& at) { return std::to_string(at.line) + ":" + std::to_string(at.column); }
+
+}  // namespace
+
+bool FuzzyliteKeys::once_in_section(const std::string& key, const SourceRange& at, const std::string& section,
+                                    DiagnosticList& diagnostics) {
+  const auto [first, inserted] = section_.emplace(key, at);
+  if (inserted) return true;
+  diagnostics.error(at, "'" + key + "' is given twice in " + section + "; keep one",
+                    {"first given here: " + position_of(first->second)});
+  return false;
+}
+
+bool FuzzyliteKeys::one_value(const std::string& setting, const std::string& value, const SourceRange& at,
+                              DiagnosticList& diagnostics) {
+  const auto [first, inserted] = file_.emplace(setting, std::make_pair(value, at));
+  if (inserted || first->second.first == value) return true;
+  diagnostics.error(at, "'" + setting + "' is '" + value + "' here and '" + first->second.first +
+                            "' before; an fmpc system has one " + setting + " for all its rules and outputs: make "
+                            "them equal, or split the file",
+                    {"first given here: " + position_of(first->second.second)});
+  return false;
 }
 
 bool looks_like_fll(const std::string& line) {

@@ -937,20 +937,8 @@ RuleFile read_matlab_fis(const std::string& path, const std::string& text, Diagn
   RuleFile file;
   file.path = path;
 
-  if (const std::size_t bad_byte = first_invalid_utf8(text); bad_byte != std::string::npos) {
-    SourceRange range;
-    range.file = path;
-    range.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(bad_byte), '\n'));
-    const std::size_t line_start = text.rfind('\n', bad_byte == 0 ? 0 : bad_byte - 1);
-    range.column = static_cast<int>(bad_byte - (line_start == std::string::npos || bad_byte == 0 ? 0 : line_start + 1)) + 1;
-    range.end_line = range.line;
-    range.end_column = range.column + 1;
-    diagnostics.error(range, "the file is not valid UTF-8 here", {"save the file as UTF-8"});
-    return file;
-  }
-  // A UTF-8 byte order mark becomes blanks so that columns still count bytes of the original text.
-  std::string source = text;
-  if (source.compare(0, 3, "\xEF\xBB\xBF") == 0) source.replace(0, 3, "   ");
+  if (report_invalid_utf8(path, text, diagnostics)) return file;
+  const std::string source = blank_byte_order_mark(text);
 
   const SourcePositions positions(path, source);
   SyntaxErrorCollector errors(positions, diagnostics);

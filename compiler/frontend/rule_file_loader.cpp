@@ -7,18 +7,20 @@
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/frontend/fuzzylite_vocabulary.h"
 #include "compiler/frontend/matlab_fis.h"
+#include "compiler/frontend/utf8.h"
 #include "compiler/sema/check.h"
 
 namespace fmpc {
 
 namespace {
 
-// The first line that is not blank or a comment, without its leading blanks.
+// The first line that is not blank or a comment, without its leading blanks (std::isspace's, as the FLL and FCL
+// readers cut lines: a form feed alone on the first line leaves an FCL file FCL).
 std::string first_content_line(const std::string& text) {
-  std::size_t pos = 0;
+  std::size_t pos = starts_with_byte_order_mark(text) ? 3 : 0;
   while (pos < text.size()) {
     const std::size_t end = std::min(text.find('\n', pos), text.size());
-    const std::size_t first = text.find_first_not_of(" \t\r", pos);
+    const std::size_t first = text.find_first_not_of(" \t\r\v\f", pos);
     if (first < end) {
       const char c = text[first];
       if (text.compare(first, 2, "(*") == 0) {  // FCL block comment, possibly over several lines
@@ -75,7 +77,8 @@ std::string foreign_format(const std::string& text) {
   return {};
 }
 
-RuleFile load_rule_file(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
+RuleFile load_rule_file(const std::string& path, const std::string& original, DiagnosticList& diagnostics) {
+  const std::string text = blank_byte_order_mark(original);
   const Dialect dialect = detect_dialect(text);
   if (dialect == Dialect::Fmpc) {
     const std::string foreign = foreign_format(text);
@@ -84,6 +87,10 @@ RuleFile load_rule_file(const std::string& path, const std::string& text, Diagno
       return RuleFile{path, {}};
     }
   }
+  // The MATLAB reader and the fmpc parser check UTF-8 themselves; FLL and FCL names reach every output (Python's
+  // str among them), so their text is checked here.
+  if ((dialect == Dialect::Fll || dialect == Dialect::Fcl) && report_invalid_utf8(path, text, diagnostics))
+    return RuleFile{path, {}};
   RuleFile file;
   switch (dialect) {
     case Dialect::Matlab: file = read_matlab_fis(path, text, diagnostics); break;

@@ -1,5 +1,7 @@
 #include "compiler/frontend/utf8.h"
 
+#include <algorithm>
+
 namespace fmpc {
 
 std::size_t first_invalid_utf8(std::string_view text) {
@@ -32,6 +34,40 @@ std::size_t first_invalid_utf8(std::string_view text) {
     i += length;
   }
   return std::string_view::npos;
+}
+
+bool report_invalid_utf8(const std::string& path, std::string_view text, DiagnosticList& diagnostics) {
+  const std::size_t bad_byte = first_invalid_utf8(text);
+  if (bad_byte == std::string_view::npos) return false;
+  SourceRange range;
+  range.file = path;
+  range.line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<long>(bad_byte), '\n'));
+  const std::size_t line_start = text.rfind('\n', bad_byte == 0 ? 0 : bad_byte - 1);
+  range.column =
+      static_cast<int>(bad_byte - (line_start == std::string_view::npos || bad_byte == 0 ? 0 : line_start + 1)) + 1;
+  range.end_line = range.line;
+  range.end_column = range.column + 1;
+  diagnostics.error(range, "the file is not valid UTF-8 here", {"save the file as UTF-8"});
+  return true;
+}
+
+std::string valid_utf8(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t bad = first_invalid_utf8(text); bad != std::string_view::npos; bad = first_invalid_utf8(text)) {
+    out.append(text.substr(0, bad));
+    out.append("\xEF\xBF\xBD");
+    text.remove_prefix(bad + 1);
+  }
+  out.append(text);
+  return out;
+}
+
+bool starts_with_byte_order_mark(std::string_view text) { return text.substr(0, 3) == "\xEF\xBB\xBF"; }
+
+std::string blank_byte_order_mark(std::string text) {
+  if (starts_with_byte_order_mark(text)) text.replace(0, 3, "   ");
+  return text;
 }
 
 }  // namespace fmpc

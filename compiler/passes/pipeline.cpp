@@ -106,9 +106,11 @@ std::optional<CompileResult> run_pipeline(const FuzzySystem& source, const Bindi
       continue;
     }
     bound[static_cast<std::size_t>(index)] = true;
-    if (binding.points != 0 && binding.points < 2) {
-      diagnostics.error(binding.origin, "an axis needs at least 2 points, not " + std::to_string(binding.points),
-                        {"write " + binding.name + ":2 or more, or leave the count out to have it chosen"});
+    if (binding.points != 0 && (binding.points < 2 || binding.points > kMaxAxisPoints)) {
+      diagnostics.error(binding.origin,
+                        "an axis takes 2 to " + std::to_string(kMaxAxisPoints) + " points, not " +
+                            std::to_string(binding.points),
+                        {"give " + binding.name + " 2 or more points, or leave the count out to have it chosen"});
       continue;
     }
     points[static_cast<std::size_t>(index)] = binding.points;

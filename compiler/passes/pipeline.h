@@ -19,9 +19,12 @@ struct FixedInput {
   SourceRange origin;  // where the binding was written (a scene line, or the command-line argument)
 };
 
+// The most breakpoints one table axis may be given (`--vary NAME:POINTS`, compile_table's vary={NAME: POINTS}).
+inline constexpr int kMaxAxisPoints = 1000000;
+
 struct VariedInput {
   std::string name;
-  int points = 0;  // breakpoints of its table axis; 0 = chosen by the table builder to meet the error target
+  int points = 0;  // breakpoints of its table axis, 2 to kMaxAxisPoints; 0 = chosen by the table builder
   SourceRange origin;
 };
 

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <unordered_map>
 
 #include "compiler/frontend/fmpc_ast.h"
 #include "compiler/frontend/fmpc_language.h"
+#include "compiler/ir/system_names.h"
 #include "diagnostics/number_format.h"
 
 namespace fmpc {
@@ -31,6 +33,16 @@ std::string position_text(const SourceRange& range) {
 std::string list_text(const std::vector<std::string>& names) {
   std::string text;
   for (std::size_t i = 0; i < names.size(); ++i) text += (i ? ", " : "") + names[i];
+  return text;
+}
+
+std::vector<std::string> names_of(const std::vector<const char*>& names) {
+  return std::vector<std::string>(names.begin(), names.end());
+}
+
+std::string join_words(const std::vector<const char*>& words) {
+  std::string text;
+  for (std::size_t i = 0; i < words.size(); ++i) text += (i ? " " : "") + std::string(words[i]);
   return text;
 }
 
@@ -87,6 +99,7 @@ class SystemLowering {
     settings_failed_ = diagnostics_.has_errors();
     for (const Item& item : source_.items)
       if (const auto* variable = std::get_if<ast::Variable>(&item)) lower_variable_header(*variable);
+    names_.emplace(system_);  // the variables, for linear(...) coefficients
     std::size_t input_index = 0, output_index = 0;
     std::vector<std::pair<fmpc::Variable*, std::size_t>> failed_terms;
     for (const Item& item : source_.items) {
@@ -99,6 +112,7 @@ class SystemLowering {
         if (diagnostics_.error_count() > errors_before) failed_terms.emplace_back(&target, target.terms.size() - 1);
       }
     }
+    names_.emplace(system_);  // and their terms, for the rules
     for (const Item& item : source_.items)
       if (const auto* rule = std::get_if<ast::Rule>(&item)) {
         const std::size_t errors_before = diagnostics_.error_count();
@@ -297,13 +311,9 @@ class SystemLowering {
     term.name = source.name.text;
     term.range = source.range;
     term.name_range = source.name.range;
-    const FamilySignature* family = ast::find_family(source.family.text);
-    if (!family) {
-      std::vector<std::string> notes = did_you_mean(source.family.text, ast::family_names());
-      notes.push_back("membership functions: " + list_text(ast::family_names()));
-      diagnostics_.error(source.family.range, "unknown membership function " + quoted(source.family.text), notes);
-      return term;
-    }
+    const FamilySignature* family = resolve_family(source.family);
+    if (!family) return term;
+    if (refuse_matlab_parameters(source.family, source.arguments, *family, source.call_range)) return term;
     term.mf.kind = family->kind;
     if (family->kind == MfKind::Linear) lower_linear(source.arguments, variable, term.mf);
     else lower_named_parameters(source, source.family, source.arguments, *family, variable, term.mf, &term);
@@ -338,7 +348,7 @@ class SystemLowering {
     footprint.range = source.lower_range;
     if (source.lower) {
       footprint.kind = FootprintKind::ExplicitLower;
-      const FamilySignature* family = ast::find_family(source.lower->family.text);
+      const FamilySignature* family = ast::find_family_or_alias(source.lower->family.text);
       if (!family || family->kind == MfKind::Linear || family->kind == MfKind::Constant) {
         std::vector<std::string> notes = did_you_mean(source.lower->family.text, ast::family_names());
         notes.push_back("a lower MF is one of the input families: triangle, trapezoid, gauss, ...");
@@ -348,6 +358,7 @@ class SystemLowering {
                            notes);
         return;
       }
+      if (refuse_matlab_parameters(source.lower->family, source.lower->arguments, *family, source.lower->range)) return;
       footprint.lower.kind = family->kind;
       lower_named_parameters(source, source.lower->family, source.lower->arguments, *family, variable,
                              footprint.lower, nullptr);
@@ -357,6 +368,105 @@ class SystemLowering {
       footprint.second = source.lower_lag ? source.lower_lag->value : 0.0;
     }
     term.footprint = footprint;
+  }
+
+  // The family named `name`: fmpc's, or MATLAB's name for it (`trimf` is `triangle`: docs/language.md, "MATLAB's
+  // names"); nullptr after reporting an unknown name.
+  const FamilySignature* resolve_family(const Name& name) {
+    if (const FamilySignature* family = ast::find_family_or_alias(name.text)) return family;
+    std::vector<std::string> candidates = ast::family_names();
+    for (const std::string& alias : ast::matlab_family_names()) candidates.push_back(alias);
+    std::vector<std::string> notes = did_you_mean(name.text, candidates);
+    notes.push_back("membership functions: " + list_text(ast::family_names()));
+    notes.push_back("MATLAB's names are accepted too: " + list_text(ast::matlab_family_names()));
+    diagnostics_.error(name.range, "unknown membership function " + quoted(name.text), notes);
+    return nullptr;
+  }
+
+  // MATLAB's spellings of parameters are refused with fmpc's (fmpc names them so that nobody confuses MATLAB's
+  // [sigma c] order): positional values, `gaussmf(0.91, 7.64)` or `gaussmf [0.91 7.64]`, and MATLAB's own names,
+  // `gaussmf(sigma 0.91, c 7.64)`. Positional values under a MATLAB name and MATLAB's names under any name have one
+  // meaning, so the message spells the call out with fmpc's names and offers it as a fix-it; positional values
+  // under an fmpc name imply no order and none is guessed. True after reporting.
+  bool refuse_matlab_parameters(const Name& family_name, const std::vector<Argument>& arguments,
+                                const FamilySignature& family, const SourceRange& call_range) {
+    if (family.kind == MfKind::Linear) {
+      for (const Argument& argument : arguments) {
+        if (argument.name.text.empty() && !argument.name.quoted) {
+          diagnostics_.error(argument.range, "the coefficients of linear(...) are named by input: "
+                                             "linear(INPUT VALUE, ..., offset VALUE)");
+          return true;
+        }
+      }
+      return false;
+    }
+    std::size_t positional = 0, matlab_named = 0;
+    for (const Argument& argument : arguments) {
+      if (argument.name.text.empty() && !argument.name.quoted) ++positional;
+      else if (matlab_position(family, argument.name.text)) ++matlab_named;
+    }
+    if (positional == 0 && (matlab_named == 0 || matlab_named != arguments.size())) return false;
+    const std::string matlab_form = std::string(matlab_name(family.kind)) + " [" +
+                                    join_words(family.matlab_parameters) + "]";
+    std::vector<std::string> mapping;
+    for (std::size_t i = 0; i < family.parameters.size(); ++i)
+      mapping.push_back(std::string(family.parameters[i]) + " " +
+                        family.matlab_parameters[static_cast<std::size_t>(family.matlab_index[i])]);
+    const std::string mapping_note = "MATLAB's " + matlab_form + " is " + family.name + "(" + list_text(mapping) + ")";
+    // The argument at each of MATLAB's positions, when the call has one meaning.
+    std::vector<const Argument*> at(family.parameters.size(), nullptr);
+    bool one_meaning = arguments.size() == family.parameters.size();
+    for (std::size_t k = 0; k < arguments.size() && one_meaning; ++k) {
+      const Argument& argument = arguments[k];
+      std::optional<std::size_t> position = positional > 0 ? std::optional<std::size_t>(k)
+                                                           : matlab_position(family, argument.name.text);
+      one_meaning = !argument.high && position && *position < at.size() && !at[*position];
+      if (one_meaning) at[*position] = &argument;
+    }
+    if (positional > 0) one_meaning = one_meaning && positional == arguments.size() && ast::find_matlab_family(family_name.text);
+    if (!one_meaning) {
+      std::vector<std::string> named;
+      for (const char* parameter : family.parameters) named.push_back(std::string(parameter) + " VALUE");
+      std::vector<std::string> notes{std::string(family.name) + " takes: " + list_text(names_of(family.parameters))};
+      if (ast::find_matlab_family(family_name.text) || positional == 0) notes.push_back(mapping_note);
+      diagnostics_.error(positional > 0 ? first_positional(arguments) : family_name.range,
+                         "parameters are named in fmpc: write " + std::string(family.name) + "(" + list_text(named) +
+                             ")",
+                         notes);
+      return true;
+    }
+    std::vector<std::string> parts;
+    for (std::size_t i = 0; i < family.parameters.size(); ++i) {
+      const Argument& argument = *at[static_cast<std::size_t>(family.matlab_index[i])];
+      std::string part = std::string(family.parameters[i]) + " " + format_number(argument.value.value);
+      if (argument.unit) part += " " + argument.unit->text;
+      parts.push_back(part);
+    }
+    const std::string call = std::string(family.name) + "(" + list_text(parts) + ")";
+    Diagnostic diagnostic;
+    diagnostic.range = call_range;
+    diagnostic.message = (positional > 0 ? "parameters are named in fmpc: write "
+                                         : "these are MATLAB's parameter names; in fmpc write ") + call;
+    diagnostic.notes.push_back(mapping_note);
+    diagnostic.fix = FixIt{call_range, call};
+    diagnostics_.add(std::move(diagnostic));
+    return true;
+  }
+
+  // The position of MATLAB's parameter `name` in MATLAB's params vector of `family` (gaussmf: sigma 0, c 1), unless
+  // `name` is also one of fmpc's names for the family.
+  static std::optional<std::size_t> matlab_position(const FamilySignature& family, const std::string& name) {
+    for (const char* parameter : family.parameters)
+      if (name == parameter) return std::nullopt;
+    for (std::size_t k = 0; k < family.matlab_parameters.size(); ++k)
+      if (name == family.matlab_parameters[k]) return k;
+    return std::nullopt;
+  }
+
+  static SourceRange first_positional(const std::vector<Argument>& arguments) {
+    for (const Argument& argument : arguments)
+      if (argument.name.text.empty() && !argument.name.quoted) return argument.range;
+    return SourceRange{};
   }
 
   // `term` receives the footprint of an interval argument; null where intervals are not allowed (a lower MF).
@@ -371,6 +481,13 @@ class SystemLowering {
       const auto found = std::find(names.begin(), names.end(), argument.name.text);
       if (found == names.end()) {
         std::vector<std::string> notes = did_you_mean(argument.name.text, names);
+        // MATLAB's own name for the parameter (gaussmf's sigma): say which fmpc name it is.
+        for (std::size_t i = 0; i < names.size(); ++i) {
+          const auto position = static_cast<std::size_t>(family.matlab_index[i]);
+          if (position < family.matlab_parameters.size() && argument.name.text == family.matlab_parameters[position])
+            notes = {"MATLAB's " + std::string(matlab_name(family.kind)) + " calls it " + argument.name.text +
+                     "; fmpc calls it " + quoted(names[i])};
+        }
         notes.push_back(takes);
         diagnostics_.error(argument.name.range,
                            quoted(family.name) + " has no parameter " + quoted(argument.name.text), notes);
@@ -444,17 +561,8 @@ class SystemLowering {
     return true;
   }
 
-  std::vector<std::string> input_names() const {
-    std::vector<std::string> names;
-    for (const fmpc::Variable& input : system_.inputs) names.push_back(input.name);
-    return names;
-  }
-
-  std::vector<std::string> output_names() const {
-    std::vector<std::string> names;
-    for (const fmpc::Variable& output : system_.outputs) names.push_back(output.name);
-    return names;
-  }
+  const std::vector<std::string>& input_names() const { return names_->variable_names(false); }
+  const std::vector<std::string>& output_names() const { return names_->variable_names(true); }
 
   void lower_linear(const std::vector<Argument>& arguments, const fmpc::Variable& variable, MembershipFunction& mf) {
     const std::size_t inputs = system_.inputs.size();
@@ -467,11 +575,11 @@ class SystemLowering {
       const bool is_offset = argument.name.text == "offset" && !argument.name.quoted;
       std::size_t index = inputs;
       if (!is_offset) {
-        const int input = system_.find_input(argument.name.text);
+        const int input = names_->variable(false, argument.name.text);
         if (input < 0) {
           std::vector<std::string> notes = did_you_mean(argument.name.text, input_names());
           notes.push_back("linear(...) takes one coefficient per input of " + quoted(system_.name) + " (" +
-                          list_text(input_names()) + ") and an offset");
+                          name_list_text(input_names()) + ") and an offset");
           diagnostics_.error(argument.name.range,
                              quoted(argument.name.text) + " is not an input of system " + quoted(system_.name),
                              notes);
@@ -500,17 +608,23 @@ class SystemLowering {
 
   // --- rules --------------------------------------------------------------------------------------------------
 
-  // The system of this file, other than this one, that has a variable called `name`, with its role.
-  std::optional<std::string> owner_elsewhere(const std::string& name) const {
-    for (const System& other : file_.systems) {
-      if (&other == &source_ || other.name.text == source_.name.text) continue;
-      for (const Item& item : other.items)
-        if (const auto* variable = std::get_if<ast::Variable>(&item); variable && variable->name.text == name)
-          return quoted(name) + " is an " + (variable->is_output ? "output" : "input") + " of system " +
-                 quoted(other.name.text) + "; a rule of " + quoted(source_.name.text) +
-                 " can only name its own variables";
+  // The system of this file, other than this one, that has a variable called `name`, with its role. The other
+  // systems' variables are indexed on the first unknown name, so that many unknown names cost one pass.
+  std::optional<std::string> owner_elsewhere(const std::string& name) {
+    if (!variables_elsewhere_) {
+      variables_elsewhere_.emplace();
+      for (const System& other : file_.systems) {
+        if (&other == &source_ || other.name.text == source_.name.text) continue;
+        for (const Item& item : other.items)
+          if (const auto* variable = std::get_if<ast::Variable>(&item))
+            variables_elsewhere_->emplace(variable->name.text, std::make_pair(&other, variable->is_output));
+      }
     }
-    return std::nullopt;
+    const auto found = variables_elsewhere_->find(name);
+    if (found == variables_elsewhere_->end()) return std::nullopt;
+    const auto [other, is_output] = found->second;
+    return quoted(name) + " is an " + (is_output ? "output" : "input") + " of system " + quoted(other->name.text) +
+           "; a rule of " + quoted(source_.name.text) + " can only name its own variables";
   }
 
   // Resolves one clause; returns false after reporting when it does not resolve.
@@ -518,10 +632,9 @@ class SystemLowering {
                     std::map<int, SourceRange>& used) {
     const std::vector<fmpc::Variable>& variables = consequent ? system_.outputs : system_.inputs;
     const char* role = consequent ? "output" : "input";
-    const int index = consequent ? system_.find_output(source.variable.text) : system_.find_input(source.variable.text);
+    const int index = names_->variable(consequent, source.variable.text);
     if (index < 0) {
-      const int other_role = consequent ? system_.find_input(source.variable.text)
-                                        : system_.find_output(source.variable.text);
+      const int other_role = names_->variable(!consequent, source.variable.text);
       if (other_role >= 0) {
         diagnostics_.error(source.variable.range,
                            quoted(source.variable.text) + " is an " + (consequent ? "input" : "output") + " of " +
@@ -547,12 +660,11 @@ class SystemLowering {
                          {"first used here: " + position_text(previous->second)});
       return false;
     }
-    const int term = variable.find_term(source.term.text);
+    const int term = names_->term(consequent, index, source.term.text);
     if (term < 0) {
-      std::vector<std::string> term_names;
-      for (const fmpc::Term& candidate : variable.terms) term_names.push_back(candidate.name);
+      const std::vector<std::string>& term_names = names_->term_names(consequent, index);
       std::vector<std::string> notes = did_you_mean(source.term.text, term_names);
-      notes.push_back("terms of " + quoted(variable.name) + ": " + list_text(term_names));
+      notes.push_back("terms of " + quoted(variable.name) + ": " + name_list_text(term_names));
       diagnostics_.error(source.term.range,
                          std::string(role) + " " + quoted(variable.name) + " has no term " + quoted(source.term.text),
                          notes);
@@ -600,6 +712,9 @@ class SystemLowering {
   const System& source_;
   DiagnosticList& diagnostics_;
   FuzzySystem system_;
+  std::optional<SystemNames> names_;  // system_'s names, indexed once its variables (then its terms) are lowered
+  // The other systems' variables by name: the first system that has it, and whether it is an output there.
+  std::optional<std::unordered_map<std::string, std::pair<const System*, bool>>> variables_elsewhere_;
   bool settings_failed_ = false;
   std::vector<std::size_t> failed_rules_;
 };

@@ -70,8 +70,16 @@ class Tables(unittest.TestCase):
         with self.assertRaises(fmpc.Error) as caught:  # unreachable: refused before anything is evaluated
             system.compile_table(os.path.join(folder, "t.fzt"), max_error=1e-300)
         self.assertFalse(os.path.exists(os.path.join(folder, "t.fzt")))
-        with self.assertRaises(fmpc.Error):
+        with self.assertRaises(fmpc.Error) as caught:
             fmpc.load_table(MAMDANI)
+        self.assertIn("it is not a lookup table", str(caught.exception))
+        # A gigabyte that is not a table is refused after its first bytes (sparse: no disk, no memory used).
+        big = os.path.join(folder, "big.fzt")
+        with open(big, "wb") as out:
+            out.truncate(1 << 30)
+        with self.assertRaises(fmpc.Error) as caught:
+            fmpc.load_table(big)
+        self.assertIn("it is not a lookup table", str(caught.exception))
 
 
 if __name__ == "__main__":

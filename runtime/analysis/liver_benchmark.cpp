@@ -186,6 +186,7 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
     return std::nullopt;
   }
   LiverBenchmarkReport report;
+  const std::size_t run_count = controllers.size() * patients.size() + moduli.size();
   auto reference = simulate_benchmark_reference(options, diagnostics);
   if (!reference) return std::nullopt;
   report.reference = std::move(*reference);
@@ -225,6 +226,7 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
         diagnostics.warning(SourceRange{}, "no-rule-fired",
                             "patient '" + patient.label + "': no rule of controller '" + controller.name +
                                 "' fired; its output is the system's no-fire value");
+      if (options.progress) options.progress(report.runs.size(), run_count);
       auto run = compare_modulus_with_benchmark(controller.name, patient.label,
                                                 evaluation.outputs.front() * *pascals, report.reference, options,
                                                 diagnostics);
@@ -233,6 +235,7 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
     }
   }
   for (const double modulus : moduli) {
+    if (options.progress) options.progress(report.runs.size(), run_count);
     auto run = compare_modulus_with_benchmark("constant", "E = " + format_number(modulus / 1000.0) + " kPa", modulus,
                                               report.reference, options, diagnostics);
     if (!run) return std::nullopt;

@@ -20,6 +20,7 @@
 //   the controller with the benchmark; "benchmark law" (ControllerRun::benchmark_*) runs the benchmark's own law and
 //   nodal damping with K1 = k l0 (K2 / K1 and Xc kept) driven by the controller, as issue 10 item 7 asks. The
 //   reference is the benchmark with its own K1.
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +51,8 @@ struct LiverBenchmarkOptions {
   double area_over_length = 1e-3;  // m: k (N/m) = E (Pa) x area_over_length
   double rest_length = 1.0;        // m, l0 of the benchmark's spring
   SourceRange time_step_range;     // where the time step came from (a step the simulator refuses points there)
+  // Called before each run with (runs done, runs in all): thousands of patients take minutes.
+  std::function<void(std::size_t, std::size_t)> progress;
 };
 
 // Limits on the options (checked before anything is allocated).

@@ -58,20 +58,27 @@ std::optional<ElementGeometry> element_geometry(const std::vector<Point3>& point
     inverse[8] = (dm[0] * dm[4] - dm[1] * dm[3]) / det;
     geometry.rest_volume[e] = volume;
   }
-  geometry.corner_offset.assign(points.size() + 1, 0);
-  for (const Tetrahedron& t : tetrahedra)
-    for (const std::int32_t v : t) ++geometry.corner_offset[static_cast<std::size_t>(v) + 1];
-  for (std::size_t v = 0; v < points.size(); ++v) geometry.corner_offset[v + 1] += geometry.corner_offset[v];
-  geometry.corner_index.resize(4 * count);
-  geometry.corner_slot.resize(4 * count);
-  std::vector<std::int32_t> next(geometry.corner_offset.begin(), geometry.corner_offset.end() - 1);
-  for (std::size_t e = 0; e < count; ++e)
-    for (std::size_t c = 0; c < 4; ++c) {
-      const std::int32_t slot = next[static_cast<std::size_t>(tetrahedra[e][c])]++;
-      geometry.corner_index[static_cast<std::size_t>(slot)] = static_cast<std::int32_t>(4 * e + c);
-      geometry.corner_slot[4 * e + c] = slot;
-    }
+  geometry.kind = kernels::element_kind_index<kernels::LinearTetrahedron>;
+  geometry.nodes_per_element = kernels::LinearTetrahedron::kNodes;
+  geometry.nodes.reserve(4 * count);
+  for (const Tetrahedron& t : tetrahedra) geometry.nodes.insert(geometry.nodes.end(), t.begin(), t.end());
+  build_node_csr(geometry, points.size());
   return geometry;
+}
+
+void build_node_csr(ElementGeometry& geometry, std::size_t vertex_count) {
+  const std::size_t entries = geometry.nodes.size();
+  geometry.corner_offset.assign(vertex_count + 1, 0);
+  for (const std::int32_t v : geometry.nodes) ++geometry.corner_offset[static_cast<std::size_t>(v) + 1];
+  for (std::size_t v = 0; v < vertex_count; ++v) geometry.corner_offset[v + 1] += geometry.corner_offset[v];
+  geometry.corner_index.resize(entries);
+  geometry.corner_slot.resize(entries);
+  std::vector<std::int32_t> next(geometry.corner_offset.begin(), geometry.corner_offset.end() - 1);
+  for (std::size_t k = 0; k < entries; ++k) {
+    const std::int32_t slot = next[static_cast<std::size_t>(geometry.nodes[k])]++;
+    geometry.corner_index[static_cast<std::size_t>(slot)] = static_cast<std::int32_t>(k);
+    geometry.corner_slot[k] = slot;
+  }
 }
 
 kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, std::size_t term,
@@ -79,8 +86,9 @@ kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, st
   const ElementTerm& t = terms.terms[term];
   kernels::ElementTermView<double> view{};
   view.law = t.law;
+  view.element = terms.geometry.kind;
   view.count = static_cast<int>(terms.geometry.size());
-  view.corners = nullptr;
+  view.corners = terms.geometry.nodes.data();
   view.corner_slot = terms.geometry.corner_slot.data();
   view.rest_inverse = terms.geometry.rest_inverse.data();
   view.rest_volume = terms.geometry.rest_volume.data();
@@ -107,18 +115,22 @@ void assign_element_damping(const ElementGeometry& geometry, ElementTerm& term, 
   std::vector<double> damping(geometry.size());
   kernels::ElementTermView<double> view{};
   view.law = term.law;
+  view.element = geometry.kind;
   view.count = static_cast<int>(geometry.size());
+  view.corners = geometry.nodes.data();
+  view.corner_slot = geometry.corner_slot.data();
   view.rest_inverse = geometry.rest_inverse.data();
   view.rest_volume = geometry.rest_volume.data();
   for (int p = 0; p < kernels::kMostLawParameters; ++p)
     view.parameter[p] = term.parameter[p].empty() ? nullptr : term.parameter[p].data();
   view.stiffness_damping = nullptr;
   view.strain_table = {nullptr, nullptr, 0};
-  kernels::visit_element_law(term.law, [&](auto element_law) {
+  kernels::visit_element_term(geometry.kind, term.law, [&](auto kind, auto element_law) {
+    using Element = decltype(kind);
     using Law = decltype(element_law);
     for (std::size_t e = 0; e < geometry.size(); ++e) {
-      const double stiffness = Law::stiffness_bound(Law::material(view, static_cast<int>(e)));
-      const double corner_mass = density * geometry.rest_volume[e] / 4.0;
+      const double stiffness = Element::template stiffness_bound<Law>(view, static_cast<int>(e));
+      const double corner_mass = density * geometry.rest_volume[e] / Element::kNodes;
       const double omega = std::sqrt(stiffness / corner_mass);
       damping[e] = (omega > 0.0 ? 2.0 * ratio / omega : 0.0) + rayleigh_stiffness;
     }

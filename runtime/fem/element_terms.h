@@ -1,8 +1,8 @@
 #pragma once
-// A run's element terms as plain data (docs/simulator.md, "Element terms"): the tetrahedra's rest geometry and
-// corner CSR, shared by the terms, and the list of terms, each one law (kernels/laws/, listed in kernels/
+// A run's element terms as plain data (docs/simulator.md, "Element terms"): the elements' kind, nodes, rest geometry
+// and node CSR, shared by the terms, and the list of terms, each one law (kernels/laws/, listed in kernels/
 // element_laws.h; runtime/fem/element_law_registry.h builds them) with its per-element parameters, summed in list
-// order. The backends read them through kernels::ElementTermView. Nothing here names a law.
+// order. The backends read them through kernels::ElementTermView. Nothing here names a law or an element kind.
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -13,15 +13,19 @@
 
 namespace fmpc::sim {
 
-// Parallel to SimulationSetup::tetrahedra (positively oriented).
+// Parallel to SimulationSetup::tetrahedra (positively oriented): element e is built on tetrahedron e.
 struct ElementGeometry {
+  int kind = 0;                      // the element kind's index in kernels::ElementKinds
+  int nodes_per_element = 4;         // the kind's kNodes
+  std::vector<std::int32_t> nodes;   // nodes_per_element vertices per element (the linear kind's: the tetrahedra)
   std::vector<double> rest_inverse;  // Dm^-1 per element, 9 values, row-major (1/m)
   std::vector<double> rest_volume;   // m^3, positive
-  // The corners at each vertex as CSR: corner_index[corner_offset[v] .. corner_offset[v+1]) are 4 e + c, increasing.
+  // The nodes at each vertex as CSR: corner_index[corner_offset[v] .. corner_offset[v+1]) are N e + a (element e's
+  // node a, N nodes per element), increasing.
   std::vector<std::int32_t> corner_offset;
   std::vector<std::int32_t> corner_index;
-  // The inverse of corner_index: corner_slot[4 e + c] = k where corner_index[k] = 4 e + c. The element pass writes
-  // corner forces at their slots, so each vertex's gather reads one contiguous run (no 12-byte reads scattered over
+  // The inverse of corner_index: corner_slot[N e + a] = k where corner_index[k] = N e + a. The element pass writes
+  // node forces at their slots, so each vertex's gather reads one contiguous run (no 12-byte reads scattered over
   // element-major memory: docs/performance.md).
   std::vector<std::int32_t> corner_slot;
 
@@ -42,15 +46,19 @@ struct ElementTerms {
   bool empty() const { return terms.empty(); }
 };
 
-// The rest geometry (Dm^-1, volumes) and the corner CSR of `tetrahedra` over `points` (metres). An element whose
-// volume is not positive (|V| <= 1e-9 l_max^3, or inverted) is an error naming it: repair the mesh first.
+// Linear tetrahedra on `tetrahedra` over `points` (metres): their nodes, rest geometry (Dm^-1, volumes) and node
+// CSR. An element whose volume is not positive (|V| <= 1e-9 l_max^3, or inverted) is an error naming it: repair the
+// mesh first.
 std::optional<ElementGeometry> element_geometry(const std::vector<Point3>& points,
                                                 const std::vector<Tetrahedron>& tetrahedra,
                                                 DiagnosticList& diagnostics);
 
-// Term `term` of `terms` as the laws' material() reads it on the host, in double, over the arrays held here (no
-// corners: host loops read positions through SimulationSetup::tetrahedra), with `table` (a strain table's view; null:
-// none) where the term's law reads one. Valid while `terms` and `table` live.
+// geometry.nodes' CSR by vertex (corner_offset, corner_index, corner_slot) over `vertex_count` vertices.
+void build_node_csr(ElementGeometry& geometry, std::size_t vertex_count);
+
+// Term `term` of `terms` as the element kinds and laws read it on the host, in double, over the arrays held here,
+// with `table` (a strain table's view; null: none) where the term's law reads one. Valid while `terms` and `table`
+// live.
 kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, std::size_t term,
                                                    const kernels::StrainTableView* table);
 
@@ -58,7 +66,7 @@ kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, st
 bool reads_strain_table(const ElementTerm& term);
 
 // Stiffness-proportional damping for one term: beta_e = 2 zeta / omega_e + rayleigh_stiffness, with omega_e^2 the
-// element's stiffness bound (its law's stiffness_bound at its own parameters) over its corner mass rho V0 / 4: the
+// element's stiffness bound (its kind's stiffness_bound at its law's rest moduli) over its node mass rho V0 / N: the
 // element's own fastest mode gets the damping ratio zeta, as a spring's dashpot 2 zeta sqrt(k mu) damps the spring's
 // own mode. rho is the vertex masses' total over the elements' volume. Leaves the array empty when both are zero.
 void assign_element_damping(const ElementGeometry& geometry, ElementTerm& term, const std::vector<double>& vertex_mass,
@@ -75,5 +83,14 @@ InversionCount count_inverted_tetrahedra(const std::vector<Tetrahedron>& tetrahe
 // The four corners of tetrahedron e as rows [corner][axis] of `points`.
 void tetrahedron_corners(const std::vector<Tetrahedron>& tetrahedra, std::size_t e, const std::vector<Point3>& points,
                          double out[4][3]);
+
+// Element e's nodes as rows [node][axis] of `points` (N = geometry.nodes_per_element rows).
+template <int N>
+void element_node_rows(const ElementGeometry& geometry, std::size_t e, const std::vector<Point3>& points,
+                       double out[N][3]) {
+  for (std::size_t a = 0; a < static_cast<std::size_t>(N); ++a)
+    for (std::size_t i = 0; i < 3; ++i)
+      out[a][i] = points[static_cast<std::size_t>(geometry.nodes[static_cast<std::size_t>(N) * e + a])][i];
+}
 
 }  // namespace fmpc::sim

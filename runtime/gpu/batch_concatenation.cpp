@@ -39,6 +39,9 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
   c.corners.resize(4 * elements);
   c.element_scene.resize(elements);
   if (c.has_elements) {
+    c.element_kind = scenes.front().elements.geometry.kind;
+    c.nodes_per_element = scenes.front().elements.geometry.nodes_per_element;
+    c.nodes.resize(static_cast<std::size_t>(c.nodes_per_element) * elements);
     c.corner_offset.reserve(vertices + 1);
     c.corner_offset.resize(vertices);
     c.corner_index.resize(corners);
@@ -78,8 +81,11 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
       const auto cbase = static_cast<std::size_t>(corner_base);
       fill_on_pool(pool, c.corner_offset, vb, n,
                    [&](std::size_t v) { return corners_before + field.corner_offset[v]; });
+      const int N = c.nodes_per_element;
+      fill_on_pool(pool, c.nodes, static_cast<std::size_t>(N) * eb, field.nodes.size(),
+                   [&](std::size_t k) { return vertex_base + field.nodes[k]; });
       fill_on_pool(pool, c.corner_index, cbase, field.corner_index.size(),
-                   [&](std::size_t k) { return 4 * element_base + field.corner_index[k]; });
+                   [&](std::size_t k) { return N * element_base + field.corner_index[k]; });
       fill_on_pool(pool, c.corner_slot, cbase, field.corner_slot.size(),
                    [&](std::size_t k) { return corners_before + field.corner_slot[k]; });
       corner_base += static_cast<int>(field.corner_index.size());
@@ -152,6 +158,7 @@ GatherKind gather_kind(const sim::SimulationSetup& setup) {
 
 bool same_element_laws(const sim::SimulationSetup& a, const sim::SimulationSetup& b) {
   if (a.elements.terms.size() != b.elements.terms.size()) return false;
+  if (!a.elements.empty() && a.elements.geometry.kind != b.elements.geometry.kind) return false;
   for (std::size_t t = 0; t < a.elements.terms.size(); ++t)
     if (a.elements.terms[t].law != b.elements.terms[t].law) return false;
   return true;

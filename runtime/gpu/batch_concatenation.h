@@ -51,6 +51,9 @@ struct ConcatenatedScenes {
   // corner CSR (each scene's corners point at its own elements) and each term's parameters and damping (the scenes
   // of a batch have the same terms: create() refuses others).
   HostArray<int> corners, element_scene, corner_offset, corner_index, corner_slot;
+  int element_kind = 0;       // the element kind's index in kernels::ElementKinds (the scenes share it)
+  int nodes_per_element = 4;  // its kNodes
+  HostArray<int> nodes;       // nodes_per_element per element, batch vertex indices
   HostArray<double> rest_inverse, rest_volume;
   struct Term {
     int law = 0;
@@ -72,7 +75,7 @@ bool force_probe(const sim::SimulationSetup& setup);
 // The gather a batch's scenes share (create() refuses batches that differ in it).
 GatherKind gather_kind(const sim::SimulationSetup& setup);
 
-// Whether two setups have the same element terms, law for law (their parameters may differ).
+// Whether two setups have the same element kind and terms, law for law (their parameters may differ).
 bool same_element_laws(const sim::SimulationSetup& a, const sim::SimulationSetup& b);
 
 // The first field in which `scene` differs from scene 0 among those a batch shares, or nullptr.

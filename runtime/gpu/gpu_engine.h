@@ -293,6 +293,7 @@ class GpuEngine final : public sim::SteppingEngine {
   std::vector<int> element_begin_;
   int element_count_ = 0;
   DeviceArray<int> corners_, element_scene_, corner_offset_, corner_index_, corner_slot_, inverted_first_;
+  DeviceArray<int> nodes_;  // the element kind's nodes per element (the element pass's; corners_: the tetrahedra's)
   // The springs' records: in the sliced layout (then vertex_order_ and sliced_row_ are set) or in CSR order.
   DeviceArray<kernels::SpringIncidence<Real>> incidence_;
   DeviceArray<int> vertex_order_;

@@ -201,7 +201,6 @@ std::optional<double> GpuEngine<Real>::energy_sum(EnergyTerm term, int begin, in
   a.force_z = energy_force_z_.data();
   if (term == EnergyTerm::ElementPotential) {
     a.element_term = elements_.terms[element_term];
-    a.element_corners = corners_.data();
   }
   if (common.strain_stiffness) {
     a.table = {table_strain_.data(), table_modulus_.data(), static_cast<int>(table_strain_.size())};

@@ -153,6 +153,8 @@ bool GpuEngine<Real>::upload_spring_records(const ConcatenatedScenes& c, Diagnos
 template <typename Real>
 bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
   const std::size_t count = static_cast<std::size_t>(element_count_);
+  const std::size_t node_entries = c.nodes.size();
+  FMPC_CUDA_CHECK(nodes_.upload(c.nodes), diagnostics, false);
   FMPC_CUDA_CHECK(corner_offset_.upload(c.corner_offset), diagnostics, false);
   FMPC_CUDA_CHECK(corner_index_.upload(c.corner_index), diagnostics, false);
   FMPC_CUDA_CHECK(corner_slot_.upload(c.corner_slot), diagnostics, false);
@@ -160,14 +162,13 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
   FMPC_CUDA_CHECK(rest_volume_.upload(convert<Real>(c.rest_volume, *c.pool)), diagnostics, false);
   FMPC_CUDA_CHECK(rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
   FMPC_CUDA_CHECK(rest_volume_d_.upload(c.rest_volume), diagnostics, false);
-  FMPC_CUDA_CHECK(corner_force_.allocate(4 * count), diagnostics, false);
+  FMPC_CUDA_CHECK(corner_force_.allocate(node_entries), diagnostics, false);
   const bool implicit = scenes_.front().integrator == sim::Integrator::ImplicitEuler;
   model_.term_count = static_cast<int>(c.terms.size());
   model_.element_count = element_count_;
   elements_ = {};
   elements_.count = element_count_;
   elements_.term_count = model_.term_count;
-  elements_.corners = corners_.data();
   for (std::size_t t = 0; t < c.terms.size(); ++t) {
     const ConcatenatedScenes::Term& term = c.terms[t];
     DeviceTermArrays& arrays = term_arrays_[t];
@@ -176,8 +177,9 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
     view = {};
     view_d = {};
     view.law = view_d.law = term.law;
+    view.element = view_d.element = c.element_kind;
     view.count = view_d.count = element_count_;
-    view.corners = view_d.corners = corners_.data();
+    view.corners = view_d.corners = nodes_.data();
     view.corner_slot = view_d.corner_slot = corner_slot_.data();
     view.rest_inverse = rest_inverse_.data();
     view.rest_volume = rest_volume_.data();
@@ -198,8 +200,9 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
     }
     view.strain_table = view_d.strain_table = {nullptr, nullptr, 0};
     if (implicit) {
-      const std::size_t bytes = kernels::visit_element_law(
-          term.law, [](auto element_law) { return sizeof(typename decltype(element_law)::Linearisation); });
+      const std::size_t bytes = kernels::visit_element_term(c.element_kind, term.law, [](auto kind, auto element_law) {
+        return sizeof(typename decltype(kind)::template Linearisation<decltype(element_law)>);
+      });
       FMPC_CUDA_CHECK(arrays.linearisation.allocate(bytes * count), diagnostics, false);
       elements_.linearisation[t] = arrays.linearisation.data();
     }
@@ -208,7 +211,7 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
   model_.corner_force = corner_force_.data();
   if (implicit) {
     for (DeviceArray<double>* array : {&element_rhs_part_, &element_diagonal_part_, &element_product_})
-      FMPC_CUDA_CHECK(array->allocate(12 * count), diagnostics, false);
+      FMPC_CUDA_CHECK(array->allocate(3 * node_entries), diagnostics, false);
     elements_.rhs_part = element_rhs_part_.data();
     elements_.diagonal_part = element_diagonal_part_.data();
     elements_.product = element_product_.data();

@@ -331,12 +331,11 @@ struct ConjugateGradientScalars {
 struct ImplicitElements {
   int count;  // elements; 0: none
   int term_count;
-  const int* corners;  // 4 per element
   kernels::ElementTermView<double> terms[kMostElementTerms];
-  void* linearisation[kMostElementTerms];  // per term: one of its law's Linearisation per element
-  double* rhs_part;                        // 12 per element
-  double* diagonal_part;                   // 12 per element
-  double* product;                         // 12 per element
+  void* linearisation[kMostElementTerms];  // per term: one of its element kind's Linearisation<Law> per element
+  double* rhs_part;                        // 3 per node of each element
+  double* diagonal_part;                   // 3 per node of each element
+  double* product;                         // 3 per node of each element
 };
 
 template <typename Real>
@@ -430,7 +429,6 @@ struct EnergyArguments {
   const double* force_z;
   // ElementPotential: one element term in double and the elements' corners.
   kernels::ElementTermView<double> element_term;
-  const int* element_corners;
 };
 
 enum class EnergyTerm : int {

@@ -9,9 +9,9 @@
 #include <cmath>
 #include <limits>
 
+#include "kernels/element_laws.h"
 #include "kernels/implicit_math.h"
 #include "kernels/integrator_math.h"
-#include "kernels/element_laws.h"
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
@@ -125,7 +125,7 @@ class CpuScene final : public CpuSceneBase {
       const ElementGeometry& geometry = setup_.elements.geometry;
       rest_inverse_ = convert(geometry.rest_inverse);
       rest_volume_ = convert(geometry.rest_volume);
-      corner_force_.assign(4 * geometry.size(), kernels::CornerForce<Real>{});
+      corner_force_.assign(geometry.nodes.size(), kernels::CornerForce<Real>{});
       const kernels::StrainTableView table = setup_.strain_stiffness ? strain_table_view(*setup_.strain_stiffness)
                                                                      : kernels::StrainTableView{nullptr, nullptr, 0};
       for (const ElementTerm& term : setup_.elements.terms) {
@@ -139,8 +139,9 @@ class CpuScene final : public CpuSceneBase {
         };
         kernels::ElementTermView<Real> view{};
         view.law = term.law;
+        view.element = geometry.kind;
         view.count = static_cast<int>(geometry.size());
-        view.corners = corners_.data();
+        view.corners = geometry.nodes.data();
         view.corner_slot = geometry.corner_slot.data();
         view.rest_inverse = rest_inverse_.data();
         view.rest_volume = rest_volume_.data();
@@ -269,14 +270,16 @@ class CpuScene final : public CpuSceneBase {
       // Each term's pass in list order: the first writes the corner forces, the later ones add to them.
       for (std::size_t term = 0; term < term_views_.size(); ++term) {
         const kernels::ElementTermView<Real>& field = term_views_[term];
-        kernels::visit_element_law(field.law, [&](auto element_law) {
+        kernels::visit_element_term(field.element, field.law, [&](auto kind, auto element_law) {
+          using Element = decltype(kind);
           using Law = decltype(element_law);
           pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
             for (std::size_t e = begin; e < end; ++e) {
+              const int element = static_cast<int>(e);
               if (term == 0) {
-                kernels::element_corner_forces<Law, false>(static_cast<int>(e), field, state, corner_force_.data());
+                kernels::element_node_forces<Element, Law, false>(element, field, state, corner_force_.data());
               } else {
-                kernels::element_corner_forces<Law, true>(static_cast<int>(e), field, state, corner_force_.data());
+                kernels::element_node_forces<Element, Law, true>(element, field, state, corner_force_.data());
               }
             }
           });
@@ -448,9 +451,7 @@ class CpuScene final : public CpuSceneBase {
     const ModelTangent tangent = model_tangent(setup_, positions(), current_stiffness());
     rhs -= h * h * (tangent.stiffness * v0);
     Eigen::SparseMatrix<double> system = h * h * tangent.stiffness + h * tangent.damping;
-    system.prune([this](Eigen::Index row, Eigen::Index column, double) {
-      return !dof_held(row) && !dof_held(column);
-    });
+    system.prune([this](Eigen::Index row, Eigen::Index column, double) { return !dof_held(row) && !dof_held(column); });
     triplets_.clear();
     for (std::size_t i = 0; i < n_; ++i) {
       const double dx = static_cast<double>(position_.x[i]) - setup_.rest_positions[i][0];
@@ -661,7 +662,7 @@ class CpuScene final : public CpuSceneBase {
   Vector3Arrays<Real> rk_velocity_[4], rk_acceleration_[4];
   kernels::SpringNetworkView<Real> network_view_{};
   kernels::VertexLoads<Real> loads_{};
-  std::vector<int> corners_;  // 4 per tetrahedron
+  std::vector<int> corners_;             // 4 per tetrahedron
   std::vector<std::int32_t> neighbour_;  // the other endpoint of each CSR entry (adjacency_neighbours)
   // The element terms in Real: the geometry the terms share, each term's parameters and damping, and its view.
   struct TermArrays {
@@ -799,7 +800,8 @@ class CpuEngine final : public SteppingEngine {
     const SimulationSetup& setup = setup_of(scene);
     const std::vector<Point3>& start = setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
     double largest = 0.0;
-    for (std::size_t v = 0; v < now.size() && v < start.size(); ++v) largest = std::max(largest, distance(now[v], start[v]));
+    for (std::size_t v = 0; v < now.size() && v < start.size(); ++v)
+      largest = std::max(largest, distance(now[v], start[v]));
     return largest;
   }
   bool reduces_in_place() const override { return false; }

@@ -1,6 +1,6 @@
 // What the element terms contribute to the host-side sums both backends share (double): internal forces at chosen
 // vertices (probes), elastic energy, element stress outputs for frames, the model's name and the inversion message.
-// Generic over the laws: each term's law is visited once per call (kernels/element_laws.h).
+// Generic over the element kinds and laws: each term's are visited once per call (kernels/element_laws.h).
 #include <sstream>
 
 #include "runtime/fem/element_law_registry.h"
@@ -11,15 +11,18 @@ namespace fmpc::sim {
 namespace {
 
 kernels::StrainTableView table_of(const SimulationSetup& setup) {
-  return setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness) : kernels::StrainTableView{nullptr, nullptr, 0};
+  return setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness)
+                                : kernels::StrainTableView{nullptr, nullptr, 0};
 }
 
-// visit(Law, view) for each element term in list order, its view reading the strain table where its law does.
+// visit(Element, Law, view) for each element term in list order, its view reading the strain table where its law
+// does.
 template <typename Visit>
 void for_each_term(const SimulationSetup& setup, const kernels::StrainTableView& table, Visit visit) {
   for (std::size_t t = 0; t < setup.elements.terms.size(); ++t) {
     const kernels::ElementTermView<double> view = element_term_view(setup.elements, t, &table);
-    kernels::visit_element_law(view.law, [&](auto element_law) { visit(element_law, view); });
+    kernels::visit_element_term(view.element, view.law,
+                                [&](auto kind, auto element_law) { visit(kind, element_law, view); });
   }
 }
 
@@ -43,40 +46,43 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
       const auto s = static_cast<std::size_t>(net.adjacency_spring[static_cast<std::size_t>(e)]);
       const auto o = static_cast<std::size_t>(adjacency_neighbour(net, v, static_cast<std::size_t>(e)));
       double f[3];
-      kernels::spring_force_on_vertex(positions[o][0] - positions[v][0], positions[o][1] - positions[v][1],
-                                      positions[o][2] - positions[v][2], velocities[o][0] - velocities[v][0],
-                                      velocities[o][1] - velocities[v][1], velocities[o][2] - velocities[v][2],
-                                      net.rest_length[s], stiffness[s], net.damping.empty() ? 0.0 : net.damping[s],
-                                      law, f[0], f[1], f[2]);
+      kernels::spring_force_on_vertex(
+          positions[o][0] - positions[v][0], positions[o][1] - positions[v][1], positions[o][2] - positions[v][2],
+          velocities[o][0] - velocities[v][0], velocities[o][1] - velocities[v][1], velocities[o][2] - velocities[v][2],
+          net.rest_length[s], stiffness[s], net.damping.empty() ? 0.0 : net.damping[s], law, f[0], f[1], f[2]);
       for (std::size_t axis = 0; axis < 3; ++axis) out[i][axis] += f[axis];
     }
   }
   if (setup.elements.empty()) return out;
   const ElementGeometry& geometry = setup.elements.geometry;
   const kernels::StrainTableView table = table_of(setup);
-  // Per vertex the terms' corner forces in the backends' order: for each corner, term after term.
+  // Per vertex the terms' node forces in the backends' order: for each node, term after term.
   std::vector<kernels::ElementTermView<double>> views;
   for (std::size_t t = 0; t < setup.elements.terms.size(); ++t)
     views.push_back(element_term_view(setup.elements, t, &table));
+  const auto N = static_cast<std::size_t>(geometry.nodes_per_element);
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     const auto v = static_cast<std::size_t>(vertices[i]);
     for (auto k = geometry.corner_offset[v]; k < geometry.corner_offset[v + 1]; ++k) {
-      const auto corner = static_cast<std::size_t>(geometry.corner_index[static_cast<std::size_t>(k)]);
-      const std::size_t e = corner / 4, c = corner % 4;
-      double x[4][3], u[4][3], corner_force[3] = {0.0, 0.0, 0.0};
-      tetrahedron_corners(setup.tetrahedra, e, positions, x);
-      tetrahedron_corners(setup.tetrahedra, e, velocities, u);
+      const auto entry = static_cast<std::size_t>(geometry.corner_index[static_cast<std::size_t>(k)]);
+      const std::size_t e = entry / N, c = entry % N;
+      double node_force[3] = {0.0, 0.0, 0.0};
       for (std::size_t t = 0; t < views.size(); ++t) {
-        kernels::visit_element_law(views[t].law, [&](auto element_law) {
-          using Law = decltype(element_law);
-          double f[4][3];
-          Law::forces(Law::material(views[t], static_cast<int>(e)), x, u, f);
-          // The first term's force as it is, later ones added: the element pass's corner slot.
+        kernels::visit_element_term(views[t].element, views[t].law, [&](auto kind, auto element_law) {
+          using Element = decltype(kind);
+          constexpr int M = Element::kNodes;
+          double x[M][3], u[M][3], f[M][3];
+          element_node_rows<M>(geometry, e, positions, x);
+          element_node_rows<M>(geometry, e, velocities, u);
+          // Velocities only where the term is damped, as the element pass reads them.
+          Element::template forces<decltype(element_law)>(views[t], static_cast<int>(e), x,
+                                                          views[t].stiffness_damping ? u : nullptr, f);
+          // The first term's force as it is, later ones added: the element pass's node slot.
           for (std::size_t axis = 0; axis < 3; ++axis)
-            corner_force[axis] = t == 0 ? f[c][axis] : corner_force[axis] + f[c][axis];
+            node_force[axis] = t == 0 ? f[c][axis] : node_force[axis] + f[c][axis];
         });
       }
-      for (std::size_t axis = 0; axis < 3; ++axis) out[i][axis] += corner_force[axis];
+      for (std::size_t axis = 0; axis < 3; ++axis) out[i][axis] += node_force[axis];
     }
   }
   return out;
@@ -84,13 +90,14 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
 
 double element_elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions) {
   double energy = 0.0;
-  for_each_term(setup, table_of(setup), [&](auto element_law, const kernels::ElementTermView<double>& view) {
-    using Law = decltype(element_law);
+  const ElementGeometry& geometry = setup.elements.geometry;
+  for_each_term(setup, table_of(setup), [&](auto kind, auto element_law, const kernels::ElementTermView<double>& view) {
+    using Element = decltype(kind);
     double term_energy = 0.0;
-    for (std::size_t e = 0; e < setup.tetrahedra.size(); ++e) {
-      double x[4][3];
-      tetrahedron_corners(setup.tetrahedra, e, positions, x);
-      term_energy += Law::energy(Law::material(view, static_cast<int>(e)), x);
+    for (std::size_t e = 0; e < geometry.size(); ++e) {
+      double x[Element::kNodes][3];
+      element_node_rows<Element::kNodes>(geometry, e, positions, x);
+      term_energy += Element::template energy<decltype(element_law)>(view, static_cast<int>(e), x);
     }
     energy += term_energy;
   });
@@ -100,13 +107,15 @@ double element_elastic_energy(const SimulationSetup& setup, const std::vector<Po
 std::vector<ElementStressOutput> element_stress_outputs(const SimulationSetup& setup,
                                                         const std::vector<Point3>& positions) {
   std::vector<ElementStressOutput> out;
-  for_each_term(setup, table_of(setup), [&](auto element_law, const kernels::ElementTermView<double>& view) {
+  const ElementGeometry& geometry = setup.elements.geometry;
+  for_each_term(setup, table_of(setup), [&](auto kind, auto element_law, const kernels::ElementTermView<double>& view) {
+    using Element = decltype(kind);
     using Law = decltype(element_law);
-    ElementStressOutput output{Law::kStressOutput, std::vector<double>(setup.tetrahedra.size())};
-    for (std::size_t e = 0; e < setup.tetrahedra.size(); ++e) {
-      double x[4][3];
-      tetrahedron_corners(setup.tetrahedra, e, positions, x);
-      output.values[e] = Law::stress_output(Law::material(view, static_cast<int>(e)), x);
+    ElementStressOutput output{Law::kStressOutput, std::vector<double>(geometry.size())};
+    for (std::size_t e = 0; e < geometry.size(); ++e) {
+      double x[Element::kNodes][3];
+      element_node_rows<Element::kNodes>(geometry, e, positions, x);
+      output.values[e] = Element::template stress_output<Law>(view, static_cast<int>(e), x);
     }
     out.push_back(std::move(output));
   });
@@ -118,8 +127,10 @@ std::string inversion_message(const SimulationSetup& setup, const InversionRepor
   const Tetrahedron& t = setup.tetrahedra[static_cast<std::size_t>(report.first_element)];
   message << "tetrahedron " << report.first_element << " (vertices " << t[0] << ", " << t[1] << ", " << t[2] << ", "
           << t[3] << ") turned inside out ";
-  if (report.first_step == 0) message << "at the start";
-  else message << "at step " << report.first_step << " (t = " << report.first_time << " s)";
+  if (report.first_step == 0)
+    message << "at the start";
+  else
+    message << "at step " << report.first_step << " (t = " << report.first_time << " s)";
   message << " (" << report.current_count << " inverted then)";
   if (setup.elements.empty()) {
     message << "; springs cannot tell an element from its mirror image: give the springs a volume term "

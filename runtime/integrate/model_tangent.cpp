@@ -1,7 +1,7 @@
 #include "runtime/integrate/model_tangent.h"
 
-#include "kernels/implicit_math.h"
 #include "kernels/element_laws.h"
+#include "kernels/implicit_math.h"
 
 namespace fmpc::sim {
 
@@ -32,8 +32,10 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
   Triplets stiffness, damping;
   const SpringNetwork& net = setup.springs;
   const std::size_t elements = setup.elements.empty() ? 0 : setup.elements.geometry.size();
-  stiffness.reserve(36 * net.size() + 144 * elements * setup.elements.terms.size());
-  damping.reserve(36 * net.size() + 144 * elements * setup.elements.terms.size());
+  const std::size_t element_entries =
+      setup.elements.empty() ? 0 : 9 * setup.elements.geometry.nodes.size() * setup.elements.geometry.nodes_per_element;
+  stiffness.reserve(36 * net.size() + element_entries * setup.elements.terms.size());
+  damping.reserve(36 * net.size() + element_entries * setup.elements.terms.size());
   const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
   for (std::size_t s = 0; s < net.size(); ++s) {
     const auto a = static_cast<std::size_t>(net.first[s]), b = static_cast<std::size_t>(net.second[s]);
@@ -57,25 +59,27 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
                                                                 : kernels::StrainTableView{nullptr, nullptr, 0};
   for (std::size_t term = 0; term < setup.elements.terms.size(); ++term) {
     const kernels::ElementTermView<double> view = element_term_view(setup.elements, term, &table);
-    kernels::visit_element_law(view.law, [&](auto element_law) {
+    const ElementGeometry& geometry = setup.elements.geometry;
+    kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
+      using Element = decltype(kind);
       using Law = decltype(element_law);
+      constexpr int N = Element::kNodes, D = 3 * N;
       for (std::size_t e = 0; e < elements; ++e) {
-        const auto m = Law::material(view, static_cast<int>(e));
-        const Tetrahedron& t = setup.tetrahedra[e];
-        double x[4][3];
-        tetrahedron_corners(setup.tetrahedra, e, positions, x);
-        typename Law::Linearisation lin{};
-        Law::linearise(m, x, lin);
-        double K[144];
-        Law::stiffness_matrix(m, lin, K);
-        for (int row = 0; row < 12; ++row) {
-          for (int column = 0; column < 12; ++column) {
-            const int global_row = 3 * t[static_cast<std::size_t>(row / 3)] + row % 3;
-            const int global_column = 3 * t[static_cast<std::size_t>(column / 3)] + column % 3;
-            const double entry = K[12 * row + column];
+        const int element = static_cast<int>(e);
+        const std::int32_t* nodes = geometry.nodes.data() + N * e;
+        double x[N][3], K[D * D];
+        element_node_rows<N>(geometry, e, positions, x);
+        typename Element::template Linearisation<Law> lin{};
+        Element::template linearise<Law>(view, element, x, lin);
+        Element::template stiffness_matrix<Law>(view, element, lin, K);
+        const double beta = view.stiffness_damping ? view.stiffness_damping[e] : 0.0;
+        for (int row = 0; row < D; ++row) {
+          for (int column = 0; column < D; ++column) {
+            const int global_row = 3 * nodes[row / 3] + row % 3;
+            const int global_column = 3 * nodes[column / 3] + column % 3;
+            const double entry = K[D * row + column];
             stiffness.emplace_back(global_row, global_column, entry);
-            if (m.stiffness_damping != 0.0)
-              damping.emplace_back(global_row, global_column, m.stiffness_damping * entry);
+            if (beta != 0.0) damping.emplace_back(global_row, global_column, beta * entry);
           }
         }
       }

@@ -2,8 +2,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "kernels/integrator_math.h"
 #include "kernels/element_laws.h"
+#include "kernels/integrator_math.h"
 #include "runtime/integrate/simulation.h"
 
 namespace fmpc::sim {
@@ -61,8 +61,9 @@ double assumed_displacement(const SimulationSetup& setup) {
     }
   double probe = 0.0;
   if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement)
-    probe = std::sqrt(setup.probe->target[0] * setup.probe->target[0] + setup.probe->target[1] * setup.probe->target[1] +
-                      setup.probe->target[2] * setup.probe->target[2]);
+    probe =
+        std::sqrt(setup.probe->target[0] * setup.probe->target[0] + setup.probe->target[1] * setup.probe->target[1] +
+                  setup.probe->target[2] * setup.probe->target[2]);
   return std::max(initial, distance(lo, hi) + probe);
 }
 
@@ -93,16 +94,20 @@ VertexBounds vertex_bounds(const SimulationSetup& setup) {
                                                                 : kernels::StrainTableView{nullptr, nullptr, 0};
   for (std::size_t term = 0; term < setup.elements.terms.size(); ++term) {
     const kernels::ElementTermView<double> view = element_term_view(setup.elements, term, &table);
-    kernels::visit_element_law(view.law, [&](auto element_law) {
+    const ElementGeometry& geometry = setup.elements.geometry;
+    kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
+      using Element = decltype(kind);
       using Law = decltype(element_law);
-      for (std::size_t e = 0; e < setup.elements.geometry.size(); ++e) {
-        const auto m = Law::material(view, static_cast<int>(e));
-        const double bound = Law::stiffness_bound(m);
-        for (const auto v : setup.tetrahedra[e]) {
-          bounds.stiffness[static_cast<std::size_t>(v)] += bound;
-          bounds.damping[static_cast<std::size_t>(v)] += m.stiffness_damping * bound;
+      constexpr auto N = static_cast<std::size_t>(Element::kNodes);
+      for (std::size_t e = 0; e < geometry.size(); ++e) {
+        const double bound = Element::template stiffness_bound<Law>(view, static_cast<int>(e));
+        const double beta = view.stiffness_damping ? view.stiffness_damping[e] : 0.0;
+        for (std::size_t a = 0; a < N; ++a) {
+          const auto v = static_cast<std::size_t>(geometry.nodes[N * e + a]);
+          bounds.stiffness[v] += bound;
+          bounds.damping[v] += beta * bound;
         }
-        bounds.element_ratio_min = std::min(bounds.element_ratio_min, m.stiffness_damping);
+        bounds.element_ratio_min = std::min(bounds.element_ratio_min, beta);
       }
     });
   }
@@ -219,21 +224,22 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
     return report;
   }
   report.time_step = *setup.time_step;
-  const double limit =
-      setup.integrator == Integrator::ForwardEuler && report.undamped_modes ? damped_modes_limit : report.critical_time_step;
+  const double limit = setup.integrator == Integrator::ForwardEuler && report.undamped_modes
+                           ? damped_modes_limit
+                           : report.critical_time_step;
   if (setup.integrator == Integrator::ForwardEuler && omega_squared_max > 0.0 && !(limit > 0.0) &&
       setup.refuse_unstable_time_step) {
-    diagnostics.error(dt_range, "forward Euler is unstable at every time step for undamped springs (|1 + i h w| > 1); "
-                                "add damping or use semi-implicit Euler");
+    diagnostics.error(dt_range,
+                      "forward Euler is unstable at every time step for undamped springs (|1 + i h w| > 1); "
+                      "add damping or use semi-implicit Euler");
     return std::nullopt;
   }
   if (report.time_step > limit) {
-    const std::string message = "dt: time step " + number(report.time_step) + " s exceeds the " +
-                                to_string(setup.integrator) + " stability limit " + number(limit) + " s (" +
-                                report.limit + " with w_max = " + number(w) + " rad/s at vertex " +
-                                std::to_string(report.limiting_vertex) + ", beta_max = " + number(beta) +
-                                " 1/s); use dt <= " + number(setup.stability_margin * limit) +
-                                " s, dt auto, or implicit Euler";
+    const std::string message =
+        "dt: time step " + number(report.time_step) + " s exceeds the " + to_string(setup.integrator) +
+        " stability limit " + number(limit) + " s (" + report.limit + " with w_max = " + number(w) +
+        " rad/s at vertex " + std::to_string(report.limiting_vertex) + ", beta_max = " + number(beta) +
+        " 1/s); use dt <= " + number(setup.stability_margin * limit) + " s, dt auto, or implicit Euler";
     if (!setup.refuse_unstable_time_step) {
       diagnostics.warning(dt_range, "unstable-time-step", message);
       return report;

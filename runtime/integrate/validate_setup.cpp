@@ -7,22 +7,37 @@ namespace fmpc::sim {
 namespace {
 bool finite_point(const Point3& p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
-// The element terms as the backends read them: a known law (kernels::visit_element_law takes any index), at most
-// what the GPU backend holds, each of its law's parameters and its damping one per element, finite (a builder from
-// runtime/fem/element_law_registry.h checks the physical ranges with the scene's names; this catches setups built
-// by hand), and the geometry's arrays parallel to the tetrahedra.
+// The element terms as the backends read them: a known element kind and law (kernels::visit_element_term takes any
+// index), at most what the GPU backend holds, each of its law's parameters and its damping one per element, finite
+// (a builder from runtime/fem/element_law_registry.h checks the physical ranges with the scene's names; this catches
+// setups built by hand), and the geometry's arrays parallel to the tetrahedra, its nodes existing vertices.
 bool validate_element_terms(const SimulationSetup& setup, const SourceRange& range, DiagnosticList& diagnostics) {
   const ElementTerms& elements = setup.elements;
   if (elements.empty()) return true;
   const std::size_t count = setup.tetrahedra.size();
   const ElementGeometry& geometry = elements.geometry;
-  if (geometry.size() != count || geometry.rest_inverse.size() != 9 * count ||
-      geometry.corner_offset.size() != setup.rest_positions.size() + 1 || geometry.corner_index.size() != 4 * count ||
-      geometry.corner_slot.size() != 4 * count) {
+  if (geometry.kind < 0 || geometry.kind >= kernels::ElementKinds::count) {
+    diagnostics.error(range, "the element terms' geometry has element kind " + std::to_string(geometry.kind) +
+                                 ", which is not one of the " + std::to_string(kernels::ElementKinds::count) +
+                                 " element kinds");
+    return false;
+  }
+  const int nodes =
+      kernels::visit_element_term(geometry.kind, 0, [](auto kind, auto) { return decltype(kind)::kNodes; });
+  const auto entries = static_cast<std::size_t>(nodes) * count;
+  if (geometry.nodes_per_element != nodes || geometry.nodes.size() != entries || geometry.size() != count ||
+      geometry.rest_inverse.size() != 9 * count || geometry.corner_offset.size() != setup.rest_positions.size() + 1 ||
+      geometry.corner_index.size() != entries || geometry.corner_slot.size() != entries) {
     diagnostics.error(range, "the element terms' geometry does not match the " + std::to_string(count) +
                                  " tetrahedra; build it with element_geometry from the same mesh");
     return false;
   }
+  for (const std::int32_t v : geometry.nodes)
+    if (v < 0 || static_cast<std::size_t>(v) >= setup.rest_positions.size()) {
+      diagnostics.error(range, "the element terms' geometry has node " + std::to_string(v) + " of " +
+                                   std::to_string(setup.rest_positions.size()) + " vertices");
+      return false;
+    }
   if (elements.terms.size() > static_cast<std::size_t>(kernels::kMostElementTerms)) {
     diagnostics.error(range, std::to_string(elements.terms.size()) + " element terms given; a model takes at most " +
                                  std::to_string(kernels::kMostElementTerms));
@@ -36,7 +51,8 @@ bool validate_element_terms(const SimulationSetup& setup, const SourceRange& ran
                                    std::to_string(kernels::ElementLaws::count) + " element laws");
       return false;
     }
-    const int parameters = kernels::visit_element_law(term.law, [](auto element_law) { return decltype(element_law)::kParameterCount; });
+    const int parameters =
+        kernels::visit_element_law(term.law, [](auto element_law) { return decltype(element_law)::kParameterCount; });
     for (int p = 0; p < kernels::kMostLawParameters; ++p) {
       const std::vector<double>& values = term.parameter[p];
       if (values.size() != (p < parameters ? count : 0)) {
@@ -53,14 +69,14 @@ bool validate_element_terms(const SimulationSetup& setup, const SourceRange& ran
         }
     }
     if (!term.stiffness_damping.empty() && term.stiffness_damping.size() != count) {
-      diagnostics.error(range, name + " has " + std::to_string(term.stiffness_damping.size()) +
-                                   " damping values for " + std::to_string(count) + " tetrahedra; give one each or none");
+      diagnostics.error(range, name + " has " + std::to_string(term.stiffness_damping.size()) + " damping values for " +
+                                   std::to_string(count) + " tetrahedra; give one each or none");
       return false;
     }
     for (const double beta : term.stiffness_damping)
       if (!(beta >= 0.0) || !std::isfinite(beta)) {
-        diagnostics.error(range, name + " has stiffness damping " + std::to_string(beta) +
-                                     "; it must be finite and non-negative");
+        diagnostics.error(
+            range, name + " has stiffness damping " + std::to_string(beta) + "; it must be finite and non-negative");
         return false;
       }
   }
@@ -155,7 +171,8 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
   }
   // Every CSR entry of vertex v names a spring at v: the gathers take the entry's other endpoint from the spring.
   if (net.adjacency_offset.front() != 0 || static_cast<std::size_t>(net.adjacency_offset.back()) != 2 * m) {
-    diagnostics.error(range, "the spring adjacency's offsets do not span its 2 x springs entries; call build_adjacency");
+    diagnostics.error(range,
+                      "the spring adjacency's offsets do not span its 2 x springs entries; call build_adjacency");
     return false;
   }
   for (std::size_t v = 0; v < net.vertex_count; ++v) {
@@ -202,8 +219,9 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
     diagnostics.error(range, "the stability margin must lie in (0, 1]");
   }
   if (setup.implicit.max_iterations < 0 || !(setup.implicit.tolerance > 0.0)) {
-    diagnostics.error(range, "implicit Euler needs a non-negative CG iteration cap (0: twice the unknowns) and a "
-                             "positive tolerance");
+    diagnostics.error(range,
+                      "implicit Euler needs a non-negative CG iteration cap (0: twice the unknowns) and a "
+                      "positive tolerance");
   }
   if (diagnostics.error_count() != errors_before) return false;
   return validate_loads(setup, diagnostics) && validate_tools(setup, diagnostics);

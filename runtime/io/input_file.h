@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace fmpc::sim {
 
@@ -21,6 +22,24 @@ inline constexpr std::size_t kMaxTableFileBytes = 1024 * kMiB;  // .fzt lookup t
 // error ("rule file", "mesh file"). Returns nullopt with `error` set to one sentence naming the path, the reason
 // and what to do.
 std::optional<std::string> read_input_file(const std::string& path, std::size_t limit, const std::string& what,
+                                           std::string& error);
+
+// An input that may be one of several kinds, told apart by their first bytes, each with its own limit (`fmpc eval`
+// and the Python module take a .fzt table or a rule file): the first bytes are read, the kind chosen, and the size
+// checked against that kind's limit before anything more is read (eval once read a 1 GiB rule file whole under the
+// table's limit before the rule file's 8 MiB applied).
+struct InputKind {
+  std::string what;       // "lookup table", "rule file"
+  std::size_t limit = 0;  // bytes
+  std::string signature;  // the first bytes of a file of this kind; empty: any file
+};
+struct KindOfInput {
+  std::size_t kind = 0;  // index into the kinds given: the first whose signature the file starts with
+  std::string contents;
+};
+// The file at `path` ("-": standard input) as the first of `kinds` that it starts with; nullopt with `error` set as
+// above (the messages name that kind), or when no kind matches.
+std::optional<KindOfInput> read_input_file(const std::string& path, const std::vector<InputKind>& kinds,
                                            std::string& error);
 
 // "8 MiB", "512 MiB", "1 GiB", "1,000 bytes": how the limits are spelled in messages.

@@ -20,10 +20,16 @@ LoadedRuleFile load_rule_file_from_disk(const std::string& path) {
                            {"fmpc eval evaluates tables: fmpc eval " + path + " NAME=VALUE..."});
     return file;
   }
+  return load_rule_text(path, *text);
+}
+
+LoadedRuleFile load_rule_text(const std::string& path, const std::string& text) {
+  LoadedRuleFile file;
+  file.path = path;
   file.readable = true;
-  file.sources.add(path, *text);
-  file.dialect = detect_dialect(*text);
-  file.rules = load_rule_file(path, *text, file.diagnostics);
+  file.sources.add(path, text);
+  file.dialect = detect_dialect(text);
+  file.rules = load_rule_file(path, text, file.diagnostics);
   return file;
 }
 

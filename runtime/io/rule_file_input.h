@@ -20,6 +20,8 @@ struct LoadedRuleFile {
 };
 
 LoadedRuleFile load_rule_file_from_disk(const std::string& path);
+// The same for text already read from `path` (by read_input_file with the rule file's kind).
+LoadedRuleFile load_rule_text(const std::string& path, const std::string& text);
 
 // `fmpc check`'s lint of every system of a file read without errors, appended to its diagnostics in file order.
 // Units are asked for only in fmpc's own language: MATLAB's format, FLL and FCL have no field for them.

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "runtime/integrate/worker_pool.h"
+#include "runtime/io/memory_limit.h"
 
 namespace fmpc::sim {
 
@@ -27,26 +28,16 @@ std::uint64_t tetrahedron_count(const EllipsoidSpec& spec) {
   return tetrahedron_count(cube);
 }
 
-std::uint64_t physical_memory_bytes() {
-  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
-}
-
 std::optional<std::string> generated_mesh_too_large(std::uint64_t tetrahedra) {
   const double bytes = static_cast<double>(tetrahedra) * static_cast<double>(kEstimatedBytesPerTetrahedron);
-  const std::uint64_t memory = physical_memory_bytes();
+  const MemoryLimit memory = memory_limit();
   const bool too_many = tetrahedra > kMaxGeneratedTetrahedra;
-  const bool too_big = memory > 0 && bytes > static_cast<double>(memory);
+  const bool too_big = memory.bytes > 0 && bytes > static_cast<double>(memory.bytes);
   if (!too_many && !too_big) return std::nullopt;
-  const auto gib = [](double value) {
-    char text[64];
-    std::snprintf(text, sizeof text, "%.3g GiB", value / static_cast<double>(std::uint64_t{1} << 30));
-    return std::string(text);
-  };
-  std::string message = "makes " + std::to_string(tetrahedra) + " tetrahedra (an estimated " + gib(bytes) +
+  std::string message = "makes " + std::to_string(tetrahedra) + " tetrahedra (an estimated " + gibibytes_text(bytes) +
                         " for the mesh, springs and state); the limit is ";
   if (too_many) return message + std::to_string(kMaxGeneratedTetrahedra) + " tetrahedra (int32 indices)";
-  return message + "this machine's memory, " + gib(static_cast<double>(memory));
+  return message + memory.source + ", " + gibibytes_text(static_cast<double>(memory.bytes));
 }
 
 Mesh generate_box(const BoxSpec& spec, DiagnosticList& diagnostics) {

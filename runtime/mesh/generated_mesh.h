@@ -25,12 +25,10 @@ struct EllipsoidSpec {
 // counted exactly and the memory the simulator needs for them is estimated (mesh, springs, CSR adjacency and
 // state: kEstimatedBytesPerTetrahedron, measured on a 60^3 box, see docs/limits.md). Two limits: 2^28 tetrahedra
 // (their corners, springs and CSR entries stay within the int32 indices of every backend), and the estimate within
-// this machine's physical memory (a 240^3 box, 83 million tetrahedra and 100 million springs, needs about 20 GiB).
+// the memory this process may use (runtime/io/memory_limit.h: physical memory, ulimit, cgroup; a 240^3 box, 83
+// million tetrahedra and 100 million springs, needs about 20 GiB).
 inline constexpr std::uint64_t kMaxGeneratedTetrahedra = std::uint64_t{1} << 28;  // 268,435,456
 inline constexpr std::uint64_t kEstimatedBytesPerTetrahedron = 256;
-
-// Physical memory in bytes (sysconf), 0 when unknown.
-std::uint64_t physical_memory_bytes();
 
 std::uint64_t tetrahedron_count(const BoxSpec& spec);        // 6 per cell
 std::uint64_t tetrahedron_count(const EllipsoidSpec& spec);  // a box of 2 * resolution cells per axis

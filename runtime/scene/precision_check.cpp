@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "diagnostics/number_format.h"
@@ -17,14 +18,16 @@ double relative_difference(double a, double b) {
 
 }  // namespace
 
-std::optional<std::string> precision_check_skipped(const Scene& scene, const SimulationSetup& setup,
-                                                   const SceneRunResult& run) {
-  const double work = static_cast<double>(setup.rest_positions.size()) * static_cast<double>(run.steps_taken);
+std::optional<std::string> precision_check_skipped(const Scene& scene, const SceneRunResult& run,
+                                                   double stepping_seconds) {
   if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Off) return std::string("off (outputs.precision_check)");
   if (!run.completed) return std::string("the run did not complete");
-  if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Auto && work > kPrecisionCheckWork) {
-    return "skipped: " + format_number(work) + " vertex-steps is above the automatic limit of " +
-           format_number(kPrecisionCheckWork) + " (outputs.precision_check: on forces it)";
+  if (scene.outputs.precision_check == SceneOutputs::PrecisionCheck::Auto && stepping_seconds > kPrecisionCheckSeconds) {
+    char seconds[32];
+    std::snprintf(seconds, sizeof seconds, "%.3g", stepping_seconds);
+    return std::string("skipped: the run took ") + seconds + " s, and the check would take about as long again; `auto` "
+           "checks runs of at most " + format_number(kPrecisionCheckSeconds) +
+           " s (outputs.precision_check: on forces it)";
   }
   return std::nullopt;
 }
@@ -47,8 +50,22 @@ PrecisionCheckResult compare_precision(const Scene& scene, const SimulationSetup
   } else {
     check.ran = true;
     const std::vector<Point3>& start = setup.initial_positions.empty() ? setup.rest_positions : setup.initial_positions;
-    check.displacement_difference =
-        relative_difference(largest_displacement(other_run->positions(ignored), start), run.final_max_displacement);
+    const double other_displacement = largest_displacement(other_run->positions(ignored), start);
+    check.displacement_difference = relative_difference(other_displacement, run.final_max_displacement);
+    // A scene that barely moves has nothing rounding could change: below the floor both answers are rounding.
+    Point3 low = start.empty() ? Point3{} : start.front(), high = low;
+    for (const Point3& p : start)
+      for (std::size_t a = 0; a < 3; ++a) low[a] = std::min(low[a], p[a]), high[a] = std::max(high[a], p[a]);
+    const double floor = kPrecisionDisplacementFloor * distance(low, high);
+    if (std::max(other_displacement, run.final_max_displacement) < floor) {
+      check.displacement_difference = 0.0;
+      check.other_inverted = other_run->inversions().largest_count;
+      check.agrees = (check.other_inverted == 0) == (run.inversions.largest_count == 0);
+      check.reason = std::string("agrees with ") + (check.other == Precision::Float ? "float" : "double") +
+                     ": the scene moves less than " + format_number(kPrecisionDisplacementFloor) +
+                     " of its size, which rounding cannot tell apart";
+      if (check.agrees) return check;
+    }
     if (setup.probe && !run.probe_curve.empty()) {
       const ProbeReading reading = other_run->probe_reading(ignored);
       const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));

@@ -11,9 +11,9 @@
 namespace fmpc::sim {
 
 // Why the precision check does not run for this run, or nullopt when it does (outputs.precision_check, and `auto`'s
-// limit on the vertex-steps).
-std::optional<std::string> precision_check_skipped(const Scene& scene, const SimulationSetup& setup,
-                                                   const SceneRunResult& run);
+// limit on the run's stepping time, `stepping_seconds`).
+std::optional<std::string> precision_check_skipped(const Scene& scene, const SceneRunResult& run,
+                                                   double stepping_seconds);
 
 // The setup of the rerun: the other precision at the run's step.
 SimulationSetup precision_check_setup(const SimulationSetup& setup, const SceneRunResult& run);

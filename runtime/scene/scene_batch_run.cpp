@@ -129,7 +129,7 @@ std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMemb
   provisional.steps_taken = simulation->steps_taken();
   std::unique_ptr<Simulation> other;
   std::unique_ptr<BatchReader> other_reader;
-  if (!precision_check_skipped(scene, simulation->setup(0), provisional)) {
+  if (!precision_check_skipped(scene, provisional, result.wall_seconds)) {
     provisional.stability = simulation->stability(0);
     std::vector<SimulationSetup> other_setups;
     for (std::size_t m = 0; m < members.size(); ++m)
@@ -149,7 +149,7 @@ std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMemb
     result.results[m] = recorders[m]->finish(
         reader.state(m), running, result.wall_seconds,
         [&](const SceneRunResult& run) {
-          if (const auto skipped = precision_check_skipped(*member.scene, setup, run)) {
+          if (const auto skipped = precision_check_skipped(*member.scene, run, result.wall_seconds)) {
             PrecisionCheckResult check;
             check.other = setup.precision == Precision::Float ? Precision::Double : Precision::Float;
             check.reason = *skipped;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -609,6 +610,34 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
         picked.reset();
         break;
       }
+    }
+    if (picked && probe.mode == ProbeLoad::Mode::Displacement) {
+      // A travel far outside the mesh's scale is a unit mistake (5 m on a mesh in millimetres ran and reported
+      // 5,000 mm), and a travel given at once is an instant step; both ran without a word.
+      Point3 low = built.mesh.points.empty() ? Point3{} : built.mesh.points.front(), high = low;
+      for (const Point3& p : built.mesh.points)
+        for (std::size_t a = 0; a < 3; ++a) low[a] = std::min(low[a], p[a]), high[a] = std::max(high[a], p[a]);
+      const double size = distance(low, high);
+      const double travel = std::sqrt(probe.target[0] * probe.target[0] + probe.target[1] * probe.target[1] +
+                                      probe.target[2] * probe.target[2]);
+      const auto digits = [](double value) {
+        char text[32];
+        std::snprintf(text, sizeof text, "%.3g", value);
+        return std::string(text);
+      };
+      if (size > 0.0 && (travel > size || (travel > 0.0 && travel < 1e-6 * size)))
+        diagnostics.warning(scene.range_of("loads.probe.displacement"), "probe-load",
+                            "loads.probe.displacement: the probe travels " + format_number(travel) + " m, " +
+                                digits(travel / size) + " times the mesh's size (" + digits(size) +
+                                " m, its bounding box's diagonal)" +
+                                (travel > size ? ", further than the whole mesh" : ", below what float can resolve") +
+                                ": displacements are in metres whatever mesh.units says",
+                            {"check the units: 5 mm is 0.005"});
+      if (probe.ramp == 0.0)
+        diagnostics.warning(scene.range_of("loads.probe"), "probe-load",
+                            "loads.probe.ramp is 0: the probe moves its whole travel in the first step, an instant "
+                            "step that shakes the mesh (and its reaction force) at the highest frequencies",
+                            {"give a ramp of several of the mesh's vibration periods, e.g. a tenth of the duration"});
     }
     if (picked) {
       ProbeLoad load;

@@ -145,8 +145,8 @@ struct SceneOutputs {
   bool csv = true;
   bool summary = true;
   bool plot = true;  // force-displacement PNG (needs a probe)
-  // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the scene's work is
-  // at most kPrecisionCheckWork vertex-steps; on always; off never.
+  // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the run's stepping
+  // took at most kPrecisionCheckSeconds (the check costs about as much again); on always; off never.
   enum class PrecisionCheck { Auto, On, Off } precision_check = PrecisionCheck::Auto;
 };
 

@@ -112,6 +112,20 @@ void SceneParser::parse(const YAML::Node& root) {
                                   " s is " + format_number(steps) + " steps; the limit is " +
                                   format_number(kMaxSimulationSteps) + ": raise dt or shorten the duration");
   }
+  // Mass damping alpha bounds an explicit scheme's step by 2 / alpha (v' = -alpha v taken explicitly grows once
+  // h alpha > 2): alpha = 1e300 left no step, and the stability analysis told a damped semi-implicit scene to "add
+  // damping", with no line. Said here, at the field, with the numbers.
+  if (scene_.rayleigh.mass > 0.0 && scene_.integrator != Integrator::ImplicitEuler) {
+    const double steps = std::ceil(scene_.duration * scene_.rayleigh.mass / 2.0);
+    if (!(steps <= kMaxSimulationSteps))
+      diagnostics_.error(scene_.range_of("damping.rayleigh.mass"),
+                         "damping.rayleigh.mass: alpha = " + format_number(scene_.rayleigh.mass) + " 1/s allows " +
+                             std::string(scene_name(scene_.integrator)) + " steps of at most 2 / alpha = " +
+                             format_number(2.0 / scene_.rayleigh.mass) + " s: " + format_number(steps) +
+                             " steps over the duration, above the limit of " + format_number(kMaxSimulationSteps),
+                         {"lower alpha (a damping ratio zeta at angular frequency w is alpha = 2 zeta w), or use "
+                          "integrator: implicit_euler, whose damping has no step limit"});
+  }
 }
 
 void SceneParser::parse_outputs(const YAML::Node& node) {

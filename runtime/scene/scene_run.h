@@ -34,8 +34,13 @@ struct ProbeCurvePoint {
 // `precision-dependent`): an equilibrium that rounding breaks (a symmetric load that buckles either way), or a
 // near-inversion.
 constexpr double kPrecisionTolerance = 0.01;
-// `auto` checks scenes of at most this many vertex-steps (about a second on one core): the check doubles the run.
-constexpr double kPrecisionCheckWork = 2e8;
+// `auto` checks a run whose stepping took at most this long (s, measured): the check runs it again, so it costs about
+// as much. A bound on vertex-steps (2e8) once let an FEM run whose elements cost far more than its vertices be
+// doubled (35 s of stepping, 80.5 s in all).
+constexpr double kPrecisionCheckSeconds = 1.0;
+// Displacements below this share of the mesh's size (its bounding box's diagonal) are not compared: float rounds
+// positions to about 6e-8 of it, and a scene that barely moves (1e-7 mm) once differed by "100%".
+constexpr double kPrecisionDisplacementFloor = 1e-5;
 
 struct PrecisionCheckResult {
   bool ran = false;

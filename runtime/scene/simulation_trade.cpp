@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -13,6 +14,8 @@
 
 #include "diagnostics/number_format.h"
 #include "runtime/fem/element_law_registry.h"
+#include "runtime/io/memory_limit.h"
+#include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_refinement.h"
 #include "runtime/scene/scene_builder.h"
 
@@ -271,9 +274,32 @@ class TradeRunner {
     return &*built_;
   }
 
+  // What `key` will cost, from the scene's own mesh (see TradePlan); nullopt when the model cannot be built.
+  struct Estimate {
+    double tetrahedra = 0.0, steps = 0.0, memory_bytes = 0.0;
+  };
+  std::optional<Estimate> estimate(const RunKey& key, DiagnosticList& diagnostics) {
+    const BuiltScene* scene = built(key.model, 0, diagnostics);
+    if (!scene) return std::nullopt;
+    const double scale = std::pow(8.0, key.refinements);
+    Estimate e;
+    e.tetrahedra = static_cast<double>(scene->mesh.tetrahedra.size()) * scale;
+    const double step = key.dt_factor * automatic_step_ / std::pow(2.0, key.refinements);
+    e.steps = std::max(1.0, std::ceil(duration_ / step * (1.0 - 1e-12)));
+    SimulationSetup setup = scene->setup;
+    setup.precision = key.precision;
+    setup.integrator = key.integrator;
+    // The run's arrays, and the refined mesh and its setup while it is built (generated_mesh.h's measured figure).
+    e.memory_bytes = memory_estimate(setup, edges_) * scale +
+                     static_cast<double>(kEstimatedBytesPerTetrahedron) * e.tetrahedra;
+    return e;
+  }
+
   // Runs one variant to the duration; nullopt when it could not be built (errors appended). A run that stops
   // (non-finite, inversion under on_inversion: stop, a conjugate gradient at its cap) is an outcome saying why.
-  std::optional<RunOutcome> run(const RunKey& key, std::size_t coarse_vertices, DiagnosticList& diagnostics) {
+  // `stepped` is told (steps taken, steps of the run) every hundredth of the run.
+  std::optional<RunOutcome> run(const RunKey& key, std::size_t coarse_vertices, DiagnosticList& diagnostics,
+                                const std::function<void(std::size_t, std::size_t)>& stepped = {}) {
     const BuiltScene* scene = built(key.model, key.refinements, diagnostics);
     if (!scene) return std::nullopt;
     RunOutcome outcome;
@@ -305,7 +331,15 @@ class TradeRunner {
     auto simulation = Simulation::create(setup, run_diagnostics);
     if (simulation) {
       const double start = process_cpu_seconds();
-      row.completed = simulation->advance(row.steps, run_diagnostics);
+      // In hundredths, so that progress is told during a run of hours (advance resumes where it stopped).
+      const std::size_t chunk = std::max<std::size_t>(1, row.steps / 100);
+      row.completed = true;
+      for (std::size_t done = 0; done < row.steps && row.completed;) {
+        const std::size_t now = std::min(chunk, row.steps - done);
+        row.completed = simulation->advance(now, run_diagnostics);
+        done += now;
+        if (stepped) stepped(done, row.steps);
+      }
       row.cpu_seconds = process_cpu_seconds() - start;
       row.steps_per_second = static_cast<double>(simulation->steps_taken()) / std::max(row.cpu_seconds, 1e-9);
       row.inverted_elements = simulation->inversions().largest_count;
@@ -451,10 +485,62 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   planned.insert(planned.begin(), reference);  // first: nothing is compared without it
 
   TradeRunner runner(scene, duration);
+  // The plan, checked before anything runs: every run's steps, the largest run's memory, the work in all.
+  TradePlan plan;
+  plan.runs = planned.size();
+  std::vector<double> work(planned.size());
+  const MemoryLimit memory = memory_limit();
+  for (std::size_t i = 0; i < planned.size(); ++i) {
+    const RunKey& key = planned[i];
+    const auto estimate = runner.estimate(key, diagnostics);
+    if (!estimate) return std::nullopt;
+    // The reference and its checks take their step from --reference-dt-factor, the variants from --integrators.
+    const bool reference_run = std::none_of(variants.begin(), variants.end(),
+                                            [&](const RunKey& v) { return !(v < key) && !(key < v); });
+    if (!(estimate->steps <= kMaxSimulationSteps)) {
+      diagnostics.error(nowhere, "the run " + label(key) + " would take " + short_number(estimate->steps) +
+                                     " steps (" + short_number(duration) + " s at about " +
+                                     short_number(duration / estimate->steps) + " s a step); the limit is " +
+                                     format_number(kMaxSimulationSteps) + " steps a run, as for simulate",
+                        {"shorten --duration, or raise " +
+                         std::string(reference_run ? "--reference-dt-factor" : "the step factor of --integrators " +
+                                                                                   std::string(scene_name(key.integrator)))});
+      return std::nullopt;
+    }
+    if (memory.bytes > 0 && estimate->memory_bytes > static_cast<double>(memory.bytes)) {
+      diagnostics.error(scene.range_of("mesh"),
+                        "mesh: the run " + label(key) + " needs an estimated " + gibibytes_text(estimate->memory_bytes) +
+                            " (" + short_number(estimate->tetrahedra) + " tetrahedra); the limit is " +
+                            memory.source + ", " + gibibytes_text(static_cast<double>(memory.bytes)),
+                        {"lower --refinements or --reference-refinements, or coarsen the mesh"});
+      return std::nullopt;
+    }
+    work[i] = estimate->tetrahedra * estimate->steps;
+    plan.element_steps += work[i];
+    plan.largest_tetrahedra = std::max(plan.largest_tetrahedra, estimate->tetrahedra);
+    plan.largest_steps = std::max(plan.largest_steps, estimate->steps);
+    plan.largest_memory_bytes = std::max(plan.largest_memory_bytes, estimate->memory_bytes);
+  }
+  if (!(plan.element_steps <= kMaxTradeWork)) {
+    diagnostics.error(nowhere, "the trade's " + std::to_string(plan.runs) + " runs would take about " +
+                                   short_number(plan.element_steps) + " element-steps (tetrahedra x steps); the "
+                                   "limit is " + format_number(kMaxTradeWork),
+                      {"fewer --refinements, models, precisions or integrators, a larger step factor, or a shorter "
+                       "--duration"});
+    return std::nullopt;
+  }
+  if (options.plan) options.plan(plan);
+  double work_done = 0.0;
   std::map<RunKey, RunOutcome> outcomes;
   for (std::size_t i = 0; i < planned.size(); ++i) {
     if (options.progress) options.progress(i, planned.size(), (i == 0 ? "reference " : "") + label(planned[i]));
-    auto outcome = runner.run(planned[i], coarse_vertices, diagnostics);
+    const auto stepped = [&](std::size_t steps, std::size_t steps_in_run) {
+      if (options.work_progress)
+        options.work_progress(work_done + work[i] * static_cast<double>(steps) / static_cast<double>(steps_in_run),
+                              plan.element_steps);
+    };
+    auto outcome = runner.run(planned[i], coarse_vertices, diagnostics, stepped);
+    work_done += work[i];
     if (!outcome) return std::nullopt;
     if (i == 0) {
       if (!outcome->row.completed) {

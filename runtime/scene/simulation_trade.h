@@ -50,6 +50,21 @@ struct TradeIntegrator {
 inline constexpr unsigned kMaxTradeRefinements = 3;
 // The largest mesh a trade builds, in tetrahedra (after refinement), checked before anything is built.
 inline constexpr std::size_t kMaxTradeTetrahedra = std::size_t{1} << 22;
+// The most work a trade plans, in element-steps (tetrahedra x steps, summed over its runs; the demo scene's default
+// trade plans 6e9), checked with every run's steps (at most kMaxSimulationSteps, as simulate's) and the largest
+// run's memory (within memory_limit()) before anything runs: --duration 1e12 or a step factor of 1e-9 once ran
+// until killed, and --refinements 3 on an 8^3 box ran for minutes with no estimate.
+inline constexpr double kMaxTradeWork = 1e11;
+
+// What a trade will cost, estimated from the scene's own mesh before anything runs: each refinement multiplies the
+// tetrahedra by 8 and halves the automatic step (the critical step scales with the edge length).
+struct TradePlan {
+  std::size_t runs = 0;
+  double element_steps = 0.0;       // tetrahedra x steps, all runs
+  double largest_tetrahedra = 0.0;  // of the largest run
+  double largest_steps = 0.0;       // of the run taking the most steps
+  double largest_memory_bytes = 0.0;
+};
 
 struct SimulationTradeOptions {
   std::vector<TradeModel> models = trade_models();
@@ -64,6 +79,10 @@ struct SimulationTradeOptions {
   std::optional<double> duration;  // s; nullopt: the scene's
   // Called before each run with (runs done, runs planned, what runs next).
   std::function<void(std::size_t, std::size_t, const std::string&)> progress;
+  // Called once the plan is checked, before the first run.
+  std::function<void(const TradePlan&)> plan;
+  // Called during the runs with (element-steps done, element-steps planned): the time left.
+  std::function<void(double, double)> work_progress;
 };
 
 // Relative errors of a run's final state against the reference's (docs/trade.md, "Scenes"): the displacement
@@ -113,8 +132,9 @@ struct SimulationTradeResult {
 
 // Runs every variant (models x precisions x integrators x refinements) and the reference on the CPU, one thread.
 // Errors (appended, nullopt returned): a scene that cannot be compared (no tetrahedra, spring constants instead of
-// Young's modulus, a force model the scene cannot build), a mesh above kMaxTradeTetrahedra after refinement, a
-// reference that does not complete or does not move. A variant that does not complete is a row saying why.
+// Young's modulus, a force model the scene cannot build), a mesh above kMaxTradeTetrahedra after refinement, a run
+// planned above kMaxSimulationSteps or the memory this process may use, a plan above kMaxTradeWork, a reference
+// that does not complete or does not move. A variant that does not complete is a row saying why.
 std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, const SimulationTradeOptions& options,
                                                           DiagnosticList& diagnostics);
 

@@ -3,12 +3,16 @@
 # copy_seeds.cmake (run_fuzzers.sh).
 function(fmpc_fuzz_seed_files name source_dir shared_data out)
   set(patterns ${source_dir}/tests/fuzz/seeds/${name}/*)
-  if(name STREQUAL "fmpc_language" OR name STREQUAL "matlab_fis")
+  if(name STREQUAL "fmpc_language" OR name STREQUAL "matlab_fis" OR name STREQUAL "lsp")
     list(APPEND patterns ${source_dir}/rulesets/*.fis ${source_dir}/rulesets/*/*.fis
          ${source_dir}/tests/golden/*/*.fis)
     if(name STREQUAL "matlab_fis")
       list(APPEND patterns ${shared_data}/matlab-fis/*.fis)
     endif()
+  elseif(name STREQUAL "fll")
+    list(APPEND patterns ${source_dir}/tests/golden/*/*.fll)
+  elseif(name STREQUAL "fcl")
+    list(APPEND patterns ${source_dir}/tests/golden/*/*.fcl)
   elseif(name STREQUAL "scene_yaml")
     list(APPEND patterns ${source_dir}/rulesets/scenes/*.yaml ${source_dir}/tests/golden/*/*.yaml)
   elseif(name STREQUAL "gmsh")

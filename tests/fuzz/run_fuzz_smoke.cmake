@@ -18,8 +18,15 @@ set(dict_arg)
 if(EXISTS ${dictionary})
   set(dict_arg -dict=${dictionary})
 endif()
+# fuzz_python_arguments reads its fixtures from the source tree and keeps the interpreter's objects to the end.
+set(extra_args)
+if(NAME STREQUAL "python_arguments")
+  set(ENV{FMPC_FUZZ_FIXTURES} ${SOURCE_DIR})
+  set(ENV{ASAN_OPTIONS} "$ENV{ASAN_OPTIONS}:detect_leaks=0")  # libFuzzer's flag covers the inputs, not the exit
+  set(extra_args -detect_leaks=0)
+endif()
 execute_process(
-  COMMAND ${FUZZER} ${dict_arg} -max_total_time=${SECONDS} -timeout=10 -rss_limit_mb=2048 -max_len=65536
+  COMMAND ${FUZZER} ${dict_arg} ${extra_args} -max_total_time=${SECONDS} -timeout=10 -rss_limit_mb=2048 -max_len=65536
           -print_final_stats=1 -artifact_prefix=${WORK_DIR}/ ${WORK_DIR}/corpus ${WORK_DIR}/seeds
   RESULT_VARIABLE result
   OUTPUT_VARIABLE output

@@ -23,7 +23,7 @@ build=$(cd "$1" && pwd)
 seconds=$2
 shift 2
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fmpc_language matlab_fis scene_yaml gmsh obj vtk fzt csv)
+[ ${#targets[@]} -gt 0 ] || targets=(fmpc_language matlab_fis fll fcl scene_yaml gmsh obj vtk fzt csv lsp python_arguments)
 binaries=${FMPC_FUZZ_BINARIES:-$build/tests/fuzz}
 shared=$(cd "$root/.." && pwd)/shared/data
 
@@ -35,6 +35,11 @@ fuzz_one() {
   seeds=${seeds:-$build/fuzz-corpus/$name-seeds}
   local dict=()
   [ -f "$root/tests/fuzz/dict/$name.dict" ] && dict=(-dict="$root/tests/fuzz/dict/$name.dict")
+  # fuzz_python_arguments reads its fixtures from the source tree and keeps the interpreter's objects to the end.
+  if [ "$name" = python_arguments ]; then
+    dict+=(-detect_leaks=0)
+    export FMPC_FUZZ_FIXTURES="$root" ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
+  fi
   local TIMEFORMAT='%U %S' status=0
   # bash's `time`: the process's user and system CPU seconds, into TARGET.PROCESS.cpu.
   { time "$binaries/fuzz_$name" "${dict[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
@@ -49,8 +54,10 @@ report() {
   local name=$1 processes=$2 status=$3 runs=0 rate=0 cpu=0 cov="" log n n_runs n_rate
   for ((n = 0; n < processes; n++)); do
     log=$build/fuzz-corpus/$name.$n.log
-    n_runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
-    n_rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
+    # The last of the final stats (an embedded interpreter's exit can print them twice).
+    n_runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1 || echo 0)
+    n_rate=$(grep -o 'stat::average_exec_per_sec: *[0-9]*' "$log" | grep -o '[0-9]*$' | tail -1 || echo 0)
+    n_runs=${n_runs:-0} n_rate=${n_rate:-0}
     runs=$((runs + n_runs))
     rate=$((rate + n_rate))
     cpu=$(awk -v sum="$cpu" '{ sum += $1 + $2 } END { printf "%d", sum }' "$build/fuzz-corpus/$name.$n.cpu")

@@ -10,6 +10,8 @@
 #   max-rss-mib: 1024            peak resident memory (times MEMORY_FACTOR in sanitizer builds)
 #   files: a.fzt b.h             the files the run may leave in $DIR besides its inputs (default: none)
 #   unchanged: a.fis b.fis       inputs whose contents the run must leave as they were
+#   address-space-mib: 2048      run under `ulimit -v` (a process memory limit); skipped, with exit status 77, in
+#                                sanitizer builds, whose shadow memory needs more address space than any such limit
 # Every run checks, besides the exit status and messages, that nothing was written outside $DIR, that $DIR holds
 # only the inputs and `files`, and that stderr stays under 64 KiB (diagnostics cap their count and excerpts).
 set -uo pipefail
@@ -17,7 +19,7 @@ case_file=$1 fmpc=$2 work=$3 memory_factor=${4:-1}
 name=$(basename "$case_file" .case)
 fail() { echo "hostile case $name: FAILED: $*" >&2; exit 1; }
 
-args="" exit_expected="" input_name="" generate="" max_seconds=20 max_rss=1024 files="" unchanged=""
+args="" exit_expected="" input_name="" generate="" max_seconds=20 max_rss=1024 files="" unchanged="" address_space=""
 stderr_needles=() stdout_needles=()
 body_start=0 line_no=0
 while IFS= read -r line || [ -n "$line" ]; do
@@ -35,6 +37,7 @@ while IFS= read -r line || [ -n "$line" ]; do
     max-rss-mib:*) max_rss=${line#max-rss-mib: } ;;
     files:*) files=${line#files: } ;;
     unchanged:*) unchanged=${line#unchanged: } ;;
+    address-space-mib:*) address_space=${line#address-space-mib: } ;;
     *) fail "unknown line '$line' in $case_file" ;;
   esac
 done < "$case_file"
@@ -56,9 +59,14 @@ before=$(cd "$DIR" && find . -mindepth 1 | sort)
 sums_before=$(cd "$DIR" && for f in $unchanged; do cksum "$f"; done)
 outside_before=$(find "$work" -mindepth 1 -maxdepth 1 | sort)
 
+if [ -n "$address_space" ] && [ "$memory_factor" != 1 ]; then
+  echo "hostile case $name: skipped in a sanitizer build (address-space-mib: $address_space)"
+  exit 77
+fi
 eval "set -- $args"
 start=$(date +%s%N)
-(cd "$DIR" && exec /usr/bin/time -f '%M' -o "$work/rss" timeout -s KILL "$max_seconds" "$fmpc" "$@" \
+(cd "$DIR" && { [ -z "$address_space" ] || ulimit -v $((address_space * 1024)); } &&
+   exec /usr/bin/time -f '%M' -o "$work/rss" timeout -s KILL "$max_seconds" "$fmpc" "$@" \
    > "$work/stdout" 2> "$work/stderr" < /dev/null)
 status=$?
 elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))

@@ -11,6 +11,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "tests/support/fmpc_process.h"
 
@@ -100,5 +102,43 @@ TEST_CASE("re-running simulate into a folder removes the earlier run's extra fra
   CHECK(fs::exists(folder / "out" / "frame_99999.vtu"));
   CHECK(fs::exists(folder / "out" / "notes.pvd"));
   CHECK(fs::exists(folder / "out" / "strain_stiffening_block.pvd"));
+  fs::remove_all(folder);
+}
+
+TEST_CASE("every command that can run long reports progress and the time left on a pipe", "[cli][heavy]") {
+  // Issue 30: trade --points 10000000 and plot of a 100,000-rule system ran silently when stderr was not a
+  // terminal. FMPC_PROGRESS_SECONDS shortens the period of the plain lines (10 s by default) so that runs of a
+  // fraction of a second show them.
+  const fs::path folder = fs::temp_directory_path() / ("fmpc_progress_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const std::string mamdani = (kSource / "rulesets" / "liver_fibrosis" / "mamdani.fis").string();
+  {
+    std::ofstream points(folder / "points.csv");
+    points << "HCV,HBV,ALD,CLD,NAFLD\n";
+    for (int k = 0; k < 3000; ++k) points << k % 60 << ",10,12,11,11.2\n";
+  }
+  REQUIRE(::setenv("FMPC_PROGRESS_SECONDS", "0.01", 1) == 0);
+  const std::string out = (folder / "out").string();
+  const std::vector<std::pair<std::string, std::string>> commands = {
+      {"eval", "eval " + mamdani + " --csv " + (folder / "points.csv").string() + " -o " + out + ".csv"},
+      {"plot", "plot " + mamdani + " --x HCV --y HBV --resolution 61 -o " + out + ".png"},
+      {"convert", "convert " + mamdani + " --to fll -o " + out + ".fll"},
+      {"trade", "trade " + (kSource / "tests" / "golden" / "fll_eval" / "tipper.fll").string() +
+                    " --points 200000 --min-seconds 0.01 --resolutions 3 --cxx false"},
+      {"simulate", "simulate " + (kSource / "rulesets" / "scenes" / "liver_indentation.yaml").string() +
+                       " --steps 3000 -o " + out + "_run"},
+      {"compile", "compile " + mamdani + " --target table --fix ALD=12 --fix CLD=11 --fix NAFLD=11.2 "
+                                         "--max-error 5 -o " + out + ".fzt"},
+      {"thesis-benchmark", "thesis-benchmark " + mamdani + " --patients " +
+                               (kSource / "rulesets" / "liver_fibrosis" / "example_patients.csv").string()}};
+  for (const auto& [name, arguments] : commands) {
+    const Run run = run_fmpc(arguments);
+    INFO(arguments << "\n" << run.out.substr(0, 3000));
+    CHECK(run.status == 0);
+    CHECK(run.out.find("fmpc " + name + ": progress: ") != std::string::npos);
+    CHECK(run.out.find(" left") != std::string::npos);
+  }
+  ::unsetenv("FMPC_PROGRESS_SECONDS");
   fs::remove_all(folder);
 }

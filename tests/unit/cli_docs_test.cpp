@@ -4,6 +4,8 @@
 #include <catch2/catch.hpp>
 #include <sys/wait.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -171,4 +173,38 @@ TEST_CASE("every warning code in the sources is a known -W code", "[cli][docs]")
     INFO("warning code '" << code << "'");
     CHECK(fmpc::is_warning_code(code));
   }
+}
+
+TEST_CASE("every option that takes a value refuses an empty one, naming it", "[cli][heavy]") {
+  // `-o ''` once sent simulate's outputs to the default folder and `--csv ''` made trade write nothing: an empty
+  // value is a mistake (an unset shell variable), and every command says so, whatever the option.
+  std::size_t checked = 0;
+  for (const std::string& command : subcommands()) {
+    const Run help = run_fmpc(command + " --help");
+    REQUIRE(help.status == 0);
+    std::istringstream lines(help.out.substr(help.out.find("Options:")));
+    for (std::string line; std::getline(lines, line);) {
+      // "  -o,--output TEXT=-  ...": names, then a type in capitals; flags have no type.
+      std::istringstream words(line);
+      std::string names, type;
+      if (!(words >> names >> type) || names[0] != '-' || line.find_first_not_of(' ') > 4) continue;
+      static const std::regex value_type(R"(^[A-Z]+([:=].*)?$)");  // TEXT, UINT=20, FLOAT:FLOAT in [0 - 1]
+      if (!std::regex_match(type, value_type) || names == "-W" || names == "--cxx-flags") continue;
+      const std::string option = names.substr(names.rfind(',') + 1);
+      const Run run = run_fmpc(command + " " + option + " ''");
+      INFO("fmpc " << command << " " << option << " '': " << run.out);
+      CHECK(run.status == 2);
+      // "--output: an empty value names nothing ..." (by any of its names: --png is --image); numbers and choices
+      // refuse '' through their own check.
+      bool named = false;
+      for (std::size_t start = 0; start < names.size();) {
+        const std::size_t comma = std::min(names.find(',', start), names.size());
+        named = named || run.out.find(names.substr(start, comma - start) + ": ") != std::string::npos;
+        start = comma + 1;
+      }
+      CHECK(named);
+      ++checked;
+    }
+  }
+  CHECK(checked > 40);
 }

@@ -70,7 +70,6 @@ SimulationSetup volume_term_setup(const Mesh& mesh, double E, double nu, double 
   return setup;
 }
 
-
 struct Uniaxial {
   double youngs_modulus = 0.0;  // traction / mean axial strain of the top face
   double poisson_ratio = 0.0;   // -(lateral strain of the x = L face) / axial strain
@@ -123,7 +122,8 @@ Uniaxial stretch(SimulationSetup setup, const Mesh& mesh, const Point3& size, do
   out.poisson_ratio = -(far_x / far / size[0]) / axial;
   // The lateral contraction of the top face is symmetric about its centre only for an isotropic response; its mean
   // relative to the contraction expected from nu is the slide.
-  const double expected_x = -out.poisson_ratio * axial * size[0] / 2.0, expected_y = -out.poisson_ratio * axial * size[1] / 2.0;
+  const double expected_x = -out.poisson_ratio * axial * size[0] / 2.0,
+               expected_y = -out.poisson_ratio * axial * size[1] / 2.0;
   out.sideways_slide = std::hypot(slide_x / top - expected_x, slide_y / top - expected_y) / (top_z / top);
   return out;
 }
@@ -178,6 +178,7 @@ TEST_CASE("the corner CSR: slots invert it, and the vertex gather sums each vert
   REQUIRE(term.law == kernels::element_law_index<Law>);
   kernels::ElementTermView<float> view{};
   view.law = term.law;
+  view.element = field.kind;
   view.count = static_cast<int>(field.size());
   view.corners = element_corners.data();
   view.corner_slot = field.corner_slot.data();
@@ -188,7 +189,8 @@ TEST_CASE("the corner CSR: slots invert it, and the vertex gather sums each vert
   view.stiffness_damping = damping.data();
   const kernels::StateView<float> state{x[0].data(), x[1].data(), x[2].data(), v[0].data(), v[1].data(), v[2].data()};
   std::vector<kernels::CornerForce<float>> slotted(corners);
-  for (int e = 0; e < view.count; ++e) kernels::element_corner_forces<Law, false>(e, view, state, slotted.data());
+  for (int e = 0; e < view.count; ++e)
+    kernels::element_node_forces<kernels::LinearTetrahedron, Law, false>(e, view, state, slotted.data());
   const kernels::CornerForceView<float> gather{field.corner_offset.data(), field.corner_index.data(), slotted.data()};
 
   std::vector<float> sum(3 * mesh.points.size(), 0.0f);
@@ -199,7 +201,7 @@ TEST_CASE("the corner CSR: slots invert it, and the vertex gather sums each vert
         xe[a][axis] = x[axis][static_cast<std::size_t>(element_corners[static_cast<std::size_t>(4 * e + a)])];
         ve[a][axis] = v[axis][static_cast<std::size_t>(element_corners[static_cast<std::size_t>(4 * e + a)])];
       }
-    Law::forces(Law::material(view, e), xe, ve, fe);
+    kernels::LinearTetrahedron::forces<Law>(view, e, xe, ve, fe);
     for (int a = 0; a < 4; ++a)
       for (int axis = 0; axis < 3; ++axis)
         sum[3 * static_cast<std::size_t>(element_corners[static_cast<std::size_t>(4 * e + a)]) +
@@ -308,8 +310,8 @@ TEST_CASE("every integrator runs every force model and converges at its order", 
                                 Scheme{Integrator::RungeKutta4, 4.0}, Scheme{Integrator::ImplicitEuler, 1.0}}) {
       const double coarse = error(run(scheme.integrator, h0)), fine = error(run(scheme.integrator, h0 / 2));
       const double measured = std::log2(coarse / fine);
-      WARN(model.name << ", " << to_string(scheme.integrator) << ": errors " << coarse << ", " << fine
-                      << " m, order " << measured);
+      WARN(model.name << ", " << to_string(scheme.integrator) << ": errors " << coarse << ", " << fine << " m, order "
+                      << measured);
       CHECK(measured == Approx(scheme.order).margin(0.35));
     }
     // Forward Euler has no automatic step without mass damping (docs/simulator.md); with it, it converges at order 1.
@@ -427,8 +429,9 @@ TEST_CASE("inversions are counted, the first step is exact, and on_inversion sto
   CHECK(result.inversions.largest_count == 1);
   REQUIRE(warned.warning_count() == 1);
   CHECK(warned.items()[0].code == "inverted-elements");
-  CHECK_THAT(warned.items()[0].message, Catch::StartsWith("tetrahedron 0 (vertices 0, 1, 2, 3) turned inside out at step " +
-                                                         std::to_string(expected)));
+  CHECK_THAT(
+      warned.items()[0].message,
+      Catch::StartsWith("tetrahedron 0 (vertices 0, 1, 2, 3) turned inside out at step " + std::to_string(expected)));
   CHECK_THAT(warned.items()[0].message, Catch::Contains("give the springs a volume term"));
   setup.on_inversion = InversionPolicy::Stop;
   DiagnosticList stopped;
@@ -451,7 +454,8 @@ TEST_CASE("inversions are counted, the first step is exact, and on_inversion sto
   CHECK(kept.positions[3][2] > 0.0);
 }
 
-TEST_CASE("resting blocks: the FEM holds a soft block above its base, springs let it fold through", "[heavy][fem][sim]") {
+TEST_CASE("resting blocks: the FEM holds a soft block above its base, springs let it fold through",
+          "[heavy][fem][sim]") {
   // Issue 10: a 0.1 m cube of 5 kPa tissue and a 2 cm cube of 1 kPa, base fixed, under gravity (semi-implicit Euler,
   // dt auto, damping ratio 0.9), and a 0.1 m cube of 3 kPa, which folds the springs through their base. At 6^3 cells
   // for the test suite's time; docs/simulator.md has the 20^3 runs.
@@ -489,7 +493,8 @@ TEST_CASE("resting blocks: the FEM holds a soft block above its base, springs le
   }
 }
 
-TEST_CASE("dt auto never diverges: seeded scenes over damping, modulus, law, model, loads and integrator", "[heavy][sim][stability]") {
+TEST_CASE("dt auto never diverges: seeded scenes over damping, modulus, law, model, loads and integrator",
+          "[heavy][sim][stability]") {
   // Issue 11: forward Euler's automatic step diverged for damping ratios above 1. Every automatic step must either
   // run bounded or be refused before the run (forward Euler without mass or nodal damping, docs/simulator.md).
   std::mt19937_64 rng(1124);
@@ -501,10 +506,11 @@ TEST_CASE("dt auto never diverges: seeded scenes over damping, modulus, law, mod
   double worst_growth = 0.0;
   for (int n = 0; n < 1000; ++n) {
     const double ratio = n % 10 == 0 ? 0.0 : std::pow(10.0, -2.0 + unit(rng) * std::log10(5000.0));  // 0.01 .. 50
-    const double E = std::pow(10.0, 2.0 + unit(rng) * 5.0);  // 100 Pa .. 10 MPa
-    const int model = n % 3;                                    // springs, springs + volume term, FEM
-    SimulationSetup setup = model == 2 ? fem_setup(mesh, E, 0.45, ratio)
-                                       : model == 1 ? volume_term_setup(mesh, E, 0.45, ratio) : spring_setup(mesh, E, ratio);
+    const double E = std::pow(10.0, 2.0 + unit(rng) * 5.0);                                          // 100 Pa .. 10 MPa
+    const int model = n % 3;  // springs, springs + volume term, FEM
+    SimulationSetup setup = model == 2   ? fem_setup(mesh, E, 0.45, ratio)
+                            : model == 1 ? volume_term_setup(mesh, E, 0.45, ratio)
+                                         : spring_setup(mesh, E, ratio);
     setup.integrator = integrators[n % 5];
     setup.precision = n % 4 == 0 ? Precision::Float : Precision::Double;
     if (model == 0 && unit(rng) < 0.5) {

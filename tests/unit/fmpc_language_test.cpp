@@ -375,8 +375,11 @@ TEST_CASE("fmpc language: syntax errors read like a compiler's, all of them, sor
         std::vector<std::string>{"2:9-10: expected a membership function such as 'gauss' after 'is', found '('"});
   CHECK(diagnostics_of("system s input x in [0, 1] a is gauss(mean 1, sd 1)\nrule r1: if x is (a) then y is b") ==
         std::vector<std::string>{"2:18-19: expected a term name after 'is', found '('"});
+  // A missing ':' is inserted (a repair): the rule is read and checked as if it were written.
   CHECK(diagnostics_of("system s\nrule r1 if x is a then y is b") ==
-        std::vector<std::string>{"2:9-11: expected ':' after 'r1', found 'if'"});
+        std::vector<std::string>{"2:9-11: expected ':' after 'r1', found 'if'",
+                                 "2:12-13: unknown input 'x' in system 's'",
+                                 "2:24-25: unknown output 'y' in system 's'"});
   CHECK(diagnostics_of("input x in [0, 1]") ==
         std::vector<std::string>{"1:1-6: a variable before the first 'system' line; start the file with: system NAME"});
   CHECK(diagnostics_of("hello") == std::vector<std::string>{"1:6-6: expected 'is' after 'hello', found end of file"});
@@ -398,7 +401,7 @@ TEST_CASE("fmpc language: syntax errors read like a compiler's, all of them, sor
             "6:16-16: expected 'then', 'and' or 'or' after 'a', found end of file"});
   CHECK(diagnostics_of("system s input x in [0, - 1]") ==
         std::vector<std::string>{
-            "1:25-26: unexpected character '-'; a negative number is written without a space: -20"});
+            "1:25-28: a negative number is written without a space: write -1"});
   CHECK(diagnostics_of("system s \xff") ==
         std::vector<std::string>{"1:10-11: the file is not valid UTF-8 (save it as UTF-8)"});
   CHECK(diagnostics_of("system s input x in [0, 1e999]") ==
@@ -427,7 +430,7 @@ input HBV in [0 75]
             "5:28-32: expected ',' or ')' after 'sd', found '0.38'",
             "9:27-31: expected an input name after 'and', found 'then'",
             "10:17-19: expected 'is' after 'HCV', found 'F3'",
-            "11:22-23: unexpected character '-'; a name with this character must be quoted: \"F0-F1\"",
+            "11:20-25: a name with '-' must be quoted: write \"F0-F1\"",
             "12:51-52: expected a number after 'weight', found 'rule'",
             "13:9-11: expected ':' after 'r5', found 'if'",
             "14:17-19: expected ',' after '0', found '75'"});
@@ -514,7 +517,9 @@ TEST_CASE("fmpc language: bad named MF arguments", "[fmpc-language]") {
   CHECK(diagnostics_of(head + "gaus(mean 1, sd 1)") ==
         std::vector<std::string>{"5:8-12: unknown membership function 'gaus' | did you mean 'gauss'? | membership "
                                  "functions: triangle, trapezoid, gauss, gauss2, bell, sigmoid, dsigmoid, psigmoid, "
-                                 "zshape, sshape, pishape, linear_s, linear_z, constant, linear"});
+                                 "zshape, sshape, pishape, linear_s, linear_z, constant, linear | MATLAB's names "
+                                 "are accepted too: trimf, trapmf, gaussmf, gauss2mf, gbellmf, sigmf, dsigmf, "
+                                 "psigmf, zmf, smf, pimf, linsmf, linzmf"});
   CHECK(diagnostics_of(head + "linear(xx 1, y 2, offset 3)") ==
         std::vector<std::string>{"5:15-17: 'xx' is not an input of system 's' | did you mean 'x'? | linear(...) "
                                  "takes one coefficient per input of 's' (x, y) and an offset"});
@@ -522,6 +527,170 @@ TEST_CASE("fmpc language: bad named MF arguments", "[fmpc-language]") {
         std::vector<std::string>{"5:30-36: the offset is given twice | first given here: 5:20"});
   CHECK(diagnostics_of(head + "linear(x 1, x 4)") ==
         std::vector<std::string>{"5:20-21: the coefficient of 'x' is given twice | first given here: 5:15"});
+}
+
+TEST_CASE("fmpc language: MATLAB's MF names read as fmpc's families; MATLAB's parameter spellings are refused",
+          "[fmpc-language]") {
+  // Every alias gives the IR of its fmpc family, parameters in MATLAB's order.
+  const std::vector<std::pair<std::string, std::string>> pairs = {
+      {"trimf(start 1, peak 2, end 3)", "triangle(start 1, peak 2, end 3)"},
+      {"trapmf(start 1, top_start 2, top_end 3, end 4)", "trapezoid(start 1, top_start 2, top_end 3, end 4)"},
+      {"gaussmf(mean 5, sd 1)", "gauss(mean 5, sd 1)"},
+      {"gauss2mf(mean1 2, sd1 1, mean2 4, sd2 2)", "gauss2(mean1 2, sd1 1, mean2 4, sd2 2)"},
+      {"gbellmf(width 2, slope 3, center 5)", "bell(width 2, slope 3, center 5)"},
+      {"sigmf(slope 2, center 5)", "sigmoid(slope 2, center 5)"},
+      {"dsigmf(slope1 2, center1 3, slope2 2, center2 7)", "dsigmoid(slope1 2, center1 3, slope2 2, center2 7)"},
+      {"psigmf(slope1 2, center1 3, slope2 -2, center2 7)", "psigmoid(slope1 2, center1 3, slope2 -2, center2 7)"},
+      {"zmf(start 2, end 6)", "zshape(start 2, end 6)"},
+      {"smf(start 2, end 6)", "sshape(start 2, end 6)"},
+      {"pimf(start 1, top_start 2, top_end 3, end 4)", "pishape(start 1, top_start 2, top_end 3, end 4)"},
+      {"linsmf(start 2, end 6)", "linear_s(start 2, end 6)"},
+      {"linzmf(start 2, end 6)", "linear_z(start 2, end 6)"}};
+  const std::string head = "system s\ninput x in [0, 10]\n  t is ";
+  const std::string tail = "\noutput y in [0, 1]\n  o is gauss(mean 0.5, sd 0.1)\nrule: if x is t then y is o\n";
+  for (const auto& [matlab, fmpc] : pairs) {
+    INFO(matlab);
+    const FuzzySystem aliased = read_one(head + matlab + tail);
+    const FuzzySystem plain = read_one(head + fmpc + tail);
+    CHECK(aliased.inputs[0].terms[0].mf.kind == plain.inputs[0].terms[0].mf.kind);
+    CHECK(aliased.inputs[0].terms[0].mf.params == plain.inputs[0].terms[0].mf.params);
+    // fmt writes fmpc's name.
+    CHECK(format_ok(head + matlab + tail) == format_ok(head + fmpc + tail));
+  }
+  // Positional values under a MATLAB name: MATLAB's order, spelled out with names, with a fix-it.
+  CHECK(diagnostics_of(head + "gaussmf(0.91, 7.64)" + tail) ==
+        std::vector<std::string>{"3:8-27: parameters are named in fmpc: write gauss(mean 7.64, sd 0.91) | MATLAB's "
+                                 "gaussmf [sigma c] is gauss(mean c, sd sigma)"});
+  CHECK(diagnostics_of(head + "gbellmf [2 3 5]" + tail) ==
+        std::vector<std::string>{"3:8-23: parameters are named in fmpc: write bell(width 2, slope 3, center 5) | "
+                                 "MATLAB's gbellmf [a b c] is bell(width a, slope b, center c)"});
+  // MATLAB's own parameter names under any name.
+  CHECK(diagnostics_of(head + "gauss2mf(sig1 1, c1 2, sig2 2, c2 4)" + tail) ==
+        std::vector<std::string>{"3:8-44: these are MATLAB's parameter names; in fmpc write gauss2(mean1 2, sd1 1, "
+                                 "mean2 4, sd2 2) | MATLAB's gauss2mf [sig1 c1 sig2 c2] is gauss2(mean1 c1, sd1 "
+                                 "sig1, mean2 c2, sd2 sig2)"});
+  // One MATLAB name among fmpc's: the note says which fmpc name it is.
+  CHECK(diagnostics_of(head + "gaussmf(mean 5, sigma 1)" + tail) ==
+        std::vector<std::string>{"3:8-15: gauss(...) of term 't' is missing parameter 'sd' | gauss takes: mean, sd",
+                                 "3:24-29: 'gauss' has no parameter 'sigma' | MATLAB's gaussmf calls it sigma; fmpc "
+                                 "calls it 'sd' | gauss takes: mean, sd"});
+  // Under fmpc's name, positional values imply no order: none is guessed.
+  CHECK(diagnostics_of(head + "gauss(7.64, 0.91)" + tail) ==
+        std::vector<std::string>{"3:14-18: parameters are named in fmpc: write gauss(mean VALUE, sd VALUE) | gauss "
+                                 "takes: mean, sd"});
+  CHECK(diagnostics_of(head + "trimf(1, 2)" + tail) ==
+        std::vector<std::string>{"3:14-15: parameters are named in fmpc: write triangle(start VALUE, peak VALUE, end "
+                                 "VALUE) | triangle takes: start, peak, end | MATLAB's trimf [a b c] is "
+                                 "triangle(start a, peak b, end c)"});
+  // The fix-it replaces the whole call.
+  DiagnosticList diagnostics;
+  read_fmpc("t.fis", head + "trimf(1, 2, 3)" + tail, diagnostics);
+  REQUIRE(diagnostics.items().size() == 1);
+  REQUIRE(diagnostics.items()[0].fix);
+  CHECK(diagnostics.items()[0].fix->replacement == "triangle(start 1, peak 2, end 3)");
+  CHECK(diagnostics.items()[0].fix->range.column == 8);
+  CHECK(diagnostics.items()[0].fix->range.end_column == 22);
+}
+
+TEST_CASE("fmpc language: what a newcomer writes is repaired with a fix-it, and reading goes on", "[fmpc-language]") {
+  const std::string head = "system s\ninput x in [0, 10] kPa\n  a is gauss(mean 5, sd 1)\n";
+  const std::string tail = "output y in [0, 1]\n  o is gauss(mean 0.5, sd 0.1)\nrule: if x is a then y is o\n";
+  // Each repair is one error naming the fix, and the file is still read: the unknown term 'b' of the last line
+  // is reported too (a semantic error, found only because the parse went on).
+  const auto with_later_error = [&](const std::string& line) {
+    return diagnostics_of(head + line + "\n" + tail + "rule: if x is b then y is o\n");
+  };
+  const std::string later = "8:15-16: input 'x' has no term 'b' | did you mean 'a'? | terms of 'x': a, c";
+  CHECK(with_later_error("  c is gauss(mean .5, sd 1)") ==
+        std::vector<std::string>{"4:19-21: a number starts with a digit: write 0.5", later});
+  CHECK(with_later_error("  c is gauss(mean -.5e1, sd 1)") ==
+        std::vector<std::string>{"4:19-24: a number starts with a digit: write -0.5e1", later});
+  CHECK(with_later_error("  c is gauss(mean 5., sd 1)") ==
+        std::vector<std::string>{"4:19-21: a number does not end with '.': write 5", later});
+  CHECK(with_later_error("  c is gauss(mean +5, sd 1)") ==
+        std::vector<std::string>{"4:19-21: a number has no leading '+': write 5", later});
+  CHECK(with_later_error("  c is gauss(mean=5, sd 1)") ==
+        std::vector<std::string>{"4:18-19: no '=' between a name and its value: write mean 5", later});
+  CHECK(with_later_error("  \"c is gauss(mean 5, sd 1)") ==
+        std::vector<std::string>{"4:3-28: unterminated quoted name: close it with '\"' on the same line",
+                                 "4:28-29: expected 'is' after '\"c is gauss(mean 5, sd 1)\"', found 'output'"});
+  // Rules: comparison and logic operators, names with a character an identifier cannot hold.
+  const std::string rules = "system s\ninput x in [0, 10]\n  a is gauss(mean 5, sd 1)\n  \"F0-F1\" is gauss(mean 1, "
+                            "sd 1)\noutput y in [0, 1]\n  o is gauss(mean 0.5, sd 0.1)\n";
+  const std::string two_inputs = "system s\ninput x in [0, 10]\n  \"F0-F1\" is gauss(mean 1, sd 1)\ninput z in [0, 1]\n"
+                                 "  a is gauss(mean 5, sd 1)\noutput y in [0, 1]\n  o is gauss(mean 0.5, sd 0.1)\n";
+  CHECK(diagnostics_of(rules + "rule r1: if x == a then y is o weight = 0.5\nrule: if x is c then y is o") ==
+        std::vector<std::string>{"7:15-17: write 'is' instead of '=='",
+                                 "7:39-40: no '=' between a name and its value: write weight 0.5",
+                                 "8:15-16: input 'x' has no term 'c' | did you mean 'a'? | terms of 'x': a, F0-F1"});
+  CHECK(diagnostics_of(two_inputs + "rule: if x != F0-F1 || z is a then y is o\n"
+                                    "rule: if x is F0-F1 & z is aa then y is o") ==
+        std::vector<std::string>{"8:12-14: write 'is not' instead of '!='",
+                                 "8:15-20: a name with '-' must be quoted: write \"F0-F1\"",
+                                 "8:21-23: write 'or' instead of '||'",
+                                 "9:15-20: a name with '-' must be quoted: write \"F0-F1\"",
+                                 "9:21-22: write 'and' instead of '&'",
+                                 "9:28-30: input 'z' has no term 'aa' | did you mean 'a'? | terms of 'z': a"});
+  // Units: quoted when they hold '/', '^', a non-ASCII letter; a number may start a unit after a range.
+  CHECK(diagnostics_of("system s\ninput x in [0, 10] mL/min\ninput z in [0, 1] µm\ninput w in [0, 1] 1/s\n"
+                       "output y in [0, 1] kg/m^3") ==
+        std::vector<std::string>{"2:20-26: a unit with '/' must be quoted: write \"mL/min\"",
+                                 "3:19-22: a unit with 'µ' must be quoted: write \"µm\"",
+                                 "4:19-22: a unit with '/' must be quoted: write \"1/s\"",
+                                 "5:20-26: a unit with '/' must be quoted: write \"kg/m^3\""});
+  // A missing ':' (after a rule label or `fires`) or ',' (in a range) is inserted.
+  CHECK(diagnostics_of("system s\n  when no rule fires midrange\ninput x in [0 10]\n  a is gauss(mean 5, sd 1)\n"
+                       "output y in [0, 1]\n  o is gauss(mean 0.5, sd 0.1)\nrule r1 if x is a then y is oo") ==
+        std::vector<std::string>{"2:22-30: expected ':' after 'fires', found 'midrange'",
+                                 "3:15-17: expected ',' after '0', found '10'",
+                                 "7:9-11: expected ':' after 'r1', found 'if'",
+                                 "7:29-31: output 'y' has no term 'oo' | did you mean 'o'? | terms of 'y': o"});
+  // What has no clear meaning is not repaired: no AST, and nothing more on its line.
+  CHECK(diagnostics_of("system s\ninput x in [0, 1] ° ≤\nrule: if x is a then y is zz") ==
+        std::vector<std::string>{"2:19-21: unexpected character '°'; a name with this character must be quoted: "
+                                 "\"F0-F1\"",
+                                 "2:22-25: unexpected character '≤'; a name with this character must be quoted: "
+                                 "\"F0-F1\""});
+  // fmt refuses a file read through repairs: the fix-its are the user's to make.
+  DiagnosticList diagnostics;
+  CHECK_FALSE(format_fmpc("t.fis", head + "  c is gauss(mean .5, sd 1)\n" + tail, diagnostics).has_value());
+  CHECK(diagnostics.error_count() == 1);
+}
+
+TEST_CASE("fmpc language: every repair's fix-it, applied, gives a file without errors", "[fmpc-language]") {
+  const std::string text = "system s\n  type = mamdani\n  when no rule fires midrange\ninput x in [0 10] mL/min\n"
+                           "  a is gauss(mean .5, sd +1)\n  b is gaussmf(1, 5)\n  F0-F1 is trimf(a 1, b 2, c 3)\n"
+                           "output y in [0, 1] µm\n  o is gauss(mean - 0.5, sd 0.1)\n"
+                           "input z in [0, 1]\n  c is linzmf(a 0, b 1)\n"
+                           "rule r1 if x == a && z != c then y is o weight=0.5\nrule: if x is F0-F1 then y is o\n";
+  DiagnosticList diagnostics;
+  read_fmpc("t.fis", text, diagnostics);
+  // Apply the fix-its from the last to the first (they do not overlap), by line and byte column.
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  std::vector<FixIt> fixes;
+  for (const Diagnostic& d : diagnostics.items()) {
+    INFO(d.message);
+    REQUIRE(d.fix);
+    fixes.push_back(*d.fix);
+  }
+  CHECK(fixes.size() == 18);
+  std::sort(fixes.begin(), fixes.end(), [](const FixIt& a, const FixIt& b) { return b.range < a.range; });
+  for (const FixIt& fix : fixes) {
+    std::string& line = lines[static_cast<std::size_t>(fix.range.line - 1)];
+    const auto begin = static_cast<std::size_t>(fix.range.column - 1);
+    line.replace(begin, static_cast<std::size_t>(fix.range.end_column - fix.range.column), fix.replacement);
+  }
+  std::string fixed;
+  for (const std::string& line : lines) fixed += line + "\n";
+  INFO(fixed);
+  const FuzzySystem system = read_one(fixed);
+  CHECK(system.inputs[0].unit == "mL/min");
+  CHECK(system.inputs[0].terms[0].mf.params == std::vector<double>{1, 0.5});
+  CHECK(system.inputs[0].terms[1].mf.params == std::vector<double>{1, 5});
+  CHECK(system.outputs[0].terms[0].mf.params[1] == -0.5);
+  CHECK(system.rules[0].weight == 0.5);
 }
 
 TEST_CASE("fmpc language: a system with errors is left out, the others are kept", "[fmpc-language]") {

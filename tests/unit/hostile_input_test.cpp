@@ -1,7 +1,9 @@
 // Hostile inputs (docs/limits.md): the caps of diagnostics, the bounded "did you mean", the bounded input reader,
 // all-or-nothing outputs, the parser depth limit, scene duplicate keys, names and step counts, generated-mesh sizes.
 // tests/hostile runs the same classes through the fmpc command line.
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -18,6 +20,7 @@
 #include "diagnostics/diagnostic.h"
 #include "runtime/io/atomic_file.h"
 #include "runtime/io/input_file.h"
+#include "runtime/io/memory_limit.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/scene/scene_file.h"
@@ -176,6 +179,49 @@ TEST_CASE("the input reader refuses what is not a regular file, and files over t
   std::filesystem::remove_all(folder);
 }
 
+TEST_CASE("an input of several kinds is read under the limit of the kind its first bytes name", "[hostile]") {
+  // `fmpc eval` and fmpc.load_table: a table (signature, 1 KiB here) or a rule file (anything, 100 bytes here).
+  const std::vector<sim::InputKind> kinds = {{"lookup table", 1024, "SIG!"}, {"rule file", 100, ""}};
+  const std::string folder = temporary_folder("kinds");
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(folder + "/" + name, std::ios::binary) << text;
+    return folder + "/" + name;
+  };
+  std::string error;
+  // Every size on either side of each limit, for both kinds, and files shorter than the signature.
+  for (const std::size_t size : {0, 3, 4, 99, 100, 101, 1023, 1024, 1025}) {
+    for (const bool table : {true, false}) {
+      std::string text = table ? "SIG!" : "rule";
+      text.resize(std::max<std::size_t>(size, 0), 'x');
+      if (size < 4) text = std::string(size, 'S');  // shorter than the signature: a rule file
+      const bool is_table = table && size >= 4;
+      const std::size_t limit = is_table ? 1024 : 100;
+      INFO(size << (is_table ? " byte table" : " byte rule file"));
+      const auto input = sim::read_input_file(write("f", text), kinds, error);
+      CHECK(bool(input) == (size <= limit));
+      if (input) {
+        CHECK(input->kind == (is_table ? 0u : 1u));
+        CHECK(input->contents == text);
+      } else {
+        CHECK(error.find(std::string("the limit for a ") + (is_table ? "lookup table" : "rule file")) !=
+              std::string::npos);
+      }
+    }
+  }
+  // A gigabyte that is not a table is refused by the rule file's limit, before it is read (sparse: no disk used).
+  const std::string big = folder + "/big";
+  {
+    std::ofstream(big).close();
+    std::filesystem::resize_file(big, std::uintmax_t{1} << 30);
+  }
+  CHECK_FALSE(sim::read_input_file(big, kinds, error));
+  CHECK(error.find("is 1 GiB; the limit for a rule file is 100 bytes") != std::string::npos);
+  // With only the table kind, anything else is named as not a table after its first bytes.
+  CHECK_FALSE(sim::read_input_file(big, {kinds[0]}, error));
+  CHECK(error.find("it is not a lookup table") != std::string::npos);
+  std::filesystem::remove_all(folder);
+}
+
 TEST_CASE("several outputs are written all or none", "[hostile]") {
   const std::string folder = temporary_folder("outputs");
   DiagnosticList diagnostics;
@@ -288,6 +334,38 @@ TEST_CASE("generated meshes are sized before they are allocated", "[hostile][sce
   const auto errors = scene_errors("mesh: {ellipsoid: {radii: [1, 1, 1], resolution: 200}}\nmaterial: {youngs_modulus: 5}\n");
   REQUIRE(errors.size() == 1);
   CHECK(errors.front().rfind("1:50: mesh.ellipsoid.resolution: 200 makes 384000000 tetrahedra", 0) == 0);
+}
+
+TEST_CASE("memory checks use the limit the process has, not only the machine's", "[hostile]") {
+  const sim::MemoryLimit machine = sim::memory_limit();
+  REQUIRE(machine.bytes > 0);
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define FMPC_UNDER_ASAN 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(FMPC_UNDER_ASAN)
+  WARN("not run under AddressSanitizer: its shadow memory needs more address space than any RLIMIT_AS");
+#else
+  // In a child: RLIMIT_AS of 3 GiB (below this machine's memory) becomes the limit, and an ellipsoid estimated at
+  // 15 GiB is refused by it (issue 30: resolution 110 passed the physical-memory check and died of bad_alloc).
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    const rlimit limit{rlim_t{3} << 30, rlim_t{3} << 30};
+    if (::setrlimit(RLIMIT_AS, &limit) != 0) ::_exit(3);
+    const sim::MemoryLimit process = sim::memory_limit();
+    if (process.bytes != (std::uint64_t{3} << 30) || process.source.find("RLIMIT_AS") == std::string::npos) ::_exit(4);
+    sim::EllipsoidSpec ellipsoid;
+    ellipsoid.resolution = 110;
+    const auto refused = sim::generated_mesh_too_large(sim::tetrahedron_count(ellipsoid));
+    ::_exit(refused && refused->find("RLIMIT_AS (ulimit -v), 3 GiB") != std::string::npos ? 0 : 5);
+  }
+  int status = 0;
+  REQUIRE(::waitpid(child, &status, 0) == child);
+  CHECK(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+#endif
 }
 
 TEST_CASE("mesh counts claim no more than the bytes left", "[hostile]") {

@@ -110,116 +110,126 @@ TEST_CASE("every element law has its registry row, in kernels::ElementLaws' orde
   CHECK(default_fem_law().model_keyword != nullptr);
 }
 
-TEST_CASE("every element law: forces are -dW/dx, blocks are -df/dx, matrix and action agree, the bound holds",
-          "[fem][law]") {
+TEST_CASE(
+    "every element kind with every law: forces are -dW/dx, the tangent is -df/dx at rest, its action, diagonal "
+    "and bound agree",
+    "[fem][law]") {
   const Element e = test_element();
+  const std::int32_t nodes[4] = {0, 1, 2, 3};
+  const std::int32_t slots[4] = {0, 1, 2, 3};
   std::mt19937_64 rng(25);
   std::uniform_real_distribution<double> jitter(-0.08, 0.08);
-  for (const ElementLawRow& row : element_law_rows()) {
-    INFO("law " << row.keyword);
-    // The law's own parameters for E = 5 kPa, nu = 0.3 from its builder, one element.
-    ElementMaterial material;
-    material.youngs_modulus = {5000.0};
-    material.poisson_ratio = {0.3};
-    DiagnosticList diagnostics;
-    const auto build = row.build(material, diagnostics);
-    REQUIRE(build);
-    REQUIRE(build->term.law == row.law);
-    kernels::ElementTermView<double> view{};
-    view.law = row.law;
-    view.count = 1;
-    view.rest_inverse = e.rest_inverse;
-    view.rest_volume = &e.volume;
-    for (int p = 0; p < kernels::kMostLawParameters; ++p)
-      view.parameter[p] = build->term.parameter[p].empty() ? nullptr : build->term.parameter[p].data();
-    kernels::visit_element_law(row.law, [&](auto element_law) {
-      using Law = decltype(element_law);
-      const auto m = Law::material(view, 0);
-      double still[4][3] = {};
-      for (int n = 0; n < 50; ++n) {
-        // A random deformation of up to 8 % per coordinate, rigidly shifted.
-        double x[4][3], f[4][3];
-        for (int a = 0; a < 4; ++a)
-          for (int i = 0; i < 3; ++i) x[a][i] = e.rest[a][i] * (1.0 + jitter(rng)) + 0.02;
-        Law::forces(m, x, still, f);
-        const double scale = 5000.0 * 1e-4;  // N: E l^2 for l = 1 cm
-        const double h = 1e-9;
-        for (int a = 0; a < 4; ++a)
-          for (int i = 0; i < 3; ++i) {
-            double plus[4][3], minus[4][3];
-            std::copy(&x[0][0], &x[0][0] + 12, &plus[0][0]);
-            std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
-            plus[a][i] += h;
-            minus[a][i] -= h;
-            const double gradient = (Law::energy(m, plus) - Law::energy(m, minus)) / (2 * h);
-            CHECK(std::abs(f[a][i] + gradient) < 1e-5 * scale);
+  for (int kind = 0; kind < kernels::ElementKinds::count; ++kind)
+    for (const ElementLawRow& row : element_law_rows()) {
+      INFO("element kind " << kind << ", law " << row.keyword);
+      // The law's own parameters for E = 5 kPa, nu = 0.3 from its builder, one element.
+      ElementMaterial material;
+      material.youngs_modulus = {5000.0};
+      material.poisson_ratio = {0.3};
+      DiagnosticList diagnostics;
+      const auto build = row.build(material, diagnostics);
+      REQUIRE(build);
+      REQUIRE(build->term.law == row.law);
+      kernels::ElementTermView<double> view{};
+      view.law = row.law;
+      view.element = kind;
+      view.count = 1;
+      view.corners = nodes;
+      view.corner_slot = slots;
+      view.rest_inverse = e.rest_inverse;
+      view.rest_volume = &e.volume;
+      for (int p = 0; p < kernels::kMostLawParameters; ++p)
+        view.parameter[p] = build->term.parameter[p].empty() ? nullptr : build->term.parameter[p].data();
+      kernels::visit_element_term(kind, row.law, [&](auto element_kind, auto element_law) {
+        using Kind = decltype(element_kind);
+        using Law = decltype(element_law);
+        constexpr int N = Kind::kNodes, D = 3 * N;
+        REQUIRE(N == 4);  // the test element is a linear tetrahedron's corners
+        const double(*undamped)[3] = nullptr;
+        for (int n = 0; n < 50; ++n) {
+          // A random deformation of up to 8 % per coordinate, rigidly shifted.
+          double x[N][3], f[N][3];
+          for (int a = 0; a < N; ++a)
+            for (int i = 0; i < 3; ++i) x[a][i] = e.rest[a][i] * (1.0 + jitter(rng)) + 0.02;
+          Kind::template forces<Law>(view, 0, x, undamped, f);
+          const double scale = 5000.0 * 1e-4;  // N: E l^2 for l = 1 cm
+          const double h = 1e-9;
+          for (int a = 0; a < N; ++a)
+            for (int i = 0; i < 3; ++i) {
+              double plus[N][3], minus[N][3];
+              std::copy(&x[0][0], &x[0][0] + D, &plus[0][0]);
+              std::copy(&x[0][0], &x[0][0] + D, &minus[0][0]);
+              plus[a][i] += h;
+              minus[a][i] -= h;
+              const double gradient =
+                  (Kind::template energy<Law>(view, 0, plus) - Kind::template energy<Law>(view, 0, minus)) / (2 * h);
+              CHECK(std::abs(f[a][i] + gradient) < 1e-5 * scale);
+            }
+          double sum[3] = {0, 0, 0};
+          for (int a = 0; a < N; ++a)
+            for (int i = 0; i < 3; ++i) sum[i] += f[a][i];
+          for (int i = 0; i < 3; ++i) CHECK(std::abs(sum[i]) < 1e-12 * scale);
+        }
+        // At rest the tangent is the forces' derivative; the action, the diagonal and the bound agree with it.
+        double x[N][3];
+        std::copy(&e.rest[0][0], &e.rest[0][0] + D, &x[0][0]);
+        typename Kind::template Linearisation<Law> lin{};
+        Kind::template linearise<Law>(view, 0, x, lin);
+        double whole[D * D];
+        Kind::template stiffness_matrix<Law>(view, 0, lin, whole);
+        Eigen::Matrix<double, D, D> K;
+        for (int r = 0; r < D; ++r)
+          for (int c = 0; c < D; ++c) K(r, c) = whole[D * r + c];
+        const double largest_entry = K.cwiseAbs().maxCoeff();
+        REQUIRE(largest_entry > 0.0);
+        CHECK((K - K.transpose()).cwiseAbs().maxCoeff() < 1e-12 * largest_entry);
+        const double h = 1e-8;
+        for (int b = 0; b < N; ++b)
+          for (int j = 0; j < 3; ++j) {
+            double plus[N][3], minus[N][3], fp[N][3], fm[N][3];
+            std::copy(&x[0][0], &x[0][0] + D, &plus[0][0]);
+            std::copy(&x[0][0], &x[0][0] + D, &minus[0][0]);
+            plus[b][j] += h;
+            minus[b][j] -= h;
+            Kind::template forces<Law>(view, 0, plus, undamped, fp);
+            Kind::template forces<Law>(view, 0, minus, undamped, fm);
+            for (int a = 0; a < N; ++a)
+              for (int i = 0; i < 3; ++i)
+                CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * largest_entry);
           }
-        double sum[3] = {0, 0, 0};
-        for (int a = 0; a < 4; ++a)
-          for (int i = 0; i < 3; ++i) sum[i] += f[a][i];
-        for (int i = 0; i < 3; ++i) CHECK(std::abs(sum[i]) < 1e-12 * scale);
-      }
-      // At rest the tangent blocks are the forces' derivative; the matrix, the action and the bound agree with them.
-      double x[4][3];
-      std::copy(&e.rest[0][0], &e.rest[0][0] + 12, &x[0][0]);
-      typename Law::Linearisation lin{};
-      Law::linearise(m, x, lin);
-      Eigen::Matrix<double, 12, 12> K;
-      for (int a = 0; a < 4; ++a)
-        for (int b = 0; b < 4; ++b) {
-          double block[9];
-          Law::stiffness_block(m, lin, a, b, block);
-          for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) K(3 * a + i, 3 * b + j) = block[3 * i + j];
+        double p[N][3], out[N][3], diagonal[N][3];
+        Eigen::Matrix<double, D, 1> pv;
+        for (int a = 0; a < N; ++a)
+          for (int i = 0; i < 3; ++i) p[a][i] = pv[3 * a + i] = std::sin(1.0 + 3 * a + i);
+        Kind::template stiffness_action<Law>(view, 0, lin, p, out);
+        Kind::template stiffness_diagonal<Law>(view, 0, lin, diagonal);
+        const Eigen::Matrix<double, D, 1> product = K * pv;
+        for (int r = 0; r < D; ++r) {
+          CHECK(out[r / 3][r % 3] == Approx(product[r]).margin(1e-12 * largest_entry));
+          CHECK(diagonal[r / 3][r % 3] == K(r, r));
         }
-      const double largest_entry = K.cwiseAbs().maxCoeff();
-      REQUIRE(largest_entry > 0.0);
-      const double h = 1e-8;
-      for (int b = 0; b < 4; ++b)
-        for (int j = 0; j < 3; ++j) {
-          double plus[4][3], minus[4][3], fp[4][3], fm[4][3];
-          std::copy(&x[0][0], &x[0][0] + 12, &plus[0][0]);
-          std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
-          plus[b][j] += h;
-          minus[b][j] -= h;
-          Law::forces(m, plus, still, fp);
-          Law::forces(m, minus, still, fm);
-          for (int a = 0; a < 4; ++a)
-            for (int i = 0; i < 3; ++i)
-              CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * largest_entry);
-        }
-      double whole[144];
-      Law::stiffness_matrix(m, lin, whole);
-      double p[4][3], out[4][3];
-      Eigen::Matrix<double, 12, 1> pv;
-      for (int a = 0; a < 4; ++a)
-        for (int i = 0; i < 3; ++i) p[a][i] = pv[3 * a + i] = std::sin(1.0 + 3 * a + i);
-      Law::stiffness_action(m, lin, p, out);
-      const Eigen::Matrix<double, 12, 1> product = K * pv;
-      for (int r = 0; r < 12; ++r) {
-        for (int c = 0; c < 12; ++c) CHECK(whole[12 * r + c] == Approx(K(r, c)).margin(1e-12 * largest_entry));
-        CHECK(out[r / 3][r % 3] == Approx(product[r]).margin(1e-12 * largest_entry));
-      }
-      const double eigenvalue =
-          Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>>(K).eigenvalues().maxCoeff();
-      CHECK(Law::stiffness_bound(m) >= eigenvalue * (1 - 1e-12));
-      // At rest: no force, no energy, no stress output.
-      double f[4][3];
-      Law::forces(m, x, still, f);
-      for (int a = 0; a < 4; ++a)
-        for (int i = 0; i < 3; ++i) CHECK(std::abs(f[a][i]) < 1e-12 * 5000.0 * 1e-4);
-      CHECK(std::abs(Law::energy(m, x)) < 1e-18);
-      CHECK(std::abs(Law::stress_output(m, x)) < 1e-9 * 5000.0);
-    });
-  }
+        const double eigenvalue =
+            Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>>(K).eigenvalues().maxCoeff();
+        const double bound = Kind::template stiffness_bound<Law>(view, 0);
+        CHECK(bound >= eigenvalue * (1 - 1e-12));
+        CHECK(bound <= 4 * eigenvalue);  // a bound, not a guess: within the norms' known slack for 12 x 12
+        // At rest: no force, no energy, no stress output.
+        double f[N][3];
+        Kind::template forces<Law>(view, 0, x, undamped, f);
+        for (int a = 0; a < N; ++a)
+          for (int i = 0; i < 3; ++i) CHECK(std::abs(f[a][i]) < 1e-12 * 5000.0 * 1e-4);
+        CHECK(std::abs(Kind::template energy<Law>(view, 0, x)) < 1e-18);
+        CHECK(std::abs(Kind::template stress_output<Law>(view, 0, x)) < 1e-9 * 5000.0);
+      });
+    }
 }
 
-TEST_CASE("a law is named only in its kernels header and the registry", "[fem][law]") {
+TEST_CASE("a law or an element kind is named only in its kernels header, the lists and the registry", "[fem][law]") {
   const std::filesystem::path root = FMPC_SOURCE_DIR;
   // The laws' type names, from ElementLaws' definition; their headers are kernels/laws/*.h.
   const std::string laws_header = read_file(root / "kernels/element_laws.h");
   std::smatch list;
-  REQUIRE(std::regex_search(laws_header, list, std::regex(R"(using ElementLaws = ElementLawList<([^>]*)>;)")));
+  REQUIRE(std::regex_search(laws_header, list, std::regex(R"(using ElementLaws = TypeList<([^>]*)>;)")));
   std::vector<std::string> types;
   {
     std::istringstream names(list[1].str());
@@ -253,9 +263,24 @@ TEST_CASE("a law is named only in its kernels header and the registry", "[fem][l
       if (literal != nullptr)
         names.push_back({std::regex("\"" + std::string(literal) + "\""), "\"" + std::string(literal) + "\"", home});
   }
-  const std::set<std::filesystem::path> registry = {root / "kernels/element_laws.h",
-                                                    root / "runtime/fem/element_law_registry.h",
-                                                    root / "runtime/fem/element_law_registry.cpp"};
+  // The element kinds' type names: only in their header, the lists and their geometry builders (runtime/fem/).
+  std::smatch kinds;
+  REQUIRE(std::regex_search(laws_header, kinds, std::regex(R"(using ElementKinds = TypeList<([^>]*)>;)")));
+  std::istringstream kind_names(kinds[1].str());
+  for (std::string name; std::getline(kind_names, name, ',');) {
+    name.erase(0, name.find_first_not_of(' '));
+    name.erase(name.find_last_not_of(' ') + 1);
+    std::filesystem::path home;
+    for (const auto& entry : std::filesystem::directory_iterator(root / "kernels/elements"))
+      if (std::regex_search(without_comments(read_file(entry.path())), std::regex("struct " + name + R"(\s*\{)")))
+        home = entry.path();
+    INFO("element kind " << name);
+    REQUIRE(!home.empty());
+    names.push_back({std::regex("\\b" + name + "\\b"), name, home});
+  }
+  const std::set<std::filesystem::path> registry = {
+      root / "kernels/element_laws.h", root / "runtime/fem/element_terms.cpp",
+      root / "runtime/fem/element_law_registry.h", root / "runtime/fem/element_law_registry.cpp"};
   std::vector<std::string> offenders;
   std::size_t files = 0;
   for (const char* folder : {"runtime", "kernels", "tools", "python", "bench", "compiler"}) {

@@ -470,6 +470,17 @@ TEST_CASE("the precision check: agreeing scenes say so, a chaotic one warns, big
   CHECK(resting.ran);
   CHECK(resting.agrees);
   CHECK(resting.displacement_difference < 1e-4);
+  // A box that barely moves (gravity 1e-9 m/s^2: displacements near 1e-13 of its size, rounding in both precisions)
+  // is not "100% different": issue 30's scene moved 1e-7 mm and was warned about.
+  DiagnosticList still;
+  const PrecisionCheckResult barely =
+      run(box + "damping: {ratio: 0.9}\nfixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\n"
+                "loads: {gravity: [0, 0, -1e-9]}\nduration: 0.5\noutputs: {frames: 0, samples: 10}\n",
+          still);
+  CHECK(barely.ran);
+  CHECK(barely.agrees);
+  CHECK(barely.reason.find("moves less than 1e-05 of its size") != std::string::npos);
+  for (const Diagnostic& d : still.items()) CHECK(d.code != "precision-dependent");
   // Off, and skipped above the automatic limit (the reason says how to force it).
   DiagnosticList off;
   CHECK_FALSE(run(box + "fixed: {indices: [0]}\nduration: 0.01\noutputs: {frames: 0, samples: 0, precision_check: off}\n",

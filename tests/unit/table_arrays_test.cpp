@@ -244,8 +244,9 @@ std::vector<HeaderLookup> compile_and_run(const std::vector<Case>& cases) {
   for (std::size_t c = 0; c < cases.size(); ++c) {
     TableArraysOptions options;
     options.namespace_name = "case" + std::to_string(c);
+    DiagnosticList diagnostics;
     testing::write_text_file(folder.path() / ("case" + std::to_string(c) + ".h"),
-                             write_table_arrays(cases[c].table, options));
+                             write_table_arrays(cases[c].table, options, diagnostics).value());
     inputs += std::to_string(c) + " " + std::to_string(cases[c].queries.size()) + "\n";
     for (const std::vector<double>& q : cases[c].queries) {
       for (double x : q) inputs += hex_float(x) + " ";
@@ -494,7 +495,9 @@ TEST_CASE("table arrays headers compile with nvcc for sm_90: every packed depth,
       TableArraysOptions options;
       options.namespace_name =
           "t" + std::to_string(axes) + (type == TableValueType::Float32 ? "f" : "d");
-      testing::write_text_file(folder.path() / (options.namespace_name + ".h"), write_table_arrays(t, options));
+      DiagnosticList diagnostics;
+      testing::write_text_file(folder.path() / (options.namespace_name + ".h"),
+                               write_table_arrays(t, options, diagnostics).value());
       driver += "#include \"" + options.namespace_name + ".h\"\n";
       const std::string value = type == TableValueType::Float32 ? "float" : "double";
       for (const char* layout : {"Grid", "SectorPacked"})

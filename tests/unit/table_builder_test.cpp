@@ -404,7 +404,8 @@ TEST_CASE("table arrays header holds the axes, counts and values", "[table-build
   table.max_error_location = {0.25};
   TableArraysOptions options;
   options.namespace_name = "scene::liver";
-  const std::string header = write_table_arrays(table, options);
+  DiagnosticList diagnostics;
+  const std::string header = write_table_arrays(table, options, diagnostics).value();
   CHECK(header.find("namespace scene::liver {") != std::string::npos);
   CHECK(header.find("inline const double axis0[3] = {\n    0.0, 0.5, 1.0\n};") != std::string::npos);
   CHECK(header.find("inline const double values[3] = {\n    1.0, 2.5, 3.0\n};") != std::string::npos);
@@ -416,6 +417,6 @@ TEST_CASE("table arrays header holds the axes, counts and values", "[table-build
   CHECK(header.find("inline constexpr bool kMaxErrorIsBound = false;") != std::string::npos);
   table.value_type = TableValueType::Float32;
   table.values = {0.1, 2.0, 3.0};
-  CHECK(write_table_arrays(table, options).find("const float values[3] = {\n    0.10000000149011612f, 2.0f, 3.0f") !=
+  CHECK(write_table_arrays(table, options, diagnostics).value().find("const float values[3] = {\n    0.10000000149011612f, 2.0f, 3.0f") !=
         std::string::npos);
 }

@@ -1,7 +1,7 @@
 // kernels/tetrahedron_math.h and kernels/laws/: rotation extraction, co-rotated forces and the volume term, their
-// stiffness, bounds and stresses. Seeded property tests over thousands of elements (random shapes, slivers, rotations, inverted, flat
-// and collapsed deformations), each checked against an independent statement (orthogonality, energy gradients by
-// finite differences, rigid-motion invariance, eigenvalues from Eigen).
+// stiffness, bounds and stresses. Seeded property tests over thousands of elements (random shapes, slivers, rotations,
+// inverted, flat and collapsed deformations), each checked against an independent statement (orthogonality, energy
+// gradients by finite differences, rigid-motion invariance, eigenvalues from Eigen).
 #include <Eigen/Dense>
 #include <array>
 #include <catch2/catch.hpp>
@@ -60,14 +60,16 @@ struct Element {
 
 // A random element: the regular tetrahedron distorted by a random affine map, from near-regular to slivers.
 Element random_element(std::mt19937_64& rng, double aspect) {
-  const double regular[4][3] = {{0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(3.0) / 2, 0}, {0.5, std::sqrt(3.0) / 6, std::sqrt(2.0 / 3.0)}};
+  const double regular[4][3] = {
+      {0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(3.0) / 2, 0}, {0.5, std::sqrt(3.0) / 6, std::sqrt(2.0 / 3.0)}};
   std::uniform_real_distribution<double> uniform(1.0, aspect);
   const Matrix shape = deformation(random_rotation(rng), {uniform(rng), 1.0, 1.0 / uniform(rng)}, random_rotation(rng));
   Element e{};
   const double scale = 0.01;  // a 1 cm element
   for (int a = 0; a < 4; ++a)
     for (int i = 0; i < 3; ++i)
-      e.rest[a][i] = scale * (shape[3 * i] * regular[a][0] + shape[3 * i + 1] * regular[a][1] + shape[3 * i + 2] * regular[a][2]);
+      e.rest[a][i] =
+          scale * (shape[3 * i] * regular[a][0] + shape[3 * i + 1] * regular[a][1] + shape[3 * i + 2] * regular[a][2]);
   double dm[9];
   for (int i = 0; i < 3; ++i)
     for (int a = 0; a < 3; ++a) dm[3 * i + a] = e.rest[a + 1][i] - e.rest[0][i];
@@ -82,14 +84,62 @@ Element random_element(std::mt19937_64& rng, double aspect) {
   return e;
 }
 
-CorotationalLinear::Material<double> corotational(const Element& e, double E, double nu, double beta = 0.0) {
-  CorotationalLinear::Material<double> m{};
-  m.rest_inverse = e.rest_inverse;
-  m.rest_volume = e.volume;
-  m.youngs_modulus = E;
-  m.poisson_ratio = nu;
-  m.stiffness_damping = beta;
-  return m;
+// One linear tetrahedron of one law: the arrays of a one-element term and its view (the laws read their parameters
+// through it, kernels/element_term.h).
+struct OneElementTerm {
+  int law = 0;
+  double parameter[2] = {0.0, 0.0};
+  double damping = 0.0;
+  double rest_inverse[9];
+  double volume = 0.0;
+  int nodes[4] = {0, 1, 2, 3};
+  ElementTermView<double> view() const {
+    ElementTermView<double> v{};
+    v.law = law;
+    v.element = element_kind_index<LinearTetrahedron>;
+    v.count = 1;
+    v.corners = nodes;
+    v.corner_slot = nodes;
+    v.rest_inverse = rest_inverse;
+    v.rest_volume = &volume;
+    v.parameter[0] = &parameter[0];
+    v.parameter[1] = &parameter[1];
+    v.stiffness_damping = damping != 0.0 ? &damping : nullptr;
+    return v;
+  }
+};
+
+OneElementTerm term_on(const Element& e, int law) {
+  OneElementTerm t;
+  t.law = law;
+  std::copy(e.rest_inverse, e.rest_inverse + 9, t.rest_inverse);
+  t.volume = e.volume;
+  return t;
+}
+
+OneElementTerm corotational(const Element& e, double E, double nu, double beta = 0.0) {
+  OneElementTerm t = term_on(e, element_law_index<CorotationalLinear>);
+  t.parameter[CorotationalLinear::kYoungsModulus] = E;
+  t.parameter[CorotationalLinear::kPoissonRatio] = nu;
+  t.damping = beta;
+  return t;
+}
+
+OneElementTerm volume_term_on(const Element& e, double kappa) {
+  OneElementTerm t = term_on(e, element_law_index<VolumePreservation>);
+  t.parameter[VolumePreservation::kBulkModulus] = kappa;
+  return t;
+}
+
+// The element's forces (velocities read where the term is damped, as the element pass reads them) and energy.
+template <typename Law>
+void forces(const OneElementTerm& t, const double x[4][3], const double v[4][3], double f[4][3]) {
+  const ElementTermView<double> view = t.view();
+  LinearTetrahedron::forces<Law>(view, 0, x, view.stiffness_damping ? v : nullptr, f);
+}
+template <typename Law>
+double energy(const OneElementTerm& t, const double x[4][3]) {
+  return LinearTetrahedron::energy<Law>(t.view(), 0, x);
 }
 
 // x_a = F X_a + t.
@@ -198,10 +248,10 @@ TEST_CASE("rotation extraction: collapsed, line-like, pure rotation, NaN", "[fem
   double x[4][3], v[4][3] = {}, f[4][3];
   std::copy(&e.rest[0][0], &e.rest[0][0] + 12, &x[0][0]);
   x[2][1] = std::numeric_limits<double>::quiet_NaN();
-  CorotationalLinear::forces(corotational(e, 1000.0, 0.3), x, v, f);
+  forces<CorotationalLinear>(corotational(e, 1000.0, 0.3), x, v, f);
   for (int a = 0; a < 4; ++a) CHECK(std::isnan(f[a][0] + f[a][1] + f[a][2]));
   x[2][1] = std::numeric_limits<double>::infinity();
-  CorotationalLinear::forces(corotational(e, 1000.0, 0.3), x, v, f);
+  forces<CorotationalLinear>(corotational(e, 1000.0, 0.3), x, v, f);
   for (int a = 0; a < 4; ++a) CHECK(!std::isfinite(f[a][0] + f[a][1] + f[a][2]));
 }
 
@@ -212,20 +262,21 @@ TEST_CASE("co-rotated forces: zero under rigid motion, the energy's gradient, mo
   for (int n = 0; n < 2000; ++n) {
     const Element e = random_element(rng, n % 4 == 0 ? 8.0 : 2.0);
     const double E = 5000.0, nu = nu_pick(rng);
-    const CorotationalLinear::Material<double> m = corotational(e, E, nu);
+    const OneElementTerm m = corotational(e, E, nu);
     const double t[3] = {shift(rng), shift(rng), shift(rng)};
     double zero_v[4][3] = {};
     // Rigid motion: no force.
     double x[4][3], f[4][3];
     deform(e, random_rotation(rng), t, x);
-    CorotationalLinear::forces(m, x, zero_v, f);
+    forces<CorotationalLinear>(m, x, zero_v, f);
     const double scale = E * std::cbrt(e.volume) * std::cbrt(e.volume);  // N for a unit strain
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i) worst_rigid = std::max(worst_rigid, std::abs(f[a][i]) / scale);
     // A general deformation: forces sum to zero, no net torque, and equal -dW/dx (central differences).
-    const Matrix F = deformation(random_rotation(rng), {stretch(rng), stretch(rng), stretch(rng)}, random_rotation(rng));
+    const Matrix F =
+        deformation(random_rotation(rng), {stretch(rng), stretch(rng), stretch(rng)}, random_rotation(rng));
     deform(e, F, t, x);
-    CorotationalLinear::forces(m, x, zero_v, f);
+    forces<CorotationalLinear>(m, x, zero_v, f);
     double sum[3] = {0, 0, 0}, torque[3] = {0, 0, 0};
     for (int a = 0; a < 4; ++a) {
       double c[3];
@@ -247,7 +298,7 @@ TEST_CASE("co-rotated forces: zero under rigid motion, the energy's gradient, mo
         std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
         plus[a][i] += h;
         minus[a][i] -= h;
-        const double gradient = (CorotationalLinear::energy(m, plus) - CorotationalLinear::energy(m, minus)) / (2 * h);
+        const double gradient = (energy<CorotationalLinear>(m, plus) - energy<CorotationalLinear>(m, minus)) / (2 * h);
         worst_gradient = std::max(worst_gradient, std::abs(f[a][i] + gradient) / scale);
       }
     }
@@ -262,14 +313,14 @@ TEST_CASE("co-rotated damping dissipates; an inverted element is pushed back to 
   std::uniform_real_distribution<double> velocity(-1.0, 1.0);
   for (int n = 0; n < 1000; ++n) {
     const Element e = random_element(rng, 3.0);
-    const CorotationalLinear::Material<double> m = corotational(e, 3000.0, 0.3, 0.01);
+    const OneElementTerm m = corotational(e, 3000.0, 0.3, 0.01);
     double x[4][3], v[4][3], f[4][3], undamped[4][3], still[4][3] = {};
     const double t[3] = {0, 0, 0};
     deform(e, deformation(random_rotation(rng), {1.1, 0.95, 0.9}, random_rotation(rng)), t, x);
     for (auto& corner : v)
       for (double& c : corner) c = velocity(rng);
-    CorotationalLinear::forces(m, x, v, f);
-    CorotationalLinear::forces(m, x, still, undamped);
+    forces<CorotationalLinear>(m, x, v, f);
+    forces<CorotationalLinear>(m, x, still, undamped);
     double power = 0.0;
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i) power += (f[a][i] - undamped[a][i]) * v[a][i];
@@ -277,7 +328,7 @@ TEST_CASE("co-rotated damping dissipates; an inverted element is pushed back to 
   }
   // Push corner 3 through the opposite face: the force on it points back along the face normal.
   const Element e = random_element(rng, 1.5);
-  const CorotationalLinear::Material<double> m = corotational(e, 3000.0, 0.45);
+  const OneElementTerm m = corotational(e, 3000.0, 0.45);
   double x[4][3], f[4][3], still[4][3] = {};
   std::copy(&e.rest[0][0], &e.rest[0][0] + 12, &x[0][0]);
   double normal[3], e1[3], e2[3];
@@ -289,10 +340,10 @@ TEST_CASE("co-rotated damping dissipates; an inverted element is pushed back to 
   const double height = 6.0 * e.volume / std::sqrt(dot3(normal, normal));
   for (int i = 0; i < 3; ++i) x[3][i] -= 1.5 * height * normal[i] / std::sqrt(dot3(normal, normal));
   REQUIRE(tetrahedron_volume(x) < 0.0);
-  CorotationalLinear::forces(m, x, still, f);
+  forces<CorotationalLinear>(m, x, still, f);
   CHECK(dot3(f[3], normal) > 0.0);
-  const VolumePreservation::Material<double> volume_term{e.rest_inverse, e.volume, 1000.0, 0.0};
-  VolumePreservation::forces(volume_term, x, still, f);
+  const OneElementTerm volume_term = volume_term_on(e, 1000.0);
+  forces<VolumePreservation>(volume_term, x, still, f);
   CHECK(dot3(f[3], normal) > 0.0);
 }
 
@@ -301,14 +352,19 @@ TEST_CASE("volume term: Teschner's constraint energy and its gradient", "[fem]")
   std::uniform_real_distribution<double> stretch(0.5, 1.6);
   for (int n = 0; n < 1000; ++n) {
     const Element e = random_element(rng, 4.0);
-    const VolumePreservation::Material<double> m{e.rest_inverse, e.volume, 2.0e4, 0.0};
+    const OneElementTerm m = volume_term_on(e, 2.0e4);
     double x[4][3], f[4][3], still[4][3] = {};
     const double t[3] = {0.1, 0.2, 0.3};
-    deform(e, deformation(random_rotation(rng), {stretch(rng), stretch(rng), stretch(rng)}, random_rotation(rng)), t, x);
-    VolumePreservation::forces(m, x, still, f);
+    deform(e, deformation(random_rotation(rng), {stretch(rng), stretch(rng), stretch(rng)}, random_rotation(rng)), t,
+           x);
+    forces<VolumePreservation>(m, x, still, f);
     const double change = tetrahedron_volume(x) - e.volume;
-    CHECK(VolumePreservation::energy(m, x) == Approx(m.bulk_modulus * change * change / (2 * e.volume)).epsilon(1e-12));
-    const double h = 1e-7 * std::cbrt(e.volume), scale = m.bulk_modulus * std::cbrt(e.volume) * std::cbrt(e.volume);
+    // The law reads J - 1 from F = D Dm^-1, whose rounded Dm^-1 moves J by about 1e-16: near J = 1 that is the
+    // energy's error, kappa V0 |J - 1| 1e-16, not a relative 1e-12.
+    CHECK(energy<VolumePreservation>(m, x) == Approx(m.parameter[0] * change * change / (2 * e.volume))
+                                                  .epsilon(1e-12)
+                                                  .margin(m.parameter[0] * std::abs(change) * 1e-14));
+    const double h = 1e-7 * std::cbrt(e.volume), scale = m.parameter[0] * std::cbrt(e.volume) * std::cbrt(e.volume);
     for (int a = 0; a < 4; ++a) {
       for (int i = 0; i < 3; ++i) {
         double plus[4][3], minus[4][3];
@@ -316,37 +372,36 @@ TEST_CASE("volume term: Teschner's constraint energy and its gradient", "[fem]")
         std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
         plus[a][i] += h;
         minus[a][i] -= h;
-        const double gradient = (VolumePreservation::energy(m, plus) - VolumePreservation::energy(m, minus)) / (2 * h);
+        const double gradient = (energy<VolumePreservation>(m, plus) - energy<VolumePreservation>(m, minus)) / (2 * h);
         CHECK(std::abs(f[a][i] + gradient) < 1e-6 * scale);
       }
     }
   }
 }
 
-TEST_CASE("element stiffness: blocks are the forces' derivative at rest, the bound holds the largest eigenvalue", "[fem]") {
+TEST_CASE("element stiffness: the tangent is the forces' derivative at rest, the bound holds the largest eigenvalue",
+          "[fem]") {
   std::mt19937_64 rng(14);
   std::uniform_real_distribution<double> nu_pick(0.0, 0.499);
   double loosest = 0.0;
   for (int n = 0; n < 1000; ++n) {
     const Element e = random_element(rng, n % 3 == 0 ? 10.0 : 2.0);
     const double nu = n == 0 ? 0.0 : n == 1 ? 0.499 : nu_pick(rng);
-    CorotationalLinear::Material<double> m = corotational(e, 4000.0, nu);
+    const OneElementTerm m = corotational(e, 4000.0, nu);
     // At a rigidly rotated rest shape the co-rotated stiffness R K0 R^T is the exact derivative of the forces.
     const Matrix Q = random_rotation(rng);
     const double t[3] = {0.01, -0.02, 0.03};
     double x[4][3], still[4][3] = {};
     deform(e, Q, t, x);
-    CorotationalLinear::Linearisation lin{};
-    CorotationalLinear::linearise(m, x, lin);
-    REQUIRE(max_difference(lin.rotation, Q.data(), 9) < 1e-12);
+    const ElementTermView<double> view = m.view();
+    LinearTetrahedron::Linearisation<CorotationalLinear> lin{};
+    LinearTetrahedron::linearise<CorotationalLinear>(view, 0, x, lin);
+    REQUIRE(max_difference(lin.point.rotation, Q.data(), 9) < 1e-12);
+    double whole[144];
+    LinearTetrahedron::stiffness_matrix<CorotationalLinear>(view, 0, lin, whole);
     Eigen::Matrix<double, 12, 12> K;
-    for (int a = 0; a < 4; ++a)
-      for (int b = 0; b < 4; ++b) {
-        double block[9];
-        CorotationalLinear::stiffness_block(m, lin, a, b, block);
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) K(3 * a + i, 3 * b + j) = block[3 * i + j];
-      }
+    for (int r = 0; r < 12; ++r)
+      for (int c = 0; c < 12; ++c) K(r, c) = whole[12 * r + c];
     const double scale = K.cwiseAbs().maxCoeff();
     const double h = 1e-6 * std::cbrt(e.volume);
     for (int b = 0; b < 4; ++b) {
@@ -356,29 +411,42 @@ TEST_CASE("element stiffness: blocks are the forces' derivative at rest, the bou
         std::copy(&x[0][0], &x[0][0] + 12, &minus[0][0]);
         plus[b][j] += h;
         minus[b][j] -= h;
-        CorotationalLinear::forces(m, plus, still, fp);
-        CorotationalLinear::forces(m, minus, still, fm);
+        forces<CorotationalLinear>(m, plus, still, fp);
+        forces<CorotationalLinear>(m, minus, still, fm);
         for (int a = 0; a < 4; ++a)
-          for (int i = 0; i < 3; ++i) CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * scale);
+          for (int i = 0; i < 3; ++i)
+            CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * scale);
       }
     }
-    // The whole matrix at once is the blocks.
-    double whole[144];
-    CorotationalLinear::stiffness_matrix(m, lin, whole);
-    for (int r = 0; r < 12; ++r)
-      for (int c = 0; c < 12; ++c) CHECK(whole[12 * r + c] == Approx(K(r, c)).margin(1e-12 * scale));
+    // The matrix is symmetric, and its 3 x 3 blocks are the closed form V0 R (lambda g_a g_b^T + mu g_b g_a^T +
+    // mu (g_a . g_b) I) R^T.
+    double g[4][3], mu, lambda;
+    shape_gradients(e.rest_inverse, g);
+    lame_parameters(4000.0, nu, mu, lambda);
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        Eigen::Matrix3d block;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            block(i, j) = e.volume * (lambda * g[a][i] * g[b][j] + mu * g[b][i] * g[a][j] +
+                                      (i == j ? mu * dot3(g[a], g[b]) : 0.0));
+        const Eigen::Matrix3d R = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(Q.data());
+        const Eigen::Matrix3d rotated = R * block * R.transpose();
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) CHECK(K(3 * a + i, 3 * b + j) == Approx(rotated(i, j)).margin(1e-12 * scale));
+      }
     // The action is the blocks' product.
     double p[4][3], out[4][3];
     Eigen::Matrix<double, 12, 1> pv;
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i) p[a][i] = pv[3 * a + i] = std::sin(1.0 + 3 * a + i);
-    CorotationalLinear::stiffness_action(m, lin, p, out);
+    LinearTetrahedron::stiffness_action<CorotationalLinear>(view, 0, lin, p, out);
     const Eigen::Matrix<double, 12, 1> product = K * pv;
     for (int a = 0; a < 4; ++a)
       for (int i = 0; i < 3; ++i) CHECK(out[a][i] == Approx(product[3 * a + i]).margin(1e-12 * scale));
     // The bound is above the largest eigenvalue, and not far above it.
     const double largest = Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>>(K).eigenvalues().maxCoeff();
-    const double bound = CorotationalLinear::stiffness_bound(m);
+    const double bound = LinearTetrahedron::stiffness_bound<CorotationalLinear>(view, 0);
     CHECK(bound >= largest * (1 - 1e-12));
     loosest = std::max(loosest, bound / largest);
   }

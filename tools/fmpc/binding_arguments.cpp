@@ -46,7 +46,7 @@ Bindings parse_binding_arguments(const std::vector<std::string>& fix, const std:
     if (colon != std::string::npos) {
       varied.name = text.substr(0, colon);
       const std::optional<double> points = whole_text_number(text.substr(colon + 1));
-      if (!points || *points != std::floor(*points) || *points < 2 || *points > 1e6) {
+      if (!points || *points != std::floor(*points) || *points < 2 || *points > kMaxAxisPoints) {
         diagnostics.error(where, "'" + text.substr(colon + 1) + "' is not a point count",
                           {"write NAME:POINTS with a whole number of at least 2, e.g. --vary HCV:33"});
         continue;

@@ -20,5 +20,10 @@ void register_compile_command(CLI::App& app, int& exit_code);
 void register_plot_command(CLI::App& app, int& exit_code);
 void register_trade_command(CLI::App& app, int& exit_code);
 void register_thesis_benchmark_command(CLI::App& app, int& exit_code);
+void register_lsp_command(CLI::App& app, int& exit_code);
+void register_tune_command(CLI::App& app, int& exit_code);
+void register_validate_command(CLI::App& app, int& exit_code);
+void register_diff_command(CLI::App& app, int& exit_code);
+void register_studio_command(CLI::App& app, int& exit_code);
 
 }  // namespace fmpc::cli

@@ -9,12 +9,14 @@
 #include <sstream>
 
 #include "compiler/backend/cpp/emit_cpp.h"
+#include "compiler/backend/cpp/namespace_name.h"
 #include "compiler/backend/table/lookup_table.h"
 #include "compiler/backend/table/table_arrays.h"
 #include "compiler/backend/table/table_builder.h"
 #include "compiler/ir/content_hash.h"
 #include "diagnostics/number_format.h"
 #include "compiler/passes/pipeline.h"
+#include "runtime/io/memory_limit.h"
 #include "tools/fmpc/binding_arguments.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/progress_line.h"
@@ -170,6 +172,9 @@ int run_compile(const CompileOptions& options) {
     table_options.spacing = options.spacing == "uniform" ? BreakpointSpacing::Uniform : BreakpointSpacing::Refined;
     table_options.value_type = options.precision == "float" ? TableValueType::Float32 : TableValueType::Float64;
     table_options.max_grid_points = options.max_grid_points;
+    const sim::MemoryLimit memory = sim::memory_limit();
+    table_options.memory_limit_bytes = memory.bytes;
+    table_options.memory_limit_source = memory.source;
     table_options.held_out_points = options.held_out;
     table_options.seed = options.seed;
     table_options.threads = options.threads;
@@ -184,7 +189,7 @@ int run_compile(const CompileOptions& options) {
       progress.show("round " + std::to_string(p.round) + ", " + std::to_string(p.grid_points) + " grid points (budget " +
                     std::to_string(p.budget) + "), error " + format_number(p.training_error) + " (target " +
                     format_number(p.target) + "); estimated " + format_number(std::round(p.estimated_grid_points)) +
-                    " points, at least " + duration_text(left) + " more");
+                    " points, at least " + duration_text(left) + " left");
     };
     TableBuildStatistics stats;
     const std::optional<LookupTable> table = build_table(*system, *compiled, table_options, diagnostics, &stats);
@@ -196,9 +201,16 @@ int run_compile(const CompileOptions& options) {
     if (options.report) write_table_report(*table, table_options, stats, output_unit(*system), report);
     TableArraysOptions arrays;
     arrays.namespace_name = options.namespace_name;
-    for (const std::string& path : options.outputs)
-      writes.emplace_back(path, is_header_path(path) || path == "-" ? write_table_arrays(*table, arrays)
-                                                                    : serialize_fzt(*table));
+    for (const std::string& path : options.outputs) {
+      if (!is_header_path(path) && path != "-") {
+        writes.emplace_back(path, serialize_fzt(*table));
+      } else if (const std::optional<std::string> header = write_table_arrays(*table, arrays, diagnostics)) {
+        writes.emplace_back(path, *header);
+      } else {
+        print_diagnostics(diagnostics, file.sources, std::cerr);
+        return kExitErrors;
+      }
+    }
   } else {
     EmitOptions emit;
     emit.target = options.target == "cuda" ? EmitOptions::Target::Cuda : EmitOptions::Target::Cpp;
@@ -274,7 +286,13 @@ void register_compile_command(CLI::App& app, int& exit_code) {
   command->add_option("--seed", options->seed, "Seed of the training and held-out points");
   command->add_option("--threads", options->threads, "Threads building and measuring the table")
       ->check(CLI::Range(1, 256));
-  command->add_option("--namespace", options->namespace_name, "C++ namespace of generated headers");
+  command->add_option("--namespace", options->namespace_name, "C++ namespace of generated headers")
+      ->check([](const std::string& name) {
+        const std::optional<std::string> problem = namespace_name_problem(name);
+        return problem ? "it cannot name the generated code's namespace: " + *problem +
+                             "; use identifiers joined by '::', e.g. scene::liver"
+                       : std::string();
+      });
   command
       ->add_option("--semantics", options->semantics,
                    "Whose numbers the table reproduces where MATLAB and Octave differ (docs/numerics.md)")

@@ -9,6 +9,7 @@
 #include "compiler/passes/mamdani_to_sugeno.h"
 #include "compiler/passes/rename_duplicate_terms.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 
@@ -25,9 +26,11 @@ struct ConvertOptions {
 };
 
 // The written text read back, system by system, as `fmpc` would read the file (MATLAB's format or the fmpc
-// language), against the systems it was written from: what would change in the outputs (empty: nothing).
+// language), against the systems it was written from: what would change in the outputs (empty: nothing). Names
+// that read back otherwise are a warning in `diagnostics_out` (-Wrenamed-term), located at the system or `path`.
 std::vector<std::string> changes_on_reading_back(const std::string& text, bool matlab,
-                                                 const std::vector<FuzzySystem>& intended) {
+                                                 const std::vector<FuzzySystem>& intended, const std::string& path,
+                                                 ProgressLine& progress, DiagnosticList& diagnostics_out) {
   DiagnosticList diagnostics;
   const RuleFile back = matlab ? read_matlab_fis("converted.fis", text, diagnostics)
                                : load_rule_file("converted.fis", text, diagnostics);
@@ -41,9 +44,24 @@ std::vector<std::string> changes_on_reading_back(const std::string& text, bool m
     return {"the written file holds " + std::to_string(back.systems.size()) + " systems, not " +
             std::to_string(intended.size())};
   std::vector<std::string> changes;
-  for (std::size_t k = 0; k < intended.size(); ++k)
-    for (const std::string& change : output_changes(intended[k], back.systems[k]))
-      changes.push_back((intended.size() > 1 ? "system '" + intended[k].name + "': " : std::string()) + change);
+  for (std::size_t k = 0; k < intended.size(); ++k) {
+    const std::string prefix = intended.size() > 1 ? "system '" + intended[k].name + "': " : std::string();
+    OutputComparison comparison;
+    comparison.progress = [&](std::size_t done, std::size_t total) {
+      progress.show_fraction(static_cast<double>(k) + static_cast<double>(done) / static_cast<double>(total),
+                             static_cast<double>(intended.size()), "system");
+    };
+    for (const std::string& change : output_changes(intended[k], back.systems[k], comparison))
+      changes.push_back(prefix + change);
+    // Names do not change outputs, but the points a user evaluates name inputs: a renamed one is said.
+    const std::vector<std::string> renamed = name_changes(intended[k], back.systems[k]);
+    if (!renamed.empty())
+      diagnostics_out.warning(intended[k].range.valid() ? intended[k].range : SourceRange{path, 0, 0, 0, 0},
+                              "renamed-term",
+                              prefix + std::to_string(renamed.size()) + " name" + (renamed.size() == 1 ? "" : "s") +
+                                  " cannot be written as they are",
+                              renamed);
+  }
   return changes;
 }
 
@@ -84,7 +102,7 @@ int run_convert(const ConvertOptions& options) {
         intended.push_back(sugeno);
         matlab_text = file.dialect == Dialect::Matlab;
         // The approximation is what --to sugeno asks for; it is measured and said, not refused.
-        approximation = output_changes(*system, sugeno, {{}, 1000, false});
+        approximation = output_changes(*system, sugeno, {{}, 1000, false, {}});
         if (file.dialect == Dialect::Matlab) {
           text = write_matlab_fis(sugeno, diagnostics);
         } else if (file.dialect == Dialect::Fll) {
@@ -117,7 +135,10 @@ int run_convert(const ConvertOptions& options) {
   // A conversion that would change what the system computes is refused unless asked for (issue 11): the text is
   // read back as fmpc would read the file and evaluated against the system it was written from.
   if (!diagnostics.has_errors()) {
-    std::vector<std::string> changes = changes_on_reading_back(text, matlab_text, intended);
+    ProgressLine progress("convert");
+    std::vector<std::string> changes =
+        changes_on_reading_back(text, matlab_text, intended, options.file, progress, diagnostics);
+    progress.finish();
     // What the writer itself reports as changing the outputs (an output unit scenes would read otherwise).
     std::size_t lossy_warnings = 0;
     for (const Diagnostic& d : diagnostics.items()) lossy_warnings += d.code == kMatlabLossy ? 1 : 0;

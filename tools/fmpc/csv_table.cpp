@@ -1,5 +1,6 @@
 #include "tools/fmpc/csv_table.h"
 
+#include "compiler/frontend/utf8.h"
 #include "tools/fmpc/text_files.h"
 
 #include <algorithm>
@@ -16,7 +17,9 @@ std::string trimmed(const std::string& s) {
 
 }  // namespace
 
-CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticList& diagnostics) {
+CsvTable parse_csv(const std::string& path, const std::string& original, DiagnosticList& diagnostics,
+                   const std::string& header_example) {
+  const std::string text = blank_byte_order_mark(original);
   CsvTable table;
   table.path = path;
   std::vector<CsvCell> row;
@@ -93,7 +96,8 @@ CsvTable parse_csv(const std::string& path, const std::string& text, DiagnosticL
   finish_row();
   if (table.header.empty())
     diagnostics.error(SourceRange{path, 0, 0, 0, 0}, "no header row: the CSV is empty",
-                      {"the first row names the inputs, e.g. HCV,HBV,ALD,CLD,NAFLD"});
+                      {header_example.empty() ? std::string("the first row names the columns")
+                                              : "the first row names the columns: " + header_example});
   return table;
 }
 
@@ -117,7 +121,7 @@ std::string format_csv_row(const std::vector<std::string>& fields) {
 
 std::optional<CsvTable> read_csv_file(const std::string& path, const std::string& name, std::size_t limit,
                                       const std::string& what, const SourceRange& unreadable, SourceFiles& sources,
-                                      DiagnosticList& diagnostics) {
+                                      DiagnosticList& diagnostics, const std::string& header_example) {
   std::string error;
   const std::optional<std::string> text = read_text_file(path, limit, what, error);
   if (!text) {
@@ -126,7 +130,7 @@ std::optional<CsvTable> read_csv_file(const std::string& path, const std::string
   }
   sources.add(name, *text);
   const std::size_t errors_before = diagnostics.error_count();
-  CsvTable table = parse_csv(name, *text, diagnostics);
+  CsvTable table = parse_csv(name, *text, diagnostics, header_example);
   if (diagnostics.error_count() > errors_before) return std::nullopt;
   return table;
 }

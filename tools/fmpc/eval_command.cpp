@@ -13,9 +13,11 @@
 #include "compiler/frontend/fmpc_language.h"
 #include "diagnostics/number_format.h"
 #include "kernels/type2_math.h"
+#include "runtime/io/input_file.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 
@@ -149,12 +151,12 @@ void write_explanation(const FuzzySystem& system, const EvaluationPoint& point, 
 
 // The points' CSV (`--csv FILE`, or standard input without it), parsed; nullopt with an error when it cannot be
 // read or parsed. Its text joins `sources` so that diagnostics can quote it.
-std::optional<CsvTable> read_points_csv(const std::string& csv_option, SourceFiles& sources,
-                                        DiagnosticList& diagnostics) {
+std::optional<CsvTable> read_points_csv(const std::string& csv_option, const FuzzySystem& system,
+                                        SourceFiles& sources, DiagnosticList& diagnostics) {
   const std::string csv_path = csv_option.empty() ? "-" : csv_option;
   const std::string shown_path = csv_path == "-" ? "<stdin>" : csv_path;
   return read_csv_file(csv_path, shown_path, sim::kMaxCsvFileBytes, "CSV file", SourceRange{shown_path, 0, 0, 0, 0},
-                       sources, diagnostics);
+                       sources, diagnostics, csv_header_of(system));
 }
 
 // ---- lookup tables (.fzt) ----
@@ -195,6 +197,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
   }
   const FuzzySystem interface = table_interface(*table);
   std::vector<EvaluationPoint> points;
+  std::string label_column;  // the points' label column (docs/cli.md), empty without one
   if (!options.assignments.empty() && !options.csv.empty()) {
     diagnostics.error(kCommandLine, "give NAME=VALUE inputs or --csv, not both");
   } else if (!options.assignments.empty()) {
@@ -208,7 +211,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       varying.push_back(assignment);
     }
     if (auto point = point_from_assignments(varying, interface, diagnostics)) points.push_back(std::move(*point));
-  } else if (std::optional<CsvTable> read = read_points_csv(options.csv, sources, diagnostics)) {
+  } else if (std::optional<CsvTable> read = read_points_csv(options.csv, interface, sources, diagnostics)) {
     CsvTable& csv = *read;
     // Columns of fixed inputs: checked against the fixed value, then left out.
     for (std::size_t c = csv.header.size(); c-- > 0;) {
@@ -223,11 +226,12 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       }
       csv.header.erase(csv.header.begin() + static_cast<std::ptrdiff_t>(c));
     }
-    if (!diagnostics.has_errors()) points = points_from_csv(csv, interface, diagnostics);
+    if (!diagnostics.has_errors()) points = points_from_csv(csv, interface, diagnostics, &label_column);
   }
   std::ostringstream csv;
   if (!diagnostics.has_errors()) {
     std::vector<std::string> header = variable_names(interface.inputs);
+    if (!label_column.empty()) header.insert(header.begin(), label_column);
     for (const Variable& v : interface.outputs) header.push_back(v.name);
     csv << format_csv_row(header);
     std::vector<const double*> breakpoints;
@@ -239,6 +243,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       interpolate_table(view, point.inputs.data(), out.data());
       report_table_inputs(interface, point.inputs, point.origins, point_diagnostics);
       std::vector<std::string> row;
+      if (!label_column.empty()) row.push_back(point.name);
       for (double v : point.inputs) row.push_back(format_number(v));
       for (double v : out) row.push_back(format_number(v));
       csv << format_csv_row(row);
@@ -268,8 +273,10 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
 // in aligned columns (units in the header). The exact numbers are in the CSV (-o) and --explain.
 class SummaryTable {
  public:
-  explicit SummaryTable(const FuzzySystem& system) {
-    std::vector<std::string> header{"point"};
+  // `label_column`: the header of the points' label column, which then names the rows; empty without one.
+  SummaryTable(const FuzzySystem& system, const std::string& label_column) {
+    std::vector<std::string> header{label_column.empty() ? "point" : label_column};
+    labelled_ = !label_column.empty();
     for (const auto* variables : {&system.inputs, &system.outputs})
       for (const Variable& v : *variables)
         header.push_back(v.unit.empty() || v.unit == "dimensionless" ? v.name : v.name + " (" + v.unit + ")");
@@ -277,7 +284,7 @@ class SummaryTable {
     rows_.push_back(std::move(header));
   }
   void add(const FuzzySystem& system, const EvaluationPoint& point, const Evaluation& evaluation) {
-    std::vector<std::string> row{std::to_string(rows_.size())};
+    std::vector<std::string> row{point.name.empty() ? std::to_string(rows_.size()) : point.name};
     for (double v : point.inputs) row.push_back(four_digits(v));
     for (double v : evaluation.outputs) row.push_back(four_digits(v));
     std::size_t best = evaluation.firing_strengths.size();
@@ -297,9 +304,10 @@ class SummaryTable {
     for (const auto& row : rows_) {
       std::string line;
       for (std::size_t c = 0; c < row.size(); ++c) {
-        // Numbers right-aligned, the rule name (last) left-aligned; no trailing spaces.
+        // Numbers right-aligned, labels and the rule name (last) left-aligned; no trailing spaces.
         const std::string pad(widths[c] - row[c].size(), ' ');
-        line += (c ? "  " : "") + (c + 1 == row.size() ? row[c] : pad + row[c]);
+        const bool text = c + 1 == row.size() || (c == 0 && labelled_);
+        line += (c ? "  " : "") + (c + 1 == row.size() ? row[c] : text ? row[c] + pad : pad + row[c]);
       }
       out << line << '\n';
     }
@@ -307,6 +315,7 @@ class SummaryTable {
 
  private:
   std::vector<std::vector<std::string>> rows_;
+  bool labelled_ = false;
 };
 
 Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<double>& inputs, bool with_sets) {
@@ -315,13 +324,21 @@ Explanation explain_or_evaluate(Interpreter& interpreter, const std::vector<doub
 }
 
 int run_eval(const EvalOptions& options) {
-  {
-    std::string error;
-    // A file that is not a table, or cannot be read as one, is read as a rule file next (with its own limit).
-    const std::optional<std::string> bytes = read_text_file(options.file, sim::kMaxTableFileBytes, "lookup table", error);
-    if (bytes && has_fzt_signature(*bytes)) return run_eval_table(options, *bytes);
+  // A table or a rule file, told apart by the first bytes, each read under its own limit.
+  std::string error;
+  const std::optional<sim::KindOfInput> input = sim::read_input_file(
+      options.file,
+      {sim::InputKind{"lookup table", sim::kMaxTableFileBytes, fzt_signature()},
+       sim::InputKind{"rule file", sim::kMaxRuleFileBytes, ""}},
+      error);
+  if (!input) {
+    DiagnosticList diagnostics;
+    diagnostics.error(SourceRange{options.file, 0, 0, 0, 0}, error);
+    print_diagnostics(diagnostics, SourceFiles{}, std::cerr);
+    return kExitErrors;
   }
-  LoadedRuleFile file = load_rule_file_from_disk(options.file);
+  if (input->kind == 0) return run_eval_table(options, input->contents);
+  LoadedRuleFile file = sim::load_rule_text(options.file, input->contents);
   if (file.diagnostics.has_errors()) {
     print_diagnostics(file.diagnostics, file.sources, std::cerr);
     return kExitErrors;
@@ -331,6 +348,7 @@ int run_eval(const EvalOptions& options) {
   SourceFiles& sources = file.sources;
   const FuzzySystem* system = select_system(file, options.system, diagnostics);
   std::vector<EvaluationPoint> points;
+  std::string label_column;  // the points' label column (docs/cli.md), empty without one
   if (system) {
     if (!options.assignments.empty() && !options.csv.empty()) {
       diagnostics.error(kCommandLine, "give NAME=VALUE inputs or --csv, not both");
@@ -352,8 +370,8 @@ int run_eval(const EvalOptions& options) {
                          "or: fmpc eval " + options.file + " --csv points.csv (header row: " + header + ")",
                          "or pipe the CSV on standard input (--csv - reads a terminal too, ending with Ctrl-D)"});
     } else {
-      if (const std::optional<CsvTable> csv = read_points_csv(options.csv, sources, diagnostics))
-        points = points_from_csv(*csv, *system, diagnostics);
+      if (const std::optional<CsvTable> csv = read_points_csv(options.csv, *system, sources, diagnostics))
+        points = points_from_csv(*csv, *system, diagnostics, &label_column);
     }
   }
   // --explain prints every sample of each output's aggregated set for every point, and builds the sets in memory
@@ -376,6 +394,7 @@ int run_eval(const EvalOptions& options) {
   std::ostringstream explanation_text;
   if (system && !diagnostics.has_errors()) {
     std::vector<std::string> header = variable_names(system->inputs);
+    if (!label_column.empty()) header.insert(header.begin(), label_column);
     for (const Variable& v : system->outputs) {
       header.push_back(v.name);
       if (system->interval_type2) {
@@ -388,12 +407,16 @@ int run_eval(const EvalOptions& options) {
     EvaluationOptions evaluation_options;
     evaluation_options.reference = options.semantics == "octave" ? Reference::Octave : Reference::Matlab;
     Interpreter interpreter(*system, evaluation_options);
-    SummaryTable summary(*system);
-    for (const EvaluationPoint& point : points) {
+    SummaryTable summary(*system, label_column);
+    ProgressLine progress("eval");  // a million points of a large system take minutes
+    for (std::size_t p = 0; p < points.size(); ++p) {
+      const EvaluationPoint& point = points[p];
+      progress.show_fraction(p, points.size(), "point");
       const Explanation explanation = explain_or_evaluate(interpreter, point.inputs, options.explain);
       report_evaluation_flags(*system, point.inputs, point.origins, point.where, explanation.evaluation,
                               point_diagnostics);
       std::vector<std::string> row;
+      if (!label_column.empty()) row.push_back(point.name);
       for (double v : point.inputs) row.push_back(format_number(v));
       const Evaluation& evaluation = explanation.evaluation;
       for (std::size_t o = 0; o < evaluation.outputs.size(); ++o) {
@@ -407,6 +430,7 @@ int run_eval(const EvalOptions& options) {
       if (options.explain) write_explanation(*system, point, explanation, options.explain_threshold, explanation_text);
       if (options.summary) summary.add(*system, point, evaluation);
     }
+    progress.finish();
     if (options.summary) summary.write(explanation_text);
     // A large CSV out of range everywhere would bury the terminal: keep the first warnings and count the rest.
     std::size_t warnings = 0, dropped = 0;
@@ -427,7 +451,7 @@ int run_eval(const EvalOptions& options) {
   }
   print_diagnostics(diagnostics, sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;
-  std::string error;
+  error.clear();
   if (options.explain || options.summary) {
     std::cout << explanation_text.str();
     if (options.output != "-" && !write_text_file_atomically(options.output, csv.str(), error)) {

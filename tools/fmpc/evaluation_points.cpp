@@ -41,16 +41,25 @@ std::vector<std::string> variable_names(const std::vector<Variable>& variables) 
   return names;
 }
 
+std::string csv_header_of(const FuzzySystem& system) {
+  std::string header;
+  for (const Variable& v : system.inputs) header += (header.empty() ? "" : ",") + v.name;
+  return header;
+}
+
 namespace {
 
+// `csv_column`: the name is a CSV header, where a label column may stand too.
 void report_unknown_input(const std::string& name, const FuzzySystem& system, const SourceRange& where,
-                          DiagnosticList& diagnostics) {
+                          DiagnosticList& diagnostics, bool csv_column = false) {
   std::vector<std::string> notes;
-  if (auto suggestion = closest_name(name, variable_names(system.inputs)))
-    notes.push_back("did you mean '" + *suggestion + "'?");
+  std::vector<std::string> candidates = variable_names(system.inputs);
+  if (csv_column) candidates.insert(candidates.end(), {"label", "patient"});
+  if (auto suggestion = closest_name(name, candidates)) notes.push_back("did you mean '" + *suggestion + "'?");
   std::string inputs;
   for (const Variable& v : system.inputs) inputs += (inputs.empty() ? "" : ", ") + v.name;
   notes.push_back("the inputs of '" + system.name + "' are: " + inputs);
+  if (csv_column) notes.push_back("a column 'label' or 'patient' names the rows; columns named after outputs are ignored");
   diagnostics.error(where, "'" + name + "' is not an input of system '" + system.name + "'", notes);
 }
 
@@ -113,21 +122,29 @@ bool is_output_interval_column(const std::string& name, const FuzzySystem& syste
 
 // A CSV table with a header row -> points. Columns naming outputs are ignored (so a golden file with inputs and
 // outputs can be fed back in); any other unknown column is an error.
+bool is_label_column(const std::string& header) { return header == "label" || header == "patient"; }
+
 std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzySystem& system,
-                                             DiagnosticList& diagnostics) {
+                                             DiagnosticList& diagnostics, std::string* label_column) {
   std::vector<EvaluationPoint> points;
   std::vector<int> column_input(table.header.size(), -1);
   std::vector<bool> seen(system.inputs.size(), false);
+  std::optional<std::size_t> label;
   for (std::size_t c = 0; c < table.header.size(); ++c) {
     const CsvCell& cell = table.header[c];
     const int index = system.find_input(cell.text);
-    if (index >= 0) {
+    if (index < 0 && is_label_column(cell.text)) {
+      if (label)
+        diagnostics.error(cell.range, "two label columns ('" + table.header[*label].text + "' and '" + cell.text + "')",
+                          {"keep one: it names the rows"});
+      else label = c;
+    } else if (index >= 0) {
       if (seen[static_cast<std::size_t>(index)])
         diagnostics.error(cell.range, "column '" + cell.text + "' appears twice");
       seen[static_cast<std::size_t>(index)] = true;
       column_input[c] = index;
     } else if (system.find_output(cell.text) < 0 && !is_output_interval_column(cell.text, system)) {
-      report_unknown_input(cell.text, system, cell.range, diagnostics);
+      report_unknown_input(cell.text, system, cell.range, diagnostics, true);
     }
   }
   for (std::size_t i = 0; i < system.inputs.size(); ++i)
@@ -144,6 +161,10 @@ std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzyS
     point.where.end_column = row.back().range.end_column;
     point.inputs.assign(system.inputs.size(), 0.0);
     point.origins.assign(system.inputs.size(), SourceRange{});
+    if (label && *label < row.size()) {
+      point.name = row[*label].text;
+      point.label = point.name + " (" + table.path + ":" + std::to_string(row.front().range.line) + ")";
+    }
     if (row.size() != table.header.size()) {
       diagnostics.error(row.front().range, "this row has " + std::to_string(row.size()) + " fields, the header " +
                                                std::to_string(table.header.size()));
@@ -159,6 +180,7 @@ std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzyS
     }
     points.push_back(std::move(point));
   }
+  if (label_column) *label_column = label ? table.header[*label].text : std::string();
   return points;
 }
 

@@ -24,6 +24,11 @@ int main(int argc, char** argv) {
   fmpc::cli::register_plot_command(app, exit_code);
   fmpc::cli::register_trade_command(app, exit_code);
   fmpc::cli::register_thesis_benchmark_command(app, exit_code);
+  fmpc::cli::register_tune_command(app, exit_code);
+  fmpc::cli::register_lsp_command(app, exit_code);
+  fmpc::cli::register_validate_command(app, exit_code);
+  fmpc::cli::register_diff_command(app, exit_code);
+  fmpc::cli::register_studio_command(app, exit_code);
   const char* exit_rule =
       "Exit status (every command, docs/cli.md): 0 done; 1 done, but warnings made errors by -Werror (or files\n"
       "`fmt --check` would change); 2 errors in the input or the command line; 70 an internal error in fmpc.";
@@ -31,9 +36,18 @@ int main(int argc, char** argv) {
   for (CLI::App* command : app.get_subcommands([](CLI::App*) { return true; })) {
     fmpc::cli::add_warning_options(*command);
     command->footer(exit_rule);
-    // An empty list has no default worth showing ("=[]").
-    for (CLI::Option* option : command->get_options())
+    for (CLI::Option* option : command->get_options()) {
+      // An empty list has no default worth showing ("=[]").
       if (option->get_default_str() == "[]") option->default_str("");
+      // An empty value given on purpose is a mistake (`-o ''`, `--csv "$UNSET"`): an empty path once sent
+      // simulate's outputs to the default folder and trade's CSV nowhere, silently. Only compiler flags may be
+      // empty.
+      if (option->get_items_expected_max() > 0 && option->get_name() != "--cxx-flags")
+        option->check([](const std::string& value) {
+          return value.empty() ? std::string("an empty value names nothing: give one, or leave the option out")
+                               : std::string();
+        });
+    }
   }
   try {
     app.parse(argc, argv);

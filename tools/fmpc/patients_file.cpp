@@ -88,9 +88,13 @@ std::optional<PatientsFile> read_patients_file(const std::string& path, const si
                                                const FuzzySystem& system, SourceFiles& sources,
                                                DiagnosticList& diagnostics) {
   const std::size_t errors_before = diagnostics.error_count();
+  std::string header = kLabelColumn;
+  for (const sim::InputBinding& binding : scene.material.bindings)
+    if (binding.kind == sim::InputBinding::Kind::Constant && system.find_input(binding.input) >= 0)
+      header += "," + binding.input;
   const std::optional<CsvTable> read =
       read_csv_file(path, path, sim::kMaxCsvFileBytes, "patients file",
-                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics);
+                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics, header);
   if (!read) return std::nullopt;
   const CsvTable& table = *read;
   PatientsFile file;

@@ -9,13 +9,16 @@
 #include <iostream>
 #include <limits>
 
+#include "compiler/eval/control_surface.h"
+#include "compiler/eval/evaluation_report.h"
 #include "compiler/eval/interpreter.h"
 #include "diagnostics/number_format.h"
-#include "tools/fmpc/commands.h"
-#include "tools/fmpc/rule_file_session.h"
-#include "tools/fmpc/text_files.h"
 #include "kernels/fuzzy_math.h"
 #include "kernels/type2_math.h"
+#include "tools/fmpc/commands.h"
+#include "tools/fmpc/progress_line.h"
+#include "tools/fmpc/rule_file_session.h"
+#include "tools/fmpc/text_files.h"
 #include "tools/plot/heat_map.h"
 #include "tools/plot/line_chart.h"
 #include "tools/plot/rule_view.h"
@@ -34,8 +37,8 @@ struct PlotOptions {
   int resolution = 101;
   std::optional<double> z_min;
   std::optional<double> z_max;
-  std::string terms;      // --terms VAR
-  bool rules = false;     // --rules
+  std::string terms;   // --terms VAR
+  bool rules = false;  // --rules
   std::string image;
 };
 
@@ -66,10 +69,6 @@ int find_variable(const std::vector<Variable>& variables, const std::string& nam
 std::string axis_label(const Variable& variable) {
   return variable.unit.empty() || variable.unit == "dimensionless" ? variable.name
                                                                    : variable.name + " (" + variable.unit + ")";
-}
-
-std::string with_unit(double value, const Variable& variable) {
-  return format_number(value) + (variable.unit.empty() || variable.unit == "dimensionless" ? "" : " " + variable.unit);
 }
 
 // A clause's grade interval at x: the term's [lower, upper] grade, hedged, then negated (MATLAB's order).
@@ -126,8 +125,10 @@ int plot_terms(const FuzzySystem& system, const PlotOptions& options, Diagnostic
     diagnostics.error(where, "'" + options.terms + "' is not a variable of system '" + system.name + "'", notes);
   }
   if (variable && is_output && system.type == SystemType::Sugeno)
-    diagnostics.error(where, "'" + variable->name + "' is a Sugeno output: its terms are constants or linear "
-                             "functions of the inputs, not membership functions over a range",
+    diagnostics.error(where,
+                      "'" + variable->name +
+                          "' is a Sugeno output: its terms are constants or linear "
+                          "functions of the inputs, not membership functions over a range",
                       {"plot an input's terms, or the rule viewer (--rules) to see each rule's output value"});
   if (diagnostics.has_errors()) {
     print_diagnostics(diagnostics, sources, std::cerr);
@@ -184,7 +185,7 @@ int plot_rules(const FuzzySystem& system, const std::vector<double>& point, cons
                        " aggregation, " + to_string(system.defuzzifier) + ")");
   std::string at;
   for (std::size_t i = 0; i < system.inputs.size(); ++i)
-    at += (i ? ", " : "") + system.inputs[i].name + " = " + with_unit(point[i], system.inputs[i]);
+    at += (i ? ", " : "") + system.inputs[i].name + " = " + value_with_unit(point[i], system.inputs[i].unit);
   view.title.push_back(at);
   for (std::size_t i = 0; i < system.inputs.size(); ++i) {
     view.input_titles.push_back(system.inputs[i].name + " = " + format_number(point[i]));
@@ -202,15 +203,15 @@ int plot_rules(const FuzzySystem& system, const std::vector<double>& point, cons
   // kMaxRuleRows rules at this point are drawn (in file order), and the title says how strong the others are.
   std::vector<bool> drawn(system.rules.size(), true);
   // Sugeno stems are drawn as tall as each rule's weight relative to the strongest rule's.
-  const double strongest =
-      evaluation.firing_strengths.empty()
-          ? 0.0
-          : *std::max_element(evaluation.firing_strengths.begin(), evaluation.firing_strengths.end());
+  const double strongest = evaluation.firing_strengths.empty() ? 0.0
+                                                               : *std::max_element(evaluation.firing_strengths.begin(),
+                                                                                   evaluation.firing_strengths.end());
   std::vector<std::vector<std::pair<double, double>>> sugeno_stems(system.outputs.size());
   if (system.type == SystemType::Sugeno) {
     char text[160];
     std::snprintf(text, sizeof text,
-                  "stems: each rule's output, as tall as its weight relative to the strongest rule's (%.3g)", strongest);
+                  "stems: each rule's output, as tall as its weight relative to the strongest rule's (%.3g)",
+                  strongest);
     view.title.push_back(text);
   }
   if (system.rules.size() > kMaxRuleRows) {
@@ -295,7 +296,8 @@ int plot_rules(const FuzzySystem& system, const std::vector<double>& point, cons
   if (status == kExitOk) {
     std::cout << options.image << ": " << system.rules.size() << " rules at " << at << ";";
     for (std::size_t o = 0; o < system.outputs.size(); ++o)
-      std::cout << ' ' << system.outputs[o].name << " = " << with_unit(evaluation.outputs[o], system.outputs[o]);
+      std::cout << ' ' << system.outputs[o].name << " = "
+                << value_with_unit(evaluation.outputs[o], system.outputs[o].unit);
     std::cout << '\n';
   }
   return status;
@@ -347,8 +349,7 @@ int run_plot(const PlotOptions& options) {
 
   // Inputs not on an axis sit at the middle of their range unless fixed (MATLAB gensurf's reference inputs).
   std::vector<double> point(system.inputs.size());
-  for (std::size_t i = 0; i < system.inputs.size(); ++i)
-    point[i] = (system.inputs[i].min + system.inputs[i].max) / 2.0;
+  for (std::size_t i = 0; i < system.inputs.size(); ++i) point[i] = (system.inputs[i].min + system.inputs[i].max) / 2.0;
   std::vector<bool> fixed(system.inputs.size(), false);
   for (const std::string& assignment : options.fixes) {
     const SourceRange where{"argument --fix " + assignment, 0, 0, 0, 0};
@@ -393,31 +394,22 @@ int run_plot(const PlotOptions& options) {
   const Variable& x_input = system.inputs[static_cast<std::size_t>(ix)];
   const Variable& y_input = system.inputs[static_cast<std::size_t>(iy)];
   const Variable& output = system.outputs[static_cast<std::size_t>(io)];
+  ProgressLine progress("plot");  // 1001 x 1001 points of a 100,000-rule system take minutes
+  const ControlSurface grid = control_surface(
+      system, static_cast<std::size_t>(ix), static_cast<std::size_t>(iy), static_cast<std::size_t>(io), point, n, {},
+      [&](std::size_t row, std::size_t rows) { progress.show_fraction(row, rows, "row"); });
+  progress.finish();
   plot::HeatMap map;
-  map.x.resize(n);
-  map.y.resize(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const double t = static_cast<double>(k) / static_cast<double>(n - 1);
-    map.x[k] = x_input.min + t * (x_input.max - x_input.min);
-    map.y[k] = y_input.min + t * (y_input.max - y_input.min);
-  }
-  map.z.resize(n * n);
-  Interpreter interpreter(system);
+  map.x = grid.x;
+  map.y = grid.y;
+  map.z = grid.z;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  std::size_t nan_count = 0;
-  for (std::size_t r = 0; r < n; ++r)
-    for (std::size_t c = 0; c < n; ++c) {
-      point[static_cast<std::size_t>(ix)] = map.x[c];
-      point[static_cast<std::size_t>(iy)] = map.y[r];
-      const double z = interpreter.evaluate(point).outputs[static_cast<std::size_t>(io)];
-      map.z[r * n + c] = z;
-      if (std::isnan(z)) {
-        ++nan_count;
-        continue;
-      }
+  for (double z : map.z)
+    if (!std::isnan(z)) {
       lo = std::min(lo, z);
       hi = std::max(hi, z);
     }
+  const std::size_t nan_count = grid.nan_points;
   if (nan_count > 0)
     diagnostics.warning(kCommandLine, "nan-output",
                         std::to_string(nan_count) + " of " + std::to_string(n * n) +
@@ -433,8 +425,8 @@ int run_plot(const PlotOptions& options) {
   std::string rest;
   for (std::size_t i = 0; i < system.inputs.size(); ++i) {
     if (static_cast<int>(i) == ix || static_cast<int>(i) == iy) continue;
-    rest += (rest.empty() ? "fixed: " : ", ") + system.inputs[i].name + " = " + with_unit(point[i], system.inputs[i]) +
-            (fixed[i] ? "" : " (mid-range)");
+    rest += (rest.empty() ? "fixed: " : ", ") + system.inputs[i].name + " = " +
+            value_with_unit(point[i], system.inputs[i].unit) + (fixed[i] ? "" : " (mid-range)");
   }
   if (!rest.empty()) map.title.push_back(rest);
 
@@ -468,8 +460,7 @@ void register_plot_command(CLI::App& app, int& exit_code) {
                       "NAME=VALUE for an input not on an axis, or of the rule viewer's point (repeatable)");
   command->add_option("--output", options->output_variable, "Surface: output to plot (default: the first)");
   command->add_option("--system", options->system, "Which system of the file (when it holds several)");
-  command->add_option("--resolution", options->resolution, "Surface: grid points per axis")
-      ->check(CLI::Range(2, 1001));
+  command->add_option("--resolution", options->resolution, "Surface: grid points per axis")->check(CLI::Range(2, 1001));
   command->add_option("--zmin", options->z_min, "Surface: output value at the bottom of the colour scale");
   command->add_option("--zmax", options->z_max, "Surface: output value at the top of the colour scale");
   command->add_option("-o,--image,--png", options->image, "Picture to write: .svg for SVG, else PNG")->required();

@@ -7,12 +7,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <utility>
 
 #include "diagnostics/number_format.h"
 #include "runtime/scene/scene_file.h"
+#include "runtime/io/memory_limit.h"
 #include "runtime/scene/simulation_trade.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 #include "tools/plot/pareto_plot.h"
@@ -189,10 +192,27 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
     report();
     return kExitErrors;
   }
-  options->progress = [](std::size_t done, std::size_t total, const std::string& what) {
-    if (done < total) std::cerr << "fmpc trade: run " << done + 1 << " of " << total << ": " << what << std::endl;
+  // What the runs will cost, said before they start; then progress by work done (tetrahedra x steps), which the
+  // runs' times follow, with the time left.
+  ProgressLine progress("trade");
+  std::string running;
+  options->plan = [](const sim::TradePlan& plan) {
+    const auto three_digits = [](double value) {
+      char digits[32];
+      std::snprintf(digits, sizeof digits, "%.3g", value);
+      return std::string(digits);
+    };
+    std::cerr << "fmpc trade: " << plan.runs << " runs, about " << three_digits(plan.element_steps)
+              << " element-steps in all (the largest run " << three_digits(plan.largest_tetrahedra)
+              << " tetrahedra, the longest " << three_digits(plan.largest_steps) << " steps, at most "
+              << sim::gibibytes_text(plan.largest_memory_bytes) << " of memory)" << std::endl;
   };
+  options->progress = [&](std::size_t done, std::size_t total, const std::string& what) {
+    running = "run " + std::to_string(std::min(done + 1, total)) + " of " + std::to_string(total) + " (" + what + ")";
+  };
+  options->work_progress = [&](double done, double total) { progress.show_fraction(done, total, running + ", work"); };
   const std::optional<sim::SimulationTradeResult> result = sim::run_simulation_trade(*scene, *options, diagnostics);
+  progress.finish();
   report();
   if (!result) return kExitErrors;
 

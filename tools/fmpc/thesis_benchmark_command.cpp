@@ -13,6 +13,7 @@
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
+#include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 #include "tools/plot/line_chart.h"
@@ -32,13 +33,13 @@ struct ThesisBenchmarkOptions {
 
 constexpr std::size_t kPatientFileLimit = std::size_t{1} << 20;
 
-// Patients from a CSV with a column per input of `system`, read as `fmpc eval` reads its points; labelled
-// "patient 1", "patient 2", ... in row order.
+// Patients from a CSV with a column per input of `system`, read as `fmpc eval` reads its points; named by its
+// `label` or `patient` column, or "patient 1", "patient 2", ... in row order without one.
 std::optional<std::vector<sim::LiverPatient>> read_patients(const std::string& path, const FuzzySystem& system,
                                                             SourceFiles& sources, DiagnosticList& diagnostics) {
   const std::optional<CsvTable> table =
       read_csv_file(path, path, kPatientFileLimit, "patient table",
-                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics);
+                    SourceRange{"argument --patients", 0, 0, 0, 0}, sources, diagnostics, csv_header_of(system));
   if (!table) return std::nullopt;
   const std::size_t errors_before = diagnostics.error_count();
   const std::vector<EvaluationPoint> points = points_from_csv(*table, system, diagnostics);
@@ -49,7 +50,8 @@ std::optional<std::vector<sim::LiverPatient>> read_patients(const std::string& p
   }
   std::vector<sim::LiverPatient> patients;
   for (const EvaluationPoint& point : points)
-    patients.push_back({"patient " + std::to_string(patients.size() + 1), point.inputs});
+    patients.push_back({point.name.empty() ? "patient " + std::to_string(patients.size() + 1) : point.name,
+                        point.inputs});
   return patients;
 }
 
@@ -193,7 +195,11 @@ int run_thesis_benchmark(const ThesisBenchmarkOptions& options) {
   }
   std::vector<double> moduli;
   for (const double kpa : options.moduli) moduli.push_back(kpa * 1000.0);
-  const auto report = sim::run_liver_benchmark(controllers, patients, moduli, options.run, diagnostics);
+  ProgressLine progress("thesis-benchmark");
+  sim::LiverBenchmarkOptions run_options = options.run;
+  run_options.progress = [&](std::size_t done, std::size_t total) { progress.show_fraction(done, total, "run"); };
+  const auto report = sim::run_liver_benchmark(controllers, patients, moduli, run_options, diagnostics);
+  progress.finish();
   if (!report) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;

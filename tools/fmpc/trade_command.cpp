@@ -223,6 +223,14 @@ int run_trade(const TradeOptions& options) {
                               2 + (d > 0 ? options.resolutions.size() : 0);
   ProgressLine progress("trade");
   const auto measured = [&] { progress.show_fraction(rows.size(), planned, "variant"); };
+  // Within an interpreter variant (millions of points take minutes): its first pass is half of it, the timed
+  // passes the other half.
+  const auto interpreting = [&](std::size_t p, bool timed) {
+    if (p % 4096 == 0)
+      progress.show_fraction(static_cast<double>(rows.size()) + (timed ? 0.5 : 0.0) +
+                                 0.5 * static_cast<double>(p) / static_cast<double>(n),
+                             static_cast<double>(planned), "variant");
+  };
   // The reference: the interpreter with `samples exact` (Mamdani); a Sugeno system has no sampling to remove, and an
   // interval type-2 Mamdani system is type-reduced over its samples (there is no exact mode): its reference is the
   // interpreter as the file says, and the sampled row below is left out.
@@ -233,6 +241,7 @@ int run_trade(const TradeOptions& options) {
   {
     Interpreter exact(exact_system);
     for (std::size_t p = 0; p < n; ++p) {
+      interpreting(p, false);
       const Evaluation e = exact.evaluate(point(p));
       for (std::size_t o = 0; o < m; ++o) reference[p * m + o] = e.outputs[o];
     }
@@ -242,7 +251,10 @@ int run_trade(const TradeOptions& options) {
                                                           : "reference",
                        ErrorStats{});
     row.evaluations_per_second = measure_rate(n, options.min_seconds, [&] {
-      for (std::size_t p = 0; p < n; ++p) exact.evaluate(point(p));
+      for (std::size_t p = 0; p < n; ++p) {
+        interpreting(p, true);
+        exact.evaluate(point(p));
+      }
     });
     row.memory_bytes = interpreter_bytes(exact_system);
     row.memory_note = "IR data";
@@ -253,13 +265,17 @@ int run_trade(const TradeOptions& options) {
     Interpreter sampled(system);
     std::vector<double> got(n * m);
     for (std::size_t p = 0; p < n; ++p) {
+      interpreting(p, false);
       const Evaluation e = sampled.evaluate(point(p));
       for (std::size_t o = 0; o < m; ++o) got[p * m + o] = e.outputs[o];
     }
     const ErrorStats error = error_against(reference, got);
     Row row = make_row("interpreter", std::to_string(system.samples) + " samples", error);
     row.evaluations_per_second = measure_rate(n, options.min_seconds, [&] {
-      for (std::size_t p = 0; p < n; ++p) sampled.evaluate(point(p));
+      for (std::size_t p = 0; p < n; ++p) {
+        interpreting(p, true);
+        sampled.evaluate(point(p));
+      }
     });
     row.memory_bytes = interpreter_bytes(system);
     row.memory_note = "IR data + sampled terms";
@@ -353,7 +369,7 @@ int run_trade(const TradeOptions& options) {
       row.memory_bytes = 8.0 * static_cast<double>(table.values.size() + static_cast<std::size_t>(resolution) * d);
       row.memory_note = "values + breakpoints";
       rows.push_back(row);
-    measured();
+      measured();
     }
   }
 

@@ -43,7 +43,7 @@ std::string render_line_chart(const LineChart& chart, ImageFormat format) {
     canvas.polygon(band, fill);
   }
   for (const Series& s : chart.series) {
-    canvas.polyline(points_of(s.x, s.y), s.colour, s.width, s.dashes);
+    if (s.line) canvas.polyline(points_of(s.x, s.y), s.colour, s.width, s.dashes);
     if (s.y_lower.size() == s.y.size()) canvas.polyline(points_of(s.x, s.y_lower), s.colour, s.width / 2, {3, 2});
     if (s.markers)
       for (const auto& [px, py] : points_of(s.x, s.y)) canvas.circle(px, py, 2.5, s.colour, s.colour, 0.5);
@@ -75,7 +75,8 @@ std::string render_line_chart(const LineChart& chart, ImageFormat format) {
       fill.a = 0.25;
       canvas.rectangle(lx, ly + 3, 20, 12, fill);
     }
-    canvas.line(lx, ly + 9, lx + 20, ly + 9, s.colour, s.width, s.dashes);
+    if (s.line) canvas.line(lx, ly + 9, lx + 20, ly + 9, s.colour, s.width, s.dashes);
+    else canvas.circle(lx + 10, ly + 9, 3, s.colour, s.colour, 0.5);
     Font font = legend_font;
     const double w = canvas.measure(s.name, font).first;
     if (w > column - 28) font.size = std::max(8.0, font.size * (column - 28) / w);

@@ -22,6 +22,7 @@ struct Series {
   double width = 2;
   std::vector<double> dashes;
   bool markers = false;  // a dot at every point
+  bool line = true;      // false: the dots alone (a scatter plot; set markers)
 };
 
 // A vertical line at x with a label at its top.

@@ -12,14 +12,6 @@ namespace fmpc {
 
 namespace {
 
-bool is_identifier(const std::string& text) {
-  if (text.empty()) return false;
-  const auto first = static_cast<unsigned char>(text[0]);
-  if (!(std::isalpha(first) || text[0] == '_')) return false;
-  return std::all_of(text.begin(), text.end(),
-                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
-}
-
 const char* tnorm_enumerator(TNorm norm) {
   switch (norm) {
     case TNorm::Minimum: return "fmpc_math::TNorm::Minimum";
@@ -76,16 +68,6 @@ std::string cpp_comment_text(const std::string& text) {
   for (const char c : text) out += (c == '\n' || c == '\r') ? ' ' : c;
   while (!out.empty() && (out.back() == '\\' || out.back() == ' ')) out.pop_back();
   return out;
-}
-
-bool is_cpp_namespace_path(const std::string& text) {
-  std::size_t start = 0;
-  while (true) {
-    const std::size_t end = text.find("::", start);
-    if (!is_identifier(text.substr(start, end == std::string::npos ? std::string::npos : end - start))) return false;
-    if (end == std::string::npos) return true;
-    start = end + 2;
-  }
 }
 
 // Parameters are finite after sema; the non-finite spellings keep the header compiling if a caller passes one

@@ -18,7 +18,6 @@ namespace fmpc {
 std::string hex64(std::uint64_t value);                    // 16 lower-case hex digits, no prefix
 std::string cpp_string_literal(const std::string& text);  // a C++ string literal, escaped
 std::string cpp_comment_text(const std::string& text);    // fits one `//` line (no newline, no final backslash)
-bool is_cpp_namespace_path(const std::string& text);      // identifiers joined by "::"
 // A T-typed constant: "T(0.25)"; NaN and +-inf spelled for device code too.
 std::string cpp_constant(double value);
 

@@ -9,6 +9,7 @@
 #include "compiler/backend/cpp/emit_type2.h"
 #include "compiler/backend/cpp/evaluator_emitter.h"
 #include "compiler/backend/cpp/lane_batch_emitter.h"
+#include "compiler/backend/cpp/namespace_name.h"
 #include "compiler/ir/content_hash.h"
 #include "diagnostics/number_format.h"
 
@@ -27,10 +28,10 @@ bool check_supported(const FuzzySystem& system, const EmitOptions& options, Diag
                       {"`fmpc compile --target table` accepts `samples exact`"});
     supported = false;
   }
-  if (!is_cpp_namespace_path(options.namespace_name)) {
+  if (const auto problem = namespace_name_problem(options.namespace_name)) {
     diagnostics.error(SourceRange{options.source_path, 0, 0, 0, 0},
-                      "namespace '" + options.namespace_name +
-                          "' is not a C++ namespace name: use identifiers joined by '::', e.g. scene::liver");
+                      "namespace '" + options.namespace_name + "' cannot name the generated code's namespace: " +
+                          *problem + "; use identifiers joined by '::', e.g. scene::liver");
     supported = false;
   }
   return supported;

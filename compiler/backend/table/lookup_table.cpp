@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "compiler/frontend/utf8.h"
 #include "compiler/ir/content_hash.h"
 #include "diagnostics/number_format.h"
 
@@ -91,6 +92,11 @@ class ByteReader {
     }
     std::string s(size, '\0');
     if (!raw(s.data(), size, what)) return {};
+    // Names, units and paths are text everywhere they go (messages, generated headers, Python's str).
+    if (first_invalid_utf8(s) != std::string::npos) {
+      fail(std::string(what) + ": not valid UTF-8 text");
+      return {};
+    }
     return s;
   }
   void fail(std::string message) {
@@ -222,6 +228,8 @@ bool validate_table(const LookupTable& table, const std::string& origin, Diagnos
   }
   return true;
 }
+
+std::string fzt_signature() { return std::string(kMagic, sizeof kMagic); }
 
 bool has_fzt_signature(const std::string& bytes) {
   return bytes.size() >= sizeof kMagic && std::memcmp(bytes.data(), kMagic, sizeof kMagic) == 0;

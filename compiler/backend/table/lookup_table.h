@@ -91,6 +91,8 @@ std::string serialize_fzt(const LookupTable& table);
 
 // Whether `bytes` start with the .fzt signature (a table, not a rule file: the CLI tells them apart by this).
 bool has_fzt_signature(const std::string& bytes);
+// The signature itself: the first 8 bytes of every .fzt file.
+std::string fzt_signature();
 
 // Parses and validates `bytes` (the contents of `path`). Every read is bounds-checked; a truncated, corrupted,
 // wrong-version, wrong-endian or hostile file gives nullopt and an error naming the field and what to do.

@@ -51,6 +51,11 @@ struct TableBuildOptions {
   BreakpointSpacing spacing = BreakpointSpacing::Refined;
   TableValueType value_type = TableValueType::Float64;  // the stored values are rounded to it before measuring
   std::uint64_t max_grid_points = 1ULL << 21;
+  // The memory this process may use (runtime/io/memory_limit.h's memory_limit(); 0: unchecked) and what sets it:
+  // every grid is sized against it before it is allocated (a 1.6e9-point grid inside --max-grid-points once took
+  // 5.7 GiB before anything refused it).
+  std::uint64_t memory_limit_bytes = 0;
+  std::string memory_limit_source;
   std::size_t held_out_points = 100000;
   std::size_t training_points = 50000;
   std::uint64_t seed = 1;

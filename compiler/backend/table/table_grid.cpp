@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 namespace fmpc::table_build {
@@ -92,6 +93,20 @@ bool GridBuilder::set_axes(const std::vector<std::vector<double>>& axes, Diagnos
     }
   }
   const std::uint64_t total = grid_size(axes);
+  // While the grid grows, the old and the new grids' values and rounding (8 bytes each per output) and the points
+  // left to evaluate (8 bytes) are held at once.
+  const double bytes = static_cast<double>(total) * (16.0 * static_cast<double>(outputs) + 8.0) +
+                       16.0 * static_cast<double>(table_.values.size());
+  if (options_.memory_limit_bytes > 0 && bytes > static_cast<double>(options_.memory_limit_bytes)) {
+    char needed[64], limit[64];
+    std::snprintf(needed, sizeof needed, "%.3g GiB", bytes / 1073741824.0);
+    std::snprintf(limit, sizeof limit, "%.3g GiB", static_cast<double>(options_.memory_limit_bytes) / 1073741824.0);
+    diagnostics.error(SourceRange{table_.source_path, 0, 0, 0, 0},
+                      "the grid of " + std::to_string(total) + " points needs an estimated " + needed +
+                          " while it is built; the limit is " + options_.memory_limit_source + ", " + limit,
+                      {"lower --max-grid-points, raise --max-error, or fix more inputs"});
+    return false;
+  }
   std::vector<double> values(static_cast<std::size_t>(total) * outputs, 0.0);
   std::vector<double> rounding(values.size(), 0.0);
   std::vector<std::size_t> missing;

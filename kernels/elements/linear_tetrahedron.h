@@ -1,0 +1,135 @@
+#pragma once
+// The linear (4-node) tetrahedron as an element kind: constant shape-function gradients g_a (rows of Dm^-1, g_0 =
+// -(g_1 + g_2 + g_3)), one material point, F = sum_a x_a g_a^T and corner forces f_a = -V0 P(F) g_a (Bonet & Wood,
+// "Nonlinear Continuum Mechanics for Finite Element Analysis", 2nd ed., 9.4). Every function is generic over the
+// constitutive law (kernels/laws/: first_piola, energy_density, linearise and stress_differential, rest_lame,
+// stress_output); the element kinds are listed in kernels/element_laws.h.
+#include "kernels/element_term.h"
+
+namespace fmpc::kernels {
+
+struct LinearTetrahedron {
+  static constexpr int kNodes = 4;
+
+  // The element's forces on its nodes at positions x and, where the term is damped (v non-null), velocities v.
+  template <typename Law, typename Real>
+  static FMPC_HD void forces(const ElementTermView<Real>& t, int e, const Real x[kNodes][3], const Real (*v)[3],
+                             Real out[kNodes][3]) {
+    const Real* rest_inverse = t.rest_inverse + 9 * e;
+    Real g[4][3], F[9], F_rate[9], P[9];
+    shape_gradients(rest_inverse, g);
+    corner_gradient(x, rest_inverse, F);
+    if (v) corner_gradient(v, rest_inverse, F_rate);
+    Law::first_piola(Law::material(t, e), F, v ? F_rate : nullptr, P);
+    corner_forces_from_stress(P, g, t.rest_volume[e], out);
+  }
+
+  // What implicit Euler holds over a step: the law's linearisation at the element's point.
+  template <typename Law>
+  struct Linearisation {
+    typename Law::Linearisation point;
+  };
+
+  template <typename Law>
+  static FMPC_HD void linearise(const ElementTermView<double>& t, int e, const double x[kNodes][3],
+                                Linearisation<Law>& lin) {
+    double F[9];
+    corner_gradient(x, t.rest_inverse + 9 * e, F);
+    Law::linearise(Law::material(t, e), F, lin.point);
+  }
+
+  // The tangent stiffness applied to a nodal field p [node][axis]: out_a = sum_b K_ab p_b = V0 dP(dF) g_a with
+  // dF = sum_b p_b g_b^T.
+  template <typename Law>
+  static FMPC_HD void stiffness_action(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
+                                       const double p[kNodes][3], double out[kNodes][3]) {
+    const double* rest_inverse = t.rest_inverse + 9 * e;
+    double g[4][3], dF[9], dP[9];
+    shape_gradients(rest_inverse, g);
+    corner_gradient(p, rest_inverse, dF);
+    Law::stress_differential(Law::material(t, e), lin.point, dF, dP);
+    for (int a = 0; a < kNodes; ++a)
+      for (int i = 0; i < 3; ++i)
+        out[a][i] = t.rest_volume[e] * (dP[3 * i] * g[a][0] + dP[3 * i + 1] * g[a][1] + dP[3 * i + 2] * g[a][2]);
+  }
+
+  // Column (3 b + j) of the 12 x 12 tangent: its action on the unit displacement of node b along axis j.
+  template <typename Law>
+  static FMPC_HD void stiffness_column(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin, int b,
+                                       int j, double out[kNodes][3]) {
+    double p[kNodes][3] = {};
+    p[b][j] = 1.0;
+    stiffness_action<Law>(t, e, lin, p, out);
+  }
+
+  // The diagonal entries K_(3a+i),(3a+i) (Jacobi's preconditioner), as [node][axis].
+  template <typename Law>
+  static FMPC_HD void stiffness_diagonal(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
+                                         double diagonal[kNodes][3]) {
+    for (int a = 0; a < kNodes; ++a)
+      for (int i = 0; i < 3; ++i) {
+        double column[kNodes][3];
+        stiffness_column<Law>(t, e, lin, a, i, column);
+        diagonal[a][i] = column[a][i];
+      }
+  }
+
+  // The whole 12 x 12 tangent, row-major: K[12 (3 a + i) + 3 b + j].
+  template <typename Law>
+  static FMPC_HD void stiffness_matrix(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
+                                       double* K) {
+    for (int b = 0; b < kNodes; ++b)
+      for (int j = 0; j < 3; ++j) {
+        double column[kNodes][3];
+        stiffness_column<Law>(t, e, lin, b, j, column);
+        for (int a = 0; a < kNodes; ++a)
+          for (int i = 0; i < 3; ++i) K[3 * kNodes * (3 * a + i) + 3 * b + j] = column[a][i];
+      }
+  }
+
+  // Elastic energy at positions x (J).
+  template <typename Law>
+  static FMPC_HD double energy(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
+    double F[9];
+    corner_gradient(x, t.rest_inverse + 9 * e, F);
+    return t.rest_volume[e] * Law::energy_density(Law::material(t, e), F);
+  }
+
+  // The law's stress output (its kStressOutput) at positions x.
+  template <typename Law>
+  static FMPC_HD double stress_output(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
+    double F[9];
+    corner_gradient(x, t.rest_inverse + 9 * e, F);
+    return Law::stress_output(Law::material(t, e), F);
+  }
+
+  // An upper bound of the largest eigenvalue of the element's rest stiffness (N/m), for the critical time step and the
+  // element damping: the smaller of the Frobenius norm and the largest absolute row sum (Gershgorin) of the 12 x 12
+  // matrix K_ab = V0 (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a . g_b) I) with the law's rest Lame parameters, both of
+  // which bound the spectral radius of a symmetric matrix.
+  template <typename Law>
+  static FMPC_HD double stiffness_bound(const ElementTermView<double>& t, int e) {
+    double g[4][3], mu, lambda;
+    shape_gradients(t.rest_inverse + 9 * e, g);
+    Law::rest_lame(Law::material(t, e), mu, lambda);
+    const double volume = t.rest_volume[e];
+    double frobenius = 0.0, row_max = 0.0;
+    double rows[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+    for (int a = 0; a < kNodes; ++a)
+      for (int b = 0; b < kNodes; ++b) {
+        const double gg = dot3(g[a], g[b]);
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) {
+            const double entry =
+                volume * (lambda * g[a][i] * g[b][j] + mu * g[b][i] * g[a][j] + (i == j ? mu * gg : 0.0));
+            frobenius += entry * entry;
+            rows[3 * a + i] += entry < 0.0 ? -entry : entry;
+          }
+      }
+    for (int r = 0; r < 12; ++r) row_max = rows[r] > row_max ? rows[r] : row_max;
+    frobenius = square_root(frobenius);
+    return frobenius < row_max ? frobenius : row_max;
+  }
+};
+
+}  // namespace fmpc::kernels
