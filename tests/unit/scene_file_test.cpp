@@ -290,7 +290,8 @@ TEST_CASE("unknown keys and keywords come with a suggestion", "[scene]") {
 
 TEST_CASE("every shipped scene parses", "[scene]") {
   for (const char* name :
-       {"liver_indentation", "sofa_liver_springs", "sofa_liver_fuzzy", "sofa_liver_fem", "strain_stiffening_block"}) {
+       {"liver_indentation", "sofa_liver_springs", "sofa_liver_fuzzy", "sofa_liver_fem", "strain_stiffening_block",
+        "liver_palpation"}) {
     const std::string path = std::string(FMPC_SOURCE_DIR) + "/rulesets/scenes/" + name + ".yaml";
     std::ifstream in(path);
     std::stringstream text;
