@@ -217,8 +217,8 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "threads: 1.5\n") == "3:10: threads: expected an integer from 0 to 256, got '1.5'");
   CHECK(error_of(kMinimal + "gravity: [0, 0, -9.81]\n") ==
         "3:1: gravity: unknown key; allowed: 'name', 'model', 'mesh', 'material', 'mass', 'damping', 'springs', "
-        "'law', 'fixed', 'hold', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads', "
-        "'outputs' or 'on_inversion'");
+        "'law', 'fixed', 'hold', 'loads', 'tools', 'contact', 'integrator', 'dt', 'duration', 'backend', "
+        "'precision', 'threads', 'outputs' or 'on_inversion'");
   CHECK(error_of("material: {youngs_modulus: 10}\n") ==
         "1:1: mesh: missing; give a mesh file or a generated box or ellipsoid");
   CHECK(error_of("mesh: {box: {size: [1, 1, 1]}}\n") ==
