@@ -47,16 +47,48 @@ void check(bool ok, const PySession& s, const DiagnosticList& diagnostics) {
   raise_error(diagnostics, s.session->sources());
 }
 
-std::unique_ptr<PySession> open_scene(const std::string& path, const std::string& backend) {
-  const runtime::SessionOptions options = session_options(backend);
+// Whether a session call's result says it succeeded (a bool, an optional); a list is always an answer.
+bool succeeded(bool ok) { return ok; }
+template <typename T>
+bool succeeded(const std::optional<T>& value) {
+  return value.has_value();
+}
+template <typename T>
+bool succeeded(const std::vector<T>&) {
+  return true;
+}
+
+// Runs `call(diagnostics)` on the session with the GIL released and the session's lock held, and returns its result;
+// raises fmpc.Error where it failed or added an error.
+template <typename Call>
+auto locked_call(const PySession& s, Call call) {
+  DiagnosticList diagnostics;
+  std::optional<decltype(call(diagnostics))> result;
+  {
+    py::gil_scoped_release unlocked;
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    result.emplace(call(diagnostics));
+  }
+  check(succeeded(*result), s, diagnostics);
+  return std::move(*result);
+}
+
+// A session made by `create(diagnostics)` with the GIL released; fmpc.Error where it could not be made.
+template <typename Create>
+std::unique_ptr<PySession> created(Create create) {
   DiagnosticList diagnostics;
   auto out = std::make_unique<PySession>();
   {
     py::gil_scoped_release unlocked;
-    out->session = runtime::Session::open(path, diagnostics, options);
+    out->session = create(diagnostics);
   }
   if (!out->session) raise_error(diagnostics, SourceFiles{});
   return out;
+}
+
+std::unique_ptr<PySession> open_scene(const std::string& path, const std::string& backend) {
+  const runtime::SessionOptions options = session_options(backend);
+  return created([&](DiagnosticList& d) { return runtime::Session::open(path, d, options); });
 }
 
 py::array_t<double> points_array(const std::vector<runtime::Point3>& points) {
@@ -74,9 +106,12 @@ std::size_t tool_index(const PySession& s, const py::object& tool) {
     if (const auto found = s.session->find_tool(name)) return *found;
     raise_error(argument("tool"), "the scene has no tool '" + name + "'");
   }
-  const long long index = tool.cast<long long>();
-  if (index < 0 || static_cast<std::size_t>(index) >= s.session->tool_count())
-    raise_error(argument("tool"), "tool " + std::to_string(index) + " does not exist; the scene has " +
+  if (!py::isinstance<py::int_>(tool) || py::isinstance<py::bool_>(tool))
+    raise_error(argument("tool"), "expected a tool's index or name, got " + py::repr(tool).cast<std::string>());
+  int overflow = 0;
+  const long long index = PyLong_AsLongLongAndOverflow(tool.ptr(), &overflow);
+  if (overflow != 0 || index < 0 || static_cast<std::size_t>(index) >= s.session->tool_count())
+    raise_error(argument("tool"), "tool " + py::repr(tool).cast<std::string>() + " does not exist; the scene has " +
                                       std::to_string(s.session->tool_count()));
   return static_cast<std::size_t>(index);
 }
@@ -106,14 +141,7 @@ void bind_session(py::module_& m) {
           "from_yaml",
           [](const std::string& text, const std::string& path, const std::string& backend) {
             const runtime::SessionOptions options = session_options(backend);
-            DiagnosticList diagnostics;
-            auto out = std::make_unique<PySession>();
-            {
-              py::gil_scoped_release unlocked;
-              out->session = runtime::Session::from_yaml(text, path, diagnostics, options);
-            }
-            if (!out->session) raise_error(diagnostics, SourceFiles{});
-            return out;
+            return created([&](DiagnosticList& d) { return runtime::Session::from_yaml(text, path, d, options); });
           },
           py::arg("text"), py::arg("path") = "scene.yaml", py::arg("backend") = "auto",
           "A scene given as YAML text; `path` names it in messages and resolves its relative files")
@@ -121,27 +149,13 @@ void bind_session(py::module_& m) {
           "step",
           [](PySession& s, long long steps) {
             if (steps < 0) raise_error(argument("steps"), "steps must be >= 0, got " + std::to_string(steps));
-            DiagnosticList diagnostics;
-            bool ok = false;
-            {
-              py::gil_scoped_release unlocked;
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              ok = s.session->step(static_cast<std::size_t>(steps), diagnostics);
-            }
-            check(ok, s, diagnostics);
+            locked_call(s, [&](DiagnosticList& d) { return s.session->step(static_cast<std::size_t>(steps), d); });
           },
           py::arg("steps") = 1, "Advances `steps` steps (the GIL released while stepping)")
       .def(
           "step_to",
           [](PySession& s, double time) {
-            DiagnosticList diagnostics;
-            bool ok = false;
-            {
-              py::gil_scoped_release unlocked;
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              ok = s.session->step_to(time, diagnostics);
-            }
-            check(ok, s, diagnostics);
+            locked_call(s, [&](DiagnosticList& d) { return s.session->step_to(time, d); });
           },
           py::arg("time"), "Advances to at least `time` seconds (the GIL released while stepping)")
       .def_property_readonly(
@@ -166,14 +180,7 @@ void bind_session(py::module_& m) {
             runtime::ToolPose pose;
             pose.position = numbers<3>(position, "position");
             pose.orientation = numbers<4>(orientation, "orientation");
-            DiagnosticList diagnostics;
-            bool ok = false;
-            {
-              py::gil_scoped_release unlocked;
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              ok = s.session->set_tool_pose(index, pose, diagnostics);
-            }
-            check(ok, s, diagnostics);
+            locked_call(s, [&](DiagnosticList& d) { return s.session->set_tool_pose(index, pose, d); });
           },
           py::arg("tool"), py::arg("position"), py::arg("orientation") = std::vector<double>{1.0, 0.0, 0.0, 0.0},
           "Poses a tool (its index or name) for the steps from now on: position (m), orientation a quaternion "
@@ -181,14 +188,8 @@ void bind_session(py::module_& m) {
       .def(
           "tool_readings",
           [](const PySession& s) {
-            DiagnosticList diagnostics;
-            std::vector<runtime::ToolReading> readings;
-            {
-              py::gil_scoped_release unlocked;
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              readings = s.session->tool_readings(diagnostics);
-            }
-            check(!diagnostics.has_errors(), s, diagnostics);
+            const std::vector<runtime::ToolReading> readings =
+                locked_call(s, [&](DiagnosticList& d) { return s.session->tool_readings(d); });
             std::vector<runtime::Point3> force, torque;
             py::array_t<long long> contacts(static_cast<py::ssize_t>(readings.size()));
             py::array_t<double> deepest(static_cast<py::ssize_t>(readings.size()));
@@ -210,41 +211,24 @@ void bind_session(py::module_& m) {
       .def(
           "positions",
           [](const PySession& s) {
-            DiagnosticList diagnostics;
-            std::vector<runtime::Point3> points;
-            {
-              py::gil_scoped_release unlocked;
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              points = s.session->positions(diagnostics);
-            }
-            check(!diagnostics.has_errors(), s, diagnostics);
+            const std::vector<runtime::Point3> points =
+                locked_call(s, [&](DiagnosticList& d) { return s.session->positions(d); });
             return points_array(points);
           },
           "Every vertex's position now (n x 3, m)")
       .def(
           "velocities",
           [](const PySession& s) {
-            DiagnosticList diagnostics;
-            std::vector<runtime::Point3> points;
-            {
-              py::gil_scoped_release unlocked;
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              points = s.session->velocities(diagnostics);
-            }
-            check(!diagnostics.has_errors(), s, diagnostics);
+            const std::vector<runtime::Point3> points =
+                locked_call(s, [&](DiagnosticList& d) { return s.session->velocities(d); });
             return points_array(points);
           },
           "Every vertex's velocity now (n x 3, m/s)")
       .def(
           "device_positions",
           [](const PySession& s) {
-            DiagnosticList diagnostics;
-            std::optional<runtime::DevicePositions> pointer;
-            {
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              pointer = s.session->device_positions(diagnostics);
-            }
-            check(pointer.has_value(), s, diagnostics);
+            const std::optional<runtime::DevicePositions> pointer =
+                locked_call(s, [&](DiagnosticList& d) { return s.session->device_positions(d); });
             // Addresses, for a CUDA array interface (CuPy, PyTorch) of the caller's; valid until the next step.
             py::dict out;
             out["x"] = reinterpret_cast<std::uintptr_t>(pointer->x);
@@ -259,14 +243,8 @@ void bind_session(py::module_& m) {
       .def(
           "energies",
           [](const PySession& s) {
-            DiagnosticList diagnostics;
-            std::optional<runtime::Energies> energies;
-            {
-              py::gil_scoped_release unlocked;
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              energies = s.session->energies(diagnostics);
-            }
-            check(energies.has_value(), s, diagnostics);
+            const std::optional<runtime::Energies> energies =
+                locked_call(s, [&](DiagnosticList& d) { return s.session->energies(d); });
             py::dict out;
             out["kinetic"] = energies->kinetic;
             out["elastic"] = energies->elastic;
@@ -290,14 +268,7 @@ void bind_session(py::module_& m) {
       .def(
           "swap_material",
           [](PySession& s, const std::string& file) {
-            DiagnosticList diagnostics;
-            bool ok = false;
-            {
-              py::gil_scoped_release unlocked;
-              const std::lock_guard<std::mutex> lock(s.mutex);
-              ok = s.session->swap_material(file, diagnostics);
-            }
-            check(ok, s, diagnostics);
+            locked_call(s, [&](DiagnosticList& d) { return s.session->swap_material(file, d); });
           },
           py::arg("file"),
           "Swaps the material for a rule file or a compiled table (.fzt) between two steps, keeping the state");

@@ -74,6 +74,10 @@ class Session(unittest.TestCase):
             s.set_tool_pose("shaft", [0.0, 0.0, 0.0])
         with self.assertRaises(fmpc.Error):
             s.set_tool_pose(0, [0.0, 0.0])
+        for tool in (1.5, None, True, 2**70, -1):
+            with self.assertRaises(fmpc.Error) as caught:
+                s.set_tool_pose(tool, [0.01, 0.01, 0.02])
+            self.assertEqual(caught.exception.diagnostics[0].file, "argument 'tool'")
         with self.assertRaises(fmpc.Error):
             s.swap_material(source("rulesets", "scenes", "strain_stiffening.fis"))
         with self.assertRaises(fmpc.Error):
