@@ -306,14 +306,12 @@ const InversionReport& Simulation::inversions(std::size_t scene) const { return 
 int Simulation::implicit_max_iterations_used() const { return engine_->implicit_max_iterations_used(); }
 bool Simulation::reduces_in_place() const { return engine_->reduces_in_place(); }
 
-namespace {
 bool scene_exists(std::size_t scene, std::size_t count, DiagnosticList& diagnostics) {
   if (scene < count) return true;
   diagnostics.error(SourceRange{},
                     "scene " + std::to_string(scene) + " does not exist; the batch has " + std::to_string(count));
   return false;
 }
-}  // namespace
 
 std::vector<Point3> Simulation::positions(std::size_t scene, DiagnosticList& diagnostics) const {
   if (!scene_exists(scene, scenes_.size(), diagnostics)) return {};

@@ -122,12 +122,7 @@ bool Simulation::run_engine(const std::vector<std::size_t>& ends, DiagnosticList
 
 bool Simulation::set_tool_pose(std::size_t scene, std::size_t tool, ToolPose pose, DiagnosticList& diagnostics) {
   const SourceRange argument{"argument 'pose'", 0, 0, 0, 0};
-  if (scene >= scenes_.size()) {
-    diagnostics.error(SourceRange{"argument 'scene'", 0, 0, 0, 0},
-                      "scene " + std::to_string(scene) + " does not exist; the batch has " +
-                          std::to_string(scenes_.size()));
-    return false;
-  }
+  if (!scene_exists(scene, scenes_.size(), diagnostics)) return false;
   std::vector<RigidTool>& tools = scenes_[scene].tools;
   if (tool >= tools.size()) {
     diagnostics.error(SourceRange{"argument 'tool'", 0, 0, 0, 0},
@@ -148,12 +143,7 @@ bool Simulation::set_tool_pose(std::size_t scene, std::size_t tool, ToolPose pos
 }
 
 std::optional<DevicePositions> Simulation::device_positions(std::size_t scene, DiagnosticList& diagnostics) const {
-  if (scene >= scenes_.size()) {
-    diagnostics.error(SourceRange{"argument 'scene'", 0, 0, 0, 0},
-                      "scene " + std::to_string(scene) + " does not exist; the batch has " +
-                          std::to_string(scenes_.size()));
-    return std::nullopt;
-  }
+  if (!scene_exists(scene, scenes_.size(), diagnostics)) return std::nullopt;
   if (backend_ != Backend::Cuda) {
     diagnostics.error(SourceRange{}, "the positions live on the host with the CPU backend; read positions() instead "
                                      "of a device pointer");
@@ -176,12 +166,7 @@ std::vector<ToolReading> Simulation::tool_readings(std::size_t scene, Diagnostic
 
 bool Simulation::replace_material(std::size_t scene, const SimulationSetup& material, DiagnosticList& diagnostics) {
   const SourceRange argument{"argument 'material'", 0, 0, 0, 0};
-  if (scene >= scenes_.size()) {
-    diagnostics.error(SourceRange{"argument 'scene'", 0, 0, 0, 0},
-                      "scene " + std::to_string(scene) + " does not exist; the batch has " +
-                          std::to_string(scenes_.size()));
-    return false;
-  }
+  if (!scene_exists(scene, scenes_.size(), diagnostics)) return false;
   if (failed_) {
     diagnostics.error(argument, "the simulation stopped at an earlier error; the material was not replaced");
     return false;

@@ -89,4 +89,7 @@ std::string cg_stopped_message(std::size_t step, int iterations, double relative
 // solves (kernels/contact_math.h), the same for both backends.
 std::string contact_unsettled_message(std::size_t step, int rounds);
 
+// True where `scene` indexes a batch of `count` scenes; otherwise an error saying so (Simulation's per-scene calls).
+bool scene_exists(std::size_t scene, std::size_t count, DiagnosticList& diagnostics);
+
 }  // namespace fmpc::sim
