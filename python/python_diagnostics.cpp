@@ -14,11 +14,6 @@ namespace {
 
 PyObject* error_class = nullptr;
 
-// As the renderer spells them.
-std::string severity_name(Severity severity) {
-  return severity == Severity::Error ? "error" : severity == Severity::Warning ? "warning" : "note";
-}
-
 }  // namespace
 
 void set_error_class(PyObject* error) { error_class = error; }

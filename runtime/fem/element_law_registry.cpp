@@ -9,8 +9,11 @@ namespace fmpc::sim {
 
 namespace {
 
-std::optional<ElementLawBuild> build_corotational_linear(const ElementMaterial& material, DiagnosticList& diagnostics) {
-  using Law = kernels::CorotationalLinear;
+// A law whose parameters are Young's modulus and Poisson's ratio per element (kYoungsModulus, kPoissonRatio): both
+// checked, nu below 0.5 by the margin linear tetrahedra need.
+template <typename Law>
+std::optional<ElementLawBuild> build_youngs_modulus_and_poisson_ratio(const ElementMaterial& material,
+                                                                      DiagnosticList& diagnostics) {
   const std::size_t count = material.youngs_modulus.size();
   for (std::size_t e = 0; e < count; ++e) {
     const double youngs = material.youngs_modulus[e], poisson = material.poisson_ratio[e];
@@ -61,11 +64,17 @@ const std::vector<ElementLawRow>& element_law_rows() {
        "co-rotational linear elasticity on linear tetrahedra (Mueller & Gross 2004; Nesme, Payan & Faure 2005), "
        "E and nu per element, E optionally from a strain table",
        kernels::element_law_index<kernels::CorotationalLinear>, kernels::CorotationalLinear::kStressOutput,
-       build_corotational_linear},
+       build_youngs_modulus_and_poisson_ratio<kernels::CorotationalLinear>},
       {"volume_preservation", nullptr, true, "springs_volume_term", "springs+volume",
        "the volume term beside springs (Teschner et al. 2004), kappa calibrated with the springs to E and nu",
        kernels::element_law_index<kernels::VolumePreservation>, kernels::VolumePreservation::kStressOutput,
        build_volume_preservation},
+      {"stable_neo_hookean", nullptr, false, "stable_neo_hookean", "SNH",
+       "stable neo-Hookean hyperelasticity (Smith, de Goes & Kim 2018, ACM TOG 37(2)) with the paper's Lame "
+       "re-parameterisation from E and nu, finite and restoring for inverted elements; E optionally from a strain "
+       "table at the principal strain of largest magnitude",
+       kernels::element_law_index<kernels::StableNeoHookean>, kernels::StableNeoHookean::kStressOutput,
+       build_youngs_modulus_and_poisson_ratio<kernels::StableNeoHookean>},
   };
   return rows;
 }
@@ -82,6 +91,45 @@ const ElementLawRow* element_law_by_trade_name(const std::string& name) {
   for (const ElementLawRow& row : element_law_rows())
     if (name == row.trade_name) return &row;
   return nullptr;
+}
+
+const ElementLawRow* fem_law_by_keyword(const std::string& name) {
+  for (const ElementLawRow& row : element_law_rows())
+    if (!row.beside_springs && name == row.keyword) return &row;
+  return nullptr;
+}
+
+std::vector<std::string> fem_law_keywords() {
+  std::vector<std::string> out;
+  for (const ElementLawRow& row : element_law_rows())
+    if (!row.beside_springs) out.emplace_back(row.keyword);
+  return out;
+}
+
+const std::vector<ElementKindRow>& element_kind_rows() {
+  static const std::vector<ElementKindRow> rows = {
+      {"linear",
+       "4-node linear tetrahedra, one point per element (Bonet & Wood, Nonlinear Continuum Mechanics for Finite "
+       "Element Analysis, 2nd ed., 9.4)",
+       kernels::element_kind_index<kernels::LinearTetrahedron>},
+  };
+  return rows;
+}
+
+const ElementKindRow& element_kind_row(int kind) { return element_kind_rows().at(static_cast<std::size_t>(kind)); }
+
+const ElementKindRow* element_kind_by_keyword(const std::string& name) {
+  for (const ElementKindRow& row : element_kind_rows())
+    if (name == row.keyword) return &row;
+  return nullptr;
+}
+
+const ElementKindRow& default_element_kind() { return element_kind_rows().front(); }
+
+std::vector<std::string> element_kind_keywords() {
+  std::vector<std::string> out;
+  for (const ElementKindRow& row : element_kind_rows()) out.emplace_back(row.keyword);
+  return out;
 }
 
 const ElementLawRow& element_law_beside_springs() {

@@ -50,12 +50,35 @@ const std::vector<ElementLawRow>& element_law_rows();
 const ElementLawRow& element_law_row(int law);
 // The row whose model_keyword (or trade_name) is `name`; null when none is.
 const ElementLawRow* element_law_by_model_keyword(const std::string& name);
+// The law `fem: {law: NAME}` selects: a row with that keyword that is a model of its own (not beside springs); null
+// when none is.
+const ElementLawRow* fem_law_by_keyword(const std::string& name);
+// The keywords fem_law_by_keyword accepts, in the registry's order (for errors and docs).
+std::vector<std::string> fem_law_keywords();
 const ElementLawRow* element_law_by_trade_name(const std::string& name);
 // The law a spring network takes beside it (beside_springs).
 const ElementLawRow& element_law_beside_springs();
 // The finite-element model messages recommend and a model built without a law takes: the first row with a
 // model_keyword.
 const ElementLawRow& default_fem_law();
+
+// The element kinds' registry: one row per kernels::ElementKinds entry, in the same order. `fem: {element: KEYWORD}`
+// in scene files selects a kind by its keyword; nothing outside a kind's kernels header, kernels/element_laws.h and
+// runtime/fem's registry and geometry builders names it.
+struct ElementKindRow {
+  const char* keyword;      // fem: {element: KEYWORD}
+  const char* description;  // one line for docs and errors, with its source
+  int kind;                 // index in kernels::ElementKinds
+};
+
+// Every row, in kernels::ElementKinds' order.
+const std::vector<ElementKindRow>& element_kind_rows();
+const ElementKindRow& element_kind_row(int kind);
+// The row with keyword `name`; null when none has it.
+const ElementKindRow* element_kind_by_keyword(const std::string& name);
+// The kind `model: corotational_fem` and a `fem` map without `element` take: the first row.
+const ElementKindRow& default_element_kind();
+std::vector<std::string> element_kind_keywords();
 
 // Springs plus the volume term reaching a Young's modulus E and Poisson ratio nu (docs/simulator.md): a central
 // spring network obeys the Cauchy relation lambda = mu, with mu = 2 E_s / 5 for the Van Gelder mapping at E_s (the

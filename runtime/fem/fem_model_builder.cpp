@@ -41,8 +41,9 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
     return std::nullopt;
   }
   if (mesh.tetrahedra.empty()) {
-    diagnostics.error(range, "the co-rotational FEM needs tetrahedra; the mesh has none (a surface mesh can only be "
-                             "simulated with springs)");
+    diagnostics.error(range,
+                      "a finite-element model needs tetrahedra; the mesh has none (a surface mesh can only be "
+                      "simulated with springs)");
     return std::nullopt;
   }
   const std::size_t count = mesh.tetrahedra.size();
@@ -66,6 +67,12 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
   setup.springs.adjacency_offset.assign(scaled.points.size() + 1, 0);
   auto geometry = element_geometry(scaled.points, scaled.tetrahedra, diagnostics);
   if (!geometry) return std::nullopt;
+  if (geometry->kind != spec.element) {
+    diagnostics.error(range, std::string("internal error: element kind '") + element_kind_row(spec.element).keyword +
+                                 "' has no geometry builder in runtime/fem (element_geometry builds '" +
+                                 element_kind_row(geometry->kind).keyword + "')");
+    return std::nullopt;
+  }
   setup.elements.geometry = std::move(*geometry);
   setup.mass = lumped_masses(scaled, spec.mass, diagnostics);
   if (setup.mass.empty()) return std::nullopt;
@@ -73,6 +80,7 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
     diagnostics.error(range, "damping ratio and Rayleigh stiffness damping must be finite and non-negative");
     return std::nullopt;
   }
+  build->term.prony = spec.prony;
   if (!add_element_term(setup, std::move(build->term), spec.damping_ratio, spec.rayleigh_stiffness, diagnostics))
     return std::nullopt;
   return setup;

@@ -14,7 +14,8 @@
 namespace fmpc::sim {
 
 struct FemModelSpec {
-  int law = default_fem_law().law;  // the element law (its index in element_law_rows())
+  int law = default_fem_law().law;            // the element law (its index in element_law_rows())
+  int element = default_element_kind().kind;  // the element kind (its index in element_kind_rows())
   // Pa: one value for every element, or one per tetrahedron of the mesh.
   std::vector<double> youngs_modulus;
   std::vector<double> poisson_ratio;  // one value, or one per tetrahedron; the law's builder checks the range
@@ -22,6 +23,7 @@ struct FemModelSpec {
   double damping_ratio = 0.0;       // zeta of each element's own fastest mode (assign_element_damping)
   double rayleigh_stiffness = 0.0;  // beta (s), added to every element's
   double length_unit = 1.0;         // metres per mesh unit
+  std::vector<PronyTerm> prony;     // viscoelasticity on the law; empty: elastic
 };
 
 // Scales the points to metres, checks every element (positive volume: repair the mesh first) and the material (the

@@ -109,7 +109,9 @@ class GpuEngine final : public sim::SteppingEngine {
   // sample of the 20^3 box, mostly page faults (H100 machine).
   sim::ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const override;
 
-  int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
+  int implicit_max_iterations_used() const override { return implicit_log_.report().iterations_max; }
+  sim::ImplicitSolverReport implicit_solver(std::size_t) const override { return implicit_log_.report(); }
+  std::vector<sim::ImplicitStepRecord> take_implicit_steps(std::size_t) override { return implicit_log_.take(); }
   bool persistent_launch() const { return plan_.persistent(); }
   bool cluster_launch() const { return !plan_.cluster_blocks.empty(); }
 
@@ -160,6 +162,10 @@ class GpuEngine final : public sim::SteppingEngine {
 
   bool enqueue_strain_lookup(const DeviceState<Real>& state, DiagnosticList& diagnostics);
 
+  // The stateful element terms' update after an accepted step, at `state` (the step's end); with `jump`, the history
+  // of a jump from rest to it (once, after upload: sim::prony_constants at dt = 0).
+  bool enqueue_point_state_update(const DeviceState<Real>& state, bool jump, DiagnosticList& diagnostics);
+
   // The probe kernels' time origin for the chunk about to be enqueued or replayed.
   bool set_step_base(DiagnosticList& diagnostics);
 
@@ -168,12 +174,14 @@ class GpuEngine final : public sim::SteppingEngine {
   bool read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics);
 
   // One implicit Euler step: assemble, then Eigen's preconditioned conjugate gradient (same iteration, same
-  // stopping rule, same warning as the CPU backend), then v += dv, x += h v. The host reads |r|^2 once per
-  // iteration, so implicit steps are never captured into graphs.
+  // stopping rule, same warning as the CPU backend) stopping on the device, in one cooperative launch
+  // (LaunchPlan::cg_grid_blocks) or in chunks of per-iteration launches, then v += dv, x += h v; with tools, the
+  // contact's linear part solved again until its active set stays, as on the CPU. The host reads the solver's
+  // scalars once per launch or chunk, so implicit steps are never captured into graphs.
   bool implicit_solve(DiagnosticList& diagnostics);
-  // One solve of the assembled system (x = dv), warned about as on the CPU when it stops at its cap; at_rest where the
-  // right-hand side is zero to double precision (nothing solved: the step changes nothing).
-  bool conjugate_gradient(const ImplicitArguments<Real>& a, bool& at_rest, DiagnosticList& diagnostics);
+  // One solve of the assembled system (x = dv) into `scalars`.
+  bool conjugate_gradient(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
+                          DiagnosticList& diagnostics);
 
   VerletArguments<Real> verlet_arguments() const;
 
@@ -278,9 +286,9 @@ class GpuEngine final : public sim::SteppingEngine {
   DeviceArray<double> implicit_rest_, implicit_blocks_, implicit_diagonal_, implicit_jacobi_, implicit_rhs_;
   DeviceArray<double> cg_x_, cg_r_, cg_z_, cg_p_, cg_ap_, cg_partial_;
   DeviceArray<ConjugateGradientScalars> cg_scalars_;
+  int cg_previous_iterations_ = 0;  // the last solve's iterations: the first chunk's length (per-iteration launches)
   unsigned long long step_base_host_ = 0;
-  int implicit_iterations_max_ = 0;
-  bool cg_warning_given_ = false;
+  sim::ImplicitSolverLog implicit_log_;  // implicit Euler's solves (a batch of one scene)
   DeviceState<Real> state_[2];
   // The state at the last check (checkpoint_step_): slot checkpoint_slot_ of checkpoint_ (checkpoint_slot), which
   // has plan_.persistent_checks slots on the cooperative grid.
@@ -308,6 +316,7 @@ class GpuEngine final : public sim::SteppingEngine {
     DeviceArray<Real> damping;
     DeviceArray<double> damping_d;
     DeviceArray<unsigned char> linearisation;
+    DeviceArray<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
   };
   DeviceArray<Real> rest_inverse_, rest_volume_;
   DeviceArray<double> rest_inverse_d_, rest_volume_d_;
@@ -318,7 +327,7 @@ class GpuEngine final : public sim::SteppingEngine {
   // The tools' contact (set_contact, set_tool_shapes): loads_.contact points at these.
   DeviceArray<kernels::ToolShape<Real>> tools_;
   DeviceArray<Real> contact_stiffness_;
-  DeviceArray<double> contact_blocks_;         // implicit Euler's h^2 K_c, 6 per vertex
+  DeviceArray<double> contact_blocks_, contact_rhs_;  // implicit Euler's contact part: 6 and 3 per vertex
   DeviceArray<unsigned char> contact_active_;  // implicit Euler's contact set per vertex
   DeviceArray<unsigned int> contact_changes_;
   bool contact_warning_given_ = false;

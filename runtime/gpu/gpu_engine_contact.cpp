@@ -31,6 +31,7 @@ bool GpuEngine<Real>::set_contact(std::size_t, const std::vector<double>& stiffn
     FMPC_CUDA_CHECK(tools_.allocate(static_cast<std::size_t>(kernels::kMostTools)), diagnostics, false);
     if (scheme() == sim::Integrator::ImplicitEuler) {
       FMPC_CUDA_CHECK(contact_blocks_.allocate(6 * static_cast<std::size_t>(n_)), diagnostics, false);
+      FMPC_CUDA_CHECK(contact_rhs_.allocate(3 * static_cast<std::size_t>(n_)), diagnostics, false);
       FMPC_CUDA_CHECK(contact_active_.allocate(static_cast<std::size_t>(n_)), diagnostics, false);
       FMPC_CUDA_CHECK(contact_changes_.allocate(1), diagnostics, false);
     }

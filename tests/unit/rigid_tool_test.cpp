@@ -12,6 +12,7 @@
 #include "runtime/fem/fem_model_builder.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/mesh/generated_mesh.h"
+#include "tests/support/error_messages.h"
 #include "tests/support/hertz_contact.h"
 
 using namespace fmpc;
@@ -19,12 +20,7 @@ using namespace fmpc::sim;
 
 namespace {
 
-std::string errors_of(const DiagnosticList& diagnostics) {
-  std::string text;
-  for (const Diagnostic& d : diagnostics.items())
-    if (d.severity == Severity::Error) text += (text.empty() ? "" : "\n") + d.message;
-  return text;
-}
+using fmpc::testing::errors_of;
 
 // A 2 x 2 x 1 cm block of 10 kPa FEM tissue (cells of 2.5 mm), fixed at its base, and a sphere of 3 mm above the
 // middle of its top face.

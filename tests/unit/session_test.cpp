@@ -15,6 +15,7 @@
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
 #include "runtime/scene/scene_run.h"
+#include "tests/support/error_messages.h"
 
 using namespace fmpc;
 using fmpc::runtime::Session;
@@ -61,12 +62,7 @@ std::string scene_text(const std::string& rules, const std::string& extra = "") 
          extra;
 }
 
-std::string errors_of(const DiagnosticList& diagnostics) {
-  std::string text;
-  for (const Diagnostic& d : diagnostics.items())
-    if (d.severity == Severity::Error) text += (text.empty() ? "" : "\n") + d.message;
-  return text;
-}
+using fmpc::testing::errors_of;
 
 }  // namespace
 
