@@ -25,7 +25,8 @@
 #               and 20^3 small box; reports as text in $OUT/profile_*.txt
 #   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
 #               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540); the
-#               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run
+#               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run;
+#               FUZZ_TARGETS="fll fcl ..." runs only those
 #   evaluator   bench/gpu/evaluator_gpu_bench.cu (nvcc alone): the generated CUDA evaluators (type-1 and interval
 #               type-2, float and double) and table lookups (2-D double and float; 5-D double and float at 9^5,
 #               7^5, 5^5; each in the grid and the sector-packed layout) on the liver rule base, each checked
@@ -322,16 +323,25 @@ simulator_section() {
     if [[ -z "$sanitizer" ]]; then
       fail "compute-sanitizer not found"
     else
+      # The four tools at once (each instruments the same small scenes; racecheck alone takes minutes), each under
+      # SANITIZER_SECONDS (default 480): a tool cut off is reported as such with the last test it started.
       local tool
+      local -A pids=()
       for tool in memcheck racecheck initcheck synccheck; do
         local extra=()
         [[ $tool == memcheck ]] && extra=(--leak-check full)
-        "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
-          "$BUILD/tests/gpu/fmpc_gpu_tests" sanitizer > "$OUT/sanitizer_$tool.log" 2>&1
+        timeout "${SANITIZER_SECONDS:-480}" "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
+          "$BUILD/tests/gpu/fmpc_gpu_tests" sanitizer > "$OUT/sanitizer_$tool.log" 2>&1 &
+        pids[$tool]=$!
+      done
+      for tool in memcheck racecheck initcheck synccheck; do
+        wait "${pids[$tool]}"
         local rc=$?
         local errors
         errors=$(grep -E 'ERROR SUMMARY|RACECHECK SUMMARY' "$OUT/sanitizer_$tool.log" | tail -1)
-        if [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$OUT/sanitizer_$tool.log"; then
+        if [[ $rc -eq 124 ]]; then
+          fail "$tool: cut off after ${SANITIZER_SECONDS:-480} s in '$(grep -E '^\[ RUN' "$OUT/sanitizer_$tool.log" | tail -1)'"
+        elif [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$OUT/sanitizer_$tool.log"; then
           record "$tool: ok (${errors:-no summary line})"
         else
           fail "$tool: exit $rc (${errors:-see sanitizer_$tool.log})"
@@ -590,8 +600,14 @@ fuzz_section() {
   fi
   # The targets carried (run_fuzzers.sh's own default list names targets a sanitizer build may lack: the Python
   # module's, without -DFMPC_PYTHON=ON).
-  local program targets=()
-  for program in "$UNPACKED"/bin/fuzz_*; do targets+=("${program##*/fuzz_}"); done
+  # FUZZ_TARGETS (space-separated names, e.g. "fll fcl python_arguments") narrows them, so that a call's cores go to
+  # the targets that still need CPU time.
+  local program name targets=()
+  for program in "$UNPACKED"/bin/fuzz_*; do
+    name=${program##*/fuzz_}
+    if [[ -z "${FUZZ_TARGETS:-}" || " $FUZZ_TARGETS " == *" $name "* ]]; then targets+=("$name"); fi
+  done
+  [[ ${#targets[@]} -gt 0 ]] || { fail "FUZZ_TARGETS='${FUZZ_TARGETS:-}' names no carried target"; return 1; }
   local jobs=${FUZZ_JOBS:-$(( JOBS / ${#targets[@]} > 0 ? JOBS / ${#targets[@]} : 1 ))}
   FMPC_FUZZ_BINARIES="$UNPACKED/bin" FMPC_FUZZ_SEEDS="$UNPACKED/seeds" \
     bash "$ROOT/tests/fuzz/run_fuzzers.sh" --jobs "$jobs" "$BUILD" "${FUZZ_SECONDS:-540}" "${targets[@]}" \
