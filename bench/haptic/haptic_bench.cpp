@@ -126,6 +126,11 @@ struct ModeResult {
   std::size_t overruns = 0;
   double real_time_factor = 0.0;
   double final_force = 0.0, peak_force = 0.0;  // N, magnitudes
+  // Implicit Euler's solves (all contact rounds of a step counted): iterations per step, the largest residual.
+  double iterations_mean = 0.0;
+  int iterations_max = 0;
+  double residual_max = 0.0;
+  std::size_t capped_steps = 0;
 };
 
 bool run_mode(const Options& options, const std::string& mode, ModeResult& result) {
@@ -194,6 +199,14 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
   result.overruns = static_cast<std::size_t>(
       std::count_if(latencies.begin(), latencies.end(), [](double ms) { return ms > 1e3 * kTick; }));
   result.real_time_factor = static_cast<double>(result.ticks) * kTick / result.wall;
+  if (mode == "implicit") {
+    const fmpc::sim::ImplicitSolverReport solver = session->simulation().implicit_solver(0);
+    result.iterations_mean =
+        static_cast<double>(solver.iterations_total) / static_cast<double>(std::max<std::size_t>(1, solver.steps));
+    result.iterations_max = solver.iterations_max;
+    result.residual_max = solver.residual_max;
+    result.capped_steps = solver.capped_steps;
+  }
   // The sphere reaches the surface at kPressTime kStartGap / (kStartGap + kDepth): a run past twice that which felt
   // nothing is broken, not slow.
   const double touch = kPressTime * kStartGap / (kStartGap + kDepth);
@@ -294,6 +307,11 @@ int main(int argc, char** argv) {
         mode.c_str(), options.backend.c_str(), result.vertices, result.dt, result.steps_per_tick, result.ticks,
         result.wall, result.cpu, result.p50, result.p99, result.max, result.overruns, result.real_time_factor,
         result.final_force, result.peak_force);
+    if (mode == "implicit")
+      std::printf(
+          "  implicit solves: %.1f iterations per step (at most %d), largest relative residual %.3g, %zu "
+          "steps at the cap\n",
+          result.iterations_mean, result.iterations_max, result.residual_max, result.capped_steps);
     results.push_back(result);
   }
   std::printf(
@@ -306,12 +324,14 @@ int main(int argc, char** argv) {
   if (!options.out.empty()) {
     std::ofstream csv(std::filesystem::path(options.out) / "haptic.csv");
     csv << "mode,backend,precision,cells,vertices,dt_s,steps_per_tick,ticks,wall_s,cpu_s,setup_s,latency_p50_ms,"
-           "latency_p99_ms,latency_max_ms,overruns,real_time_factor,final_force_N,peak_force_N\n";
+           "latency_p99_ms,latency_max_ms,overruns,real_time_factor,final_force_N,peak_force_N,iterations_mean,"
+           "iterations_max,residual_max,capped_steps\n";
     for (const ModeResult& r : results)
       csv << r.mode << "," << options.backend << "," << options.precision << "," << options.cells << "," << r.vertices
           << "," << r.dt << "," << r.steps_per_tick << "," << r.ticks << "," << r.wall << "," << r.cpu << "," << r.setup
           << "," << r.p50 << "," << r.p99 << "," << r.max << "," << r.overruns << "," << r.real_time_factor << ","
-          << r.final_force << "," << r.peak_force << "\n";
+          << r.final_force << "," << r.peak_force << "," << r.iterations_mean << "," << r.iterations_max << ","
+          << r.residual_max << "," << r.capped_steps << "\n";
   }
   return 0;
 }
