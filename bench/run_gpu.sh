@@ -17,6 +17,10 @@
 #               and cpu, and SOFA's liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as
 #               liver-CUDA.scn) on CUDA and on the CPU; the demo's 12-patient cohort (--patients) on both,
 #               cohort.csv compared; large boxes (240^3 springs, 120^3 FEM) end to end; outputs under $OUT/scenes
+#   haptic      the carried fmpc_haptic_bench (bench/haptic, from the same CUDA build as the carried fmpc: --prepare
+#               bundles it with fmpc) runs the 1 kHz haptic loop on the 20^3 block with the sphere tool, 30 s of wall
+#               time per mode (HAPTIC_SECONDS), implicit Euler and explicit substeps, on CUDA and on the CPU: per-tick
+#               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv), haptic.md
 #   setup       (only when asked: --only setup) bench/setup's fmpc_setup_bench on the GPU machine's cores: boxes of
 #               60^3, 120^3 and 240^3 cells (issue 13: 100M springs set up in 20 s, 64 bytes per spring at peak)
 #               with the model builder's breakdown and the simulators' peak, then 120^3 on one thread (same checksum)
@@ -47,7 +51,7 @@
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
 # device.txt, summary.md. Options: --skip-sanitizers, --quick (shorter benchmark), --evaluator-only (that section
-# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, evaluator, fuzz; the build
+# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, haptic, evaluator, fuzz; the build
 # runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses it). Exit status: 0
 # when every step passed.
 set -u -o pipefail
@@ -149,6 +153,13 @@ prepare_scenes() {
   local fmpc="${FMPC:-}"
   [[ -n "$fmpc" && -x "$fmpc" ]] || { echo "set FMPC=path/to/a CUDA build's fmpc for the scenes section" >&2; return 1; }
   bundle_program "$fmpc" fmpc || return 1
+  # The haptic section's benchmark from the same build (HAPTIC_BENCH=... names another).
+  local haptic="${HAPTIC_BENCH:-$(dirname "$fmpc")/../bench/haptic/fmpc_haptic_bench}"
+  if [[ -x "$haptic" ]]; then
+    bundle_program "$haptic" fmpc_haptic_bench || return 1
+  else
+    echo "no $haptic (build the target fmpc_haptic_bench): the haptic section will not run" >&2
+  fi
   mkdir -p "$PROGRAMS/fonts"
   cp /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf /usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf \
     "$PROGRAMS/fonts/" || { echo "no DejaVu fonts (Debian fonts-dejavu-core)" >&2; return 1; }
@@ -218,7 +229,7 @@ fi
 SKIP_SANITIZERS=0
 QUICK=0
 EVALUATOR_ONLY=0
-ONLY="tests,sanitizers,bench,scenes,evaluator"
+ONLY="tests,sanitizers,bench,scenes,haptic,evaluator"
 usage="usage: bash bench/run_gpu.sh [--prepare | --skip-sanitizers | --quick | --evaluator-only | --only LIST]"
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -231,8 +242,8 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | scenes | evaluator | fuzz | setup | profile | baseline) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator, fuzz, setup, profile, baseline)" >&2
+          tests | sanitizers | bench | scenes | haptic | evaluator | fuzz | setup | profile | baseline) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, haptic, evaluator, fuzz, setup, profile, baseline)" >&2
              exit 2 ;;
         esac
       done
@@ -458,6 +469,33 @@ scenes_section() {
   else
     fail "cohort: CUDA and CPU cohort.csv differ (scenes/cohort_{cuda,cpu}/cohort.csv)"
   fi
+}
+
+# The haptic loop (issue 27 item 4): fmpc_haptic_bench, built on the build machine with CUDA and carried, on CUDA and
+# on this machine's CPU, both modes each; the goal is p99 <= 1 ms on an H100.
+haptic_section() {
+  section "haptic: 1 kHz loop through fmpc::runtime's Session (bench/haptic)"
+  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc_haptic_bench" ]]; then
+    fail "no fmpc_haptic_bench in $CARRY/programs.tar.xz: build it in the CUDA build and run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare'"
+    return 1
+  fi
+  local seconds="${HAPTIC_SECONDS:-30}" backend
+  [[ $QUICK -eq 1 ]] && seconds=5
+  mkdir -p "$OUT/haptic"
+  : > "$OUT/haptic.md"
+  for backend in cuda cpu; do
+    mkdir -p "$OUT/haptic/$backend"
+    if "$UNPACKED/bin/fmpc_haptic_bench" --backend "$backend" --seconds "$seconds" --out "$OUT/haptic/$backend" \
+        > "$OUT/haptic/$backend.log" 2>&1; then
+      grep -E '^(implicit|explicit) on ' "$OUT/haptic/$backend.log" | tee -a "$SUMMARY"
+      grep -E '^\|' "$OUT/haptic/$backend.log" | awk -v first="$([[ -s "$OUT/haptic.md" ]] && echo 0 || echo 1)" \
+        'first == 1 || NR > 2' >> "$OUT/haptic.md"
+    else
+      tail -5 "$OUT/haptic/$backend.log"
+      fail "fmpc_haptic_bench --backend $backend (see haptic/$backend.log)"
+    fi
+  done
+  cat "$OUT/haptic.md" >> "$SUMMARY"
 }
 
 # The median of the numbers on stdin.
@@ -692,6 +730,7 @@ if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted p
   fi
 fi
 wanted scenes && scenes_section
+wanted haptic && haptic_section
 wanted evaluator && evaluator_section
 wanted fuzz && fuzz_section
 

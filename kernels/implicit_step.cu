@@ -4,6 +4,7 @@
 
 #include <cfloat>
 
+#include "kernels/implicit_contact_math.h"
 #include "kernels/step_device.cuh"
 #include "runtime/gpu/launch_plan.h"
 
@@ -168,6 +169,13 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
       jacobi[c] += system[kernels::symmetric_index(c, c)];
     }
   }
+  if (a.extra_blocks != nullptr) {
+    // The caller's linear part (ImplicitArguments::extra_blocks): its block on the diagonal, its values into b.
+    for (int c = 0; c < 3; ++c) {
+      b[c] += a.extra_rhs[3 * v + c];
+      jacobi[c] += a.extra_blocks[6 * v + kernels::symmetric_index(c, c)];
+    }
+  }
   if (a.elements.count > 0) {
     const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
     double kv[3] = {0.0, 0.0, 0.0}, element_diagonal[3] = {0.0, 0.0, 0.0};
@@ -208,6 +216,12 @@ __device__ void apply_row(const ImplicitArguments<Real>& a, int v) {
     for (int c = 0; c < 3; ++c) relative[c] = own[c] - (kernels::axis_fixed(other, c) ? 0.0 : a.p[3 * o + c]);
     double product[3];
     kernels::symmetric_multiply(a.blocks + 12 * s + 6, relative, product);
+    for (int c = 0; c < 3; ++c) sum[c] += product[c];
+  }
+  if (a.extra_blocks != nullptr) {
+    double free_own[3], product[3];
+    for (int c = 0; c < 3; ++c) free_own[c] = kernels::axis_fixed(held, c) ? 0.0 : own[c];
+    kernels::symmetric_multiply(a.extra_blocks + 6 * v, free_own, product);
     for (int c = 0; c < 3; ++c) sum[c] += product[c];
   }
   if (a.elements.count > 0) {
@@ -460,6 +474,39 @@ __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
   a.state.z[v] += h * a.state.vz[v];
 }
 
+// The tools' contact as the system's linear part (kernels/implicit_contact_math.h, as the CPU's ImplicitContact):
+// the vertex's active set at the state (predicted false) or after moving by h (v0 + dv) on its free axes with dv the
+// solution in x; a set that changes counts into *contact_changes; the vertex's part for its set into extra_blocks
+// and extra_rhs (zero for a vertex no tool can touch).
+template <typename Real>
+__global__ void contact_part_kernel(ImplicitArguments<Real> a, bool predicted) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count) return;
+  const double k = static_cast<double>(a.loads.contact.stiffness[v]);
+  double* block = a.extra_blocks + 6 * v;
+  double* rhs = a.extra_rhs + 3 * v;
+  if (!(k > 0.0)) {
+    if (predicted) return;
+    for (int i = 0; i < 6; ++i) block[i] = 0.0;
+    for (int c = 0; c < 3; ++c) rhs[c] = 0.0;
+    return;
+  }
+  const unsigned char held = a.loads.fixed[v];
+  const double x0[3] = {static_cast<double>(a.state.x[v]), static_cast<double>(a.state.y[v]),
+                        static_cast<double>(a.state.z[v])};
+  const double v0[3] = {static_cast<double>(a.state.vx[v]), static_cast<double>(a.state.vy[v]),
+                        static_cast<double>(a.state.vz[v])};
+  const auto set = static_cast<unsigned char>(
+      predicted ? kernels::predicted_contact_set(a.loads.contact, held, a.h, x0, v0, a.x + 3 * v)
+                : kernels::contact_set(a.loads.contact, x0[0], x0[1], x0[2], nullptr));
+  if (predicted) {
+    if (set == a.contact_active[v]) return;
+    atomicAdd(a.contact_changes, 1u);
+  }
+  a.contact_active[v] = set;
+  kernels::contact_system_part(a.loads.contact, set, k, a.h, x0, v0, held, block, rhs);
+}
+
 cudaError_t launch_dots(const double* first, const double* second, const double* third, const double* fourth, int count,
                         double* partial, ConjugateGradientScalars* scalars, CgStage stage, double tolerance, int limit,
                         cudaStream_t stream) {
@@ -582,6 +629,13 @@ cudaError_t launch_cg_persistent(const ImplicitArguments<Real>& a, int blocks, c
 }
 
 template <typename Real>
+cudaError_t launch_contact_part(const ImplicitArguments<Real>& a, bool predicted, cudaStream_t stream) {
+  if (a.vertex_count <= 0 || a.extra_blocks == nullptr) return cudaSuccess;
+  contact_part_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a, predicted);
+  return cudaGetLastError();
+}
+
+template <typename Real>
 cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_t stream) {
   if (a.vertex_count <= 0) return cudaSuccess;
   implicit_finish_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
@@ -594,6 +648,7 @@ cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_
   template cudaError_t launch_cg_iterations<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \
   template cudaError_t launch_cg_persistent<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \
   template cudaError_t cg_persistent_block_limit<Real>(int&);                                         \
+  template cudaError_t launch_contact_part<Real>(const ImplicitArguments<Real>&, bool, cudaStream_t); \
   template cudaError_t launch_implicit_finish<Real>(const ImplicitArguments<Real>&, cudaStream_t);
 FMPC_IMPLICIT_STEP_LAUNCHERS(float)
 FMPC_IMPLICIT_STEP_LAUNCHERS(double)

@@ -80,3 +80,6 @@ fmpc_unity_group(fmpc_tests tests_11
   unit/plot_test.cpp
   unit/sim_loads_test.cpp
   unit/packed_table_test.cpp)
+fmpc_unity_group(fmpc_tests tests_12
+  unit/rigid_tool_test.cpp
+  unit/session_test.cpp)

@@ -365,7 +365,15 @@ struct ImplicitArguments {
   double h;
   int vertex_count;
   int spring_count;
-  double* blocks;          // 12 per spring: K_s (6) then the system block (6)
+  double* blocks;  // 12 per spring: K_s (6) then the system block (6)
+  // A linear part of the system a caller fills (null: none): per vertex a symmetric block (6) added to its diagonal
+  // block and 3 values added to b, on the free axes (the tools' contact, launch_contact_part).
+  double* extra_blocks;
+  double* extra_rhs;
+  // The tools' contact (null without tools): per vertex its active set (bit t: tool t pushes it), and the count of
+  // sets launch_contact_part changed.
+  unsigned char* contact_active;
+  unsigned int* contact_changes;
   double* diagonal;        // per vertex: m + h (gamma0 + gamma1 |x - x0|); 1 for fixed vertices
   double* inverse_jacobi;  // 3 per vertex
   double* rhs;             // 3 per vertex, b
@@ -400,6 +408,12 @@ cudaError_t launch_cg_persistent(const ImplicitArguments<Real>& arguments, int b
 // Blocks of launch_cg_persistent resident at once on the device (0: no cooperative launches).
 template <typename Real>
 cudaError_t cg_persistent_block_limit(int& blocks);
+// The tools' contact as the system's linear part (kernels/implicit_contact_math.h): every vertex's active set at
+// the state (predicted false: the step's first set, every vertex's part written) or predicted from the solution in
+// x (the vertices whose set changed are counted into *contact_changes, preset by the caller, and get their new part).
+// Nothing without tools.
+template <typename Real>
+cudaError_t launch_contact_part(const ImplicitArguments<Real>& arguments, bool predicted, cudaStream_t stream);
 // v += dv, x += h v on the free vertices (x and v in Real, as the CPU backend).
 template <typename Real>
 cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& arguments, cudaStream_t stream);

@@ -253,7 +253,7 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                              "relative tolerance in (0, 1)");
   }
   if (diagnostics.error_count() != errors_before) return false;
-  return validate_loads(setup, diagnostics);
+  return validate_loads(setup, diagnostics) && validate_tools(setup, diagnostics);
 }
 
 }  // namespace fmpc::sim
