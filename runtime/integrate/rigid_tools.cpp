@@ -12,8 +12,6 @@ namespace fmpc::sim {
 
 namespace {
 
-bool finite_point(const Point3& p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
-
 std::string point_text(const Point3& p) {
   return "(" + format_number(p[0]) + ", " + format_number(p[1]) + ", " + format_number(p[2]) + ")";
 }
