@@ -75,8 +75,10 @@ SimulationSetup block_with_tools(bool fem, Precision precision, Integrator integ
 
 ToolPose at(double x, double y, double z, const ToolPose& like) { return ToolPose{{x, y, z}, like.orientation}; }
 
-// Both simulations pressed and dragged by the same poses, one per advance of `steps`.
-bool drive(Simulation& simulation, std::size_t steps, DiagnosticList& diagnostics) {
+// Both simulations pressed and dragged by the same poses, one per advance of `steps`; `touched`, where given, counts
+// the ticks at whose end each tool touched the tissue (under explicit integrators a penalty-pressed tip bounces, so
+// that at a given tick one tool may be out of contact).
+bool drive(Simulation& simulation, std::size_t steps, DiagnosticList& diagnostics, int* touched = nullptr) {
   const ToolPose tip = simulation.tool_poses().at(0), shaft = simulation.tool_poses().at(1);
   for (int tick = 1; tick <= 12; ++tick) {
     const double press = 0.0015 * std::min(1.0, tick / 6.0), slide = 0.0004 * tick;
@@ -86,6 +88,10 @@ bool drive(Simulation& simulation, std::size_t steps, DiagnosticList& diagnostic
             0, 1, at(shaft.position[0], shaft.position[1] + slide, shaft.position[2] - press, shaft), diagnostics) ||
         !simulation.advance(steps, diagnostics))
       return false;
+    if (touched) {
+      const std::vector<ToolReading> readings = simulation.tool_readings(0, diagnostics);
+      for (std::size_t t = 0; t < readings.size() && t < 2; ++t) touched[t] += readings[t].contacts > 0 ? 1 : 0;
+    }
   }
   return true;
 }
@@ -110,7 +116,8 @@ FMPC_GPU_TEST(tools_match_cpu, "tools posed between advances: every explicit int
         const auto cpu = Simulation::create(setup, diagnostics);
         const auto device = gpu_simulation(setup, diagnostics);
         FMPC_REQUIRE(cpu && device);
-        FMPC_REQUIRE(drive(*cpu, 40, diagnostics) && drive(*device, 40, diagnostics));
+        int touched[2] = {0, 0};
+        FMPC_REQUIRE(drive(*cpu, 40, diagnostics, touched) && drive(*device, 40, diagnostics));
         const double positions = max_difference(cpu->positions(diagnostics), device->positions(diagnostics));
         const std::vector<ToolReading> a = cpu->tool_readings(0, diagnostics),
                                        b = device->tool_readings(0, diagnostics);
@@ -119,11 +126,11 @@ FMPC_GPU_TEST(tools_match_cpu, "tools posed between advances: every explicit int
         line << (fem ? "FEM" : "springs") << ", " << to_string(integrator) << ", " << name_of(precision)
              << ": max |GPU - CPU| after 12 poses: " << positions << " m; tool forces " << forces << " N; tip "
              << a.at(0).force[2] << " N on " << a.at(0).contacts << " vertices, shaft " << a.at(1).force[2] << " N on "
-             << a.at(1).contacts;
+             << a.at(1).contacts << "; in contact at " << touched[0] << " and " << touched[1] << " of 12 ticks";
         note(line.str());
         FMPC_EXPECT(positions <= position_tolerance(precision));
         FMPC_EXPECT(forces == 0.0 || positions > 0.0);  // the same positions give the same readings
-        FMPC_EXPECT(a.at(0).contacts > 0 && a.at(1).contacts > 0);
+        FMPC_EXPECT(touched[0] > 0 && touched[1] > 0);
         FMPC_EXPECT(!diagnostics.has_errors());
       }
     }
