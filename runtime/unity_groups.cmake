@@ -57,6 +57,7 @@ fmpc_unity_group(fmpc_runtime runtime_scene_file
   scene/cohort.cpp)
 fmpc_unity_group(fmpc_runtime runtime_scene_run
   scene/scene_builder.cpp
+  scene/scene_meshing.cpp
   scene/scene_recorder.cpp
   scene/scene_run.cpp
   scene/scene_state.cpp

@@ -79,3 +79,7 @@ fmpc_unity_group(fmpc_tests tests_11
   unit/plot_test.cpp
   unit/sim_loads_test.cpp
   unit/packed_table_test.cpp)
+fmpc_unity_group(fmpc_tests tests_12
+  unit/volume_mesher_test.cpp
+  unit/surface_readers_test.cpp
+  unit/scene_meshing_test.cpp)

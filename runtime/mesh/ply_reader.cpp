@@ -2,6 +2,7 @@
 #include <cstring>
 #include <vector>
 
+#include "diagnostics/number_format.h"
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/mesh/text_cursor.h"
 
@@ -246,7 +247,7 @@ bool PlyParser::read_element(const PlyElement& element) {
       if (!read_value(property.count_type, value)) return false;
       note_line();
       if (!(value >= 0.0 && value <= 1000.0) || value != std::floor(value)) {
-        error_at(line, element.name + " " + std::to_string(item) + ": list length " + std::to_string(value) +
+        error_at(line, element.name + " " + std::to_string(item) + ": list length " + format_number(value) +
                            " is not a count from 0 to 1000; fix the file");
         return false;
       }
@@ -256,7 +257,7 @@ bool PlyParser::read_element(const PlyElement& element) {
         if (!read_value(property.type, value)) return false;
         polygon.push_back(static_cast<std::int64_t>(value));
         if (value != std::floor(value) || value < 0.0 || value >= static_cast<double>(mesh_.points.size())) {
-          error_at(line, "face " + std::to_string(item) + " refers to vertex " + std::to_string(value) +
+          error_at(line, "face " + std::to_string(item) + " refers to vertex " + format_number(value) +
                              " but the file has " + std::to_string(mesh_.points.size()) +
                              " vertices (0-based); fix the face");
           return false;

@@ -30,6 +30,10 @@ struct SizeField {
   std::vector<SizeSegment> sources;
 };
 
+// The mean length of a triangle surface's edges (each counted once per triangle): the default far size, so that the
+// volume is as fine as the surface it comes from.
+double mean_edge_length(const Mesh& surface);
+
 double distance_to_segment(const Point3& p, const SizeSegment& segment);
 // h(x) = min(size_far, size_near + grading * max(0, d(x) - near_distance)), d the distance to the nearest source;
 // size_far everywhere without sources.

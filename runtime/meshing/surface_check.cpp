@@ -21,14 +21,18 @@ struct EdgeUse {
   }
 };
 
+// A triangle with a repeated vertex is reported once as such and left out of the edge and fan checks, which it
+// would otherwise fail again.
+bool repeats_vertex(const Triangle& tri) { return tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]; }
+
 std::vector<EdgeUse> edge_uses(const Mesh& surface) {
   std::vector<EdgeUse> uses;
   uses.reserve(3 * surface.triangles.size());
   for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
     const Triangle& tri = surface.triangles[t];
+    if (repeats_vertex(tri)) continue;
     for (std::size_t k = 0; k < 3; ++k) {
       const std::int32_t a = tri[k], b = tri[(k + 1) % 3];
-      if (a == b) continue;
       uses.push_back({std::min(a, b), std::max(a, b), static_cast<std::int32_t>(t), a < b});
     }
   }
@@ -63,7 +67,7 @@ class DefectReport {
 };
 
 std::string edge_name(std::int32_t a, std::int32_t b) {
-  return "edge " + std::to_string(a) + "-" + std::to_string(b);
+  return "the edge from vertex " + std::to_string(a) + " to vertex " + std::to_string(b) + " (0-based)";
 }
 
 // Triangles a vertex belongs to: CSR offsets over the vertices.
@@ -76,12 +80,15 @@ VertexTriangles vertex_triangles(const Mesh& surface) {
   VertexTriangles out;
   out.offset.assign(surface.points.size() + 1, 0);
   for (const Triangle& tri : surface.triangles)
-    for (const auto v : tri) ++out.offset[static_cast<std::size_t>(v) + 1];
+    if (!repeats_vertex(tri))
+      for (const auto v : tri) ++out.offset[static_cast<std::size_t>(v) + 1];
   std::partial_sum(out.offset.begin(), out.offset.end(), out.offset.begin());
   out.triangle.resize(out.offset.back());
   std::vector<std::size_t> fill(out.offset.begin(), out.offset.end() - 1);
   for (std::size_t t = 0; t < surface.triangles.size(); ++t)
-    for (const auto v : surface.triangles[t]) out.triangle[fill[static_cast<std::size_t>(v)]++] = static_cast<std::int32_t>(t);
+    if (!repeats_vertex(surface.triangles[t]))
+      for (const auto v : surface.triangles[t])
+        out.triangle[fill[static_cast<std::size_t>(v)]++] = static_cast<std::int32_t>(t);
   return out;
 }
 
@@ -166,9 +173,9 @@ void report_flipped(const Mesh& surface, const std::vector<EdgeUse>& uses, Defec
           break;
         }
       report.add(report.triangle_range(t),
-                 report.triangle_name(t) + " is flipped" + against + " (" + std::to_string(minority_count) + " of the " +
-                     std::to_string(queue.size()) + " triangles of its part are oriented against the rest); "
-                     "reverse its vertex order");
+                 report.triangle_name(t) + " is flipped" + against + " (triangles oriented against the rest of "
+                     "their part: " + std::to_string(minority_count) + " of " + std::to_string(queue.size()) +
+                     "); reverse its vertex order");
     }
   }
 }
@@ -187,7 +194,7 @@ SourceRange triangle_range(const Mesh& surface, std::size_t t) {
 
 std::string triangle_name(const Mesh& surface, std::size_t t) {
   const SourceRange range = triangle_range(surface, t);
-  return "triangle " + std::to_string(t) + (range.valid() ? " (line " + std::to_string(range.line) + ")" : "");
+  return "triangle " + std::to_string(t) + (range.valid() ? " (line " + std::to_string(range.line) + ")" : " (0-based)");
 }
 
 void reverse_triangles(Mesh& surface) {
@@ -210,13 +217,13 @@ SurfaceCheck check_closed_surface(const Mesh& surface, DiagnosticList& diagnosti
     for (const auto v : tri) used[static_cast<std::size_t>(v)] = 1;
   for (std::size_t v = 0; v < used.size(); ++v)
     if (!used[v])
-      report.add(file_range, "vertex " + std::to_string(v) + " belongs to no triangle; remove it (a surface to mesh "
+      report.add(file_range, "vertex " + std::to_string(v) + " (0-based) belongs to no triangle; remove it (a surface to mesh "
                                                               "has only the vertices of its triangles)");
   // Degenerate triangles: a repeated vertex, or three corners on a line (area <= 1e-12 of the squared longest edge).
   for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
     const Triangle& tri = surface.triangles[t];
     const auto name = report.triangle_name(static_cast<std::int32_t>(t));
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
+    if (repeats_vertex(tri)) {
       report.add(report.triangle_range(static_cast<std::int32_t>(t)),
                  name + " repeats a vertex (" + std::to_string(tri[0]) + ", " + std::to_string(tri[1]) + ", " +
                      std::to_string(tri[2]) + "); remove it");
@@ -245,19 +252,19 @@ SurfaceCheck check_closed_surface(const Mesh& surface, DiagnosticList& diagnosti
       for (std::size_t k = i; k < j; ++k)
         list += (k == i ? "" : k + 1 == j ? " and " : ", ") + std::to_string(uses[k].triangle);
       report.add(report.triangle_range(uses[i].triangle),
-                 edge + " is non-manifold: " + std::to_string(j - i) + " triangles (" + list +
-                     ") share it; a closed surface has exactly two on every edge");
+                 "the surface is non-manifold at " + edge + ": " + std::to_string(j - i) + " triangles share it (0-based: " + list +
+                     "); a closed surface has exactly two on every edge");
     }
     i = j;
   }
   // Vertices whose triangles form several fans: two parts touching at a point.
   const VertexTriangles around = vertex_triangles(surface);
   for (std::size_t v = 0; v < surface.points.size(); ++v) {
-    if (!used[v]) continue;
+    if (around.offset[v + 1] == around.offset[v]) continue;
     const std::size_t fans = fan_count(surface, around, v);
     if (fans > 1)
       report.add(report.triangle_range(around.triangle[around.offset[v]]),
-                 "vertex " + std::to_string(v) + " is non-manifold: its triangles form " + std::to_string(fans) +
+                 "vertex " + std::to_string(v) + " (0-based) is non-manifold: its triangles form " + std::to_string(fans) +
                      " separate fans (parts of the surface touch at this point); separate the parts");
   }
   report_flipped(surface, uses, report);

@@ -15,8 +15,9 @@ void report_self_intersections(const Mesh& surface, const std::vector<std::size_
   if (triangles.size() > kMaxSurfaceDefectsListed) list += ", ...";
   for (std::size_t i = 0; i < triangles.size() && i < kMaxSurfaceDefectsListed; ++i)
     diagnostics.error(triangle_range(surface, triangles[i]),
-                      triangle_name(surface, triangles[i]) + " intersects another part of the surface (" +
-                          std::to_string(triangles.size()) + " triangles do: " + list + ")",
+                      triangle_name(surface, triangles[i]) + " intersects another part of the surface" +
+                          (i > 0 ? std::string()
+                                 : " (" + std::to_string(triangles.size()) + " triangles do: " + list + ")"),
                       i > 0 ? std::vector<std::string>{} : std::vector<std::string>{"fix the surface, or set mesh.smooth_intersections: true (fmpc mesh --smooth-intersections) "
                        "to move their vertices toward their neighbours until the surface is free of them"});
   if (triangles.size() > kMaxSurfaceDefectsListed)

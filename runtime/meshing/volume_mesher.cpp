@@ -87,6 +87,8 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
     }
     result.untangling = untangle_surface(surface, std::move(*intersecting), diagnostics);
     if (!result.untangling) return std::nullopt;
+    DiagnosticList none;  // the moved surface has the same triangles: still closed and outward
+    result.surface = check_closed_surface(surface, none);
     diagnostics.warning(file_range, "surface-smoothed",
                         std::to_string(result.untangling->intersecting_triangles) +
                             " triangles intersected other parts of the surface; smoothing moved " +

@@ -59,6 +59,14 @@ struct VolumeMesh {
   TetrahedronQuality quality;
 };
 
+// A meshing as a scene build records it for the summary: the result (its mesh moved out), the options as used
+// (defaults filled in, the probe's sources added) and the wall time.
+struct MeshingRun {
+  VolumeMesh result;
+  VolumeMeshOptions options;
+  double seconds = 0.0;
+};
+
 // Whether this build has the mesher (FMPC_MESHER, on by default: CMake's libtet1.5-dev).
 bool volume_mesher_available();
 

@@ -20,6 +20,7 @@
 #include "runtime/mesh/mesh_check.h"
 #include "runtime/mesh/mesh_refinement.h"
 #include "runtime/mesh/mesh_reader.h"
+#include "runtime/scene/scene_meshing.h"
 #include "runtime/scene/spring_model_builder.h"
 
 namespace fmpc::sim {
@@ -88,8 +89,9 @@ std::string against_mesh_size(double length, double size) {
          " mesh units, its bounding box's diagonal)";
 }
 
-std::optional<Mesh> load_mesh(const Scene& scene, DiagnosticList& diagnostics) {
+std::optional<Mesh> load_mesh(const Scene& scene, BuiltScene& built, DiagnosticList& diagnostics) {
   switch (scene.mesh.kind) {
+    case SceneMesh::Kind::Surface: return mesh_scene_surface(scene, built, diagnostics);
     case SceneMesh::Kind::File: {
       DiagnosticList mesh_diagnostics;
       auto mesh = read_mesh_file(scene.mesh.file, mesh_diagnostics);
@@ -734,7 +736,7 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
                                       const LoadedRules* rules) {
   const std::size_t errors = diagnostics.error_count();
   BuiltScene built;
-  auto mesh = load_mesh(scene, diagnostics);
+  auto mesh = load_mesh(scene, built, diagnostics);
   if (!mesh) return std::nullopt;
   const MeshRepairResult repair = repair_mesh(*mesh);
   std::vector<std::string> repaired;

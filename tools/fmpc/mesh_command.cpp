@@ -65,16 +65,6 @@ std::optional<sim::SizeSegment> parse_near(const std::string& text, DiagnosticLi
   return segment;
 }
 
-// The surface's mean edge length: the default size_far, so that the volume is as fine as the surface it comes from.
-double mean_edge_length(const sim::Mesh& surface) {
-  double sum = 0.0;
-  for (const sim::Triangle& t : surface.triangles)
-    for (std::size_t k = 0; k < 3; ++k)
-      sum += sim::distance(surface.points[static_cast<std::size_t>(t[k])],
-                           surface.points[static_cast<std::size_t>(t[(k + 1) % 3])]);
-  return surface.triangles.empty() ? 0.0 : sum / (3.0 * static_cast<double>(surface.triangles.size()));
-}
-
 // The mesh as VTK XML in mesh units, each tetrahedron with its radius-edge ratio and smallest dihedral angle.
 std::optional<std::string> vtu_with_quality(const sim::Mesh& mesh, DiagnosticList& diagnostics) {
   sim::VtuOptions options;
@@ -124,7 +114,7 @@ int run_mesh(const MeshOptions& options) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;
   }
-  mesh_options.size.size_far = options.size_far.value_or(mean_edge_length(*surface));
+  mesh_options.size.size_far = options.size_far.value_or(sim::mean_edge_length(*surface));
   mesh_options.size.size_near = options.size_near.value_or(mesh_options.size.size_far);
   sim::SizeOptionNames names{"--size-near", "--size-far", "--near-distance", "--grading"};
   for (const std::string& problem : sim::size_field_problems(mesh_options.size, names))

@@ -1,0 +1,81 @@
+#include "runtime/scene/scene_meshing.h"
+
+#include <chrono>
+#include <limits>
+
+#include "runtime/mesh/mesh_reader.h"
+
+namespace fmpc::sim {
+
+std::vector<SizeSegment> probe_size_sources(const Scene& scene, const Mesh& surface) {
+  std::vector<SizeSegment> sources;
+  if (!scene.probe) return sources;
+  const SceneProbe& probe = *scene.probe;
+  Point3 travel{0.0, 0.0, 0.0};
+  if (probe.mode == ProbeLoad::Mode::Displacement)
+    for (std::size_t a = 0; a < 3; ++a) travel[a] = probe.target[a] / scene.mesh.unit;
+  std::vector<Point3> starts;
+  if (probe.by_ray) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const Triangle& t : surface.triangles) {
+      const auto hit = ray_triangle_hit(probe.ray_origin, probe.ray_direction,
+                                        surface.points[static_cast<std::size_t>(t[0])],
+                                        surface.points[static_cast<std::size_t>(t[1])],
+                                        surface.points[static_cast<std::size_t>(t[2])]);
+      if (hit && *hit < best) best = *hit;
+    }
+    if (best < std::numeric_limits<double>::infinity())
+      starts.push_back({probe.ray_origin[0] + best * probe.ray_direction[0],
+                        probe.ray_origin[1] + best * probe.ray_direction[1],
+                        probe.ray_origin[2] + best * probe.ray_direction[2]});
+  } else {
+    for (const auto index : probe.indices)
+      if (index >= 0 && static_cast<std::size_t>(index) < surface.points.size())
+        starts.push_back(surface.points[static_cast<std::size_t>(index)]);
+  }
+  for (const Point3& start : starts)
+    sources.push_back({start, {start[0] + travel[0], start[1] + travel[1], start[2] + travel[2]}});
+  return sources;
+}
+
+std::optional<Mesh> mesh_scene_surface(const Scene& scene, BuiltScene& built, DiagnosticList& diagnostics) {
+  std::string contents;
+  DiagnosticList read_diagnostics;
+  auto surface = read_mesh_file(scene.mesh.file, read_diagnostics, &contents);
+  diagnostics.append(read_diagnostics);
+  if (!surface) {
+    if (read_diagnostics.empty())
+      diagnostics.error(scene.range_of("mesh.surface"), "mesh.surface: cannot read '" + scene.mesh.file + "'");
+    return std::nullopt;
+  }
+  // Binary STL and PLY bodies have no lines to quote; ASCII files do.
+  built.sources.emplace_back(scene.mesh.file, std::move(contents));
+  MeshingRun run;
+  run.options = scene.mesh.surface.options;
+  SizeField& size = run.options.size;
+  if (!scene.mesh.surface.size_far_given) size.size_far = mean_edge_length(*surface);
+  if (!scene.mesh.surface.size_near_given) size.size_near = size.size_far;
+  size.size_near = std::min(size.size_near, size.size_far);
+  const std::vector<SizeSegment> probe = probe_size_sources(scene, *surface);
+  size.sources.insert(size.sources.begin(), probe.begin(), probe.end());
+  if (scene.mesh.surface.size_near_given && size.sources.empty())
+    diagnostics.warning(scene.range_of("mesh.size_near"), "mesh-size-field",
+                        "mesh.size_near: the scene has no probe and no refine_near, so nothing is near: the mesh is "
+                        "size_far everywhere");
+  const auto start = std::chrono::steady_clock::now();
+  auto meshed = mesh_volume(std::move(*surface), run.options, diagnostics);
+  run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!meshed) {
+    diagnostics.error(scene.range_of("mesh.surface"),
+                      "mesh.surface: '" + scene.mesh.file + "' could not be meshed (above)");
+    return std::nullopt;
+  }
+  Mesh mesh = std::move(meshed->mesh);
+  meshed->mesh = Mesh{};
+  meshed->mesh.source = mesh.source;
+  run.result = std::move(*meshed);
+  built.meshing = std::move(run);
+  return mesh;
+}
+
+}  // namespace fmpc::sim
