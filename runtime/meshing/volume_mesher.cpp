@@ -136,6 +136,18 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
   mesh->triangles.clear();
   result.mesh = std::move(*mesh);
   result.quality = measure_quality(result.mesh, options.max_radius_edge_ratio, options.min_dihedral_degrees);
+  for (const Tetrahedron& t : result.mesh.tetrahedra) {
+    Point3 centroid{0.0, 0.0, 0.0};
+    for (const auto v : t)
+      for (std::size_t a = 0; a < 3; ++a) centroid[a] += result.mesh.points[static_cast<std::size_t>(v)][a] / 4.0;
+    result.above_size += element_shape(result.mesh, t).longest_edge > kSizeFieldSlack * size_at(options.size, centroid);
+  }
+  if (result.above_size > 0 && options.keep_surface)
+    diagnostics.warning(file_range, "mesh-size-field",
+                        std::to_string(result.above_size) + " of the " + std::to_string(result.mesh.tetrahedra.size()) +
+                            " tetrahedra have edges longer than 1.5 times the size field at their centroid: the "
+                            "kept surface's triangles are coarser than the field near them",
+                        {"set keep_surface: false (fmpc mesh: leave out --keep-surface) to let the mesher split them"});
   if (result.quality.non_positive > 0) {
     diagnostics.error(file_range, "internal error: the mesher produced " +
                                       std::to_string(result.quality.non_positive) +
@@ -163,7 +175,7 @@ std::string quality_text(const VolumeMesh& mesh, const VolumeMeshOptions& option
           " sources, graded at " + format_number(options.size.grading) + " to size_far " +
           format_number(options.size.size_far) + " (mesh units); surface " +
           (options.keep_surface ? "kept" : "refined") + "\n";
-  text += row("longest edge", q.longest_edge);
+  text += row("longest edge (" + std::to_string(mesh.above_size) + " above 1.5 x the size field)", q.longest_edge);
   text += row("radius-edge ratio (bound " + format_number(options.max_radius_edge_ratio) + ", " +
                   std::to_string(q.above_ratio_bound) + " above, " + std::to_string(q.above_ratio_bound_inside) +
                   " of them off the surface)",

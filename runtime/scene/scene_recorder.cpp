@@ -212,6 +212,7 @@ void add_meshing(JsonDocument& out, const MeshingRun& run) {
   out["size_sources"] = size.sources.size();
   out["keep_surface"] = run.options.keep_surface;
   out["seconds"] = run.seconds;
+  out["above_size_field"] = meshed.above_size;
   if (meshed.untangling) {
     out["smoothed_vertices"] = meshed.untangling->moved_vertices;
     out["smoothing_largest_move"] = meshed.untangling->largest_move;

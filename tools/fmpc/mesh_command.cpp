@@ -33,7 +33,7 @@ struct MeshOptions {
   double radius_edge_ratio = sim::kDefaultRadiusEdgeRatio;
   double min_dihedral = sim::kDefaultMinDihedralDegrees;
   bool smooth_intersections = false;
-  bool refine_surface = false;
+  bool keep_surface = false;
 };
 
 bool ends_with(const std::string& text, const std::string& suffix) {
@@ -93,7 +93,7 @@ int run_mesh(const MeshOptions& options) {
   mesh_options.max_radius_edge_ratio = options.radius_edge_ratio;
   mesh_options.min_dihedral_degrees = options.min_dihedral;
   mesh_options.smooth_intersections = options.smooth_intersections;
-  mesh_options.keep_surface = !options.refine_surface;
+  mesh_options.keep_surface = options.keep_surface;
   if (!(options.radius_edge_ratio >= 1.0))
     diagnostics.error(kCommandLine, "--radius-edge: " + format_number(options.radius_edge_ratio) +
                                         " is below 1; Delaunay refinement needs a bound of at least 1 (1.2 to 2 is usual)");
@@ -168,8 +168,9 @@ void register_mesh_command(CLI::App& app, int& exit_code) {
                       "Smallest dihedral angle (degrees) TetGen's optimisation seeks");
   command->add_flag("--smooth-intersections", options->smooth_intersections,
                    "Smooth the vertices of self-intersecting triangles until none intersect (reported)");
-  command->add_flag("--refine-surface", options->refine_surface,
-                   "Let the mesher split surface triangles where the size field asks (default: keep them as given)");
+  command->add_flag("--keep-surface", options->keep_surface,
+                   "Keep the surface's triangles as the boundary faces, refining only the interior (default: the "
+                   "mesher splits them where the size field asks)");
   command->callback([options, &exit_code] { exit_code = run_mesh(*options); });
 }
 
