@@ -12,17 +12,8 @@ namespace fmpc::sim {
 
 namespace {
 
-std::string three_digits(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", value);
-  return text;
-}
-
-std::string count_text(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.0f", value);
-  return text;
-}
+// A predicted count, rounded: "320000".
+std::string count_text(double value) { return std::to_string(std::llround(value)); }
 
 }  // namespace
 
@@ -76,7 +67,7 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
     result.surface.volume = -result.surface.volume;
     diagnostics.warning(file_range, "surface-orientation",
                         "the surface's triangles are oriented inwards (enclosed volume " +
-                            three_digits(result.surface.volume) + " with the normals reversed); meshed as if reversed");
+                            significant_digits(result.surface.volume, 3) + " with the normals reversed); meshed as if reversed");
   }
   auto intersecting = tetgen_self_intersections(surface, diagnostics);
   if (!intersecting) return std::nullopt;
@@ -93,7 +84,7 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
                         std::to_string(result.untangling->intersecting_triangles) +
                             " triangles intersected other parts of the surface; smoothing moved " +
                             std::to_string(result.untangling->moved_vertices) + " vertices by at most " +
-                            three_digits(result.untangling->largest_move) + " mesh units in " +
+                            significant_digits(result.untangling->largest_move, 3) + " mesh units in " +
                             std::to_string(result.untangling->rounds) + (result.untangling->rounds == 1 ? " round" : " rounds") +
                             " (smooth_intersections)");
   }
@@ -101,7 +92,7 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
   if (result.estimate.tetrahedra > static_cast<double>(options.max_tetrahedra)) {
     diagnostics.error(file_range, "the size field asks for about " + count_text(result.estimate.tetrahedra) +
                                       " tetrahedra (an estimate from the enclosed volume, " +
-                                      three_digits(result.estimate.volume) + " mesh units^3, and the sizes); the "
+                                      significant_digits(result.estimate.volume, 3) + " mesh units^3, and the sizes); the "
                                       "limit is " + std::to_string(options.max_tetrahedra) +
                                       ": raise size_far or size_near, or shrink near_distance");
     return std::nullopt;
@@ -160,16 +151,16 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
 std::string quality_text(const VolumeMesh& mesh, const VolumeMeshOptions& options) {
   const TetrahedronQuality& q = mesh.quality;
   const auto row = [](const std::string& name, const Distribution& d) {
-    return "  " + name + ": min " + three_digits(d.min) + ", 1% " + three_digits(d.p1) + ", 5% " +
-           three_digits(d.p5) + ", median " + three_digits(d.p50) + ", 95% " + three_digits(d.p95) + ", 99% " +
-           three_digits(d.p99) + ", max " + three_digits(d.max) + "\n";
+    return "  " + name + ": min " + significant_digits(d.min, 3) + ", 1% " + significant_digits(d.p1, 3) + ", 5% " +
+           significant_digits(d.p5, 3) + ", median " + significant_digits(d.p50, 3) + ", 95% " + significant_digits(d.p95, 3) + ", 99% " +
+           significant_digits(d.p99, 3) + ", max " + significant_digits(d.max, 3) + "\n";
   };
   std::string text = "meshed " + mesh.mesh.source + ": " + std::to_string(mesh.surface_vertices) +
                      " surface vertices, " + std::to_string(mesh.surface_triangles) + " triangles -> " +
                      std::to_string(mesh.mesh.points.size()) + " vertices, " + std::to_string(q.tetrahedra) +
                      " tetrahedra (estimated " + count_text(mesh.estimate.tetrahedra) + ")\n";
-  text += "  volume " + three_digits(q.volume) + " mesh units^3 (the surface encloses " +
-          three_digits(mesh.surface.volume) + ")\n";
+  text += "  volume " + significant_digits(q.volume, 3) + " mesh units^3 (the surface encloses " +
+          significant_digits(mesh.surface.volume, 3) + ")\n";
   text += "  size field: size_near " + format_number(options.size.size_near) + " within " +
           format_number(options.size.near_distance) + " of " + std::to_string(options.size.sources.size()) +
           " sources, graded at " + format_number(options.size.grading) + " to size_far " +

@@ -135,9 +135,7 @@ int run_mesh(const MeshOptions& options) {
   diagnostics.sort_by_position();
   print_diagnostics(diagnostics, sources, std::cerr);
   if (!meshed) return kExitErrors;
-  char took[32];
-  std::snprintf(took, sizeof took, "%.3g", seconds);
-  std::cout << sim::quality_text(*meshed, mesh_options) << "  meshing took " << took << " s; wrote "
+  std::cout << sim::quality_text(*meshed, mesh_options) << "  meshing took " << significant_digits(seconds, 3) << " s; wrote "
             << options.output << "\n";
   return kExitOk;
 }
