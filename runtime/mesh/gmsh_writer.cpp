@@ -1,5 +1,6 @@
-#include "diagnostics/number_format.h"
 #include "runtime/mesh/mesh_writer.h"
+
+#include "diagnostics/number_format.h"
 
 namespace fmpc::sim {
 
@@ -8,8 +9,8 @@ std::string gmsh_document(const Mesh& mesh) {
   text.reserve(mesh.points.size() * 64 + mesh.tetrahedra.size() * 48);
   for (std::size_t v = 0; v < mesh.points.size(); ++v) {
     const Point3& p = mesh.points[v];
-    text += std::to_string(v + 1) + " " + format_number(p[0]) + " " + format_number(p[1]) + " " +
-            format_number(p[2]) + "\n";
+    text += std::to_string(v + 1) + " " + format_number(p[0]) + " " + format_number(p[1]) + " " + format_number(p[2]) +
+            "\n";
   }
   text += "$EndNodes\n$Elements\n" + std::to_string(mesh.tetrahedra.size() + mesh.triangles.size()) + "\n";
   std::size_t number = 0;

@@ -30,13 +30,17 @@ std::optional<PlyType> ply_type(std::string_view name) {
 std::size_t type_bytes(PlyType type) {
   switch (type) {
     case PlyType::Int8:
-    case PlyType::UInt8: return 1;
+    case PlyType::UInt8:
+      return 1;
     case PlyType::Int16:
-    case PlyType::UInt16: return 2;
+    case PlyType::UInt16:
+      return 2;
     case PlyType::Int32:
     case PlyType::UInt32:
-    case PlyType::Float32: return 4;
-    case PlyType::Float64: return 8;
+    case PlyType::Float32:
+      return 4;
+    case PlyType::Float64:
+      return 8;
   }
   return 1;
 }
@@ -137,7 +141,8 @@ bool PlyParser::parse_header() {
         const std::string_view count_type = cursor_.next_token();
         const auto counted = ply_type(count_type);
         if (!counted || *counted == PlyType::Float32 || *counted == PlyType::Float64) {
-          error("list count type '" + std::string(count_type.substr(0, 40)) + "' is not an integer type; fix the "
+          error("list count type '" + std::string(count_type.substr(0, 40)) +
+                "' is not an integer type; fix the "
                 "header");
           return false;
         }
@@ -178,12 +183,24 @@ bool PlyParser::read_value(PlyType type, double& value) {
   std::uint64_t bits = 0;
   for (std::size_t i = 0; i < width; ++i) bits |= static_cast<std::uint64_t>(raw[i]) << (8 * i);
   switch (type) {
-    case PlyType::Int8: value = static_cast<std::int8_t>(bits); break;
-    case PlyType::UInt8: value = static_cast<double>(bits); break;
-    case PlyType::Int16: value = static_cast<std::int16_t>(bits); break;
-    case PlyType::UInt16: value = static_cast<double>(bits); break;
-    case PlyType::Int32: value = static_cast<std::int32_t>(bits); break;
-    case PlyType::UInt32: value = static_cast<double>(bits); break;
+    case PlyType::Int8:
+      value = static_cast<std::int8_t>(bits);
+      break;
+    case PlyType::UInt8:
+      value = static_cast<double>(bits);
+      break;
+    case PlyType::Int16:
+      value = static_cast<std::int16_t>(bits);
+      break;
+    case PlyType::UInt16:
+      value = static_cast<double>(bits);
+      break;
+    case PlyType::Int32:
+      value = static_cast<std::int32_t>(bits);
+      break;
+    case PlyType::UInt32:
+      value = static_cast<double>(bits);
+      break;
     case PlyType::Float32: {
       const auto narrow = static_cast<std::uint32_t>(bits);
       float f = 0.0f;
@@ -191,7 +208,9 @@ bool PlyParser::read_value(PlyType type, double& value) {
       value = static_cast<double>(f);
       break;
     }
-    case PlyType::Float64: std::memcpy(&value, &bits, sizeof value); break;
+    case PlyType::Float64:
+      std::memcpy(&value, &bits, sizeof value);
+      break;
   }
   return true;
 }
@@ -213,8 +232,9 @@ bool PlyParser::read_element(const PlyElement& element) {
     return false;
   }
   if (face && indices_property < 0) {
-    error_at(element.line, "the face element needs a list property 'vertex_indices' (or 'vertex_index'); fix the "
-                           "header");
+    error_at(element.line,
+             "the face element needs a list property 'vertex_indices' (or 'vertex_index'); fix the "
+             "header");
     return false;
   }
   // Every element takes at least one byte (binary) or two (ASCII "0 "): a count the rest of the file cannot hold is

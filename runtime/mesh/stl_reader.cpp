@@ -60,9 +60,9 @@ std::optional<Mesh> read_binary_stl(std::string_view bytes, const std::string& f
       for (std::size_t axis = 0; axis < 3; ++axis) {
         const float value = load_little_endian_float(record + 12 + 12 * corner + 4 * axis);
         if (!std::isfinite(value)) {
-          diagnostics.error(SourceRange{file, 0, 0, 0, 0},
-                            "binary STL triangle " + std::to_string(t) + " (0-based) has a coordinate that is not a "
-                            "finite number; fix the surface");
+          diagnostics.error(SourceRange{file, 0, 0, 0, 0}, "binary STL triangle " + std::to_string(t) +
+                                                               " (0-based) has a coordinate that is not a "
+                                                               "finite number; fix the surface");
           return std::nullopt;
         }
         p[axis] = static_cast<double>(value);
@@ -152,7 +152,8 @@ std::optional<Mesh> read_stl(std::string_view bytes, const std::string& file, Di
               std::to_string(kStlHeaderBytes + kStlTriangleBytes * load_little_endian_u32(bytes.data() + 80));
   diagnostics.error(SourceRange{file, 0, 0, 0, 0},
                     "this is neither an ASCII STL file (starting with 'solid') nor a binary one (84 + 50 x triangles "
-                    "bytes):" + detail + "; the file is truncated or not STL: export it again");
+                    "bytes):" +
+                        detail + "; the file is truncated or not STL: export it again");
   return std::nullopt;
 }
 

@@ -78,7 +78,8 @@ ElementShape element_shape(const Mesh& mesh, const Tetrahedron& t) {
   const Point3& b = mesh.points[static_cast<std::size_t>(t[1])];
   const Point3& c = mesh.points[static_cast<std::size_t>(t[2])];
   const Point3& d = mesh.points[static_cast<std::size_t>(t[3])];
-  const double edges[6] = {distance(a, b), distance(a, c), distance(a, d), distance(b, c), distance(b, d), distance(c, d)};
+  const double edges[6] = {distance(a, b), distance(a, c), distance(a, d),
+                           distance(b, c), distance(b, d), distance(c, d)};
   ElementShape shape;
   shape.radius_edge_ratio = circumradius(a, b, c, d) / *std::min_element(edges, edges + 6);
   shape.min_dihedral_degrees = min_dihedral_degrees(a, b, c, d);
@@ -102,10 +103,10 @@ TetrahedronQuality measure_quality(const Mesh& mesh, double ratio_bound, double 
     quality.volume += shape.volume;
     quality.non_positive += shape.volume <= 0.0;
     quality.above_ratio_bound += shape.radius_edge_ratio > ratio_bound;
-    quality.above_ratio_bound_inside += shape.radius_edge_ratio > ratio_bound && !on_boundary[static_cast<std::size_t>(t[0])] &&
-                                        !on_boundary[static_cast<std::size_t>(t[1])] &&
-                                        !on_boundary[static_cast<std::size_t>(t[2])] &&
-                                        !on_boundary[static_cast<std::size_t>(t[3])];
+    quality.above_ratio_bound_inside +=
+        shape.radius_edge_ratio > ratio_bound && !on_boundary[static_cast<std::size_t>(t[0])] &&
+        !on_boundary[static_cast<std::size_t>(t[1])] && !on_boundary[static_cast<std::size_t>(t[2])] &&
+        !on_boundary[static_cast<std::size_t>(t[3])];
     quality.below_dihedral_bound += shape.min_dihedral_degrees < dihedral_bound;
     ratio.push_back(shape.radius_edge_ratio);
     dihedral.push_back(shape.min_dihedral_degrees);

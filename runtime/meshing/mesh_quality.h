@@ -20,13 +20,13 @@ Distribution distribution_of(std::vector<double> values);
 struct TetrahedronQuality {
   std::size_t tetrahedra = 0;
   Distribution radius_edge_ratio;
-  Distribution min_dihedral_degrees;  // each element's smallest of its six dihedral angles
-  Distribution longest_edge;          // mesh units
-  double volume = 0.0;                // the sum of the elements' signed volumes (mesh units^3)
-  std::size_t non_positive = 0;       // elements with signed volume <= 0
-  std::size_t above_ratio_bound = 0;     // elements with a radius-edge ratio above the bound given
+  Distribution min_dihedral_degrees;         // each element's smallest of its six dihedral angles
+  Distribution longest_edge;                 // mesh units
+  double volume = 0.0;                       // the sum of the elements' signed volumes (mesh units^3)
+  std::size_t non_positive = 0;              // elements with signed volume <= 0
+  std::size_t above_ratio_bound = 0;         // elements with a radius-edge ratio above the bound given
   std::size_t above_ratio_bound_inside = 0;  // of those, the ones with no vertex on the boundary
-  std::size_t below_dihedral_bound = 0;  // elements with a smallest dihedral angle below the bound given
+  std::size_t below_dihedral_bound = 0;      // elements with a smallest dihedral angle below the bound given
 };
 
 double circumradius(const Point3& a, const Point3& b, const Point3& c, const Point3& d);
@@ -42,6 +42,6 @@ struct ElementShape {
 ElementShape element_shape(const Mesh& mesh, const Tetrahedron& tetrahedron);
 // The distributions, and the elements outside the bounds (infinite and 0 bounds count none).
 TetrahedronQuality measure_quality(const Mesh& mesh, double ratio_bound = std::numeric_limits<double>::infinity(),
-                                       double dihedral_bound = 0.0);
+                                   double dihedral_bound = 0.0);
 
 }  // namespace fmpc::sim

@@ -10,7 +10,8 @@ double mean_edge_length(const Mesh& surface) {
   double sum = 0.0;
   for (const Triangle& t : surface.triangles)
     for (std::size_t k = 0; k < 3; ++k)
-      sum += distance(surface.points[static_cast<std::size_t>(t[k])], surface.points[static_cast<std::size_t>(t[(k + 1) % 3])]);
+      sum += distance(surface.points[static_cast<std::size_t>(t[k])],
+                      surface.points[static_cast<std::size_t>(t[(k + 1) % 3])]);
   return surface.triangles.empty() ? 0.0 : sum / (3.0 * static_cast<double>(surface.triangles.size()));
 }
 

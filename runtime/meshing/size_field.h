@@ -45,8 +45,8 @@ double size_at(const SizeField& field, const Point3& p);
 // longest edges at most h give tetrahedra much smaller than the regular tetrahedron of edge h (h^3 / 8.49).
 inline constexpr double kTetrahedraPerSizeCube = 40.0;
 struct VolumeEstimate {
-  double volume = 0.0;        // sampled enclosed volume (mesh units^3)
-  double tetrahedra = 0.0;    // predicted count
+  double volume = 0.0;      // sampled enclosed volume (mesh units^3)
+  double tetrahedra = 0.0;  // predicted count
 };
 VolumeEstimate estimate_tetrahedra(const Mesh& surface, const SizeField& field);
 

@@ -172,10 +172,11 @@ void report_flipped(const Mesh& surface, const std::vector<EdgeUse>& uses, Defec
           against = ": it runs an edge the same way as its neighbour " + report.triangle_name(u);
           break;
         }
-      report.add(report.triangle_range(t),
-                 report.triangle_name(t) + " is flipped" + against + " (triangles oriented against the rest of "
-                     "their part: " + std::to_string(minority_count) + " of " + std::to_string(queue.size()) +
-                     "); reverse its vertex order");
+      report.add(report.triangle_range(t), report.triangle_name(t) + " is flipped" + against +
+                                               " (triangles oriented against the rest of "
+                                               "their part: " +
+                                               std::to_string(minority_count) + " of " + std::to_string(queue.size()) +
+                                               "); reverse its vertex order");
     }
   }
 }
@@ -194,7 +195,8 @@ SourceRange triangle_range(const Mesh& surface, std::size_t t) {
 
 std::string triangle_name(const Mesh& surface, std::size_t t) {
   const SourceRange range = triangle_range(surface, t);
-  return "triangle " + std::to_string(t) + (range.valid() ? " (line " + std::to_string(range.line) + ")" : " (0-based)");
+  return "triangle " + std::to_string(t) +
+         (range.valid() ? " (line " + std::to_string(range.line) + ")" : " (0-based)");
 }
 
 void reverse_triangles(Mesh& surface) {
@@ -217,8 +219,9 @@ SurfaceCheck check_closed_surface(const Mesh& surface, DiagnosticList& diagnosti
     for (const auto v : tri) used[static_cast<std::size_t>(v)] = 1;
   for (std::size_t v = 0; v < used.size(); ++v)
     if (!used[v])
-      report.add(file_range, "vertex " + std::to_string(v) + " (0-based) belongs to no triangle; remove it (a surface to mesh "
-                                                              "has only the vertices of its triangles)");
+      report.add(file_range, "vertex " + std::to_string(v) +
+                                 " (0-based) belongs to no triangle; remove it (a surface to mesh "
+                                 "has only the vertices of its triangles)");
   // Degenerate triangles: a repeated vertex, or three corners on a line (area <= 1e-12 of the squared longest edge).
   for (std::size_t t = 0; t < surface.triangles.size(); ++t) {
     const Triangle& tri = surface.triangles[t];
@@ -252,8 +255,8 @@ SurfaceCheck check_closed_surface(const Mesh& surface, DiagnosticList& diagnosti
       for (std::size_t k = i; k < j; ++k)
         list += (k == i ? "" : k + 1 == j ? " and " : ", ") + std::to_string(uses[k].triangle);
       report.add(report.triangle_range(uses[i].triangle),
-                 "the surface is non-manifold at " + edge + ": " + std::to_string(j - i) + " triangles share it (0-based: " + list +
-                     "); a closed surface has exactly two on every edge");
+                 "the surface is non-manifold at " + edge + ": " + std::to_string(j - i) +
+                     " triangles share it (0-based: " + list + "); a closed surface has exactly two on every edge");
     }
     i = j;
   }
@@ -264,7 +267,8 @@ SurfaceCheck check_closed_surface(const Mesh& surface, DiagnosticList& diagnosti
     const std::size_t fans = fan_count(surface, around, v);
     if (fans > 1)
       report.add(report.triangle_range(around.triangle[around.offset[v]]),
-                 "vertex " + std::to_string(v) + " (0-based) is non-manifold: its triangles form " + std::to_string(fans) +
+                 "vertex " + std::to_string(v) + " (0-based) is non-manifold: its triangles form " +
+                     std::to_string(fans) +
                      " separate fans (parts of the surface touch at this point); separate the parts");
   }
   report_flipped(surface, uses, report);

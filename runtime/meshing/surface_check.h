@@ -15,10 +15,10 @@ namespace fmpc::sim {
 inline constexpr std::size_t kMaxSurfaceDefectsListed = 20;
 
 struct SurfaceCheck {
-  bool closed = false;    // no defect of any kind: the surface can be meshed
-  bool inward = false;    // consistently oriented, but with normals pointing in (enclosed volume < 0)
-  double volume = 0.0;    // enclosed volume (mesh units^3), by the divergence theorem; > 0 once oriented outwards
-  double area = 0.0;      // surface area (mesh units^2)
+  bool closed = false;  // no defect of any kind: the surface can be meshed
+  bool inward = false;  // consistently oriented, but with normals pointing in (enclosed volume < 0)
+  double volume = 0.0;  // enclosed volume (mesh units^3), by the divergence theorem; > 0 once oriented outwards
+  double area = 0.0;    // surface area (mesh units^2)
   std::size_t defects = 0;
 };
 

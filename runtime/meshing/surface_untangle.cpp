@@ -14,16 +14,18 @@ void report_self_intersections(const Mesh& surface, const std::vector<std::size_
     list += (i == 0 ? "" : ", ") + std::to_string(triangles[i]);
   if (triangles.size() > kMaxSurfaceDefectsListed) list += ", ...";
   for (std::size_t i = 0; i < triangles.size() && i < kMaxSurfaceDefectsListed; ++i)
-    diagnostics.error(triangle_range(surface, triangles[i]),
-                      triangle_name(surface, triangles[i]) + " intersects another part of the surface" +
-                          (i > 0 ? std::string()
-                                 : " (" + std::to_string(triangles.size()) + " triangles do: " + list + ")"),
-                      i > 0 ? std::vector<std::string>{} : std::vector<std::string>{"fix the surface, or set mesh.smooth_intersections: true (fmpc mesh --smooth-intersections) "
-                       "to move their vertices toward their neighbours until the surface is free of them"});
+    diagnostics.error(
+        triangle_range(surface, triangles[i]),
+        triangle_name(surface, triangles[i]) + " intersects another part of the surface" +
+            (i > 0 ? std::string() : " (" + std::to_string(triangles.size()) + " triangles do: " + list + ")"),
+        i > 0 ? std::vector<std::string>{}
+              : std::vector<std::string>{
+                    "fix the surface, or set mesh.smooth_intersections: true (fmpc mesh --smooth-intersections) "
+                    "to move their vertices toward their neighbours until the surface is free of them"});
   if (triangles.size() > kMaxSurfaceDefectsListed)
-    diagnostics.error(SourceRange{surface.source, 0, 0, 0, 0},
-                      std::to_string(triangles.size() - kMaxSurfaceDefectsListed) +
-                          " more intersecting triangles are not listed");
+    diagnostics.error(
+        SourceRange{surface.source, 0, 0, 0, 0},
+        std::to_string(triangles.size() - kMaxSurfaceDefectsListed) + " more intersecting triangles are not listed");
 }
 
 std::optional<SurfaceUntangling> untangle_surface(Mesh& surface, std::vector<std::size_t> intersecting,

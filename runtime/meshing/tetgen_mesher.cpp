@@ -42,7 +42,8 @@ class SizeFieldScope {
 // TetGen's exit codes (tetgen.h, terminatetetgen) as what the user can do about them.
 std::string tetgen_failure(int code) {
   switch (code) {
-    case 1: return "TetGen ran out of memory; use a larger size_far or size_near";
+    case 1:
+      return "TetGen ran out of memory; use a larger size_far or size_near";
     case 3:
       return "TetGen found the surface intersecting itself; fix the surface (fmpc checks that it is closed, manifold "
              "and oriented, but not that it is free of self-intersections)";
@@ -51,8 +52,10 @@ std::string tetgen_failure(int code) {
              "a vertex and an edge almost touch; clean the surface";
     case 5:
       return "TetGen found two surface triangles too close to each other (almost overlapping); clean the surface";
-    case 10: return "TetGen refused the input; check that the surface is valid";
-    default: return "TetGen failed with internal error " + std::to_string(code) + "; report it with the surface";
+    case 10:
+      return "TetGen refused the input; check that the surface is valid";
+    default:
+      return "TetGen failed with internal error " + std::to_string(code) + "; report it with the surface";
   }
 }
 

@@ -14,8 +14,9 @@ std::optional<Mesh> tetgen_tetrahedralize(const Mesh& surface, const VolumeMeshO
 }
 
 std::optional<std::vector<std::size_t>> tetgen_self_intersections(const Mesh& surface, DiagnosticList& diagnostics) {
-  return tetgen_tetrahedralize(surface, VolumeMeshOptions{}, 0, diagnostics) ? std::vector<std::size_t>{}
-                                                                              : std::optional<std::vector<std::size_t>>{};
+  return tetgen_tetrahedralize(surface, VolumeMeshOptions{}, 0, diagnostics)
+             ? std::vector<std::size_t>{}
+             : std::optional<std::vector<std::size_t>>{};
 }
 
 }  // namespace fmpc::sim

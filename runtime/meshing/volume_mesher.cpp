@@ -28,8 +28,8 @@ std::vector<std::string> size_field_problems(const SizeField& field, const SizeO
   positive(field.size_far, names.size_far);
   positive(field.size_near, names.size_near);
   if (field.size_near > field.size_far)
-    problems.push_back(names.size_near + " (" + format_number(field.size_near) + ") must not exceed " +
-                       names.size_far + " (" + format_number(field.size_far) + ")");
+    problems.push_back(names.size_near + " (" + format_number(field.size_near) + ") must not exceed " + names.size_far +
+                       " (" + format_number(field.size_far) + ")");
   if (!(std::isfinite(field.near_distance) && field.near_distance >= 0.0))
     problems.push_back(names.near_distance + " must be a length >= 0 (mesh units), got " +
                        format_number(field.near_distance));
@@ -47,14 +47,17 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
   result.surface_triangles = surface.triangles.size();
   if (surface.points.size() > kMaxSurfaceVertices || surface.triangles.size() > kMaxSurfaceTriangles) {
     diagnostics.error(file_range, "the surface has " + std::to_string(surface.points.size()) + " vertices and " +
-                                      std::to_string(surface.triangles.size()) + " triangles; the mesher takes at "
-                                      "most " + std::to_string(kMaxSurfaceVertices) + " and " +
+                                      std::to_string(surface.triangles.size()) +
+                                      " triangles; the mesher takes at "
+                                      "most " +
+                                      std::to_string(kMaxSurfaceVertices) + " and " +
                                       std::to_string(kMaxSurfaceTriangles) + ": decimate the surface first");
     return std::nullopt;
   }
   if (!surface.tetrahedra.empty()) {
-    diagnostics.error(file_range, "the file holds tetrahedra already; give it as mesh.file (a volume mesh), not as a "
-                                  "surface to mesh");
+    diagnostics.error(file_range,
+                      "the file holds tetrahedra already; give it as mesh.file (a volume mesh), not as a "
+                      "surface to mesh");
     return std::nullopt;
   }
   const auto problems = size_field_problems(options.size);
@@ -67,7 +70,8 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
     result.surface.volume = -result.surface.volume;
     diagnostics.warning(file_range, "surface-orientation",
                         "the surface's triangles are oriented inwards (enclosed volume " +
-                            significant_digits(result.surface.volume, 3) + " with the normals reversed); meshed as if reversed");
+                            significant_digits(result.surface.volume, 3) +
+                            " with the normals reversed); meshed as if reversed");
   }
   auto intersecting = tetgen_self_intersections(surface, diagnostics);
   if (!intersecting) return std::nullopt;
@@ -85,15 +89,17 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
                             " triangles intersected other parts of the surface; smoothing moved " +
                             std::to_string(result.untangling->moved_vertices) + " vertices by at most " +
                             significant_digits(result.untangling->largest_move, 3) + " mesh units in " +
-                            std::to_string(result.untangling->rounds) + (result.untangling->rounds == 1 ? " round" : " rounds") +
-                            " (smooth_intersections)");
+                            std::to_string(result.untangling->rounds) +
+                            (result.untangling->rounds == 1 ? " round" : " rounds") + " (smooth_intersections)");
   }
   result.estimate = estimate_tetrahedra(surface, options.size);
   if (result.estimate.tetrahedra > static_cast<double>(options.max_tetrahedra)) {
     diagnostics.error(file_range, "the size field asks for about " + count_text(result.estimate.tetrahedra) +
                                       " tetrahedra (an estimate from the enclosed volume, " +
-                                      significant_digits(result.estimate.volume, 3) + " mesh units^3, and the sizes); the "
-                                      "limit is " + std::to_string(options.max_tetrahedra) +
+                                      significant_digits(result.estimate.volume, 3) +
+                                      " mesh units^3, and the sizes); the "
+                                      "limit is " +
+                                      std::to_string(options.max_tetrahedra) +
                                       ": raise size_far or size_near, or shrink near_distance");
     return std::nullopt;
   }
@@ -140,8 +146,7 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
                             "kept surface's triangles are coarser than the field near them",
                         {"set keep_surface: false (fmpc mesh: leave out --keep-surface) to let the mesher split them"});
   if (result.quality.non_positive > 0) {
-    diagnostics.error(file_range, "internal error: the mesher produced " +
-                                      std::to_string(result.quality.non_positive) +
+    diagnostics.error(file_range, "internal error: the mesher produced " + std::to_string(result.quality.non_positive) +
                                       " tetrahedra of zero volume; report it with the surface");
     return std::nullopt;
   }
@@ -152,8 +157,9 @@ std::string quality_text(const VolumeMesh& mesh, const VolumeMeshOptions& option
   const TetrahedronQuality& q = mesh.quality;
   const auto row = [](const std::string& name, const Distribution& d) {
     return "  " + name + ": min " + significant_digits(d.min, 3) + ", 1% " + significant_digits(d.p1, 3) + ", 5% " +
-           significant_digits(d.p5, 3) + ", median " + significant_digits(d.p50, 3) + ", 95% " + significant_digits(d.p95, 3) + ", 99% " +
-           significant_digits(d.p99, 3) + ", max " + significant_digits(d.max, 3) + "\n";
+           significant_digits(d.p5, 3) + ", median " + significant_digits(d.p50, 3) + ", 95% " +
+           significant_digits(d.p95, 3) + ", 99% " + significant_digits(d.p99, 3) + ", max " +
+           significant_digits(d.max, 3) + "\n";
   };
   std::string text = "meshed " + mesh.mesh.source + ": " + std::to_string(mesh.surface_vertices) +
                      " surface vertices, " + std::to_string(mesh.surface_triangles) + " triangles -> " +

@@ -36,7 +36,7 @@ inline constexpr double kSizeFieldSlack = 1.5;
 
 struct VolumeMeshOptions {
   SizeField size;
-  double max_radius_edge_ratio = kDefaultRadiusEdgeRatio;  // enforced by refinement (except at small input angles)
+  double max_radius_edge_ratio = kDefaultRadiusEdgeRatio;    // enforced by refinement (except at small input angles)
   double min_dihedral_degrees = kDefaultMinDihedralDegrees;  // sought by TetGen's optimisation; reported
   std::size_t max_tetrahedra = kMaxMeshedTetrahedra;
   // A surface that intersects itself is refused (located) unless this is set: then surface_untangle.h smooths it.
@@ -79,8 +79,7 @@ bool volume_mesher_available();
 // The checks on options a caller makes before anything is read: one sentence per problem, naming the option as
 // `names` spells it ("size_near" in a scene, "--size-near" on the command line); empty when they are fine.
 struct SizeOptionNames {
-  std::string size_near = "size_near", size_far = "size_far", near_distance = "near_distance",
-              grading = "grading";
+  std::string size_near = "size_near", size_far = "size_far", near_distance = "near_distance", grading = "grading";
 };
 std::vector<std::string> size_field_problems(const SizeField& field, const SizeOptionNames& names = {});
 

@@ -18,10 +18,9 @@ std::vector<SizeSegment> probe_size_sources(const Scene& scene, const Mesh& surf
   if (probe.by_ray) {
     double best = std::numeric_limits<double>::infinity();
     for (const Triangle& t : surface.triangles) {
-      const auto hit = ray_triangle_hit(probe.ray_origin, probe.ray_direction,
-                                        surface.points[static_cast<std::size_t>(t[0])],
-                                        surface.points[static_cast<std::size_t>(t[1])],
-                                        surface.points[static_cast<std::size_t>(t[2])]);
+      const auto hit = ray_triangle_hit(
+          probe.ray_origin, probe.ray_direction, surface.points[static_cast<std::size_t>(t[0])],
+          surface.points[static_cast<std::size_t>(t[1])], surface.points[static_cast<std::size_t>(t[2])]);
       if (hit && *hit < best) best = *hit;
     }
     if (best < std::numeric_limits<double>::infinity())

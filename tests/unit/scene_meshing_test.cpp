@@ -1,7 +1,8 @@
 // `mesh: {surface: FILE}` in scenes: the keys, the probe's hit and path as the size field's sources, the run's
 // summary, and SOFA's liver-smooth.obj meshed to the thesis's size and run for a few steps (rulesets/scenes).
-#include <catch2/catch.hpp>
+#include "runtime/scene/scene_meshing.h"
 
+#include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -10,7 +11,6 @@
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
-#include "runtime/scene/scene_meshing.h"
 #include "runtime/scene/scene_run.h"
 
 using namespace fmpc;
@@ -51,9 +51,10 @@ std::vector<std::string> error_messages(const DiagnosticList& diagnostics) {
 }  // namespace
 
 TEST_CASE("a scene's surface is meshed fine around the probe's hit and path", "[mesher][scene]") {
-  const std::string path = write_box_scene(
-      "probe", "  size_far: 1\n  size_near: 0.25\n  near_distance: 0.3\n  keep_surface: false\n"
-               "  refine_near: [[0, 0, 2], [4, 4, 0, 4, 4, 2]]\n");
+  const std::string path =
+      write_box_scene("probe",
+                      "  size_far: 1\n  size_near: 0.25\n  near_distance: 0.3\n  keep_surface: false\n"
+                      "  refine_near: [[0, 0, 2], [4, 4, 0, 4, 4, 2]]\n");
   DiagnosticList diagnostics;
   const auto scene = parse_scene(path, read_whole(path), diagnostics);
   REQUIRE(scene);
@@ -86,11 +87,12 @@ TEST_CASE("surface meshing keys: refused without a surface, and checked", "[mesh
   };
   CHECK(parse_errors("mesh: {box: {size: [1, 1, 1]}, size_far: 0.2}\nmaterial: {youngs_modulus: 1}\n") ==
         std::vector<std::string>{"mesh.size_far: 'size_far' sets how a surface is meshed; it needs 'surface'"});
-  CHECK(parse_errors("mesh: {surface: s.obj, size_far: 0.2, size_near: 0.3, radius_edge_ratio: 0.9}\n"
-                     "material: {youngs_modulus: 1}\n") ==
-        std::vector<std::string>{
-            "mesh.size_near: 0.3 exceeds size_far (0.2); the near size is the fine one",
-            "mesh.radius_edge_ratio: 0.9 is not from 1 to 10; Delaunay refinement needs at least 1 (1.2 to 2 is usual)"});
+  CHECK(
+      parse_errors("mesh: {surface: s.obj, size_far: 0.2, size_near: 0.3, radius_edge_ratio: 0.9}\n"
+                   "material: {youngs_modulus: 1}\n") ==
+      std::vector<std::string>{
+          "mesh.size_near: 0.3 exceeds size_far (0.2); the near size is the fine one",
+          "mesh.radius_edge_ratio: 0.9 is not from 1 to 10; Delaunay refinement needs at least 1 (1.2 to 2 is usual)"});
   CHECK(parse_errors("mesh: {surface: s.obj, refine_near: [[1, 2]]}\nmaterial: {youngs_modulus: 1}\n") ==
         std::vector<std::string>{"mesh.refine_near[0]: expected a point [x, y, z] or a segment [x, y, z, x, y, z] "
                                  "(mesh units), got a list of 2"});

@@ -2,7 +2,6 @@
 // legacy VTK polydata ASCII and binary, PLY ASCII and binary little-endian) reads back as the same closed surface;
 // broken files are errors with their place.
 #include <catch2/catch.hpp>
-
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -15,7 +14,8 @@ using namespace fmpc::sim;
 
 namespace {
 
-const double kCubePoints[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+const double kCubePoints[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                  {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
 const int kCubeFaces[12][3] = {{0, 3, 2}, {0, 2, 1}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
                                {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
 
@@ -43,8 +43,8 @@ void append_big_endian(std::string& out, T value) {
 std::string ascii_points(const char* prefix) {
   std::string text;
   for (const auto& p : kCubePoints)
-    text += prefix + std::to_string(int(p[0])) + " " + std::to_string(int(p[1])) + " " + std::to_string(int(p[2])) +
-            "\n";
+    text +=
+        prefix + std::to_string(int(p[0])) + " " + std::to_string(int(p[1])) + " " + std::to_string(int(p[2])) + "\n";
   return text;
 }
 
@@ -174,8 +174,9 @@ TEST_CASE("broken STL and PLY files are errors with their place", "[mesher]") {
       {"count.ply",
        "ply\nformat binary_little_endian 1.0\nelement vertex 1000000\nproperty float x\nproperty float y\n"
        "property float z\nend_header\n",
-       3, "element 'vertex' claims 1000000 items but the file has only 0 bytes left; the file is truncated or the "
-          "count is wrong"},
+       3,
+       "element 'vertex' claims 1000000 items but the file has only 0 bytes left; the file is truncated or the "
+       "count is wrong"},
   };
   for (const Broken& b : cases) {
     CAPTURE(b.name);

@@ -1,16 +1,16 @@
 // Volume meshes from surfaces (runtime/meshing): the meshed volume against the enclosed one, positive elements,
 // quality bounds, boundary faces against the surface, the size field measured, determinism, limits, and the
 // surface checks' located errors (the command's exact output is in tests/golden/mesh_*).
-#include <catch2/catch.hpp>
+#include "runtime/meshing/volume_mesher.h"
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <map>
 #include <set>
 
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/mesh/mesh_writer.h"
-#include "runtime/meshing/volume_mesher.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
@@ -31,11 +31,11 @@ Mesh sphere_surface(int levels) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
   Mesh sphere;
   sphere.source = "sphere";
-  sphere.points = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                   {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  sphere.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                      {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                      {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  sphere.points = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                   {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  sphere.triangles = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                      {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                      {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   const auto normalise = [](Point3 p) {
     const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
     return Point3{p[0] / r, p[1] / r, p[2] / r};
@@ -197,7 +197,8 @@ TEST_CASE("the size field: elements near the probe's path are smaller than far f
   }
   REQUIRE(near_count > 20);
   REQUIRE(far_count > 20);
-  const double near_mean = near_sum / static_cast<double>(near_count), far_mean = far_sum / static_cast<double>(far_count);
+  const double near_mean = near_sum / static_cast<double>(near_count),
+               far_mean = far_sum / static_cast<double>(far_count);
   CAPTURE(near_mean, far_mean, near_count, far_count);
   CHECK(near_mean <= options.size.size_near);
   CHECK(far_mean > 3.0 * near_mean);
@@ -247,15 +248,17 @@ TEST_CASE("limits: the predicted tetrahedra and the surface's size are refused b
   huge.points.resize(kMaxSurfaceVertices + 1);
   DiagnosticList too_many;
   CHECK_FALSE(mesh_volume(std::move(huge), uniform(1.0), too_many));
-  CHECK(messages(too_many) == "the surface has 1000001 vertices and 0 triangles; the mesher takes at most 1000000 "
-                              "and 2000000: decimate the surface first\n");
+  CHECK(messages(too_many) ==
+        "the surface has 1000001 vertices and 0 triangles; the mesher takes at most 1000000 "
+        "and 2000000: decimate the surface first\n");
   VolumeMeshOptions bad = uniform(0.1);
   bad.size.size_near = 0.2;
   bad.size.grading = 0.0;
   DiagnosticList refused;
   CHECK_FALSE(mesh_volume(unit_cube_surface(), bad, refused));
-  CHECK(messages(refused) == "size_near (0.2) must not exceed size_far (0.1)\n"
-                             "grading must be a positive length (mesh units), got 0\n");
+  CHECK(messages(refused) ==
+        "size_near (0.2) must not exceed size_far (0.1)\n"
+        "grading must be a positive length (mesh units), got 0\n");
 }
 
 TEST_CASE("surface defects are refused with their place; an inward surface is meshed reversed", "[mesher]") {
@@ -303,8 +306,9 @@ TEST_CASE("surface defects are refused with their place; an inward surface is me
   DiagnosticList diagnostics;
   const auto meshed = mesh_volume(inward, uniform(0.5), diagnostics);
   REQUIRE(meshed);
-  CHECK(messages(diagnostics) == "the surface's triangles are oriented inwards (enclosed volume 1 with the normals "
-                                 "reversed); meshed as if reversed\n");
+  CHECK(messages(diagnostics) ==
+        "the surface's triangles are oriented inwards (enclosed volume 1 with the normals "
+        "reversed); meshed as if reversed\n");
   CHECK(meshed->quality.volume == Approx(1.0).epsilon(1e-12));
 }
 

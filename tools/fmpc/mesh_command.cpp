@@ -1,7 +1,6 @@
 // fmpc mesh SURFACE -o OUT.msh|.vtu: a closed triangle surface (OBJ, STL, legacy VTK polydata, PLY) meshed into
 // tetrahedra with a graded size field (runtime/meshing, docs/meshing.md), written for reuse as a scene's mesh.file.
 #include <CLI/CLI.hpp>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -55,8 +54,9 @@ std::optional<sim::SizeSegment> parse_near(const std::string& text, DiagnosticLi
     values.push_back(value);
   }
   if (values.size() != 3 && values.size() != 6) {
-    diagnostics.error(kCommandLine, "--near: '" + text + "' is neither a point x,y,z nor a segment x,y,z,x,y,z "
-                                                         "(finite numbers, mesh units)");
+    diagnostics.error(kCommandLine, "--near: '" + text +
+                                        "' is neither a point x,y,z nor a segment x,y,z,x,y,z "
+                                        "(finite numbers, mesh units)");
     return std::nullopt;
   }
   sim::SizeSegment segment;
@@ -76,10 +76,10 @@ std::optional<std::string> vtu_with_quality(const sim::Mesh& mesh, DiagnosticLis
     ratio.push_back(shape.radius_edge_ratio);
     dihedral.push_back(shape.min_dihedral_degrees);
   }
-  return sim::vtu_document(mesh.points, *cells, {},
-                           {sim::vtu_scalars("radius_edge_ratio", ratio),
-                            sim::vtu_scalars("min_dihedral_degrees", dihedral)},
-                           options, diagnostics);
+  return sim::vtu_document(
+      mesh.points, *cells, {},
+      {sim::vtu_scalars("radius_edge_ratio", ratio), sim::vtu_scalars("min_dihedral_degrees", dihedral)}, options,
+      diagnostics);
 }
 
 int run_mesh(const MeshOptions& options) {
@@ -95,8 +95,9 @@ int run_mesh(const MeshOptions& options) {
   mesh_options.smooth_intersections = options.smooth_intersections;
   mesh_options.keep_surface = options.keep_surface;
   if (!(options.radius_edge_ratio >= 1.0))
-    diagnostics.error(kCommandLine, "--radius-edge: " + format_number(options.radius_edge_ratio) +
-                                        " is below 1; Delaunay refinement needs a bound of at least 1 (1.2 to 2 is usual)");
+    diagnostics.error(kCommandLine,
+                      "--radius-edge: " + format_number(options.radius_edge_ratio) +
+                          " is below 1; Delaunay refinement needs a bound of at least 1 (1.2 to 2 is usual)");
   if (!(options.min_dihedral >= 0.0 && options.min_dihedral <= 30.0))
     diagnostics.error(kCommandLine, "--min-dihedral: " + format_number(options.min_dihedral) +
                                         " is not from 0 to 30 degrees (TetGen cannot reach more)");
@@ -135,8 +136,8 @@ int run_mesh(const MeshOptions& options) {
   diagnostics.sort_by_position();
   print_diagnostics(diagnostics, sources, std::cerr);
   if (!meshed) return kExitErrors;
-  std::cout << sim::quality_text(*meshed, mesh_options) << "  meshing took " << significant_digits(seconds, 3) << " s; wrote "
-            << options.output << "\n";
+  std::cout << sim::quality_text(*meshed, mesh_options) << "  meshing took " << significant_digits(seconds, 3)
+            << " s; wrote " << options.output << "\n";
   return kExitOk;
 }
 
@@ -144,12 +145,15 @@ int run_mesh(const MeshOptions& options) {
 
 void register_mesh_command(CLI::App& app, int& exit_code) {
   auto options = std::make_shared<MeshOptions>();
-  CLI::App* command = app.add_subcommand(
-      "mesh", "Mesh a closed surface (OBJ, STL, VTK polydata, PLY) into tetrahedra with a graded size field "
-              "(docs/meshing.md)");
+  CLI::App* command =
+      app.add_subcommand("mesh",
+                         "Mesh a closed surface (OBJ, STL, VTK polydata, PLY) into tetrahedra with a graded size field "
+                         "(docs/meshing.md)");
   command->add_option("SURFACE", options->surface, "Closed, consistently oriented triangle surface")->required();
-  command->add_option("-o,--output", options->output, "The volume mesh: .msh (Gmsh 2.2, a scene's mesh.file) or "
-                                                      ".vtu (with each element's quality)")
+  command
+      ->add_option("-o,--output", options->output,
+                   "The volume mesh: .msh (Gmsh 2.2, a scene's mesh.file) or "
+                   ".vtu (with each element's quality)")
       ->required();
   command->add_option("--size-far", options->size_far,
                       "Longest edge allowed far from every --near (mesh units; default: the surface's mean edge)");
@@ -165,10 +169,10 @@ void register_mesh_command(CLI::App& app, int& exit_code) {
   command->add_option("--min-dihedral", options->min_dihedral,
                       "Smallest dihedral angle (degrees) TetGen's optimisation seeks");
   command->add_flag("--smooth-intersections", options->smooth_intersections,
-                   "Smooth the vertices of self-intersecting triangles until none intersect (reported)");
+                    "Smooth the vertices of self-intersecting triangles until none intersect (reported)");
   command->add_flag("--keep-surface", options->keep_surface,
-                   "Keep the surface's triangles as the boundary faces, refining only the interior (default: the "
-                   "mesher splits them where the size field asks)");
+                    "Keep the surface's triangles as the boundary faces, refining only the interior (default: the "
+                    "mesher splits them where the size field asks)");
   command->callback([options, &exit_code] { exit_code = run_mesh(*options); });
 }
 
