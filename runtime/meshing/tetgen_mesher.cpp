@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <map>
+#include <mutex>
 #include <new>
 #include <string>
 
@@ -80,6 +81,15 @@ void fill_tetgen_input(const Mesh& surface, tetgenio& in) {
   }
 }
 
+// TetGen is not thread-safe: its exact predicates keep their constants in globals, and its incremental Delaunay
+// and point removal shuffle with the C library's srand() and rand(), seeded per call. Cohort patients are built on
+// worker threads; interleaved, two meshings would draw from one another's sequence and differ from run to run.
+// One call at a time in the process keeps every mesh the same.
+std::mutex& tetgen_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
 // Runs TetGen with `switches`; false after an error naming what TetGen refused.
 bool run_tetgen(const Mesh& surface, const char* switches, tetgenio& in, tetgenio& out, DiagnosticList& diagnostics) {
   tetgenbehavior behaviour;
@@ -90,6 +100,7 @@ bool run_tetgen(const Mesh& surface, const char* switches, tetgenio& in, tetgeni
     return false;
   }
   try {
+    const std::lock_guard<std::mutex> lock(tetgen_mutex());
     tetrahedralize(&behaviour, &in, &out);
   } catch (int code) {
     diagnostics.error(SourceRange{surface.source, 0, 0, 0, 0}, tetgen_failure(code));

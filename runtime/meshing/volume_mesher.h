@@ -5,8 +5,8 @@
 // generator", ACM TOMS 41(2)) meshes the volume by constrained Delaunay refinement: every tetrahedron's longest edge
 // at most the size field at its centroid, radius-edge ratio at most `max_radius_edge_ratio`, and TetGen's mesh
 // optimisation raising the smallest dihedral angles toward `min_dihedral_degrees`. Nothing is printed (TetGen runs
-// quiet); the same surface and options give the same mesh bit for bit (TetGen's randomness is its own seeded
-// generator; one thread).
+// quiet); the same surface and options give the same mesh bit for bit (TetGen is single-threaded and seeds its own
+// random choices per call; calls are serialised across threads, tetgen_mesher.cpp).
 #include <cstddef>
 #include <optional>
 #include <string>

@@ -1,5 +1,6 @@
 #include "runtime/scene/scene_meshing.h"
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 
@@ -52,9 +53,10 @@ std::optional<Mesh> mesh_scene_surface(const Scene& scene, BuiltScene& built, Di
   MeshingRun run;
   run.options = scene.mesh.surface.options;
   SizeField& size = run.options.size;
-  if (!scene.mesh.surface.size_far_given) size.size_far = mean_edge_length(*surface);
+  // Defaults: far, the surface's mean edge (or the near size given, if coarser); near, the far size.
+  if (!scene.mesh.surface.size_far_given)
+    size.size_far = std::max(mean_edge_length(*surface), scene.mesh.surface.size_near_given ? size.size_near : 0.0);
   if (!scene.mesh.surface.size_near_given) size.size_near = size.size_far;
-  size.size_near = std::min(size.size_near, size.size_far);
   const std::vector<SizeSegment> probe = probe_size_sources(scene, *surface);
   size.sources.insert(size.sources.begin(), probe.begin(), probe.end());
   if (scene.mesh.surface.size_near_given && size.sources.empty())

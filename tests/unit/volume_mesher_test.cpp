@@ -8,6 +8,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/mesh/mesh_writer.h"
@@ -225,6 +226,22 @@ TEST_CASE("the same surface and options give the same mesh, bit for bit, and the
   REQUIRE(second);
   CHECK(first->mesh.points == second->mesh.points);
   CHECK(first->mesh.tetrahedra == second->mesh.tetrahedra);
+  // On two threads at once (a cohort builds its patients' scenes so): the same again.
+  std::optional<VolumeMesh> on_threads[2];
+  std::thread other([&] {
+    DiagnosticList ignored;
+    on_threads[1] = mesh_volume(sphere_surface(1), options, ignored);
+  });
+  {
+    DiagnosticList ignored;
+    on_threads[0] = mesh_volume(sphere_surface(1), options, ignored);
+  }
+  other.join();
+  for (const auto& meshed : on_threads) {
+    REQUIRE(meshed);
+    CHECK(meshed->mesh.points == first->mesh.points);
+    CHECK(meshed->mesh.tetrahedra == first->mesh.tetrahedra);
+  }
   const std::string text = gmsh_document(first->mesh);
   CHECK(text == gmsh_document(second->mesh));
   const auto read = read_gmsh(text, "meshed.msh", diagnostics);

@@ -1,6 +1,7 @@
 // fmpc mesh SURFACE -o OUT.msh|.vtu: a closed triangle surface (OBJ, STL, legacy VTK polydata, PLY) meshed into
 // tetrahedra with a graded size field (runtime/meshing, docs/meshing.md), written for reuse as a scene's mesh.file.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -115,7 +116,8 @@ int run_mesh(const MeshOptions& options) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;
   }
-  mesh_options.size.size_far = options.size_far.value_or(sim::mean_edge_length(*surface));
+  mesh_options.size.size_far =
+      options.size_far.value_or(std::max(sim::mean_edge_length(*surface), options.size_near.value_or(0.0)));
   mesh_options.size.size_near = options.size_near.value_or(mesh_options.size.size_far);
   sim::SizeOptionNames names{"--size-near", "--size-far", "--near-distance", "--grading"};
   for (const std::string& problem : sim::size_field_problems(mesh_options.size, names))
