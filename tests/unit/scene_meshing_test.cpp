@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "runtime/mesh/mesh_reader.h"
+#include "runtime/mesh/mesh_writer.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
 #include "runtime/scene/scene_run.h"
@@ -77,6 +78,30 @@ TEST_CASE("a scene's surface is meshed fine around the probe's hit and path", "[
   // The probe picks the surface vertices within 0.3 of the hit: the fine mesh there has several.
   REQUIRE(built->setup.probe);
   CHECK(built->setup.probe->vertices.size() >= 5);
+}
+
+TEST_CASE("a mesh written as .msh runs as a scene's mesh.file, the same mesh", "[mesher][scene]") {
+  const std::string path = write_box_scene("reuse", "  size_far: 1.2\n");
+  DiagnosticList diagnostics;
+  const auto scene = parse_scene(path, read_whole(path), diagnostics);
+  REQUIRE(scene);
+  const auto built = build_scene(*scene, diagnostics);
+  REQUIRE(built);
+  const std::filesystem::path msh = std::filesystem::path(path).parent_path() / "box.msh";
+  std::ofstream(msh) << gmsh_document(built->mesh);
+  std::string text = read_whole(path);
+  text.replace(text.find("surface: box.obj"), 16, "file: box.msh");
+  text.replace(text.find("  size_far: 1.2\n"), 16, "");
+  std::ofstream(path) << text;
+  const auto reused = parse_scene(path, read_whole(path), diagnostics);
+  REQUIRE(reused);
+  REQUIRE(reused->mesh.kind == SceneMesh::Kind::File);
+  const auto rebuilt = build_scene(*reused, diagnostics);
+  REQUIRE(rebuilt);
+  CHECK_FALSE(diagnostics.has_errors());
+  CHECK(rebuilt->mesh.points == built->mesh.points);
+  CHECK(rebuilt->mesh.tetrahedra == built->mesh.tetrahedra);
+  CHECK(rebuilt->setup.probe->vertices == built->setup.probe->vertices);
 }
 
 TEST_CASE("surface meshing keys: refused without a surface, and checked", "[mesher][scene]") {

@@ -189,3 +189,22 @@ TEST_CASE("broken STL and PLY files are errors with their place", "[mesher]") {
     CHECK(diagnostics.items().front().message == b.message);
   }
 }
+
+TEST_CASE("SOFA's surfaces: liver.vtk (binary polydata, mm, oriented inwards) and liver-smooth.obj are closed",
+          "[mesher]") {
+  const std::string folder = std::string(FMPC_SHARED_DATA_DIR) + "/sofa-liver/";
+  for (const auto& [name, inward] : {std::pair<const char*, bool>{"liver.vtk", true}, {"liver-smooth.obj", false}}) {
+    CAPTURE(name);
+    DiagnosticList diagnostics;
+    const auto surface = read_mesh_file(folder + name, diagnostics);
+    if (!surface) {
+      WARN("skipped: " << folder << name << " is absent (../shared/data)");
+      continue;
+    }
+    const SurfaceCheck check = check_closed_surface(*surface, diagnostics);
+    CHECK(diagnostics.empty());
+    CHECK(check.closed);
+    CHECK(check.inward == inward);
+    CHECK((check.volume < 0.0) == inward);  // liver.vtk encloses 1.48 litres (in mm^3) with its normals reversed
+  }
+}
