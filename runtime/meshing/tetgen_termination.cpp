@@ -4,7 +4,10 @@
 // function through its PLT, so this definition in fmpc takes its place (ELF symbol interposition): it throws without
 // freeing, and ~tetgenmesh frees once. The signature is tetgen.h's, which this file does not include (it defines the
 // function inline); the class is only named.
+#include "runtime/meshing/tetgen_mesher.h"
+
 class tetgenmesh;
+void terminatetetgen(tetgenmesh* mesh, int code);
 
 __attribute__((visibility("default"))) void terminatetetgen(tetgenmesh*, int code) { throw code; }
 

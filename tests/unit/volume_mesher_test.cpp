@@ -1,6 +1,7 @@
 // Volume meshes from surfaces (runtime/meshing): the meshed volume against the enclosed one, positive elements,
 // quality bounds, boundary faces against the surface, the size field measured, determinism, limits, and the
 // surface checks' located errors (the command's exact output is in tests/golden/mesh_*).
+#include "runtime/meshing/tetgen_mesher.h"
 #include "runtime/meshing/volume_mesher.h"
 
 #include <algorithm>
@@ -349,4 +350,19 @@ TEST_CASE("a self-intersecting surface is refused, or smoothed on request and th
   CHECK(meshed->untangling->largest_move > 1.0);
   CHECK_THAT(messages(diagnostics), Catch::Contains("smoothing moved"));
   CHECK(meshed->quality.volume == Approx(meshed->surface.volume).epsilon(1e-9));
+}
+
+TEST_CASE("TetGen's own errors come back as diagnostics, not as a crash", "[mesher]") {
+  // Two overlapping cubes: mesh_volume refuses them before TetGen runs (self-intersections); given to TetGen directly
+  // they make it stop with its error 3, whose path in Debian's TetGen 1.5.0 freed memory twice until fmpc replaced
+  // terminatetetgen (tetgen_termination.cpp).
+  Mesh two = unit_cube_surface();
+  const Mesh cube = unit_cube_surface();
+  for (const Point3& p : cube.points) two.points.push_back({p[0] + 0.5, p[1] + 0.25, p[2] + 0.25});
+  for (const Triangle& t : cube.triangles) two.triangles.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
+  DiagnosticList diagnostics;
+  CHECK_FALSE(tetgen_tetrahedralize(two, uniform(0.5), 1000, diagnostics));
+  CHECK(messages(diagnostics) ==
+        "TetGen found the surface intersecting itself; fix the surface (fmpc checks that it is closed, manifold and "
+        "oriented, but not that it is free of self-intersections)\n");
 }
