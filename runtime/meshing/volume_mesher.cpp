@@ -169,9 +169,9 @@ std::string quality_text(const VolumeMesh& mesh, const VolumeMeshOptions& option
           significant_digits(mesh.surface.volume, 3) + ")\n";
   text += "  size field: size_near " + format_number(options.size.size_near) + " within " +
           format_number(options.size.near_distance) + " of " + std::to_string(options.size.sources.size()) +
-          " sources, graded at " + format_number(options.size.grading) + " to size_far " +
-          format_number(options.size.size_far) + " (mesh units); surface " +
-          (options.keep_surface ? "kept" : "refined") + "\n";
+          (options.size.sources.size() == 1 ? " source" : " sources") + ", graded at " +
+          format_number(options.size.grading) + " to size_far " + format_number(options.size.size_far) +
+          " (mesh units); surface " + (options.keep_surface ? "kept" : "refined") + "\n";
   text += row("longest edge (" + std::to_string(mesh.above_size) + " above 1.5 x the size field)", q.longest_edge);
   text += row("radius-edge ratio (bound " + format_number(options.max_radius_edge_ratio) + ", " +
                   std::to_string(q.above_ratio_bound) + " above, " + std::to_string(q.above_ratio_bound_inside) +

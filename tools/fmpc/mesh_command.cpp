@@ -169,7 +169,7 @@ void register_mesh_command(CLI::App& app, int& exit_code) {
   command->add_option("--radius-edge", options->radius_edge_ratio,
                       "Largest radius-edge ratio (circumradius / shortest edge) refinement allows");
   command->add_option("--min-dihedral", options->min_dihedral,
-                      "Smallest dihedral angle (degrees) TetGen's optimisation seeks");
+                      "Smallest dihedral angle (degrees) TetGen refines and optimises toward (not guaranteed)");
   command->add_flag("--smooth-intersections", options->smooth_intersections,
                     "Smooth the vertices of self-intersecting triangles until none intersect (reported)");
   command->add_flag("--keep-surface", options->keep_surface,
