@@ -279,7 +279,7 @@ TEST_CASE("limits: the predicted tetrahedra and the surface's size are refused b
         "grading must be a positive length (mesh units), got 0\n");
 }
 
-TEST_CASE("surface defects are refused with their place; an inward surface is meshed reversed", "[mesher]") {
+TEST_CASE("surface defects are refused with their place, and an inward surface is meshed reversed", "[mesher]") {
   struct Case {
     const char* name;
     Mesh surface;
