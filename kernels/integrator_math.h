@@ -1,5 +1,6 @@
 #pragma once
 // Per-vertex pieces of the integrators, shared by the CPU loops and the CUDA kernels.
+#include "kernels/contact_math.h"
 #include "kernels/fmpc_hd.h"
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
@@ -25,6 +26,7 @@ struct VertexLoads {
   Real gravity_x, gravity_y, gravity_z;
   Real gamma0, gamma1;  // nodal damping (Basafa-Farahmand), N s/m and N s/m^2
   Real mass_damping;    // Rayleigh's mass-proportional alpha (1/s): force -alpha m v
+  ContactView<Real> contact;  // rigid tools (kernels/contact_math.h); tool_count 0: none
 };
 
 // A vertex's own load values (VertexLoads' per-vertex arrays at one vertex): what loaded_acceleration reads besides
@@ -34,11 +36,12 @@ struct VertexLoadValues {
   Real mass;
   Real rest_x, rest_y, rest_z;     // read where there is nodal damping
   Real force_x, force_y, force_z;  // zero without external forces
+  Real contact_stiffness;          // zero without tools
 };
 
 template <typename Real>
 FMPC_HD VertexLoadValues<Real> vertex_load_values(const VertexLoads<Real>& loads, int v) {
-  VertexLoadValues<Real> l{loads.mass[v], Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
+  VertexLoadValues<Real> l{loads.mass[v], Real(0), Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
     l.rest_x = loads.rest_x[v];
     l.rest_y = loads.rest_y[v];
@@ -49,11 +52,13 @@ FMPC_HD VertexLoadValues<Real> vertex_load_values(const VertexLoads<Real>& loads
     l.force_y = loads.force_y[v];
     l.force_z = loads.force_z[v];
   }
+  if (loads.contact.tool_count > 0) l.contact_stiffness = loads.contact.stiffness[v];
   return l;
 }
 
 // Acceleration of a vertex at (x, v) = `self` with load values `own`, not held on every axis, under the model's
-// internal force f: (f + external force - (gamma0 + gamma1 |x - x0|) v - alpha m v) / m + g; zero along held axes.
+// internal force f: (f + external force + the tools' contact force - (gamma0 + gamma1 |x - x0|) v - alpha m v) / m
+// + g; zero along held axes.
 template <typename Real>
 FMPC_HD void loaded_acceleration(const VertexLoadValues<Real>& own, unsigned char held, const VertexState<Real>& self,
                                  Real fx, Real fy, Real fz, const VertexLoads<Real>& loads, Real& ax, Real& ay,
@@ -63,6 +68,8 @@ FMPC_HD void loaded_acceleration(const VertexLoadValues<Real>& own, unsigned cha
     fy += own.force_y;
     fz += own.force_z;
   }
+  if (own.contact_stiffness > Real(0))
+    add_contact_force(loads.contact, own.contact_stiffness, self.x, self.y, self.z, fx, fy, fz);
   if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
     const Real dx = self.x - own.rest_x, dy = self.y - own.rest_y, dz = self.z - own.rest_z;
     const Real gamma = loads.gamma0 + loads.gamma1 * square_root(dx * dx + dy * dy + dz * dz);
@@ -136,7 +143,20 @@ FMPC_HD void verlet_velocity_update(Real& v, Real a0, Real a1, Real h) {
 // (ramp_time 0: at once). Evaluated in double by both backends so that the prescribed path is the same bits. Once
 // t reaches the ramp time, t / ramp_time rounds to 1 or more, so the division is skipped: on the GPU it is a
 // double-precision sequence on the path of the probe vertex's thread, which its neighbours' blocks wait for.
-FMPC_HD double probe_ramp_share(double t, double ramp_time) {
+// With `cycles` > 0 the share is a triangle wave instead: up to 1 at the ramp time, back to 0 at twice it, `cycles`
+// times, then held at 0 (cyclic loading: a viscoelastic material's hysteresis). The period's index is a truncation
+// (exact), the rest + - * /.
+FMPC_HD double probe_cycle_phase(double t, double ramp_time) {
+  const double u = t / ramp_time;
+  const double whole = static_cast<double>(static_cast<long long>(u / 2.0));
+  return u - 2.0 * whole;  // in [0, 2): rising below 1, falling above
+}
+FMPC_HD double probe_ramp_share(double t, double ramp_time, int cycles) {
+  if (cycles > 0 && ramp_time > 0.0) {
+    if (!(t < 2.0 * ramp_time * cycles)) return 0.0;
+    const double phase = probe_cycle_phase(t, ramp_time);
+    return phase < 1.0 ? phase : 2.0 - phase;
+  }
   if (!(ramp_time > 0.0) || !(t < ramp_time)) return 1.0;
   const double share = t / ramp_time;
   return share < 1.0 ? share : 1.0;
@@ -145,9 +165,15 @@ FMPC_HD double probe_ramp_share(double t, double ramp_time) {
 // One axis of a displacement probe's vertex at time t: position start + share target, and, before a step while
 // the ramp is rising, the ramp's velocity (which the dashpots and the implicit step see); zero otherwise.
 template <typename Real>
-FMPC_HD void probe_prescribed_state(double start, double target, double t, double ramp_time, bool before_step,
-                                    Real& position, Real& velocity) {
-  position = static_cast<Real>(start + probe_ramp_share(t, ramp_time) * target);
+FMPC_HD void probe_prescribed_state(double start, double target, double t, double ramp_time, int cycles,
+                                    bool before_step, Real& position, Real& velocity) {
+  position = static_cast<Real>(start + probe_ramp_share(t, ramp_time, cycles) * target);
+  if (cycles > 0 && ramp_time > 0.0) {
+    const bool moving = t < 2.0 * ramp_time * cycles;
+    const double rate = probe_cycle_phase(t, ramp_time) < 1.0 ? target / ramp_time : -target / ramp_time;
+    velocity = static_cast<Real>(before_step && moving ? rate : 0.0);
+    return;
+  }
   const bool ramping = ramp_time > 0.0 && t < ramp_time;
   velocity = static_cast<Real>(before_step && ramping ? target / ramp_time : 0.0);
 }

@@ -4,6 +4,7 @@
 fmpc_unity_group(fmpc_tests tests_0
   unit/matlab_fis_test.cpp
   unit/fmpc_language_test.cpp
+  unit/fmpc_writer_test.cpp
   support/setup_reference.cpp
   unit/interpreter_test.cpp
   unit/tetrahedron_math_test.cpp
@@ -80,6 +81,9 @@ fmpc_unity_group(fmpc_tests tests_11
   unit/sim_loads_test.cpp
   unit/packed_table_test.cpp)
 fmpc_unity_group(fmpc_tests tests_12
+  unit/rigid_tool_test.cpp
+  unit/session_test.cpp)
+fmpc_unity_group(fmpc_tests tests_13
   unit/volume_mesher_test.cpp
   unit/surface_readers_test.cpp
   unit/scene_meshing_test.cpp)

@@ -10,6 +10,14 @@ namespace fmpc::kernels {
 
 struct LinearTetrahedron {
   static constexpr int kNodes = 4;
+  static constexpr int kPoints = 1;  // material points (per-point state: kernels/prony_viscoelasticity.h)
+
+  // F at each material point from node positions x.
+  template <typename Real>
+  static FMPC_HD void deformation_gradients(const ElementTermView<Real>& t, int e, const Real x[kNodes][3],
+                                            Real F[kPoints][9]) {
+    corner_gradient(x, t.rest_inverse + 9 * e, F[0]);
+  }
 
   // The element's forces on its nodes at positions x and, where the term is damped (v non-null), velocities v.
   template <typename Law, typename Real>
@@ -24,9 +32,9 @@ struct LinearTetrahedron {
     if (v) {
       Real F_rate[9];
       corner_gradient(v, rest_inverse, F_rate);
-      Law::first_piola(Law::material(t, e), F, F_rate, P);
+      point_first_piola<Law>(t, e, kPoints * e, F, F_rate, P);
     } else {
-      Law::first_piola(Law::material(t, e), F, static_cast<const Real*>(nullptr), P);
+      point_first_piola<Law>(t, e, kPoints * e, F, static_cast<const Real*>(nullptr), P);
     }
     corner_forces_from_stress(P, g, t.rest_volume[e], out);
   }

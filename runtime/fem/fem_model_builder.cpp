@@ -80,6 +80,7 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
     diagnostics.error(range, "damping ratio and Rayleigh stiffness damping must be finite and non-negative");
     return std::nullopt;
   }
+  build->term.prony = spec.prony;
   if (!add_element_term(setup, std::move(build->term), spec.damping_ratio, spec.rayleigh_stiffness, diagnostics))
     return std::nullopt;
   return setup;

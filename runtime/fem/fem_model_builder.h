@@ -23,6 +23,7 @@ struct FemModelSpec {
   double damping_ratio = 0.0;       // zeta of each element's own fastest mode (assign_element_damping)
   double rayleigh_stiffness = 0.0;  // beta (s), added to every element's
   double length_unit = 1.0;         // metres per mesh unit
+  std::vector<PronyTerm> prony;     // viscoelasticity on the law; empty: elastic
 };
 
 // Scales the points to metres, checks every element (positive volume: repair the mesh first) and the material (the

@@ -66,6 +66,9 @@ bool GpuEngine<Real>::save_checkpoint(DiagnosticList& diagnostics) {
     return true;
   }
   if (!copy_state(checkpoint_slot(checkpoint_slot_), state_[current_].view(), diagnostics)) return false;
+  for (DeviceTermArrays& arrays : term_arrays_)
+    if (arrays.state.size() > 0)
+      FMPC_CUDA_CHECK(copy_async(arrays.checkpoint_state, arrays.state, stream_), diagnostics, false);
   if (scheme() == sim::Integrator::VelocityVerlet) {
     FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.x, acceleration_.x, stream_), diagnostics, false);
     FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.y, acceleration_.y, stream_), diagnostics, false);
@@ -86,6 +89,9 @@ bool GpuEngine<Real>::restore_checkpoint(DiagnosticList& diagnostics) {
   }
   if (!copy_state(state_[current_].mutable_view(), read_only(checkpoint_slot(checkpoint_slot_)), diagnostics))
     return false;
+  for (DeviceTermArrays& arrays : term_arrays_)
+    if (arrays.state.size() > 0)
+      FMPC_CUDA_CHECK(copy_async(arrays.state, arrays.checkpoint_state, stream_), diagnostics, false);
   if (scheme() == sim::Integrator::VelocityVerlet) {
     FMPC_CUDA_CHECK(copy_async(acceleration_.x, checkpoint_acceleration_.x, stream_), diagnostics, false);
     FMPC_CUDA_CHECK(copy_async(acceleration_.y, checkpoint_acceleration_.y, stream_), diagnostics, false);

@@ -8,6 +8,7 @@
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
+#include "runtime/integrate/implicit_contact.h"
 #include "runtime/integrate/implicit_solver.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/integrate/stepping_engine.h"
@@ -49,6 +50,9 @@ class CpuSceneBase {
   virtual ProbeReading probe_reading() const = 0;
   virtual std::vector<double> current_stiffness() const = 0;
   virtual const SimulationSetup& setup() const = 0;
+  virtual void set_contact(const std::vector<double>& stiffness) = 0;
+  virtual void set_tool_shapes(const std::vector<kernels::ToolShape<double>>& shapes) = 0;
+  virtual void refresh_material() = 0;
 };
 
 template <typename Real>
@@ -123,6 +127,9 @@ class CpuScene final : public CpuSceneBase {
         TermArrays arrays;
         for (int p = 0; p < kernels::kMostLawParameters; ++p) arrays.parameter[p] = convert(term.parameter[p]);
         arrays.damping = convert(term.stiffness_damping);
+        const int width = point_state_width(term);
+        const int points = static_cast<int>(geometry.size()) * points_per_element(geometry.kind);
+        arrays.state.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(points), Real(0));
         term_arrays_.push_back(std::move(arrays));
         const TermArrays& held = term_arrays_.back();
         const auto data_or_null = [](const std::vector<Real>& values) {
@@ -139,10 +146,16 @@ class CpuScene final : public CpuSceneBase {
         for (int p = 0; p < kernels::kMostLawParameters; ++p) view.parameter[p] = data_or_null(held.parameter[p]);
         view.stiffness_damping = data_or_null(held.damping);
         view.strain_table = reads_strain_table(term) ? table : kernels::StrainTableView{nullptr, nullptr, 0};
+        view.state = {width > 0 ? term_arrays_.back().state.data() : nullptr, width, points};
+        view.prony = kernels::PronyConstants<Real>{};
+        if (width > 0)
+          view.prony = prony_constants_in<Real>(term.prony, stability.time_step,
+                                                setup.integrator == Integrator::ImplicitEuler);
         term_views_.push_back(view);
       }
       corner_view_ = {geometry.corner_offset.data(), geometry.corner_index.data(), corner_force_.data()};
     }
+    update_point_state(true);
     loads_.mass = mass_.data();
     loads_.fixed = fixed_.data();
     loads_.rest_x = rest_.x.data();
@@ -174,6 +187,45 @@ class CpuScene final : public CpuSceneBase {
     }
   }
 
+  // Contact: the stiffness per vertex and the tools' shapes, in Real, which loads_.contact points at.
+  void set_contact(const std::vector<double>& stiffness) override {
+    contact_stiffness_.assign(stiffness.begin(), stiffness.end());
+    loads_.contact.stiffness = contact_stiffness_.data();
+  }
+
+  void set_tool_shapes(const std::vector<kernels::ToolShape<double>>& shapes) override {
+    tools_.resize(shapes.size());
+    for (std::size_t t = 0; t < shapes.size(); ++t) {
+      const kernels::ToolShape<double>& s = shapes[t];
+      tools_[t] = {static_cast<Real>(s.ax), static_cast<Real>(s.ay), static_cast<Real>(s.az), static_cast<Real>(s.bx),
+                   static_cast<Real>(s.by), static_cast<Real>(s.bz), static_cast<Real>(s.radius)};
+    }
+    loads_.contact.tools = tools_.data();
+    loads_.contact.tool_count = static_cast<int>(tools_.size());
+  }
+
+  // The setup's material arrays were replaced with arrays of the same sizes: converted again into the buffers the
+  // views point at (their sizes, and so the views, are unchanged); the strain table's view is taken again.
+  void refresh_material() override {
+    const SpringNetwork& net = setup_.springs;
+    std::transform(net.stiffness.begin(), net.stiffness.end(), stiffness_.begin(),
+                   [](double k) { return static_cast<Real>(k); });
+    std::transform(net.damping.begin(), net.damping.end(), damping_.begin(),
+                   [](double c) { return static_cast<Real>(c); });
+    const kernels::StrainTableView table = setup_.strain_stiffness ? strain_table_view(*setup_.strain_stiffness)
+                                                                   : kernels::StrainTableView{nullptr, nullptr, 0};
+    for (std::size_t t = 0; t < term_arrays_.size(); ++t) {
+      const ElementTerm& term = setup_.elements.terms[t];
+      TermArrays& arrays = term_arrays_[t];
+      for (int p = 0; p < kernels::kMostLawParameters; ++p)
+        std::transform(term.parameter[p].begin(), term.parameter[p].end(), arrays.parameter[p].begin(),
+                       [](double value) { return static_cast<Real>(value); });
+      std::transform(term.stiffness_damping.begin(), term.stiffness_damping.end(), arrays.damping.begin(),
+                     [](double beta) { return static_cast<Real>(beta); });
+      if (reads_strain_table(term)) term_views_[t].strain_table = table;
+    }
+  }
+
   void run_to(std::size_t end, DiagnosticList& diagnostics) override {
     while (steps_taken_ < end) {
       one_step(diagnostics);
@@ -182,7 +234,9 @@ class CpuScene final : public CpuSceneBase {
   }
 
   ProbeReading probe_reading() const override {
-    return read_probe(setup_, time(), positions(), velocities(), current_stiffness());
+    ElementTermStates states;
+    for (const TermArrays& arrays : term_arrays_) states.emplace_back(arrays.state.begin(), arrays.state.end());
+    return read_probe(setup_, time(), positions(), velocities(), current_stiffness(), &states);
   }
 
   std::vector<double> current_stiffness() const override {
@@ -267,6 +321,26 @@ class CpuScene final : public CpuSceneBase {
     step(diagnostics);
     ++steps_taken_;
     apply_probe(time(), false);
+    update_point_state(false);
+  }
+
+  // Each stateful term's state after an accepted step, at the positions held (the step's end, probe applied); with
+  // `jump`, the history of a jump from rest to the positions held (the start: prony_constants at dt = 0).
+  void update_point_state(bool jump) {
+    const kernels::StateView<Real> state = view(position_, velocity_);
+    for (std::size_t term = 0; term < term_views_.size(); ++term) {
+      kernels::ElementTermView<Real> field = term_views_[term];
+      if (field.prony.count == 0) continue;
+      if (jump) field.prony = prony_constants_in<Real>(setup_.elements.terms[term].prony, 0.0, false);
+      kernels::visit_element_term(field.element, field.law, [&](auto kind, auto element_law) {
+        using Element = decltype(kind);
+        using Law = decltype(element_law);
+        pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
+          for (std::size_t e = begin; e < end; ++e)
+            kernels::element_state_update<Element, Law>(static_cast<int>(e), field, state);
+        });
+      });
+    }
   }
 
   InversionCount count_inversions() const override {
@@ -287,6 +361,7 @@ class CpuScene final : public CpuSceneBase {
     checkpoint_acceleration_ = acceleration_;
     checkpoint_have_acceleration_ = have_acceleration_;
     checkpoint_step_ = steps_taken_;
+    for (TermArrays& arrays : term_arrays_) arrays.checkpoint_state = arrays.state;
     if (solver_) {
       checkpoint_warm_start_ = solver_->warm_start();
       log_.save(steps_taken_);
@@ -299,6 +374,9 @@ class CpuScene final : public CpuSceneBase {
     acceleration_ = checkpoint_acceleration_;
     have_acceleration_ = checkpoint_have_acceleration_;
     steps_taken_ = checkpoint_step_;
+    // Copied into the buffers the views point at.
+    for (TermArrays& arrays : term_arrays_) std::copy(arrays.checkpoint_state.begin(), arrays.checkpoint_state.end(),
+                                                      arrays.state.begin());
     if (solver_) {
       solver_->set_warm_start(checkpoint_warm_start_);
       log_.restore();
@@ -410,8 +488,11 @@ class CpuScene final : public CpuSceneBase {
     interleave(acceleration_, implicit_a_);
     implicit_k_.resize(stiffness_.size());
     for (std::size_t s = 0; s < stiffness_.size(); ++s) implicit_k_[s] = static_cast<double>(stiffness_[s]);
-    const ImplicitSolve solve = solver_->solve(implicit_x_, implicit_v_, implicit_a_, implicit_k_,
-                                               static_cast<double>(h_), pool_, implicit_dv_);
+    const bool contact = loads_.contact.tool_count > 0;
+    if (contact) contact_.start(implicit_x_, implicit_v_, static_cast<double>(h_));
+    const ImplicitSolve solve =
+        solver_->solve(implicit_x_, implicit_v_, implicit_a_, implicit_k_, static_cast<double>(h_), pool_,
+                       implicit_dv_, contact ? &contact_ : nullptr, kernels::kMostContactRounds);
     if (solve.direct_failed) log_.fallback();
     const ImplicitStepRecord record{steps_taken_ + 1, solve.iterations, solve.relative_residual, !solve.converged};
     if (log_.record(record)) {
@@ -420,6 +501,11 @@ class CpuScene final : public CpuSceneBase {
                                                                  : solver_->method(),
                                              record.step, record.iterations, record.relative_residual,
                                              setup_.implicit.tolerance));
+    }
+    if (!solve.settled && !contact_warning_given_) {
+      contact_warning_given_ = true;
+      diagnostics.warning(setup_.source_range, "contact-not-settled",
+                          contact_unsettled_message(steps_taken_ + 1, kernels::kMostContactRounds));
     }
     const std::vector<double>& dv = implicit_dv_;
     for_each_vertex([&](std::size_t i) {
@@ -450,7 +536,7 @@ class CpuScene final : public CpuSceneBase {
     const ProbeLoad& probe = *setup_.probe;
     if (probe.mode == ProbeLoad::Mode::Force) {
       if (!before_step) return;
-      const double share = kernels::probe_ramp_share(t, probe.ramp_time);
+      const double share = kernels::probe_ramp_share(t, probe.ramp_time, probe.cycles);
       const double count = static_cast<double>(probe.vertices.size());
       for (const auto vertex : probe.vertices) {
         const auto v = static_cast<std::size_t>(vertex);
@@ -464,11 +550,14 @@ class CpuScene final : public CpuSceneBase {
     for (const auto vertex : probe.vertices) {
       const auto v = static_cast<std::size_t>(vertex);
       const Point3& start = start_position(setup_, v);
-      kernels::probe_prescribed_state(start[0], probe.target[0], t, probe.ramp_time, before_step, position_.x[v],
+      kernels::probe_prescribed_state(start[0], probe.target[0], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.x[v],
                                       velocity_.x[v]);
-      kernels::probe_prescribed_state(start[1], probe.target[1], t, probe.ramp_time, before_step, position_.y[v],
+      kernels::probe_prescribed_state(start[1], probe.target[1], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.y[v],
                                       velocity_.y[v]);
-      kernels::probe_prescribed_state(start[2], probe.target[2], t, probe.ramp_time, before_step, position_.z[v],
+      kernels::probe_prescribed_state(start[2], probe.target[2], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.z[v],
                                       velocity_.z[v]);
     }
   }
@@ -504,6 +593,8 @@ class CpuScene final : public CpuSceneBase {
   std::size_t n_;
   std::vector<Real> rest_length_, stiffness_, damping_, mass_;
   std::vector<unsigned char> fixed_;
+  std::vector<Real> contact_stiffness_;
+  std::vector<kernels::ToolShape<Real>> tools_;
   Vector3Arrays<Real> position_, velocity_, rest_, acceleration_, force_;
   Vector3Arrays<Real> stage_position_, stage_velocity_, next_acceleration_;
   Vector3Arrays<Real> rk_velocity_[4], rk_acceleration_[4];
@@ -515,6 +606,7 @@ class CpuScene final : public CpuSceneBase {
   struct TermArrays {
     std::vector<Real> parameter[kernels::kMostLawParameters];
     std::vector<Real> damping;
+    std::vector<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
   };
   std::vector<Real> rest_inverse_, rest_volume_;
   std::vector<TermArrays> term_arrays_;  // the views point into its vectors' buffers, which moves keep
@@ -531,6 +623,9 @@ class CpuScene final : public CpuSceneBase {
   std::unique_ptr<ImplicitSolver> solver_;
   ImplicitSolverLog log_;
   std::vector<double> implicit_x_, implicit_v_, implicit_a_, implicit_k_, implicit_dv_, checkpoint_warm_start_;
+  // The tools' contact in the solve (read through loads_.contact), and whether contact-not-settled was given.
+  ImplicitContact<Real> contact_{loads_.contact, fixed_};
+  bool contact_warning_given_ = false;
 };
 
 // The CPU engine of a batch: each scene's CpuScene, run side by side on a pool of workers over the scenes (a scene's
@@ -662,6 +757,19 @@ class CpuEngine final : public SteppingEngine {
   }
   std::vector<double> current_stiffness(std::size_t scene, DiagnosticList&) const override {
     return scenes_[scene]->current_stiffness();
+  }
+  bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList&) override {
+    scenes_[scene]->set_contact(stiffness);
+    return true;
+  }
+  bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,
+                       DiagnosticList&) override {
+    scenes_[scene]->set_tool_shapes(shapes);
+    return true;
+  }
+  bool refresh_material(std::size_t scene, DiagnosticList&) override {
+    scenes_[scene]->refresh_material();
+    return true;
   }
 
  private:

@@ -428,6 +428,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   spec.mass = scene.mass;
   spec.damping_ratio = scene.damping.ratio;
   spec.rayleigh_stiffness = scene.rayleigh.stiffness;
+  spec.prony = material.prony;
   const RegionalValue poisson = material.poisson_ratio.value_or(RegionalValue{kDefaultPoissonRatio, true, {}});
   const auto nu = regional_values(poisson, centroids, scene, "material.poisson_ratio", diagnostics);
   if (!nu) return std::nullopt;
@@ -469,6 +470,11 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   }
   const std::string nu_text = poisson.regions.empty() ? format_number(poisson.value) : "per region";
   built.stiffness_description += ", nu = " + nu_text;
+  if (!material.prony.empty()) {
+    built.stiffness_description += "; viscoelastic, Prony series (g, tau)";
+    for (const PronyTerm& term : material.prony)
+      built.stiffness_description += " (" + format_number(term.weight) + ", " + format_number(term.time) + " s)";
+  }
   auto setup = build_fem_model(built.mesh, spec, diagnostics);
   if (!setup) return std::nullopt;
   setup->strain_stiffness = std::move(strain_table);
@@ -535,6 +541,12 @@ bool add_term_beside_springs(const Scene& scene, const BuiltScene& built, const 
 std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& built, const LoadedRules* loaded,
                                              DiagnosticList& diagnostics) {
   const SceneMaterial& material = scene.material;
+  if (!material.prony.empty()) {
+    diagnostics.error(scene.range_of("material.viscoelastic"),
+                      "material.viscoelastic acts on an element law; a spring network has none: use a finite-element "
+                      "model (model: corotational_fem), or remove 'viscoelastic'");
+    return std::nullopt;
+  }
   SpringModelSpec model;
   model.length_unit = scene.mesh.unit;
   model.triangle_springs = scene.triangle_springs;
@@ -690,9 +702,25 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
       load.vertices = *picked;
       load.target = probe.target;
       load.ramp_time = probe.ramp;
+      load.cycles = probe.cycles;
       setup->probe = load;
     }
   }
+  // Tools: mesh units to metres; Simulation::create checks that none starts inside the tissue.
+  for (const SceneTool& scene_tool : scene.tools) {
+    RigidTool tool;
+    tool.name = scene_tool.name;
+    tool.shape = scene_tool.shape;
+    tool.radius = scene_tool.radius * scene.mesh.unit;
+    tool.length = scene_tool.length * scene.mesh.unit;
+    tool.range = scene.range_of(scene_tool.field);
+    for (ToolKeyframe keyframe : scene_tool.path) {
+      for (double& coordinate : keyframe.pose.position) coordinate *= scene.mesh.unit;
+      tool.path.push_back(keyframe);
+    }
+    setup->tools.push_back(std::move(tool));
+  }
+  setup->contact_stiffness_ratio = scene.contact_stiffness_ratio;
   setup->gravity = scene.gravity;
   setup->law = scene.law.law;
   setup->basafa_k2_over_k1 = scene.law.k2_over_k1;

@@ -93,6 +93,8 @@ struct SceneMaterial {
   bool mapping_given = false;
   // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.499].
   std::optional<RegionalValue> poisson_ratio;
+  // material.viscoelastic: {prony: [{weight, time}, ...]} (kernels/prony_viscoelasticity.h); empty: elastic. FEM only.
+  std::vector<PronyTerm> prony;
   double thickness = 1.0;        // m, membranes (triangle meshes)
   double flexion_fraction = 0.1;
 };
@@ -134,6 +136,17 @@ struct SceneProbe {
   double radius = 0.0;  // mesh units: the vertices within this distance of the first hit (0: the hit's nearest)
   Point3 target{0.0, 0.0, 0.0};  // m (displacement) or N (force)
   double ramp = 0.0;             // s
+  int cycles = 0;                // > 0: up to target and back over 2 ramp, this many times (ProbeLoad::cycles)
+};
+
+// A rigid tool (`tools:`): its geometry in mesh units, converted to metres by the builder.
+struct SceneTool {
+  std::string name;
+  RigidTool::Shape shape = RigidTool::Shape::Sphere;
+  double radius = 0.0;              // mesh units
+  double length = 0.0;              // mesh units (capsule)
+  std::vector<ToolKeyframe> path;   // positions in mesh units; one keyframe for `pose`
+  std::string field;                // "tools[i]", for errors found when the mesh is known
 };
 
 enum class SceneBackend { Auto, Cpu, Cuda };
@@ -190,6 +203,8 @@ struct Scene {
   std::vector<SceneHold> holds;
   Point3 gravity{0.0, 0.0, 0.0};
   std::optional<SceneProbe> probe;
+  std::vector<SceneTool> tools;
+  double contact_stiffness_ratio = kDefaultContactStiffnessRatio;  // `contact: {stiffness_ratio}`
   Integrator integrator = Integrator::SemiImplicitEuler;
   std::optional<double> dt;  // nullopt: auto
   double duration = 1.0;     // s

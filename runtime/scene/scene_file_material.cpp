@@ -177,7 +177,7 @@ void SceneParser::parse_material(const YAML::Node& node) {
   remember(node, "material");
   if (!check_map(node, "material", {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table",
                                     "system", "output", "patient", "inputs", "strain_axis", "thickness",
-                                    "flexion_fraction", "mapping", "poisson_ratio"}))
+                                    "flexion_fraction", "mapping", "poisson_ratio", "viscoelastic"}))
     return;
   SceneMaterial& material = scene_.material;
   const std::vector<std::string> sources = {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table"};
@@ -234,6 +234,7 @@ void SceneParser::parse_material(const YAML::Node& node) {
     }
   }
   if (node["poisson_ratio"]) material.poisson_ratio = poisson_ratio(node["poisson_ratio"]);
+  if (node["viscoelastic"]) parse_viscoelastic(node["viscoelastic"]);
   if (node["thickness"])
     if (auto v = positive(node["thickness"], "material.thickness", " (m)")) material.thickness = *v;
   if (node["flexion_fraction"])
@@ -284,6 +285,51 @@ bool SceneParser::parse_regions(const YAML::Node& value, const std::string& fiel
     if (region_box && region_value) out.push_back({*region_box, *region_value});
   }
   return true;
+}
+
+// `viscoelastic: {prony: [{weight: g, time: tau}, ...]}`: 1 to kMostPronyTerms terms, each weight in (0, 1) and
+// time (s) positive, the weights summing below 1 (the long-term modulus 1 - sum g_i of the law's instantaneous one).
+void SceneParser::parse_viscoelastic(const YAML::Node& node) {
+  const std::string field = "material.viscoelastic";
+  remember(node, field);
+  if (!check_map(node, field, {"prony"})) return;
+  const YAML::Node list = node["prony"];
+  const std::string expected = "a list of 1 to " + std::to_string(kernels::kMostPronyTerms) +
+                               " Prony terms {weight: g, time: tau (s)}";
+  if (!list || !list.IsSequence() || list.size() == 0 ||
+      list.size() > static_cast<std::size_t>(kernels::kMostPronyTerms)) {
+    error(list ? list : node, field + ".prony", "expected " + expected);
+    return;
+  }
+  remember(list, field + ".prony");
+  std::vector<PronyTerm> prony;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string term_field = field + ".prony[" + std::to_string(i) + "]";
+    if (!check_map(list[i], term_field, {"weight", "time"})) return;
+    if (!list[i]["weight"] || !list[i]["time"]) {
+      error(list[i], term_field, "a Prony term needs 'weight' and 'time'");
+      return;
+    }
+    const auto weight = number(list[i]["weight"], term_field + ".weight", "a number in (0, 1)");
+    const auto time = positive(list[i]["time"], term_field + ".time", " (s)");
+    if (!weight || !time) return;
+    if (!(*weight > 0.0 && *weight < 1.0)) {
+      error(list[i]["weight"], term_field + ".weight",
+            format_number(*weight) + " is not in (0, 1): a weight is the fraction of the instantaneous stress that "
+                                     "relaxes with this time constant");
+      return;
+    }
+    sum += *weight;
+    prony.push_back({*weight, *time});
+  }
+  if (!(sum < 1.0)) {
+    error(list, field + ".prony",
+          "the weights sum to " + format_number(sum) +
+              "; they must sum below 1 (the long-term modulus is 1 - sum g_i times the law's instantaneous one)");
+    return;
+  }
+  scene_.material.prony = std::move(prony);
 }
 
 // A Poisson ratio in [0, 0.499]: a number, or {regions: [...], default: NUMBER}.

@@ -217,8 +217,8 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "threads: 1.5\n") == "3:10: threads: expected an integer from 0 to 256, got '1.5'");
   CHECK(error_of(kMinimal + "gravity: [0, 0, -9.81]\n") ==
         "3:1: gravity: unknown key; allowed: 'name', 'model', 'mesh', 'material', 'mass', 'damping', 'springs', "
-        "'law', 'fem', 'fixed', 'hold', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads', "
-        "'outputs', 'on_inversion' or 'solver'");
+        "'law', 'fem', 'fixed', 'hold', 'loads', 'tools', 'contact', 'integrator', 'dt', 'duration', 'backend', "
+        "'precision', 'threads', 'outputs', 'on_inversion' or 'solver'");
   CHECK(error_of("material: {youngs_modulus: 10}\n") ==
         "1:1: mesh: missing; give a mesh file or a generated box or ellipsoid");
   CHECK(error_of("mesh: {box: {size: [1, 1, 1]}}\n") ==
@@ -328,7 +328,7 @@ TEST_CASE("unknown keys and keywords come with a suggestion", "[scene]") {
   CHECK(parsed.errors[0].rfind("3:1: integrater: unknown key; allowed:", 0) == 0);
   CHECK(parsed.errors[1] ==
         "4:31: loads.probe.displacment: unknown key in loads.probe; allowed: 'indices', 'ray', 'radius', "
-        "'displacement', 'force' or 'ramp'");
+        "'displacement', 'force', 'ramp' or 'cycles'");
   CHECK(parsed.errors[2] == "4:16: loads.probe: give one of 'displacement' or 'force'");
   CHECK(parsed.notes == std::vector<std::string>{"did you mean 'integrator'?", "did you mean 'displacement'?"});
   const Parsed keyword = parse(kMinimal + "integrator: implicit_eular\n");
@@ -337,7 +337,8 @@ TEST_CASE("unknown keys and keywords come with a suggestion", "[scene]") {
 
 TEST_CASE("every shipped scene parses", "[scene]") {
   for (const char* name :
-       {"liver_indentation", "sofa_liver_springs", "sofa_liver_fuzzy", "sofa_liver_fem", "strain_stiffening_block"}) {
+       {"liver_indentation", "sofa_liver_springs", "sofa_liver_fuzzy", "sofa_liver_fem", "strain_stiffening_block",
+        "liver_palpation"}) {
     const std::string path = std::string(FMPC_SOURCE_DIR) + "/rulesets/scenes/" + name + ".yaml";
     std::ifstream in(path);
     std::stringstream text;

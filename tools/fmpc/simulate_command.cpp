@@ -56,9 +56,14 @@ std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& c
   }
   if (!scene.material.patient.empty()) subtitle = scene.material.patient + "; " + subtitle;
   chart.title.push_back(subtitle);
-  const double ramp = scene.probe ? scene.probe->ramp : 0.0;
+  // A cyclic probe (loads.probe.cycles) has no hold: its loops are one curve (a viscoelastic material's hysteresis).
+  const int cycles = scene.probe ? scene.probe->cycles : 0;
+  const double ramp = scene.probe && cycles == 0 ? scene.probe->ramp : 0.0;
   plot::Series ramp_series, hold_series;
   ramp_series.name = ramp > 0 ? "ramp (0 to " + six_digits(ramp) + " s)" : "loading";
+  if (cycles > 0)
+    ramp_series.name = std::to_string(cycles) + (cycles == 1 ? " cycle" : " cycles") + " of " +
+                       six_digits(2.0 * scene.probe->ramp) + " s";
   ramp_series.colour = plot::categorical_colour(0);
   hold_series.name = "hold (probe still)";
   hold_series.colour = plot::categorical_colour(1);
