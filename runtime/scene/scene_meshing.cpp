@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <limits>
 
 #include "runtime/mesh/mesh_reader.h"
@@ -38,6 +39,28 @@ std::vector<SizeSegment> probe_size_sources(const Scene& scene, const Mesh& surf
   return sources;
 }
 
+std::vector<SizeSegment> tool_size_sources(const Scene& scene) {
+  std::vector<SizeSegment> sources;
+  for (const SceneTool& tool : scene.tools) {
+    for (std::size_t k = 0; k < tool.path.size(); ++k) {
+      const ToolPose& pose = tool.path[k].pose;
+      const Point3& from = pose.position;
+      const Point3& to = tool.path[std::min(k + 1, tool.path.size() - 1)].pose.position;
+      if (k + 1 < tool.path.size() || tool.path.size() == 1) sources.push_back({from, to});
+      if (tool.shape != RigidTool::Shape::Capsule) continue;
+      // The capsule's axis runs from its position along the tool's z axis: the rotation's third column.
+      auto [w, x, y, z] = pose.orientation;
+      const double norm = std::sqrt(w * w + x * x + y * y + z * z);
+      if (!(norm > 0.0)) continue;
+      w /= norm, x /= norm, y /= norm, z /= norm;
+      const Point3 axis{2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y)};
+      sources.push_back(
+          {from, {from[0] + tool.length * axis[0], from[1] + tool.length * axis[1], from[2] + tool.length * axis[2]}});
+    }
+  }
+  return sources;
+}
+
 std::optional<Mesh> mesh_scene_surface(const Scene& scene, BuiltScene& built, DiagnosticList& diagnostics) {
   std::string contents;
   DiagnosticList read_diagnostics;
@@ -57,12 +80,14 @@ std::optional<Mesh> mesh_scene_surface(const Scene& scene, BuiltScene& built, Di
   if (!scene.mesh.surface.size_far_given)
     size.size_far = std::max(mean_edge_length(*surface), scene.mesh.surface.size_near_given ? size.size_near : 0.0);
   if (!scene.mesh.surface.size_near_given) size.size_near = size.size_far;
-  const std::vector<SizeSegment> probe = probe_size_sources(scene, *surface);
-  size.sources.insert(size.sources.begin(), probe.begin(), probe.end());
+  std::vector<SizeSegment> acting = probe_size_sources(scene, *surface);
+  const std::vector<SizeSegment> tools = tool_size_sources(scene);
+  acting.insert(acting.end(), tools.begin(), tools.end());
+  size.sources.insert(size.sources.begin(), acting.begin(), acting.end());
   if (scene.mesh.surface.size_near_given && size.sources.empty())
     diagnostics.warning(scene.range_of("mesh.size_near"), "mesh-size-field",
-                        "mesh.size_near: the scene has no probe and no refine_near, so nothing is near: the mesh is "
-                        "size_far everywhere");
+                        "mesh.size_near: the scene has no probe, no tools and no refine_near, so nothing is near: the "
+                        "mesh is size_far everywhere");
   const auto start = std::chrono::steady_clock::now();
   auto meshed = mesh_volume(std::move(*surface), run.options, diagnostics);
   run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -27,7 +27,7 @@ std::string read_whole(const std::string& path) {
 }
 
 // A 4 x 4 x 2 cm box as a closed OBJ surface (mesh units: cm), beside the scene written next to it.
-std::string write_box_scene(const std::string& name, const std::string& mesh_keys) {
+std::string write_box_scene(const std::string& name, const std::string& mesh_keys, const std::string& more = "") {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("fmpc_scene_meshing_" + name);
   std::filesystem::create_directories(dir);
   std::ofstream(dir / "box.obj") << "v 0 0 0\nv 4 0 0\nv 4 4 0\nv 0 4 0\nv 0 0 2\nv 4 0 2\nv 4 4 2\nv 0 4 2\n"
@@ -37,7 +37,8 @@ std::string write_box_scene(const std::string& name, const std::string& mesh_key
                             "model: corotational_fem\nmaterial: {youngs_modulus: 10}\n"
                             "fixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\n"
                             "loads:\n  probe:\n    ray: {origin: [2, 2, 5], direction: [0, 0, -1]}\n"
-                            "    radius: 0.3\n    displacement: [0, 0, -0.002]\n    ramp: 1\n";
+                            "    radius: 0.3\n    displacement: [0, 0, -0.002]\n    ramp: 1\n" +
+                            more;
   std::ofstream(dir / "scene.yaml") << scene;
   return (dir / "scene.yaml").string();
 }
@@ -78,6 +79,33 @@ TEST_CASE("a scene's surface is meshed fine around the probe's hit and path", "[
   // The probe picks the surface vertices within 0.3 of the hit: the fine mesh there has several.
   REQUIRE(built->setup.probe);
   CHECK(built->setup.probe->vertices.size() >= 5);
+}
+
+TEST_CASE("a scene's rigid tools add their paths and a capsule's axis to the size field", "[mesher][scene]") {
+  const std::string path = write_box_scene(
+      "tools", "  size_far: 1\n  size_near: 0.3\n  near_distance: 0.2\n",
+      "tools:\n"
+      "  - {name: tip, shape: sphere, radius: 0.2, path: [{time: 0, position: [1, 1, 2.5]}, {time: 1, position: [3, 1, "
+      "2.5]}, {time: 2, position: [3, 3, 2.5]}]}\n"
+      "  - {name: shaft, shape: capsule, radius: 0.1, length: 1, pose: {position: [0.5, 3, 2.3], orientation: [0.7071, "
+      "0, 0.7071, 0]}}\n");
+  DiagnosticList diagnostics;
+  const auto scene = parse_scene(path, read_whole(path), diagnostics);
+  REQUIRE(scene);
+  INFO(error_messages(diagnostics).size());
+  const std::vector<SizeSegment> sources = tool_size_sources(*scene);
+  REQUIRE(sources.size() == 4);  // the tip's two legs; the shaft's (still) position and its axis
+  CHECK(sources[0].a == Point3{1, 1, 2.5});
+  CHECK(sources[0].b == Point3{3, 1, 2.5});
+  CHECK(sources[1].b == Point3{3, 3, 2.5});
+  CHECK(sources[2].a == sources[2].b);
+  // A quarter turn about y takes the tool's z axis to x: the axis runs from x = 0.5 to 1.5.
+  CHECK(sources[3].b[0] == Approx(1.5).epsilon(1e-4));
+  CHECK(sources[3].b[2] == Approx(2.3).margin(1e-4));
+  const auto built = build_scene(*scene, diagnostics);
+  REQUIRE(built);
+  CHECK_FALSE(diagnostics.has_errors());
+  CHECK(built->meshing->options.size.sources.size() == 5);  // the probe's path first
 }
 
 TEST_CASE("a mesh written as .msh runs as a scene's mesh.file, the same mesh", "[mesher][scene]") {
