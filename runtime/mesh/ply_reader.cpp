@@ -183,23 +183,19 @@ bool PlyParser::read_value(PlyType type, double& value) {
   std::uint64_t bits = 0;
   for (std::size_t i = 0; i < width; ++i) bits |= static_cast<std::uint64_t>(raw[i]) << (8 * i);
   switch (type) {
+    case PlyType::UInt8:
+    case PlyType::UInt16:
+    case PlyType::UInt32:
+      value = static_cast<double>(bits);
+      break;
     case PlyType::Int8:
       value = static_cast<std::int8_t>(bits);
-      break;
-    case PlyType::UInt8:
-      value = static_cast<double>(bits);
       break;
     case PlyType::Int16:
       value = static_cast<std::int16_t>(bits);
       break;
-    case PlyType::UInt16:
-      value = static_cast<double>(bits);
-      break;
     case PlyType::Int32:
       value = static_cast<std::int32_t>(bits);
-      break;
-    case PlyType::UInt32:
-      value = static_cast<double>(bits);
       break;
     case PlyType::Float32: {
       const auto narrow = static_cast<std::uint32_t>(bits);
