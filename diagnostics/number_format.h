@@ -8,4 +8,8 @@ namespace fmpc {
 // Infinities are "inf"/"-inf" and NaN is "nan"; every writer in fmpc (fmpc text, MATLAB .fis, CSV) uses this.
 std::string format_number(double value);
 
+// `digits` significant digits for reports and messages (printf's %.*g: 0.0123, 1.5e+06); not for numbers that must
+// read back exactly (format_number).
+std::string significant_digits(double value, int digits);
+
 }  // namespace fmpc

@@ -51,6 +51,9 @@ const std::vector<WarningCode>& warning_codes() {
       // meshes, scenes and the simulator
       {"mesh-ignored-elements", "scene"},
       {"mesh-repaired", "scene"},
+      {"surface-orientation", "mesh"},
+      {"surface-smoothed", "mesh"},
+      {"mesh-size-field", "scene"},
       {"assumed-unit", "scene"},
       {"unstable-time-step", "simulate"},
       {"undamped-modes", "simulate"},

@@ -12,6 +12,15 @@ fmpc_unity_group(fmpc_runtime runtime_mesh
   mesh/obj_reader.cpp
   mesh/text_cursor.cpp
   mesh/vtk_reader.cpp)
+# tetgen_mesher.cpp compiles alone: TetGen's header defines REAL and other macros every file after it would see.
+fmpc_unity_group(fmpc_runtime runtime_meshing
+  mesh/ply_reader.cpp
+  mesh/stl_reader.cpp
+  meshing/mesh_quality.cpp
+  meshing/size_field.cpp
+  meshing/surface_check.cpp
+  meshing/surface_untangle.cpp
+  meshing/volume_mesher.cpp)
 fmpc_unity_group(fmpc_runtime runtime_models
   springs/sliced_springs.cpp
   springs/spring_network.cpp
@@ -52,6 +61,7 @@ fmpc_unity_group(fmpc_runtime runtime_scene_file
   scene/cohort.cpp)
 fmpc_unity_group(fmpc_runtime runtime_scene_run
   scene/scene_builder.cpp
+  scene/scene_meshing.cpp
   scene/scene_recorder.cpp
   scene/scene_run.cpp
   scene/scene_state.cpp

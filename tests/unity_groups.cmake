@@ -83,3 +83,7 @@ fmpc_unity_group(fmpc_tests tests_11
 fmpc_unity_group(fmpc_tests tests_12
   unit/rigid_tool_test.cpp
   unit/session_test.cpp)
+fmpc_unity_group(fmpc_tests tests_13
+  unit/volume_mesher_test.cpp
+  unit/surface_readers_test.cpp
+  unit/scene_meshing_test.cpp)

@@ -20,7 +20,16 @@ std::optional<Mesh> read_obj(std::string_view text, const std::string& file, Dia
 // UNSTRUCTURED_GRID (CELLS/CELL_TYPES: tetra 10, triangle 5). Attribute data (POINT_DATA, CELL_DATA) is ignored.
 std::optional<Mesh> read_vtk(std::string_view bytes, const std::string& file, DiagnosticList& diagnostics);
 
-// Reads `path` and picks the reader from its extension (.msh, .obj, .vtk).
-std::optional<Mesh> read_mesh_file(const std::string& path, DiagnosticList& diagnostics);
+// STL, ASCII or binary (told apart by the size a binary file must have): corners with equal coordinates become one
+// vertex (numbered by first appearance); facet normals are ignored (the corners' order orients a facet).
+std::optional<Mesh> read_stl(std::string_view bytes, const std::string& file, DiagnosticList& diagnostics);
+// PLY, ASCII or binary little-endian: `vertex` x, y, z and `face` vertex_indices (or vertex_index) lists, polygons
+// fanned into triangles; other elements and properties are read past.
+std::optional<Mesh> read_ply(std::string_view bytes, const std::string& file, DiagnosticList& diagnostics);
+
+// Reads `path` and picks the reader from its extension (.msh, .obj, .vtk, .stl, .ply). `contents`, when given,
+// receives the file's bytes (for diagnostics that quote a line).
+std::optional<Mesh> read_mesh_file(const std::string& path, DiagnosticList& diagnostics,
+                                   std::string* contents = nullptr);
 
 }  // namespace fmpc::sim

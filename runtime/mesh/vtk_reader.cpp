@@ -2,6 +2,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "runtime/io/input_file.h"
@@ -314,26 +315,28 @@ std::optional<Mesh> read_vtk(std::string_view bytes, const std::string& file, Di
   return parser.parse();
 }
 
-std::optional<Mesh> read_mesh_file(const std::string& path, DiagnosticList& diagnostics) {
+std::optional<Mesh> read_mesh_file(const std::string& path, DiagnosticList& diagnostics, std::string* contents) {
   SourceRange range;
   range.file = path;
-  const bool gmsh = ends_with(path, ".msh");
-  const bool obj = ends_with(path, ".obj");
-  const bool vtk = ends_with(path, ".vtk");
-  if (!gmsh && !obj && !vtk) {
-    diagnostics.error(range, "unknown mesh format; use a .msh (Gmsh), .obj or .vtk (legacy VTK) file");
+  using Reader = std::optional<Mesh> (*)(std::string_view, const std::string&, DiagnosticList&);
+  const std::pair<const char*, Reader> readers[] = {
+      {".msh", read_gmsh}, {".obj", read_obj}, {".vtk", read_vtk}, {".stl", read_stl}, {".ply", read_ply}};
+  Reader reader = nullptr;
+  for (const auto& [extension, candidate] : readers)
+    if (ends_with(path, extension)) reader = candidate;
+  if (reader == nullptr) {
+    diagnostics.error(range, "unknown mesh format; use a .msh (Gmsh), .obj, .vtk (legacy VTK), .stl or .ply file");
     return std::nullopt;
   }
   std::string error;
-  const std::optional<std::string> read = read_input_file(path, kMaxMeshFileBytes, "mesh file", error);
+  std::optional<std::string> read = read_input_file(path, kMaxMeshFileBytes, "mesh file", error);
   if (!read) {
     diagnostics.error(range, error);
     return std::nullopt;
   }
-  const std::string& contents = *read;
-  if (gmsh) return read_gmsh(contents, path, diagnostics);
-  if (obj) return read_obj(contents, path, diagnostics);
-  return read_vtk(contents, path, diagnostics);
+  auto mesh = reader(*read, path, diagnostics);
+  if (contents != nullptr) *contents = std::move(*read);
+  return mesh;
 }
 
 }  // namespace fmpc::sim

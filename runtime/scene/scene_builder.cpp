@@ -20,6 +20,7 @@
 #include "runtime/mesh/mesh_check.h"
 #include "runtime/mesh/mesh_refinement.h"
 #include "runtime/mesh/mesh_reader.h"
+#include "runtime/scene/scene_meshing.h"
 #include "runtime/scene/spring_model_builder.h"
 
 namespace fmpc::sim {
@@ -76,20 +77,15 @@ double mesh_size(const Mesh& mesh) {
   return distance(low, high);
 }
 
-std::string three_digits(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", value);
-  return text;
-}
-
 // "N times the mesh's size (S mesh units, its bounding box's diagonal)".
 std::string against_mesh_size(double length, double size) {
-  return three_digits(length / size) + " times the mesh's size (" + three_digits(size) +
+  return significant_digits(length / size, 3) + " times the mesh's size (" + significant_digits(size, 3) +
          " mesh units, its bounding box's diagonal)";
 }
 
-std::optional<Mesh> load_mesh(const Scene& scene, DiagnosticList& diagnostics) {
+std::optional<Mesh> load_mesh(const Scene& scene, BuiltScene& built, DiagnosticList& diagnostics) {
   switch (scene.mesh.kind) {
+    case SceneMesh::Kind::Surface: return mesh_scene_surface(scene, built, diagnostics);
     case SceneMesh::Kind::File: {
       DiagnosticList mesh_diagnostics;
       auto mesh = read_mesh_file(scene.mesh.file, mesh_diagnostics);
@@ -248,9 +244,9 @@ std::optional<std::vector<std::int32_t>> pick_by_ray(const Scene& scene, const S
       if (on_surface[v]) nearest = std::min(nearest, distance(mesh.points[v], hit));
     diagnostics.warning(scene.range_of("loads.probe.radius"), "scene-scale",
                         "loads.probe.radius: no surface vertex lies within " + format_number(probe.radius) +
-                            " of the point the ray hits (the nearest is " + three_digits(nearest) +
+                            " of the point the ray hits (the nearest is " + significant_digits(nearest, 3) +
                             " away): the probe takes the hit triangle's nearest corner alone, as with radius 0",
-                        {"the radius is in mesh units (mesh.units); give at least " + three_digits(nearest) +
+                        {"the radius is in mesh units (mesh.units); give at least " + significant_digits(nearest, 3) +
                          " to pick the vertices around the hit"});
   }
   if (picked.empty()) {  // radius 0 or smaller than the triangle: the hit triangle's nearest corner
@@ -689,7 +685,7 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
       if (size > 0.0 && (travel > size || (travel > 0.0 && travel < 1e-6 * size)))
         diagnostics.warning(scene.range_of("loads.probe.displacement"), "probe-load",
                             "loads.probe.displacement: the probe travels " + format_number(travel) + " m, " +
-                                three_digits(travel / size) + " times the mesh's size (" + three_digits(size) +
+                                significant_digits(travel / size, 3) + " times the mesh's size (" + significant_digits(size, 3) +
                                 " m, its bounding box's diagonal)" +
                                 (travel > size ? ", further than the whole mesh" : ", below what float can resolve") +
                                 ": displacements are in metres whatever mesh.units says",
@@ -762,7 +758,7 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
                                       const LoadedRules* rules) {
   const std::size_t errors = diagnostics.error_count();
   BuiltScene built;
-  auto mesh = load_mesh(scene, diagnostics);
+  auto mesh = load_mesh(scene, built, diagnostics);
   if (!mesh) return std::nullopt;
   const MeshRepairResult repair = repair_mesh(*mesh);
   std::vector<std::string> repaired;

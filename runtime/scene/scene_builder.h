@@ -12,6 +12,7 @@
 #include "diagnostics/diagnostic.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/mesh/mesh.h"
+#include "runtime/meshing/volume_mesher.h"
 #include "runtime/scene/material_binding.h"
 #include "runtime/scene/scene_file.h"
 
@@ -22,6 +23,7 @@ struct BuiltScene {
   SimulationSetup setup;
   std::optional<MaterialBinding> material;  // rules or table
   std::string stiffness_description;        // for the summary, e.g. "Van Gelder 1998, E = 9.8 kPa"
+  std::optional<MeshingRun> meshing;        // `mesh: {surface: FILE}`: how the surface was meshed
   // Files read while building, with their text, so that diagnostics located in them can show the line.
   std::vector<std::pair<std::string, std::string>> sources;
 };

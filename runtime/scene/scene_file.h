@@ -13,13 +13,23 @@
 #include "runtime/integrate/simulation.h"
 #include "runtime/io/vtk_xml.h"
 #include "runtime/mesh/generated_mesh.h"
+#include "runtime/meshing/volume_mesher.h"
 #include "runtime/springs/spring_network.h"
 
 namespace fmpc::sim {
 
+// `mesh: {surface: FILE, ...}`: how a closed surface becomes tetrahedra (runtime/meshing/volume_mesher.h). The size
+// field's sources are the probe's picked point and path (added when the scene is built) and `refine_near`.
+struct SceneSurfaceMeshing {
+  VolumeMeshOptions options;         // size lengths in mesh units
+  bool size_far_given = false;       // else the surface's mean edge length
+  bool size_near_given = false;      // else size_far
+};
+
 struct SceneMesh {
-  enum class Kind { File, Box, Ellipsoid } kind = Kind::Box;
-  std::string file;         // resolved against the scene's folder
+  enum class Kind { File, Box, Ellipsoid, Surface } kind = Kind::Box;
+  std::string file;         // resolved against the scene's folder (`file` or `surface`)
+  SceneSurfaceMeshing surface;
   double unit = 1.0;        // metres per mesh unit (`units: m|cm|mm|NUMBER`)
   BoxSpec box;              // mesh units
   EllipsoidSpec ellipsoid;  // mesh units

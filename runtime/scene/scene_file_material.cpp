@@ -10,9 +10,18 @@ namespace fmpc::sim {
 
 void SceneParser::parse_mesh(const YAML::Node& node) {
   remember(node, "mesh");
-  if (!check_map(node, "mesh", {"file", "box", "ellipsoid", "units"})) return;
+  const std::vector<std::string> meshing_keys = {"size_far", "size_near", "near_distance", "grading",
+                                                 "radius_edge_ratio", "min_dihedral", "keep_surface",
+                                                 "smooth_intersections", "refine_near"};
+  std::vector<std::string> allowed = {"file", "box", "ellipsoid", "surface", "units"};
+  allowed.insert(allowed.end(), meshing_keys.begin(), meshing_keys.end());
+  if (!check_map(node, "mesh", allowed)) return;
   SceneMesh& mesh = scene_.mesh;
-  switch (one_of(node, "mesh", {"file", "box", "ellipsoid"})) {
+  const int kind = one_of(node, "mesh", {"file", "box", "ellipsoid", "surface"});
+  if (kind != 3)
+    for (const std::string& key : meshing_keys)
+      if (node[key]) error(node[key], "mesh." + key, "'" + key + "' sets how a surface is meshed; it needs 'surface'");
+  switch (kind) {
     case 0:
       if (auto file = text(node["file"], "mesh.file")) {
         mesh.kind = SceneMesh::Kind::File;
@@ -74,6 +83,14 @@ void SceneParser::parse_mesh(const YAML::Node& node) {
         }
       break;
     }
+    case 3:
+      if (auto file = text(node["surface"], "mesh.surface")) {
+        mesh.kind = SceneMesh::Kind::Surface;
+        mesh.file = resolve(*file);
+        check_input_file(node["surface"], "mesh.surface", mesh.file, kMaxMeshFileBytes, "mesh file");
+      }
+      parse_surface_meshing(node);
+      break;
     default:
       break;
   }
@@ -89,6 +106,70 @@ void SceneParser::parse_mesh(const YAML::Node& node) {
     else
       error(units, "mesh.units", describe(units) + " is not a unit; use m, cm, mm or a positive number of metres "
                                                    "per mesh unit");
+  }
+}
+
+void SceneParser::parse_surface_meshing(const YAML::Node& node) {
+  SceneSurfaceMeshing& surface = scene_.mesh.surface;
+  VolumeMeshOptions& options = surface.options;
+  if (node["size_far"])
+    if (auto v = positive(node["size_far"], "mesh.size_far", " (mesh units)")) {
+      options.size.size_far = *v;
+      surface.size_far_given = true;
+    }
+  if (node["size_near"])
+    if (auto v = positive(node["size_near"], "mesh.size_near", " (mesh units)")) {
+      options.size.size_near = *v;
+      surface.size_near_given = true;
+    }
+  if (surface.size_far_given && surface.size_near_given && options.size.size_near > options.size.size_far)
+    error(node["size_near"], "mesh.size_near", format_number(options.size.size_near) + " exceeds size_far (" +
+                                                   format_number(options.size.size_far) + "); the near size is the fine one");
+  if (node["near_distance"])
+    if (auto v = non_negative(node["near_distance"], "mesh.near_distance", " (mesh units)")) options.size.near_distance = *v;
+  if (node["grading"])
+    if (auto v = positive(node["grading"], "mesh.grading", " (mesh units of size per mesh unit of distance)"))
+      options.size.grading = *v;
+  if (node["radius_edge_ratio"])
+    if (auto v = number(node["radius_edge_ratio"], "mesh.radius_edge_ratio", "a number from 1 to 10")) {
+      if (*v >= 1.0 && *v <= 10.0) options.max_radius_edge_ratio = *v;
+      else error(node["radius_edge_ratio"], "mesh.radius_edge_ratio",
+                 format_number(*v) + " is not from 1 to 10; Delaunay refinement needs at least 1 (1.2 to 2 is usual)");
+    }
+  if (node["min_dihedral"])
+    if (auto v = number(node["min_dihedral"], "mesh.min_dihedral", "a number of degrees from 0 to 30")) {
+      if (*v >= 0.0 && *v <= 30.0) options.min_dihedral_degrees = *v;
+      else error(node["min_dihedral"], "mesh.min_dihedral", format_number(*v) + " is not from 0 to 30 degrees");
+    }
+  if (node["keep_surface"])
+    if (auto v = boolean(node["keep_surface"], "mesh.keep_surface")) options.keep_surface = *v;
+  if (node["smooth_intersections"])
+    if (auto v = boolean(node["smooth_intersections"], "mesh.smooth_intersections")) options.smooth_intersections = *v;
+  if (const YAML::Node near = node["refine_near"]) {
+    remember(near, "mesh.refine_near");
+    if (!near.IsSequence() || near.size() > kMaxSizeSources) {
+      error(near, "mesh.refine_near", "expected a list of points [x, y, z] and segments [x, y, z, x, y, z] (mesh "
+                                      "units), at most " + std::to_string(kMaxSizeSources));
+      return;
+    }
+    for (std::size_t i = 0; i < near.size(); ++i) {
+      const std::string field = "mesh.refine_near[" + std::to_string(i) + "]";
+      const YAML::Node item = near[i];
+      std::vector<double> values;
+      if (item.IsSequence() && (item.size() == 3 || item.size() == 6))
+        for (std::size_t k = 0; k < item.size(); ++k)
+          if (auto v = number(item[k], field, "a coordinate (mesh units)")) values.push_back(*v);
+      if (values.size() != 3 && values.size() != 6) {
+        if (!(item.IsSequence() && (item.size() == 3 || item.size() == 6)))
+          error(item, field, "expected a point [x, y, z] or a segment [x, y, z, x, y, z] (mesh units), got " +
+                                 describe(item));
+        continue;
+      }
+      SizeSegment segment;
+      segment.a = {values[0], values[1], values[2]};
+      segment.b = values.size() == 6 ? Point3{values[3], values[4], values[5]} : segment.a;
+      options.size.sources.push_back(segment);
+    }
   }
 }
 

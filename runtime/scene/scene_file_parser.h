@@ -74,6 +74,8 @@ class SceneParser {
 
   // ---- mesh, material and the material's companions (scene_file_material.cpp) ----
   void parse_mesh(const YAML::Node& node);
+  // `surface`'s companions: the size field, quality bounds, keep_surface, smooth_intersections, refine_near.
+  void parse_surface_meshing(const YAML::Node& node);
   void parse_material(const YAML::Node& node);
   bool parse_regions(const YAML::Node& value, const std::string& field, std::vector<RegionValue>& out);
   std::optional<RegionalValue> poisson_ratio(const YAML::Node& node);

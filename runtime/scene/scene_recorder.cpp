@@ -210,6 +210,52 @@ std::optional<SceneRunResult> SceneRecorder::finish(const SceneState& state, boo
   return result;
 }
 
+namespace {
+
+// `mesh: {surface}`: how the surface was meshed (docs/meshing.md), with the quality distributions.
+void add_meshing(JsonDocument& out, const MeshingRun& run) {
+  const VolumeMesh& meshed = run.result;
+  const SizeField& size = run.options.size;
+  out["surface_vertices"] = meshed.surface_vertices;
+  out["surface_triangles"] = meshed.surface_triangles;
+  out["enclosed_volume"] = meshed.surface.volume;
+  out["estimated_tetrahedra"] = meshed.estimate.tetrahedra;
+  out["size_far"] = size.size_far;
+  out["size_near"] = size.size_near;
+  out["near_distance"] = size.near_distance;
+  out["grading"] = size.grading;
+  out["size_sources"] = size.sources.size();
+  out["keep_surface"] = run.options.keep_surface;
+  out["seconds"] = run.seconds;
+  out["above_size_field"] = meshed.above_size;
+  if (meshed.untangling) {
+    out["smoothed_vertices"] = meshed.untangling->moved_vertices;
+    out["smoothing_largest_move"] = meshed.untangling->largest_move;
+  }
+  const auto distribution = [](JsonDocument& d, const Distribution& values) {
+    d["min"] = values.min;
+    d["p1"] = values.p1;
+    d["p5"] = values.p5;
+    d["p50"] = values.p50;
+    d["p95"] = values.p95;
+    d["p99"] = values.p99;
+    d["max"] = values.max;
+  };
+  const TetrahedronQuality& q = meshed.quality;
+  JsonDocument& ratio = out["radius_edge_ratio"];
+  ratio["bound"] = run.options.max_radius_edge_ratio;
+  ratio["above_bound"] = q.above_ratio_bound;
+  ratio["above_bound_off_surface"] = q.above_ratio_bound_inside;
+  distribution(ratio, q.radius_edge_ratio);
+  JsonDocument& dihedral = out["min_dihedral_degrees"];
+  dihedral["sought"] = run.options.min_dihedral_degrees;
+  dihedral["below"] = q.below_dihedral_bound;
+  distribution(dihedral, q.min_dihedral_degrees);
+  distribution(out["longest_edge"], q.longest_edge);
+}
+
+}  // namespace
+
 std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList& diagnostics) const {
   const Scene& scene = scene_;
   const BuiltScene& built = built_;
@@ -263,6 +309,7 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
   mesh["volume_term"] = setup.springs.size() > 0 && !setup.elements.empty();
   mesh["fixed_vertices"] = setup.fixed_vertices.size();
   mesh["metres_per_unit"] = scene.mesh.unit;
+  if (built.meshing) add_meshing(mesh["meshing"], *built.meshing);
   JsonDocument& material = json["stiffness"];
   material["description"] = built.stiffness_description;
   material["k_min_N_per_m"] = k_min;

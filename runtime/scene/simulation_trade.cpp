@@ -92,12 +92,6 @@ const char* short_integrator(Integrator integrator) {
   return "?";
 }
 
-std::string short_number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", value);
-  return text;
-}
-
 // One run: what it is (the map key orders and deduplicates runs).
 struct RunKey {
   TradeModel model = trade_reference_model();
@@ -113,7 +107,7 @@ struct RunKey {
 std::string label(const RunKey& key) {
   std::string text = short_model(key.model) + (key.precision == Precision::Float ? " f32 " : " f64 ") +
                      short_integrator(key.integrator);
-  if (key.dt_factor != 1.0) text += " x" + short_number(key.dt_factor);
+  if (key.dt_factor != 1.0) text += " x" + significant_digits(key.dt_factor, 3);
   return text + " r" + std::to_string(key.refinements);
 }
 
@@ -498,9 +492,9 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
     const bool reference_run = std::none_of(variants.begin(), variants.end(),
                                             [&](const RunKey& v) { return !(v < key) && !(key < v); });
     if (!(estimate->steps <= kMaxSimulationSteps)) {
-      diagnostics.error(nowhere, "the run " + label(key) + " would take " + short_number(estimate->steps) +
-                                     " steps (" + short_number(duration) + " s at about " +
-                                     short_number(duration / estimate->steps) + " s a step); the limit is " +
+      diagnostics.error(nowhere, "the run " + label(key) + " would take " + significant_digits(estimate->steps, 3) +
+                                     " steps (" + significant_digits(duration, 3) + " s at about " +
+                                     significant_digits(duration / estimate->steps, 3) + " s a step); the limit is " +
                                      format_number(kMaxSimulationSteps) + " steps a run, as for simulate",
                         {"shorten --duration, or raise " +
                          std::string(reference_run ? "--reference-dt-factor" : "the step factor of --integrators " +
@@ -510,7 +504,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
     if (memory.bytes > 0 && estimate->memory_bytes > static_cast<double>(memory.bytes)) {
       diagnostics.error(scene.range_of("mesh"),
                         "mesh: the run " + label(key) + " needs an estimated " + gibibytes_text(estimate->memory_bytes) +
-                            " (" + short_number(estimate->tetrahedra) + " tetrahedra); the limit is " +
+                            " (" + significant_digits(estimate->tetrahedra, 3) + " tetrahedra); the limit is " +
                             memory.source + ", " + gibibytes_text(static_cast<double>(memory.bytes)),
                         {"lower --refinements or --reference-refinements, or coarsen the mesh"});
       return std::nullopt;
@@ -523,7 +517,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   }
   if (!(plan.element_steps <= kMaxTradeWork)) {
     diagnostics.error(nowhere, "the trade's " + std::to_string(plan.runs) + " runs would take about " +
-                                   short_number(plan.element_steps) + " element-steps (tetrahedra x steps); the "
+                                   significant_digits(plan.element_steps, 3) + " element-steps (tetrahedra x steps); the "
                                    "limit is " + format_number(kMaxTradeWork),
                       {"fewer --refinements, models, precisions or integrators, a larger step factor, or a shorter "
                        "--duration"});
@@ -573,7 +567,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   };
   result.reference_description = "co-rotational FEM, double, semi-implicit Euler at " +
                                  format_number(options.reference_dt_factor) + " x its automatic step (dt " +
-                                 short_number(ref.row.dt) + " s), the scene's mesh refined " +
+                                 significant_digits(ref.row.dt, 3) + " s), the scene's mesh refined " +
                                  std::to_string(reference_level) + " time" + (reference_level == 1 ? "" : "s") + " (" +
                                  std::to_string(ref.row.vertices) + " vertices, " +
                                  std::to_string(ref.row.tetrahedra) + " tetrahedra)";
@@ -629,7 +623,7 @@ std::string simulation_trade_csv(const SimulationTradeResult& result) {
 
 std::string simulation_trade_markdown(const SimulationTradeResult& result) {
   std::ostringstream md;
-  const auto percent = [](double value) { return short_number(100.0 * value) + "%"; };
+  const auto percent = [](double value) { return significant_digits(100.0 * value, 3) + "%"; };
   const auto errors_text = [&](const TradeErrors& e) {
     std::string text = "displacement max " + percent(e.displacement_max) + ", RMS " + percent(e.displacement_rms);
     if (e.probe_force) text += ", probe force " + percent(*e.probe_force);
@@ -652,10 +646,10 @@ std::string simulation_trade_markdown(const SimulationTradeResult& result) {
   md << "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n";
   for (const SimulationTradeRow& row : result.rows) {
     const auto error = [&](double value) { return row.completed ? percent(value) : std::string("-"); };
-    md << "| " << row.variant << " | " << short_number(row.dt) << " | " << row.vertices << " | "
+    md << "| " << row.variant << " | " << significant_digits(row.dt, 3) << " | " << row.vertices << " | "
        << error(row.errors.displacement_max) << " | " << error(row.errors.displacement_rms) << " | "
        << (row.completed && row.errors.probe_force ? percent(*row.errors.probe_force) : "-") << " | "
-       << short_number(row.steps_per_second) << " | " << short_number(row.memory_bytes / 1024.0) << " KiB | "
+       << significant_digits(row.steps_per_second, 3) << " | " << significant_digits(row.memory_bytes / 1024.0, 3) << " KiB | "
        << row.inverted_elements << " | " << (row.completed ? "completed" : "failed: " + row.failure) << " |\n";
   }
   return md.str();

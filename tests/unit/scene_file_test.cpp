@@ -230,8 +230,8 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of("mesh: {box: {size: [1, 1, 1], cells: [1, 0, 1]}}\nmaterial: {stiffness: 1}\n") ==
         "1:42: mesh.box.cells: expected an integer from 1 to 1000, got '0'");
   CHECK(error_of("mesh: {file: a.msh, box: {size: [1, 1, 1]}}\nmaterial: {stiffness: 1}\n") ==
-        "1:26: mesh: give only one of 'file', 'box' or 'ellipsoid'");
-  CHECK(error_of("mesh: {units: m}\nmaterial: {stiffness: 1}\n") == "1:7: mesh: give one of 'file', 'box' or 'ellipsoid'");
+        "1:26: mesh: give only one of 'file', 'box', 'ellipsoid' or 'surface'");
+  CHECK(error_of("mesh: {units: m}\nmaterial: {stiffness: 1}\n") == "1:7: mesh: give one of 'file', 'box', 'ellipsoid' or 'surface'");
   CHECK(error_of("mesh: {file: a.msh, units: inch}\nmaterial: {stiffness: 1}\n") ==
         "1:28: mesh.units: 'inch' is not a unit; use m, cm, mm or a positive number of metres per mesh unit");
   CHECK(error_of("mesh: {box: {size: [1, 1, 1]}}\nmaterial: {youngs_modulus: -3}\n") ==

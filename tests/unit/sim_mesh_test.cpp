@@ -227,7 +227,7 @@ TEST_CASE("broken OBJ and VTK files are errors with file:line", "[sim]") {
   DiagnosticList diagnostics;
   CHECK_FALSE(read_mesh_file("/tmp/fmpc_sim_test_does_not_exist.msh", diagnostics));
   CHECK_THAT(first_error(diagnostics), Catch::Contains("cannot read"));
-  CHECK_FALSE(read_mesh_file(temporary_file("mesh.stl", "solid"), diagnostics));
+  CHECK_FALSE(read_mesh_file(temporary_file("mesh.step", "solid"), diagnostics));
   CHECK_THAT(diagnostics.items().back().message, Catch::Contains("unknown mesh format"));
 }
 

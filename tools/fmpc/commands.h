@@ -16,6 +16,7 @@ void register_fmt_command(CLI::App& app, int& exit_code);
 void register_eval_command(CLI::App& app, int& exit_code);
 void register_convert_command(CLI::App& app, int& exit_code);
 void register_simulate_command(CLI::App& app, int& exit_code);
+void register_mesh_command(CLI::App& app, int& exit_code);
 void register_compile_command(CLI::App& app, int& exit_code);
 void register_plot_command(CLI::App& app, int& exit_code);
 void register_trade_command(CLI::App& app, int& exit_code);

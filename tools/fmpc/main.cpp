@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   fmpc::cli::register_eval_command(app, exit_code);
   fmpc::cli::register_convert_command(app, exit_code);
   fmpc::cli::register_simulate_command(app, exit_code);
+  fmpc::cli::register_mesh_command(app, exit_code);
   fmpc::cli::register_compile_command(app, exit_code);
   fmpc::cli::register_plot_command(app, exit_code);
   fmpc::cli::register_trade_command(app, exit_code);

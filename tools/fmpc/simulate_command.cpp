@@ -120,6 +120,16 @@ std::string solver_summary(const sim::ImplicitSolverReport& report) {
   return line;
 }
 
+// `mesh: {surface}`: the meshing in one line (summary.json has the distributions).
+std::string meshing_line(const sim::MeshingRun& run) {
+  const sim::TetrahedronQuality& q = run.result.quality;
+  return "  meshed from " + std::to_string(run.result.surface_vertices) + " surface vertices in " +
+         six_digits(run.seconds) + " s: radius-edge ratio median " + six_digits(q.radius_edge_ratio.p50) + ", 99% " +
+         six_digits(q.radius_edge_ratio.p99) + " (" + std::to_string(q.above_ratio_bound) + " above " +
+         six_digits(run.options.max_radius_edge_ratio) + "), smallest dihedral angle min " +
+         six_digits(q.min_dihedral_degrees.min) + ", 1% " + six_digits(q.min_dihedral_degrees.p1) + " degrees\n";
+}
+
 // Applies the command-line overrides; errors name the option and what is allowed.
 bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, DiagnosticList& diagnostics) {
   if (!options.backend.empty()) {
@@ -237,6 +247,7 @@ int run_simulate(const SimulateOptions& options) {
             << "  model: " << sim::model_name(setup) << "; mesh: " << built->mesh.points.size() << " vertices, "
             << built->mesh.tetrahedra.size() << " tetrahedra, " << setup.springs.size() << " springs, "
             << setup.fixed_vertices.size() << " fixed\n"
+            << (built->meshing ? meshing_line(*built->meshing) : std::string())
             << "  stiffness: " << built->stiffness_description << "\n"
             << "  wall time " << six_digits(result->wall_seconds) << " s (" << six_digits(result->steps_per_second)
             << " steps/s), max displacement " << six_digits(result->max_displacement * 1000.0) << " mm\n"
