@@ -10,37 +10,11 @@
 // stiffness-proportional (Rayleigh) damping beta R K0 R^T v per element. A strain table replaces Young's modulus with
 // E at the point's principal strain of largest magnitude.
 #include "kernels/element_term.h"
+#include "kernels/laws/isotropic_moduli.h"
 
 namespace fmpc::kernels {
 
-struct CorotationalLinear {
-  // Per element: Young's modulus (Pa) and Poisson's ratio.
-  static constexpr int kParameterCount = 2;
-  static constexpr int kYoungsModulus = 0;
-  static constexpr int kPoissonRatio = 1;
-  // A strain table's E(strain) replaces the Young's modulus during the run.
-  static constexpr bool kStrainTableModulus = true;
-
-  template <typename Real>
-  struct Material {
-    Real youngs_modulus;
-    Real poisson_ratio;
-    Real stiffness_damping;  // beta (s)
-    // By value: a pointer into the kernel's parameter would copy the whole ElementTermView to local memory in every
-    // thread (ptxas: a 128-byte stack frame, the float element pass 24% slower). strain == null: youngs_modulus.
-    StrainTableView strain_table;
-  };
-
-  template <typename Real>
-  static FMPC_HD Material<Real> material(const ElementTermView<Real>& t, int e) {
-    Material<Real> m;
-    m.youngs_modulus = t.parameter[kYoungsModulus][e];
-    m.poisson_ratio = t.parameter[kPoissonRatio][e];
-    m.stiffness_damping = t.stiffness_damping ? t.stiffness_damping[e] : Real(0);
-    m.strain_table = t.strain_table;
-    return m;
-  }
-
+struct CorotationalLinear : IsotropicModuli {
   // R of F and the modulus at F (a strain table's value at the point's strain; the principal stretches cost an
   // eigen-decomposition, so only a strain table computes them).
   template <typename Real>

@@ -23,36 +23,11 @@
 // principal strain (stretch - 1) of largest magnitude, as for the co-rotational law (its stretches cost an
 // eigen-decomposition, paid only with a table).
 #include "kernels/element_term.h"
+#include "kernels/laws/isotropic_moduli.h"
 
 namespace fmpc::kernels {
 
-struct StableNeoHookean {
-  // Per element: Young's modulus (Pa) and Poisson's ratio (the small-strain moduli the law reproduces).
-  static constexpr int kParameterCount = 2;
-  static constexpr int kYoungsModulus = 0;
-  static constexpr int kPoissonRatio = 1;
-  static constexpr bool kStrainTableModulus = true;
-
-  template <typename Real>
-  struct Material {
-    Real youngs_modulus;
-    Real poisson_ratio;
-    Real stiffness_damping;  // beta (s)
-    // By value, as the co-rotational law's: a pointer into the kernel's parameter would copy the whole
-    // ElementTermView to local memory in every thread. strain == null: youngs_modulus.
-    StrainTableView strain_table;
-  };
-
-  template <typename Real>
-  static FMPC_HD Material<Real> material(const ElementTermView<Real>& t, int e) {
-    Material<Real> m;
-    m.youngs_modulus = t.parameter[kYoungsModulus][e];
-    m.poisson_ratio = t.parameter[kPoissonRatio][e];
-    m.stiffness_damping = t.stiffness_damping ? t.stiffness_damping[e] : Real(0);
-    m.strain_table = t.strain_table;
-    return m;
-  }
-
+struct StableNeoHookean : IsotropicModuli {
   // The paper's parameters at the point: mu' = 4/3 mu, lambda' = lambda + 5/6 mu, and alpha - 1 = 3 mu' / (4 lambda')
   // = mu / lambda'; also the small-strain mu and lambda (damping).
   template <typename Real>

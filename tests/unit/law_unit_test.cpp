@@ -275,7 +275,7 @@ TEST_CASE("a law or an element kind is named only in its kernels header, the lis
   for (const auto& entry : std::filesystem::directory_iterator(root / "kernels/laws")) {
     const std::string text = without_comments(read_file(entry.path()));
     for (const std::string& type : types)
-      if (std::regex_search(text, std::regex("struct " + type + R"(\s*\{)"))) header_of[type] = entry.path();
+      if (std::regex_search(text, std::regex("struct " + type + R"(\s*(:[^{]*)?\{)"))) header_of[type] = entry.path();
   }
   for (std::size_t law = 0; law < types.size(); ++law) {
     INFO("law " << types[law]);

@@ -15,6 +15,7 @@
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
 #include "runtime/scene/scene_run.h"
+#include "tests/support/generated_program.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
@@ -40,11 +41,11 @@ Outcome run(const std::string& text, const std::string& name) {
   scene->outputs.precision_check = SceneOutputs::PrecisionCheck::Off;
   const auto built = build_scene(*scene, diagnostics);
   REQUIRE(built);
-  const auto folder = std::filesystem::temp_directory_path() / ("fmpc_never_folds_" + name);
+  // A folder of this run's own: a fixed name collided with a concurrent run of the suite on the same machine.
+  const testing::ScratchFolder folder("never_folds_" + name);
   SceneRunOptions options;
-  options.output_directory = folder.string();
+  options.output_directory = folder.path().string();
   const auto result = run_scene(*scene, *built, options, diagnostics);
-  std::filesystem::remove_all(folder);
   Outcome out;
   for (const Diagnostic& d : diagnostics.items()) {
     if (d.message.find("turned inside out") != std::string::npos) ++out.inversion_warnings;
