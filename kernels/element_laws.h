@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "kernels/elements/linear_tetrahedron.h"
+#include "kernels/elements/quadratic_tetrahedron.h"
 #include "kernels/fmpc_hd.h"
 #include "kernels/laws/corotational_linear.h"
 #include "kernels/laws/volume_preservation.h"
@@ -19,7 +20,7 @@ struct TypeList {
 };
 
 using ElementLaws = TypeList<CorotationalLinear, VolumePreservation>;
-using ElementKinds = TypeList<LinearTetrahedron>;
+using ElementKinds = TypeList<LinearTetrahedron, QuadraticTetrahedron>;
 
 // The dispatch over a list, defined twice: for host code (launchers, host loops) and for device code (a kernel that
 // meets a term at run time), because a host lambda may not be called from a __host__ __device__ function.

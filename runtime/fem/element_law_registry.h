@@ -57,6 +57,29 @@ const ElementLawRow& element_law_beside_springs();
 // model_keyword.
 const ElementLawRow& default_fem_law();
 
+// The element kinds' registry: one row per kernels::ElementKinds entry, in the same order. `fem: {element: KEYWORD}`
+// in scene files selects a kind by its keyword; nothing outside a kind's kernels header, kernels/element_laws.h and
+// runtime/fem's registry and geometry builders names it.
+struct ElementKindRow {
+  const char* keyword;      // fem: {element: KEYWORD}
+  const char* description;  // one line for docs and errors, with its source
+  int kind;                 // index in kernels::ElementKinds
+  int vtk_cell_type;        // frames write the elements' nodes as this VTK cell (10: VTK_TETRA, 24: quadratic)
+  double largest_poisson_ratio;  // a larger material.poisson_ratio is an error on this kind
+  // Above this ratio the kind locks (too stiff): build_fem_model warns with `locking_note`; 1: it does not.
+  double locking_poisson_ratio;
+  const char* locking_note;  // the measured error the warning quotes (docs/validation.md)
+};
+
+// Every row, in kernels::ElementKinds' order.
+const std::vector<ElementKindRow>& element_kind_rows();
+const ElementKindRow& element_kind_row(int kind);
+// The row with keyword `name`; null when none has it.
+const ElementKindRow* element_kind_by_keyword(const std::string& name);
+// The kind `model: corotational_fem` and a `fem` map without `element` take: the first row.
+const ElementKindRow& default_element_kind();
+std::vector<std::string> element_kind_keywords();
+
 // Springs plus the volume term reaching a Young's modulus E and Poisson ratio nu (docs/simulator.md): a central
 // spring network obeys the Cauchy relation lambda = mu, with mu = 2 E_s / 5 for the Van Gelder mapping at E_s (the
 // bulk modulus 2 E_s / 3 is exact for every tetrahedron, docs/simulator.md) and 24/25 of it for Lloyd's. The springs

@@ -372,6 +372,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   const std::vector<Point3> centroids = tetrahedron_centroids(built.mesh);
   FemModelSpec spec;
   spec.law = scene.element_law;
+  spec.poisson_where = scene.range_of("material.poisson_ratio");
   spec.length_unit = scene.mesh.unit;
   spec.mass = scene.mass;
   spec.damping_ratio = scene.damping.ratio;
@@ -648,6 +649,7 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
       setup->probe = load;
     }
   }
+  extend_to_added_vertices(*setup, built.mesh.points.size());
   setup->gravity = scene.gravity;
   setup->law = scene.law.law;
   setup->basafa_k2_over_k1 = scene.law.k2_over_k1;

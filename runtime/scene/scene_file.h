@@ -81,7 +81,7 @@ struct SceneMaterial {
   // Young's modulus -> spring constants (`mapping`): YoungsModulus, Rules and Table only.
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
   bool mapping_given = false;
-  // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.499].
+  // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.4999] (the element kind may take less: build_fem_model).
   std::optional<RegionalValue> poisson_ratio;
   double thickness = 1.0;        // m, membranes (triangle meshes)
   double flexion_fraction = 0.1;

@@ -1,4 +1,5 @@
-// The force models on the CUDA backend against the CPU loop (the host reference): the co-rotational FEM, springs with
+// The force models on the CUDA backend against the CPU loop (the host reference): the co-rotational FEM on linear and
+// quadratic tetrahedra, springs with
 // the volume term, Rayleigh mass damping, per-axis holds, inversion counting with its exact first step (replay) and
 // on_inversion: stop, on odd mesh sizes (never a multiple of the block size), alone and in a batch.
 //
@@ -27,9 +28,11 @@ using namespace fmpc::gpu_test;
 
 namespace {
 
-enum class Model { Fem, SpringsWithVolumeTerm };
+enum class Model { Fem, QuadraticFem, SpringsWithVolumeTerm };
 
-const char* name_of(Model model) { return model == Model::Fem ? "FEM" : "springs + volume term"; }
+const char* name_of(Model model) {
+  return model == Model::Fem ? "FEM" : model == Model::QuadraticFem ? "quadratic FEM" : "springs + volume term";
+}
 
 Mesh box_mesh(int nx, int ny, int nz) {
   DiagnosticList diagnostics;
@@ -48,8 +51,9 @@ SimulationSetup hanging_box(Model model, Precision precision, Integrator integra
   const Mesh mesh = box_mesh(nx, ny, nz);
   DiagnosticList diagnostics;
   SimulationSetup out;
-  if (model == Model::Fem) {
+  if (model == Model::Fem || model == Model::QuadraticFem) {
     FemModelSpec spec;
+    if (model == Model::QuadraticFem) spec.element = element_kind_by_keyword("quadratic")->kind;
     spec.youngs_modulus = {5000.0};
     spec.poisson_ratio = {0.45};
     spec.mass.value = 1060.0;
@@ -117,7 +121,7 @@ SimulationSetup thrown_corner(Precision precision, double speed = 3.0) {
   return setup;
 }
 
-const Model kModels[] = {Model::Fem, Model::SpringsWithVolumeTerm};
+const Model kModels[] = {Model::Fem, Model::QuadraticFem, Model::SpringsWithVolumeTerm};
 
 }  // namespace
 

@@ -27,6 +27,8 @@ const char* model_name(ProblemModel model) {
       return "springs (Lloyd)";
     case ProblemModel::SpringsVolumeTerm:
       return "springs + volume term";
+    case ProblemModel::QuadraticFem:
+      return "quadratic FEM";
   }
   return "?";
 }
@@ -37,8 +39,9 @@ std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, Prob
   mass.source = sim::MassSpec::Source::Density;
   mass.value = problem.density;
   std::optional<sim::SimulationSetup> setup;
-  if (model == ProblemModel::CorotationalFem) {
+  if (model == ProblemModel::CorotationalFem || model == ProblemModel::QuadraticFem) {
     sim::FemModelSpec spec;
+    if (model == ProblemModel::QuadraticFem) spec.element = sim::element_kind_by_keyword("quadratic")->kind;
     spec.youngs_modulus = {problem.youngs_modulus};
     spec.poisson_ratio = {problem.poisson_ratio};
     spec.mass = mass;
@@ -72,12 +75,14 @@ std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, Prob
   setup->external_forces = problem.forces;
   setup->precision = sim::Precision::Double;
   if (!problem.prescribed.empty()) {
-    setup->initial_positions = setup->rest_positions;
+    setup->initial_positions.assign(setup->rest_positions.begin(), setup->rest_positions.begin() + static_cast<std::ptrdiff_t>(n));
     for (std::size_t v = 0; v < n; ++v)
       for (int a = 0; a < 3; ++a)
         if ((problem.held[v] >> a) & 1u)
           setup->initial_positions[v][static_cast<std::size_t>(a)] += problem.prescribed[v][static_cast<std::size_t>(a)];
   }
+  // A kind's added edge nodes follow their ends' supports and prescribed displacements (as the C3D10 deck's do).
+  sim::extend_to_added_vertices(*setup, n);
   sim::StaticOptions options;
   options.linear = true;
   const auto result = sim::static_equilibrium(*setup, options, diagnostics);
@@ -89,7 +94,7 @@ std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, Prob
   answer.displacement.resize(n);
   for (std::size_t v = 0; v < n; ++v)
     for (std::size_t i = 0; i < 3; ++i) answer.displacement[v][i] = result->positions[v][i] - setup->rest_positions[v][i];
-  answer.nodes = problem.mesh.points;
+  answer.nodes = setup->rest_positions;
   answer.reaction = result->reactions;
   return answer;
 }

@@ -552,8 +552,8 @@ TEST_CASE("scenes choose the force model; the FEM refuses spring settings, namin
                                  "Cauchy relation lambda = mu); add the volume term (springs: {volume_term: true}) to "
                                  "reach another ratio, or use model: corotational_fem"});
   CHECK(errors_of("model: corotational_fem\n" + base + "material: {youngs_modulus: 3, poisson_ratio: 0.5}\n") ==
-        std::vector<std::string>{"6:46: material.poisson_ratio: expected a number in [0, 0.499] (0.5 is incompressible, "
-                                 "which linear tetrahedra cannot represent without locking), got 0.5"});
+        std::vector<std::string>{"6:46: material.poisson_ratio: expected a number in [0, 0.4999] (0.5 is incompressible, "
+                                 "which no element here represents; linear tetrahedra take at most 0.499), got 0.5"});
   CHECK(errors_of(base + "material: {youngs_modulus: 3}\nmodel: fem\n").front() ==
         "6:8: model: 'fem' is not a force model; use springs or corotational_fem");
 
