@@ -117,7 +117,7 @@ bool add_element_term(SimulationSetup& setup, ElementTerm term, double damping_r
                                          ") acts on tetrahedra; the mesh has none (it is a surface mesh)");
     return false;
   }
-  if (setup.elements.empty()) {
+  if (setup.elements.geometry.nodes.empty()) {
     // Beside springs: linear tetrahedra (the first kind), on the springs' own vertices.
     auto geometry = element_geometry(setup.rest_positions, setup.tetrahedra, 0, diagnostics);
     if (!geometry) return false;
