@@ -104,7 +104,7 @@ std::optional<std::string> SourceFiles::line(const std::string& path, int line_n
   return result;
 }
 
-static const char* severity_name(Severity severity) {
+const char* severity_name(Severity severity) {
   switch (severity) {
     case Severity::Note: return "note";
     case Severity::Warning: return "warning";

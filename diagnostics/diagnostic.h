@@ -81,6 +81,9 @@ inline constexpr std::size_t kMaxExcerptBytes = 160;
 // How many diagnostics render_all prints before it summarises the rest ("... and 9,990 more: 9,990 errors").
 inline constexpr std::size_t kMaxRenderedDiagnostics = 100;
 
+// "error", "warning" or "note", as the rendered text and the studio's diagnostics name them.
+const char* severity_name(Severity severity);
+
 // Renders one diagnostic:
 //   FILE:LINE:COL: error: MESSAGE
 //      LINE | source text

@@ -47,6 +47,8 @@ const std::vector<WarningCode>& warning_codes() {
       {"missing-measurement", "validate, tune"},
       {"precision-dependent", "simulate"},
       {"probe-load", "scene"},
+      {"scene-scale", "scene"},
+      {"element-locking", "scene"},
       // meshes, scenes and the simulator
       {"mesh-ignored-elements", "scene"},
       {"mesh-repaired", "scene"},

@@ -10,6 +10,7 @@
 //   forces, the tangent's action, energy, stress output and stiffness bound, each generic over the law.
 // Everything here is generic over both.
 #include "kernels/fmpc_hd.h"
+#include "kernels/prony_viscoelasticity.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
 #include "kernels/tetrahedron_math.h"
@@ -34,6 +35,11 @@ struct ElementTermView {
   const Real* parameter[kMostLawParameters];  // the law's parameters in its order, one per element each
   const Real* stiffness_damping;              // beta (s) per element; null: undamped
   StrainTableView strain_table;  // E(strain) for a law whose modulus a strain table replaces; strain null: none
+  // Per-point state (kernels/prony_viscoelasticity.h) and the Prony series reading it; count 0: elastic (the state's
+  // values null). The engines' Real views carry both; the double views of implicit Euler and the host's sums leave
+  // them empty: the tangent and the energy are the law's (docs/simulator.md, "Per-point state").
+  PointStateView<Real> state;
+  PronyConstants<Real> prony;
 };
 
 // Element e's node positions and, where `velocities`, velocities [node][axis].
@@ -53,6 +59,31 @@ FMPC_HD void element_nodes(int e, const int* nodes, const StateView<Real>& s, bo
   }
 }
 
+// P at material point `point` (element e's, numbered kPoints e + q) of deformation gradient F: the law's stress,
+// then the term's Prony series on the state held. Element kinds call this, never the law's first_piola directly.
+template <typename Law, typename Real>
+FMPC_HD void point_first_piola(const ElementTermView<Real>& t, int e, int point, const Real* F, const Real* F_rate,
+                               Real* P) {
+  Law::first_piola(Law::material(t, e), F, F_rate, P);
+  if (t.prony.count > 0) prony_first_piola(t.prony, t.state, point, F, P);
+}
+
+// The state update of element e after an accepted step, at positions s (the step's end): each point's Prony history
+// from the law's elastic stress there. Only for a term with state (t.prony.count > 0).
+template <typename Element, typename Law, typename Real>
+FMPC_HD void element_state_update(int e, const ElementTermView<Real>& t, const StateView<Real>& s) {
+  constexpr int N = Element::kNodes;
+  constexpr int Q = Element::kPoints;
+  Real x[N][3], v[N][3], F[Q][9];
+  element_nodes<N>(e, t.corners, s, false, x, v);
+  Element::deformation_gradients(t, e, x, F);
+  for (int q = 0; q < Q; ++q) {
+    Real P[9];
+    Law::first_piola(Law::material(t, e), F[q], static_cast<const Real*>(nullptr), P);
+    prony_update(t.prony, t.state, Q * e + q, F[q], P);
+  }
+}
+
 // The element pass of one term: element e's node forces into force[corner_slot[kNodes e + a]] (the vertex-major
 // layout CornerForceView reads), written by the run's first term and added to by each later one (Accumulate), so
 // that a vertex's gather sums the terms in list order. Velocities are read only where the term has stiffness
@@ -63,8 +94,16 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
   constexpr int N = Element::kNodes;
   Real x[N][3], v[N][3], out[N][3];
   const bool damped = t.stiffness_damping != nullptr;
-  element_nodes<N>(e, t.corners, s, damped, x, v);
-  Element::template forces<Law>(t, e, x, damped ? v : nullptr, out);
+  // As in LinearTetrahedron::forces: a constant pointer in each branch lets the GPU keep x and v in registers. The
+  // nodes are read in each branch with a constant flag, so that the compiler sees v written where it is read (GCC 12
+  // reported v as uninitialised once a law's damped stress was inlined).
+  if (damped) {
+    element_nodes<N>(e, t.corners, s, true, x, v);
+    Element::template forces<Law>(t, e, x, v, out);
+  } else {
+    element_nodes<N>(e, t.corners, s, false, x, v);
+    Element::template forces<Law>(t, e, x, static_cast<const Real(*)[3]>(nullptr), out);
+  }
   for (int a = 0; a < N; ++a) {
     CornerForce<Real>& to = force[t.corner_slot[N * e + a]];
     if (Accumulate) {

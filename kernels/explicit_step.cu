@@ -49,6 +49,13 @@ cudaError_t launch_term_forces(const ForceModelView<Real>& model, const kernels:
   return cudaGetLastError();
 }
 
+template <typename Real, typename Element, typename Law>
+__global__ void point_state_kernel(kernels::ElementTermView<Real> term, kernels::StateView<Real> state) {
+  const int e = vertex_index();
+  if (e >= term.count) return;
+  kernels::element_state_update<Element, Law>(e, term, state);
+}
+
 template <typename Real>
 __global__ void spring_incidence_kernel(kernels::SpringNetworkView<Real> net, int entries,
                                         kernels::SpringIncidence<Real>* incidence) {
@@ -378,6 +385,23 @@ cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kerne
 }
 
 template <typename Real>
+cudaError_t launch_point_state_update(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
+                                      cudaStream_t stream) {
+  if (model.kind == GatherKind::Springs || model.element_count <= 0) return cudaSuccess;
+  for (int t = 0; t < model.term_count; ++t) {
+    const kernels::ElementTermView<Real>& term = model.terms[t];
+    if (term.prony.count == 0) continue;
+    const cudaError_t status = kernels::visit_element_term(term.element, term.law, [&](auto kind, auto element_law) {
+      point_state_kernel<Real, decltype(kind), decltype(element_law)>
+          <<<blocks_for(term.count), kThreadsPerBlock, 0, stream>>>(term, state);
+      return cudaGetLastError();
+    });
+    if (status != cudaSuccess) return status;
+  }
+  return cudaSuccess;
+}
+
+template <typename Real>
 cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<Real>& network, const int* vertex_order,
                                   int vertex_count, kernels::SpringIncidence<Real>* record, cudaStream_t stream) {
   if (vertex_count <= 0) return cudaSuccess;
@@ -461,6 +485,8 @@ cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<Real>& argume
 #define FMPC_EXPLICIT_STEP_LAUNCHERS(Real)                                                                       \
   template cudaError_t launch_element_forces<Real>(const ForceModelView<Real>&, const kernels::StateView<Real>&, \
                                                    cudaStream_t);                                                \
+  template cudaError_t launch_point_state_update<Real>(const ForceModelView<Real>&,                                \
+                                                       const kernels::StateView<Real>&, cudaStream_t);           \
   template cudaError_t launch_sliced_springs<Real>(const kernels::SpringNetworkView<Real>&, const int*, int,     \
                                                    kernels::SpringIncidence<Real>*, cudaStream_t);               \
   template cudaError_t launch_spring_incidence<Real>(const kernels::SpringNetworkView<Real>&, int,               \

@@ -136,7 +136,20 @@ FMPC_HD void verlet_velocity_update(Real& v, Real a0, Real a1, Real h) {
 // (ramp_time 0: at once). Evaluated in double by both backends so that the prescribed path is the same bits. Once
 // t reaches the ramp time, t / ramp_time rounds to 1 or more, so the division is skipped: on the GPU it is a
 // double-precision sequence on the path of the probe vertex's thread, which its neighbours' blocks wait for.
-FMPC_HD double probe_ramp_share(double t, double ramp_time) {
+// With `cycles` > 0 the share is a triangle wave instead: up to 1 at the ramp time, back to 0 at twice it, `cycles`
+// times, then held at 0 (cyclic loading: a viscoelastic material's hysteresis). The period's index is a truncation
+// (exact), the rest + - * /.
+FMPC_HD double probe_cycle_phase(double t, double ramp_time) {
+  const double u = t / ramp_time;
+  const double whole = static_cast<double>(static_cast<long long>(u / 2.0));
+  return u - 2.0 * whole;  // in [0, 2): rising below 1, falling above
+}
+FMPC_HD double probe_ramp_share(double t, double ramp_time, int cycles) {
+  if (cycles > 0 && ramp_time > 0.0) {
+    if (!(t < 2.0 * ramp_time * cycles)) return 0.0;
+    const double phase = probe_cycle_phase(t, ramp_time);
+    return phase < 1.0 ? phase : 2.0 - phase;
+  }
   if (!(ramp_time > 0.0) || !(t < ramp_time)) return 1.0;
   const double share = t / ramp_time;
   return share < 1.0 ? share : 1.0;
@@ -145,9 +158,15 @@ FMPC_HD double probe_ramp_share(double t, double ramp_time) {
 // One axis of a displacement probe's vertex at time t: position start + share target, and, before a step while
 // the ramp is rising, the ramp's velocity (which the dashpots and the implicit step see); zero otherwise.
 template <typename Real>
-FMPC_HD void probe_prescribed_state(double start, double target, double t, double ramp_time, bool before_step,
-                                    Real& position, Real& velocity) {
-  position = static_cast<Real>(start + probe_ramp_share(t, ramp_time) * target);
+FMPC_HD void probe_prescribed_state(double start, double target, double t, double ramp_time, int cycles,
+                                    bool before_step, Real& position, Real& velocity) {
+  position = static_cast<Real>(start + probe_ramp_share(t, ramp_time, cycles) * target);
+  if (cycles > 0 && ramp_time > 0.0) {
+    const bool moving = t < 2.0 * ramp_time * cycles;
+    const double rate = probe_cycle_phase(t, ramp_time) < 1.0 ? target / ramp_time : -target / ramp_time;
+    velocity = static_cast<Real>(before_step && moving ? rate : 0.0);
+    return;
+  }
   const bool ramping = ramp_time > 0.0 && t < ramp_time;
   velocity = static_cast<Real>(before_step && ramping ? target / ramp_time : 0.0);
 }

@@ -45,16 +45,16 @@ __device__ bool probe_prescribe(const ProbeEntry& e, int offset, bool before_ste
       static_cast<double>(e.step_base + static_cast<unsigned long long>(offset + (before_step ? 0 : 1))) * p.h;
   if (p.force_mode) {
     if (!before_step) return false;
-    const double share = kernels::probe_ramp_share(t, p.ramp_time);
+    const double share = kernels::probe_ramp_share(t, p.ramp_time, p.cycles);
     const double count = static_cast<double>(p.count);
     force = {true, static_cast<Real>(e.base_force_x + share * p.target_x / count),
              static_cast<Real>(e.base_force_y + share * p.target_y / count),
              static_cast<Real>(e.base_force_z + share * p.target_z / count)};
     return false;
   }
-  kernels::probe_prescribed_state(e.start_x, p.target_x, t, p.ramp_time, before_step, state.x, state.vx);
-  kernels::probe_prescribed_state(e.start_y, p.target_y, t, p.ramp_time, before_step, state.y, state.vy);
-  kernels::probe_prescribed_state(e.start_z, p.target_z, t, p.ramp_time, before_step, state.z, state.vz);
+  kernels::probe_prescribed_state(e.start_x, p.target_x, t, p.ramp_time, p.cycles, before_step, state.x, state.vx);
+  kernels::probe_prescribed_state(e.start_y, p.target_y, t, p.ramp_time, p.cycles, before_step, state.y, state.vy);
+  kernels::probe_prescribed_state(e.start_z, p.target_z, t, p.ramp_time, p.cycles, before_step, state.z, state.vz);
   return true;
 }
 

@@ -202,26 +202,35 @@ FMPC_HD int normalised_copy(const Real* F, Real* out) {
   return exponent;
 }
 
+// Where `right` is non-null, the right singular vectors v_i are written as its columns (v_3 = v_1 x v_2, a proper
+// rotation): F = U diag(stretch) V^T with U = R V, the inversion-aware SVD of Irving, Teran & Fedkiw 2004.
 template <typename Real>
-FMPC_HD void rotation_and_stretches_of_normalised(const Real* F, Real* R, Real* stretch);
+FMPC_HD void rotation_and_stretches_of_normalised(const Real* F, Real* R, Real* stretch, Real* right = nullptr);
 
 template <typename Real>
-FMPC_HD void rotation_and_stretches(const Real* unscaled, Real* R, Real* stretch) {
+FMPC_HD void rotation_and_stretches(const Real* unscaled, Real* R, Real* stretch, Real* right = nullptr) {
   Real F[9];
   const int exponent = normalised_copy(unscaled, F);
-  rotation_and_stretches_of_normalised(F, R, stretch);
+  rotation_and_stretches_of_normalised(F, R, stretch, right);
   for (int k = 0; k < 3; ++k) stretch[k] = scale_by_power_of_two(stretch[k], exponent);
 }
 
 // rotation_and_stretches for an F whose largest entry is about 1.
 template <typename Real>
-FMPC_HD void rotation_and_stretches_of_normalised(const Real* F, Real* R, Real* stretch) {
+FMPC_HD void rotation_and_stretches_of_normalised(const Real* F, Real* R, Real* stretch, Real* right) {
   Real c[9], eigenvalues[3], v[9];
   multiply3_transposed_left(F, F, c);
   symmetric_eigen3(c, eigenvalues, v);
   const Real v1[3] = {v[0], v[3], v[6]}, v2[3] = {v[1], v[4], v[7]};
   Real v3[3];
   cross3(v1, v2, v3);
+  if (right) {
+    for (int i = 0; i < 3; ++i) {
+      right[3 * i] = v1[i];
+      right[3 * i + 1] = v2[i];
+      right[3 * i + 2] = v3[i];
+    }
+  }
   Real u1[3], u2[3], u3[3];
   for (int i = 0; i < 3; ++i) {
     u1[i] = F[3 * i] * v1[0] + F[3 * i + 1] * v1[1] + F[3 * i + 2] * v1[2];
@@ -285,15 +294,7 @@ FMPC_HD void polar_rotation(const Real* unscaled, Real* R) {
     for (int iteration = 0; iteration < 24; ++iteration) {
       // X^-T = cofactor(X) / det X.
       Real cofactor[9];
-      cofactor[0] = X[4] * X[8] - X[5] * X[7];
-      cofactor[1] = X[5] * X[6] - X[3] * X[8];
-      cofactor[2] = X[3] * X[7] - X[4] * X[6];
-      cofactor[3] = X[2] * X[7] - X[1] * X[8];
-      cofactor[4] = X[0] * X[8] - X[2] * X[6];
-      cofactor[5] = X[1] * X[6] - X[0] * X[7];
-      cofactor[6] = X[1] * X[5] - X[2] * X[4];
-      cofactor[7] = X[2] * X[3] - X[0] * X[5];
-      cofactor[8] = X[0] * X[4] - X[1] * X[3];
+      cofactor3(X, cofactor);
       const Real detX = X[0] * cofactor[0] + X[1] * cofactor[1] + X[2] * cofactor[2];
       Real gamma = Real(1);
       if (scaled) {

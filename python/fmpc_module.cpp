@@ -51,11 +51,6 @@ struct PyDiagnostic {
   std::string text;      // rendered, with the source line and caret where the file is known
 };
 
-// As the renderer spells them.
-std::string severity_name(Severity severity) {
-  return severity == Severity::Error ? "error" : severity == Severity::Warning ? "warning" : "note";
-}
-
 // Messages may quote any bytes of any file (a binary file read as a scene): a Python str takes UTF-8 only, so every
 // text goes through valid_utf8 (a bad byte becomes U+FFFD) instead of raising UnicodeDecodeError.
 std::vector<PyDiagnostic> to_python(const DiagnosticList& diagnostics, const SourceFiles& sources) {

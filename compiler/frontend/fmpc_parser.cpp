@@ -613,6 +613,9 @@ class AstBuilder {
     std::vector<std::size_t> block_start(lines_.size());
     for (std::size_t i = 0; i < lines_.size(); ++i) block_start[i] = lines_[i].first_token;
     std::size_t end_block_start = std::string::npos;
+    // Each line's last own-line comment (token index) and how many entries of its block reach it: a blank line
+    // between a comment block and its line is part of the layout (a file's header comment, then `system`).
+    std::vector<std::size_t> last_comment(lines_.size(), std::string::npos), block_entries(lines_.size(), 0);
     const std::size_t count = tokens_.size();
     for (std::size_t index = 0; index < count; ++index) {
       const antlr4::Token* token = tokens_.get(index);
@@ -640,9 +643,20 @@ class AstBuilder {
       // A blank line between two own-line comments is kept (as an empty entry).
       if (!block.empty() && blank_line_before(index)) block.emplace_back();
       block.push_back(text);
-      if (owner < lines_.size()) block_start[owner] = std::min(block_start[owner], index);
-      else end_block_start = std::min(end_block_start, index);
+      if (owner < lines_.size()) {
+        block_start[owner] = std::min(block_start[owner], index);
+        last_comment[owner] = index;
+        block_entries[owner] = block.size();
+      } else {
+        end_block_start = std::min(end_block_start, index);
+      }
     }
+    for (std::size_t i = 0; i < lines_.size(); ++i)
+      if (last_comment[i] != std::string::npos &&
+          tokens_.get(lines_[i].first_token)->getLine() >= tokens_.get(last_comment[i])->getLine() + 2) {
+        std::vector<std::string>& leading = lines_[i].comments->leading;
+        leading.insert(leading.begin() + static_cast<std::ptrdiff_t>(block_entries[i]), std::string());
+      }
     for (std::size_t i = 0; i < lines_.size(); ++i)
       lines_[i].comments->blank_line_before = blank_line_before(block_start[i]);
     if (end_block_start != std::string::npos) file.end_comments.blank_line_before = blank_line_before(end_block_start);

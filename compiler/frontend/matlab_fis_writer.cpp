@@ -16,7 +16,7 @@ namespace fmpc {
 namespace {
 
 // MATLAB strings double a quote inside.
-std::string quoted(const std::string& text) {
+std::string matlab_string(const std::string& text) {
   std::string result = "'";
   for (char c : text) {
     result += c;
@@ -102,21 +102,21 @@ class Writer {
     report_what_matlab_cannot_hold();
     std::string out;
     out += "[System]\n";
-    out += "Name=" + quoted(system_.name) + "\n";
+    out += "Name=" + matlab_string(system_.name) + "\n";
     // A type-2 system is MATLAB's mamfistype2 / sugfistype2: Type stays 'mamdani' / 'sugeno' and the
     // TypeReductionMethod key, which only type-2 systems have, marks it (docs/matlab_fis.md).
-    out += "Type=" + quoted(to_string(system_.type)) + "\n";
+    out += "Type=" + matlab_string(to_string(system_.type)) + "\n";
     out += "Version=2.0\n";
     out += "NumInputs=" + std::to_string(system_.inputs.size()) + "\n";
     out += "NumOutputs=" + std::to_string(system_.outputs.size()) + "\n";
     out += "NumRules=" + std::to_string(system_.rules.size()) + "\n";
-    out += "AndMethod=" + quoted(to_string(system_.and_method)) + "\n";
-    out += "OrMethod=" + quoted(to_string(system_.or_method)) + "\n";
-    out += "ImpMethod=" + quoted(to_string(system_.implication)) + "\n";
-    out += "AggMethod=" + quoted(to_string(system_.aggregation)) + "\n";
-    out += "DefuzzMethod=" + quoted(to_string(system_.defuzzifier)) + "\n";
+    out += "AndMethod=" + matlab_string(to_string(system_.and_method)) + "\n";
+    out += "OrMethod=" + matlab_string(to_string(system_.or_method)) + "\n";
+    out += "ImpMethod=" + matlab_string(to_string(system_.implication)) + "\n";
+    out += "AggMethod=" + matlab_string(to_string(system_.aggregation)) + "\n";
+    out += "DefuzzMethod=" + matlab_string(to_string(system_.defuzzifier)) + "\n";
     if (system_.interval_type2)
-      out += "TypeReductionMethod=" + quoted(matlab_type_reduction(system_.type_reduction)) + "\n";
+      out += "TypeReductionMethod=" + matlab_string(matlab_type_reduction(system_.type_reduction)) + "\n";
     const bool type2 = system_.interval_type2;
     const bool sugeno = system_.type == SystemType::Sugeno;
     for (std::size_t i = 0; i < system_.inputs.size(); ++i) out += variable("Input", i + 1, system_.inputs[i], type2);
@@ -176,14 +176,14 @@ class Writer {
 
   static std::string variable(const char* section, std::size_t index, const Variable& variable, bool type2) {
     std::string out = "\n[" + std::string(section) + std::to_string(index) + "]\n";
-    out += "Name=" + quoted(variable.name) + "\n";
+    out += "Name=" + matlab_string(variable.name) + "\n";
     out += "Range=" + vector_text({variable.min, variable.max}) + "\n";
     out += "NumMFs=" + std::to_string(variable.terms.size()) + "\n";
     for (std::size_t k = 0; k < variable.terms.size(); ++k) {
       const Term& term = variable.terms[k];
       const MembershipFunction mf = type2 ? upper_mf(term) : term.mf;
-      out += "MF" + std::to_string(k + 1) + "=" + quoted(term.name) + ":" + quoted(matlab_name(mf.kind)) + "," +
-             vector_text(mf.params) + (type2 ? lower_scale_lag(term, variable) : "") + "\n";
+      out += "MF" + std::to_string(k + 1) + "=" + matlab_string(term.name) + ":" + matlab_string(matlab_name(mf.kind)) +
+             "," + vector_text(mf.params) + (type2 ? lower_scale_lag(term, variable) : "") + "\n";
     }
     return out;
   }

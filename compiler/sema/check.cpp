@@ -11,7 +11,7 @@ namespace fmpc {
 
 namespace {
 
-std::string quoted(const std::string& name) { return "'" + name + "'"; }
+std::string in_quotes(const std::string& name) { return "'" + name + "'"; }
 
 std::string position_text(const SourceRange& range) {
   return std::to_string(range.line) + ":" + std::to_string(range.column);
@@ -90,7 +90,7 @@ class SystemChecker {
       diagnostics_.error(system_.range, "samples is " + std::to_string(system_.samples) +
                                             "; use at least 2 output samples, or 'exact'");
     if (system_.outputs.empty())
-      diagnostics_.error(system_.range, "system " + quoted(system_.name) + " has no output; add one");
+      diagnostics_.error(system_.range, "system " + in_quotes(system_.name) + " has no output; add one");
     if (system_.interval_type2 && !sugeno && system_.defuzzifier != Defuzzifier::Centroid)
       diagnostics_.error(system_.range, std::string("defuzzifier '") + to_string(system_.defuzzifier) +
                                             "' has no interval type-2 form; an interval type-2 mamdani system "
@@ -109,7 +109,7 @@ class SystemChecker {
             diagnostics_.warning(system_.range, "no-fire-out-of-range",
                                  "the value used when no rule fires, " + format_number(system_.no_fire_value) +
                                      ", lies outside the range [" + format_number(output.min) + ", " +
-                                     format_number(output.max) + "] of output " + quoted(output.name) +
+                                     format_number(output.max) + "] of output " + in_quotes(output.name) +
                                      "; pick a value inside it");
         }
       }
@@ -131,7 +131,7 @@ class SystemChecker {
                 : std::string("first defined as ") + role_name(it->second.first) + " " +
                       std::to_string(it->second.second + 1);
         diagnostics_.error(variable.name_range,
-                           "variable " + quoted(variable.name) +
+                           "variable " + in_quotes(variable.name) +
                                " is defined twice (inputs and outputs share one namespace); rename one of them",
                            {note});
       }
@@ -141,7 +141,7 @@ class SystemChecker {
   }
 
   void check_variable(const Variable& variable, Role role) {
-    const std::string name = role_name(role) + std::string(" ") + quoted(variable.name);
+    const std::string name = role_name(role) + std::string(" ") + in_quotes(variable.name);
     const bool sugeno_output = role == Role::Output && system_.type == SystemType::Sugeno;
     if (!std::isfinite(variable.min) || !std::isfinite(variable.max)) {
       diagnostics_.error(variable.range, "the range [" + format_number(variable.min) + ", " +
@@ -169,12 +169,12 @@ class SystemChecker {
                                      : "first defined as term " + std::to_string(it->second + 1);
         if (options_.terms_named_by_index)
           diagnostics_.warning(term.name_range, "duplicate-term",
-                               "term " + quoted(term.name) + " is defined twice in " + name +
+                               "term " + in_quotes(term.name) + " is defined twice in " + name +
                                    "; rules refer to it by number here, but give each term its own name",
                                {note});
         else
           diagnostics_.error(term.name_range,
-                             "term " + quoted(term.name) + " is defined twice in " + name + "; rename one of them",
+                             "term " + in_quotes(term.name) + " is defined twice in " + name + "; rename one of them",
                              {note});
       }
       check_term(variable, term, role);
@@ -184,7 +184,7 @@ class SystemChecker {
   void check_term(const Variable& variable, const Term& term, Role role) {
     const MfKind kind = term.mf.kind;
     const std::vector<double>& params = term.mf.params;
-    const std::string what = "term " + quoted(term.name) + " of " + quoted(variable.name);
+    const std::string what = "term " + in_quotes(term.name) + " of " + in_quotes(variable.name);
     const char* kind_name = matlab_name(kind);
 
     if (role == Role::Input && is_sugeno_output_kind(kind)) {
@@ -246,7 +246,7 @@ class SystemChecker {
     const SourceRange& where = footprint.range.valid() ? footprint.range : term.range;
     auto error = [&](const std::string& message) { diagnostics_.error(where, message); };
     if (!system_.interval_type2) {
-      error(what + " has a footprint of uncertainty, but system " + quoted(system_.name) +
+      error(what + " has a footprint of uncertainty, but system " + in_quotes(system_.name) +
             " is type-1; declare `type interval_type2 " + to_string(system_.type) + "`");
       return;
     }
@@ -386,7 +386,7 @@ class SystemChecker {
       const Variable& variable = variables[static_cast<std::size_t>(clause.variable)];
       if (clause.term < 0 || static_cast<std::size_t>(clause.term) >= variable.terms.size()) {
         diagnostics_.error(clause.range, rule_name + " refers to term number " + std::to_string(clause.term + 1) +
-                                             " of " + quoted(variable.name) + ", which has " +
+                                             " of " + in_quotes(variable.name) + ", which has " +
                                              std::to_string(variable.terms.size()) + " term" +
                                              (variable.terms.size() == 1 ? "" : "s") + "; name an existing one");
       }
@@ -396,7 +396,7 @@ class SystemChecker {
         std::vector<std::string> notes;
         if (earlier.valid()) notes.push_back("first mentioned here: " + position_text(earlier));
         diagnostics_.error(clause.range,
-                           rule_name + " mentions " + quoted(variable.name) +
+                           rule_name + " mentions " + in_quotes(variable.name) +
                                " twice; a rule takes one clause per variable, so split it into two rules",
                            notes);
       }

@@ -20,7 +20,7 @@ namespace {
 // Samples per variable for the never-fires bounds (plus each MF's own breakpoints).
 constexpr int kBoundSamples = 1001;
 
-std::string quoted(const std::string& name) { return "'" + name + "'"; }
+std::string in_quotes(const std::string& name) { return "'" + name + "'"; }
 
 std::string position_text(const SourceRange& range) {
   return std::to_string(range.line) + ":" + std::to_string(range.column);
@@ -40,10 +40,10 @@ bool clause_resolves(const std::vector<Variable>& variables, const Clause& claus
 // "'HCV' is not very 'F4'"
 std::string clause_text(const std::vector<Variable>& variables, const Clause& clause) {
   const Variable& variable = variables[static_cast<std::size_t>(clause.variable)];
-  std::string text = quoted(variable.name) + " is ";
+  std::string text = in_quotes(variable.name) + " is ";
   if (clause.negated) text += "not ";
   if (clause.hedge != Hedge::None) text += std::string(to_string(clause.hedge)) + " ";
-  return text + quoted(variable.terms[static_cast<std::size_t>(clause.term)].name);
+  return text + in_quotes(variable.terms[static_cast<std::size_t>(clause.term)].name);
 }
 
 // Clauses as comparable tuples, in a canonical order: rules that differ only in clause order are the same rule.
@@ -75,13 +75,13 @@ class SystemLinter {
   void lint_variable(const Variable& variable, const char* role) {
     if (options_.require_units && variable.unit.empty())
       diagnostics_.warning(variable.name_range, "unit",
-                           std::string(role) + " " + quoted(variable.name) +
+                           std::string(role) + " " + in_quotes(variable.name) +
                                " has no unit; write one after its range (e.g. 'in [0, 75] kPa'), or 'dimensionless' "
                                "for a pure number");
     if (!has_usable_range(variable)) return;
     const double span = variable.max - variable.min;
     for (const Term& term : variable.terms) {
-      const std::string what = "term " + quoted(term.name) + " of " + quoted(variable.name);
+      const std::string what = "term " + in_quotes(term.name) + " of " + in_quotes(variable.name);
       if (const std::optional<CoreInterval> core = term_core(term)) {
         if (core->hi < variable.min || core->lo > variable.max)
           diagnostics_.warning(term.name_range, "term-out-of-range",
@@ -168,13 +168,13 @@ class SystemLinter {
       if (sign == 0 || sign == direction) continue;
       const Term& term = variable.terms[placed[i].term];
       const Term& previous = variable.terms[placed[i - 1].term];
-      diagnostics_.warning(
-          term.name_range, "terms-out-of-order",
-          "term " + quoted(term.name) + " of " + quoted(variable.name) + " (centre " +
-              format_number(placed[i].centre) + ") comes after " + quoted(previous.name) + " (centre " +
-              format_number(placed[i - 1].centre) + ") but lies " + (direction > 0 ? "below" : "above") +
-              " it, while the terms run from " + (direction > 0 ? "low to high" : "high to low") +
-              "; declare the terms in order of their centres");
+      diagnostics_.warning(term.name_range, "terms-out-of-order",
+                           "term " + in_quotes(term.name) + " of " + in_quotes(variable.name) + " (centre " +
+                               format_number(placed[i].centre) + ") comes after " + in_quotes(previous.name) +
+                               " (centre " + format_number(placed[i - 1].centre) + ") but lies " +
+                               (direction > 0 ? "below" : "above") + " it, while the terms run from " +
+                               (direction > 0 ? "low to high" : "high to low") +
+                               "; declare the terms in order of their centres");
       return;
     }
   }
@@ -193,7 +193,7 @@ class SystemLinter {
           if (used.count({static_cast<int>(v), static_cast<int>(t)})) continue;
           const Term& term = variables[v].terms[t];
           diagnostics_.warning(term.name_range, "unused-term",
-                               "term " + quoted(term.name) + " of " + role + " " + quoted(variables[v].name) +
+                               "term " + in_quotes(term.name) + " of " + role + " " + in_quotes(variables[v].name) +
                                    " is not used by any rule; use it in a rule or remove it");
         }
     };
@@ -239,7 +239,7 @@ class SystemLinter {
         const Variable& input = system_.inputs[static_cast<std::size_t>(clause.variable)];
         reason = "the condition " + clause_text(system_.inputs, clause) + " stays below " +
                  format_number(kNegligibleFiringStrength) + " everywhere in the range " +
-                 interval_text(input.min, input.max) + " of " + quoted(input.name);
+                 interval_text(input.min, input.max) + " of " + in_quotes(input.name);
       } else if (!conjunction) {
         reason = "none of its conditions reaches " + format_number(kNegligibleFiringStrength) +
                  " anywhere in the input ranges";
@@ -310,7 +310,7 @@ class SystemLinter {
         const std::string where =
             hole.from == hole.to ? "at " + format_number(hole.from) : "on " + interval_text(hole.from, hole.to);
         diagnostics_.warning(input.range, "coverage-hole",
-                             "no term of input " + quoted(input.name) + " reaches " +
+                             "no term of input " + in_quotes(input.name) + " reaches " +
                                  format_number(options_.coverage_threshold) + " " + where +
                                  "; add or widen a term there, or narrow the range");
       }
@@ -326,7 +326,7 @@ class SystemLinter {
     if (!coverage.analysed || coverage.holes == 0) return;
     std::string point;
     for (std::size_t d = 0; d < system_.inputs.size(); ++d)
-      point += (d ? ", " : "") + quoted(system_.inputs[d].name) + " = " + format_number(coverage.worst_point[d]);
+      point += (d ? ", " : "") + in_quotes(system_.inputs[d].name) + " = " + format_number(coverage.worst_point[d]);
     std::string strongest = "no rule fires there at all";
     if (coverage.strongest_rule >= 0)
       strongest = "the strongest rule there, " +

@@ -8,6 +8,7 @@
 #include "compiler/frontend/fmpc_ast.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/ir/system_names.h"
+#include "compiler/ir/units.h"
 #include "diagnostics/number_format.h"
 
 namespace fmpc {
@@ -24,7 +25,7 @@ using ast::Setting;
 using ast::SettingKind;
 using ast::System;
 
-std::string quoted(const std::string& text) { return "'" + text + "'"; }
+std::string in_quotes(const std::string& text) { return "'" + text + "'"; }
 
 std::string position_text(const SourceRange& range) {
   return std::to_string(range.line) + ":" + std::to_string(range.column);
@@ -47,44 +48,9 @@ std::string join_words(const std::vector<const char*>& words) {
 }
 
 std::vector<std::string> did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
-  if (auto suggestion = closest_name(name, candidates)) return {"did you mean " + quoted(*suggestion) + "?"};
+  if (auto suggestion = closest_name(name, candidates)) return {"did you mean " + in_quotes(*suggestion) + "?"};
   return {};
 }
-
-// ---------------------------------------------------------------------------------------------------------------
-// Units: SI prefixes of Pa, m, s, N and g, plus % and dimensionless. Every conversion is a power of ten, so a value
-// is scaled by one correctly rounded multiplication or division.
-
-struct UnitMeaning {
-  const char* dimension;
-  int exponent;  // value in the base unit = value * 10^exponent
-};
-
-std::optional<UnitMeaning> unit_meaning(const std::string& unit) {
-  if (unit == "dimensionless") return UnitMeaning{"dimensionless", 0};
-  if (unit == "%") return UnitMeaning{"dimensionless", -2};
-  static const std::vector<std::pair<std::string, const char*>> bases = {
-      {"Pa", "pressure"}, {"m", "length"}, {"s", "time"}, {"N", "force"}, {"g", "mass"}};
-  static const std::vector<std::pair<std::string, int>> prefixes = {
-      {"", 0},   {"da", 1}, {"h", 2},  {"k", 3},  {"M", 6},       {"G", 9},       {"T", 12},  {"d", -1},
-      {"c", -2}, {"m", -3}, {"u", -6}, {"\xC2\xB5", -6} /* micro sign */, {"\xCE\xBC", -6} /* Greek mu */,
-      {"n", -9}, {"p", -12}, {"f", -15}};
-  for (const auto& [base, dimension] : bases) {
-    if (unit.size() < base.size() || unit.compare(unit.size() - base.size(), base.size(), base) != 0) continue;
-    const std::string prefix = unit.substr(0, unit.size() - base.size());
-    for (const auto& [spelling, exponent] : prefixes)
-      if (prefix == spelling) return UnitMeaning{dimension, exponent};
-  }
-  return std::nullopt;
-}
-
-double scale_by_power_of_ten(double value, int exponent) {
-  double power = 1.0;
-  for (int i = 0; i < std::abs(exponent); ++i) power *= 10.0;  // exact up to 1e22
-  return exponent >= 0 ? value * power : value / power;
-}
-
-// ---------------------------------------------------------------------------------------------------------------
 
 class SystemLowering {
  public:
@@ -163,8 +129,8 @@ class SystemLowering {
       auto [it, inserted] = first_set.emplace(setting.kind, setting.range);
       if (!inserted)
         diagnostics_.error(setting.range,
-                           quoted(setting_name(setting.kind)) + " is set twice in system " + quoted(system_.name) +
-                               "; keep one",
+                           in_quotes(setting_name(setting.kind)) + " is set twice in system " +
+                               in_quotes(system_.name) + "; keep one",
                            {"first set here: " + position_text(it->second)});
     }
     for (const Setting& setting : source_.settings)
@@ -194,9 +160,9 @@ class SystemLowering {
   void unknown_choice(const Setting& setting, const std::string& what, const std::vector<std::string>& choices) {
     std::vector<std::string> notes = did_you_mean(setting.value.text, choices);
     notes.push_back("choose one of: " + list_text(choices));
-    std::string message = "unknown " + what + " " + quoted(setting.value.text);
+    std::string message = "unknown " + what + " " + in_quotes(setting.value.text);
     if (setting.kind != SettingKind::Type && setting.kind != SettingKind::Defuzzify)
-      message += std::string(" for ") + quoted(setting_name(setting.kind));
+      message += std::string(" for ") + in_quotes(setting_name(setting.kind));
     diagnostics_.error(setting.value.range, message, notes);
   }
 
@@ -272,10 +238,10 @@ class SystemLowering {
   std::optional<double> in_variable_unit(double value, const std::optional<Name>& unit, const std::string& parameter,
                                          const fmpc::Variable& variable) {
     if (!unit || unit->text == variable.unit) return value;
-    const std::string what = quoted(unit->text) + " given for " + quoted(parameter);
+    const std::string what = in_quotes(unit->text) + " given for " + in_quotes(parameter);
     if (variable.unit.empty()) {
-      diagnostics_.error(unit->range, what + ", but " + quoted(variable.name) + " has no unit",
-                         {"give " + quoted(variable.name) + " a unit after its range (in [" +
+      diagnostics_.error(unit->range, what + ", but " + in_quotes(variable.name) + " has no unit",
+                         {"give " + in_quotes(variable.name) + " a unit after its range (in [" +
                           format_number(variable.min) + ", " + format_number(variable.max) + "] " + unit->text +
                           ") or drop this one"});
       return std::nullopt;
@@ -285,22 +251,22 @@ class SystemLowering {
     const std::string known = "fmpc converts Pa, m, s, N and g with SI prefixes (kPa, mm, ms, ...), % and "
                               "dimensionless";
     if (!from) {
-      diagnostics_.error(unit->range, "unknown unit " + quoted(unit->text) + " for " + quoted(parameter) + "; " +
-                                          quoted(variable.name) + " is in " + quoted(variable.unit),
+      diagnostics_.error(unit->range, "unknown unit " + in_quotes(unit->text) + " for " + in_quotes(parameter) + "; " +
+                                          in_quotes(variable.name) + " is in " + in_quotes(variable.unit),
                          {known});
       return std::nullopt;
     }
     if (!to) {
       diagnostics_.error(unit->range,
-                         "unit " + quoted(unit->text) + " of " + quoted(parameter) + " does not convert to " +
-                             quoted(variable.unit) + ", the unit of " + quoted(variable.name),
+                         "unit " + in_quotes(unit->text) + " of " + in_quotes(parameter) + " does not convert to " +
+                             in_quotes(variable.unit) + ", the unit of " + in_quotes(variable.name),
                          {known + "; write the value in " + variable.unit});
       return std::nullopt;
     }
     if (std::string(from->dimension) != to->dimension) {
-      diagnostics_.error(unit->range, "unit " + quoted(unit->text) + " (" + from->dimension + ") of " +
-                                          quoted(parameter) + " does not convert to " + quoted(variable.unit) +
-                                          " (" + to->dimension + "), the unit of " + quoted(variable.name));
+      diagnostics_.error(unit->range, "unit " + in_quotes(unit->text) + " (" + from->dimension + ") of " +
+                                          in_quotes(parameter) + " does not convert to " + in_quotes(variable.unit) +
+                                          " (" + to->dimension + "), the unit of " + in_quotes(variable.name));
       return std::nullopt;
     }
     return scale_by_power_of_ten(value, from->exponent - to->exponent);
@@ -331,15 +297,15 @@ class SystemLowering {
         if (argument.high && !has_lower) where = argument.range;
       if (has_lower || source.explicit_upper || term.footprint)
         diagnostics_.error(where,
-                           "term " + quoted(source.name.text) + " has a footprint of uncertainty, but system " +
-                               quoted(system_.name) + " is type-1; declare `type interval_type2 " +
+                           "term " + in_quotes(source.name.text) + " has a footprint of uncertainty, but system " +
+                               in_quotes(system_.name) + " is type-1; declare `type interval_type2 " +
                                to_string(system_.type) + "` to use interval type-2 terms");
       term.footprint.reset();
       return;
     }
     if (!has_lower) return;
     if (term.footprint) {
-      diagnostics_.error(source.lower_range, "term " + quoted(source.name.text) +
+      diagnostics_.error(source.lower_range, "term " + in_quotes(source.name.text) +
                                                  " has an interval parameter and a lower MF; give one footprint: "
                                                  "an interval, or `upper F(...) lower G(...)`, or `lower scale S lag L`");
       return;
@@ -354,7 +320,7 @@ class SystemLowering {
         notes.push_back("a lower MF is one of the input families: triangle, trapezoid, gauss, ...");
         diagnostics_.error(source.lower->family.range,
                            (family ? "'" + source.lower->family.text + "' cannot be a lower MF"
-                                   : "unknown membership function " + quoted(source.lower->family.text)),
+                                   : "unknown membership function " + in_quotes(source.lower->family.text)),
                            notes);
         return;
       }
@@ -379,7 +345,7 @@ class SystemLowering {
     std::vector<std::string> notes = did_you_mean(name.text, candidates);
     notes.push_back("membership functions: " + list_text(ast::family_names()));
     notes.push_back("MATLAB's names are accepted too: " + list_text(ast::matlab_family_names()));
-    diagnostics_.error(name.range, "unknown membership function " + quoted(name.text), notes);
+    diagnostics_.error(name.range, "unknown membership function " + in_quotes(name.text), notes);
     return nullptr;
   }
 
@@ -486,24 +452,24 @@ class SystemLowering {
           const auto position = static_cast<std::size_t>(family.matlab_index[i]);
           if (position < family.matlab_parameters.size() && argument.name.text == family.matlab_parameters[position])
             notes = {"MATLAB's " + std::string(matlab_name(family.kind)) + " calls it " + argument.name.text +
-                     "; fmpc calls it " + quoted(names[i])};
+                     "; fmpc calls it " + in_quotes(names[i])};
         }
         notes.push_back(takes);
         diagnostics_.error(argument.name.range,
-                           quoted(family.name) + " has no parameter " + quoted(argument.name.text), notes);
+                           in_quotes(family.name) + " has no parameter " + in_quotes(argument.name.text), notes);
         continue;
       }
       const auto index = static_cast<std::size_t>(found - names.begin());
       if (given[index]) {
-        diagnostics_.error(argument.name.range, "parameter " + quoted(argument.name.text) + " is given twice",
+        diagnostics_.error(argument.name.range, "parameter " + in_quotes(argument.name.text) + " is given twice",
                            {"first given here: " + position_text(given[index]->name.range)});
         continue;
       }
       given[index] = &argument;
       if (argument.unit && !family.takes_unit[index]) {
         diagnostics_.error(argument.unit->range,
-                           quoted(argument.name.text) + " of " + family.name + " takes no unit (it is per unit of " +
-                               quoted(variable.name) + "); remove " + quoted(argument.unit->text));
+                           in_quotes(argument.name.text) + " of " + family.name + " takes no unit (it is per unit of " +
+                               in_quotes(variable.name) + "); remove " + in_quotes(argument.unit->text));
         continue;
       }
       std::optional<double> value = in_variable_unit(argument.value.value, argument.unit, argument.name.text, variable);
@@ -518,13 +484,13 @@ class SystemLowering {
     }
     std::vector<std::string> missing;
     for (std::size_t i = 0; i < names.size(); ++i)
-      if (!given[i]) missing.push_back(quoted(names[i]));
+      if (!given[i]) missing.push_back(in_quotes(names[i]));
     if (!missing.empty()) {
       std::string list;
       for (std::size_t i = 0; i < missing.size(); ++i)
         list += (i == 0 ? "" : i + 1 == missing.size() ? " and " : ", ") + missing[i];
       diagnostics_.error(family_name.range,
-                         std::string(family.name) + "(...) of term " + quoted(source.name.text) + " is missing " +
+                         std::string(family.name) + "(...) of term " + in_quotes(source.name.text) + " is missing " +
                              (missing.size() == 1 ? "parameter " : "parameters ") + list,
                          {takes});
     }
@@ -540,14 +506,14 @@ class SystemLowering {
     else if (family.kind == MfKind::Constant && parameter == "value") kind = FootprintKind::IntervalValue;
     if (kind == FootprintKind::None || term == nullptr) {
       diagnostics_.error(argument.range,
-                         quoted(parameter) + " of " + family.name + " takes a number, not an interval",
+                         in_quotes(parameter) + " of " + family.name + " takes a number, not an interval",
                          {"intervals: gauss(mean [m1, m2], sd s), gauss(mean m, sd [s1, s2]) and, for sugeno "
                           "outputs, constant(value [c1, c2]); other families take `upper F(...) lower G(...)` or "
                           "`lower scale S lag L`"});
       return false;
     }
     if (term->footprint) {
-      diagnostics_.error(argument.range, "term " + quoted(term->name) +
+      diagnostics_.error(argument.range, "term " + in_quotes(term->name) +
                                              " has two intervals; an uncertain gaussian has an uncertain mean or "
                                              "an uncertain sd, not both (use `upper gauss(...) lower gauss(...)`)");
       return false;
@@ -578,10 +544,10 @@ class SystemLowering {
         const int input = names_->variable(false, argument.name.text);
         if (input < 0) {
           std::vector<std::string> notes = did_you_mean(argument.name.text, input_names());
-          notes.push_back("linear(...) takes one coefficient per input of " + quoted(system_.name) + " (" +
+          notes.push_back("linear(...) takes one coefficient per input of " + in_quotes(system_.name) + " (" +
                           name_list_text(input_names()) + ") and an offset");
           diagnostics_.error(argument.name.range,
-                             quoted(argument.name.text) + " is not an input of system " + quoted(system_.name),
+                             in_quotes(argument.name.text) + " is not an input of system " + in_quotes(system_.name),
                              notes);
           continue;
         }
@@ -589,7 +555,8 @@ class SystemLowering {
       }
       if (given[index]) {
         diagnostics_.error(argument.name.range,
-                           (is_offset ? std::string("the offset") : "the coefficient of " + quoted(argument.name.text)) +
+                           (is_offset ? std::string("the offset")
+                                      : "the coefficient of " + in_quotes(argument.name.text)) +
                                " is given twice",
                            {"first given here: " + position_text(given[index]->name.range)});
         continue;
@@ -597,8 +564,8 @@ class SystemLowering {
       given[index] = &argument;
       if (!is_offset) {
         if (argument.unit)
-          diagnostics_.error(argument.unit->range, "the coefficient of " + quoted(argument.name.text) +
-                                                       " takes no unit; remove " + quoted(argument.unit->text));
+          diagnostics_.error(argument.unit->range, "the coefficient of " + in_quotes(argument.name.text) +
+                                                       " takes no unit; remove " + in_quotes(argument.unit->text));
         else mf.params[index] = argument.value.value;
       } else if (auto value = in_variable_unit(argument.value.value, argument.unit, "offset", variable)) {
         mf.params[index] = *value;
@@ -623,8 +590,9 @@ class SystemLowering {
     const auto found = variables_elsewhere_->find(name);
     if (found == variables_elsewhere_->end()) return std::nullopt;
     const auto [other, is_output] = found->second;
-    return quoted(name) + " is an " + (is_output ? "output" : "input") + " of system " + quoted(other->name.text) +
-           "; a rule of " + quoted(source_.name.text) + " can only name its own variables";
+    return in_quotes(name) + " is an " + (is_output ? "output" : "input") + " of system " +
+           in_quotes(other->name.text) + "; a rule of " + in_quotes(source_.name.text) +
+           " can only name its own variables";
   }
 
   // Resolves one clause; returns false after reporting when it does not resolve.
@@ -637,16 +605,16 @@ class SystemLowering {
       const int other_role = names_->variable(!consequent, source.variable.text);
       if (other_role >= 0) {
         diagnostics_.error(source.variable.range,
-                           quoted(source.variable.text) + " is an " + (consequent ? "input" : "output") + " of " +
-                               quoted(system_.name) + "; the " +
+                           in_quotes(source.variable.text) + " is an " + (consequent ? "input" : "output") + " of " +
+                               in_quotes(system_.name) + "; the " +
                                (consequent ? "conclusions after 'then' name outputs"
                                            : "conditions after 'if' name inputs"));
       } else if (auto elsewhere = owner_elsewhere(source.variable.text)) {
         diagnostics_.error(source.variable.range, *elsewhere);
       } else {
         diagnostics_.error(source.variable.range,
-                           std::string("unknown ") + role + " " + quoted(source.variable.text) + " in system " +
-                               quoted(system_.name),
+                           std::string("unknown ") + role + " " + in_quotes(source.variable.text) + " in system " +
+                               in_quotes(system_.name),
                            did_you_mean(source.variable.text, consequent ? output_names() : input_names()));
       }
       return false;
@@ -655,7 +623,7 @@ class SystemLowering {
     const auto [previous, inserted] = used.emplace(index, source.variable.range);
     if (!inserted) {
       diagnostics_.error(source.variable.range,
-                         std::string(role) + " " + quoted(variable.name) + " appears twice in " + rule_name +
+                         std::string(role) + " " + in_quotes(variable.name) + " appears twice in " + rule_name +
                              "; a rule names each " + role + " at most once",
                          {"first used here: " + position_text(previous->second)});
       return false;
@@ -664,9 +632,10 @@ class SystemLowering {
     if (term < 0) {
       const std::vector<std::string>& term_names = names_->term_names(consequent, index);
       std::vector<std::string> notes = did_you_mean(source.term.text, term_names);
-      notes.push_back("terms of " + quoted(variable.name) + ": " + name_list_text(term_names));
+      notes.push_back("terms of " + in_quotes(variable.name) + ": " + name_list_text(term_names));
       diagnostics_.error(source.term.range,
-                         std::string(role) + " " + quoted(variable.name) + " has no term " + quoted(source.term.text),
+                         std::string(role) + " " + in_quotes(variable.name) + " has no term " +
+                             in_quotes(source.term.text),
                          notes);
       return false;
     }
@@ -684,7 +653,7 @@ class SystemLowering {
     rule.range = source.range;
     rule.weight = source.weight ? source.weight->value : 1.0;
     const std::string rule_name =
-        source.label ? "rule " + quoted(source.label->text) : "rule " + std::to_string(system_.rules.size() + 1);
+        source.label ? "rule " + in_quotes(source.label->text) : "rule " + std::to_string(system_.rules.size() + 1);
     if (!source.connectives.empty()) {
       rule.connective = source.connectives.front().connective;
       for (const ConnectiveToken& connective : source.connectives) {
@@ -731,7 +700,7 @@ RuleFile ast::lower_fmpc(const File& file, DiagnosticList& diagnostics) {
     const auto [first, inserted] = system_names.emplace(system.name.text, system.name.range);
     if (!inserted)
       system_diagnostics.error(system.name.range,
-                               "system " + quoted(system.name.text) + " is defined twice in this file; rename one",
+                               "system " + in_quotes(system.name.text) + " is defined twice in this file; rename one",
                                {"first defined here: " + position_text(first->second)});
     SystemLowering lowering(file, i, system_diagnostics);
     FuzzySystem lowered = lowering.lower();

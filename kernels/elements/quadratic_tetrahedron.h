@@ -10,8 +10,8 @@
 // which is the linear tetrahedron's corner_gradient of the four y_k; the forces f_a = -sum_q V0/4 P_q grad N_a(q) are
 // the linear tetrahedron's corner forces c_k = -V0/4 P_q g_k spread back by the same dN_a/dL_k. Every function is
 // generic over the law, as LinearTetrahedron's.
-#include "kernels/elements/element_kind_tangent.h"
 #include "kernels/element_term.h"
+#include "kernels/elements/element_kind_tangent.h"
 
 namespace fmpc::kernels {
 
@@ -81,21 +81,35 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
     }
   }
 
+  // F at each of the four points from node positions x.
+  template <typename Real>
+  static FMPC_HD void deformation_gradients(const ElementTermView<Real>& t, int e, const Real x[kNodes][3],
+                                            Real F[kPoints][9]) {
+    for (int q = 0; q < kPoints; ++q) point_gradient(x, q, t.rest_inverse + 9 * e, F[q]);
+  }
+
+  // Each point's stress through point_first_piola (point kPoints e + q), so that a term's per-point state (the Prony
+  // series) acts on every point.
   template <typename Law, typename Real>
   static FMPC_HD void forces(const ElementTermView<Real>& t, int e, const Real x[kNodes][3], const Real (*v)[3],
                              Real out[kNodes][3]) {
     const Real* rest_inverse = t.rest_inverse + 9 * e;
-    const typename Law::template Material<Real> material = Law::material(t, e);
     const Real weight = t.rest_volume[e] / Real(kPoints);
     Real g[4][3];
     shape_gradients(rest_inverse, g);
     for (int a = 0; a < kNodes; ++a)
       for (int i = 0; i < 3; ++i) out[a][i] = Real(0);
     for (int q = 0; q < kPoints; ++q) {
-      Real F[9], F_rate[9], P[9], c[4][3];
+      Real F[9], P[9], c[4][3];
       point_gradient(x, q, rest_inverse, F);
-      if (v) point_gradient(v, q, rest_inverse, F_rate);
-      Law::first_piola(material, F, v ? F_rate : nullptr, P);
+      // Two calls with a constant pointer each, as LinearTetrahedron::forces says why.
+      if (v) {
+        Real F_rate[9];
+        point_gradient(v, q, rest_inverse, F_rate);
+        point_first_piola<Law>(t, e, kPoints * e + q, F, F_rate, P);
+      } else {
+        point_first_piola<Law>(t, e, kPoints * e + q, F, static_cast<const Real*>(nullptr), P);
+      }
       corner_forces_from_stress(P, g, weight, c);
       spread(c, q, out);
     }
@@ -204,8 +218,8 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
           const double gg = dot3(G[q][a], G[q][b]);
           for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j)
-              block[i][j] += weight * (lambda * G[q][a][i] * G[q][b][j] + mu * G[q][b][i] * G[q][a][j] +
-                                       (i == j ? mu * gg : 0.0));
+              block[i][j] +=
+                  weight * (lambda * G[q][a][i] * G[q][b][j] + mu * G[q][b][i] * G[q][a][j] + (i == j ? mu * gg : 0.0));
         }
         for (int i = 0; i < 3; ++i)
           for (int j = 0; j < 3; ++j) {

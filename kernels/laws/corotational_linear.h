@@ -25,8 +25,10 @@ struct CorotationalLinear {
   struct Material {
     Real youngs_modulus;
     Real poisson_ratio;
-    Real stiffness_damping;               // beta (s)
-    const StrainTableView* strain_table;  // null: youngs_modulus
+    Real stiffness_damping;  // beta (s)
+    // By value: a pointer into the kernel's parameter would copy the whole ElementTermView to local memory in every
+    // thread (ptxas: a 128-byte stack frame, the float element pass 24% slower). strain == null: youngs_modulus.
+    StrainTableView strain_table;
   };
 
   template <typename Real>
@@ -35,7 +37,7 @@ struct CorotationalLinear {
     m.youngs_modulus = t.parameter[kYoungsModulus][e];
     m.poisson_ratio = t.parameter[kPoissonRatio][e];
     m.stiffness_damping = t.stiffness_damping ? t.stiffness_damping[e] : Real(0);
-    m.strain_table = t.strain_table.strain ? &t.strain_table : nullptr;
+    m.strain_table = t.strain_table;
     return m;
   }
 
@@ -43,11 +45,11 @@ struct CorotationalLinear {
   // eigen-decomposition, so only a strain table computes them).
   template <typename Real>
   static FMPC_HD Real rotation_and_modulus(const Material<Real>& m, const Real* F, Real* R) {
-    if (m.strain_table) {
+    if (m.strain_table.strain) {
       Real stretch[3];
       rotation_and_stretches(F, R, stretch);
       const Real strain = principal_strain_of_largest_magnitude(stretch);
-      return static_cast<Real>(strain_table_modulus(*m.strain_table, static_cast<double>(strain)));
+      return static_cast<Real>(strain_table_modulus(m.strain_table, static_cast<double>(strain)));
     }
     polar_rotation(F, R);
     return m.youngs_modulus;
@@ -96,7 +98,7 @@ struct CorotationalLinear {
   // The small-strain Lame parameters at the largest modulus the run can give the point (a strain table's largest):
   // the stable step and the element damping use the element's rest stiffness with these.
   static FMPC_HD void rest_lame(const Material<double>& m, double& mu, double& lambda) {
-    const double modulus = m.strain_table ? strain_table_largest_modulus(*m.strain_table) : m.youngs_modulus;
+    const double modulus = m.strain_table.strain ? strain_table_largest_modulus(m.strain_table) : m.youngs_modulus;
     lame_parameters(modulus, m.poisson_ratio, mu, lambda);
   }
 
@@ -105,7 +107,7 @@ struct CorotationalLinear {
   static FMPC_HD void stress(const Material<double>& m, const double* F, double* sigma) {
     double R[9], e[9], mu, lambda;
     const double modulus = rotation_and_modulus(m, F, R);
-    if (m.strain_table) polar_rotation(F, R);
+    if (m.strain_table.strain) polar_rotation(F, R);
     corotated_symmetric_part(R, F, true, e);
     lame_parameters(modulus, m.poisson_ratio, mu, lambda);
     linear_stress(e, mu, lambda, sigma);

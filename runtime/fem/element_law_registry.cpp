@@ -9,8 +9,11 @@ namespace fmpc::sim {
 
 namespace {
 
-std::optional<ElementLawBuild> build_corotational_linear(const ElementMaterial& material, DiagnosticList& diagnostics) {
-  using Law = kernels::CorotationalLinear;
+// A law whose parameters are Young's modulus and Poisson's ratio per element (kYoungsModulus, kPoissonRatio): both
+// checked, nu in [0, 0.4999] (the element kind's own limit is build_fem_model's).
+template <typename Law>
+std::optional<ElementLawBuild> build_youngs_modulus_and_poisson_ratio(const ElementMaterial& material,
+                                                                      DiagnosticList& diagnostics) {
   const std::size_t count = material.youngs_modulus.size();
   for (std::size_t e = 0; e < count; ++e) {
     const double youngs = material.youngs_modulus[e], poisson = material.poisson_ratio[e];
@@ -62,11 +65,17 @@ const std::vector<ElementLawRow>& element_law_rows() {
        "co-rotational linear elasticity on linear tetrahedra (Mueller & Gross 2004; Nesme, Payan & Faure 2005), "
        "E and nu per element, E optionally from a strain table",
        kernels::element_law_index<kernels::CorotationalLinear>, kernels::CorotationalLinear::kStressOutput,
-       build_corotational_linear},
+       build_youngs_modulus_and_poisson_ratio<kernels::CorotationalLinear>},
       {"volume_preservation", nullptr, true, "springs_volume_term", "springs+volume",
        "the volume term beside springs (Teschner et al. 2004), kappa calibrated with the springs to E and nu",
        kernels::element_law_index<kernels::VolumePreservation>, kernels::VolumePreservation::kStressOutput,
        build_volume_preservation},
+      {"stable_neo_hookean", nullptr, false, "stable_neo_hookean", "SNH",
+       "stable neo-Hookean hyperelasticity (Smith, de Goes & Kim 2018, ACM TOG 37(2)) with the paper's Lame "
+       "re-parameterisation from E and nu, finite and restoring for inverted elements; E optionally from a strain "
+       "table at the principal strain of largest magnitude",
+       kernels::element_law_index<kernels::StableNeoHookean>, kernels::StableNeoHookean::kStressOutput,
+       build_youngs_modulus_and_poisson_ratio<kernels::StableNeoHookean>},
   };
   return rows;
 }
@@ -83,6 +92,19 @@ const ElementLawRow* element_law_by_trade_name(const std::string& name) {
   for (const ElementLawRow& row : element_law_rows())
     if (name == row.trade_name) return &row;
   return nullptr;
+}
+
+const ElementLawRow* fem_law_by_keyword(const std::string& name) {
+  for (const ElementLawRow& row : element_law_rows())
+    if (!row.beside_springs && name == row.keyword) return &row;
+  return nullptr;
+}
+
+std::vector<std::string> fem_law_keywords() {
+  std::vector<std::string> out;
+  for (const ElementLawRow& row : element_law_rows())
+    if (!row.beside_springs) out.emplace_back(row.keyword);
+  return out;
 }
 
 const std::vector<ElementKindRow>& element_kind_rows() {

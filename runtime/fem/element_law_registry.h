@@ -50,6 +50,11 @@ const std::vector<ElementLawRow>& element_law_rows();
 const ElementLawRow& element_law_row(int law);
 // The row whose model_keyword (or trade_name) is `name`; null when none is.
 const ElementLawRow* element_law_by_model_keyword(const std::string& name);
+// The law `fem: {law: NAME}` selects: a row with that keyword that is a model of its own (not beside springs); null
+// when none is.
+const ElementLawRow* fem_law_by_keyword(const std::string& name);
+// The keywords fem_law_by_keyword accepts, in the registry's order (for errors and docs).
+std::vector<std::string> fem_law_keywords();
 const ElementLawRow* element_law_by_trade_name(const std::string& name);
 // The law a spring network takes beside it (beside_springs).
 const ElementLawRow& element_law_beside_springs();

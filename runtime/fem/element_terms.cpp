@@ -145,6 +145,43 @@ kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, st
   return view;
 }
 
+kernels::PronyConstants<double> prony_constants(const std::vector<PronyTerm>& prony, double dt, bool step_end_stress) {
+  kernels::PronyConstants<double> c{};
+  c.count = static_cast<int>(std::min<std::size_t>(prony.size(), kernels::kMostPronyTerms));
+  double scale = 1.0;
+  for (int i = 0; i < c.count; ++i) {
+    const PronyTerm& term = prony[static_cast<std::size_t>(i)];
+    if (dt > 0.0) {
+      const double ratio = dt / term.time;
+      c.decay[i] = std::exp(-ratio);
+      // (1 - exp(-r)) / r without the cancellation of 1 - exp(-r) at small r.
+      c.gain[i] = term.weight * (-std::expm1(-ratio) / ratio);
+    } else {
+      c.decay[i] = 1.0;
+      c.gain[i] = term.weight;
+    }
+    scale += c.gain[i] - term.weight;
+    c.stress_decay[i] = step_end_stress ? c.decay[i] : 1.0;
+    c.stress_gain[i] = step_end_stress ? c.gain[i] : term.weight;
+  }
+  c.stress_scale = step_end_stress ? scale : 1.0;
+  return c;
+}
+
+int point_state_width(const ElementTerm& term) {
+  return term.prony.empty() ? 0 : kernels::prony_state_width(static_cast<int>(term.prony.size()));
+}
+
+int points_per_element(int kind) {
+  return kernels::visit_element_term(kind, 0, [](auto element_kind, auto) { return decltype(element_kind)::kPoints; });
+}
+
+bool has_point_state(const ElementTerms& terms) {
+  for (const ElementTerm& term : terms.terms)
+    if (point_state_width(term) > 0) return true;
+  return false;
+}
+
 bool reads_strain_table(const ElementTerm& term) {
   return kernels::visit_element_law(term.law,
                                     [](auto element_law) { return decltype(element_law)::kStrainTableModulus; });

@@ -36,11 +36,21 @@ struct ElementGeometry {
   std::size_t size() const { return rest_volume.size(); }
 };
 
+// One term of a Prony series (kernels/prony_viscoelasticity.h): its weight g_i, a fraction of the law's instantaneous
+// response, and its time constant tau_i (s).
+struct PronyTerm {
+  double weight = 0.0;
+  double time = 0.0;
+};
+
 struct ElementTerm {
   int law = 0;  // index in kernels::ElementLaws
   // The law's parameters in its order (kParameterCount of them), one value per element each.
   std::vector<double> parameter[kernels::kMostLawParameters];
   std::vector<double> stiffness_damping;  // beta (s) per element; empty: undamped
+  // Viscoelasticity on the law (at most kernels::kMostPronyTerms, weights summing below 1); empty: elastic. A term
+  // with a series keeps per-point state (point_state_width values per material point).
+  std::vector<PronyTerm> prony;
 };
 
 struct ElementTerms {
@@ -73,6 +83,38 @@ void build_node_csr(ElementGeometry& geometry, std::size_t vertex_count);
 // live.
 kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, std::size_t term,
                                                    const kernels::StrainTableView* table);
+
+// The Prony series' constants at time step dt (s), in double (exp evaluated here, on the host, once per run): the
+// update's a_i = exp(-dt / tau_i), c_i = g_i (1 - a_i) / (dt / tau_i), and the stress's (kernels/
+// prony_viscoelasticity.h): at the step's end t_(n+1) where `step_end_stress` (implicit Euler: a_i, c_i and
+// gamma = 1 - sum g_i + sum c_i), else at its start t_n (1, g_i, 1). With dt = 0: the update of an instantaneous jump
+// (a_i = 1, c_i = g_i), which the engines apply once at the start so that a scene starting deformed starts with the
+// history of a jump to that deformation at t = 0.
+kernels::PronyConstants<double> prony_constants(const std::vector<PronyTerm>& prony, double dt, bool step_end_stress);
+
+// The constants in Real (each rounded once from the double above, the same on both backends).
+template <typename Real>
+kernels::PronyConstants<Real> prony_constants_in(const std::vector<PronyTerm>& prony, double dt,
+                                                 bool step_end_stress) {
+  const kernels::PronyConstants<double> c = prony_constants(prony, dt, step_end_stress);
+  kernels::PronyConstants<Real> out{};
+  out.count = c.count;
+  out.stress_scale = static_cast<Real>(c.stress_scale);
+  for (int i = 0; i < kernels::kMostPronyTerms; ++i) {
+    out.stress_decay[i] = static_cast<Real>(c.stress_decay[i]);
+    out.stress_gain[i] = static_cast<Real>(c.stress_gain[i]);
+    out.decay[i] = static_cast<Real>(c.decay[i]);
+    out.gain[i] = static_cast<Real>(c.gain[i]);
+  }
+  return out;
+}
+
+// Values per material point a term keeps (0: none), and material points per element of kind `kind`.
+int point_state_width(const ElementTerm& term);
+int points_per_element(int kind);
+
+// Whether any of the terms keeps per-point state.
+bool has_point_state(const ElementTerms& terms);
 
 // Whether the law of `term` reads a strain table's modulus (its kStrainTableModulus).
 bool reads_strain_table(const ElementTerm& term);

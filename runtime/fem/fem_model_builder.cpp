@@ -42,8 +42,9 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
     return std::nullopt;
   }
   if (mesh.tetrahedra.empty()) {
-    diagnostics.error(range, "the co-rotational FEM needs tetrahedra; the mesh has none (a surface mesh can only be "
-                             "simulated with springs)");
+    diagnostics.error(range,
+                      "a finite-element model needs tetrahedra; the mesh has none (a surface mesh can only be "
+                      "simulated with springs)");
     return std::nullopt;
   }
   const std::size_t count = mesh.tetrahedra.size();
@@ -105,6 +106,7 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
     diagnostics.error(range, "damping ratio and Rayleigh stiffness damping must be finite and non-negative");
     return std::nullopt;
   }
+  build->term.prony = spec.prony;
   if (!add_element_term(setup, std::move(build->term), spec.damping_ratio, spec.rayleigh_stiffness, diagnostics))
     return std::nullopt;
   return setup;

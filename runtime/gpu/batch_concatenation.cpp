@@ -53,6 +53,7 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
     for (std::size_t t = 0; t < first.size(); ++t) {
       ConcatenatedScenes::Term& term = c.terms[t];
       term.law = first[t].law;
+      term.prony = first[t].prony;
       for (int p = 0; p < kernels::kMostLawParameters; ++p)
         if (!first[t].parameter[p].empty()) term.parameter[p].resize(elements);
       bool damped = false;
@@ -194,6 +195,10 @@ const char* single_scene_feature(const sim::SimulationSetup& setup) {
   if (setup.strain_stiffness) {
     return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as a simulation of its "
            "own";
+  }
+  if (sim::has_point_state(setup.elements)) {
+    return "a viscoelastic scene runs on its own on the GPU (its Prony constants depend on the scene's time step); "
+           "run it as a simulation of its own";
   }
   return nullptr;
 }

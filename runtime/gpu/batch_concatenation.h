@@ -59,6 +59,7 @@ struct ConcatenatedScenes {
     int law = 0;
     HostArray<double> parameter[kernels::kMostLawParameters];
     HostArray<double> stiffness_damping;  // empty: no scene damps this term
+    std::vector<sim::PronyTerm> prony;    // scene 0's (a viscoelastic scene runs alone: single_scene_feature)
   };
   std::vector<Term> terms;
   bool has_elements = false;

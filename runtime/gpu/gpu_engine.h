@@ -106,7 +106,9 @@ class GpuEngine final : public sim::SteppingEngine {
   // sample of the 20^3 box, mostly page faults (H100 machine).
   sim::ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const override;
 
-  int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
+  int implicit_max_iterations_used() const override { return implicit_log_.report().iterations_max; }
+  sim::ImplicitSolverReport implicit_solver(std::size_t) const override { return implicit_log_.report(); }
+  std::vector<sim::ImplicitStepRecord> take_implicit_steps(std::size_t) override { return implicit_log_.take(); }
   bool persistent_launch() const { return plan_.persistent(); }
   bool cluster_launch() const { return !plan_.cluster_blocks.empty(); }
 
@@ -146,6 +148,10 @@ class GpuEngine final : public sim::SteppingEngine {
   ProbeArguments<Real> probe_arguments(const DeviceState<Real>& state) const;
 
   bool enqueue_strain_lookup(const DeviceState<Real>& state, DiagnosticList& diagnostics);
+
+  // The stateful element terms' update after an accepted step, at `state` (the step's end); with `jump`, the history
+  // of a jump from rest to it (once, after upload: sim::prony_constants at dt = 0).
+  bool enqueue_point_state_update(const DeviceState<Real>& state, bool jump, DiagnosticList& diagnostics);
 
   // The probe kernels' time origin for the chunk about to be enqueued or replayed.
   bool set_step_base(DiagnosticList& diagnostics);
@@ -263,8 +269,7 @@ class GpuEngine final : public sim::SteppingEngine {
   DeviceArray<double> cg_x_, cg_r_, cg_z_, cg_p_, cg_ap_, cg_partial_;
   DeviceArray<ConjugateGradientScalars> cg_scalars_;
   unsigned long long step_base_host_ = 0;
-  int implicit_iterations_max_ = 0;
-  bool cg_warning_given_ = false;
+  sim::ImplicitSolverLog implicit_log_;  // implicit Euler's solves (a batch of one scene)
   DeviceState<Real> state_[2];
   // The state at the last check (checkpoint_step_): slot checkpoint_slot_ of checkpoint_ (checkpoint_slot), which
   // has plan_.persistent_checks slots on the cooperative grid.
@@ -292,6 +297,7 @@ class GpuEngine final : public sim::SteppingEngine {
     DeviceArray<Real> damping;
     DeviceArray<double> damping_d;
     DeviceArray<unsigned char> linearisation;
+    DeviceArray<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
   };
   DeviceArray<Real> rest_inverse_, rest_volume_;
   DeviceArray<double> rest_inverse_d_, rest_volume_d_;

@@ -55,6 +55,7 @@ template <typename Real>
 bool GpuEngine<Real>::save_checkpoint(DiagnosticList& diagnostics) {
   checkpoint_step_ = steps_taken_;
   checkpoint_has_acceleration_ = have_acceleration_;
+  implicit_log_.save(steps_taken_);
   // Persistent runs change the state only in their launches, which store the state they start from into the
   // checkpoint (PersistentEulerArguments::checkpoints): until the next one, the state held is the checkpoint. Six
   // copies per check were a fifth of the 20^3 box's time between checks (H100). At a check before the launch's
@@ -65,6 +66,9 @@ bool GpuEngine<Real>::save_checkpoint(DiagnosticList& diagnostics) {
     return true;
   }
   if (!copy_state(checkpoint_slot(checkpoint_slot_), state_[current_].view(), diagnostics)) return false;
+  for (DeviceTermArrays& arrays : term_arrays_)
+    if (arrays.state.size() > 0)
+      FMPC_CUDA_CHECK(copy_async(arrays.checkpoint_state, arrays.state, stream_), diagnostics, false);
   if (scheme() == sim::Integrator::VelocityVerlet) {
     FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.x, acceleration_.x, stream_), diagnostics, false);
     FMPC_CUDA_CHECK(copy_async(checkpoint_acceleration_.y, acceleration_.y, stream_), diagnostics, false);
@@ -77,6 +81,7 @@ template <typename Real>
 bool GpuEngine<Real>::restore_checkpoint(DiagnosticList& diagnostics) {
   checks_pending_ = false;
   selected_inner_ = false;
+  implicit_log_.restore();
   if (checkpoint_in_state_) {
     steps_taken_ = checkpoint_step_;
     have_acceleration_ = checkpoint_has_acceleration_;
@@ -84,6 +89,9 @@ bool GpuEngine<Real>::restore_checkpoint(DiagnosticList& diagnostics) {
   }
   if (!copy_state(state_[current_].mutable_view(), read_only(checkpoint_slot(checkpoint_slot_)), diagnostics))
     return false;
+  for (DeviceTermArrays& arrays : term_arrays_)
+    if (arrays.state.size() > 0)
+      FMPC_CUDA_CHECK(copy_async(arrays.state, arrays.checkpoint_state, stream_), diagnostics, false);
   if (scheme() == sim::Integrator::VelocityVerlet) {
     FMPC_CUDA_CHECK(copy_async(acceleration_.x, checkpoint_acceleration_.x, stream_), diagnostics, false);
     FMPC_CUDA_CHECK(copy_async(acceleration_.y, checkpoint_acceleration_.y, stream_), diagnostics, false);

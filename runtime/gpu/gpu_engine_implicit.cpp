@@ -53,31 +53,34 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
   FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
   ConjugateGradientScalars scalars{};
   if (!read_cg_scalars(scalars, diagnostics)) return false;
-  // As the CPU backend: a right-hand side this small means the system is at rest to double precision.
-  if (std::sqrt(scalars.rhs_norm2) < 1e-150) return true;
   const sim::ImplicitSolverOptions& options = scenes_.front().implicit;
+  // As the CPU backend: a right-hand side this small means the system is at rest to double precision; dv = 0 (the
+  // start's x) and the positions still move with their velocities.
+  if (std::sqrt(scalars.rhs_norm2) < 1e-150) {
+    implicit_log_.record({steps_taken_ + 1, 0, 0.0, false});
+    FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
+    return true;
+  }
   const double threshold =
       std::max(options.tolerance * options.tolerance * scalars.rhs_norm2, std::numeric_limits<double>::min());
   double residual = scalars.rhs_norm2;
+  // Iterations count the matrix products, the converging one included (the CPU's count).
   int iterations = 0;
-  if (residual >= threshold) {
-    const int limit = sim::implicit_iteration_limit(scenes_.front());
-    while (iterations < limit) {
-      FMPC_CUDA_CHECK(launch_cg_iteration(a, stream_), diagnostics, false);
-      if (!read_cg_scalars(scalars, diagnostics)) return false;
-      residual = scalars.rr;
-      if (residual < threshold) break;
-      FMPC_CUDA_CHECK(launch_cg_direction(a, stream_), diagnostics, false);
-      ++iterations;
-    }
+  const int limit = sim::implicit_iteration_limit(scenes_.front());
+  while (residual >= threshold && iterations < limit) {
+    FMPC_CUDA_CHECK(launch_cg_iteration(a, stream_), diagnostics, false);
+    if (!read_cg_scalars(scalars, diagnostics)) return false;
+    residual = scalars.rr;
+    ++iterations;
+    if (residual < threshold) break;
+    FMPC_CUDA_CHECK(launch_cg_direction(a, stream_), diagnostics, false);
   }
-  implicit_iterations_max_ = std::max(implicit_iterations_max_, iterations);
   const double error = std::sqrt(residual / scalars.rhs_norm2);
-  if (!(error <= options.tolerance) && !cg_warning_given_) {
-    cg_warning_given_ = true;
+  const sim::ImplicitStepRecord record{steps_taken_ + 1, iterations, error, !(residual < threshold)};
+  if (implicit_log_.record(record))
     diagnostics.warning(scenes_.front().source_range, "cg-not-converged",
-                        sim::cg_stopped_message(steps_taken_ + 1, iterations, error, options.tolerance));
-  }
+                        sim::cg_stopped_message(sim::ImplicitMethod::ConjugateGradient, record.step, iterations,
+                                                error, options.tolerance));
   FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
   return true;
 }

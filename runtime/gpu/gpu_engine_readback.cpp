@@ -71,7 +71,19 @@ sim::ProbeReading GpuEngine<Real>::probe_reading(std::size_t scene, DiagnosticLi
       probe_stiffness_[k] = static_cast<double>(static_cast<Real>(setup.springs.stiffness[k]));
     probe_stiffness_scene_ = scene;
   }
-  return sim::read_probe(setup, time, probe_state_[0], probe_state_[1], probe_stiffness_);
+  // A stateful term's history (a viscoelastic scene runs alone: its state is this scene's).
+  sim::ElementTermStates states;
+  for (std::size_t t = 0; t < setup.elements.terms.size(); ++t) {
+    const DeviceArray<Real>& state = term_arrays_[t].state;
+    std::vector<Real> values(state.size());
+    if (!values.empty())
+      FMPC_CUDA_CHECK(cudaMemcpyAsync(values.data(), state.data(), values.size() * sizeof(Real),
+                                      cudaMemcpyDeviceToHost, stream_),
+                      diagnostics, {});
+    if (!values.empty() && !synchronize(diagnostics)) return {};
+    states.emplace_back(values.begin(), values.end());
+  }
+  return sim::read_probe(setup, time, probe_state_[0], probe_state_[1], probe_stiffness_, &states);
 }
 
 template <typename Real>

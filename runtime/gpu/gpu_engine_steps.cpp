@@ -53,7 +53,21 @@ bool GpuEngine<Real>::enqueue_steps(std::size_t count, int& parity, DiagnosticLi
     }
     if (!stepped) return false;
     if (!fused_probes && !enqueue_probe(offset, false, state_[parity], diagnostics)) return false;
+    if (!enqueue_point_state_update(state_[parity], false, diagnostics)) return false;
   }
+  return true;
+}
+
+template <typename Real>
+bool GpuEngine<Real>::enqueue_point_state_update(const DeviceState<Real>& state, bool jump,
+                                                 DiagnosticList& diagnostics) {
+  if (!sim::has_point_state(scenes_.front().elements)) return true;
+  ForceModelView<Real> model = model_;
+  if (jump)
+    for (int t = 0; t < model.term_count; ++t)
+      if (model.terms[t].prony.count > 0)
+        model.terms[t].prony = sim::prony_constants_in<Real>(scenes_.front().elements.terms[t].prony, 0.0, false);
+  FMPC_CUDA_CHECK(launch_point_state_update(model, state.view(), stream_), diagnostics, false);
   return true;
 }
 
@@ -244,6 +258,8 @@ bool GpuEngine<Real>::capture(std::size_t count, cudaGraphExec_t& executable, Di
                                                DiagnosticList& diagnostics);                                         \
   template ProbeArguments<Real> GpuEngine<Real>::probe_arguments(const DeviceState<Real>& state) const;              \
   template bool GpuEngine<Real>::enqueue_strain_lookup(const DeviceState<Real>& state, DiagnosticList& diagnostics); \
+  template bool GpuEngine<Real>::enqueue_point_state_update(const DeviceState<Real>& state, bool jump,               \
+                                                            DiagnosticList& diagnostics);                            \
   template bool GpuEngine<Real>::set_step_base(DiagnosticList& diagnostics);                                         \
   template bool GpuEngine<Real>::run_steps(std::size_t count, bool allow_graph, DiagnosticList& diagnostics);        \
   template bool GpuEngine<Real>::run_persistent(const std::vector<std::size_t>& ends, DiagnosticList& diagnostics);  \

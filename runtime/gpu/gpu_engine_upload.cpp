@@ -116,6 +116,7 @@ bool GpuEngine<Real>::upload(DiagnosticList& diagnostics) {
             static_cast<Real>(common.mass_damping)};
   step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
   if (!plan_launches(c, diagnostics) || !upload_spring_records(c, diagnostics)) return false;
+  if (!enqueue_point_state_update(state_[current_], true, diagnostics)) return false;
   // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
   // stream_ does not wait for.
   FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
@@ -198,6 +199,17 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
       view_d.stiffness_damping = arrays.damping_d.data();
     }
     view.strain_table = view_d.strain_table = {nullptr, nullptr, 0};
+    const sim::ElementTerm& own = scenes_.front().elements.terms[t];
+    const int width = sim::point_state_width(own);
+    if (width > 0) {
+      // Zeros, then the history of a jump to the start positions (as the CPU engine): prony_constants at dt = 0.
+      const int points = element_count_ * sim::points_per_element(c.element_kind);
+      const std::size_t values = static_cast<std::size_t>(width) * static_cast<std::size_t>(points);
+      FMPC_CUDA_CHECK(arrays.state.upload(HostArray<Real>(values, Real(0))), diagnostics, false);
+      FMPC_CUDA_CHECK(arrays.checkpoint_state.upload(HostArray<Real>(values, Real(0))), diagnostics, false);
+      view.state = {arrays.state.data(), width, points};
+      view.prony = sim::prony_constants_in<Real>(term.prony, stability_.front().time_step, implicit);
+    }
     if (implicit) {
       const std::size_t bytes = kernels::visit_element_term(c.element_kind, term.law, [](auto kind, auto element_law) {
         return sizeof(typename decltype(kind)::template Linearisation<decltype(element_law)>);
@@ -230,7 +242,7 @@ bool GpuEngine<Real>::upload_probes(DiagnosticList& diagnostics) {
     const sim::ProbeLoad& probe = *setup.probe;
     const bool based = force_probe(setup) && !setup.external_forces.empty();
     any_base = any_base || based;
-    probes.push_back(ProbeScene{probe.target[0], probe.target[1], probe.target[2], probe.ramp_time,
+    probes.push_back(ProbeScene{probe.target[0], probe.target[1], probe.target[2], probe.ramp_time, probe.cycles,
                                 stability_[s].time_step, static_cast<int>(probe.vertices.size()), force_probe(setup),
                                 based});
     for (const auto v : probe.vertices) {
@@ -274,6 +286,7 @@ bool GpuEngine<Real>::plan_launches(const ConcatenatedScenes& c, DiagnosticList&
   batch.double_precision = std::is_same_v<Real, double>;
   batch.fused_scheme = fused_scheme();
   batch.strain_table = scenes_.front().strain_stiffness.has_value();
+  batch.point_state = sim::has_point_state(scenes_.front().elements);
   batch.probe_vertices_unique = probe_vertices_unique_;
   batch.vertex_count = n_;
   batch.element_count = element_count_;
@@ -361,6 +374,8 @@ bool GpuEngine<Real>::upload_single_scene_features(DiagnosticList& diagnostics) 
       FMPC_CUDA_CHECK(array->allocate(3 * count), diagnostics, false);
     FMPC_CUDA_CHECK(cg_scalars_.allocate(1), diagnostics, false);
     FMPC_CUDA_CHECK(cg_partial_.allocate(2 * kEnergyBlocks), diagnostics, false);
+    implicit_log_ = sim::ImplicitSolverLog(sim::ImplicitMethod::ConjugateGradient, setup.implicit.tolerance,
+                                           sim::implicit_iteration_limit(setup));
   }
   return true;
 }

@@ -58,6 +58,12 @@ template <typename Real>
 cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
                                   cudaStream_t stream);
 
+// The stateful terms' per-point state update after an accepted step at `state` (kernels::element_state_update), one
+// launch per term with state; nothing for the others.
+template <typename Real>
+cudaError_t launch_point_state_update(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
+                                      cudaStream_t stream);
+
 template <typename Real>
 struct MutableStateView {
   Real* x;

@@ -1,7 +1,8 @@
 # FMPC_GPU_ONLY=ON: the build for the GPU machine, which has CMake, nvcc and the CUDA libraries but none of the
 # Debian packages the full build needs (antlr4, yaml-cpp, CLI11, Catch2, Eigen, fuzzylite). It builds only
 #   fmpc_runtime     kernels/*_step.cu and reductions.cu, runtime/gpu, and the CPU reference it is compared with: meshes,
-#                    springs, integrators, the model builder, diagnostics/diagnostic.cpp and
+#                    springs, integrators, the model builder, runtime/io/memory_limit.cpp (the memory limits
+#                    the mesh generator checks), diagnostics/diagnostic.cpp and
 #                    diagnostics/number_format.cpp;
 #   fmpc_gpu_tests   tests/gpu (its own runner, no Catch2), ctest label `gpu`;
 #   fmpc_sim_bench   bench/sim;
@@ -44,6 +45,7 @@ endif()
 add_library(fmpc_runtime STATIC
   ${FMPC_GPU_ONLY_SOURCES}
   ${PROJECT_SOURCE_DIR}/runtime/scene/spring_model_builder.cpp
+  ${PROJECT_SOURCE_DIR}/runtime/io/memory_limit.cpp
   ${PROJECT_SOURCE_DIR}/diagnostics/diagnostic.cpp
   ${PROJECT_SOURCE_DIR}/diagnostics/number_format.cpp
   ${PROJECT_SOURCE_DIR}/kernels/explicit_step.cu

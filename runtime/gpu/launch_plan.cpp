@@ -174,7 +174,7 @@ std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions
   // Chunks of forward or semi-implicit Euler run as one persistent launch each where no strain table is looked up
   // between steps, each probe vertex is listed once and the batch fits the grid or clusters; otherwise one launch per
   // kernel (steps of meshes too large for either are long enough that launches cost little).
-  if (!options.persistent || batch.vertex_count <= 0 || batch.strain_table || !batch.probe_vertices_unique ||
+  if (!options.persistent || batch.vertex_count <= 0 || batch.strain_table || batch.point_state || !batch.probe_vertices_unique ||
       !batch.fused_scheme)
     return plan;
   // GpuOptions::persistent_kind: the preferred launch first, the other where it does not fit.

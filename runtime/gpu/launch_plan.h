@@ -28,6 +28,7 @@ struct BatchShape {
   bool double_precision = false;
   bool fused_scheme = false;          // forward or semi-implicit Euler: one kernel per step
   bool strain_table = false;          // a lookup between steps (no persistent launch)
+  bool point_state = false;           // an element state update between steps (no persistent launch)
   bool probe_vertices_unique = true;  // every probe vertex listed once (else the per-step probe kernel)
   int vertex_count = 0;
   int element_count = 0;

@@ -25,6 +25,7 @@ constexpr bool valid_lanes(int lanes) { return lanes > 0 && lanes <= 32 && (lane
 struct ProbeScene {
   double target_x, target_y, target_z;
   double ramp_time;
+  int cycles;  // ProbeLoad::cycles
   double h;
   int count;  // the scene's probe vertices (a force probe shares its target equally among them)
   bool force_mode;

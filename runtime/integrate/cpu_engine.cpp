@@ -1,10 +1,3 @@
-// GCC 12 at -O2 reports a null dereference inside Eigen's SparseCompressedBase after inlining (Eigen's code, not
-// ours); the warning is silenced for Eigen's headers only.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wnull-dereference"
-#include <Eigen/IterativeLinearSolvers>
-#include <Eigen/Sparse>
-#pragma GCC diagnostic pop
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -15,7 +8,7 @@
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
-#include "runtime/integrate/model_tangent.h"
+#include "runtime/integrate/implicit_solver.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/integrate/stepping_engine.h"
 #include "runtime/integrate/worker_pool.h"
@@ -47,7 +40,8 @@ class CpuSceneBase {
   virtual InversionCount count_inversions() const = 0;
   virtual void save_checkpoint() = 0;
   virtual void restore_checkpoint() = 0;
-  virtual int implicit_max_iterations_used() const = 0;
+  virtual const ImplicitSolverLog& implicit_log() const = 0;
+  virtual std::vector<ImplicitStepRecord> take_implicit_steps() = 0;
   virtual std::vector<Point3> positions() const = 0;
   virtual std::vector<Point3> velocities() const = 0;
   virtual double kinetic_energy() const = 0;
@@ -129,6 +123,9 @@ class CpuScene final : public CpuSceneBase {
         TermArrays arrays;
         for (int p = 0; p < kernels::kMostLawParameters; ++p) arrays.parameter[p] = convert(term.parameter[p]);
         arrays.damping = convert(term.stiffness_damping);
+        const int width = point_state_width(term);
+        const int points = static_cast<int>(geometry.size()) * points_per_element(geometry.kind);
+        arrays.state.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(points), Real(0));
         term_arrays_.push_back(std::move(arrays));
         const TermArrays& held = term_arrays_.back();
         const auto data_or_null = [](const std::vector<Real>& values) {
@@ -145,10 +142,16 @@ class CpuScene final : public CpuSceneBase {
         for (int p = 0; p < kernels::kMostLawParameters; ++p) view.parameter[p] = data_or_null(held.parameter[p]);
         view.stiffness_damping = data_or_null(held.damping);
         view.strain_table = reads_strain_table(term) ? table : kernels::StrainTableView{nullptr, nullptr, 0};
+        view.state = {width > 0 ? term_arrays_.back().state.data() : nullptr, width, points};
+        view.prony = kernels::PronyConstants<Real>{};
+        if (width > 0)
+          view.prony = prony_constants_in<Real>(term.prony, stability.time_step,
+                                                setup.integrator == Integrator::ImplicitEuler);
         term_views_.push_back(view);
       }
       corner_view_ = {geometry.corner_offset.data(), geometry.corner_index.data(), corner_force_.data()};
     }
+    update_point_state(true);
     loads_.mass = mass_.data();
     loads_.fixed = fixed_.data();
     loads_.rest_x = rest_.x.data();
@@ -174,6 +177,10 @@ class CpuScene final : public CpuSceneBase {
       for (auto& k : rk_velocity_) k.resize(n_);
       for (auto& k : rk_acceleration_) k.resize(n_);
     }
+    if (scheme == Integrator::ImplicitEuler) {
+      solver_ = std::make_unique<ImplicitSolver>(setup, fixed_);
+      log_ = ImplicitSolverLog(solver_->method(), setup.implicit.tolerance, implicit_iteration_limit(setup));
+    }
   }
 
   void run_to(std::size_t end, DiagnosticList& diagnostics) override {
@@ -184,7 +191,9 @@ class CpuScene final : public CpuSceneBase {
   }
 
   ProbeReading probe_reading() const override {
-    return read_probe(setup_, time(), positions(), velocities(), current_stiffness());
+    ElementTermStates states;
+    for (const TermArrays& arrays : term_arrays_) states.emplace_back(arrays.state.begin(), arrays.state.end());
+    return read_probe(setup_, time(), positions(), velocities(), current_stiffness(), &states);
   }
 
   std::vector<double> current_stiffness() const override {
@@ -197,7 +206,8 @@ class CpuScene final : public CpuSceneBase {
   double time() const { return static_cast<double>(steps_taken_) * stability_.time_step; }
   std::vector<Point3> positions() const override { return to_points(position_); }
   std::vector<Point3> velocities() const override { return to_points(velocity_); }
-  int implicit_max_iterations_used() const override { return implicit_iterations_max_; }
+  const ImplicitSolverLog& implicit_log() const override { return log_; }
+  std::vector<ImplicitStepRecord> take_implicit_steps() override { return log_.take(); }
   const SimulationSetup& setup() const override { return setup_; }
 
   double kinetic_energy() const override { return sim::kinetic_energy(setup_, velocities()); }
@@ -268,6 +278,26 @@ class CpuScene final : public CpuSceneBase {
     step(diagnostics);
     ++steps_taken_;
     apply_probe(time(), false);
+    update_point_state(false);
+  }
+
+  // Each stateful term's state after an accepted step, at the positions held (the step's end, probe applied); with
+  // `jump`, the history of a jump from rest to the positions held (the start: prony_constants at dt = 0).
+  void update_point_state(bool jump) {
+    const kernels::StateView<Real> state = view(position_, velocity_);
+    for (std::size_t term = 0; term < term_views_.size(); ++term) {
+      kernels::ElementTermView<Real> field = term_views_[term];
+      if (field.prony.count == 0) continue;
+      if (jump) field.prony = prony_constants_in<Real>(setup_.elements.terms[term].prony, 0.0, false);
+      kernels::visit_element_term(field.element, field.law, [&](auto kind, auto element_law) {
+        using Element = decltype(kind);
+        using Law = decltype(element_law);
+        pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
+          for (std::size_t e = begin; e < end; ++e)
+            kernels::element_state_update<Element, Law>(static_cast<int>(e), field, state);
+        });
+      });
+    }
   }
 
   InversionCount count_inversions() const override {
@@ -288,6 +318,11 @@ class CpuScene final : public CpuSceneBase {
     checkpoint_acceleration_ = acceleration_;
     checkpoint_have_acceleration_ = have_acceleration_;
     checkpoint_step_ = steps_taken_;
+    for (TermArrays& arrays : term_arrays_) arrays.checkpoint_state = arrays.state;
+    if (solver_) {
+      checkpoint_warm_start_ = solver_->warm_start();
+      log_.save(steps_taken_);
+    }
   }
 
   void restore_checkpoint() override {
@@ -296,6 +331,13 @@ class CpuScene final : public CpuSceneBase {
     acceleration_ = checkpoint_acceleration_;
     have_acceleration_ = checkpoint_have_acceleration_;
     steps_taken_ = checkpoint_step_;
+    // Copied into the buffers the views point at.
+    for (TermArrays& arrays : term_arrays_) std::copy(arrays.checkpoint_state.begin(), arrays.checkpoint_state.end(),
+                                                      arrays.state.begin());
+    if (solver_) {
+      solver_->set_warm_start(checkpoint_warm_start_);
+      log_.restore();
+    }
   }
 
   template <typename Update>
@@ -386,79 +428,45 @@ class CpuScene final : public CpuSceneBase {
   }
 
   // Baraff & Witkin's linearised backward Euler (kernels/implicit_math.h), (M + h D + h^2 K) dv = h (f0 - h K v0)
-  // with the model's tangent (model_tangent.h), solved with Eigen's conjugate gradient and its Jacobi (diagonal)
-  // preconditioner; fixed vertices become identity rows with a zero right-hand side.
+  // with the model's tangent, solved by implicit_solver.h (a direct factorisation or a preconditioned CG, each step
+  // recorded in the log); held axes keep their velocity.
   bool implicit_euler_step(DiagnosticList& diagnostics) {
-    const double h = static_cast<double>(h_);
-    const std::size_t dofs = 3 * n_;
     accelerations(position_, velocity_, acceleration_);
-    Eigen::VectorXd rhs(static_cast<Eigen::Index>(dofs));
-    Eigen::VectorXd v0(static_cast<Eigen::Index>(dofs));
-    for (std::size_t i = 0; i < n_; ++i) {
-      const double a[3] = {static_cast<double>(acceleration_.x[i]), static_cast<double>(acceleration_.y[i]),
-                           static_cast<double>(acceleration_.z[i])};
-      const double v[3] = {static_cast<double>(velocity_.x[i]), static_cast<double>(velocity_.y[i]),
-                           static_cast<double>(velocity_.z[i])};
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        const auto row = static_cast<Eigen::Index>(3 * i + axis);
-        rhs[row] = h * setup_.mass[i] * a[axis];  // h f0
-        v0[row] = v[axis];
+    const auto interleave = [this](const Vector3Arrays<Real>& from, std::vector<double>& to) {
+      to.resize(3 * n_);
+      for (std::size_t i = 0; i < n_; ++i) {
+        to[3 * i] = static_cast<double>(from.x[i]);
+        to[3 * i + 1] = static_cast<double>(from.y[i]);
+        to[3 * i + 2] = static_cast<double>(from.z[i]);
       }
-    }
-    // The springs' current stiffness (a strain table's last lookup), as the forces use.
-    const ModelTangent tangent = model_tangent(setup_, positions(), current_stiffness());
-    rhs -= h * h * (tangent.stiffness * v0);
-    Eigen::SparseMatrix<double> system = h * h * tangent.stiffness + h * tangent.damping;
-    system.prune([this](Eigen::Index row, Eigen::Index column, double) { return !dof_held(row) && !dof_held(column); });
-    triplets_.clear();
-    for (std::size_t i = 0; i < n_; ++i) {
-      const double dx = static_cast<double>(position_.x[i]) - setup_.rest_positions[i][0];
-      const double dy = static_cast<double>(position_.y[i]) - setup_.rest_positions[i][1];
-      const double dz = static_cast<double>(position_.z[i]) - setup_.rest_positions[i][2];
-      const double diagonal =
-          kernels::implicit_vertex_diagonal(setup_.mass[i], h, setup_.nodal_damping_gamma0, setup_.nodal_damping_gamma1,
-                                            std::sqrt(dx * dx + dy * dy + dz * dz), setup_.mass_damping);
-      for (std::size_t axis = 0; axis < 3; ++axis) {
-        const auto dof = static_cast<Eigen::Index>(3 * i + axis);
-        // A held axis is an identity row with a zero right-hand side.
-        if (dof_held(dof)) rhs[dof] = 0.0;
-        triplets_.emplace_back(static_cast<int>(dof), static_cast<int>(dof), dof_held(dof) ? 1.0 : diagonal);
-      }
-    }
-    Eigen::SparseMatrix<double> diagonal_part(static_cast<Eigen::Index>(dofs), static_cast<Eigen::Index>(dofs));
-    diagonal_part.setFromTriplets(triplets_.begin(), triplets_.end());
-    system += diagonal_part;
-    Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower | Eigen::Upper,
-                             Eigen::DiagonalPreconditioner<double>>
-        solver;
-    solver.setMaxIterations(implicit_iteration_limit(setup_));
-    solver.setTolerance(setup_.implicit.tolerance);
-    // A right-hand side this small means the system is at rest to double precision; CG on denormals would only
-    // report a spurious failure.
-    if (rhs.norm() < 1e-150) return true;
-    solver.compute(system);
-    const Eigen::VectorXd dv = solver.solve(rhs);
-    implicit_iterations_max_ = std::max(implicit_iterations_max_, static_cast<int>(solver.iterations()));
-    if (solver.info() != Eigen::Success && !cg_warning_given_) {
-      cg_warning_given_ = true;
+    };
+    interleave(position_, implicit_x_);
+    interleave(velocity_, implicit_v_);
+    interleave(acceleration_, implicit_a_);
+    implicit_k_.resize(stiffness_.size());
+    for (std::size_t s = 0; s < stiffness_.size(); ++s) implicit_k_[s] = static_cast<double>(stiffness_[s]);
+    const ImplicitSolve solve = solver_->solve(implicit_x_, implicit_v_, implicit_a_, implicit_k_,
+                                               static_cast<double>(h_), pool_, implicit_dv_);
+    if (solve.direct_failed) log_.fallback();
+    const ImplicitStepRecord record{steps_taken_ + 1, solve.iterations, solve.relative_residual, !solve.converged};
+    if (log_.record(record)) {
       diagnostics.warning(setup_.source_range, "cg-not-converged",
-                          cg_stopped_message(steps_taken_ + 1, static_cast<int>(solver.iterations()), solver.error(),
+                          cg_stopped_message(solve.direct_failed ? ImplicitMethod::ConjugateGradient
+                                                                 : solver_->method(),
+                                             record.step, record.iterations, record.relative_residual,
                                              setup_.implicit.tolerance));
     }
-    for (std::size_t i = 0; i < n_; ++i) {
-      if (fixed_[i] == kernels::kAllAxesFixed) continue;
-      velocity_.x[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i)]);
-      velocity_.y[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i + 1)]);
-      velocity_.z[i] += static_cast<Real>(dv[static_cast<Eigen::Index>(3 * i + 2)]);
+    const std::vector<double>& dv = implicit_dv_;
+    for_each_vertex([&](std::size_t i) {
+      if (fixed_[i] == kernels::kAllAxesFixed) return;
+      velocity_.x[i] += static_cast<Real>(dv[3 * i]);
+      velocity_.y[i] += static_cast<Real>(dv[3 * i + 1]);
+      velocity_.z[i] += static_cast<Real>(dv[3 * i + 2]);
       position_.x[i] += h_ * velocity_.x[i];
       position_.y[i] += h_ * velocity_.y[i];
       position_.z[i] += h_ * velocity_.z[i];
-    }
+    });
     return true;
-  }
-
-  bool dof_held(Eigen::Index dof) const {
-    return kernels::axis_fixed(fixed_[static_cast<std::size_t>(dof / 3)], static_cast<int>(dof % 3));
   }
 
   std::size_t first_non_finite_vertex() const override {
@@ -477,7 +485,7 @@ class CpuScene final : public CpuSceneBase {
     const ProbeLoad& probe = *setup_.probe;
     if (probe.mode == ProbeLoad::Mode::Force) {
       if (!before_step) return;
-      const double share = kernels::probe_ramp_share(t, probe.ramp_time);
+      const double share = kernels::probe_ramp_share(t, probe.ramp_time, probe.cycles);
       const double count = static_cast<double>(probe.vertices.size());
       for (const auto vertex : probe.vertices) {
         const auto v = static_cast<std::size_t>(vertex);
@@ -491,11 +499,14 @@ class CpuScene final : public CpuSceneBase {
     for (const auto vertex : probe.vertices) {
       const auto v = static_cast<std::size_t>(vertex);
       const Point3& start = start_position(setup_, v);
-      kernels::probe_prescribed_state(start[0], probe.target[0], t, probe.ramp_time, before_step, position_.x[v],
+      kernels::probe_prescribed_state(start[0], probe.target[0], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.x[v],
                                       velocity_.x[v]);
-      kernels::probe_prescribed_state(start[1], probe.target[1], t, probe.ramp_time, before_step, position_.y[v],
+      kernels::probe_prescribed_state(start[1], probe.target[1], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.y[v],
                                       velocity_.y[v]);
-      kernels::probe_prescribed_state(start[2], probe.target[2], t, probe.ramp_time, before_step, position_.z[v],
+      kernels::probe_prescribed_state(start[2], probe.target[2], t, probe.ramp_time, probe.cycles, before_step,
+                                      position_.z[v],
                                       velocity_.z[v]);
     }
   }
@@ -542,6 +553,7 @@ class CpuScene final : public CpuSceneBase {
   struct TermArrays {
     std::vector<Real> parameter[kernels::kMostLawParameters];
     std::vector<Real> damping;
+    std::vector<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
   };
   std::vector<Real> rest_inverse_, rest_volume_;
   std::vector<TermArrays> term_arrays_;  // the views point into its vectors' buffers, which moves keep
@@ -554,9 +566,10 @@ class CpuScene final : public CpuSceneBase {
   Vector3Arrays<Real> checkpoint_position_, checkpoint_velocity_, checkpoint_acceleration_;
   bool checkpoint_have_acceleration_ = false;
   std::size_t checkpoint_step_ = 0;
-  std::vector<Eigen::Triplet<double>> triplets_;
-  int implicit_iterations_max_ = 0;
-  bool cg_warning_given_ = false;
+  // Implicit Euler: the solver, its log, the state in double for the solver, and the warm start at the checkpoint.
+  std::unique_ptr<ImplicitSolver> solver_;
+  ImplicitSolverLog log_;
+  std::vector<double> implicit_x_, implicit_v_, implicit_a_, implicit_k_, implicit_dv_, checkpoint_warm_start_;
 };
 
 // The CPU engine of a batch: each scene's CpuScene, run side by side on a pool of workers over the scenes (a scene's
@@ -638,8 +651,14 @@ class CpuEngine final : public SteppingEngine {
   }
   int implicit_max_iterations_used() const override {
     int most = 0;
-    for (const auto& scene : scenes_) most = std::max(most, scene->implicit_max_iterations_used());
+    for (const auto& scene : scenes_) most = std::max(most, scene->implicit_log().report().iterations_max);
     return most;
+  }
+  ImplicitSolverReport implicit_solver(std::size_t scene) const override {
+    return scenes_[scene]->implicit_log().report();
+  }
+  std::vector<ImplicitStepRecord> take_implicit_steps(std::size_t scene) override {
+    return scenes_[scene]->take_implicit_steps();
   }
 
   std::vector<Point3> positions(std::size_t scene, DiagnosticList&) const override {

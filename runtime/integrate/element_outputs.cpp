@@ -31,12 +31,12 @@ void for_each_term(const SimulationSetup& setup, const kernels::StrainTableView&
 std::string model_name(const SimulationSetup& setup) {
   if (setup.springs.size() > 0 || setup.elements.empty()) return "springs";
   const char* keyword = element_law_row(setup.elements.terms.front().law).model_keyword;
-  return keyword != nullptr ? keyword : "springs";
+  return keyword != nullptr && setup.elements.geometry.kind == default_element_kind().kind ? keyword : "fem";
 }
 
 std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vector<Point3>& positions,
                                     const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
-                                    const std::vector<std::int32_t>& vertices) {
+                                    const std::vector<std::int32_t>& vertices, const ElementTermStates* states) {
   std::vector<Point3> out(vertices.size(), Point3{0.0, 0.0, 0.0});
   const SpringNetwork& net = setup.springs;
   const kernels::SpringLawParameters<double> law{setup.law, setup.basafa_k2_over_k1, setup.basafa_xc};
@@ -58,8 +58,16 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
   const kernels::StrainTableView table = table_of(setup);
   // Per vertex the terms' node forces in the backends' order: for each node, term after term.
   std::vector<kernels::ElementTermView<double>> views;
-  for (std::size_t t = 0; t < setup.elements.terms.size(); ++t)
+  for (std::size_t t = 0; t < setup.elements.terms.size(); ++t) {
     views.push_back(element_term_view(setup.elements, t, &table));
+    // The stress at the state's time t_n (the start-of-step constants: the convolution's stress exactly).
+    const ElementTerm& term = setup.elements.terms[t];
+    const int width = point_state_width(term);
+    if (states == nullptr || width == 0 || t >= states->size() || (*states)[t].empty()) continue;
+    const int points = static_cast<int>((*states)[t].size()) / width;
+    views.back().state = {const_cast<double*>((*states)[t].data()), width, points};
+    views.back().prony = prony_constants(term.prony, 0.0, false);
+  }
   const auto N = static_cast<std::size_t>(geometry.nodes_per_element);
   for (std::size_t i = 0; i < vertices.size(); ++i) {
     const auto v = static_cast<std::size_t>(vertices[i]);

@@ -34,7 +34,8 @@ kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table) {
 }
 
 ProbeReading read_probe(const SimulationSetup& setup, double time, const std::vector<Point3>& positions,
-                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness) {
+                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
+                        const ElementTermStates* states) {
   ProbeReading reading;
   if (!setup.probe || setup.probe->vertices.empty()) return reading;
   const std::size_t n = setup.rest_positions.size();
@@ -47,11 +48,11 @@ ProbeReading read_probe(const SimulationSetup& setup, double time, const std::ve
     for (std::size_t axis = 0; axis < 3; ++axis) reading.displacement[axis] += (positions[v][axis] - start[axis]) / count;
   }
   if (probe.mode == ProbeLoad::Mode::Force) {
-    const double share = kernels::probe_ramp_share(time, probe.ramp_time);
+    const double share = kernels::probe_ramp_share(time, probe.ramp_time, probe.cycles);
     for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] = share * probe.target[axis];
     return reading;
   }
-  const std::vector<Point3> forces = internal_forces(setup, positions, velocities, stiffness, probe.vertices);
+  const std::vector<Point3> forces = internal_forces(setup, positions, velocities, stiffness, probe.vertices, states);
   for (const Point3& f : forces)
     for (std::size_t axis = 0; axis < 3; ++axis) reading.force[axis] -= f[axis];
   return reading;
@@ -81,6 +82,8 @@ bool validate_loads(const SimulationSetup& setup, DiagnosticList& diagnostics) {
     bool finite = std::isfinite(probe.ramp_time) && probe.ramp_time >= 0.0;
     for (const double value : probe.target) finite = finite && std::isfinite(value);
     if (!finite) diagnostics.error(SourceRange{}, "the probe's target and ramp time must be finite (ramp time >= 0)");
+    if (probe.cycles < 0 || (probe.cycles > 0 && !(probe.ramp_time > 0.0)))
+      diagnostics.error(SourceRange{}, "a cyclic probe needs a positive ramp time and a non-negative cycle count");
   }
   if (setup.strain_stiffness) {
     const StrainStiffnessTable& table = *setup.strain_stiffness;

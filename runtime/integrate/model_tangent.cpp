@@ -1,7 +1,7 @@
 #include "runtime/integrate/model_tangent.h"
 
-#include "kernels/element_laws.h"
 #include "kernels/implicit_math.h"
+#include "kernels/element_laws.h"
 
 namespace fmpc::sim {
 
@@ -55,35 +55,25 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
       for (int col = r; col < 3; ++col) d_block[kernels::symmetric_index(r, col)] = c * u[r] * u[col];
     add_spring_block(damping, a, b, d_block);
   }
-  const kernels::StrainTableView table = setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness)
-                                                                : kernels::StrainTableView{nullptr, nullptr, 0};
-  for (std::size_t term = 0; term < setup.elements.terms.size(); ++term) {
-    const kernels::ElementTermView<double> view = element_term_view(setup.elements, term, &table);
-    const ElementGeometry& geometry = setup.elements.geometry;
-    kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
-      using Element = decltype(kind);
-      using Law = decltype(element_law);
-      constexpr int N = Element::kNodes, D = 3 * N;
-      for (std::size_t e = 0; e < elements; ++e) {
-        const int element = static_cast<int>(e);
-        const std::int32_t* nodes = geometry.nodes.data() + N * e;
-        double x[N][3], K[D * D];
-        element_node_rows<N>(geometry, e, positions, x);
-        typename Element::template Linearisation<Law> lin{};
-        Element::template linearise<Law>(view, element, x, lin);
-        Element::template stiffness_matrix<Law>(view, element, lin, K);
-        const double beta = view.stiffness_damping ? view.stiffness_damping[e] : 0.0;
-        for (int row = 0; row < D; ++row) {
-          for (int column = 0; column < D; ++column) {
-            const int global_row = 3 * nodes[row / 3] + row % 3;
-            const int global_column = 3 * nodes[column / 3] + column % 3;
-            const double entry = K[D * row + column];
-            stiffness.emplace_back(global_row, global_column, entry);
-            if (beta != 0.0) damping.emplace_back(global_row, global_column, beta * entry);
-          }
+  const ElementTangents tangents(setup);
+  const auto nodes = static_cast<std::size_t>(tangents.nodes()), size = 3 * nodes;
+  std::vector<double> x(3 * nodes), K(size * size);
+  for (std::size_t term = 0; term < tangents.term_count(); ++term) {
+    for (std::size_t e = 0; e < elements; ++e) {
+      const std::int32_t* node = tangents.element_nodes(e);
+      for (std::size_t a = 0; a < nodes; ++a)
+        for (std::size_t i = 0; i < 3; ++i) x[3 * a + i] = positions[static_cast<std::size_t>(node[a])][i];
+      const double beta = tangents.stiffness(term, e, x.data(), K.data());
+      for (std::size_t row = 0; row < size; ++row) {
+        for (std::size_t column = 0; column < size; ++column) {
+          const auto global_row = static_cast<int>(3 * static_cast<std::size_t>(node[row / 3]) + row % 3);
+          const auto global_column = static_cast<int>(3 * static_cast<std::size_t>(node[column / 3]) + column % 3);
+          const double entry = K[size * row + column];
+          stiffness.emplace_back(global_row, global_column, entry);
+          if (beta != 0.0) damping.emplace_back(global_row, global_column, beta * entry);
         }
       }
-    });
+    }
   }
   ModelTangent tangent;
   tangent.stiffness.resize(dofs, dofs);
@@ -91,6 +81,28 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
   tangent.stiffness.setFromTriplets(stiffness.begin(), stiffness.end());
   tangent.damping.setFromTriplets(damping.begin(), damping.end());
   return tangent;
+}
+
+ElementTangents::ElementTangents(const SimulationSetup& setup) : geometry_(setup.elements.geometry) {
+  if (setup.strain_stiffness) table_ = strain_table_view(*setup.strain_stiffness);
+  for (std::size_t term = 0; term < setup.elements.terms.size(); ++term)
+    views_.push_back(element_term_view(setup.elements, term, &table_));
+}
+
+double ElementTangents::stiffness(std::size_t term, std::size_t e, const double* x, double* K) const {
+  const kernels::ElementTermView<double>& view = views_[term];
+  kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
+    using Element = decltype(kind);
+    using Law = decltype(element_law);
+    constexpr int N = Element::kNodes;
+    double nodes[N][3];
+    for (int a = 0; a < N; ++a)
+      for (int i = 0; i < 3; ++i) nodes[a][i] = x[3 * a + i];
+    typename Element::template Linearisation<Law> lin{};
+    Element::template linearise<Law>(view, static_cast<int>(e), nodes, lin);
+    Element::template stiffness_matrix<Law>(view, static_cast<int>(e), lin, K);
+  });
+  return view.stiffness_damping != nullptr ? view.stiffness_damping[e] : 0.0;
 }
 
 }  // namespace fmpc::sim

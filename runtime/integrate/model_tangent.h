@@ -9,8 +9,10 @@
 #pragma GCC diagnostic ignored "-Wnull-dereference"
 #include <Eigen/Sparse>
 #pragma GCC diagnostic pop
+#include <cstdint>
 #include <vector>
 
+#include "kernels/element_laws.h"
 #include "runtime/integrate/simulation.h"
 
 namespace fmpc::sim {
@@ -24,5 +26,42 @@ struct ModelTangent {
 // last lookup, or springs.stiffness) and, with a strain table, each element's modulus at its current strain.
 ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point3>& positions,
                            const std::vector<double>& spring_stiffness);
+
+// The element terms' tangent one element at a time, for an assembler that places the blocks itself (implicit Euler's
+// fixed pattern, implicit_system.h): the one place that asks an element kind and its law for the stiffness
+// (kernels/element_term.h), so that model_tangent and the assemblers stay apart from the laws' linearisation and
+// hold no element kind's node count. Reads the setup for its life; not copyable (its views point at its own strain
+// table view).
+class ElementTangents {
+ public:
+  explicit ElementTangents(const SimulationSetup& setup);
+  ElementTangents(const ElementTangents&) = delete;
+  ElementTangents& operator=(const ElementTangents&) = delete;
+
+  std::size_t term_count() const { return views_.size(); }
+  // Nodes per element (the element kind's kNodes), and element e's nodes (vertex indices).
+  int nodes() const { return geometry_.nodes_per_element; }
+  const std::int32_t* element_nodes(std::size_t e) const {
+    return geometry_.nodes.data() + static_cast<std::size_t>(geometry_.nodes_per_element) * e;
+  }
+  // Term `term`'s (3N x 3N) stiffness of element e with its N = nodes() nodes at `x` (3 N values, node-major),
+  // row-major: K[3N (3 a + i) + 3 b + j] couples node a's axis i to node b's axis j, linearised there by the term's
+  // element kind and law; returns the element's stiffness damping beta_e (s), 0 when undamped.
+  double stiffness(std::size_t term, std::size_t e, const double* x, double* K) const;
+
+ private:
+  const ElementGeometry& geometry_;
+  kernels::StrainTableView table_{nullptr, nullptr, 0};
+  std::vector<kernels::ElementTermView<double>> views_;
+};
+
+// The most nodes an element kind has (kernels::ElementKinds): the size of an assembler's per-element buffers.
+template <typename... Kinds>
+constexpr int most_element_nodes(kernels::TypeList<Kinds...>) {
+  int most = 0;
+  for (const int nodes : {Kinds::kNodes...}) most = nodes > most ? nodes : most;
+  return most;
+}
+inline constexpr int kMostElementNodes = most_element_nodes(kernels::ElementKinds{});
 
 }  // namespace fmpc::sim

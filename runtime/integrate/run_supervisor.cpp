@@ -13,14 +13,6 @@
 
 namespace fmpc::sim {
 
-std::string cg_stopped_message(std::size_t step, int iterations, double relative_residual, double tolerance) {
-  std::ostringstream message;
-  message << "implicit Euler: conjugate gradient stopped at step " << step << " after " << iterations
-          << " iterations with relative residual " << relative_residual << " (tolerance " << tolerance
-          << "); raise max_iterations or use a smaller dt";
-  return message.str();
-}
-
 std::unique_ptr<Simulation> Simulation::create(const SimulationSetup& setup, DiagnosticList& diagnostics,
                                                const SimulationOptions& options) {
   std::vector<SimulationSetup> one;
@@ -42,6 +34,15 @@ std::unique_ptr<Simulation> Simulation::create(std::vector<SimulationSetup> scen
     diagnostics.error(SourceRange{}, options.backend == Backend::Cuda ? "a GPU batch needs at least one scene"
                                                                       : "a simulation needs at least one scene");
     return nullptr;
+  }
+  for (std::size_t s = 0; s < scenes.size(); ++s) {
+    if (options.backend == Backend::Cuda && scenes[s].integrator == Integrator::ImplicitEuler &&
+        scenes[s].implicit.method == ImplicitMethod::Direct) {
+      diagnostics.error(scenes[s].source_range,
+                        "implicit Euler's direct solver runs on the CPU only; use the CPU backend, or the conjugate "
+                        "gradient (method cg or auto) on CUDA");
+      return nullptr;
+    }
   }
   std::vector<StabilityReport> stability;
   for (std::size_t s = 0; s < scenes.size(); ++s) {
@@ -287,6 +288,10 @@ SimulationLaunches Simulation::launches() const { return engine_->launches(); }
 const std::optional<NonFiniteReport>& Simulation::non_finite() const { return non_finite_; }
 const InversionReport& Simulation::inversions(std::size_t scene) const { return inversions_.at(scene); }
 int Simulation::implicit_max_iterations_used() const { return engine_->implicit_max_iterations_used(); }
+ImplicitSolverReport Simulation::implicit_solver(std::size_t scene) const { return engine_->implicit_solver(scene); }
+std::vector<ImplicitStepRecord> Simulation::take_implicit_steps(std::size_t scene) {
+  return engine_->take_implicit_steps(scene);
+}
 bool Simulation::reduces_in_place() const { return engine_->reduces_in_place(); }
 
 namespace {

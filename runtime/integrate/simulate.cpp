@@ -68,6 +68,7 @@ SimulationResult simulate(const SimulationSetup& setup, DiagnosticList& diagnost
   result.non_finite = simulation->non_finite();
   result.inversions = simulation->inversions();
   result.implicit_max_iterations_used = simulation->implicit_max_iterations_used();
+  result.implicit_solver = simulation->implicit_solver();
   return result;
 }
 

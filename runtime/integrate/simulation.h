@@ -1,6 +1,7 @@
 #pragma once
 // The simulator's library interface: a plain SimulationSetup in, a SimulationResult out. A scene loader builds the
 // setup from a mesh, a material mapping and its options; nothing here reads files, prints or exits.
+#include <cstddef>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -26,12 +27,62 @@ enum class InversionPolicy { Warn, Stop };
 
 const char* to_string(Integrator integrator);
 
-struct ImplicitSolverOptions {
-  // Conjugate-gradient iterations per step; 0: twice the unknowns (3 per vertex), Eigen's default. A fixed small
-  // cap stopped SOFA's liver with fuzzy stiffness short of the tolerance (stiff springs, Jacobi preconditioning).
-  int max_iterations = 0;
-  double tolerance = 1e-10;  // relative residual |r| / |b|
+// How implicit Euler solves its linear system (M + h D + h^2 K) dv = h (f0 - h K v0) each step.
+enum class ImplicitMethod {
+  Automatic,  // the CPU: Direct up to kDirectSolverMostUnknowns free unknowns, else ConjugateGradient; CUDA: the CG
+  Direct,     // a sparse LDL^T factorisation every step (CPU only), refined while above the tolerance
+  ConjugateGradient,  // preconditioned CG (CPU: block Jacobi, started from the last step's solution; CUDA: Jacobi)
 };
+
+// Automatic's threshold: free unknowns (3 per vertex, less the held axes) up to which the CPU factorises. Measured
+// in docs/simulator.md ("Implicit Euler's solvers"): SOFA's liver (534 free unknowns, stiff against its masses at dt
+// 0.02) factorises faster than the CG reaches 1e-10; a box of 1,944 factorises 4.8 times slower than the CG (fill).
+// Size is half of it: a small, well-conditioned system is faster with the CG (the table there).
+inline constexpr std::size_t kDirectSolverMostUnknowns = 1000;
+
+const char* to_string(ImplicitMethod method);  // "auto", "direct", "cg": the scene's spelling
+
+struct ImplicitSolverOptions {
+  ImplicitMethod method = ImplicitMethod::Automatic;
+  // Conjugate-gradient iterations (or direct solves) per step; 0: twice the unknowns (3 per vertex), Eigen's default.
+  // A step that reaches it above the tolerance is counted and warned about (code `cg-not-converged`), never silent.
+  int max_iterations = 0;
+  double tolerance = 1e-10;  // relative residual |b - A dv| / |b|
+  // The CPU's CG starts from the previous step's dv (false: from zero, Eigen's start; for measuring).
+  bool warm_start = true;
+};
+
+// One implicit step's solve, as the run's log keeps it (Simulation::take_implicit_steps).
+struct ImplicitStepRecord {
+  std::size_t step = 0;            // 1-based: the step this solve advanced to
+  int iterations = 0;              // CG iterations (matrix products), or direct solves
+  double relative_residual = 0.0;  // |b - A dv| / |b| reached (0 when b = 0: the system at rest)
+  bool capped = false;             // stopped at max_iterations above the tolerance
+};
+
+// Every implicit step's solve so far, summed (Simulation::implicit_solver); zeros for the explicit schemes.
+struct ImplicitSolverReport {
+  ImplicitMethod method = ImplicitMethod::ConjugateGradient;  // the one used (never Automatic)
+  double tolerance = 0.0;
+  int max_iterations = 0;  // the cap in force (implicit_iteration_limit)
+  std::size_t steps = 0;
+  std::uint64_t iterations_total = 0;
+  int iterations_min = 0;
+  int iterations_max = 0;
+  double residual_max = 0.0;          // the largest relative residual a step reached
+  std::size_t residual_max_step = 0;  // its step
+  std::size_t capped_steps = 0;       // steps that stopped at the cap above the tolerance
+  std::size_t first_capped_step = 0;  // 0: none
+  double first_capped_residual = 0.0;
+  std::size_t direct_fallbacks = 0;   // direct factorisations that failed (a zero pivot): those steps used the CG
+  ImplicitStepRecord last;            // the latest step's
+  // Records take_implicit_steps never saw: more than kMostPendingImplicitSteps were waiting (the sums above count
+  // them).
+  std::size_t unlogged_steps = 0;
+};
+
+// Records a Simulation keeps for take_implicit_steps (16 MiB); later steps are only summed until they are taken.
+inline constexpr std::size_t kMostPendingImplicitSteps = std::size_t{1} << 20;
 
 // A probe on picked vertices (DESIGN section 7: prescribed displacement or force, reaction force recorded).
 // The load ramps linearly from zero at t = 0 to `target` at t = ramp_time and is then held (ramp_time 0: at once).
@@ -42,6 +93,9 @@ struct ProbeLoad {
   // Force: N, the total, shared equally by the probe vertices (added to any external force).
   Point3 target{0.0, 0.0, 0.0};
   double ramp_time = 0.0;  // s
+  // > 0: cyclic loading instead, a triangle wave up to target at ramp_time and back to zero at twice it, `cycles`
+  // times, then held at zero (kernels::probe_ramp_share).
+  int cycles = 0;
 };
 
 // What a probe measures at the current state.
@@ -116,8 +170,9 @@ struct SimulationSetup {
   std::optional<StrainStiffnessTable> strain_stiffness;  // replaces springs.stiffness every step
 };
 
-// The model's name as scenes spell it: "springs" for a spring network (with or without a term beside it), else the
-// scene `model:` keyword of its element law (the registry's model_keyword).
+// The model's name as scenes spell it: "springs" for a spring network (with or without a term beside it), the scene
+// `model:` keyword of its element law where it has one (the registry's model_keyword) on the default element kind,
+// else "fem" (the summary's "fem" field then names the law and the element kind).
 std::string model_name(const SimulationSetup& setup);
 
 // Where vertex v starts: its initial position, or its rest position.
@@ -135,15 +190,20 @@ kernels::StrainTableView strain_table_view(const StrainStiffnessTable& table);
 // from their start, and the applied force (Force) or minus the internal forces (springs with their dashpots and the
 // springs' current `stiffness`, elements with their damping) on the probe vertices (Displacement). Zeros without a
 // probe or with mismatched sizes.
+// Per element term, its per-point state now in double (kernels/prony_viscoelasticity.h; empty for a term without
+// state): what the host's force sums need to include a viscoelastic term's history (the engines' probe readings).
+using ElementTermStates = std::vector<std::vector<double>>;
 ProbeReading read_probe(const SimulationSetup& setup, double time, const std::vector<Point3>& positions,
-                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness);
+                        const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
+                        const ElementTermStates* states = nullptr);
 
 // The internal force (N, in double) of the model on each of `vertices` at a state: springs (with `stiffness`, one per
 // spring, and their dashpots) and tetrahedron-field elements (their damping included; a strain table's modulus at
-// each element's strain).
+// each element's strain; with `states`, a stateful term's stress at the state's time: its history included).
 std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vector<Point3>& positions,
                                     const std::vector<Point3>& velocities, const std::vector<double>& stiffness,
-                                    const std::vector<std::int32_t>& vertices);
+                                    const std::vector<std::int32_t>& vertices,
+                                    const ElementTermStates* states = nullptr);
 
 // Per element term, per tetrahedron at `positions` (double): the term's stress output (its law's stress_output, the
 // frames' cell array named by the law's kStressOutput: e.g. a von Mises stress, or the volume term's pressure beside
@@ -246,6 +306,7 @@ struct SimulationResult {
   std::optional<NonFiniteReport> non_finite;
   InversionReport inversions;
   int implicit_max_iterations_used = 0;
+  ImplicitSolverReport implicit_solver;
 };
 
 class SteppingEngine;
@@ -295,8 +356,14 @@ class Simulation {
   const std::optional<NonFiniteReport>& non_finite() const;
   // Inverted tetrahedra of a scene (InversionReport): at every check, the first step exact by replay.
   const InversionReport& inversions(std::size_t scene = 0) const;
-  // The most conjugate-gradient iterations one implicit step needed (0 for the explicit schemes).
+  // The most conjugate-gradient iterations (or direct solves) one implicit step needed (0 for the explicit schemes).
   int implicit_max_iterations_used() const;
+  // Implicit Euler's solves in a scene so far: the method, iterations and residuals reached, the steps stopped at
+  // the cap. Checkpoint replays count each step once.
+  ImplicitSolverReport implicit_solver(std::size_t scene = 0) const;
+  // Each implicit step's record since the last call (at most kMostPendingImplicitSteps; the report counts the
+  // others), in step order: what a caller logs per step (the scene runner fills summary.json and the time series).
+  std::vector<ImplicitStepRecord> take_implicit_steps(std::size_t scene = 0);
 
   // The state, read back (from the device on CUDA). After a device error (appended) the vectors are empty and the
   // optionals nullopt. Energies: kinetic 1/2 m |v|^2, elastic (springs and element

@@ -158,8 +158,9 @@ std::optional<StaticResult> static_equilibrium(const SimulationSetup& setup, con
         if (free_index[3 * v + i] >= 0) r[free_index[3 * v + i]] = f[v][i] + loads.applied[v][i];
     return r.allFinite();
   };
-  if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement) {
-    // A displacement probe loads the tissue through its first residual: its scale is that force.
+  if ((setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement) || !setup.initial_positions.empty()) {
+    // A displacement probe, or held vertices moved from rest (the initial positions), load the tissue through the
+    // first residual: its scale is that force.
     Eigen::VectorXd r;
     residual_of(x, r);
     probe_scale = r.norm();

@@ -14,7 +14,9 @@
 namespace fmpc::sim {
 
 struct StaticOptions {
-  double tolerance = 1e-10;  // |residual| <= tolerance x |applied load| (the largest of gravity, forces, probe)
+  // |residual| <= tolerance x |applied load| (the largest of gravity, forces, and the first residual of a
+  // displacement probe or of initial positions that move held vertices)
+  double tolerance = 1e-10;
   int max_iterations = 100;  // Newton steps; reaching it is an error, never a result
   // The linear (small-strain) solution, for comparison with linear FEM codes: the stiffness at rest K0, and
   // K0 u = f_ext with the held axes' displacements (from the initial positions) prescribed. Reactions K0 u - f_ext.

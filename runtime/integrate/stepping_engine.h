@@ -47,6 +47,9 @@ class SteppingEngine {
   virtual bool save_checkpoint(DiagnosticList& diagnostics) = 0;
   virtual bool restore_checkpoint(DiagnosticList& diagnostics) = 0;
   virtual int implicit_max_iterations_used() const = 0;
+  // Implicit Euler's solves per scene (ImplicitSolverLog below); a checkpoint saves and restores them with the state.
+  virtual ImplicitSolverReport implicit_solver(std::size_t scene) const = 0;
+  virtual std::vector<ImplicitStepRecord> take_implicit_steps(std::size_t scene) = 0;
 
   // ---- reading, for the Simulation's readers ----------------------------------------------------------------------
   virtual std::vector<Point3> positions(std::size_t scene, DiagnosticList& diagnostics) const = 0;
@@ -69,7 +72,30 @@ std::unique_ptr<SteppingEngine> create_cpu_engine(const std::vector<SimulationSe
                                                   const std::vector<StabilityReport>& stability,
                                                   unsigned batch_threads);
 
-// The conjugate gradient's warning text (code `cg-not-converged`), the same for both backends.
-std::string cg_stopped_message(std::size_t step, int iterations, double relative_residual, double tolerance);
+// The warning text of a step that stopped at the cap (code `cg-not-converged`), the same for both backends.
+std::string cg_stopped_message(ImplicitMethod method, std::size_t step, int iterations, double relative_residual,
+                               double tolerance);
+
+// One scene's implicit solves as an engine keeps them: the report's sums, the records not yet taken, and their
+// state at the checkpoint (a replay from it then counts each step once).
+class ImplicitSolverLog {
+ public:
+  ImplicitSolverLog() = default;
+  ImplicitSolverLog(ImplicitMethod method, double tolerance, int max_iterations);
+  // Adds a step's record; true when it is the first step of the run that stopped at the cap (the engine warns once).
+  bool record(const ImplicitStepRecord& step);
+  void fallback() { ++report_.direct_fallbacks; }
+  const ImplicitSolverReport& report() const { return report_; }
+  std::vector<ImplicitStepRecord> take();
+  // The checkpoint at `step` steps taken, and back to it.
+  void save(std::size_t step);
+  void restore();
+
+ private:
+  ImplicitSolverReport report_, saved_;
+  std::size_t saved_step_ = 0;
+  std::vector<ImplicitStepRecord> pending_;
+  bool warned_ = false;
+};
 
 }  // namespace fmpc::sim

@@ -1,5 +1,6 @@
 #include <cmath>
 
+#include "diagnostics/number_format.h"
 #include "runtime/integrate/simulation.h"
 
 namespace fmpc::sim {
@@ -11,6 +12,34 @@ bool finite_point(const Point3& p) { return std::isfinite(p[0]) && std::isfinite
 // index), at most what the GPU backend holds, each of its law's parameters and its damping one per element, finite
 // (a builder from runtime/fem/element_law_registry.h checks the physical ranges with the scene's names; this catches
 // setups built by hand), and the geometry's arrays parallel to the tetrahedra, its nodes existing vertices.
+// At most kMostPronyTerms terms, each weight in (0, 1) and time positive and finite, the weights summing below 1 (a
+// solid keeps a long-term modulus g_inf = 1 - sum g_i > 0).
+bool validate_prony(const std::vector<PronyTerm>& prony, const std::string& name, const SourceRange& range,
+                    DiagnosticList& diagnostics) {
+  if (prony.size() > static_cast<std::size_t>(kernels::kMostPronyTerms)) {
+    diagnostics.error(range, name + " has " + std::to_string(prony.size()) + " Prony terms; at most " +
+                                 std::to_string(kernels::kMostPronyTerms) + " are allowed");
+    return false;
+  }
+  double sum = 0.0;
+  for (std::size_t i = 0; i < prony.size(); ++i) {
+    const PronyTerm& term = prony[i];
+    if (!(term.weight > 0.0 && term.weight < 1.0) || !(term.time > 0.0) || !std::isfinite(term.time)) {
+      diagnostics.error(range, name + ": Prony term " + std::to_string(i) + " has weight " +
+                                   format_number(term.weight) + " and time " + format_number(term.time) +
+                                   " s; a weight is in (0, 1) and a time positive and finite");
+      return false;
+    }
+    sum += term.weight;
+  }
+  if (!(sum < 1.0)) {
+    diagnostics.error(range, name + ": the Prony weights sum to " + format_number(sum) +
+                                 "; they must sum below 1 (the long-term modulus is 1 - sum g_i of the law's)");
+    return false;
+  }
+  return true;
+}
+
 bool validate_element_terms(const SimulationSetup& setup, const SourceRange& range, DiagnosticList& diagnostics) {
   const ElementTerms& elements = setup.elements;
   if (elements.empty()) return true;
@@ -79,6 +108,7 @@ bool validate_element_terms(const SimulationSetup& setup, const SourceRange& ran
             range, name + " has stiffness damping " + std::to_string(beta) + "; it must be finite and non-negative");
         return false;
       }
+    if (!validate_prony(term.prony, name, range, diagnostics)) return false;
   }
   return true;
 }
@@ -218,10 +248,9 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
   if (!(setup.stability_margin > 0.0 && setup.stability_margin <= 1.0)) {
     diagnostics.error(range, "the stability margin must lie in (0, 1]");
   }
-  if (setup.implicit.max_iterations < 0 || !(setup.implicit.tolerance > 0.0)) {
-    diagnostics.error(range,
-                      "implicit Euler needs a non-negative CG iteration cap (0: twice the unknowns) and a "
-                      "positive tolerance");
+  if (setup.implicit.max_iterations < 0 || !(setup.implicit.tolerance > 0.0 && setup.implicit.tolerance < 1.0)) {
+    diagnostics.error(range, "implicit Euler needs a non-negative CG iteration cap (0: twice the unknowns) and a "
+                             "relative tolerance in (0, 1)");
   }
   if (diagnostics.error_count() != errors_before) return false;
   return validate_loads(setup, diagnostics);

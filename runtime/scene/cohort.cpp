@@ -66,6 +66,9 @@ Scene patient_scene(const Scene& scene, const std::string& label, const std::vec
                     const std::vector<double>& values) {
   Scene patient = scene;
   patient.material.patient = label;
+  // Frames and the force-displacement picture per patient only when the scene asks (outputs.cohort).
+  if (!scene.outputs.cohort_frames) patient.outputs.frames = 0;
+  patient.outputs.plot = scene.outputs.plot && scene.outputs.cohort_plot;
   for (InputBinding& binding : patient.material.bindings) {
     if (binding.kind != InputBinding::Kind::Constant) continue;
     for (std::size_t i = 0; i < inputs.size() && i < values.size(); ++i)

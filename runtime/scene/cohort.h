@@ -39,8 +39,10 @@ std::optional<CohortShard> parse_cohort_shard(const std::string& text, std::stri
 // The patients (indices into the file's rows, 0-based) shard `shard` runs: index, index + count, ...
 std::vector<std::size_t> shard_patients(std::size_t patient_count, const CohortShard& shard);
 
-// The scene for one patient: each named input's constant binding set to the patient's value and material.patient
-// set to the label. Every name must be an input the scene binds to a constant (the caller checked).
+// The scene for one patient: each named input's constant binding set to the patient's value, material.patient set
+// to the label, and its frames and force-displacement picture left out unless outputs.cohort asks for them (a
+// patient writes summary.json and time_series.csv by default). Every name must be an input the scene binds to a
+// constant (the caller checked).
 Scene patient_scene(const Scene& scene, const std::string& label, const std::vector<std::string>& inputs,
                     const std::vector<double>& values);
 

@@ -98,6 +98,7 @@ std::optional<CohortRunResult> run_cohort(const std::vector<CohortPatient>& pati
   CohortRunResult result;
   result.patients = run->results;
   result.wall_seconds = run->wall_seconds;
+  result.stepping_seconds = run->stepping_seconds;
   result.spring_steps = run->spring_steps;
   return result;
 }

@@ -92,8 +92,11 @@ std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMemb
   if (members.size() > 1) pool = std::make_unique<WorkerPool>(resolve_thread_count(threads, members.size(), 2));
   // Every member has the same events (the same scene outputs, the same step count): the first recorder's.
   const SceneRecorder& plan = *recorders.front();
+  const bool implicit = simulation->setup(0).integrator == Integrator::ImplicitEuler;
   const auto record_all = [&](bool frame, bool sample) {
     const auto from = Clock::now();
+    if (implicit)
+      for (std::size_t m = 0; m < members.size(); ++m) recorders[m]->add_solver_steps(simulation->take_implicit_steps(m));
     const bool read = reader.read(frame || sample, diagnostics);
     if (read)
       for_each_member(members.size(), pool.get(), [&](std::size_t m) {
@@ -109,8 +112,12 @@ std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMemb
   for (const std::size_t event : plan.events()) {
     if (!running || event == 0) continue;
     const auto from = Clock::now();
-    running = simulation->advance(event - simulation->steps_taken(), diagnostics);
+    // A step stopped at the solver's cap is said once, at the end, with how many did (capped_steps_message).
+    DiagnosticList advance_diagnostics;
+    running = simulation->advance(event - simulation->steps_taken(), advance_diagnostics);
     const double advanced = seconds_since(from);
+    for (const Diagnostic& diagnostic : advance_diagnostics.items())
+      if (diagnostic.code != "cg-not-converged") diagnostics.add(diagnostic);
     timing.stepping += advanced;
     if (first) timing.first_advance = advanced;
     first = false;
@@ -122,6 +129,15 @@ std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMemb
   if (!running) record_all(plan.records_at_end(), plan.samples_at_end());
   SceneBatchResult result;
   result.wall_seconds = seconds_since(start);
+  result.stepping_seconds = timing.stepping;
+  if (implicit)
+    for (std::size_t m = 0; m < members.size(); ++m)
+      if (const auto message = capped_steps_message(simulation->implicit_solver(m))) {
+        const Scene& member_scene = *members[m].scene;
+        const SourceRange at = member_scene.ranges.count("solver") ? member_scene.range_of("solver")
+                                                                     : simulation->setup(m).source_range;
+        members[m].diagnostics->warning(at, "cg-not-converged", *message);
+      }
 
   // The precision check: every member again in the other precision, as a second batch at the same step.
   SceneRunResult provisional;

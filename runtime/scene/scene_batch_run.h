@@ -23,6 +23,7 @@ struct SceneBatchMember {
 struct SceneBatchResult {
   std::vector<std::optional<SceneRunResult>> results;  // per member, in order
   double wall_seconds = 0.0;                           // stepping and recording
+  double stepping_seconds = 0.0;                       // the advance calls alone
   double spring_steps = 0.0;                           // over members: springs x steps taken
 };
 

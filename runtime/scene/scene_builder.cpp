@@ -67,6 +67,27 @@ std::string bounds_text(const Mesh& mesh) {
   return "the mesh spans " + point_text(lo) + " to " + point_text(hi) + " (mesh units)";
 }
 
+// The diagonal of the mesh's bounding box (mesh units): the scale a scene's lengths are held against.
+double mesh_size(const Mesh& mesh) {
+  if (mesh.points.empty()) return 0.0;
+  Point3 low = mesh.points.front(), high = low;
+  for (const Point3& p : mesh.points)
+    for (std::size_t a = 0; a < 3; ++a) low[a] = std::min(low[a], p[a]), high[a] = std::max(high[a], p[a]);
+  return distance(low, high);
+}
+
+std::string three_digits(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
+// "N times the mesh's size (S mesh units, its bounding box's diagonal)".
+std::string against_mesh_size(double length, double size) {
+  return three_digits(length / size) + " times the mesh's size (" + three_digits(size) +
+         " mesh units, its bounding box's diagonal)";
+}
+
 std::optional<Mesh> load_mesh(const Scene& scene, DiagnosticList& diagnostics) {
   switch (scene.mesh.kind) {
     case SceneMesh::Kind::File: {
@@ -154,6 +175,17 @@ std::optional<std::vector<std::int32_t>> selected_vertices(const Scene& scene, c
       fixed[v] = 1;
       ++count;
     }
+    // A slab thicker than the whole mesh is a unit mistake (a tolerance meant in millimetres on a mesh in metres):
+    // it selects whatever lies near the plane across the whole mesh, without a word.
+    const double size = mesh_size(mesh);
+    if (count > 0 && size > 0.0 && plane.tolerance > size)
+      diagnostics.warning(scene.range_of(plane.field + ".tolerance"), "scene-scale",
+                          plane.field + ".tolerance: " + format_number(plane.tolerance) + " is " +
+                              against_mesh_size(plane.tolerance, size) + ": the plane selects " +
+                              std::to_string(count) + " of the " + std::to_string(mesh.points.size()) +
+                              " vertices, every one within that distance of it",
+                          {"the tolerance is in mesh units (mesh.units); a plane through a face needs a small "
+                           "fraction of an edge, e.g. 1e-6 of the mesh's size"});
     if (count == 0) {
       diagnostics.error(scene.range_of(prefix + ".plane"),
                         prefix + ".plane: no vertex lies within " + format_number(plane.tolerance) +
@@ -201,6 +233,26 @@ std::optional<std::vector<std::int32_t>> pick_by_ray(const Scene& scene, const S
   std::vector<std::int32_t> picked;
   for (std::size_t v = 0; v < mesh.points.size(); ++v)
     if (on_surface[v] && distance(mesh.points[v], hit) <= probe.radius) picked.push_back(static_cast<std::int32_t>(v));
+  // A radius out of the mesh's scale is a unit mistake: beyond the whole mesh it picks the whole surface in reach; a
+  // positive one that reaches no vertex picks one corner, as radius 0 does. Neither said so.
+  const double size = mesh_size(mesh);
+  if (size > 0.0 && probe.radius > size)
+    diagnostics.warning(scene.range_of("loads.probe.radius"), "scene-scale",
+                        "loads.probe.radius: " + format_number(probe.radius) + " is " +
+                            against_mesh_size(probe.radius, size) + ": the probe picks " +
+                            std::to_string(picked.size()) + " surface vertices, all in reach of the hit",
+                        {"the radius is in mesh units (mesh.units)"});
+  if (probe.radius > 0.0 && picked.empty()) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (std::size_t v = 0; v < mesh.points.size(); ++v)
+      if (on_surface[v]) nearest = std::min(nearest, distance(mesh.points[v], hit));
+    diagnostics.warning(scene.range_of("loads.probe.radius"), "scene-scale",
+                        "loads.probe.radius: no surface vertex lies within " + format_number(probe.radius) +
+                            " of the point the ray hits (the nearest is " + three_digits(nearest) +
+                            " away): the probe takes the hit triangle's nearest corner alone, as with radius 0",
+                        {"the radius is in mesh units (mesh.units); give at least " + three_digits(nearest) +
+                         " to pick the vertices around the hit"});
+  }
   if (picked.empty()) {  // radius 0 or smaller than the triangle: the hit triangle's nearest corner
     const Triangle& tri = surface[hit_triangle];
     std::int32_t nearest = tri[0];
@@ -373,10 +425,15 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   FemModelSpec spec;
   spec.law = scene.element_law;
   spec.poisson_where = scene.range_of("material.poisson_ratio");
+  spec.element = scene.element_kind;
+  // "FEM (law corotational, element linear)": the registry's names, as the scene writes them.
+  const std::string model = std::string("FEM (law ") + element_law_row(scene.element_law).keyword + ", element " +
+                            element_kind_row(scene.element_kind).keyword + ")";
   spec.length_unit = scene.mesh.unit;
   spec.mass = scene.mass;
   spec.damping_ratio = scene.damping.ratio;
   spec.rayleigh_stiffness = scene.rayleigh.stiffness;
+  spec.prony = material.prony;
   const RegionalValue poisson = material.poisson_ratio.value_or(RegionalValue{kDefaultPoissonRatio, true, {}});
   const auto nu = regional_values(poisson, centroids, scene, "material.poisson_ratio", diagnostics);
   if (!nu) return std::nullopt;
@@ -385,7 +442,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   switch (material.source) {
     case SceneMaterial::Source::YoungsModulus:
       spec.youngs_modulus = {material.value * 1000.0};  // kPa -> Pa
-      built.stiffness_description = "co-rotational FEM with E = " + format_number(material.value) + " kPa";
+      built.stiffness_description = model + " with E = " + format_number(material.value) + " kPa";
       break;
     case SceneMaterial::Source::Rules:
     case SceneMaterial::Source::Table: {
@@ -395,7 +452,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
       if (binding.strain.empty()) {
         spec.youngs_modulus = binding.modulus_per_spring;  // one per material point: here, per element
         built.stiffness_description =
-            "co-rotational FEM with E from '" + binding.system + "' output '" + binding.output +
+            model + " with E from '" + binding.system + "' output '" + binding.output +
             "': " + format_number(binding.modulus_min / 1000.0) +
             (binding.modulus_min == binding.modulus_max ? "" : " to " + format_number(binding.modulus_max / 1000.0)) +
             " kPa";
@@ -405,8 +462,8 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
         table.modulus = binding.strain_modulus;
         spec.youngs_modulus = {strain_table_rest_modulus(table)};
         strain_table = std::move(table);
-        built.stiffness_description = "co-rotational FEM with E(principal strain) from '" + binding.system +
-                                      "' output '" + binding.output + "', " + std::to_string(binding.strain.size()) +
+        built.stiffness_description = model + " with E(principal strain) from '" + binding.system + "' output '" +
+                                      binding.output + "', " + std::to_string(binding.strain.size()) +
                                       "-point table: " + format_number(binding.modulus_min / 1000.0) + " to " +
                                       format_number(binding.modulus_max / 1000.0) + " kPa";
       }
@@ -418,6 +475,11 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   }
   const std::string nu_text = poisson.regions.empty() ? format_number(poisson.value) : "per region";
   built.stiffness_description += ", nu = " + nu_text;
+  if (!material.prony.empty()) {
+    built.stiffness_description += "; viscoelastic, Prony series (g, tau)";
+    for (const PronyTerm& term : material.prony)
+      built.stiffness_description += " (" + format_number(term.weight) + ", " + format_number(term.time) + " s)";
+  }
   auto setup = build_fem_model(built.mesh, spec, diagnostics);
   if (!setup) return std::nullopt;
   setup->strain_stiffness = std::move(strain_table);
@@ -484,6 +546,12 @@ bool add_term_beside_springs(const Scene& scene, const BuiltScene& built, const 
 std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& built, const LoadedRules* loaded,
                                              DiagnosticList& diagnostics) {
   const SceneMaterial& material = scene.material;
+  if (!material.prony.empty()) {
+    diagnostics.error(scene.range_of("material.viscoelastic"),
+                      "material.viscoelastic acts on an element law; a spring network has none: use a finite-element "
+                      "model (model: corotational_fem), or remove 'viscoelastic'");
+    return std::nullopt;
+  }
   SpringModelSpec model;
   model.length_unit = scene.mesh.unit;
   model.triangle_springs = scene.triangle_springs;
@@ -615,21 +683,14 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
     if (picked && probe.mode == ProbeLoad::Mode::Displacement) {
       // A travel far outside the mesh's scale is a unit mistake (5 m on a mesh in millimetres ran and reported
       // 5,000 mm), and a travel given at once is an instant step; both ran without a word.
-      Point3 low = built.mesh.points.empty() ? Point3{} : built.mesh.points.front(), high = low;
-      for (const Point3& p : built.mesh.points)
-        for (std::size_t a = 0; a < 3; ++a) low[a] = std::min(low[a], p[a]), high[a] = std::max(high[a], p[a]);
-      const double size = distance(low, high);
+      // The travel is in metres, the mesh in its own units: the size is compared in metres.
+      const double size = mesh_size(built.mesh) * scene.mesh.unit;
       const double travel = std::sqrt(probe.target[0] * probe.target[0] + probe.target[1] * probe.target[1] +
                                       probe.target[2] * probe.target[2]);
-      const auto digits = [](double value) {
-        char text[32];
-        std::snprintf(text, sizeof text, "%.3g", value);
-        return std::string(text);
-      };
       if (size > 0.0 && (travel > size || (travel > 0.0 && travel < 1e-6 * size)))
         diagnostics.warning(scene.range_of("loads.probe.displacement"), "probe-load",
                             "loads.probe.displacement: the probe travels " + format_number(travel) + " m, " +
-                                digits(travel / size) + " times the mesh's size (" + digits(size) +
+                                three_digits(travel / size) + " times the mesh's size (" + three_digits(size) +
                                 " m, its bounding box's diagonal)" +
                                 (travel > size ? ", further than the whole mesh" : ", below what float can resolve") +
                                 ": displacements are in metres whatever mesh.units says",
@@ -646,6 +707,7 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
       load.vertices = *picked;
       load.target = probe.target;
       load.ramp_time = probe.ramp;
+      load.cycles = probe.cycles;
       setup->probe = load;
     }
   }
@@ -663,10 +725,12 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
   setup->source_range = SourceRange{scene.path, 0, 0, 0, 0};
   setup->mass_damping = scene.rayleigh.mass;
   setup->on_inversion = scene.on_inversion;
-  // Automatic: one thread below 10,000 vertices, where a step takes microseconds and handing work to other
-  // threads costs more than it saves; otherwise up to 8.
+  setup->implicit = scene.solver;
+  // Automatic: one thread below 10,000 vertices (implicit Euler: 2,000, its step being a linear solve), where a
+  // step takes microseconds and handing work to other threads costs more than it saves; otherwise up to 8.
+  const std::size_t serial_below = scene.integrator == Integrator::ImplicitEuler ? 2000 : 10000;
   setup->threads = scene.threads > 0 ? scene.threads
-                   : built.mesh.points.size() < 10000
+                   : built.mesh.points.size() < serial_below
                        ? 1u
                        : std::max(1u, std::min(8u, std::thread::hardware_concurrency()));
   if (diagnostics.error_count() != errors) return std::nullopt;

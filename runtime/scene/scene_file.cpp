@@ -44,7 +44,8 @@ const char* scene_name(StiffnessMapping mapping) {
 
 std::string model_keyword(const Scene& scene) {
   if (scene.model == ForceModel::Springs) return "springs";
-  return element_law_row(scene.element_law).model_keyword;
+  const char* keyword = element_law_row(scene.element_law).model_keyword;
+  return keyword != nullptr && scene.element_kind == default_element_kind().kind ? keyword : "fem";
 }
 
 SourceRange Scene::range_of(const std::string& field) const {

@@ -81,8 +81,11 @@ struct SceneMaterial {
   // Young's modulus -> spring constants (`mapping`): YoungsModulus, Rules and Table only.
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
   bool mapping_given = false;
-  // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.4999] (the element kind may take less: build_fem_model).
+  // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.4999] (the
+  // element kind may take less: build_fem_model).
   std::optional<RegionalValue> poisson_ratio;
+  // material.viscoelastic: {prony: [{weight, time}, ...]} (kernels/prony_viscoelasticity.h); empty: elastic. FEM only.
+  std::vector<PronyTerm> prony;
   double thickness = 1.0;        // m, membranes (triangle meshes)
   double flexion_fraction = 0.1;
 };
@@ -102,6 +105,7 @@ struct SceneFixed {
     Point3 point{0.0, 0.0, 0.0};
     Point3 normal{0.0, 0.0, 1.0};
     double tolerance = 1e-9;  // mesh units
+    std::string field;        // where the scene gives it ("fixed.plane", "hold[0].plane[1]"), for messages
   };
   std::vector<Plane> planes;
 };
@@ -123,6 +127,7 @@ struct SceneProbe {
   double radius = 0.0;  // mesh units: the vertices within this distance of the first hit (0: the hit's nearest)
   Point3 target{0.0, 0.0, 0.0};  // m (displacement) or N (force)
   double ramp = 0.0;             // s
+  int cycles = 0;                // > 0: up to target and back over 2 ramp, this many times (ProbeLoad::cycles)
 };
 
 enum class SceneBackend { Auto, Cpu, Cuda };
@@ -138,6 +143,11 @@ struct SceneOutputs {
   // Rerun in the other precision and compare (scene_run.h, PrecisionCheck): auto runs it when the run's stepping
   // took at most kPrecisionCheckSeconds (the check costs about as much again); on always; off never.
   enum class PrecisionCheck { Auto, On, Off } precision_check = PrecisionCheck::Auto;
+  // A cohort's patients (docs/cohorts.md) write summary.json and time_series.csv each, and cohort.csv beside them;
+  // their frames and force-displacement pictures only when asked (`cohort: {frames: true, plot: true}`): a
+  // thousand patients' 25 frames each were most of a cohort's time.
+  bool cohort_frames = false;
+  bool cohort_plot = false;
 };
 
 // Rayleigh damping C = alpha M + beta K (`damping: {rayleigh: {mass: ALPHA, stiffness: BETA}}`): alpha (1/s) acts on
@@ -150,14 +160,17 @@ struct SceneRayleigh {
 constexpr double kDefaultPoissonRatio = 0.45;
 
 // The scene's `model:` (docs/scenes.md): a spring network (with springs: {volume_term: true}, the element law beside
-// springs with it), or a finite-element model of one element law (runtime/fem/element_law_registry.h).
+// springs with it), or a finite-element model of one element law on one element kind (`model: fem` with
+// `fem: {law, element}`, or a law's own model keyword such as `corotational_fem` on linear tetrahedra;
+// runtime/fem/element_law_registry.h).
 enum class ForceModel { Springs, Elements };
 
 struct Scene {
   std::string path;  // the scene file
   std::string name;  // `name`, or the file's stem
   ForceModel model = ForceModel::Springs;
-  int element_law = 0;  // model Elements: the law's index in element_law_rows()
+  int element_law = 0;   // model Elements: the law's index in element_law_rows()
+  int element_kind = 0;  // model Elements: the element kind's index in element_kind_rows()
   SceneMesh mesh;
   SceneMaterial material;
   MassSpec mass;
@@ -175,6 +188,7 @@ struct Scene {
   std::optional<double> dt;  // nullopt: auto
   double duration = 1.0;     // s
   std::optional<std::size_t> steps;  // overrides duration (command line)
+  ImplicitSolverOptions solver;      // `solver` (implicit Euler's linear solver)
   SceneBackend backend = SceneBackend::Auto;
   Precision precision = Precision::Float;
   unsigned threads = 0;  // 0: hardware concurrency, at most 8
@@ -208,7 +222,8 @@ std::optional<Scene> parse_scene(const std::string& path, const std::string& tex
 const char* to_string(SceneBackend backend);
 const char* scene_name(Integrator integrator);  // the scene spelling: "semi_implicit_euler", ...
 const char* scene_name(StiffnessMapping mapping);  // the scene spelling: "van_gelder_1998", ...
-// The scene spelling of its model: "springs", or the element law's model keyword.
+// The scene spelling of its model: "springs", the element law's model keyword where it has one and the element kind
+// is the default, else "fem".
 std::string model_keyword(const Scene& scene);
 
 }  // namespace fmpc::sim

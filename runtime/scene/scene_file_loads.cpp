@@ -54,6 +54,7 @@ void SceneParser::parse_selection(const YAML::Node& node, const std::string& pre
         return;
       }
       SceneFixed::Plane plane;
+      plane.field = field;
       const auto point = vector3(p["point"], field + ".point", " (mesh units)");
       const auto normal = vector3(p["normal"], field + ".normal", "");
       if (!point || !normal) return;
@@ -81,7 +82,7 @@ void SceneParser::parse_loads(const YAML::Node& node) {
   if (!node["probe"]) return;
   const YAML::Node p = node["probe"];
   remember(p, "loads.probe");
-  if (!check_map(p, "loads.probe", {"indices", "ray", "radius", "displacement", "force", "ramp"})) return;
+  if (!check_map(p, "loads.probe", {"indices", "ray", "radius", "displacement", "force", "ramp", "cycles"})) return;
   SceneProbe probe;
   bool ok = true;
   switch (one_of(p, "loads.probe", {"indices", "ray"})) {
@@ -136,6 +137,11 @@ void SceneParser::parse_loads(const YAML::Node& node) {
   }
   if (p["ramp"]) {
     if (auto v = non_negative(p["ramp"], "loads.probe.ramp", " of seconds")) probe.ramp = *v;
+  }
+  if (p["cycles"]) {
+    if (auto v = integer(p["cycles"], "loads.probe.cycles", 1, 1000)) probe.cycles = static_cast<int>(*v);
+    if (!(probe.ramp > 0.0))
+      error(p["cycles"], "loads.probe.cycles", "needs a positive 'ramp' (the time from zero to the target)");
   }
   if (ok) scene_.probe = probe;
 }

@@ -96,7 +96,7 @@ void SceneParser::parse_material(const YAML::Node& node) {
   remember(node, "material");
   if (!check_map(node, "material", {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table",
                                     "system", "output", "patient", "inputs", "strain_axis", "thickness",
-                                    "flexion_fraction", "mapping", "poisson_ratio"}))
+                                    "flexion_fraction", "mapping", "poisson_ratio", "viscoelastic"}))
     return;
   SceneMaterial& material = scene_.material;
   const std::vector<std::string> sources = {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table"};
@@ -153,6 +153,7 @@ void SceneParser::parse_material(const YAML::Node& node) {
     }
   }
   if (node["poisson_ratio"]) material.poisson_ratio = poisson_ratio(node["poisson_ratio"]);
+  if (node["viscoelastic"]) parse_viscoelastic(node["viscoelastic"]);
   if (node["thickness"])
     if (auto v = positive(node["thickness"], "material.thickness", " (m)")) material.thickness = *v;
   if (node["flexion_fraction"])
@@ -203,6 +204,51 @@ bool SceneParser::parse_regions(const YAML::Node& value, const std::string& fiel
     if (region_box && region_value) out.push_back({*region_box, *region_value});
   }
   return true;
+}
+
+// `viscoelastic: {prony: [{weight: g, time: tau}, ...]}`: 1 to kMostPronyTerms terms, each weight in (0, 1) and
+// time (s) positive, the weights summing below 1 (the long-term modulus 1 - sum g_i of the law's instantaneous one).
+void SceneParser::parse_viscoelastic(const YAML::Node& node) {
+  const std::string field = "material.viscoelastic";
+  remember(node, field);
+  if (!check_map(node, field, {"prony"})) return;
+  const YAML::Node list = node["prony"];
+  const std::string expected = "a list of 1 to " + std::to_string(kernels::kMostPronyTerms) +
+                               " Prony terms {weight: g, time: tau (s)}";
+  if (!list || !list.IsSequence() || list.size() == 0 ||
+      list.size() > static_cast<std::size_t>(kernels::kMostPronyTerms)) {
+    error(list ? list : node, field + ".prony", "expected " + expected);
+    return;
+  }
+  remember(list, field + ".prony");
+  std::vector<PronyTerm> prony;
+  double sum = 0.0;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const std::string term_field = field + ".prony[" + std::to_string(i) + "]";
+    if (!check_map(list[i], term_field, {"weight", "time"})) return;
+    if (!list[i]["weight"] || !list[i]["time"]) {
+      error(list[i], term_field, "a Prony term needs 'weight' and 'time'");
+      return;
+    }
+    const auto weight = number(list[i]["weight"], term_field + ".weight", "a number in (0, 1)");
+    const auto time = positive(list[i]["time"], term_field + ".time", " (s)");
+    if (!weight || !time) return;
+    if (!(*weight > 0.0 && *weight < 1.0)) {
+      error(list[i]["weight"], term_field + ".weight",
+            format_number(*weight) + " is not in (0, 1): a weight is the fraction of the instantaneous stress that "
+                                     "relaxes with this time constant");
+      return;
+    }
+    sum += *weight;
+    prony.push_back({*weight, *time});
+  }
+  if (!(sum < 1.0)) {
+    error(list, field + ".prony",
+          "the weights sum to " + format_number(sum) +
+              "; they must sum below 1 (the long-term modulus is 1 - sum g_i times the law's instantaneous one)");
+    return;
+  }
+  scene_.material.prony = std::move(prony);
 }
 
 // A Poisson ratio in [0, 0.4999]: a number, or {regions: [...], default: NUMBER}. The element kind's own limit (the
@@ -282,13 +328,13 @@ void SceneParser::parse_inputs(const YAML::Node& node) {
 
 // What only springs have is refused with the co-rotational FEM, naming the field.
 void SceneParser::check_fem_fields(const YAML::Node& root) {
-  const std::string why = " has no meaning for model: corotational_fem (it is a spring setting)";
+  const std::string why = " has no meaning for model: " + model_keyword(scene_) + " (it is a spring setting)";
   const YAML::Node material = root["material"];
   if (material && material.IsMap()) {
     for (const char* key : {"stiffness", "stiffness_over_length"})
       if (material[key])
         error(material[key], std::string("material.") + key,
-              "the co-rotational FEM takes Young's modulus (youngs_modulus, rules or table), not spring constants");
+              "a finite-element model takes Young's modulus (youngs_modulus, rules or table), not spring constants");
     // A mapping beside spring constants already has its own error (it needs Young's modulus).
     const bool modulus = material["youngs_modulus"] || material["rules"] || material["table"];
     for (const char* key : {"mapping", "thickness", "flexion_fraction"})
@@ -296,7 +342,8 @@ void SceneParser::check_fem_fields(const YAML::Node& root) {
         error(material[key], std::string("material.") + key, why.substr(1));
   }
   if (root["springs"]) error(root["springs"], "springs", why.substr(1));
-  if (root["law"]) error(root["law"], "law", why.substr(1) + "; the FEM's material is linear elastic (co-rotated)");
+  if (root["law"])
+    error(root["law"], "law", why.substr(1) + "; the FEM's material is its element law (fem: {law: ...})");
   const YAML::Node damping = root["damping"];
   if (damping && damping.IsMap()) {
     for (const char* key : {"coefficient", "natural_frequency"})

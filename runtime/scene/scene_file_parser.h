@@ -69,18 +69,22 @@ class SceneParser {
 
   // ---- the run's settings (scene_file_run.cpp) ----
   void parse_outputs(const YAML::Node& node);
+  void parse_solver(const YAML::Node& node);
 
   // ---- mesh, material and the material's companions (scene_file_material.cpp) ----
   void parse_mesh(const YAML::Node& node);
   void parse_material(const YAML::Node& node);
   bool parse_regions(const YAML::Node& value, const std::string& field, std::vector<RegionValue>& out);
   std::optional<RegionalValue> poisson_ratio(const YAML::Node& node);
+  void parse_viscoelastic(const YAML::Node& node);
   void parse_inputs(const YAML::Node& node);
   void check_fem_fields(const YAML::Node& root);
   void parse_mass(const YAML::Node& node);
   void parse_damping(const YAML::Node& node);
   void parse_springs(const YAML::Node& node);
   void parse_law(const YAML::Node& node);
+  // `fem: {law, element}` (model: fem), through the law and element-kind registries.
+  void parse_fem(const YAML::Node& node);
 
   // ---- loads (scene_file_loads.cpp) ----
   void parse_fixed(const YAML::Node& node);

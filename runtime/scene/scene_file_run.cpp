@@ -13,9 +13,9 @@ void SceneParser::parse(const YAML::Node& root) {
                                     "docs/scenes.md");
     return;
   }
-  check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fixed", "hold",
-                       "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
-                       "on_inversion"});
+  check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fem", "fixed",
+                       "hold", "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
+                       "on_inversion", "solver"});
   if (root["name"]) {
     if (auto name = text(root["name"], "name")) {
       if (const auto problem = output_name_problem(*name))
@@ -27,10 +27,11 @@ void SceneParser::parse(const YAML::Node& root) {
     diagnostics_.error(range(root), "name: the scene file's name '" + scene_.name + "' " + *problem +
                                         "; give the scene a 'name'");
   }
+  bool fem_keys = false;  // model: fem, whose law and element kind `fem` gives
   if (root["model"]) {
-    // "springs", then each element law's model keyword, in the registry's order.
-    std::vector<std::string> names = {"springs"};
-    std::vector<int> laws = {-1};
+    // "springs", "fem", then each element law's model keyword, in the registry's order.
+    std::vector<std::string> names = {"springs", "fem"};
+    std::vector<int> laws = {-1, default_fem_law().law};
     for (const ElementLawRow& row : element_law_rows()) {
       if (row.model_keyword == nullptr) continue;
       names.push_back(row.model_keyword);
@@ -39,6 +40,19 @@ void SceneParser::parse(const YAML::Node& root) {
     if (auto i = keyword(root["model"], "model", names, "a force model")) {
       scene_.model = *i == 0 ? ForceModel::Springs : ForceModel::Elements;
       if (*i > 0) scene_.element_law = laws[*i];
+      scene_.element_kind = default_element_kind().kind;
+      fem_keys = *i == 1;
+    }
+  }
+  if (root["fem"]) {
+    if (fem_keys) {
+      parse_fem(root["fem"]);
+    } else {
+      const std::string given = root["model"] ? describe(root["model"]) : std::string("springs (the default)");
+      error(root["fem"], "fem",
+            "'fem' chooses the law and element of model: fem; this scene's model is " + given +
+                ": write model: fem (model: " + default_fem_law().model_keyword +
+                " is fem: {law: " + default_fem_law().keyword + ", element: " + default_element_kind().keyword + "})");
     }
   }
   if (root["on_inversion"]) {
@@ -95,6 +109,12 @@ void SceneParser::parse(const YAML::Node& root) {
   if (root["threads"]) {
     if (auto value = integer(root["threads"], "threads", 0, 256)) scene_.threads = static_cast<unsigned>(*value);
   }
+  if (root["solver"]) parse_solver(root["solver"]);
+  if (root["solver"] && scene_.integrator != Integrator::ImplicitEuler) {
+    error(root["solver"], "solver",
+          std::string("only implicit_euler solves a linear system each step; this scene's integrator is ") +
+              scene_name(scene_.integrator) + ": remove 'solver' or use integrator: implicit_euler");
+  }
   if (root["outputs"]) parse_outputs(root["outputs"]);
   if (scene_.model == ForceModel::Elements) check_fem_fields(root);
   if (scene_.model == ForceModel::Springs && scene_.material.poisson_ratio && !scene_.volume_term) {
@@ -126,12 +146,37 @@ void SceneParser::parse(const YAML::Node& root) {
   }
 }
 
+void SceneParser::parse_fem(const YAML::Node& node) {
+  remember(node, "fem");
+  if (!check_map(node, "fem", {"law", "element"})) return;
+  if (node["law"]) {
+    const std::vector<std::string> laws = fem_law_keywords();
+    if (auto i = keyword(node["law"], "fem.law", laws, "an element law"))
+      scene_.element_law = fem_law_by_keyword(laws[*i])->law;
+  }
+  if (node["element"]) {
+    const std::vector<std::string> kinds = element_kind_keywords();
+    if (auto i = keyword(node["element"], "fem.element", kinds, "an element kind"))
+      scene_.element_kind = element_kind_by_keyword(kinds[*i])->kind;
+  }
+}
+
 void SceneParser::parse_outputs(const YAML::Node& node) {
   remember(node, "outputs");
   if (!check_map(node, "outputs",
-                 {"directory", "frames", "vtu", "samples", "csv", "summary", "plot", "precision_check"}))
+                 {"directory", "frames", "vtu", "samples", "csv", "summary", "plot", "precision_check", "cohort"}))
     return;
   SceneOutputs& out = scene_.outputs;
+  if (node["cohort"]) {
+    const YAML::Node cohort = node["cohort"];
+    remember(cohort, "outputs.cohort");
+    if (check_map(cohort, "outputs.cohort", {"frames", "plot"})) {
+      if (cohort["frames"])
+        if (auto v = boolean(cohort["frames"], "outputs.cohort.frames")) out.cohort_frames = *v;
+      if (cohort["plot"])
+        if (auto v = boolean(cohort["plot"], "outputs.cohort.plot")) out.cohort_plot = *v;
+    }
+  }
   if (node["precision_check"]) {
     static const std::vector<std::string> names = {"auto", "on", "off"};
     if (auto i = keyword(node["precision_check"], "outputs.precision_check", names, "auto, on or off"))
@@ -156,6 +201,31 @@ void SceneParser::parse_outputs(const YAML::Node& node) {
     if (auto v = boolean(node["summary"], "outputs.summary")) out.summary = *v;
   if (node["plot"])
     if (auto v = boolean(node["plot"], "outputs.plot")) out.plot = *v;
+}
+
+// `solver: {method, tolerance, max_iterations}` (docs/scenes.md): implicit Euler's linear solver.
+void SceneParser::parse_solver(const YAML::Node& node) {
+  remember(node, "solver");
+  if (!check_map(node, "solver", {"method", "tolerance", "max_iterations"})) return;
+  ImplicitSolverOptions& solver = scene_.solver;
+  if (node["method"]) {
+    static const std::vector<std::string> names = {"auto", "direct", "cg"};
+    static const ImplicitMethod methods[] = {ImplicitMethod::Automatic, ImplicitMethod::Direct,
+                                             ImplicitMethod::ConjugateGradient};
+    if (auto i = keyword(node["method"], "solver.method", names, "a linear solver")) solver.method = methods[*i];
+  }
+  if (node["tolerance"]) {
+    // Below 1e-16 a double residual cannot get: every step would stop at the cap.
+    const auto value = number(node["tolerance"], "solver.tolerance", "a relative residual from 1e-16 to 0.5");
+    if (value && !(*value >= 1e-16 && *value <= 0.5))
+      error(node["tolerance"], "solver.tolerance",
+            "expected a relative residual from 1e-16 (double precision's reach) to 0.5, got " + format_number(*value));
+    else if (value)
+      solver.tolerance = *value;
+  }
+  if (node["max_iterations"])
+    if (auto v = integer(node["max_iterations"], "solver.max_iterations", 1, 1000000))
+      solver.max_iterations = static_cast<int>(*v);
 }
 
 }  // namespace fmpc::sim

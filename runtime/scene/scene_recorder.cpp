@@ -43,6 +43,7 @@ SceneRecorder::SceneRecorder(const Scene& scene, const BuiltScene& built, const 
   frame_steps_ = scene.outputs.frames > 0 ? spread(scene.outputs.frames, total) : std::vector<std::size_t>{};
   write_csv_ = scene.outputs.csv && scene.outputs.samples > 0;
   with_probe_ = setup.probe.has_value();
+  with_solver_ = setup.integrator == Integrator::ImplicitEuler;
   sample_steps_ = write_csv_ || with_probe_ ? spread(std::max(scene.outputs.samples, 2), total)
                                             : std::vector<std::size_t>{};
   events_.insert(frame_steps_.begin(), frame_steps_.end());
@@ -55,7 +56,7 @@ SceneRecorder::SceneRecorder(const Scene& scene, const BuiltScene& built, const 
       for (std::size_t i = 0; i < 3; ++i) probe_axis_[i] = setup.probe->target[i] / length;
   }
   if (write_csv_) {
-    const auto columns = time_series_columns(with_probe_);
+    const auto columns = time_series_columns(with_probe_, with_solver_);
     for (std::size_t i = 0; i < columns.size(); ++i) csv_ += (i ? "," : "") + columns[i];
     csv_ += "\n";
   }
@@ -105,10 +106,12 @@ void SceneRecorder::record(const SceneState& state, bool frame, bool sample, Dia
     }
     // Element stresses as cell data where the cells are the elements: each element term's stress output (its law's:
     // a von Mises stress, or the volume term's pressure magnitude; springs carry no continuum stress).
+    // The arrays point into the stresses' values, which must outlive the document's encoding.
+    std::vector<ElementStressOutput> stresses;
     std::vector<VtuArray> cell_data;
     if (!setup.elements.empty() && vtu_cells_ && vtu_cells_->size() == setup.tetrahedra.size())
-      for (const ElementStressOutput& stress : element_stress_outputs(setup, positions))
-        cell_data.push_back(vtu_scalars(stress.name, stress.values));
+      stresses = element_stress_outputs(setup, positions);
+    for (const ElementStressOutput& stress : stresses) cell_data.push_back(vtu_scalars(stress.name, stress.values));
     const auto vtu = vtu_cells_ ? vtu_document(positions, *vtu_cells_,
                                                {vtu_vectors("displacement", displacement),
                                                 vtu_vectors("velocity", velocities)},
@@ -121,6 +124,17 @@ void SceneRecorder::record(const SceneState& state, bool frame, bool sample, Dia
   if (sample) record_sample(state, largest, positions, velocities, diagnostics);
 }
 
+
+void SceneRecorder::add_solver_steps(const std::vector<ImplicitStepRecord>& steps) {
+  for (const ImplicitStepRecord& step : steps) {
+    interval_iterations_ = std::max(interval_iterations_, step.iterations);
+    interval_residual_ = std::max(interval_residual_, step.relative_residual);
+    if (step_iterations_.size() < kMostSummarySolverSteps) {
+      step_iterations_.push_back(step.iterations);
+      step_residuals_.push_back(step.relative_residual);
+    }
+  }
+}
 
 void SceneRecorder::record_sample(const SceneState& state, double largest, const std::vector<Point3>& positions,
                                   const std::vector<Point3>& velocities, DiagnosticList& diagnostics) {
@@ -140,6 +154,11 @@ void SceneRecorder::record_sample(const SceneState& state, double largest, const
                            reading.displacement[2], reading.force[0], reading.force[1], reading.force[2]});
   }
   row.insert(row.end(), {kinetic, elastic, largest});
+  if (with_solver_) {
+    row.insert(row.end(), {static_cast<double>(interval_iterations_), interval_residual_});
+    interval_iterations_ = 0;
+    interval_residual_ = 0.0;
+  }
   if (write_csv_) {
     for (std::size_t i = 0; i < row.size(); ++i) csv_ += (i ? "," : "") + format_number(row[i]);
     csv_ += "\n";
@@ -157,6 +176,7 @@ std::optional<SceneRunResult> SceneRecorder::finish(const SceneState& state, boo
   result.steps_per_second =
       result.wall_seconds > 0.0 ? static_cast<double>(result.steps_taken) / result.wall_seconds : 0.0;
   result.inversions = state.inversions();
+  if (with_solver_) result.solver = state.implicit_solver();
   result.final_positions = state.positions(diagnostics);
   result.final_max_displacement = largest_displacement(result.final_positions, start_positions());
   result.precision_check = check(result);
@@ -206,6 +226,10 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
   json["scene_file"] = scene.path;
   json["completed"] = result.completed;
   json["model"] = model_name(setup);
+  if (setup.springs.size() == 0 && !setup.elements.empty()) {
+    json["fem"]["law"] = element_law_row(setup.elements.terms.front().law).keyword;
+    json["fem"]["element"] = element_kind_row(setup.elements.geometry.kind).keyword;
+  }
   json["inverted_elements"] = result.inversions.largest_count;
   json["backend"] = options.backend;
   json["precision"] = setup.precision == Precision::Float ? "float" : "double";
@@ -274,6 +298,43 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
     inversions["first_time_s"] = result.inversions.first_time;
     inversions["first_element"] = static_cast<std::size_t>(result.inversions.first_element);
   }
+  if (result.solver) {
+    const ImplicitSolverReport& solver = *result.solver;
+    JsonDocument& out = json["solver"];
+    out["method"] = to_string(solver.method);
+    out["requested_method"] = to_string(setup.implicit.method);
+    const bool cpu = options.backend != "cuda";
+    out["preconditioner"] = solver.method == ImplicitMethod::Direct ? "none" : cpu ? "block_jacobi" : "jacobi";
+    out["warm_start"] = cpu && solver.method == ImplicitMethod::ConjugateGradient && setup.implicit.warm_start;
+    out["tolerance"] = solver.tolerance;
+    out["max_iterations"] = static_cast<std::size_t>(solver.max_iterations);
+    out["steps"] = solver.steps;
+    out["iterations_min"] = static_cast<std::size_t>(solver.iterations_min);
+    out["iterations_mean"] =
+        solver.steps == 0 ? 0.0 : static_cast<double>(solver.iterations_total) / static_cast<double>(solver.steps);
+    out["iterations_max"] = static_cast<std::size_t>(solver.iterations_max);
+    out["iterations_total"] = static_cast<std::size_t>(solver.iterations_total);
+    out["relative_residual_max"] = solver.residual_max;
+    out["relative_residual_max_step"] = solver.residual_max_step;
+    out["relative_residual_last"] = solver.last.relative_residual;
+    out["capped_steps"] = solver.capped_steps;
+    out["first_capped_step"] = solver.first_capped_step;
+    out["first_capped_relative_residual"] = solver.first_capped_residual;
+    out["direct_fallbacks"] = solver.direct_fallbacks;
+    // Every step's numbers, in step order, while they fit (kMostSummarySolverSteps); null past it.
+    if (solver.steps <= kMostSummarySolverSteps && step_iterations_.size() == solver.steps) {
+      JsonDocument iterations = JsonDocument::array(), residuals = JsonDocument::array();
+      for (std::size_t k = 0; k < step_iterations_.size(); ++k) {
+        iterations.push_back(static_cast<std::size_t>(step_iterations_[k]));
+        residuals.push_back(step_residuals_[k]);
+      }
+      JsonDocument& per_step = out["per_step"];
+      per_step["iterations"] = std::move(iterations);
+      per_step["relative_residual"] = std::move(residuals);
+    } else {
+      out["per_step"] = nullptr;
+    }
+  }
   const PrecisionCheckResult& precision = result.precision_check;
   JsonDocument& precision_json = json["precision_check"];
   precision_json["ran"] = precision.ran;
@@ -294,11 +355,28 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
   return json_text(json);
 }
 
-std::vector<std::string> time_series_columns(bool with_probe) {
-  if (!with_probe) return {"time_s", "kinetic_energy_J", "elastic_energy_J", "max_displacement_m"};
-  return {"time_s",          "probe_displacement_m", "probe_force_N",    "probe_dx_m",        "probe_dy_m",
-          "probe_dz_m",      "probe_fx_N",           "probe_fy_N",       "probe_fz_N",        "kinetic_energy_J",
-          "elastic_energy_J", "max_displacement_m"};
+std::vector<std::string> time_series_columns(bool with_probe, bool with_solver) {
+  std::vector<std::string> columns = {"time_s"};
+  if (with_probe)
+    columns.insert(columns.end(), {"probe_displacement_m", "probe_force_N", "probe_dx_m", "probe_dy_m", "probe_dz_m",
+                                   "probe_fx_N", "probe_fy_N", "probe_fz_N"});
+  columns.insert(columns.end(), {"kinetic_energy_J", "elastic_energy_J", "max_displacement_m"});
+  // The worst implicit step since the row before: its iterations and its relative residual.
+  if (with_solver) columns.insert(columns.end(), {"solver_iterations", "solver_relative_residual"});
+  return columns;
+}
+
+std::optional<std::string> capped_steps_message(const ImplicitSolverReport& report) {
+  if (report.capped_steps == 0) return std::nullopt;
+  const bool direct = report.method == ImplicitMethod::Direct;
+  return "implicit Euler: " + std::to_string(report.capped_steps) + " of " + std::to_string(report.steps) +
+         " steps stopped at the cap of " + std::to_string(report.max_iterations) +
+         (direct ? " direct solves" : " conjugate-gradient iterations") + " above the tolerance " +
+         format_number(report.tolerance) + " (the first at step " + std::to_string(report.first_capped_step) +
+         " with relative residual " + format_number(report.first_capped_residual) +
+         "); the largest relative residual reached was " + format_number(report.residual_max) + " at step " +
+         std::to_string(report.residual_max_step) +
+         "; raise solver.max_iterations, loosen solver.tolerance or use a smaller dt";
 }
 
 std::vector<std::filesystem::path> earlier_run_files(const std::filesystem::path& directory) {

@@ -37,6 +37,8 @@ class SceneRecorder {
   void set_timing(const SceneRunTiming& timing) { result_.timing = timing; }
 
   void record(const SceneState& state, bool frame, bool sample, DiagnosticList& diagnostics);
+  // Implicit Euler's records of the steps since the last event (Simulation::take_implicit_steps), before record().
+  void add_solver_steps(const std::vector<ImplicitStepRecord>& steps);
   // The run's end: its totals, then the precision check (check(result) gives it), the .pvd, the CSV and the summary.
   std::optional<SceneRunResult> finish(const SceneState& state, bool completed, double wall_seconds,
                                        const std::function<PrecisionCheckResult(const SceneRunResult&)>& check,
@@ -67,6 +69,13 @@ class SceneRecorder {
   VtuOptions vtu_options_;
   std::optional<VtuCells> vtu_cells_;  // the cells are the same in every frame: encoded once, at the first
   bool outputs_ok_ = true;
+  // Implicit Euler: the worst step since the last CSV row, and every step's record for summary.json (up to
+  // kMostSummarySolverSteps).
+  bool with_solver_ = false;
+  int interval_iterations_ = 0;
+  double interval_residual_ = 0.0;
+  std::vector<int> step_iterations_;
+  std::vector<double> step_residuals_;
 };
 
 }  // namespace fmpc::sim

@@ -15,13 +15,22 @@ std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& 
   const bool have_device = false;
   device = "this fmpc was built without CUDA";
 #endif
+  const bool direct = scene.integrator == Integrator::ImplicitEuler && scene.solver.method == ImplicitMethod::Direct;
   switch (scene.backend) {
     case SceneBackend::Cpu:
       return BackendChoice{"cpu", ""};
     case SceneBackend::Auto:
+      if (have_device && direct)
+        return BackendChoice{"cpu", "backend auto: solver.method direct runs on the CPU only; running on the CPU"};
       if (have_device) return BackendChoice{"cuda", "backend auto: running on CUDA (" + device + ")"};
       return BackendChoice{"cpu", "backend auto: no GPU (" + device + "); running on the CPU"};
     case SceneBackend::Cuda:
+      if (direct) {
+        diagnostics.error(scene.range_of("solver.method"),
+                          "solver.method: the direct solver runs on the CPU only; this scene asks for backend cuda: "
+                          "use method cg (or auto, the CG on CUDA) or backend cpu");
+        return std::nullopt;
+      }
       if (have_device) return BackendChoice{"cuda", ""};
       diagnostics.error(scene.range_of("backend"),
                         "backend: 'cuda' cannot run here: " + device + "; use backend cpu or auto");

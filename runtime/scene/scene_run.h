@@ -61,6 +61,11 @@ struct SceneRunTiming {
   double recording = 0.0;      // the events: largest displacement, frames and samples (downloads, energies, files)
 };
 
+// summary.json lists every implicit step's iterations and residual up to this many steps (about 30 bytes a step);
+// past it the per-step arrays are left out (the sums stay, and time_series.csv has each row's worst since the one
+// before).
+inline constexpr std::size_t kMostSummarySolverSteps = 10000;
+
 struct SceneRunResult {
   bool completed = false;  // false: stopped by a non-finite state (the error says where)
   std::size_t steps_planned = 0;
@@ -72,6 +77,8 @@ struct SceneRunResult {
   double max_displacement = 0.0;  // m, over every vertex at the recorded times (frames and samples)
   std::vector<ProbeCurvePoint> probe_curve;  // at the samples; empty without a probe
   InversionReport inversions;
+  // Implicit Euler: the solves' sums (Simulation::implicit_solver); nullopt for the explicit schemes.
+  std::optional<ImplicitSolverReport> solver;
   double final_max_displacement = 0.0;  // m, at the last step
   PrecisionCheckResult precision_check;
   std::vector<Point3> final_positions;       // m, every vertex at the last step (the last finite state if stopped)
@@ -131,8 +138,9 @@ struct CohortRunResult {
   // Per patient, in the order given: nullopt when it could not start or its outputs could not be written (errors
   // appended). A non-finite state in one patient stops the batch: every patient then has completed: false.
   std::vector<std::optional<SceneRunResult>> patients;
-  double wall_seconds = 0.0;  // all patients: stepping and recording (outputs and the precision check excluded)
-  double spring_steps = 0.0;  // the sum over patients of springs x steps taken
+  double wall_seconds = 0.0;      // all patients: stepping and recording (outputs and the precision check excluded)
+  double stepping_seconds = 0.0;  // the simulator's advance calls alone (their checks included)
+  double spring_steps = 0.0;      // the sum over patients of springs x steps taken
 };
 
 // Checks every patient's setup (the stability check included) and gives them one time step: the scene's dt when
@@ -149,7 +157,12 @@ std::optional<double> prepare_cohort(const std::vector<BuiltScene*>& patients, c
 std::optional<CohortRunResult> run_cohort(const std::vector<CohortPatient>& patients, const CohortRunOptions& options,
                                           DiagnosticList& diagnostics);
 
-// The CSV's header for a scene with or without a probe (docs/scenes.md lists the columns).
-std::vector<std::string> time_series_columns(bool with_probe);
+// The CSV's header for a scene with or without a probe, and with implicit Euler's solver columns (docs/scenes.md
+// lists the columns).
+std::vector<std::string> time_series_columns(bool with_probe, bool with_solver = false);
+
+// The one warning a run gives when implicit steps stopped at the solver's cap (code `cg-not-converged`): how many,
+// the first with its residual, and the largest residual reached; nullopt when none did.
+std::optional<std::string> capped_steps_message(const ImplicitSolverReport& report);
 
 }  // namespace fmpc::sim

@@ -35,6 +35,7 @@ class SceneState {
   double time() const { return simulation_.time(scene_); }
   const StabilityReport& stability() const { return simulation_.stability(scene_); }
   const InversionReport& inversions() const { return simulation_.inversions(scene_); }
+  ImplicitSolverReport implicit_solver() const { return simulation_.implicit_solver(scene_); }
   std::vector<Point3> positions(DiagnosticList& diagnostics) const;
   std::vector<Point3> velocities(DiagnosticList& diagnostics) const;
   ProbeReading probe_reading(DiagnosticList& diagnostics) const;

@@ -21,6 +21,11 @@ struct ElasticProblem {
   std::vector<std::uint8_t> held;        // per vertex: held axes, bit a for axis a
   std::vector<sim::Point3> prescribed;   // per vertex: the held axes' displacement (m); empty: zero
   std::vector<sim::Point3> forces;       // per vertex (N); empty: none (C3D10 refuses them: no consistent loads)
+  // CalculiX: the compressible neo-Hookean material (*HYPERELASTIC, NEO HOOKE: W = C10 (J^-2/3 I_1 - 3) +
+  // (J - 1)^2 / D1 with C10 = mu / 2 and D1 = 2 / K, the small-strain moduli of E and nu) solved with NLGEOM in
+  // `increments` equal steps, instead of linear elasticity.
+  bool neo_hooke = false;
+  int increments = 10;
 };
 
 enum class ProblemModel {

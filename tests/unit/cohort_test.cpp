@@ -123,13 +123,29 @@ TEST_CASE("a patient's scene replaces the constant bindings it names and nothing
                                                        : scene.material.bindings[b].value;
     CHECK(binding.value == expected);
   }
+  // A patient writes its numbers (summary.json, time_series.csv) by default; frames and the picture when asked.
+  CHECK(patient.outputs.frames == 0);
+  CHECK_FALSE(patient.outputs.plot);
+  CHECK(patient.outputs.samples == scene.outputs.samples);
+  CHECK(patient.outputs.csv);
+  CHECK(patient.outputs.summary);
+  Scene asking = scene;
+  asking.outputs.cohort_frames = true;
+  asking.outputs.cohort_plot = true;
+  const Scene full = patient_scene(asking, "P9", {"HCV"}, {1.5});
+  CHECK(full.outputs.frames == scene.outputs.frames);
+  CHECK(full.outputs.plot);
+  // outputs.cohort.plot draws nothing where the scene draws nothing.
+  asking.outputs.plot = false;
+  CHECK_FALSE(patient_scene(asking, "P9", {"HCV"}, {1.5}).outputs.plot);
 }
 
 TEST_CASE("a CPU cohort gives every patient its single run's bits, at the smallest automatic step", "[cohort]") {
   // Five patients of the demo with different fibrosis inputs (hence different E and automatic steps), 300 steps.
   const std::vector<std::vector<double>> values = {
       {9.7, 9.5, 12, 11, 11.2}, {5, 5, 5, 5, 5}, {20, 18, 25, 22, 19}, {7.2, 6.1, 8.8, 9.4, 5.5}, {14, 3, 17, 6, 21}};
-  const Scene scene = demo_scene(300);
+  Scene scene = demo_scene(300);
+  scene.outputs.cohort_frames = true;  // the frames are compared too
   std::vector<Scene> scenes;
   std::vector<BuiltScene> built;
   std::vector<std::string> labels;
@@ -280,13 +296,46 @@ TEST_CASE("fmpc simulate --patients checks the whole patients file before runnin
   CHECK(no_patients.status == 2);
   CHECK(no_patients.out.find("--shard: a shard is a share of a cohort") != std::string::npos);
 
-  // A good cohort with a value out of range: two folders, cohort.csv and the overlay.
+  // A good cohort with a value out of range: two folders of numbers, cohort.csv and the overlay; no frames and no
+  // patient's picture unless outputs.cohort asks.
   const auto good = run_with(header + "A,9.7,9.5,12,11,11.2\nB,200,5,5,5,5\n");
   CHECK(good.status == 0);
   CHECK(good.out.find("warning: input 'HCV' = 200 is outside its range") != std::string::npos);
-  for (const char* file : {"A/time_series.csv", "A/summary.json", "A/force_displacement.png", "B/time_series.csv",
+  for (const char* file : {"A/time_series.csv", "A/summary.json", "B/time_series.csv", "B/summary.json",
                            "cohort.csv", "cohort_force_displacement.png"})
     CHECK(std::filesystem::exists(dir / "out" / file));
+  for (const char* file : {"A/force_displacement.png", "A/frame_00000.vtu", "A/liver_indentation.pvd"})
+    CHECK_FALSE(std::filesystem::exists(dir / "out" / file));
+  CHECK(good.out.find("wrote 4 files in 2 patient folders") != std::string::npos);
+  // The rates, each labelled with what it is over.
+  CHECK(good.out.find("  stepping (the simulator's advance calls, checks included): ") != std::string::npos);
+  CHECK(good.out.find(" batch steps/s, ") != std::string::npos);
+  CHECK(good.out.find(" patient-steps/s, ") != std::string::npos);
+  CHECK(good.out.find("  whole command: ") != std::string::npos);
+  CHECK(good.out.find(" spring-steps/s\n") != std::string::npos);
+  {
+    // outputs.cohort asks for both: every patient's frames and picture, and a second run into the same folder.
+    std::string text = read_text(kDemo);
+    const auto replace = [&](const std::string& from, const std::string& to) {
+      const auto at = text.find(from);
+      REQUIRE(at != std::string::npos);
+      text.replace(at, from.size(), to);
+    };
+    replace("../liver_fibrosis/mamdani.fis", std::string(FMPC_SOURCE_DIR) + "/rulesets/liver_fibrosis/mamdani.fis");
+    replace("outputs: {frames: 25, samples: 240}", "outputs: {frames: 3, samples: 20, cohort: {frames: true, plot: true}}");
+    {
+      std::ofstream out(dir / "asking.yaml", std::ios::binary);
+      out << text;
+    }
+    const auto asking = fmpc::testing::run_fmpc("simulate " + (dir / "asking.yaml").string() +
+                                                " --backend cpu --steps 20 -o " + (dir / "out").string() +
+                                                " --patients " + (dir / "patients.csv").string());
+    CHECK(asking.status == 0);
+    for (const char* file : {"A/force_displacement.png", "A/frame_00000.vtu", "A/frame_00002.vtu", "A/liver_indentation.pvd",
+                             "B/force_displacement.png", "B/frame_00002.vtu"})
+      CHECK(std::filesystem::exists(dir / "out" / file));
+    CHECK(asking.out.find("wrote 14 files in 2 patient folders") != std::string::npos);
+  }
   const std::string table = read_text(dir / "out" / "cohort.csv");
   CHECK(table.rfind("label,HCV,HBV,ALD,CLD,NAFLD,E_kPa,E_max_kPa,completed,final_probe_displacement_m,"
                     "final_probe_force_N,max_displacement_m,inverted_elements,steps,dt_s,steps_per_second\nA,9.7,9.5,"

@@ -773,6 +773,23 @@ rule: if HCV is somewhat F4 then stiffness is low
   CHECK(difference(read_one(messy), read_one(formatted)).empty());
 }
 
+TEST_CASE("fmpc language: fmt keeps one blank line between a comment block and its line", "[fmpc-language]") {
+  // rulesets/liver_fibrosis/mamdani.fis opens with a header block, a blank line, then `system`: that blank line is
+  // part of the layout (at most one is kept, as everywhere).
+  const std::string text = "# header\n#\n# more header\n\n\nsystem s\n  type mamdani\n  and min\n  or max\n"
+                           "  implication min\n  aggregation max\n  defuzzify centroid samples 101\n"
+                           "  when no rule fires: midrange\n\ninput a in [0, 1]\n  # about lo\n\n"
+                           "  lo is triangle(start 0, peak 0, end 1)\n  # about hi\n  hi is triangle(start 0, peak 1, end 1)\n\n"
+                           "output o in [0, 1]\n  x is triangle(start 0, peak 0, end 1)\n\n# the rules\n\n"
+                           "rule r1: if a is lo then o is x  # end of line\n";
+  std::string expected = text;
+  expected.erase(expected.find("\n\n\nsystem"), 1);
+  const std::string formatted = format_ok(text);
+  CHECK(formatted == expected);
+  CHECK(format_ok(formatted) == formatted);
+  CHECK(difference(read_one(text), read_one(formatted)).empty());
+}
+
 TEST_CASE("fmpc language: fmt fills in the sugeno defaults and keeps several systems apart", "[fmpc-language]") {
   const std::string text = "system a type sugeno input x in [0,1] a is gauss(mean 0, sd 1) output y in [0, 1]\n"
                            "k is linear(offset 1, x 2) rule: if x is a then y is k\n\n\n\nsystem b\n"

@@ -32,9 +32,10 @@ struct GridBatch {
       for (int z = 0; z < nz; ++z)
         for (int y = 0; y < ny; ++y)
           for (int x = 0; x < nx; ++x) {
-            const auto add = [&](int i, int j, int k) {
-              if (i >= 0 && i < nx && j >= 0 && j < ny && k >= 0 && k < nz)
-                neighbour.push_back(base + (k * ny + j) * nx + i);
+            // Copies: C++17 lambdas cannot capture structured bindings (clang refuses; GCC allows it).
+            const auto add = [&, sx = nx, sy = ny, sz = nz](int i, int j, int k) {
+              if (i >= 0 && i < sx && j >= 0 && j < sy && k >= 0 && k < sz)
+                neighbour.push_back(base + (k * sy + j) * sx + i);
             };
             add(x - 1, y, z);
             add(x + 1, y, z);
@@ -133,6 +134,9 @@ TEST_CASE("Launch plan: no persistent launch where a step needs its own launches
   not_persistent(box.shape, off);
   BatchShape shape = box.shape;
   shape.strain_table = true;
+  not_persistent(shape, {});
+  shape = box.shape;
+  shape.point_state = true;  // a viscoelastic term's update between steps
   not_persistent(shape, {});
   shape = box.shape;
   shape.probe_vertices_unique = false;

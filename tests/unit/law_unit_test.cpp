@@ -110,6 +110,30 @@ TEST_CASE("every element law has its registry row, in kernels::ElementLaws' orde
   CHECK(default_fem_law().model_keyword != nullptr);
 }
 
+TEST_CASE("every element kind has its registry row, in kernels::ElementKinds' order", "[fem][law]") {
+  const std::vector<ElementKindRow>& rows = element_kind_rows();
+  REQUIRE(static_cast<int>(rows.size()) == kernels::ElementKinds::count);
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const ElementKindRow& row = rows[i];
+    INFO("row " << i << ": " << row.keyword);
+    CHECK(row.kind == static_cast<int>(i));
+    CHECK(&element_kind_row(row.kind) == &row);
+    CHECK(element_kind_by_keyword(row.keyword) == &row);
+    CHECK(names.insert(row.keyword).second);
+    CHECK(std::string(row.description).size() > 20);
+  }
+  std::vector<std::string> in_order;
+  for (const ElementKindRow& row : rows) in_order.emplace_back(row.keyword);
+  CHECK(element_kind_keywords() == in_order);
+  CHECK(element_kind_by_keyword("no such kind") == nullptr);
+  CHECK(&default_element_kind() == &rows.front());
+  // The laws fem: {law: ...} takes: every row that is a model of its own, by its keyword.
+  for (const ElementLawRow& row : element_law_rows())
+    CHECK(fem_law_by_keyword(row.keyword) == (row.beside_springs ? nullptr : &row));
+  CHECK(fem_law_by_keyword(default_fem_law().keyword) == &default_fem_law());
+}
+
 TEST_CASE(
     "every element kind with every law: forces are -dW/dx, the tangent is -df/dx at rest, its action, diagonal "
     "and bound agree",

@@ -217,8 +217,8 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "threads: 1.5\n") == "3:10: threads: expected an integer from 0 to 256, got '1.5'");
   CHECK(error_of(kMinimal + "gravity: [0, 0, -9.81]\n") ==
         "3:1: gravity: unknown key; allowed: 'name', 'model', 'mesh', 'material', 'mass', 'damping', 'springs', "
-        "'law', 'fixed', 'hold', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads', "
-        "'outputs' or 'on_inversion'");
+        "'law', 'fem', 'fixed', 'hold', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads', "
+        "'outputs', 'on_inversion' or 'solver'");
   CHECK(error_of("material: {youngs_modulus: 10}\n") ==
         "1:1: mesh: missing; give a mesh file or a generated box or ellipsoid");
   CHECK(error_of("mesh: {box: {size: [1, 1, 1]}}\n") ==
@@ -274,6 +274,53 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of("") == "0:0: a scene file is a YAML map with 'mesh', 'material' and the other keys of docs/scenes.md");
 }
 
+TEST_CASE("solver: implicit Euler's linear solver, read and checked", "[scene][implicit]") {
+  const std::string implicit = kMinimal + "integrator: implicit_euler\n";
+  const Parsed defaults = parse(implicit);
+  REQUIRE(defaults.scene);
+  CHECK(defaults.scene->solver.method == ImplicitMethod::Automatic);
+  CHECK(defaults.scene->solver.tolerance == 1e-10);
+  CHECK(defaults.scene->solver.max_iterations == 0);
+  const Parsed given = parse(implicit + "solver: {method: cg, tolerance: 1e-9, max_iterations: 25}\n");
+  REQUIRE(given.scene);
+  CHECK(given.scene->solver.method == ImplicitMethod::ConjugateGradient);
+  CHECK(given.scene->solver.tolerance == 1e-9);
+  CHECK(given.scene->solver.max_iterations == 25);
+  CHECK(parse(implicit + "solver: {method: direct}\n").scene->solver.method == ImplicitMethod::Direct);
+  CHECK(error_of(implicit + "solver: {method: lu}\n") ==
+        "4:18: solver.method: 'lu' is not a linear solver; use auto, direct or cg");
+  CHECK(error_of(implicit + "solver: {tolerance: 0}\n") ==
+        "4:21: solver.tolerance: expected a relative residual from 1e-16 (double precision's reach) to 0.5, got 0");
+  CHECK(error_of(implicit + "solver: {tolerance: 1e-20}\n") ==
+        "4:21: solver.tolerance: expected a relative residual from 1e-16 (double precision's reach) to 0.5, got "
+        "1e-20");
+  CHECK(error_of(implicit + "solver: {tolerance: tight}\n") ==
+        "4:21: solver.tolerance: expected a relative residual from 1e-16 to 0.5, got 'tight'");
+  CHECK(error_of(implicit + "solver: {max_iterations: 0}\n") ==
+        "4:26: solver.max_iterations: expected an integer from 1 to 1000000, got '0'");
+  CHECK(error_of(implicit + "solver: {iterations: 25}\n") ==
+        "4:10: solver.iterations: unknown key in solver; allowed: 'method', 'tolerance' or 'max_iterations'");
+  CHECK(error_of(implicit + "solver: cg\n") == "4:9: solver: expected a map with 'method', 'tolerance' or 'max_iterations'");
+  CHECK(error_of(kMinimal + "solver: {max_iterations: 25}\n") ==
+        "3:9: solver: only implicit_euler solves a linear system each step; this scene's integrator is "
+        "semi_implicit_euler: remove 'solver' or use integrator: implicit_euler");
+}
+
+TEST_CASE("outputs.cohort: a cohort's per-patient frames and pictures only when asked", "[scene]") {
+  const Parsed defaults = parse(kMinimal);
+  REQUIRE(defaults.scene);
+  CHECK_FALSE(defaults.scene->outputs.cohort_frames);
+  CHECK_FALSE(defaults.scene->outputs.cohort_plot);
+  const Parsed given = parse(kMinimal + "outputs: {cohort: {frames: true, plot: true}}\n");
+  REQUIRE(given.scene);
+  CHECK(given.scene->outputs.cohort_frames);
+  CHECK(given.scene->outputs.cohort_plot);
+  CHECK(error_of(kMinimal + "outputs: {cohort: {frames: 25}}\n") ==
+        "3:28: outputs.cohort.frames: expected true or false, got '25'");
+  CHECK(error_of(kMinimal + "outputs: {cohort: {csv: true}}\n") ==
+        "3:20: outputs.cohort.csv: unknown key in outputs.cohort; allowed: 'frames' or 'plot'");
+}
+
 TEST_CASE("unknown keys and keywords come with a suggestion", "[scene]") {
   const Parsed parsed = parse(kMinimal + "integrater: rk4\nloads: {probe: {indices: [1], displacment: [0, 0, 1]}}\n");
   CHECK_FALSE(parsed.scene);
@@ -281,7 +328,7 @@ TEST_CASE("unknown keys and keywords come with a suggestion", "[scene]") {
   CHECK(parsed.errors[0].rfind("3:1: integrater: unknown key; allowed:", 0) == 0);
   CHECK(parsed.errors[1] ==
         "4:31: loads.probe.displacment: unknown key in loads.probe; allowed: 'indices', 'ray', 'radius', "
-        "'displacement', 'force' or 'ramp'");
+        "'displacement', 'force', 'ramp' or 'cycles'");
   CHECK(parsed.errors[2] == "4:16: loads.probe: give one of 'displacement' or 'force'");
   CHECK(parsed.notes == std::vector<std::string>{"did you mean 'integrator'?", "did you mean 'displacement'?"});
   const Parsed keyword = parse(kMinimal + "integrator: implicit_eular\n");

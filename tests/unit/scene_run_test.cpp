@@ -1,5 +1,7 @@
 // Scene building (fixed nodes, probes, ray picking), the outputs (VTU, PVD, CSV, JSON) and whole runs: the demo,
 // the strain-table scene and SOFA's liver scenes (skipped visibly without ../shared/data).
+#include "runtime/scene/scene_run.h"
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
@@ -11,11 +13,11 @@
 #include <sstream>
 
 #include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/io/json_text.h"
 #include "runtime/io/vtk_xml.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
-#include "runtime/scene/scene_run.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
@@ -37,6 +39,16 @@ Scene parse_text(const std::string& text, const std::string& path = "/tmp/fmpc_s
   INFO((diagnostics.empty() ? std::string() : diagnostics.items().front().message));
   REQUIRE(scene);
   return *scene;
+}
+
+// Every diagnostic of parsing `text` as "line:column: message".
+std::vector<std::string> errors_of(const std::string& text) {
+  DiagnosticList d;
+  parse_scene("s.yaml", text, d);
+  std::vector<std::string> out;
+  for (const Diagnostic& item : d.items())
+    out.push_back(std::to_string(item.range.line) + ":" + std::to_string(item.range.column) + ": " + item.message);
+  return out;
 }
 
 std::vector<std::string> messages(const DiagnosticList& diagnostics) {
@@ -514,7 +526,7 @@ TEST_CASE("scenes choose the force model; the FEM refuses spring settings, namin
   CHECK(setup.mass_damping == 2.0);
   CHECK(setup.on_inversion == InversionPolicy::Stop);
   for (const double beta : term.stiffness_damping) CHECK(beta > 0.001);
-  CHECK(built->stiffness_description == "co-rotational FEM with E = 3 kPa, nu = 0.3");
+  CHECK(built->stiffness_description == "FEM (law corotational, element linear) with E = 3 kPa, nu = 0.3");
 
   // Springs with the volume term and Rayleigh damping.
   const Scene volume = parse_text(base + "material: {youngs_modulus: 3, poisson_ratio: 0.45}\n"
@@ -526,27 +538,20 @@ TEST_CASE("scenes choose the force model; the FEM refuses spring settings, namin
   CHECK(springs->setup.springs.damping.size() == springs->setup.springs.size());
   CHECK(springs->setup.springs.damping.front() == Approx(0.01 * springs->setup.springs.stiffness.front()));
 
-  const auto errors_of = [](const std::string& text) {
-    DiagnosticList d;
-    parse_scene("s.yaml", text, d);
-    std::vector<std::string> out;
-    for (const Diagnostic& item : d.items())
-      out.push_back(std::to_string(item.range.line) + ":" + std::to_string(item.range.column) + ": " + item.message);
-    return out;
-  };
   const auto spring_only = errors_of("model: corotational_fem\n" + base +
                                      "material: {stiffness: 100, mapping: lloyd_szekely_harders_2007}\n"
                                      "law: basafa_farahmand\ndamping: {coefficient: 2}\nsprings: {bending: true}\n");
-  CHECK(spring_only == std::vector<std::string>{
-                           "6:37: material.mapping: only allowed with 'youngs_modulus', 'rules' or 'table' (it maps "
-                           "Young's modulus to spring constants)",
-                           "6:23: material.stiffness: the co-rotational FEM takes Young's modulus (youngs_modulus, rules "
-                           "or table), not spring constants",
-                           "9:10: springs: has no meaning for model: corotational_fem (it is a spring setting)",
-                           "7:6: law: has no meaning for model: corotational_fem (it is a spring setting); the FEM's "
-                           "material is linear elastic (co-rotated)",
-                           "8:24: damping.coefficient: a per-spring dashpot setting; the FEM is damped by 'ratio' "
-                           "(each element's fastest mode) and 'rayleigh'"});
+  CHECK(spring_only ==
+        std::vector<std::string>{
+            "6:37: material.mapping: only allowed with 'youngs_modulus', 'rules' or 'table' (it maps "
+            "Young's modulus to spring constants)",
+            "6:23: material.stiffness: a finite-element model takes Young's modulus (youngs_modulus, rules "
+            "or table), not spring constants",
+            "9:10: springs: has no meaning for model: corotational_fem (it is a spring setting)",
+            "7:6: law: has no meaning for model: corotational_fem (it is a spring setting); the FEM's "
+            "material is its element law (fem: {law: ...})",
+            "8:24: damping.coefficient: a per-spring dashpot setting; the FEM is damped by 'ratio' "
+            "(each element's fastest mode) and 'rayleigh'"});
   CHECK(errors_of(base + "material: {youngs_modulus: 3, poisson_ratio: 0.3}\n") ==
         std::vector<std::string>{"5:46: material.poisson_ratio: springs alone have nu = 1/4 (central springs obey the "
                                  "Cauchy relation lambda = mu); add the volume term (springs: {volume_term: true}) to "
@@ -554,8 +559,8 @@ TEST_CASE("scenes choose the force model; the FEM refuses spring settings, namin
   CHECK(errors_of("model: corotational_fem\n" + base + "material: {youngs_modulus: 3, poisson_ratio: 0.5}\n") ==
         std::vector<std::string>{"6:46: material.poisson_ratio: expected a number in [0, 0.4999] (0.5 is incompressible, "
                                  "which no element here represents; linear tetrahedra take at most 0.499), got 0.5"});
-  CHECK(errors_of(base + "material: {youngs_modulus: 3}\nmodel: fem\n").front() ==
-        "6:8: model: 'fem' is not a force model; use springs or corotational_fem");
+  CHECK(errors_of(base + "material: {youngs_modulus: 3}\nmodel: finite_elements\n").front() ==
+        "6:8: model: 'finite_elements' is not a force model; use springs, fem or corotational_fem");
 
   // A per-region binding that misses part of the body: the FEM evaluates the material per element, and says so.
   const std::string material = "material: {rules: " + std::string(FMPC_SOURCE_DIR) +
@@ -570,4 +575,169 @@ TEST_CASE("scenes choose the force model; the FEM refuses spring settings, namin
     CHECK(message.rfind(fem_model ? "material.inputs.HCV: element " : "material.inputs.HCV: spring ", 0) == 0);
     CHECK(message.find(fem_model ? " (centroid " : " (midpoint ") != std::string::npos);
   }
+}
+
+TEST_CASE("model: fem takes its law and element kind from the registries; corotational_fem is one such pair",
+          "[scene][fem]") {
+  const std::string base =
+      "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [2, 2, 2]}, units: m}\nmass: {density: 1000}\n"
+      "fixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}\nloads: {gravity: [0, 0, -9.81]}\n"
+      "material: {youngs_modulus: 3, poisson_ratio: 0.3}\n";
+  // Every law that is a model of its own, on every element kind, by its keywords; model: corotational_fem is the
+  // pair {corotational, linear} and builds the same setup.
+  const Scene old_keys = parse_text("model: corotational_fem\n" + base);
+  DiagnosticList diagnostics;
+  const auto old_built = build_scene(old_keys, diagnostics);
+  REQUIRE(old_built);
+  for (const std::string& law : fem_law_keywords())
+    for (const std::string& kind : element_kind_keywords()) {
+      INFO(law << " on " << kind);
+      const Scene scene = parse_text("model: fem\nfem: {law: " + law + ", element: " + kind + "}\n" + base);
+      CHECK(scene.model == ForceModel::Elements);
+      CHECK(scene.element_law == fem_law_by_keyword(law)->law);
+      CHECK(scene.element_kind == element_kind_by_keyword(kind)->kind);
+      const auto built = build_scene(scene, diagnostics);
+      REQUIRE(built);
+      CHECK(built->setup.elements.terms.front().law == scene.element_law);
+      CHECK(built->setup.elements.geometry.kind == scene.element_kind);
+      CHECK(built->stiffness_description == "FEM (law " + law + ", element " + kind + ") with E = 3 kPa, nu = 0.3");
+      const char* own = element_law_row(scene.element_law).model_keyword;
+      const bool named = own != nullptr && scene.element_kind == default_element_kind().kind;
+      CHECK(model_name(built->setup) == (named ? std::string(own) : "fem"));
+      CHECK(model_keyword(scene) == model_name(built->setup));
+      if (scene.element_law == old_keys.element_law && scene.element_kind == default_element_kind().kind) {
+        for (int i = 0; i < kernels::kMostLawParameters; ++i)
+          CHECK(built->setup.elements.terms.front().parameter[i] ==
+                old_built->setup.elements.terms.front().parameter[i]);
+        CHECK(built->setup.elements.geometry.nodes == old_built->setup.elements.geometry.nodes);
+        CHECK(built->setup.mass == old_built->setup.mass);
+      }
+    }
+  // model: fem alone is the default law on the default element kind.
+  const Scene bare = parse_text("model: fem\n" + base);
+  CHECK(bare.element_law == default_fem_law().law);
+  CHECK(bare.element_kind == default_element_kind().kind);
+  CHECK(diagnostics.error_count() == 0);
+
+  const auto joined = [](const std::vector<std::string>& names) {
+    std::string out;
+    for (std::size_t i = 0; i < names.size(); ++i)
+      out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+    return out;
+  };
+  // Unknown laws and element kinds: located, listing the known ones; the volume term is no model of its own.
+  CHECK(
+      errors_of("model: fem\nfem: {law: neo_hooke}\n" + base) ==
+      std::vector<std::string>{"2:12: fem.law: 'neo_hooke' is not an element law; use " + joined(fem_law_keywords())});
+  CHECK(errors_of("model: fem\nfem: {law: " + std::string(element_law_beside_springs().keyword) + "}\n" + base)
+            .front()
+            .rfind("2:12: fem.law: '" + std::string(element_law_beside_springs().keyword) + "' is not an element law",
+                   0) == 0);
+  CHECK(errors_of("model: fem\nfem: {element: cubic}\n" + base) ==
+        std::vector<std::string>{"2:16: fem.element: 'cubic' is not an element kind; use " +
+                                 joined(element_kind_keywords())});
+  CHECK(errors_of("model: fem\nfem: {law: corotational, elements: linear}\n" + base).front() ==
+        "2:26: fem.elements: unknown key in fem; allowed: 'law' or 'element'");
+  // fem belongs to model: fem.
+  CHECK(errors_of("model: corotational_fem\nfem: {element: linear}\n" + base) ==
+        std::vector<std::string>{"2:6: fem: 'fem' chooses the law and element of model: fem; this scene's model is "
+                                 "'corotational_fem': write model: fem (model: corotational_fem is fem: {law: "
+                                 "corotational, element: linear})"});
+  CHECK(errors_of("fem: {law: corotational}\n" + base).front() ==
+        "1:6: fem: 'fem' chooses the law and element of model: fem; this scene's model is springs (the default): "
+        "write model: fem (model: corotational_fem is fem: {law: corotational, element: linear})");
+}
+
+TEST_CASE("implicit Euler's solves in summary.json and the time series; steps at the cap warned once with the count",
+          "[scene][implicit]") {
+  // A soft FEM block sagging at a large step: the CG capped at 3 iterations cannot reach 1e-12.
+  const std::string text = R"yaml(name: implicit_block
+mesh: {box: {size: [0.02, 0.02, 0.02], cells: [2, 2, 2]}}
+model: corotational_fem
+material: {youngs_modulus: 2, poisson_ratio: 0.45}
+mass: {density: 1000}
+fixed: {plane: {point: [0, 0, 0], normal: [0, 0, 1]}}
+loads: {gravity: [0, 0, -9.81]}
+integrator: implicit_euler
+dt: 0.01
+duration: 0.2
+precision: double
+solver: {method: cg, tolerance: 1e-12, max_iterations: 3}
+outputs: {frames: 0, samples: 5, precision_check: off}
+)yaml";
+  const Scene scene = parse_text(text);
+  DiagnosticList diagnostics;
+  const auto built = build_scene(scene, diagnostics);
+  REQUIRE(built);
+  CHECK(built->setup.implicit.max_iterations == 3);
+  const auto dir = temporary_directory("implicit");
+  SceneRunOptions options;
+  options.output_directory = dir.string();
+  const auto result = run_scene(scene, *built, options, diagnostics);
+  REQUIRE(result);
+  REQUIRE(result->solver);
+  CHECK(result->solver->steps == 20);
+  CHECK(result->solver->capped_steps == 20);
+  // One warning for the run, located at `solver`, with the count and the residuals reached.
+  std::vector<Diagnostic> capped;
+  for (const Diagnostic& d : diagnostics.items())
+    if (d.code == "cg-not-converged") capped.push_back(d);
+  REQUIRE(capped.size() == 1);
+  CHECK(capped[0].range.line == 12);
+  CHECK(capped[0].range.column == 9);
+  CHECK(capped[0].message ==
+        "implicit Euler: 20 of 20 steps stopped at the cap of 3 conjugate-gradient iterations above the tolerance "
+        "1e-12 (the first at step 1 with relative residual " +
+            format_number(result->solver->first_capped_residual) + "); the largest relative residual reached was " +
+            format_number(result->solver->residual_max) + " at step " +
+            std::to_string(result->solver->residual_max_step) +
+            "; raise solver.max_iterations, loosen solver.tolerance or use a smaller dt");
+
+  const JsonDocument summary = JsonDocument::parse(read_text((dir / "summary.json").string()));
+  const JsonDocument& solver = summary["solver"];
+  CHECK(solver["method"] == "cg");
+  CHECK(solver["requested_method"] == "cg");
+  CHECK(solver["preconditioner"] == "block_jacobi");
+  CHECK(solver["warm_start"] == true);
+  CHECK(solver["tolerance"].get<double>() == 1e-12);
+  CHECK(solver["max_iterations"] == 3);
+  CHECK(solver["steps"] == 20);
+  CHECK(solver["iterations_max"] == 3);
+  CHECK(solver["capped_steps"] == 20);
+  CHECK(solver["first_capped_step"] == 1);
+  REQUIRE(solver["per_step"]["iterations"].size() == 20);
+  REQUIRE(solver["per_step"]["relative_residual"].size() == 20);
+  double largest = 0.0;
+  for (const auto& residual : solver["per_step"]["relative_residual"]) largest = std::max(largest, residual.get<double>());
+  CHECK(largest == solver["relative_residual_max"].get<double>());
+
+  // The time series: each row's worst step since the row before.
+  std::istringstream csv(read_text((dir / "time_series.csv").string()));
+  std::string header, line;
+  std::getline(csv, header);
+  CHECK(header == "time_s,kinetic_energy_J,elastic_energy_J,max_displacement_m,solver_iterations,"
+                  "solver_relative_residual");
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  REQUIRE(rows.size() == 5);
+  CHECK(rows.front().substr(rows.front().size() - 4) == ",0,0");  // step 0: no solve yet
+  CHECK(rows.back().find(",3,") != std::string::npos);
+
+  // The direct solver on the same scene: one solve a step, no warning.
+  Scene direct = scene;
+  direct.solver.method = ImplicitMethod::Direct;
+  direct.solver.max_iterations = 0;
+  const auto direct_built = build_scene(direct, diagnostics);
+  REQUIRE(direct_built);
+  DiagnosticList direct_diagnostics;
+  const auto direct_result = run_scene(direct, *direct_built, options, direct_diagnostics);
+  REQUIRE(direct_result);
+  CHECK(direct_result->solver->method == ImplicitMethod::Direct);
+  CHECK(direct_result->solver->iterations_max == 1);
+  CHECK(direct_result->solver->residual_max < 1e-12);
+  CHECK(direct_diagnostics.warning_count() == 0);
+  const JsonDocument direct_summary = JsonDocument::parse(read_text((dir / "summary.json").string()));
+  CHECK(direct_summary["solver"]["preconditioner"] == "none");
+  CHECK(direct_summary["solver"]["warm_start"] == false);
+  std::filesystem::remove_all(dir);
 }

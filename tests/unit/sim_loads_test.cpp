@@ -1,7 +1,6 @@
 // The pieces both simulator backends share (kernels/integrator_math.h, kernels/strain_table_math.h,
 // kernels/implicit_math.h, runtime/integrate/loads.cpp) and what a scene without damping allocates.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -42,7 +41,7 @@ SimulationSetup hanging_box(double damping_ratio) {
   return *setup;
 }
 
-bool same_bits(const std::vector<Point3>& a, const std::vector<Point3>& b) {
+bool same_positions(const std::vector<Point3>& a, const std::vector<Point3>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(Point3)) == 0;
 }
 
@@ -65,7 +64,7 @@ TEST_CASE("loads: a scene without damping has no damping array and runs as zero 
       REQUIRE(run_b);
       REQUIRE(run_a->advance(300, diagnostics));
       REQUIRE(run_b->advance(300, diagnostics));
-      CHECK(same_bits(run_a->positions(diagnostics), run_b->positions(diagnostics)));
+      CHECK(same_positions(run_a->positions(diagnostics), run_b->positions(diagnostics)));
       CHECK_FALSE(diagnostics.has_errors());
     }
   }
@@ -77,24 +76,37 @@ TEST_CASE("loads: a scene without damping has no damping array and runs as zero 
 }
 
 TEST_CASE("loads: probe ramp share and prescribed state, exact", "[sim][loads]") {
-  CHECK(kernels::probe_ramp_share(0.0, 2.0) == 0.0);
-  CHECK(kernels::probe_ramp_share(0.5, 2.0) == 0.25);
-  CHECK(kernels::probe_ramp_share(2.0, 2.0) == 1.0);
-  CHECK(kernels::probe_ramp_share(7.0, 2.0) == 1.0);
-  CHECK(kernels::probe_ramp_share(0.0, 0.0) == 1.0);  // no ramp: at once
+  CHECK(kernels::probe_ramp_share(0.0, 2.0, 0) == 0.0);
+  CHECK(kernels::probe_ramp_share(0.5, 2.0, 0) == 0.25);
+  CHECK(kernels::probe_ramp_share(2.0, 2.0, 0) == 1.0);
+  CHECK(kernels::probe_ramp_share(7.0, 2.0, 0) == 1.0);
+  CHECK(kernels::probe_ramp_share(0.0, 0.0, 0) == 1.0);  // no ramp: at once
   double position = 0.0, velocity = 0.0;
-  kernels::probe_prescribed_state(1.0, -0.5, 1.0, 2.0, true, position, velocity);
+  kernels::probe_prescribed_state(1.0, -0.5, 1.0, 2.0, 0, true, position, velocity);
   CHECK(position == 0.75);
   CHECK(velocity == -0.25);
-  kernels::probe_prescribed_state(1.0, -0.5, 1.0, 2.0, false, position, velocity);  // after a step: at rest
+  kernels::probe_prescribed_state(1.0, -0.5, 1.0, 2.0, 0, false, position, velocity);  // after a step: at rest
   CHECK(velocity == 0.0);
-  kernels::probe_prescribed_state(1.0, -0.5, 3.0, 2.0, true, position, velocity);  // ramp over: held
+  kernels::probe_prescribed_state(1.0, -0.5, 3.0, 2.0, 0, true, position, velocity);  // ramp over: held
   CHECK(position == 0.5);
   CHECK(velocity == 0.0);
   float single = 0.0f, single_velocity = 0.0f;
-  kernels::probe_prescribed_state(0.1, 0.2, 0.5, 1.0, true, single, single_velocity);
+  kernels::probe_prescribed_state(0.1, 0.2, 0.5, 1.0, 0, true, single, single_velocity);
   CHECK(single == static_cast<float>(0.1 + 0.5 * 0.2));
   CHECK(single_velocity == 0.2f);
+  // Cyclic: a triangle wave of period 2 ramp, `cycles` times, then held at zero.
+  CHECK(kernels::probe_ramp_share(0.5, 2.0, 2) == 0.25);
+  CHECK(kernels::probe_ramp_share(3.0, 2.0, 2) == 0.5);
+  CHECK(kernels::probe_ramp_share(4.0, 2.0, 2) == 0.0);
+  CHECK(kernels::probe_ramp_share(5.0, 2.0, 2) == 0.5);
+  CHECK(kernels::probe_ramp_share(8.0, 2.0, 2) == 0.0);
+  CHECK(kernels::probe_ramp_share(100.0, 2.0, 2) == 0.0);
+  kernels::probe_prescribed_state(1.0, -0.5, 3.0, 2.0, 2, true, position, velocity);  // falling
+  CHECK(position == 0.75);
+  CHECK(velocity == 0.25);
+  kernels::probe_prescribed_state(1.0, -0.5, 9.0, 2.0, 2, true, position, velocity);  // cycles over: at rest
+  CHECK(position == 1.0);
+  CHECK(velocity == 0.0);
 }
 
 TEST_CASE("loads: strain table stiffness interpolates, clamps and propagates NaN", "[sim][loads]") {

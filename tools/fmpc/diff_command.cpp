@@ -43,6 +43,7 @@ int run_diff(const DiffOptions& options) {
   if (options.second != options.first) print_diagnostics(second.diagnostics, second.sources, std::cerr);
   if (!a || !b) return kExitErrors;
   DiagnosticList diagnostics;
+  const std::string markdown = output_file_argument(options.report.markdown, *a, diagnostics);
   SourceFiles& sources = first.sources;
   PatientDataRequest request;
   parse_column_mappings(options.report.columns, request.input_columns, diagnostics);
@@ -63,7 +64,7 @@ int run_diff(const DiffOptions& options) {
   report->path_b = options.second;
   report->data_path = options.patients;
   return write_report(
-      options.report, "diff", version_diff_markdown(*report, *a, *b), [&] { return version_diff_csv(*report, *a, *b); },
+      options.report, markdown, "diff", version_diff_markdown(*report, *a, *b), [&] { return version_diff_csv(*report, *a, *b); },
       [&] {
         std::vector<std::pair<std::string, std::string>> plots;
         for (std::size_t o = 0; o < report->outputs.size(); ++o)

@@ -18,6 +18,7 @@
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
 #include "tools/fmpc/progress_line.h"
+#include "tools/fmpc/report_text.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 
@@ -43,13 +44,6 @@ struct EvalOptions {
 };
 
 std::string with_unit(double value, const Variable& variable) { return value_with_unit(value, variable.unit); }
-
-// Four significant digits: what a reader compares at a glance (the CSV keeps every digit).
-std::string four_digits(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", value);
-  return text;
-}
 
 // Each antecedent clause's grade at `inputs` (hedge, then negation: MATLAB's order, as the interpreter), so that
 // --explain shows why a rule fired as strongly as it did. Interval type-2 clauses show [lower, upper].
@@ -248,17 +242,7 @@ int run_eval_table(const EvalOptions& options, const std::string& bytes) {
       for (double v : out) row.push_back(format_number(v));
       csv << format_csv_row(row);
     }
-    std::size_t warnings = 0, dropped = 0;
-    for (const Diagnostic& d : point_diagnostics.items()) {
-      if (++warnings > options.max_warnings) {
-        ++dropped;
-        continue;
-      }
-      diagnostics.add(d);
-    }
-    if (dropped > 0)
-      diagnostics.add(Diagnostic{Severity::Note, SourceRange{options.file, 0, 0, 0, 0},
-                                 std::to_string(dropped) + " more warnings not shown (--max-warnings)", {}, {}, {}});
+    append_capped(point_diagnostics, options.max_warnings, options.file, diagnostics);
   }
   print_diagnostics(diagnostics, sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;
@@ -433,21 +417,7 @@ int run_eval(const EvalOptions& options) {
     progress.finish();
     if (options.summary) summary.write(explanation_text);
     // A large CSV out of range everywhere would bury the terminal: keep the first warnings and count the rest.
-    std::size_t warnings = 0, dropped = 0;
-    for (const Diagnostic& d : point_diagnostics.items()) {
-      if (d.severity == Severity::Warning && ++warnings > options.max_warnings) {
-        ++dropped;
-        continue;
-      }
-      diagnostics.add(d);
-    }
-    if (dropped > 0)
-      diagnostics.add(Diagnostic{Severity::Note,
-                                 SourceRange{options.file, 0, 0, 0, 0},
-                                 std::to_string(dropped) + " more warnings not shown (--max-warnings)",
-                                 {},
-                                 {},
-                                 {}});
+    append_capped(point_diagnostics, options.max_warnings, options.file, diagnostics);
   }
   print_diagnostics(diagnostics, sources, std::cerr);
   if (diagnostics.has_errors()) return kExitErrors;

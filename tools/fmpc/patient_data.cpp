@@ -55,6 +55,9 @@ class PatientDataReader {
       : table_(table), request_(request), diagnostics_(diagnostics) {}
 
   std::optional<PatientData> read() {
+    // Errors the caller found before (in its options, say) do not stop the reading: every mistake at once.
+    const std::size_t errors_before = diagnostics_.error_count();
+    const auto failed = [&] { return diagnostics_.error_count() > errors_before; };
     for (const auto& [input, column] : request_.input_columns) {
       bool known = false;
       for (const FuzzySystem* system : request_.systems) known = known || system->find_input(input) >= 0;
@@ -71,12 +74,12 @@ class PatientDataReader {
     for (std::size_t s = 0; s < request_.systems.size(); ++s)
       for (const Variable& input : request_.systems[s]->inputs) input_uses_[s].push_back(find_input(input));
     if (request_.measured_output) find_measured();
-    if (diagnostics_.has_errors()) return std::nullopt;
+    if (failed()) return std::nullopt;
     note_unused_columns();
     data_.points.resize(request_.systems.size());
     data_.origins.resize(request_.systems.size());
     for (const std::vector<CsvCell>& row : table_.rows) read_row(row);
-    if (diagnostics_.has_errors()) return std::nullopt;
+    if (failed()) return std::nullopt;
     if (data_.labels.empty()) {
       diagnostics_.error(SourceRange{table_.path, 1, 1, 1, 1},
                          table_.rows.empty() ? "the table has no patients: add a row under the header"
@@ -181,9 +184,14 @@ class PatientDataReader {
       }
     std::string tried;
     for (const std::string& name : candidates) tried += (tried.empty() ? "'" : ", '") + name + "'";
+    std::vector<std::string> names, notes;
+    for (const HeaderColumn& header : header_) names.push_back(header.name);
+    for (const std::string& name : candidates)
+      if (auto suggestion = closest_name(name, names); suggestion && notes.empty())
+        notes.push_back("did you mean '" + *suggestion + "'?");
+    notes.push_back("name the column with --measured COLUMN");
     diagnostics_.error(SourceRange{table_.path, 1, 1, 1, 1},
-                       "the header has no column of measured '" + output.name + "' (looked for " + tried + ")",
-                       {"name the column with --measured COLUMN"});
+                       "the header has no column of measured '" + output.name + "' (looked for " + tried + ")", notes);
   }
 
   void note_unused_columns() {
@@ -285,9 +293,29 @@ std::optional<std::size_t> output_named(const FuzzySystem& system, const std::st
   std::string outputs;
   for (const Variable& v : system.outputs) outputs += (outputs.empty() ? "" : ", ") + v.name;
   notes.push_back("the outputs of '" + system.name + "' are: " + outputs);
-  diagnostics.error(SourceRange{"argument --output", 0, 0, 0, 0},
+  diagnostics.error(SourceRange{"argument --output-variable", 0, 0, 0, 0},
                     "'" + name + "' is not an output of system '" + system.name + "'", notes);
   return std::nullopt;
+}
+
+std::string output_file_argument(const std::vector<std::string>& values, const FuzzySystem& system,
+                                 DiagnosticList& diagnostics) {
+  std::vector<std::string> files;
+  for (const std::string& value : values) {
+    if (system.find_output(value) < 0) {
+      files.push_back(value);
+      continue;
+    }
+    diagnostics.error(SourceRange{"argument --output " + value, 0, 0, 0, 0},
+                      "'" + value + "' is an output of system '" + system.name +
+                          "', not a file: -o/--output names the file the command writes",
+                      {"choose the output with --output-variable " + value + " (-o ./" + value +
+                       " writes a file of that name)"});
+  }
+  if (files.size() > 1)
+    diagnostics.error(SourceRange{"argument --output " + files[1], 0, 0, 0, 0},
+                      "-o/--output is given twice ('" + files[0] + "' and '" + files[1] + "'); give one file");
+  return files.empty() ? "" : files.front();
 }
 
 bool parse_column_mappings(const std::vector<std::string>& arguments, std::map<std::string, std::string>& mappings,

@@ -49,9 +49,17 @@ struct PatientData {
 std::optional<PatientData> read_patient_data(const CsvTable& table, const PatientDataRequest& request,
                                              DiagnosticList& diagnostics);
 
-// The output called `name` (the first when `name` is empty); an error naming the outputs otherwise (`--output`).
+// The output called `name` (the first when `name` is empty); an error naming the outputs otherwise
+// (`--output-variable`).
 std::optional<std::size_t> output_named(const FuzzySystem& system, const std::string& name,
                                         DiagnosticList& diagnostics);
+
+// The file `-o/--output` names ("" when not given). It names a file in every command; `fmpc tune`, `validate` and
+// `plot` once took `--output NAME` for an output variable beside another option for the file, so the option collects
+// every value: one that is the name of an output of `system` is refused with an error naming --output-variable (the
+// old spelling never writes a file called `stiffness`), and two files are an error.
+std::string output_file_argument(const std::vector<std::string>& values, const FuzzySystem& system,
+                                 DiagnosticList& diagnostics);
 
 // `--column INPUT=COLUMN` arguments -> the request's map; errors name the argument.
 bool parse_column_mappings(const std::vector<std::string>& arguments, std::map<std::string, std::string>& mappings,

@@ -16,6 +16,8 @@
 #include "kernels/fuzzy_math.h"
 #include "kernels/type2_math.h"
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/evaluation_points.h"
+#include "tools/fmpc/patient_data.h"
 #include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
@@ -39,17 +41,12 @@ struct PlotOptions {
   std::optional<double> z_max;
   std::string terms;   // --terms VAR
   bool rules = false;  // --rules
-  std::string image;
+  std::vector<std::string> images;  // -o/--output, as given
+  std::string image;                // the one file among them (output_file_argument)
 };
 
 // The most rule rows the rule viewer draws before it keeps only the rules that fire.
 constexpr std::size_t kMaxRuleRows = 40;
-
-std::vector<std::string> names_of(const std::vector<Variable>& variables) {
-  std::vector<std::string> names;
-  for (const Variable& v : variables) names.push_back(v.name);
-  return names;
-}
 
 // Index of the variable called `name` among `variables`, or -1 with a located error naming the choices.
 int find_variable(const std::vector<Variable>& variables, const std::string& name, const std::string& role,
@@ -57,7 +54,7 @@ int find_variable(const std::vector<Variable>& variables, const std::string& nam
   for (std::size_t i = 0; i < variables.size(); ++i)
     if (variables[i].name == name) return static_cast<int>(i);
   std::vector<std::string> notes;
-  const std::vector<std::string> names = names_of(variables);
+  const std::vector<std::string> names = variable_names(variables);
   if (auto suggestion = closest_name(name, names)) notes.push_back("did you mean '" + *suggestion + "'?");
   std::string list;
   for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
@@ -115,7 +112,7 @@ int plot_terms(const FuzzySystem& system, const PlotOptions& options, Diagnostic
     variable = &system.outputs[static_cast<std::size_t>(system.find_output(options.terms))];
     is_output = true;
   } else {
-    std::vector<std::string> names = names_of(system.inputs);
+    std::vector<std::string> names = variable_names(system.inputs);
     for (const Variable& v : system.outputs) names.push_back(v.name);
     std::vector<std::string> notes;
     if (auto suggestion = closest_name(options.terms, names)) notes.push_back("did you mean '" + *suggestion + "'?");
@@ -303,7 +300,7 @@ int plot_rules(const FuzzySystem& system, const std::vector<double>& point, cons
   return status;
 }
 
-int run_plot(const PlotOptions& options) {
+int run_plot(PlotOptions options) {
   LoadedRuleFile file = load_rule_file_from_disk(options.file);
   if (file.diagnostics.has_errors()) {
     print_diagnostics(file.diagnostics, file.sources, std::cerr);
@@ -316,12 +313,14 @@ int run_plot(const PlotOptions& options) {
     return kExitErrors;
   }
   const FuzzySystem& system = *found;
+  options.image = output_file_argument(options.images, system, diagnostics);
   const int modes = !options.terms.empty() + options.rules + (!options.x.empty() || !options.y.empty());
-  if (modes != 1) {
-    diagnostics.error(kCommandLine,
-                      modes == 0 ? "nothing to plot: give --x IN --y IN (a surface), --terms VAR or --rules"
-                                 : "give one of --x/--y (a surface), --terms VAR or --rules",
-                      {"fmpc plot --help lists the options of each"});
+  if (modes != 1 || diagnostics.has_errors()) {
+    if (modes != 1)
+      diagnostics.error(kCommandLine,
+                        modes == 0 ? "nothing to plot: give --x IN --y IN (a surface), --terms VAR or --rules"
+                                   : "give one of --x/--y (a surface), --terms VAR or --rules",
+                        {"fmpc plot --help lists the options of each"});
     print_diagnostics(diagnostics, file.sources, std::cerr);
     return kExitErrors;
   }
@@ -342,7 +341,7 @@ int run_plot(const PlotOptions& options) {
                       {"a surface needs two different inputs"});
   int io = 0;
   if (!options.output_variable.empty())
-    io = find_variable(system.outputs, options.output_variable, "output", SourceRange{"argument --output", 0, 0, 0, 0},
+    io = find_variable(system.outputs, options.output_variable, "output", SourceRange{"argument --output-variable", 0, 0, 0, 0},
                        diagnostics);
   else if (system.outputs.empty())
     diagnostics.error(system.range, "system '" + system.name + "' has no output to plot");
@@ -458,12 +457,14 @@ void register_plot_command(CLI::App& app, int& exit_code) {
                     "crisp output, at the point --fix gives (other inputs mid-range)");
   command->add_option("--fix", options->fixes,
                       "NAME=VALUE for an input not on an axis, or of the rule viewer's point (repeatable)");
-  command->add_option("--output", options->output_variable, "Surface: output to plot (default: the first)");
+  command->add_option("--output-variable", options->output_variable, "Surface: output to plot (default: the first)");
   command->add_option("--system", options->system, "Which system of the file (when it holds several)");
   command->add_option("--resolution", options->resolution, "Surface: grid points per axis")->check(CLI::Range(2, 1001));
   command->add_option("--zmin", options->z_min, "Surface: output value at the bottom of the colour scale");
   command->add_option("--zmax", options->z_max, "Surface: output value at the top of the colour scale");
-  command->add_option("-o,--image,--png", options->image, "Picture to write: .svg for SVG, else PNG")->required();
+  command->add_option("-o,--output,--image,--png", options->images, "Picture to write: .svg for SVG, else PNG")
+      ->required()
+      ->allow_extra_args(false);
   command->callback([options, &exit_code] { exit_code = run_plot(*options); });
 }
 

@@ -21,18 +21,19 @@ void add_report_options(CLI::App& command, ReportOptions& options, const std::st
                         const std::string& plots_help) {
   command.add_option("--system", options.system, "Which system of the file");
   command.add_option("--column", options.columns, "Read an input from another column: INPUT=COLUMN (repeatable)");
-  command.add_option("--markdown", options.markdown, "Write the markdown report to this file too");
+  command.add_option("-o,--output,--markdown", options.markdown, "Write the markdown report to this file too")
+      ->allow_extra_args(false);
   command.add_option("--table", options.table, table_help);
   command.add_option("--plots", options.plots, plots_help);
   command.add_option("--semantics", options.semantics, "matlab or octave (docs/numerics.md)")
       ->check(CLI::IsMember({"matlab", "octave"}));
 }
 
-int write_report(const ReportOptions& options, const std::string& command, const std::string& markdown,
+int write_report(const ReportOptions& options, const std::string& markdown_file, const std::string& command, const std::string& markdown,
                  const std::function<std::string()>& table,
                  const std::function<std::vector<std::pair<std::string, std::string>>()>& plots) {
   std::vector<std::pair<std::string, std::string>> writes;
-  if (!options.markdown.empty()) writes.emplace_back(options.markdown, markdown);
+  if (!markdown_file.empty()) writes.emplace_back(markdown_file, markdown);
   if (!options.table.empty()) writes.emplace_back(options.table, table());
   if (!options.plots.empty()) {
     DiagnosticList folder;

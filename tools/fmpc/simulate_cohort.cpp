@@ -3,6 +3,7 @@
 // together (one GPU batch, or worker threads on the CPU), each writing the usual outputs into its own folder, and
 // cohort.csv and an overlay of the force-displacement curves are written beside the folders, both or neither.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/patients_file.h"
 #include "tools/fmpc/progress_line.h"
+#include "tools/fmpc/report_text.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/simulate_command.h"
 #include "tools/plot/heat_map.h"
@@ -34,13 +36,6 @@ namespace {
 // Past this many curves the overlay colours them by Young's modulus with a colour bar instead of naming each one in
 // a legend (a legend of more entries would run off the figure or shrink past reading).
 constexpr std::size_t kMaxLegendCurves = 10;
-
-// Young's modulus in a legend: four significant digits read at a glance (cohort.csv keeps every digit).
-std::string four_digits(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", value);
-  return text;
-}
 
 // One patient's build diagnostics as the cohort reports them: the first patient's in full (mesh repairs, assumed
 // units: the scene's own, said once), every patient's errors and rules that fired for no patient, and never the
@@ -147,6 +142,10 @@ std::string cohort_plot(const sim::Scene& scene, const PatientsFile& file, const
 }  // namespace
 
 int run_cohort_command(const SimulateOptions& options) {
+  const auto command_start = std::chrono::steady_clock::now();
+  const auto seconds_since_start = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - command_start).count();
+  };
   DiagnosticList diagnostics;
   SourceFiles sources;
   sim::CohortShard shard;
@@ -315,6 +314,7 @@ int run_cohort_command(const SimulateOptions& options) {
     patients.push_back(sim::CohortPatient{label, &member.scene, member.built.get(), (root / label).string()});
     earlier.push_back(sim::earlier_run_files(root / label));
   }
+  const double build_seconds = seconds_since_start();
   sim::CohortRunOptions run_options;
   run_options.backend = backend->backend;
   run_options.threads = scene->threads;
@@ -383,6 +383,7 @@ int run_cohort_command(const SimulateOptions& options) {
     }
   }
   const std::size_t steps = run->patients.front() ? run->patients.front()->steps_taken : 0;
+  const double command_seconds = seconds_since_start();
   std::cout << scene->name << ": cohort of " << members.size() << " patient" << (members.size() == 1 ? "" : "s")
             << shard_text << " from " << options.patients << ", " << steps << " steps of " << six_digits(*dt) << " s"
             << (automatic_dt ? " (auto: the smallest automatic step of the cohort's " +
@@ -397,9 +398,23 @@ int run_cohort_command(const SimulateOptions& options) {
             << "\n";
   if (force_hi >= force_lo)
     std::cout << "  final probe force: " << six_digits(force_lo) << " to " << six_digits(force_hi) << " N\n";
-  std::cout << "  wall time " << six_digits(run->wall_seconds) << " s for every patient together ("
-            << six_digits(run->wall_seconds > 0 ? run->spring_steps / run->wall_seconds : 0.0)
-            << " spring-steps/s over the cohort)\n"
+  // The rates over the stepping alone and over the whole command, each labelled: a batch step advances every
+  // patient; patient-steps count each patient's, and spring-steps (tetrahedron-steps without springs) its model.
+  const double patients_run = static_cast<double>(members.size());
+  const double model_steps = model_size(setup) * patients_run * static_cast<double>(steps);
+  const char* model_unit = setup.springs.size() > 0 ? "spring-steps/s" : "tetrahedron-steps/s";
+  const auto rates = [&](double seconds) {
+    const double per_second = seconds > 0.0 ? 1.0 / seconds : 0.0;
+    return six_digits(static_cast<double>(steps) * per_second) + " batch steps/s, " +
+           six_digits(static_cast<double>(steps) * patients_run * per_second) + " patient-steps/s, " +
+           six_digits(model_steps * per_second) + " " + model_unit;
+  };
+  std::cout << "  stepping (the simulator's advance calls, checks included): " << six_digits(run->stepping_seconds)
+            << " s, " << rates(run->stepping_seconds) << "\n"
+            << "  whole command: " << six_digits(command_seconds) << " s (reading and building "
+            << six_digits(build_seconds) << " s, stepping and recording " << six_digits(run->wall_seconds)
+            << " s, writing and the precision check " << six_digits(command_seconds - build_seconds - run->wall_seconds)
+            << " s), " << rates(command_seconds) << "\n"
             << "  wrote " << files << " files in " << members.size() << " patient folders under " << root.string();
   if (!cohort_files.empty())
     std::cout << ", and " << sim::kCohortTableFile << (cohort_files.size() > 1 ? std::string(" and ") + sim::kCohortPlotFile : "");

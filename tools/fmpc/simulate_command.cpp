@@ -56,9 +56,14 @@ std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& c
   }
   if (!scene.material.patient.empty()) subtitle = scene.material.patient + "; " + subtitle;
   chart.title.push_back(subtitle);
-  const double ramp = scene.probe ? scene.probe->ramp : 0.0;
+  // A cyclic probe (loads.probe.cycles) has no hold: its loops are one curve (a viscoelastic material's hysteresis).
+  const int cycles = scene.probe ? scene.probe->cycles : 0;
+  const double ramp = scene.probe && cycles == 0 ? scene.probe->ramp : 0.0;
   plot::Series ramp_series, hold_series;
   ramp_series.name = ramp > 0 ? "ramp (0 to " + six_digits(ramp) + " s)" : "loading";
+  if (cycles > 0)
+    ramp_series.name = std::to_string(cycles) + (cycles == 1 ? " cycle" : " cycles") + " of " +
+                       six_digits(2.0 * scene.probe->ramp) + " s";
   ramp_series.colour = plot::categorical_colour(0);
   hold_series.name = "hold (probe still)";
   hold_series.colour = plot::categorical_colour(1);
@@ -97,6 +102,22 @@ std::string render_force_displacement(const std::vector<sim::ProbeCurvePoint>& c
   }
   chart.notes.push_back("duration " + six_digits(curve.back().time) + " s");
   return plot::render_line_chart(chart, format);
+}
+
+// Implicit Euler's solves in one line: the method, the iterations per step, the largest residual and the capped steps.
+std::string solver_summary(const sim::ImplicitSolverReport& report) {
+  const bool direct = report.method == sim::ImplicitMethod::Direct;
+  const double mean =
+      report.steps == 0 ? 0.0 : static_cast<double>(report.iterations_total) / static_cast<double>(report.steps);
+  std::string line = std::string("implicit solver: ") + (direct ? "direct (sparse LDL^T), " : "conjugate gradient, ") +
+                     std::to_string(report.iterations_min) + " to " + std::to_string(report.iterations_max) +
+                     (direct ? " solves" : " iterations") + " per step (mean " + six_digits(mean) +
+                     "), relative residual at most " + six_digits(report.residual_max) + " (tolerance " +
+                     six_digits(report.tolerance) + ")";
+  if (report.capped_steps > 0)
+    line += "; " + std::to_string(report.capped_steps) + " of " + std::to_string(report.steps) +
+            " steps stopped at the cap of " + std::to_string(report.max_iterations);
+  return line;
 }
 
 // Applies the command-line overrides; errors name the option and what is allowed.
@@ -223,6 +244,7 @@ int run_simulate(const SimulateOptions& options) {
             << " s, stepping " << six_digits(result->timing.stepping) << " s (first call "
             << six_digits(result->timing.first_advance) << " s), recording " << six_digits(result->timing.recording)
             << " s\n";
+  if (result->solver) std::cout << "  " << solver_summary(*result->solver) << "\n";
   if (!result->probe_curve.empty()) {
     const sim::ProbeCurvePoint& last = result->probe_curve.back();
     std::cout << "  probe: " << setup.probe->vertices.size() << " vertices, displacement "

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "compiler/eval/evaluation_report.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/eval/output_comparison.h"
 #include "compiler/eval/tuning.h"
@@ -20,7 +21,8 @@
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
-#include "tools/fmpc/measured_data.h"
+#include "tools/fmpc/patient_data.h"
+#include "tools/fmpc/report_text.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
 
@@ -32,23 +34,18 @@ struct TuneOptions {
   std::string file;
   std::string data;
   std::vector<std::string> parameters;
-  std::string output;
+  std::string output_variable;
   std::string measured;
   std::vector<std::string> columns;
   int folds = 5;
   std::uint64_t seed = 1;
   int max_evaluations = 0;
   int digits = 4;
-  std::string tuned;
+  std::vector<std::string> output;  // -o/--output: the tuned file (output_file_argument)
+  std::string former_tuned;  // --tuned, the old spelling of -o/--output
   bool in_place = false;
   std::string system;
 };
-
-std::string tune_digits4(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", value);
-  return text;
-}
 
 // `value` to `digits` significant digits, as the shortest text that reads back as it.
 double tune_rounded(double value, int digits) {
@@ -109,65 +106,81 @@ int run_tune(const TuneOptions& options) {
   const std::string original =
       read_text_file(options.file, sim::kMaxRuleFileBytes, "rule file", read_error).value_or("");
   const FuzzySystem* system = select_system(file, options.system, diagnostics);
-  std::size_t output = 0;
-  if (system && !options.output.empty()) {
-    const int index = system->find_output(options.output);
-    if (index < 0)
-      diagnostics.error(SourceRange{"argument --output", 0, 0, 0, 0},
-                        "'" + options.output + "' is not an output of system '" + system->name + "'",
-                        {"the outputs are: " + [&] {
-                          std::string names;
-                          for (const Variable& v : system->outputs) names += (names.empty() ? "" : ", ") + v.name;
-                          return names;
-                        }()});
-    else output = static_cast<std::size_t>(index);
+  std::optional<std::size_t> output;
+  std::string output_path;
+  if (system) {
+    output = output_named(*system, options.output_variable, diagnostics);
+    output_path = output_file_argument(options.output, *system, diagnostics);
   }
+  if (!options.former_tuned.empty())
+    diagnostics.error(SourceRange{"argument --tuned", 0, 0, 0, 0},
+                      "--tuned is now -o/--output: -o " + options.former_tuned,
+                      {"-o/--output names the file a command writes in every fmpc command"});
   if (options.folds == 1 || options.folds < 0)
     diagnostics.error(SourceRange{"argument --folds", 0, 0, 0, 0},
                       "--folds is " + std::to_string(options.folds) + "; give 2 or more, or 0 to skip cross-validation");
   if (options.digits < 1 || options.digits > 17)
     diagnostics.error(SourceRange{"argument --digits", 0, 0, 0, 0}, "--digits takes 1 to 17 significant digits");
-  if (options.in_place && !options.tuned.empty())
-    diagnostics.error(kCommandLine, "give --tuned FILE or --in-place, not both");
+  if (options.in_place && !output_path.empty())
+    diagnostics.error(kCommandLine, "give -o/--output FILE or --in-place, not both");
   const std::string tuned_path = options.in_place ? options.file
-                                 : options.tuned.empty() ? tune_default_path(options.file) : options.tuned;
+                                 : output_path.empty() ? tune_default_path(options.file) : output_path;
   if (!options.in_place && tune_same_file(options.file, tuned_path))
-    diagnostics.error(SourceRange{"argument --tuned", 0, 0, 0, 0},
+    diagnostics.error(SourceRange{"argument --output", 0, 0, 0, 0},
                       "'" + tuned_path + "' is the input file; fmpc tune writes a new file",
-                      {"give another --tuned FILE, or --in-place to overwrite the input"});
+                      {"give another -o/--output FILE, or --in-place to overwrite the input"});
   std::vector<TunableParameter> parameters;
-  std::optional<MeasuredData> data;
-  // Every mistake at once: the parameters and the data are read whatever the options' errors were.
-  if (system) {
+  std::optional<PatientData> data;
+  // Every mistake at once: the parameters and the data are read whatever the options' errors were. The data are
+  // read as `fmpc validate` reads them (patient_data.h), so one file serves both, units in its header included.
+  if (system && output) {
     parameters = select_parameters(*system, options.parameters, SourceRange{"argument --parameters", 0, 0, 0, 0},
                                    diagnostics);
-    std::map<std::string, std::string> columns;
-    parse_input_columns(options.columns, *system, columns, diagnostics);
-    const std::string header = csv_header_of(*system) + "," + system->outputs[output].name;
+    PatientDataRequest request;
+    request.systems = {system};
+    request.measured_output = output;
+    request.measured_column = options.measured;
+    parse_column_mappings(options.columns, request.input_columns, diagnostics);
+    const std::string header = csv_header_of(*system) + "," + system->outputs[*output].name;
     if (const std::optional<CsvTable> table =
             read_csv_file(options.data, options.data, sim::kMaxCsvFileBytes, "measured data",
                           SourceRange{"argument --data", 0, 0, 0, 0}, sources, diagnostics, header))
-      data = read_measured_data(*table, *system, output, columns, options.measured, diagnostics);
+      data = read_patient_data(*table, request, diagnostics);
   }
   TuningData tuning;
   if (data && !diagnostics.has_errors()) {
-    tuning.inputs = data->inputs;
+    tuning.inputs = data->points.front();
     tuning.measured = data->measured;
-    tuning.output = output;
-    if (options.folds > 0 && data->measured.size() < static_cast<std::size_t>(options.folds))
+    tuning.output = *output;
+    if (data->measured.size() < 2)
+      diagnostics.error(SourceRange{options.data, 0, 0, 0, 0},
+                        "the data has " + std::to_string(data->measured.size()) +
+                            " patient with a measured value; tuning needs at least 2");
+    else if (options.folds > 0 && data->measured.size() < static_cast<std::size_t>(options.folds))
       diagnostics.error(SourceRange{"argument --folds", 0, 0, 0, 0},
                         std::to_string(options.folds) + " folds need at least " + std::to_string(options.folds) +
                             " patients; the data has " + std::to_string(data->measured.size()),
                         {"give fewer --folds, or 0 to skip cross-validation"});
-    // The file's own system must predict every patient: a search cannot start from no value.
+    // Each patient as `fmpc validate` reports it (inputs out of range, no rule fired), the first 20 warnings shown;
+    // and the file's own system must predict every patient: a search cannot start from no value.
     Interpreter interpreter(*system);
-    for (std::size_t p = 0; p < tuning.inputs.size() && !diagnostics.has_errors(); ++p)
-      if (!std::isfinite(interpreter.evaluate(tuning.inputs[p]).outputs[output]))
-        diagnostics.error(SourceRange{options.data, 0, 0, 0, 0},
+    DiagnosticList flags;
+    bool no_value_reported = false;
+    for (std::size_t p = 0; p < tuning.inputs.size(); ++p) {
+      const Evaluation evaluation = interpreter.evaluate(tuning.inputs[p]);
+      const std::size_t flagged = flags.error_count();
+      report_evaluation_flags(*system, tuning.inputs[p], data->origins.front()[p], data->rows[p], evaluation, flags);
+      // The policy `error` has said so already; one message is enough for the other ways to no value.
+      if (!std::isfinite(evaluation.outputs[*output]) && flags.error_count() == flagged && !no_value_reported) {
+        no_value_reported = true;
+        diagnostics.error(data->rows[p],
                           "the rule file predicts no value for " + data->labels[p] + " (no rule fires there)",
                           {"give the system a `when no rule fires:` value, or leave the patient out"});
+      }
+    }
+    append_capped(flags, 20, options.data, diagnostics);
   }
-  if (!system || !data || diagnostics.has_errors()) {
+  if (!system || !output || !data || diagnostics.has_errors()) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;
   }
@@ -238,20 +251,16 @@ int run_tune(const TuneOptions& options) {
     }
   }
 
-  const Variable& fitted = system->outputs[output];
+  const Variable& fitted = system->outputs[*output];
   const std::string unit = fitted.unit.empty() || fitted.unit == "dimensionless" ? "" : " " + fitted.unit;
   std::ostringstream out;
   out << "# fmpc tune " << options.file << "\n\n";
   out << "Fitted: output `" << fitted.name << "` against column `" << data->measured_column << "` of "
       << options.data << ", " << tuning.measured.size() << " patients";
-  if (data->skipped_rows > 0) out << " (" << data->skipped_rows << " without a measured value left out)";
-  out << ".";
-  if (!data->unused_columns.empty()) {
-    out << " Columns not used:";
-    for (std::size_t i = 0; i < data->unused_columns.size(); ++i) out << (i ? ", " : " ") << data->unused_columns[i];
-    out << ".";
-  }
-  out << "\n\nMethod: bounded Nelder-Mead simplex search (Nelder and Mead 1965; coefficients 1, 2, 1/2, 1/2 as "
+  out << ".\n";
+  if (!data->notes.empty()) out << "\n";
+  for (const std::string& note : data->notes) out << "- " << note << "\n";
+  out << "\nMethod: bounded Nelder-Mead simplex search (Nelder and Mead 1965; coefficients 1, 2, 1/2, 1/2 as "
          "MATLAB's fminsearch) minimising the RMSE, from the file's values, at most "
       << (options.max_evaluations > 0 ? options.max_evaluations : 200 * static_cast<int>(parameters.size()))
       << " evaluations a search. Rules, weights and settings are not changed.\n";
@@ -260,15 +269,15 @@ int run_tune(const TuneOptions& options) {
         << ")\n\n| fold | patients | RMSE before | RMSE after | evaluations |\n|---:|---:|---:|---:|---:|\n";
     for (std::size_t f = 0; f < result.folds.size(); ++f) {
       const FoldResult& fold = result.folds[f];
-      out << "| " << f + 1 << " | " << fold.patients << " | " << tune_digits4(fold.rmse_before) << unit << " | "
-          << tune_digits4(fold.rmse_after) << unit << " | " << fold.evaluations << (fold.converged ? "" : " (cap)")
+      out << "| " << f + 1 << " | " << fold.patients << " | " << four_digits(fold.rmse_before) << unit << " | "
+          << four_digits(fold.rmse_after) << unit << " | " << fold.evaluations << (fold.converged ? "" : " (cap)")
           << " |\n";
     }
-    out << "| all | " << tuning.measured.size() << " | " << tune_digits4(result.held_out_rmse_before) << unit << " | "
-        << tune_digits4(result.held_out_rmse_after) << unit << " | |\n";
+    out << "| all | " << tuning.measured.size() << " | " << four_digits(result.held_out_rmse_before) << unit << " | "
+        << four_digits(result.held_out_rmse_after) << unit << " | |\n";
   }
   out << "\n## Parameters (fitted on all " << tuning.measured.size() << " patients: RMSE "
-      << tune_digits4(result.rmse_before) << unit << " before, " << tune_digits4(written_rmse) << unit
+      << four_digits(result.rmse_before) << unit << " before, " << four_digits(written_rmse) << unit
       << " as written)\n\n| parameter | before | after | bounds |\n|---|---:|---:|---|\n";
   for (std::size_t i = 0; i < parameters.size(); ++i)
     out << "| " << parameters[i].name << " | " << format_number(parameters[i].value) << " | "
@@ -281,7 +290,7 @@ int run_tune(const TuneOptions& options) {
         << format_number(parameters[i].upper) << "]: " << parameters[i].bound << " |\n";
   if (!result.search.converged)
     out << "\nThe search stopped at its cap of " << result.search.evaluations
-        << " evaluations, the simplex's RMSE values still " << tune_digits4(result.search.value_spread)
+        << " evaluations, the simplex's RMSE values still " << four_digits(result.search.value_spread)
         << unit << " apart: raise --max-evaluations for a closer fit.\n";
   else
     out << "\nThe search converged after " << result.search.evaluations << " evaluations.\n";
@@ -321,7 +330,8 @@ void register_tune_command(CLI::App& app, int& exit_code) {
                       "VARIABLE.TERM.PARAMETER patterns (* and ? allowed): HCV.F2.mean, HCV.*.sd, stiffness.*")
       ->required()
       ->expected(1, -1);
-  command->add_option("--output", options->output, "The output fitted to the measured values (default the first)");
+  command->add_option("--output-variable", options->output_variable,
+                      "The output fitted to the measured values (default: the first)");
   command->add_option("--measured", options->measured,
                       "The column of measured values (default OUTPUT, measured, measured_OUTPUT or OUTPUT_measured)");
   command->add_option("--column", options->columns, "INPUT=COLUMN: read an input from a column of another name");
@@ -330,7 +340,10 @@ void register_tune_command(CLI::App& app, int& exit_code) {
   command->add_option("--max-evaluations", options->max_evaluations,
                       "Cap on objective evaluations per search; 0: 200 per parameter");
   command->add_option("--digits", options->digits, "Significant digits of the numbers written");
-  command->add_option("--tuned", options->tuned, "Where to write the tuned file (default FILE's stem + .tuned)");
+  command->add_option("-o,--output", options->output,
+                      "Where to write the tuned file, atomically (default: FILE's stem + .tuned beside it)")
+      ->allow_extra_args(false);
+  command->add_option("--tuned", options->former_tuned)->group("");  // the old spelling: an error naming -o
   command->add_flag("--in-place", options->in_place, "Overwrite the input file instead");
   command->add_option("--system", options->system, "The system to tune, in a file that holds several");
   command->callback([options, &exit_code] { exit_code = run_tune(*options); });

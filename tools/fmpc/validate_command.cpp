@@ -19,7 +19,7 @@ namespace {
 struct ValidateOptions {
   std::string file;
   std::string data;
-  std::string output;
+  std::string output_variable;
   std::string measured;
   ReportOptions report;
 };
@@ -30,7 +30,11 @@ int run_validate(const ValidateOptions& options) {
   const FuzzySystem* system =
       diagnostics.has_errors() ? nullptr : select_system(file, options.report.system, diagnostics);
   std::optional<std::size_t> output;
-  if (system) output = output_named(*system, options.output, diagnostics);
+  std::string markdown;
+  if (system) {
+    output = output_named(*system, options.output_variable, diagnostics);
+    markdown = output_file_argument(options.report.markdown, *system, diagnostics);
+  }
   PatientDataRequest request;
   parse_column_mappings(options.report.columns, request.input_columns, diagnostics);
   std::optional<CsvTable> table;
@@ -51,7 +55,7 @@ int run_validate(const ValidateOptions& options) {
   report->rules_path = options.file;
   report->data_path = options.data;
   return write_report(
-      options.report, "validate", validation_markdown(*report), [&] { return validation_csv(*report, *system); },
+      options.report, markdown, "validate", validation_markdown(*report), [&] { return validation_csv(*report, *system); },
       [&] {
         return std::vector<std::pair<std::string, std::string>>{
             {"predicted_against_measured.png", predicted_against_measured_plot(*report, plot::ImageFormat::Png)},
@@ -71,7 +75,8 @@ void register_validate_command(CLI::App& app, int& exit_code) {
       "Prints markdown; --markdown, --table and --plots write files (docs/cli.md).");
   command->add_option("file", options->file, "Rule file")->required();
   command->add_option("--data", options->data, "CSV of patients with measured values")->required();
-  command->add_option("--output", options->output, "The output the measurements are of (default: the first)");
+  command->add_option("--output-variable", options->output_variable,
+                      "The output the measurements are of (default: the first)");
   command->add_option("--measured", options->measured,
                       "The measured column (default: the first of OUTPUT, measured, measured_OUTPUT, OUTPUT_measured)");
   add_report_options(*command, options->report,

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "tools/fmpc/commands.h"
+#include "tools/fmpc/rule_file_session.h"
 #include "tools/studio/studio_server.h"
 
 extern char** environ;

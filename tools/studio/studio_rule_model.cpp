@@ -14,15 +14,6 @@ namespace fmpc::studio {
 
 namespace {
 
-const char* severity_name(Severity severity) {
-  switch (severity) {
-    case Severity::Note: return "note";
-    case Severity::Warning: return "warning";
-    case Severity::Error: return "error";
-  }
-  return "error";
-}
-
 Json clause_json(const FuzzySystem& system, const Clause& clause, bool consequent) {
   const std::vector<Variable>& variables = consequent ? system.outputs : system.inputs;
   const Variable& variable = variables[static_cast<std::size_t>(clause.variable)];
