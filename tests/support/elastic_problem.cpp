@@ -104,9 +104,13 @@ bool calculix_available() { return std::system("command -v ccx > /dev/null 2>&1"
 
 namespace {
 
+// CalculiX reads each number of a card from its first 20 characters (Fortran's f20.0): longer text is cut there,
+// which drops digits of 0.00029999999999999997 silently and makes -5.0000000000000009e-05 an error ("*ERROR
+// reading *BOUNDARY"). Thirteen significant digits in scientific notation fill at most 20.
 std::string number(double value) {
   std::ostringstream out;
-  out.precision(17);
+  out << std::scientific;
+  out.precision(12);
   out << value;
   return out.str();
 }
@@ -190,9 +194,22 @@ std::optional<ElasticAnswer> solve_with_calculix(const ElasticProblem& problem, 
   std::size_t held_count = 0;
   for (std::size_t v = 0; v < nodes.size(); ++v)
     if (held[v] != 0) deck << v + 1 << (++held_count % 16 == 0 ? "\n" : ", ");
-  deck << "\n*MATERIAL, NAME=tissue\n*ELASTIC\n" << number(problem.youngs_modulus) << ", "
-       << number(problem.poisson_ratio) << "\n*DENSITY\n" << number(problem.density)
-       << "\n*SOLID SECTION, ELSET=Eall, MATERIAL=tissue\n*STEP\n*STATIC\n*BOUNDARY\n";
+  deck << "\n*MATERIAL, NAME=tissue\n";
+  if (problem.neo_hooke) {
+    const double mu = problem.youngs_modulus / (2 * (1 + problem.poisson_ratio));
+    const double bulk = problem.youngs_modulus / (3 * (1 - 2 * problem.poisson_ratio));
+    deck << "*HYPERELASTIC, NEO HOOKE\n" << number(mu / 2) << ", " << number(2 / bulk) << "\n";
+  } else {
+    deck << "*ELASTIC\n" << number(problem.youngs_modulus) << ", " << number(problem.poisson_ratio) << "\n";
+  }
+  deck << "*DENSITY\n" << number(problem.density) << "\n*SOLID SECTION, ELSET=Eall, MATERIAL=tissue\n";
+  if (problem.neo_hooke) {
+    const double increment = 1.0 / problem.increments;
+    deck << "*STEP, NLGEOM, INC=" << 100 * problem.increments << "\n*STATIC\n" << number(increment) << ", 1.0, "
+         << number(increment / 64) << ", " << number(increment) << "\n*BOUNDARY\n";
+  } else {
+    deck << "*STEP\n*STATIC\n*BOUNDARY\n";
+  }
   for (std::size_t v = 0; v < nodes.size(); ++v)
     for (int a = 0; a < 3; ++a)
       if ((held[v] >> a) & 1u)
