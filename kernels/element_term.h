@@ -127,19 +127,6 @@ FMPC_HD void element_rest_nodes(const double corners[4][3], double out[Element::
   }
 }
 
-// Whether element e of `corners` is inverted or flat at positions s (signed volume <= 0), for the inversion count.
-template <typename Real>
-FMPC_HD bool tetrahedron_inverted(int e, const int* corners, const Real* x, const Real* y, const Real* z) {
-  Real p[4][3];
-  for (int a = 0; a < 4; ++a) {
-    const int vertex = corners[4 * e + a];
-    p[a][0] = x[vertex];
-    p[a][1] = y[vertex];
-    p[a][2] = z[vertex];
-  }
-  return !(tetrahedron_volume(p) > Real(0));
-}
-
 // The largest modulus a strain table gives (Pa): a law's stiffness bound over a run whose modulus follows it.
 FMPC_HD double strain_table_largest_modulus(const StrainTableView& table) {
   double largest = table.modulus[0];

@@ -90,7 +90,7 @@ struct LinearTetrahedron : ElementKindTangent<LinearTetrahedron> {
 
   // Whether the element is inverted or flat at x (signed volume <= 0).
   template <typename Real>
-  static FMPC_HD bool inverted(const Real x[kNodes][3], const Real*) {
+  static FMPC_HD bool inverted(const Real x[kNodes][3]) {
     return !(tetrahedron_volume(x) > Real(0));
   }
 

@@ -176,14 +176,20 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
     return sum / kPoints;
   }
 
-  // Whether the element is inverted or flat at x: det F <= 0 at one of its quadrature points (where its forces are
-  // evaluated). A curved element can fold between its corners while its corner tetrahedron keeps a positive volume.
+  // Whether the element is inverted or flat at x: the Jacobian det(dx/dL) <= 0 at one of its quadrature points
+  // (where its forces are evaluated). With L_1..L_3 independent (L_0 = 1 - L_1 - L_2 - L_3), dx/dL_k = y_k - y_0, so
+  // the determinant is 6 times the signed volume of the four y_k: the corner tetrahedron's volume for a straight
+  // element, and det F times the rest's 6 V0 > 0 in general (the sign of det F, with no rest data read). A curved
+  // element can fold between its corners while its corner tetrahedron keeps a positive volume; this catches it.
   template <typename Real>
-  static FMPC_HD bool inverted(const Real x[kNodes][3], const Real* rest_inverse) {
+  static FMPC_HD bool inverted(const Real x[kNodes][3]) {
+    Real d[kNodes][3];
+    for (int a = 0; a < kNodes; ++a)
+      for (int i = 0; i < 3; ++i) d[a][i] = x[a][i] - x[0][i];
     for (int q = 0; q < kPoints; ++q) {
-      Real F[9];
-      point_gradient(x, q, rest_inverse, F);
-      if (!(determinant3(F) > Real(0))) return true;
+      Real y[4][3];
+      barycentric_derivatives(d, q, y);
+      if (!(tetrahedron_volume(y) > Real(0))) return true;
     }
     return false;
   }
