@@ -151,29 +151,33 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
     }
   }
 
-  template <typename Law>
-  static FMPC_HD double energy(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
+  // The mean over the four points of value(material, F_q): each point carries a quarter of the volume.
+  template <typename Law, typename Value>
+  static FMPC_HD double point_mean(const ElementTermView<double>& t, int e, const double x[kNodes][3], Value value) {
     const typename Law::template Material<double> material = Law::material(t, e);
     double sum = 0.0;
     for (int q = 0; q < kPoints; ++q) {
       double F[9];
       point_gradient(x, q, t.rest_inverse + 9 * e, F);
-      sum += Law::energy_density(material, F);
-    }
-    return t.rest_volume[e] / kPoints * sum;
-  }
-
-  // The law's stress output averaged over the four points (each carries a quarter of the volume).
-  template <typename Law>
-  static FMPC_HD double stress_output(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
-    const typename Law::template Material<double> material = Law::material(t, e);
-    double sum = 0.0;
-    for (int q = 0; q < kPoints; ++q) {
-      double F[9];
-      point_gradient(x, q, t.rest_inverse + 9 * e, F);
-      sum += Law::stress_output(material, F);
+      sum += value(material, F);
     }
     return sum / kPoints;
+  }
+
+  template <typename Law>
+  static FMPC_HD double energy(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
+    return t.rest_volume[e] *
+           point_mean<Law>(t, e, x, [](const typename Law::template Material<double>& material, const double* F) {
+             return Law::energy_density(material, F);
+           });
+  }
+
+  // The law's stress output averaged over the four points.
+  template <typename Law>
+  static FMPC_HD double stress_output(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
+    return point_mean<Law>(t, e, x, [](const typename Law::template Material<double>& material, const double* F) {
+      return Law::stress_output(material, F);
+    });
   }
 
   // Whether the element is inverted or flat at x: the Jacobian det(dx/dL) <= 0 at one of its quadrature points
