@@ -17,6 +17,10 @@
 #               and cpu, and SOFA's liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as
 #               liver-CUDA.scn) on CUDA and on the CPU; the demo's 12-patient cohort (--patients) on both,
 #               cohort.csv compared; large boxes (240^3 springs, 120^3 FEM) end to end; outputs under $OUT/scenes
+#   haptic      the carried fmpc_haptic_bench (bench/haptic, from the same CUDA build as the carried fmpc: --prepare
+#               bundles it with fmpc) runs the 1 kHz haptic loop on the 20^3 block with the sphere tool, 30 s of wall
+#               time per mode (HAPTIC_SECONDS), implicit Euler and explicit substeps, on CUDA and on the CPU: per-tick
+#               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv), haptic.md
 #   setup       (only when asked: --only setup) bench/setup's fmpc_setup_bench on the GPU machine's cores: boxes of
 #               60^3, 120^3 and 240^3 cells (issue 13: 100M springs set up in 20 s, 64 bytes per spring at peak)
 #               with the model builder's breakdown and the simulators' peak, then 120^3 on one thread (same checksum)
@@ -25,7 +29,8 @@
 #               and 20^3 small box; reports as text in $OUT/profile_*.txt
 #   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
 #               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540); the
-#               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run
+#               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run;
+#               FUZZ_TARGETS="fll fcl ..." runs only those
 #   evaluator   bench/gpu/evaluator_gpu_bench.cu (nvcc alone): the generated CUDA evaluators (type-1 and interval
 #               type-2, float and double) and table lookups (2-D double and float; 5-D double and float at 9^5,
 #               7^5, 5^5; each in the grid and the sector-packed layout) on the liver rule base, each checked
@@ -46,7 +51,7 @@
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
 # device.txt, summary.md. Options: --skip-sanitizers, --quick (shorter benchmark), --evaluator-only (that section
-# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, evaluator, fuzz; the build
+# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, haptic, evaluator, fuzz; the build
 # runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses it). Exit status: 0
 # when every step passed.
 set -u -o pipefail
@@ -148,6 +153,13 @@ prepare_scenes() {
   local fmpc="${FMPC:-}"
   [[ -n "$fmpc" && -x "$fmpc" ]] || { echo "set FMPC=path/to/a CUDA build's fmpc for the scenes section" >&2; return 1; }
   bundle_program "$fmpc" fmpc || return 1
+  # The haptic section's benchmark from the same build (HAPTIC_BENCH=... names another).
+  local haptic="${HAPTIC_BENCH:-$(dirname "$fmpc")/../bench/haptic/fmpc_haptic_bench}"
+  if [[ -x "$haptic" ]]; then
+    bundle_program "$haptic" fmpc_haptic_bench || return 1
+  else
+    echo "no $haptic (build the target fmpc_haptic_bench): the haptic section will not run" >&2
+  fi
   mkdir -p "$PROGRAMS/fonts"
   cp /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf /usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf \
     "$PROGRAMS/fonts/" || { echo "no DejaVu fonts (Debian fonts-dejavu-core)" >&2; return 1; }
@@ -217,7 +229,7 @@ fi
 SKIP_SANITIZERS=0
 QUICK=0
 EVALUATOR_ONLY=0
-ONLY="tests,sanitizers,bench,scenes,evaluator"
+ONLY="tests,sanitizers,bench,scenes,haptic,evaluator"
 usage="usage: bash bench/run_gpu.sh [--prepare | --skip-sanitizers | --quick | --evaluator-only | --only LIST]"
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -230,8 +242,8 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | scenes | evaluator | fuzz | setup | profile | baseline) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, evaluator, fuzz, setup, profile, baseline)" >&2
+          tests | sanitizers | bench | scenes | haptic | evaluator | fuzz | setup | profile | baseline) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, haptic, evaluator, fuzz, setup, profile, baseline)" >&2
              exit 2 ;;
         esac
       done
@@ -322,16 +334,25 @@ simulator_section() {
     if [[ -z "$sanitizer" ]]; then
       fail "compute-sanitizer not found"
     else
+      # The four tools at once (each instruments the same small scenes; racecheck alone takes minutes), each under
+      # SANITIZER_SECONDS (default 480): a tool cut off is reported as such with the last test it started.
       local tool
+      local -A pids=()
       for tool in memcheck racecheck initcheck synccheck; do
         local extra=()
         [[ $tool == memcheck ]] && extra=(--leak-check full)
-        "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
-          "$BUILD/tests/gpu/fmpc_gpu_tests" sanitizer > "$OUT/sanitizer_$tool.log" 2>&1
+        timeout "${SANITIZER_SECONDS:-480}" "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
+          "$BUILD/tests/gpu/fmpc_gpu_tests" sanitizer > "$OUT/sanitizer_$tool.log" 2>&1 &
+        pids[$tool]=$!
+      done
+      for tool in memcheck racecheck initcheck synccheck; do
+        wait "${pids[$tool]}"
         local rc=$?
         local errors
         errors=$(grep -E 'ERROR SUMMARY|RACECHECK SUMMARY' "$OUT/sanitizer_$tool.log" | tail -1)
-        if [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$OUT/sanitizer_$tool.log"; then
+        if [[ $rc -eq 124 ]]; then
+          fail "$tool: cut off after ${SANITIZER_SECONDS:-480} s in '$(grep -E '^\[ RUN' "$OUT/sanitizer_$tool.log" | tail -1)'"
+        elif [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$OUT/sanitizer_$tool.log"; then
           record "$tool: ok (${errors:-no summary line})"
         else
           fail "$tool: exit $rc (${errors:-see sanitizer_$tool.log})"
@@ -345,6 +366,14 @@ simulator_section() {
   section "simulator: benchmark"
   local args=(--out "$OUT")
   [[ $QUICK -eq 1 ]] && args+=(--quick)
+  # Implicit Euler's rows (issue 27 item 3) at SOFA's liver settings need its mesh: beside the repository, or carried.
+  local liver="$ROOT/../shared/data/sofa-liver/liver.msh"
+  [[ -f "$liver" ]] || liver="$CARRY/sofa-liver/liver.msh"
+  if [[ -f "$liver" ]]; then
+    args+=(--liver "$liver")
+  else
+    record "sim_bench: SOFA liver implicit rows skipped (no liver.msh; bench/run_gpu.sh --prepare carries it)"
+  fi
   if "$BUILD/bench/sim/fmpc_sim_bench" "${args[@]}" > "$OUT/sim_bench.log" 2>&1; then
     record "sim_bench: ok (sim_bench.csv, sim_bench.md)"
   else
@@ -440,6 +469,33 @@ scenes_section() {
   else
     fail "cohort: CUDA and CPU cohort.csv differ (scenes/cohort_{cuda,cpu}/cohort.csv)"
   fi
+}
+
+# The haptic loop (issue 27 item 4): fmpc_haptic_bench, built on the build machine with CUDA and carried, on CUDA and
+# on this machine's CPU, both modes each; the goal is p99 <= 1 ms on an H100.
+haptic_section() {
+  section "haptic: 1 kHz loop through fmpc::runtime's Session (bench/haptic)"
+  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc_haptic_bench" ]]; then
+    fail "no fmpc_haptic_bench in $CARRY/programs.tar.xz: build it in the CUDA build and run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare'"
+    return 1
+  fi
+  local seconds="${HAPTIC_SECONDS:-30}" backend
+  [[ $QUICK -eq 1 ]] && seconds=5
+  mkdir -p "$OUT/haptic"
+  : > "$OUT/haptic.md"
+  for backend in cuda cpu; do
+    mkdir -p "$OUT/haptic/$backend"
+    if "$UNPACKED/bin/fmpc_haptic_bench" --backend "$backend" --seconds "$seconds" --out "$OUT/haptic/$backend" \
+        > "$OUT/haptic/$backend.log" 2>&1; then
+      grep -E '^(implicit|explicit) on ' "$OUT/haptic/$backend.log" | tee -a "$SUMMARY"
+      grep -E '^\|' "$OUT/haptic/$backend.log" | awk -v first="$([[ -s "$OUT/haptic.md" ]] && echo 0 || echo 1)" \
+        'first == 1 || NR > 2' >> "$OUT/haptic.md"
+    else
+      tail -5 "$OUT/haptic/$backend.log"
+      fail "fmpc_haptic_bench --backend $backend (see haptic/$backend.log)"
+    fi
+  done
+  cat "$OUT/haptic.md" >> "$SUMMARY"
 }
 
 # The median of the numbers on stdin.
@@ -582,8 +638,22 @@ fuzz_section() {
   fi
   # The targets carried (run_fuzzers.sh's own default list names targets a sanitizer build may lack: the Python
   # module's, without -DFMPC_PYTHON=ON).
-  local program targets=()
-  for program in "$UNPACKED"/bin/fuzz_*; do targets+=("${program##*/fuzz_}"); done
+  # FUZZ_TARGETS (space-separated names, e.g. "fll fcl python_arguments") narrows them, so that a call's cores go to
+  # the targets that still need CPU time.
+  local program name targets=()
+  for program in "$UNPACKED"/bin/fuzz_*; do
+    name=${program##*/fuzz_}
+    [[ -z "${FUZZ_TARGETS:-}" || " $FUZZ_TARGETS " == *" $name "* ]] || continue
+    # The Python module's target embeds the build machine's CPython, which aborts at start without its standard
+    # library (seen on the GPU machine: "failed to get the Python codec of the filesystem encoding").
+    if [[ $name == python_arguments && ! -d /usr/lib/python3.11/encodings ]]; then
+      record "fuzz_python_arguments: skipped (no /usr/lib/python3.11 here; run it on the build machine: \
+tests/fuzz/run_fuzzers.sh build-asan SECONDS python_arguments)"
+      continue
+    fi
+    targets+=("$name")
+  done
+  [[ ${#targets[@]} -gt 0 ]] || { fail "FUZZ_TARGETS='${FUZZ_TARGETS:-}' names no carried target"; return 1; }
   local jobs=${FUZZ_JOBS:-$(( JOBS / ${#targets[@]} > 0 ? JOBS / ${#targets[@]} : 1 ))}
   FMPC_FUZZ_BINARIES="$UNPACKED/bin" FMPC_FUZZ_SEEDS="$UNPACKED/seeds" \
     bash "$ROOT/tests/fuzz/run_fuzzers.sh" --jobs "$jobs" "$BUILD" "${FUZZ_SECONDS:-540}" "${targets[@]}" \
@@ -660,6 +730,7 @@ if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted p
   fi
 fi
 wanted scenes && scenes_section
+wanted haptic && haptic_section
 wanted evaluator && evaluator_section
 wanted fuzz && fuzz_section
 

@@ -57,6 +57,7 @@ const std::vector<WarningCode>& warning_codes() {
       {"undamped-modes", "simulate"},
       {"inverted-elements", "simulate"},
       {"cg-not-converged", "simulate"},
+      {"contact-not-settled", "simulate"},
   };
   return codes;
 }

@@ -1,8 +1,16 @@
 // Implicit Euler on the GPU (gpu_launch.h): the system's assembly from the springs' blocks and the elements'
 // linearisation, and the Jacobi-preconditioned conjugate gradient's kernels with their fixed-shape dot products.
+#include <cooperative_groups.h>
+
+#include <cfloat>
+
+#include "kernels/implicit_contact_math.h"
 #include "kernels/step_device.cuh"
+#include "runtime/gpu/launch_plan.h"
 
 namespace fmpc::gpu {
+
+static_assert(kCgThreads == kEnergyThreads, "the cooperative CG's blocks are the dot products' virtual blocks");
 
 namespace {
 
@@ -61,14 +69,14 @@ __global__ void implicit_element_kernel(ImplicitArguments<Real> a, kernels::Elem
 }
 
 // (h^2 + h beta) K p of element e for one term, with the nodes at fixed vertices taken as zero (their rows are
-// identity); the first term writes, each later one adds.
-template <typename Real, typename Element, typename Law, bool Accumulate>
-__global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a, kernels::ElementTermView<double> term,
-                                              const typename Element::template Linearisation<Law>* linearisation) {
+// identity); the first term writes, each later one adds (accumulate). The per-iteration kernel and the cooperative
+// one both call it, so their products have the same bits.
+template <typename Real, typename Element, typename Law>
+__device__ void element_apply(const ImplicitArguments<Real>& a, const kernels::ElementTermView<double>& term,
+                              const typename Element::template Linearisation<Law>* linearisation, int e,
+                              bool accumulate) {
   constexpr int N = Element::kNodes;
-  const int e = vertex_index();
   const ImplicitElements& f = a.elements;
-  if (e >= f.count) return;
   double p[N][3], kp[N][3];
   for (int c = 0; c < N; ++c) {
     const int vertex = term.corners[N * e + c];
@@ -81,8 +89,16 @@ __global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a, kernels
   for (int c = 0; c < N; ++c)
     for (int i = 0; i < 3; ++i) {
       double& product = f.product[3 * (N * e + c) + i];
-      product = Accumulate ? product + scale * kp[c][i] : scale * kp[c][i];
+      product = accumulate ? product + scale * kp[c][i] : scale * kp[c][i];
     }
+}
+
+template <typename Real, typename Element, typename Law, bool Accumulate>
+__global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a, kernels::ElementTermView<double> term,
+                                              const typename Element::template Linearisation<Law>* linearisation) {
+  const int e = vertex_index();
+  if (e >= a.elements.count || a.scalars->done) return;
+  element_apply<Real, Element, Law>(a, term, linearisation, e, Accumulate);
 }
 
 // launch(Element, Law, term index) for each element term, its element kind and law template arguments; the first
@@ -153,6 +169,13 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
       jacobi[c] += system[kernels::symmetric_index(c, c)];
     }
   }
+  if (a.extra_blocks != nullptr) {
+    // The caller's linear part (ImplicitArguments::extra_blocks): its block on the diagonal, its values into b.
+    for (int c = 0; c < 3; ++c) {
+      b[c] += a.extra_rhs[3 * v + c];
+      jacobi[c] += a.extra_blocks[6 * v + kernels::symmetric_index(c, c)];
+    }
+  }
   if (a.elements.count > 0) {
     const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
     double kv[3] = {0.0, 0.0, 0.0}, element_diagonal[3] = {0.0, 0.0, 0.0};
@@ -174,10 +197,9 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   }
 }
 
+// Row v of A p (fixed vertices and axes: identity rows), after the elements' product.
 template <typename Real>
-__global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
-  const int v = vertex_index();
-  if (v >= a.vertex_count) return;
+__device__ void apply_row(const ImplicitArguments<Real>& a, int v) {
   const double* own = a.p + 3 * v;
   double* out = a.ap + 3 * v;
   const unsigned char held = a.loads.fixed[v];
@@ -196,6 +218,12 @@ __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
     kernels::symmetric_multiply(a.blocks + 12 * s + 6, relative, product);
     for (int c = 0; c < 3; ++c) sum[c] += product[c];
   }
+  if (a.extra_blocks != nullptr) {
+    double free_own[3], product[3];
+    for (int c = 0; c < 3; ++c) free_own[c] = kernels::axis_fixed(held, c) ? 0.0 : own[c];
+    kernels::symmetric_multiply(a.extra_blocks + 6 * v, free_own, product);
+    for (int c = 0; c < 3; ++c) sum[c] += product[c];
+  }
   if (a.elements.count > 0) {
     const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
     gather_corner_values(v, corners, a.elements.product, sum);
@@ -203,20 +231,80 @@ __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
   for (int c = 0; c < 3; ++c) out[c] = kernels::axis_fixed(held, c) ? own[c] : sum[c];
 }
 
-// Partial sums of first . second (and of third . fourth when third is not null) over [0, count), in the fixed
-// shape of the energy sums; block b writes partial[b] and partial[kEnergyBlocks + b].
-__global__ void dot_partial_kernel(const double* first, const double* second, const double* third, const double* fourth,
-                                   int count, double* partial) {
-  __shared__ double cache[kEnergyThreads];
+template <typename Real>
+__global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count || a.scalars->done) return;
+  apply_row(a, v);
+}
+
+// The partial sums of virtual block `block` of the fixed dot-product shape (kEnergyBlocks blocks of kEnergyThreads
+// threads striding over [0, count)): thread t of the calling block (blockDim.x == kEnergyThreads) visits
+// terms(i, sum, other) for i = block kEnergyThreads + t, then a stride of kEnergyBlocks kEnergyThreads on, and the
+// block's trees sum `sum` and `other` (the second only where `pair`). A per-iteration kernel is virtual block
+// blockIdx.x; the cooperative kernel's blocks take the virtual blocks in turn. Ends with a barrier, so the cache
+// may be reused at once.
+template <typename Terms>
+__device__ void virtual_block_sums(int block, int count, bool pair, double* cache, Terms&& terms, double& total,
+                                   double& other_total) {
   double sum = 0.0, other = 0.0;
   const long long stride = static_cast<long long>(kEnergyBlocks) * kEnergyThreads;
-  for (long long i = static_cast<long long>(blockIdx.x) * kEnergyThreads + threadIdx.x; i < count; i += stride) {
-    sum += first[i] * second[i];
-    if (third != nullptr) other += third[i] * fourth[i];
+  for (long long i = static_cast<long long>(block) * kEnergyThreads + threadIdx.x; i < count; i += stride)
+    terms(static_cast<int>(i), sum, other);
+  total = block_tree_sum(sum, cache);
+  __syncthreads();  // every thread has read cache[0] before the next tree overwrites it
+  other_total = pair ? block_tree_sum(other, cache) : 0.0;
+  __syncthreads();
+}
+
+// The sums of the kEnergyBlocks partial sums in `partial` (and of the next kEnergyBlocks where `pair`), by one
+// block of kEnergyThreads threads in a fixed tree; every thread gets them. Ends with a barrier.
+__device__ void sum_partials(const double* partial, bool pair, double* cache, double& total, double& other_total) {
+  double sum = 0.0, other = 0.0;
+  for (int i = static_cast<int>(threadIdx.x); i < kEnergyBlocks; i += kEnergyThreads) {
+    sum += partial[i];
+    if (pair) other += partial[kEnergyBlocks + i];
   }
-  const double total = block_tree_sum(sum, cache);
-  __syncthreads();  // every thread has read cache[0] before the second tree overwrites it
-  const double other_total = block_tree_sum(other, cache);
+  total = block_tree_sum(sum, cache);
+  __syncthreads();
+  other_total = pair ? block_tree_sum(other, cache) : 0.0;
+  __syncthreads();
+}
+
+// One degree of freedom's update after alpha: x += alpha p, r -= alpha ap, z = M^-1 r.
+template <typename Real>
+__device__ void cg_update_entry(const ImplicitArguments<Real>& a, double alpha, int i) {
+  a.x[i] += alpha * a.p[i];
+  a.r[i] -= alpha * a.ap[i];
+  a.z[i] = a.inverse_jacobi[i] * a.r[i];
+}
+
+// The scalars after an iteration's residual sums, and the stopping test of the host loop it replaces
+// (while |r|^2 >= threshold and iterations < cap): a NaN residual stops, as there.
+__device__ void cg_finish_iteration(ConjugateGradientScalars& s, double rr, double rz_next, int limit) {
+  s.rr = rr;
+  s.rz_next = rz_next;
+  s.beta = rz_next / s.rz;
+  ++s.iterations;
+  s.done = !(rr >= s.threshold) || s.iterations >= limit ? 1 : 0;
+}
+
+// Partial sums of first . second (and of third . fourth when third is not null) over [0, count), in the fixed
+// shape of the energy sums; block b writes partial[b] and partial[kEnergyBlocks + b]. Nothing once `stop` (null
+// for the start's sums, which come before the step's `done` is set) is done.
+__global__ void dot_partial_kernel(const double* first, const double* second, const double* third, const double* fourth,
+                                   int count, double* partial, const ConjugateGradientScalars* stop) {
+  __shared__ double cache[kEnergyThreads];
+  if (stop != nullptr && stop->done) return;
+  const bool pair = third != nullptr;
+  double total = 0.0, other_total = 0.0;
+  virtual_block_sums(
+      static_cast<int>(blockIdx.x), count, pair, cache,
+      [&](int i, double& sum, double& other) {
+        sum += first[i] * second[i];
+        if (pair) other += third[i] * fourth[i];
+      },
+      total, other_total);
   if (threadIdx.x == 0) {
     partial[blockIdx.x] = total;
     partial[kEnergyBlocks + blockIdx.x] = other_total;
@@ -225,30 +313,43 @@ __global__ void dot_partial_kernel(const double* first, const double* second, co
 
 enum class CgStage : int { Start = 0, Alpha = 1, Residual = 2 };
 
-__global__ void cg_scalars_kernel(const double* partial, ConjugateGradientScalars* scalars, CgStage stage) {
+// The stage's scalars from the partial sums. Every thread reads `done` before the trees' barriers and only thread
+// 0 writes after them, so the block agrees on it.
+__global__ void cg_scalars_kernel(const double* partial, ConjugateGradientScalars* scalars, CgStage stage,
+                                  double tolerance, int limit) {
   __shared__ double cache[kEnergyThreads];
-  double sum = 0.0, other = 0.0;
-  for (int i = static_cast<int>(threadIdx.x); i < kEnergyBlocks; i += kEnergyThreads) {
-    sum += partial[i];
-    other += partial[kEnergyBlocks + i];
-  }
-  const double total = block_tree_sum(sum, cache);
-  __syncthreads();
-  const double other_total = block_tree_sum(other, cache);
+  if (stage != CgStage::Start && scalars->done) return;
+  double total = 0.0, other_total = 0.0;
+  sum_partials(partial, stage != CgStage::Alpha, cache, total, other_total);
   if (threadIdx.x != 0) return;
+  ConjugateGradientScalars& s = *scalars;
   switch (stage) {
-    case CgStage::Start:
-      scalars->rhs_norm2 = total;
-      scalars->rz = other_total;
+    case CgStage::Start: {
+      // Every field written, so that no later read (the cooperative kernel's copy, the host's) meets memory never
+      // written.
+      s.rhs_norm2 = total;
+      s.rz = other_total;
+      s.p_ap = 0.0;
+      s.alpha = 0.0;
+      s.rr = total;
+      s.rz_next = 0.0;
+      s.beta = 0.0;
+      const double threshold = tolerance * tolerance * total;
+      s.threshold = threshold < DBL_MIN ? DBL_MIN : threshold;
+      s.iterations = 0;
+      // As the CPU backend: a right-hand side this small means the system is at rest to double precision; dv = 0
+      // (the start's x) and the positions still move with their velocities.
+      s.at_rest = sqrt(total) < 1e-150 ? 1 : 0;
+      s.done = s.at_rest || !(total >= s.threshold) || limit <= 0 ? 1 : 0;
+      s.padding = 0;
       break;
+    }
     case CgStage::Alpha:
-      scalars->p_ap = total;
-      scalars->alpha = scalars->rz / total;
+      s.p_ap = total;
+      s.alpha = s.rz / total;
       break;
     case CgStage::Residual:
-      scalars->rr = total;
-      scalars->rz_next = other_total;
-      scalars->beta = other_total / scalars->rz;
+      cg_finish_iteration(s, total, other_total, limit);
       break;
   }
 }
@@ -267,20 +368,97 @@ __global__ void cg_start_kernel(ImplicitArguments<Real> a) {
 template <typename Real>
 __global__ void cg_update_kernel(ImplicitArguments<Real> a) {
   const int i = vertex_index();
-  if (i >= 3 * a.vertex_count) return;
-  const double alpha = a.scalars->alpha;
-  a.x[i] += alpha * a.p[i];
-  a.r[i] -= alpha * a.ap[i];
-  a.z[i] = a.inverse_jacobi[i] * a.r[i];
+  if (i >= 3 * a.vertex_count || a.scalars->done) return;
+  cg_update_entry(a, a.scalars->alpha, i);
 }
 
+// p = z + beta p, unless the iteration just made stopped the solve; thread 0 then moves rz_next into rz, which
+// nothing in this kernel reads.
 template <typename Real>
 __global__ void cg_direction_kernel(ImplicitArguments<Real> a) {
   const int i = vertex_index();
-  if (i >= 3 * a.vertex_count) return;
+  if (i >= 3 * a.vertex_count || a.scalars->done) return;
   a.p[i] = a.z[i] + a.scalars->beta * a.p[i];
-  // Nothing in this kernel reads rz: thread 0 may move rz_next into it.
   if (i == 0) a.scalars->rz = a.scalars->rz_next;
+}
+
+// The cooperative conjugate gradient (launch_cg_persistent): launch_cg_iterations' kernels as phases between grid
+// barriers, each thread taking the entries its kernel's thread would in turn (grid-stride), the dot products by the
+// same virtual blocks, and the scalars computed by every block from the same partial sums (so every block holds
+// the same bits and takes the same branch; block 0 stores them at the end). The alpha sums go to the second pair
+// of partial arrays: a block may write the residual's sums while another still reads alpha's.
+template <typename Real>
+__global__ void __launch_bounds__(kEnergyThreads) cg_persistent_kernel(ImplicitArguments<Real> a) {
+  namespace cg = cooperative_groups;
+  __shared__ double cache[kEnergyThreads];
+  cg::grid_group grid = cg::this_grid();
+  ConjugateGradientScalars s = *a.scalars;
+  const int dofs = 3 * a.vertex_count;
+  const int thread = vertex_index();
+  const int threads = static_cast<int>(gridDim.x) * static_cast<int>(blockDim.x);
+  double* residual_partial = a.partial;
+  double* alpha_partial = a.partial + 2 * kEnergyBlocks;
+  const int block = static_cast<int>(blockIdx.x), blocks = static_cast<int>(gridDim.x);
+  while (!s.done) {
+    if (a.elements.count > 0) {
+      for (int t = 0; t < a.elements.term_count; ++t) {
+        const kernels::ElementTermView<double>& term = a.elements.terms[t];
+        kernels::visit_element_term_on_device(term.element, term.law, [&](auto kind, auto element_law) {
+          using Element = decltype(kind);
+          using Law = decltype(element_law);
+          using Linearisation = typename Element::template Linearisation<Law>;
+          const auto* linearisation = static_cast<const Linearisation*>(a.elements.linearisation[t]);
+          for (int e = thread; e < a.elements.count; e += threads)
+            element_apply<Real, Element, Law>(a, term, linearisation, e, t > 0);
+        });
+      }
+      grid.sync();
+    }
+    for (int v = thread; v < a.vertex_count; v += threads) apply_row(a, v);
+    grid.sync();
+    for (int b = block; b < kEnergyBlocks; b += blocks) {
+      double total = 0.0, unused = 0.0;
+      virtual_block_sums(
+          b, dofs, false, cache, [&](int i, double& sum, double&) { sum += a.p[i] * a.ap[i]; }, total, unused);
+      if (threadIdx.x == 0) alpha_partial[b] = total;
+    }
+    grid.sync();
+    {
+      double p_ap = 0.0, unused = 0.0;
+      sum_partials(alpha_partial, false, cache, p_ap, unused);
+      s.p_ap = p_ap;
+      s.alpha = s.rz / p_ap;
+    }
+    // The update of an entry and its residual terms by the one thread that sums them: the values are those the
+    // per-iteration dot kernel would load after the update kernel.
+    for (int b = block; b < kEnergyBlocks; b += blocks) {
+      double total = 0.0, other_total = 0.0;
+      virtual_block_sums(
+          b, dofs, true, cache,
+          [&](int i, double& sum, double& other) {
+            cg_update_entry(a, s.alpha, i);
+            sum += a.r[i] * a.r[i];
+            other += a.r[i] * a.z[i];
+          },
+          total, other_total);
+      if (threadIdx.x == 0) {
+        residual_partial[b] = total;
+        residual_partial[kEnergyBlocks + b] = other_total;
+      }
+    }
+    grid.sync();
+    {
+      double rr = 0.0, rz_next = 0.0;
+      sum_partials(residual_partial, true, cache, rr, rz_next);
+      cg_finish_iteration(s, rr, rz_next, a.iteration_limit);
+    }
+    if (s.done) break;
+    for (int i = thread; i < dofs; i += threads) a.p[i] = a.z[i] + s.beta * a.p[i];
+    s.rz = s.rz_next;
+    grid.sync();
+  }
+  // Only after an iteration: every block then read *a.scalars before the first barrier.
+  if (block == 0 && threadIdx.x == 0 && s.iterations > 0) *a.scalars = s;
 }
 
 template <typename Real>
@@ -296,12 +474,47 @@ __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
   a.state.z[v] += h * a.state.vz[v];
 }
 
+// The tools' contact as the system's linear part (kernels/implicit_contact_math.h, as the CPU's ImplicitContact):
+// the vertex's active set at the state (predicted false) or after moving by h (v0 + dv) on its free axes with dv the
+// solution in x; a set that changes counts into *contact_changes; the vertex's part for its set into extra_blocks
+// and extra_rhs (zero for a vertex no tool can touch).
+template <typename Real>
+__global__ void contact_part_kernel(ImplicitArguments<Real> a, bool predicted) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count) return;
+  const double k = static_cast<double>(a.loads.contact.stiffness[v]);
+  double* block = a.extra_blocks + 6 * v;
+  double* rhs = a.extra_rhs + 3 * v;
+  if (!(k > 0.0)) {
+    if (predicted) return;
+    for (int i = 0; i < 6; ++i) block[i] = 0.0;
+    for (int c = 0; c < 3; ++c) rhs[c] = 0.0;
+    return;
+  }
+  const unsigned char held = a.loads.fixed[v];
+  const double x0[3] = {static_cast<double>(a.state.x[v]), static_cast<double>(a.state.y[v]),
+                        static_cast<double>(a.state.z[v])};
+  const double v0[3] = {static_cast<double>(a.state.vx[v]), static_cast<double>(a.state.vy[v]),
+                        static_cast<double>(a.state.vz[v])};
+  const auto set = static_cast<unsigned char>(
+      predicted ? kernels::predicted_contact_set(a.loads.contact, held, a.h, x0, v0, a.x + 3 * v)
+                : kernels::contact_set(a.loads.contact, x0[0], x0[1], x0[2], nullptr));
+  if (predicted) {
+    if (set == a.contact_active[v]) return;
+    atomicAdd(a.contact_changes, 1u);
+  }
+  a.contact_active[v] = set;
+  kernels::contact_system_part(a.loads.contact, set, k, a.h, x0, v0, held, block, rhs);
+}
+
 cudaError_t launch_dots(const double* first, const double* second, const double* third, const double* fourth, int count,
-                        double* partial, ConjugateGradientScalars* scalars, CgStage stage, cudaStream_t stream) {
-  dot_partial_kernel<<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(first, second, third, fourth, count, partial);
+                        double* partial, ConjugateGradientScalars* scalars, CgStage stage, double tolerance, int limit,
+                        cudaStream_t stream) {
+  dot_partial_kernel<<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(first, second, third, fourth, count, partial,
+                                                                   stage == CgStage::Start ? nullptr : scalars);
   const cudaError_t status = cudaGetLastError();
   if (status != cudaSuccess) return status;
-  cg_scalars_kernel<<<1, kEnergyThreads, 0, stream>>>(partial, scalars, stage);
+  cg_scalars_kernel<<<1, kEnergyThreads, 0, stream>>>(partial, scalars, stage, tolerance, limit);
   return cudaGetLastError();
 }
 
@@ -347,43 +560,78 @@ cudaError_t launch_cg_start(const ImplicitArguments<Real>& a, cudaStream_t strea
   cg_start_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
   const cudaError_t status = cudaGetLastError();
   if (status != cudaSuccess) return status;
-  return launch_dots(a.rhs, a.rhs, a.r, a.z, 3 * a.vertex_count, a.partial, a.scalars, CgStage::Start, stream);
+  return launch_dots(a.rhs, a.rhs, a.r, a.z, 3 * a.vertex_count, a.partial, a.scalars, CgStage::Start, a.tolerance,
+                     a.iteration_limit, stream);
 }
 
 template <typename Real>
-cudaError_t launch_cg_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+cudaError_t launch_cg_iterations(const ImplicitArguments<Real>& a, int count, cudaStream_t stream) {
   if (a.vertex_count <= 0) return cudaSuccess;
-  if (a.elements.count > 0) {
-    const cudaError_t status = for_each_term(a.elements, [&](auto kind, auto element_law, int t) {
-      using Element = decltype(kind);
-      using Law = decltype(element_law);
-      using Linearisation = typename Element::template Linearisation<Law>;
-      const auto* linearisation = static_cast<const Linearisation*>(a.elements.linearisation[t]);
-      if (t == 0) {
-        implicit_element_apply_kernel<Real, Element, Law, false>
-            <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
-      } else {
-        implicit_element_apply_kernel<Real, Element, Law, true>
-            <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
-      }
-    });
+  const int dofs = 3 * a.vertex_count;
+  for (int iteration = 0; iteration < count; ++iteration) {
+    if (a.elements.count > 0) {
+      const cudaError_t status = for_each_term(a.elements, [&](auto kind, auto element_law, int t) {
+        using Element = decltype(kind);
+        using Law = decltype(element_law);
+        using Linearisation = typename Element::template Linearisation<Law>;
+        const auto* linearisation = static_cast<const Linearisation*>(a.elements.linearisation[t]);
+        if (t == 0) {
+          implicit_element_apply_kernel<Real, Element, Law, false>
+              <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
+        } else {
+          implicit_element_apply_kernel<Real, Element, Law, true>
+              <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
+        }
+      });
+      if (status != cudaSuccess) return status;
+    }
+    implicit_apply_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+    cudaError_t status = cudaGetLastError();
+    if (status != cudaSuccess) return status;
+    status = launch_dots(a.p, a.ap, nullptr, nullptr, dofs, a.partial, a.scalars, CgStage::Alpha, a.tolerance,
+                         a.iteration_limit, stream);
+    if (status != cudaSuccess) return status;
+    cg_update_kernel<Real><<<blocks_for(dofs), kThreadsPerBlock, 0, stream>>>(a);
+    status = cudaGetLastError();
+    if (status != cudaSuccess) return status;
+    status = launch_dots(a.r, a.r, a.r, a.z, dofs, a.partial, a.scalars, CgStage::Residual, a.tolerance,
+                         a.iteration_limit, stream);
+    if (status != cudaSuccess) return status;
+    cg_direction_kernel<Real><<<blocks_for(dofs), kThreadsPerBlock, 0, stream>>>(a);
+    status = cudaGetLastError();
     if (status != cudaSuccess) return status;
   }
-  implicit_apply_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
-  cudaError_t status = cudaGetLastError();
-  if (status != cudaSuccess) return status;
-  status = launch_dots(a.p, a.ap, nullptr, nullptr, 3 * a.vertex_count, a.partial, a.scalars, CgStage::Alpha, stream);
-  if (status != cudaSuccess) return status;
-  cg_update_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
-  status = cudaGetLastError();
-  if (status != cudaSuccess) return status;
-  return launch_dots(a.r, a.r, a.r, a.z, 3 * a.vertex_count, a.partial, a.scalars, CgStage::Residual, stream);
+  return cudaSuccess;
 }
 
 template <typename Real>
-cudaError_t launch_cg_direction(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+cudaError_t cg_persistent_block_limit(int& blocks) {
+  blocks = 0;
+  int device = 0, cooperative = 0, multiprocessors = 0, per_multiprocessor = 0;
+  cudaError_t status = cudaGetDevice(&device);
+  if (status == cudaSuccess) status = cudaDeviceGetAttribute(&cooperative, cudaDevAttrCooperativeLaunch, device);
+  if (status == cudaSuccess) status = cudaDeviceGetAttribute(&multiprocessors, cudaDevAttrMultiProcessorCount, device);
+  if (status != cudaSuccess || cooperative == 0) return status;
+  status =
+      cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_multiprocessor, cg_persistent_kernel<Real>, kEnergyThreads, 0);
+  if (status == cudaSuccess) blocks = per_multiprocessor * multiprocessors;
+  return status;
+}
+
+template <typename Real>
+cudaError_t launch_cg_persistent(const ImplicitArguments<Real>& a, int blocks, cudaStream_t stream) {
   if (a.vertex_count <= 0) return cudaSuccess;
-  cg_direction_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+  if (blocks <= 0) return cudaErrorInvalidValue;
+  ImplicitArguments<Real> copy = a;
+  void* parameters[] = {&copy};
+  return cudaLaunchCooperativeKernel(reinterpret_cast<const void*>(cg_persistent_kernel<Real>), dim3(blocks),
+                                     dim3(kEnergyThreads), parameters, 0, stream);
+}
+
+template <typename Real>
+cudaError_t launch_contact_part(const ImplicitArguments<Real>& a, bool predicted, cudaStream_t stream) {
+  if (a.vertex_count <= 0 || a.extra_blocks == nullptr) return cudaSuccess;
+  contact_part_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a, predicted);
   return cudaGetLastError();
 }
 
@@ -394,11 +642,13 @@ cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_
   return cudaGetLastError();
 }
 
-#define FMPC_IMPLICIT_STEP_LAUNCHERS(Real)                                                           \
-  template cudaError_t launch_implicit_assemble<Real>(const ImplicitArguments<Real>&, cudaStream_t); \
-  template cudaError_t launch_cg_start<Real>(const ImplicitArguments<Real>&, cudaStream_t);          \
-  template cudaError_t launch_cg_iteration<Real>(const ImplicitArguments<Real>&, cudaStream_t);      \
-  template cudaError_t launch_cg_direction<Real>(const ImplicitArguments<Real>&, cudaStream_t);      \
+#define FMPC_IMPLICIT_STEP_LAUNCHERS(Real)                                                            \
+  template cudaError_t launch_implicit_assemble<Real>(const ImplicitArguments<Real>&, cudaStream_t);  \
+  template cudaError_t launch_cg_start<Real>(const ImplicitArguments<Real>&, cudaStream_t);           \
+  template cudaError_t launch_cg_iterations<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \
+  template cudaError_t launch_cg_persistent<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \
+  template cudaError_t cg_persistent_block_limit<Real>(int&);                                         \
+  template cudaError_t launch_contact_part<Real>(const ImplicitArguments<Real>&, bool, cudaStream_t); \
   template cudaError_t launch_implicit_finish<Real>(const ImplicitArguments<Real>&, cudaStream_t);
 FMPC_IMPLICIT_STEP_LAUNCHERS(float)
 FMPC_IMPLICIT_STEP_LAUNCHERS(double)

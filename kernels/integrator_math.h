@@ -1,5 +1,6 @@
 #pragma once
 // Per-vertex pieces of the integrators, shared by the CPU loops and the CUDA kernels.
+#include "kernels/contact_math.h"
 #include "kernels/fmpc_hd.h"
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
@@ -25,6 +26,7 @@ struct VertexLoads {
   Real gravity_x, gravity_y, gravity_z;
   Real gamma0, gamma1;  // nodal damping (Basafa-Farahmand), N s/m and N s/m^2
   Real mass_damping;    // Rayleigh's mass-proportional alpha (1/s): force -alpha m v
+  ContactView<Real> contact;  // rigid tools (kernels/contact_math.h); tool_count 0: none
 };
 
 // A vertex's own load values (VertexLoads' per-vertex arrays at one vertex): what loaded_acceleration reads besides
@@ -34,11 +36,12 @@ struct VertexLoadValues {
   Real mass;
   Real rest_x, rest_y, rest_z;     // read where there is nodal damping
   Real force_x, force_y, force_z;  // zero without external forces
+  Real contact_stiffness;          // zero without tools
 };
 
 template <typename Real>
 FMPC_HD VertexLoadValues<Real> vertex_load_values(const VertexLoads<Real>& loads, int v) {
-  VertexLoadValues<Real> l{loads.mass[v], Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
+  VertexLoadValues<Real> l{loads.mass[v], Real(0), Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
     l.rest_x = loads.rest_x[v];
     l.rest_y = loads.rest_y[v];
@@ -49,11 +52,13 @@ FMPC_HD VertexLoadValues<Real> vertex_load_values(const VertexLoads<Real>& loads
     l.force_y = loads.force_y[v];
     l.force_z = loads.force_z[v];
   }
+  if (loads.contact.tool_count > 0) l.contact_stiffness = loads.contact.stiffness[v];
   return l;
 }
 
 // Acceleration of a vertex at (x, v) = `self` with load values `own`, not held on every axis, under the model's
-// internal force f: (f + external force - (gamma0 + gamma1 |x - x0|) v - alpha m v) / m + g; zero along held axes.
+// internal force f: (f + external force + the tools' contact force - (gamma0 + gamma1 |x - x0|) v - alpha m v) / m
+// + g; zero along held axes.
 template <typename Real>
 FMPC_HD void loaded_acceleration(const VertexLoadValues<Real>& own, unsigned char held, const VertexState<Real>& self,
                                  Real fx, Real fy, Real fz, const VertexLoads<Real>& loads, Real& ax, Real& ay,
@@ -63,6 +68,8 @@ FMPC_HD void loaded_acceleration(const VertexLoadValues<Real>& own, unsigned cha
     fy += own.force_y;
     fz += own.force_z;
   }
+  if (own.contact_stiffness > Real(0))
+    add_contact_force(loads.contact, own.contact_stiffness, self.x, self.y, self.z, fx, fy, fz);
   if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
     const Real dx = self.x - own.rest_x, dy = self.y - own.rest_y, dz = self.z - own.rest_z;
     const Real gamma = loads.gamma0 + loads.gamma1 * square_root(dx * dx + dy * dy + dz * dz);

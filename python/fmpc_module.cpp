@@ -30,67 +30,14 @@
 #include "runtime/scene/scene_file.h"
 #include "runtime/scene/scene_run.h"
 #include "python/fmpc_module.h"
+#include "python/python_diagnostics.h"
+#include "python/session_module.h"
 
 namespace py = pybind11;
 
 namespace fmpc::python {
 
 namespace {
-
-// fmpc.Diagnostic: one diagnostic as data, with the compiler-style text fmpc check would print (`str()`).
-struct PyDiagnostic {
-  std::string severity;  // "error", "warning", "note"
-  std::string code;      // the warning's code ("unused-term"); empty for errors
-  std::string message;
-  std::string file;      // a path, or what the value came from ("points[3, 1]", "argument 'fix'")
-  int line = 0;          // 1-based; 0 when there is no position
-  int column = 0;
-  int end_line = 0;
-  int end_column = 0;
-  std::vector<std::string> notes;
-  std::string text;      // rendered, with the source line and caret where the file is known
-};
-
-// Messages may quote any bytes of any file (a binary file read as a scene): a Python str takes UTF-8 only, so every
-// text goes through valid_utf8 (a bad byte becomes U+FFFD) instead of raising UnicodeDecodeError.
-std::vector<PyDiagnostic> to_python(const DiagnosticList& diagnostics, const SourceFiles& sources) {
-  std::vector<PyDiagnostic> out;
-  for (const Diagnostic& d : diagnostics.items()) {
-    std::string text = render(d, sources);
-    while (!text.empty() && text.back() == '\n') text.pop_back();
-    std::vector<std::string> notes;
-    for (const std::string& note : d.notes) notes.push_back(valid_utf8(note));
-    out.push_back(PyDiagnostic{severity_name(d.severity), valid_utf8(d.code), valid_utf8(d.message),
-                               valid_utf8(d.range.file), d.range.line, d.range.column, d.range.end_line,
-                               d.range.end_column, std::move(notes), valid_utf8(text)});
-  }
-  return out;
-}
-
-// Set once at import: the fmpc.Error class.
-PyObject* error_class = nullptr;
-
-// Raises fmpc.Error with every diagnostic (its message: the rendered errors; .diagnostics: all of them).
-[[noreturn]] void raise_error(const DiagnosticList& diagnostics, const SourceFiles& sources) {
-  const std::vector<PyDiagnostic> items = to_python(diagnostics, sources);
-  std::string message;
-  for (const PyDiagnostic& d : items)
-    if (d.severity == "error") message += (message.empty() ? "" : "\n") + d.text;
-  if (message.empty()) message = "fmpc: error";
-  py::object error = py::reinterpret_borrow<py::object>(error_class)(message);
-  error.attr("diagnostics") = py::cast(items);
-  PyErr_SetObject(error_class, error.ptr());
-  throw py::error_already_set();
-}
-
-[[noreturn]] void raise_error(const SourceRange& where, const std::string& message,
-                              std::vector<std::string> notes = {}) {
-  DiagnosticList diagnostics;
-  diagnostics.error(where, message, std::move(notes));
-  raise_error(diagnostics, SourceFiles{});
-}
-
-SourceRange argument(const std::string& name) { return SourceRange{"argument '" + name + "'", 0, 0, 0, 0}; }
 
 // ---- arguments ----
 // Every argument a function of the module takes comes in as a Python object and is converted here, so that a
@@ -578,7 +525,7 @@ void define_fmpc_module(py::module_& m) {
   m.doc() = "fmpc: fuzzy rule files (fmpc, MATLAB .fis, FLL, FCL), their evaluation on numpy arrays, lookup tables "
             "and the soft-tissue simulator (docs/python.md)";
   static py::exception<std::runtime_error> error(m, "Error", PyExc_ValueError);
-  error_class = error.ptr();
+  set_error_class(error.ptr());
   error.attr("__doc__") = "An error a user caused; .diagnostics lists every diagnostic (fmpc.Diagnostic), str() the errors";
 
   py::class_<PyDiagnostic>(m, "Diagnostic", "One diagnostic: severity, code, message, file, line, column, notes")
@@ -665,6 +612,7 @@ void define_fmpc_module(py::module_& m) {
   m.def("simulate", &simulate, py::arg("scene"), py::arg("output_directory") = py::none(),
         "Runs a scene file (docs/scenes.md) and writes its outputs (to output_directory, default the scene's); "
         "returns the probe curve and final positions as arrays and the summary as a dict.");
+  bind_session(m);
 }
 
 }  // namespace fmpc::python

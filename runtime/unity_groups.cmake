@@ -1,7 +1,8 @@
 # Unity groups of fmpc_runtime (cmake/FmpcUnityGroups.cmake): files that share no file-scope name, about 10 to 20
 # CPU-seconds of a Release compile each. A file in no group (a new one, runtime/gpu/) compiles alone; a file that
 # no longer exists is ignored. mesh_check.cpp and validate_setup.cpp both define finite_point, material_binding.cpp
-# and scene_builder.cpp both define inside: each pair is kept in different groups.
+# and scene_builder.cpp both define inside, rigid_tools.cpp defines finite_point too: each is kept in a different
+# group.
 fmpc_unity_group(fmpc_runtime runtime_mesh
   mesh/generated_mesh.cpp
   mesh/gmsh_reader.cpp
@@ -20,12 +21,14 @@ fmpc_unity_group(fmpc_runtime runtime_models
   integrate/element_outputs.cpp
   integrate/loads.cpp
   integrate/model_tangent.cpp
+  integrate/rigid_tools.cpp
   integrate/stability.cpp
   integrate/worker_pool.cpp)
 fmpc_unity_group(fmpc_runtime runtime_integrate
   integrate/cpu_engine.cpp
   integrate/run_supervisor.cpp
   integrate/simulate.cpp
+  integrate/simulation_tools.cpp
   integrate/static_equilibrium.cpp
   integrate/validate_setup.cpp)
 fmpc_unity_group(fmpc_runtime runtime_io
@@ -43,6 +46,7 @@ fmpc_unity_group(fmpc_runtime runtime_scene_file
   scene/scene_file_loads.cpp
   scene/scene_file_material.cpp
   scene/scene_file_run.cpp
+  scene/scene_file_tools.cpp
   scene/scene_file_yaml.cpp
   scene/material_binding.cpp
   scene/cohort.cpp)

@@ -4,6 +4,7 @@
 fmpc_unity_group(fmpc_tests tests_0
   unit/matlab_fis_test.cpp
   unit/fmpc_language_test.cpp
+  unit/fmpc_writer_test.cpp
   support/setup_reference.cpp
   unit/interpreter_test.cpp
   unit/tetrahedron_math_test.cpp
@@ -80,3 +81,6 @@ fmpc_unity_group(fmpc_tests tests_11
   unit/plot_test.cpp
   unit/sim_loads_test.cpp
   unit/packed_table_test.cpp)
+fmpc_unity_group(fmpc_tests tests_12
+  unit/rigid_tool_test.cpp
+  unit/session_test.cpp)

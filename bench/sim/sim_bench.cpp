@@ -6,11 +6,16 @@
 // from ~8k to ~10M tetrahedra and springs with the volume term. Writes a CSV and prints a table.
 //
 //   fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only]
-//                  [--cohort PATIENTS]
+//                  [--cohort PATIENTS] [--liver PATH] [--implicit-only]
 //
 // --cohort N: the cohort row's patients (default 1,000; 64 with --quick unless --cohort is given): the demo scene's
 // block with its probe, one batch (fmpc simulate --patients), aggregate spring-steps/s.
 // --fem-only: the element rows alone; with --fem-cells N > 52, only the N^3 box on the GPU (for profilers).
+// --liver PATH: SOFA's liver.msh (../shared/data/sofa-liver), for the implicit Euler rows at SOFA's settings.
+// --implicit-only: the implicit Euler rows alone (issue 27 item 3): SOFA's liver FEM scene (rulesets/scenes/
+// sofa_liver_fem.yaml: 596 tetrahedra, dt 0.02, the CG capped at 25 iterations) and the 20^3-cell FEM box at dt
+// 1 ms (bench/scenes/box20_fem_implicit.yaml), on the CPU and on CUDA (the conjugate gradient in one cooperative
+// launch per step, and in per-iteration launches), with the iterations and residuals reached in column `solver`.
 //
 // Every run checks for NaN/Inf every 64 steps (the default of advance), and the time includes that check's
 // synchronisation. Scene creation and upload are not timed; one warm-up chunk (graph capture) is excluded.
@@ -33,6 +38,7 @@
 #include "runtime/fem/element_law_registry.h"
 #include "runtime/gpu/gpu_simulation.h"
 #include "runtime/mesh/generated_mesh.h"
+#include "runtime/mesh/mesh_reader.h"
 #include "runtime/scene/spring_model_builder.h"
 
 using namespace fmpc;
@@ -65,10 +71,12 @@ struct Options {
   double min_seconds = 0.5;
   int fem_cells = 120;  // the largest FEM box, GPU only: 120^3 cells = 10,368,000 tetrahedra
   bool fem_only = false;
-  std::size_t cohort = 1000;  // patients of the demo scene in the cohort row
-  bool cohort_given = false;  // --cohort N also holds with --quick
-  int spring_cells = 0;       // > 0: only the large springs box of this many cells per side (GPU rows)
-  bool cohort_only = false;   // only the cohort rows (with --spring-cells: both)
+  std::size_t cohort = 1000;   // patients of the demo scene in the cohort row
+  bool cohort_given = false;   // --cohort N also holds with --quick
+  int spring_cells = 0;        // > 0: only the large springs box of this many cells per side (GPU rows)
+  bool cohort_only = false;    // only the cohort rows (with --spring-cells: both)
+  std::string liver;           // SOFA's liver.msh for the implicit rows (empty: the liver row is skipped)
+  bool implicit_only = false;  // only the implicit Euler rows
 };
 
 struct Row {
@@ -86,6 +94,7 @@ struct Row {
   std::size_t steps = 0;
   double seconds = 0.0;
   std::string status = "ok";
+  std::string solver = "-";  // implicit Euler: the iterations and the residuals the timed steps reached
 
   double microseconds_per_step() const { return steps == 0 ? 0.0 : 1e6 * seconds / static_cast<double>(steps); }
   double spring_steps_per_second() const {
@@ -420,27 +429,145 @@ std::string scientific(double value) {
 
 void write_csv(const std::vector<Row>& rows, std::ostream& out) {
   out << "model,variant,backend,precision,integrator,graphs,threads,scenes,vertices,springs,tetrahedra,steps,seconds,"
-         "us_per_step,spring_steps_per_s,tetrahedron_steps_per_s,status\n";
+         "us_per_step,spring_steps_per_s,tetrahedron_steps_per_s,status,solver\n";
   for (const Row& r : rows) {
     out << r.model << ',' << r.variant << ',' << r.backend << ',' << r.precision << ',' << r.integrator << ','
         << r.graphs << ',' << r.threads << ',' << r.scenes << ',' << r.vertices << ',' << r.springs << ',' << r.elements
         << ',' << r.steps << ',' << format(r.seconds, 6) << ',' << format(r.microseconds_per_step(), 3) << ','
         << scientific(r.spring_steps_per_second()) << ',' << scientific(r.element_steps_per_second()) << ",\""
-        << r.status << "\"\n";
+        << r.status << "\",\"" << r.solver << "\"\n";
   }
 }
 
 void print_table(const std::vector<Row>& rows, std::ostream& out) {
   out << "| model | variant | precision | integrator | graphs | threads | scenes | springs | tetrahedra | us/step | "
-         "spring-steps/s | tet-steps/s |\n";
-  out << "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+         "spring-steps/s | tet-steps/s | solver |\n";
+  out << "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
   for (const Row& r : rows) {
     out << "| " << r.model << " | " << r.variant << " | " << r.precision << " | " << r.integrator << " | " << r.graphs
         << " | " << r.threads << " | " << r.scenes << " | " << r.springs << " | " << r.elements << " | "
         << (r.status == "ok" ? format(r.microseconds_per_step(), 2) : r.status) << " | "
         << (r.status == "ok" && r.springs > 0 ? scientific(r.spring_steps_per_second()) : "-") << " | "
-        << (r.status == "ok" && r.elements > 0 ? scientific(r.element_steps_per_second()) : "-") << " |\n";
+        << (r.status == "ok" && r.elements > 0 ? scientific(r.element_steps_per_second()) : "-") << " | " << r.solver
+        << " |\n";
   }
+}
+
+// SOFA's liver FEM scene as rulesets/scenes/sofa_liver_fem.yaml sets it (E 3 kPa, nu 0.3, density 1, Rayleigh 0.1
+// mass and 0.1 stiffness, nodes 3 39 64 fixed, gravity -9.81 along y, dt 0.02, double), with SOFA's CG cap of 25
+// iterations; nullopt (the error printed) where the mesh cannot be read.
+std::optional<SimulationSetup> sofa_liver_fem(const std::string& path) {
+  DiagnosticList diagnostics;
+  const std::optional<Mesh> mesh = read_mesh_file(path, diagnostics);
+  std::optional<SimulationSetup> setup;
+  if (mesh) {
+    FemModelSpec spec;
+    spec.youngs_modulus = {3000.0};
+    spec.poisson_ratio = {0.3};
+    spec.mass.value = 1.0;
+    spec.rayleigh_stiffness = 0.1;
+    setup = build_fem_model(*mesh, spec, diagnostics);
+  }
+  if (!setup) {
+    std::cerr << path << ": " << failure_text(diagnostics) << "\n";
+    return std::nullopt;
+  }
+  setup->mass_damping = 0.1;
+  setup->fixed_vertices = {3, 39, 64};
+  setup->gravity = {0.0, -9.81, 0.0};
+  setup->time_step = 0.02;
+  setup->integrator = Integrator::ImplicitEuler;
+  setup->precision = Precision::Double;
+  setup->implicit.max_iterations = 25;
+  return setup;
+}
+
+// The timed steps' solver report: the most and mean iterations, the largest relative residual reached and the
+// steps stopped at the cap.
+std::string solver_text(const ImplicitSolverReport& report, std::size_t steps_before) {
+  if (report.steps == 0) return "-";
+  std::ostringstream text;
+  text << to_string(report.method) << " tol " << scientific(report.tolerance) << " cap " << report.max_iterations
+       << ": iterations " << report.iterations_min << "-" << report.iterations_max << " (mean "
+       << format(static_cast<double>(report.iterations_total) / static_cast<double>(report.steps), 1)
+       << "), residual max " << scientific(report.residual_max) << ", capped " << report.capped_steps << " of "
+       << report.steps << " steps (" << steps_before << " untimed first)";
+  return text.str();
+}
+
+// One implicit Euler row: on the CPU with `threads` workers (cuda false), or on CUDA with the conjugate gradient in
+// one cooperative launch per step (persistent) or in per-iteration launches.
+Row implicit_row(const SimulationSetup& base, const std::string& model, bool cuda, bool persistent, unsigned threads,
+                 const Options& options) {
+  SimulationSetup setup = base;
+  setup.threads = threads;
+  Row row;
+  row.model = model;
+  row.elements = element_count(setup);
+  row.variant = cuda ? "cuda" : "cpu";
+  row.backend = cuda ? "cuda" : "cpu";
+  row.precision = precision_name(setup.precision);
+  row.integrator = to_string(setup.integrator);
+  // The cooperative CG runs where the launch plan finds the mesh fits (both scenes here on an H100).
+  row.graphs = cuda ? (persistent ? "cg cooperative where it fits" : "cg per iteration") : "-";
+  row.threads = cuda ? 1 : threads;
+  row.vertices = setup.rest_positions.size();
+  row.springs = setup.springs.size();
+  DiagnosticList diagnostics;
+  SimulationOptions simulation_options;
+  if (cuda) {
+    simulation_options.backend = Backend::Cuda;
+    simulation_options.gpu.persistent = persistent;
+  }
+  const std::unique_ptr<Simulation> simulation = Simulation::create(setup, diagnostics, simulation_options);
+  constexpr std::size_t kFirst = 8;
+  if (!simulation || !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics); }, kFirst,
+                                 options.min_seconds, row)) {
+    row.status = failure_text(diagnostics);
+    return row;
+  }
+  row.solver = solver_text(simulation->implicit_solver(), kFirst);
+  return row;
+}
+
+// Issue 27 item 3's rows (see the header): SOFA's liver (when --liver names its mesh) and the 20^3 FEM box.
+std::vector<Row> implicit_rows(const Options& options, bool have_device, unsigned threads) {
+  std::vector<std::pair<std::string, SimulationSetup>> scenes;
+  if (!options.liver.empty()) {
+    if (std::optional<SimulationSetup> liver = sofa_liver_fem(options.liver)) {
+      scenes.emplace_back("SOFA liver FEM (cap 25)", std::move(*liver));
+    } else {
+      Row row;
+      row.model = "SOFA liver FEM (cap 25)";
+      row.variant = "setup";
+      row.status = "failed: " + options.liver + " not read";
+      return {row};
+    }
+  }
+  SimulationSetup box = benchmark_element_box(20, false);
+  box.integrator = Integrator::ImplicitEuler;
+  box.precision = Precision::Double;
+  box.time_step = 0.001;
+  scenes.emplace_back("FEM box 20^3 (dt 1 ms)", std::move(box));
+  std::vector<Row> rows;
+  for (const auto& [name, setup] : scenes) {
+    std::cout << "implicit Euler, " << name << ": " << setup.rest_positions.size() << " vertices, "
+              << setup.tetrahedra.size() << " tetrahedra\n"
+              << std::flush;
+    const bool small = setup.rest_positions.size() < 1000;
+    if (small) {
+      // SOFA's settings on one core: the CG capped at 25 iterations, and the automatic choice (the direct solver).
+      SimulationSetup cg = setup;
+      cg.implicit.method = ImplicitMethod::ConjugateGradient;
+      rows.push_back(implicit_row(cg, name, false, false, 1, options));
+      rows.push_back(implicit_row(setup, name, false, false, 1, options));
+    } else {
+      rows.push_back(implicit_row(setup, name, false, false, threads, options));
+    }
+    if (!have_device) continue;
+    for (const bool persistent : {true, false}) rows.push_back(implicit_row(setup, name, true, persistent, 1, options));
+  }
+  return rows;
 }
 
 bool parse(int argc, char** argv, Options& options) {
@@ -465,10 +592,14 @@ bool parse(int argc, char** argv, Options& options) {
       options.cohort_only = true;
     } else if (arg == "--spring-cells" && i + 1 < argc) {
       options.spring_cells = static_cast<int>(std::strtol(argv[++i], nullptr, 10));
+    } else if (arg == "--liver" && i + 1 < argc) {
+      options.liver = argv[++i];
+    } else if (arg == "--implicit-only") {
+      options.implicit_only = true;
     } else {
       std::cerr
           << "usage: fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only] "
-             "[--cohort PATIENTS] [--cohort-only] [--spring-cells N]\n";
+             "[--cohort PATIENTS] [--cohort-only] [--spring-cells N] [--liver PATH] [--implicit-only]\n";
       return false;
     }
   }
@@ -490,7 +621,7 @@ int main(int argc, char** argv) {
   // issue 13 small mesh), 24 -> 102,024, 52 -> 1,008,748.
   std::vector<int> sizes = options.quick ? std::vector<int>{5, 11, 20} : std::vector<int>{5, 11, 20, 24, 52};
   // Parts measured alone: the FEM boxes, the large springs box, the cohort.
-  const bool part_alone = options.fem_only || options.spring_cells > 0 || options.cohort_only;
+  const bool part_alone = options.fem_only || options.spring_cells > 0 || options.cohort_only || options.implicit_only;
   if (part_alone) sizes.clear();
   std::vector<Row> rows;
   // Issue 13's large springs box on the GPU alone (--spring-cells; 240 is the end-to-end scene's): the per-step
@@ -564,7 +695,7 @@ int main(int argc, char** argv) {
   // GPU only, semi-implicit Euler in float and double (issue 10: 10 G tetrahedron-steps/s at 10M tetrahedra).
   std::vector<int> fem_sizes = options.quick ? std::vector<int>{5, 11} : std::vector<int>{11, 24, 52};
   if (!options.quick && have_device && options.fem_cells > 52) fem_sizes.push_back(options.fem_cells);
-  if (options.spring_cells > 0 || options.cohort_only) fem_sizes.clear();
+  if (options.spring_cells > 0 || options.cohort_only || options.implicit_only) fem_sizes.clear();
   if (options.fem_only && options.fem_cells > 52) fem_sizes = {options.fem_cells};
   for (const int cells : fem_sizes) {
     for (const bool with_springs : {false, true}) {
@@ -601,6 +732,9 @@ int main(int argc, char** argv) {
         rows.push_back(gpu_row(base, Precision::Float, Integrator::ImplicitEuler, Launch::Graphs, options));
     }
   }
+
+  if (!part_alone || options.implicit_only)
+    for (Row& row : implicit_rows(options, have_device, threads)) rows.push_back(row);
 
   // The table first: a results folder that cannot be written loses nothing of a long run.
   print_table(rows, std::cout);

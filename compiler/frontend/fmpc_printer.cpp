@@ -40,18 +40,60 @@ class Printer {
       if (file.end_comments.blank_line_before && !out_.empty()) out_ += '\n';
       for (const std::string& comment : file.end_comments.leading) out_ += comment + '\n';  // "" is a blank line
     }
-    return out_;
+    return aligned_trailing_comments();
   }
 
  private:
+  // A line that ends in a comment: where it starts, where its code ends and where its '\n' is, in out_.
+  struct TrailingComment {
+    std::size_t start, code_end, line_end;
+  };
+
+  static std::size_t code_points(const std::string& text, std::size_t from, std::size_t to) {
+    std::size_t count = 0;
+    for (std::size_t i = from; i < to; ++i) count += (static_cast<unsigned char>(text[i]) & 0xC0) != 0x80;
+    return count;
+  }
+
+  // The trailing comments of consecutive lines start in one column, two spaces after the longest line's code, as
+  // gofmt aligns them, so that a hand-aligned column survives `fmpc fmt`; a blank line, a comment line or a line
+  // without a trailing comment ends the run.
+  std::string aligned_trailing_comments() const {
+    if (trailing_.empty()) return out_;
+    std::string aligned;
+    aligned.reserve(out_.size() + out_.size() / 8);
+    std::size_t copied = 0;
+    for (std::size_t first = 0; first < trailing_.size();) {
+      std::size_t last = first;
+      while (last + 1 < trailing_.size() && trailing_[last + 1].start == trailing_[last].line_end + 1) ++last;
+      std::size_t width = 0;
+      for (std::size_t i = first; i <= last; ++i)
+        width = std::max(width, code_points(out_, trailing_[i].start, trailing_[i].code_end));
+      for (std::size_t i = first; i <= last; ++i) {
+        const TrailingComment& line = trailing_[i];
+        aligned.append(out_, copied, line.code_end - copied);
+        aligned.append(width - code_points(out_, line.start, line.code_end) + 2, ' ');
+        copied = line.code_end;
+      }
+      first = last + 1;
+    }
+    aligned.append(out_, copied, std::string::npos);
+    return aligned;
+  }
+
   void leading(const Comments& comments, const char* indent) {
     for (const std::string& comment : comments.leading) out_ += (comment.empty() ? "" : indent + comment) + '\n';
   }
 
   void line(const Comments& comments, const char* indent, const std::string& text) {
     leading(comments, indent);
+    const std::size_t start = out_.size();
     out_ += indent + text;
-    if (!comments.trailing.empty()) out_ += "  " + comments.trailing;
+    if (!comments.trailing.empty()) {
+      const std::size_t code_end = out_.size();
+      out_ += comments.trailing;
+      trailing_.push_back({start, code_end, out_.size()});
+    }
     out_ += '\n';
   }
 
@@ -245,6 +287,7 @@ class Printer {
 
  private:
   std::string out_;
+  std::vector<TrailingComment> trailing_;
 };
 
 // A description or name that the language cannot hold verbatim: '"' becomes '\'', line breaks become spaces.

@@ -196,6 +196,10 @@ const char* single_scene_feature(const sim::SimulationSetup& setup) {
     return "a scene with table-driven stiffness k(strain) runs on its own on the GPU; run it as a simulation of its "
            "own";
   }
+  if (!setup.tools.empty()) {
+    return "a scene with rigid tools runs on its own on the GPU (its tools' poses are the launch's); run it as a "
+           "simulation of its own";
+  }
   if (sim::has_point_state(setup.elements)) {
     return "a viscoelastic scene runs on its own on the GPU (its Prony constants depend on the scene's time step); "
            "run it as a simulation of its own";

@@ -38,6 +38,14 @@ class DeviceArray {
     data_ = static_cast<T*>(raw);
     return cudaMemset(data_, 0, size_ * sizeof(T));
   }
+  // Copies `host` into the allocation as it is, on `stream` (its pointer, which launches and graphs hold, stays);
+  // cudaErrorInvalidValue where the sizes differ.
+  template <typename Allocator>
+  cudaError_t overwrite(const std::vector<T, Allocator>& host, cudaStream_t stream) {
+    if (host.size() != size_) return cudaErrorInvalidValue;
+    if (size_ == 0) return cudaSuccess;
+    return cudaMemcpyAsync(data_, host.data(), size_ * sizeof(T), cudaMemcpyHostToDevice, stream);
+  }
   T* data() const { return data_; }
   std::size_t size() const { return size_; }
 

@@ -100,6 +100,9 @@ class GpuEngine final : public sim::SteppingEngine {
 
   std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const override;
 
+  // The held state's position arrays at the scene's first vertex, after the stream has finished.
+  std::optional<sim::DevicePositions> device_positions(std::size_t scene, DiagnosticList& diagnostics) const override;
+
   // Every sample of a probed scene reads it (100 per run): positions and velocities with one synchronisation into
   // buffers kept between readings, and without a strain table the stiffness as uploaded (rounded to Real), made once
   // for the scene instead of downloaded. Fresh buffers and the stiffness made per reading cost about 0.3 ms per
@@ -116,6 +119,16 @@ class GpuEngine final : public sim::SteppingEngine {
   std::optional<double> largest_displacement(std::size_t scene, DiagnosticList& diagnostics) const override;
   std::optional<double> elastic_energy(std::size_t scene, DiagnosticList& diagnostics) const override;
   std::optional<double> potential_energy(std::size_t scene, DiagnosticList& diagnostics) const override;
+
+  // Rigid tools and the material (gpu_engine_contact.cpp): a batch with tools is one scene (batch_accepts). The
+  // contact stiffness and the tools' shapes are written into allocations made once, whose pointers loads_ (and so
+  // every captured graph) keeps; a pose costs one copy of kMostTools shapes on the stream.
+  bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList& diagnostics) override;
+  bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,
+                       DiagnosticList& diagnostics) override;
+  // The scenes' material arrays copied again into their allocations (Real and double), and the springs' records
+  // rebuilt from them; graphs are captured again on their next use.
+  bool refresh_material(std::size_t scene, DiagnosticList& diagnostics) override;
 
  private:
   bool synchronize(DiagnosticList& diagnostics) const;
@@ -161,9 +174,14 @@ class GpuEngine final : public sim::SteppingEngine {
   bool read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics);
 
   // One implicit Euler step: assemble, then Eigen's preconditioned conjugate gradient (same iteration, same
-  // stopping rule, same warning as the CPU backend), then v += dv, x += h v. The host reads |r|^2 once per
-  // iteration, so implicit steps are never captured into graphs.
+  // stopping rule, same warning as the CPU backend) stopping on the device, in one cooperative launch
+  // (LaunchPlan::cg_grid_blocks) or in chunks of per-iteration launches, then v += dv, x += h v; with tools, the
+  // contact's linear part solved again until its active set stays, as on the CPU. The host reads the solver's
+  // scalars once per launch or chunk, so implicit steps are never captured into graphs.
   bool implicit_solve(DiagnosticList& diagnostics);
+  // One solve of the assembled system (x = dv) into `scalars`.
+  bool conjugate_gradient(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
+                          DiagnosticList& diagnostics);
 
   VerletArguments<Real> verlet_arguments() const;
 
@@ -268,6 +286,7 @@ class GpuEngine final : public sim::SteppingEngine {
   DeviceArray<double> implicit_rest_, implicit_blocks_, implicit_diagonal_, implicit_jacobi_, implicit_rhs_;
   DeviceArray<double> cg_x_, cg_r_, cg_z_, cg_p_, cg_ap_, cg_partial_;
   DeviceArray<ConjugateGradientScalars> cg_scalars_;
+  int cg_previous_iterations_ = 0;  // the last solve's iterations: the first chunk's length (per-iteration launches)
   unsigned long long step_base_host_ = 0;
   sim::ImplicitSolverLog implicit_log_;  // implicit Euler's solves (a batch of one scene)
   DeviceState<Real> state_[2];
@@ -309,6 +328,14 @@ class GpuEngine final : public sim::SteppingEngine {
   DeviceArray<kernels::CornerForce<Real>> corner_force_;
   DeviceArray<double> element_rhs_part_, element_diagonal_part_, element_product_;
   kernels::VertexLoads<Real> loads_{};
+  // The tools' contact (set_contact, set_tool_shapes): loads_.contact points at these.
+  DeviceArray<kernels::ToolShape<Real>> tools_;
+  DeviceArray<Real> contact_stiffness_;
+  DeviceArray<double> contact_blocks_, contact_rhs_;  // implicit Euler's contact part: 6 and 3 per vertex
+  DeviceArray<unsigned char> contact_active_;  // implicit Euler's contact set per vertex
+  DeviceArray<unsigned int> contact_changes_;
+  bool contact_warning_given_ = false;
+  std::vector<kernels::ToolShape<Real>> tool_shapes_;
   StepSize<Real> step_{};
   std::map<std::pair<std::size_t, int>, std::unique_ptr<GraphExecutable>> graphs_;
   int current_ = 0;

@@ -1,11 +1,10 @@
 // Implicit Euler on the device: assembly and the Jacobi-preconditioned conjugate gradient (kernels/implicit_math.h),
 // stopped and warned about as on the CPU.
-#include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "runtime/gpu/cuda_check.h"
 #include "runtime/gpu/gpu_engine.h"
+#include "runtime/gpu/launch_plan.h"
 
 namespace fmpc::gpu {
 
@@ -26,6 +25,11 @@ ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments() {
   a.vertex_count = n_;
   a.spring_count = spring_begin_.back();
   a.blocks = implicit_blocks_.data();
+  const bool contact = loads_.contact.tool_count > 0;
+  a.extra_blocks = contact ? contact_blocks_.data() : nullptr;
+  a.extra_rhs = contact ? contact_rhs_.data() : nullptr;
+  a.contact_active = contact ? contact_active_.data() : nullptr;
+  a.contact_changes = contact ? contact_changes_.data() : nullptr;
   a.diagonal = implicit_diagonal_.data();
   a.inverse_jacobi = implicit_jacobi_.data();
   a.rhs = implicit_rhs_.data();
@@ -36,6 +40,8 @@ ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments() {
   a.ap = cg_ap_.data();
   a.scalars = cg_scalars_.data();
   a.partial = cg_partial_.data();
+  a.tolerance = scenes_.front().implicit.tolerance;
+  a.iteration_limit = sim::implicit_iteration_limit(scenes_.front());
   return a;
 }
 
@@ -49,46 +55,77 @@ bool GpuEngine<Real>::read_cg_scalars(ConjugateGradientScalars& scalars, Diagnos
 template <typename Real>
 bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
   const ImplicitArguments<Real> a = implicit_arguments();
+  const bool contact = a.extra_blocks != nullptr;
+  // The tools' contact as the system's linear part (launch_contact_part): the pairs inside at the step's start,
+  // then those the solution predicts inside, solved again until the set stays, as on the CPU (a later round's CG
+  // starts from zero where the CPU's starts from the last round's dv: the two agree to the solver's tolerance).
+  FMPC_CUDA_CHECK(launch_contact_part(a, false, stream_), diagnostics, false);
+  ConjugateGradientScalars scalars{};
+  int iterations = 0;
+  for (int round = 1;; ++round) {
+    if (!conjugate_gradient(a, scalars, diagnostics)) return false;
+    iterations += scalars.iterations;
+    if (!contact || scalars.at_rest) break;
+    unsigned int changes = 0;
+    FMPC_CUDA_CHECK(cudaMemsetAsync(a.contact_changes, 0, sizeof changes, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_contact_part(a, true, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(cudaMemcpyAsync(&changes, a.contact_changes, sizeof changes, cudaMemcpyDeviceToHost, stream_),
+                    diagnostics, false);
+    if (!synchronize(diagnostics)) return false;
+    if (changes == 0) break;
+    if (round == kernels::kMostContactRounds) {
+      if (!contact_warning_given_) {
+        contact_warning_given_ = true;
+        diagnostics.warning(scenes_.front().source_range, "contact-not-settled",
+                            sim::contact_unsettled_message(steps_taken_ + 1, kernels::kMostContactRounds));
+      }
+      break;
+    }
+  }
+  if (scalars.at_rest) {
+    implicit_log_.record({steps_taken_ + 1, 0, 0.0, false});
+  } else {
+    const double error = std::sqrt(scalars.rr / scalars.rhs_norm2);
+    const sim::ImplicitStepRecord record{steps_taken_ + 1, iterations, error, !(scalars.rr < scalars.threshold)};
+    if (implicit_log_.record(record))
+      diagnostics.warning(scenes_.front().source_range, "cg-not-converged",
+                          sim::cg_stopped_message(sim::ImplicitMethod::ConjugateGradient, record.step, iterations,
+                                                  error, scenes_.front().implicit.tolerance));
+  }
+  FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
+  return true;
+}
+
+template <typename Real>
+bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
+                                         DiagnosticList& diagnostics) {
   FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
   FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
-  ConjugateGradientScalars scalars{};
-  if (!read_cg_scalars(scalars, diagnostics)) return false;
-  const sim::ImplicitSolverOptions& options = scenes_.front().implicit;
-  // As the CPU backend: a right-hand side this small means the system is at rest to double precision; dv = 0 (the
-  // start's x) and the positions still move with their velocities.
-  if (std::sqrt(scalars.rhs_norm2) < 1e-150) {
-    implicit_log_.record({steps_taken_ + 1, 0, 0.0, false});
-    FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
-    return true;
-  }
-  const double threshold =
-      std::max(options.tolerance * options.tolerance * scalars.rhs_norm2, std::numeric_limits<double>::min());
-  double residual = scalars.rhs_norm2;
-  // Iterations count the matrix products, the converging one included (the CPU's count).
-  int iterations = 0;
-  const int limit = sim::implicit_iteration_limit(scenes_.front());
-  while (residual >= threshold && iterations < limit) {
-    FMPC_CUDA_CHECK(launch_cg_iteration(a, stream_), diagnostics, false);
+  // The solve stops on the device (ConjugateGradientScalars::done); the host reads the scalars once after the
+  // cooperative launch, or after each chunk of per-iteration launches (cg_iterations_before_read).
+  if (plan_.cg_grid_blocks > 0) {
+    FMPC_CUDA_CHECK(launch_cg_persistent(a, plan_.cg_grid_blocks, stream_), diagnostics, false);
     if (!read_cg_scalars(scalars, diagnostics)) return false;
-    residual = scalars.rr;
-    ++iterations;
-    if (residual < threshold) break;
-    FMPC_CUDA_CHECK(launch_cg_direction(a, stream_), diagnostics, false);
+  } else {
+    int enqueued = 0;
+    for (;;) {
+      const int chunk = cg_iterations_before_read(cg_previous_iterations_, enqueued, a.iteration_limit);
+      FMPC_CUDA_CHECK(launch_cg_iterations(a, chunk, stream_), diagnostics, false);
+      enqueued += chunk;
+      if (!read_cg_scalars(scalars, diagnostics)) return false;
+      if (scalars.done || chunk == 0) break;
+    }
   }
-  const double error = std::sqrt(residual / scalars.rhs_norm2);
-  const sim::ImplicitStepRecord record{steps_taken_ + 1, iterations, error, !(residual < threshold)};
-  if (implicit_log_.record(record))
-    diagnostics.warning(scenes_.front().source_range, "cg-not-converged",
-                        sim::cg_stopped_message(sim::ImplicitMethod::ConjugateGradient, record.step, iterations,
-                                                error, options.tolerance));
-  FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
+  cg_previous_iterations_ = scalars.iterations;
   return true;
 }
 
 #define FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(Real)                                                                    \
   template ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments();                                         \
   template bool GpuEngine<Real>::read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics); \
-  template bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics);
+  template bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics);                                     \
+  template bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a,                             \
+                                                    ConjugateGradientScalars& scalars, DiagnosticList& diagnostics);
 FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(float)
 FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(double)
 #undef FMPC_GPU_ENGINE_IMPLICIT_MEMBERS

@@ -132,8 +132,8 @@ bool GpuEngine<Real>::run_steps(std::size_t count, bool allow_graph, DiagnosticL
     return true;
   }
   if (persistent_launch()) return run_persistent({steps_taken_ + count}, diagnostics);
-  // Velocity Verlet's first step computes a(x0, v0) and implicit Euler reads the residual every CG iteration:
-  // those steps are enqueued directly, never captured.
+  // Velocity Verlet's first step computes a(x0, v0) and implicit Euler reads its CG's scalars once per step (or per
+  // chunk of iterations): those steps are enqueued directly, never captured.
   const bool direct = !allow_graph || count < 2 || scheme() == sim::Integrator::ImplicitEuler;
   if (direct || (scheme() == sim::Integrator::VelocityVerlet && !have_acceleration_)) {
     const std::size_t piece = direct ? count : 1;

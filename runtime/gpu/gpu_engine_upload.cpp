@@ -116,7 +116,8 @@ bool GpuEngine<Real>::upload(DiagnosticList& diagnostics) {
             static_cast<Real>(common.gravity[2]),
             static_cast<Real>(common.nodal_damping_gamma0),
             static_cast<Real>(common.nodal_damping_gamma1),
-            static_cast<Real>(common.mass_damping)};
+            static_cast<Real>(common.mass_damping),
+            {nullptr, 0, nullptr}};  // the tools' contact: set_contact
   step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
   if (!plan_launches(c, diagnostics) || !upload_spring_records(c, diagnostics)) return false;
   if (!enqueue_point_state_update(state_[current_], true, diagnostics)) return false;
@@ -288,6 +289,7 @@ bool GpuEngine<Real>::plan_launches(const ConcatenatedScenes& c, DiagnosticList&
   batch.kind = model_.kind;
   batch.double_precision = std::is_same_v<Real, double>;
   batch.fused_scheme = fused_scheme();
+  batch.implicit_scheme = scheme() == sim::Integrator::ImplicitEuler;
   batch.strain_table = scenes_.front().strain_stiffness.has_value();
   batch.point_state = sim::has_point_state(scenes_.front().elements);
   batch.probe_vertices_unique = probe_vertices_unique_;
@@ -308,6 +310,11 @@ bool GpuEngine<Real>::plan_launches(const ConcatenatedScenes& c, DiagnosticList&
     bool fits = false;
     FMPC_CUDA_CHECK(cluster_euler_fits<Real>(blocks, rows, shared_bytes, fits), diagnostics, std::nullopt);
     return fits;
+  };
+  device.cg_persistent_blocks = [&]() -> std::optional<int> {
+    int blocks = 0;
+    FMPC_CUDA_CHECK(cg_persistent_block_limit<Real>(blocks), diagnostics, std::nullopt);
+    return blocks;
   };
   std::optional<LaunchPlan> plan = gpu::plan_launches(batch, options_, device);
   if (!plan) return false;
@@ -377,7 +384,7 @@ bool GpuEngine<Real>::upload_single_scene_features(DiagnosticList& diagnostics) 
     for (DeviceArray<double>* array : {&implicit_jacobi_, &implicit_rhs_, &cg_x_, &cg_r_, &cg_z_, &cg_p_, &cg_ap_})
       FMPC_CUDA_CHECK(array->allocate(3 * count), diagnostics, false);
     FMPC_CUDA_CHECK(cg_scalars_.allocate(1), diagnostics, false);
-    FMPC_CUDA_CHECK(cg_partial_.allocate(2 * kEnergyBlocks), diagnostics, false);
+    FMPC_CUDA_CHECK(cg_partial_.allocate(4 * kEnergyBlocks), diagnostics, false);
     implicit_log_ = sim::ImplicitSolverLog(sim::ImplicitMethod::ConjugateGradient, setup.implicit.tolerance,
                                            sim::implicit_iteration_limit(setup));
   }

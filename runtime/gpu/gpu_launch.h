@@ -319,16 +319,23 @@ cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<Real>& argume
 // Implicit Euler on the GPU (kernels/implicit_math.h): the system M - h df/dv - h^2 df/dx is applied matrix-free
 // from per-spring blocks, and solved by a Jacobi-preconditioned conjugate gradient in double with Eigen's
 // iteration and stopping rule (|r|^2 < tol^2 |b|^2, x0 = 0). Dot products use the fixed summation tree of the energy
-// sums, so a run gives the same bits every time. Scalars stay on the device; the host reads |r|^2 once per
-// iteration to decide whether to stop.
+// sums, so a run gives the same bits every time. The scalars and the stopping test stay on the device: the
+// iteration that meets the tolerance or the cap sets `done`, and every later kernel of the step returns at once, so
+// the host enqueues iterations in chunks and reads these scalars once per chunk (or once per step from the
+// cooperative kernel), never once per iteration.
 struct ConjugateGradientScalars {
   double rhs_norm2;  // |b|^2
+  double threshold;  // max(tol^2 |b|^2, DBL_MIN) (NaN stays NaN, as std::max on the host)
   double rz;         // r . z of the current direction (Eigen's absNew)
   double p_ap;       // p . A p
   double alpha;      // rz / p_ap
-  double rr;         // |r|^2 after the update
+  double rr;         // |r|^2 after the last update (|b|^2 before the first)
   double rz_next;    // r . z after the update
   double beta;       // rz_next / rz
+  int iterations;    // matrix products so far, the converging one included (the CPU's count)
+  int done;          // 1: at rest, converged, or at the cap; nothing more runs this step
+  int at_rest;       // 1: |b| < 1e-150, dv = 0 (the CPU backend's rule)
+  int padding;
 };
 
 // The element part of implicit Euler, in double: each term's linearisation of each element at the step's start (its
@@ -359,7 +366,15 @@ struct ImplicitArguments {
   double h;
   int vertex_count;
   int spring_count;
-  double* blocks;          // 12 per spring: K_s (6) then the system block (6)
+  double* blocks;  // 12 per spring: K_s (6) then the system block (6)
+  // A linear part of the system a caller fills (null: none): per vertex a symmetric block (6) added to its diagonal
+  // block and 3 values added to b, on the free axes (the tools' contact, launch_contact_part).
+  double* extra_blocks;
+  double* extra_rhs;
+  // The tools' contact (null without tools): per vertex its active set (bit t: tool t pushes it), and the count of
+  // sets launch_contact_part changed.
+  unsigned char* contact_active;
+  unsigned int* contact_changes;
   double* diagonal;        // per vertex: m + h (gamma0 + gamma1 |x - x0|); 1 for fixed vertices
   double* inverse_jacobi;  // 3 per vertex
   double* rhs;             // 3 per vertex, b
@@ -369,22 +384,37 @@ struct ImplicitArguments {
   double* p;
   double* ap;
   ConjugateGradientScalars* scalars;
-  double* partial;  // 2 * kEnergyBlocks
+  double* partial;      // 4 * kEnergyBlocks (the cooperative kernel's second pair of partial sums after the first)
+  double tolerance;     // relative residual |r| / |b| to reach
+  int iteration_limit;  // the cap (sim::implicit_iteration_limit)
 };
 // Blocks of every spring and the linearisation of every element, then b, the diagonal and the Jacobi preconditioner
 // of every vertex.
 template <typename Real>
 cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
-// x = 0, r = b, z = p = M^-1 r, scalars: rhs_norm2 = b.b, rz = r.z.
+// x = 0, r = b, z = p = M^-1 r, scalars: rhs_norm2 = b.b, rz = r.z, the threshold, iterations 0, and done where
+// the system is at rest, |b|^2 is not above the threshold (or NaN) or the cap is 0.
 template <typename Real>
 cudaError_t launch_cg_start(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
-// ap = A p (the elements' product first, then per vertex), alpha = rz / p.ap, x += alpha p, r -= alpha ap,
-// z = M^-1 r, rr = r.r, rz_next = r.z, beta.
+// `count` iterations enqueued one launch per kernel, each a no-op once `done` is set: ap = A p (the elements'
+// product first, then per vertex), alpha = rz / p.ap, x += alpha p, r -= alpha ap, z = M^-1 r, rr = r.r,
+// rz_next = r.z, beta, the stopping test; then, unless done, p = z + beta p, rz = rz_next.
 template <typename Real>
-cudaError_t launch_cg_iteration(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
-// p = z + beta p, rz = rz_next.
+cudaError_t launch_cg_iterations(const ImplicitArguments<Real>& arguments, int count, cudaStream_t stream);
+// The whole conjugate gradient of a step (after launch_cg_start) in one cooperative launch of `blocks` blocks of
+// kEnergyThreads threads with grid barriers: the same arithmetic in the same order as launch_cg_iterations, so the
+// same bits. blocks: 1 to cg_persistent_block_limit's.
 template <typename Real>
-cudaError_t launch_cg_direction(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
+cudaError_t launch_cg_persistent(const ImplicitArguments<Real>& arguments, int blocks, cudaStream_t stream);
+// Blocks of launch_cg_persistent resident at once on the device (0: no cooperative launches).
+template <typename Real>
+cudaError_t cg_persistent_block_limit(int& blocks);
+// The tools' contact as the system's linear part (kernels/implicit_contact_math.h): every vertex's active set at
+// the state (predicted false: the step's first set, every vertex's part written) or predicted from the solution in
+// x (the vertices whose set changed are counted into *contact_changes, preset by the caller, and get their new part).
+// Nothing without tools.
+template <typename Real>
+cudaError_t launch_contact_part(const ImplicitArguments<Real>& arguments, bool predicted, cudaStream_t stream);
 // v += dv, x += h v on the free vertices (x and v in Real, as the CPU backend).
 template <typename Real>
 cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& arguments, cudaStream_t stream);

@@ -2,7 +2,8 @@
 # Debian packages the full build needs (antlr4, yaml-cpp, CLI11, Catch2, Eigen, fuzzylite). It builds only
 #   fmpc_runtime     kernels/*_step.cu and reductions.cu, runtime/gpu, and the CPU reference it is compared with: meshes,
 #                    springs, integrators, the model builder, runtime/io/memory_limit.cpp (the memory limits
-#                    the mesh generator checks), diagnostics/diagnostic.cpp and
+#                    the mesh generator checks), runtime/io/input_file.cpp (the bench's --liver reads a mesh
+#                    file), diagnostics/diagnostic.cpp and
 #                    diagnostics/number_format.cpp;
 #   fmpc_gpu_tests   tests/gpu (its own runner, no Catch2), ctest label `gpu`;
 #   fmpc_sim_bench   bench/sim;
@@ -46,6 +47,7 @@ add_library(fmpc_runtime STATIC
   ${FMPC_GPU_ONLY_SOURCES}
   ${PROJECT_SOURCE_DIR}/runtime/scene/spring_model_builder.cpp
   ${PROJECT_SOURCE_DIR}/runtime/io/memory_limit.cpp
+  ${PROJECT_SOURCE_DIR}/runtime/io/input_file.cpp
   ${PROJECT_SOURCE_DIR}/diagnostics/diagnostic.cpp
   ${PROJECT_SOURCE_DIR}/diagnostics/number_format.cpp
   ${PROJECT_SOURCE_DIR}/kernels/explicit_step.cu

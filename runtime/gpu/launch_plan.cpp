@@ -164,6 +164,19 @@ bool plan_clusters(const BatchShape& batch, const DeviceLaunchLimits& device, La
   return true;
 }
 
+// Implicit Euler's conjugate gradient as one cooperative launch per solve (GpuOptions::persistent) where every
+// degree of freedom and every element has a thread of its own in a grid that is all resident: the small meshes whose
+// iterations are bound by launch latency (SOFA's liver: 596 tetrahedra, 3 blocks). Larger meshes keep a launch per
+// kernel, whose grids fill the GPU.
+bool plan_cg_grid(const BatchShape& batch, const DeviceLaunchLimits& device, LaunchPlan& plan) {
+  const std::optional<int> resident = device.cg_persistent_blocks();
+  if (!resident) return false;
+  const long long entries = std::max<long long>(3LL * batch.vertex_count, batch.element_count);
+  const long long wanted = (entries + kCgThreads - 1) / kCgThreads;
+  if (wanted >= 1 && wanted <= *resident) plan.cg_grid_blocks = static_cast<int>(wanted);
+  return true;
+}
+
 template <typename Real>
 std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions& options,
                                   const DeviceLaunchLimits& device) {
@@ -174,8 +187,10 @@ std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions
   // Chunks of forward or semi-implicit Euler run as one persistent launch each where no strain table is looked up
   // between steps, each probe vertex is listed once and the batch fits the grid or clusters; otherwise one launch per
   // kernel (steps of meshes too large for either are long enough that launches cost little).
-  if (!options.persistent || batch.vertex_count <= 0 || batch.strain_table || batch.point_state || !batch.probe_vertices_unique ||
-      !batch.fused_scheme)
+  if (options.persistent && batch.implicit_scheme && batch.vertex_count > 0 && !plan_cg_grid(batch, device, plan))
+    return std::nullopt;
+  if (!options.persistent || batch.vertex_count <= 0 || batch.strain_table || batch.point_state ||
+      !batch.probe_vertices_unique || !batch.fused_scheme)
     return plan;
   // GpuOptions::persistent_kind: the preferred launch first, the other where it does not fit.
   const bool clusters_first = options.persistent_kind == sim::GpuOptions::PersistentKind::Clusters;
@@ -193,6 +208,13 @@ std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions
 }
 
 }  // namespace
+
+int cg_iterations_before_read(int previous_step_iterations, int iterations_so_far, int limit) {
+  const int remaining = std::max(0, limit - std::max(0, iterations_so_far));
+  if (remaining == 0) return 0;
+  const int wanted = iterations_so_far <= 0 ? previous_step_iterations : iterations_so_far;
+  return std::min(remaining, std::max(wanted, kCgLeastIterationsPerRead));
+}
 
 std::optional<LaunchPlan> plan_launches(const BatchShape& batch, const sim::GpuOptions& options,
                                         const DeviceLaunchLimits& device) {

@@ -20,6 +20,9 @@ namespace fmpc::gpu {
 struct DeviceLaunchLimits {
   std::function<std::optional<int>(GatherKind kind, long long shared_bytes)> persistent_blocks;
   std::function<std::optional<bool>(int blocks, int rows, long long shared_bytes)> cluster_fits;
+  // How many blocks of kCgThreads threads the cooperative conjugate gradient (launch_cg_persistent) keeps resident
+  // at once (0: none, or no cooperative launches). Asked only for implicit Euler.
+  std::function<std::optional<int>()> cg_persistent_blocks;
 };
 
 // What the plan reads of the concatenated batch (runtime/gpu/batch_concatenation.h).
@@ -27,6 +30,7 @@ struct BatchShape {
   GatherKind kind = GatherKind::Springs;
   bool double_precision = false;
   bool fused_scheme = false;          // forward or semi-implicit Euler: one kernel per step
+  bool implicit_scheme = false;       // implicit Euler: a conjugate gradient per step
   bool strain_table = false;          // a lookup between steps (no persistent launch)
   bool point_state = false;           // an element state update between steps (no persistent launch)
   bool probe_vertices_unique = true;  // every probe vertex listed once (else the per-step probe kernel)
@@ -57,6 +61,9 @@ struct LaunchPlan {
   // A persistent launch's checks (checkpoint slots on the grid, one in clusters) and each check's result slots.
   std::size_t persistent_checks = 1;
   std::size_t check_slot_stride = 1;
+  // Implicit Euler: the blocks of the cooperative conjugate gradient (one launch per step's solve), 0: the
+  // per-iteration kernels, enqueued in chunks (cg_iterations_before_read).
+  int cg_grid_blocks = 0;
 
   bool persistent() const { return grid_blocks > 0 || !cluster_blocks.empty(); }
 };
@@ -65,6 +72,20 @@ struct LaunchPlan {
 // state, 217 KiB, fits many), up to kMostPersistentChecks (4,096 steps at the 64 between checks).
 constexpr std::size_t kPersistentCheckpointBytes = std::size_t{64} << 20;
 constexpr std::size_t kMostPersistentChecks = 64;
+
+// Threads per block of the cooperative conjugate gradient (kEnergyThreads: its dot products are the fixed-shape
+// sums' virtual blocks).
+constexpr int kCgThreads = 256;
+
+// The fewest conjugate gradient iterations enqueued between two reads of its scalars by the host.
+constexpr int kCgLeastIterationsPerRead = 4;
+
+// How many iterations of the per-iteration conjugate gradient to enqueue before the host next reads whether it has
+// stopped: the previous step's count first (a step's solve is usually like the last one's; at SOFA's cap of 25, one
+// read per step), then as many as already run (doubling), at least kCgLeastIterationsPerRead, never beyond the cap.
+// The kernels stop on the device, so the choice changes how many empty launches and reads a step costs, never its
+// result. 0 when the cap is reached.
+int cg_iterations_before_read(int previous_step_iterations, int iterations_so_far, int limit);
 
 // The plan; nullopt when a device query failed (its caller has the error).
 std::optional<LaunchPlan> plan_launches(const BatchShape& batch, const sim::GpuOptions& options,

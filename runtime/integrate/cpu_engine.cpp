@@ -8,6 +8,7 @@
 #include "kernels/internal_force_math.h"
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
+#include "runtime/integrate/implicit_contact.h"
 #include "runtime/integrate/implicit_solver.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/integrate/stepping_engine.h"
@@ -49,6 +50,9 @@ class CpuSceneBase {
   virtual ProbeReading probe_reading() const = 0;
   virtual std::vector<double> current_stiffness() const = 0;
   virtual const SimulationSetup& setup() const = 0;
+  virtual void set_contact(const std::vector<double>& stiffness) = 0;
+  virtual void set_tool_shapes(const std::vector<kernels::ToolShape<double>>& shapes) = 0;
+  virtual void refresh_material() = 0;
 };
 
 template <typename Real>
@@ -180,6 +184,45 @@ class CpuScene final : public CpuSceneBase {
     if (scheme == Integrator::ImplicitEuler) {
       solver_ = std::make_unique<ImplicitSolver>(setup, fixed_);
       log_ = ImplicitSolverLog(solver_->method(), setup.implicit.tolerance, implicit_iteration_limit(setup));
+    }
+  }
+
+  // Contact: the stiffness per vertex and the tools' shapes, in Real, which loads_.contact points at.
+  void set_contact(const std::vector<double>& stiffness) override {
+    contact_stiffness_.assign(stiffness.begin(), stiffness.end());
+    loads_.contact.stiffness = contact_stiffness_.data();
+  }
+
+  void set_tool_shapes(const std::vector<kernels::ToolShape<double>>& shapes) override {
+    tools_.resize(shapes.size());
+    for (std::size_t t = 0; t < shapes.size(); ++t) {
+      const kernels::ToolShape<double>& s = shapes[t];
+      tools_[t] = {static_cast<Real>(s.ax), static_cast<Real>(s.ay), static_cast<Real>(s.az), static_cast<Real>(s.bx),
+                   static_cast<Real>(s.by), static_cast<Real>(s.bz), static_cast<Real>(s.radius)};
+    }
+    loads_.contact.tools = tools_.data();
+    loads_.contact.tool_count = static_cast<int>(tools_.size());
+  }
+
+  // The setup's material arrays were replaced with arrays of the same sizes: converted again into the buffers the
+  // views point at (their sizes, and so the views, are unchanged); the strain table's view is taken again.
+  void refresh_material() override {
+    const SpringNetwork& net = setup_.springs;
+    std::transform(net.stiffness.begin(), net.stiffness.end(), stiffness_.begin(),
+                   [](double k) { return static_cast<Real>(k); });
+    std::transform(net.damping.begin(), net.damping.end(), damping_.begin(),
+                   [](double c) { return static_cast<Real>(c); });
+    const kernels::StrainTableView table = setup_.strain_stiffness ? strain_table_view(*setup_.strain_stiffness)
+                                                                   : kernels::StrainTableView{nullptr, nullptr, 0};
+    for (std::size_t t = 0; t < term_arrays_.size(); ++t) {
+      const ElementTerm& term = setup_.elements.terms[t];
+      TermArrays& arrays = term_arrays_[t];
+      for (int p = 0; p < kernels::kMostLawParameters; ++p)
+        std::transform(term.parameter[p].begin(), term.parameter[p].end(), arrays.parameter[p].begin(),
+                       [](double value) { return static_cast<Real>(value); });
+      std::transform(term.stiffness_damping.begin(), term.stiffness_damping.end(), arrays.damping.begin(),
+                     [](double beta) { return static_cast<Real>(beta); });
+      if (reads_strain_table(term)) term_views_[t].strain_table = table;
     }
   }
 
@@ -450,8 +493,11 @@ class CpuScene final : public CpuSceneBase {
     interleave(acceleration_, implicit_a_);
     implicit_k_.resize(stiffness_.size());
     for (std::size_t s = 0; s < stiffness_.size(); ++s) implicit_k_[s] = static_cast<double>(stiffness_[s]);
-    const ImplicitSolve solve = solver_->solve(implicit_x_, implicit_v_, implicit_a_, implicit_k_,
-                                               static_cast<double>(h_), pool_, implicit_dv_);
+    const bool contact = loads_.contact.tool_count > 0;
+    if (contact) contact_.start(implicit_x_, implicit_v_, static_cast<double>(h_));
+    const ImplicitSolve solve =
+        solver_->solve(implicit_x_, implicit_v_, implicit_a_, implicit_k_, static_cast<double>(h_), pool_,
+                       implicit_dv_, contact ? &contact_ : nullptr, kernels::kMostContactRounds);
     if (solve.direct_failed) log_.fallback();
     const ImplicitStepRecord record{steps_taken_ + 1, solve.iterations, solve.relative_residual, !solve.converged};
     if (log_.record(record)) {
@@ -460,6 +506,11 @@ class CpuScene final : public CpuSceneBase {
                                                                  : solver_->method(),
                                              record.step, record.iterations, record.relative_residual,
                                              setup_.implicit.tolerance));
+    }
+    if (!solve.settled && !contact_warning_given_) {
+      contact_warning_given_ = true;
+      diagnostics.warning(setup_.source_range, "contact-not-settled",
+                          contact_unsettled_message(steps_taken_ + 1, kernels::kMostContactRounds));
     }
     const std::vector<double>& dv = implicit_dv_;
     for_each_vertex([&](std::size_t i) {
@@ -547,6 +598,8 @@ class CpuScene final : public CpuSceneBase {
   std::size_t n_;
   std::vector<Real> rest_length_, stiffness_, damping_, mass_;
   std::vector<unsigned char> fixed_;
+  std::vector<Real> contact_stiffness_;
+  std::vector<kernels::ToolShape<Real>> tools_;
   Vector3Arrays<Real> position_, velocity_, rest_, acceleration_, force_;
   Vector3Arrays<Real> stage_position_, stage_velocity_, next_acceleration_;
   Vector3Arrays<Real> rk_velocity_[4], rk_acceleration_[4];
@@ -575,6 +628,9 @@ class CpuScene final : public CpuSceneBase {
   std::unique_ptr<ImplicitSolver> solver_;
   ImplicitSolverLog log_;
   std::vector<double> implicit_x_, implicit_v_, implicit_a_, implicit_k_, implicit_dv_, checkpoint_warm_start_;
+  // The tools' contact in the solve (read through loads_.contact), and whether contact-not-settled was given.
+  ImplicitContact<Real> contact_{loads_.contact, fixed_};
+  bool contact_warning_given_ = false;
 };
 
 // The CPU engine of a batch: each scene's CpuScene, run side by side on a pool of workers over the scenes (a scene's
@@ -706,6 +762,19 @@ class CpuEngine final : public SteppingEngine {
   }
   std::vector<double> current_stiffness(std::size_t scene, DiagnosticList&) const override {
     return scenes_[scene]->current_stiffness();
+  }
+  bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList&) override {
+    scenes_[scene]->set_contact(stiffness);
+    return true;
+  }
+  bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,
+                       DiagnosticList&) override {
+    scenes_[scene]->set_tool_shapes(shapes);
+    return true;
+  }
+  bool refresh_material(std::size_t scene, DiagnosticList&) override {
+    scenes_[scene]->refresh_material();
+    return true;
   }
 
  private:

@@ -11,6 +11,8 @@
 #include <cmath>
 #include <limits>
 
+#include "kernels/implicit_math.h"
+
 namespace fmpc::sim {
 
 // The system permuted once by an AMD ordering (P A P^T) and stored as its upper triangle in Eigen's compressed
@@ -95,21 +97,72 @@ ImplicitSolver::~ImplicitSolver() = default;
 
 ImplicitSolve ImplicitSolver::solve(const std::vector<double>& x, const std::vector<double>& v,
                                     const std::vector<double>& a, const std::vector<double>& spring_stiffness,
-                                    double h, WorkerPool& pool, std::vector<double>& dv) {
+                                    double h, WorkerPool& pool, std::vector<double>& dv, ImplicitLinearPart* part,
+                                    int most_rounds) {
   system_.assemble(x, v, a, spring_stiffness, h, pool, rhs_);
   dv.assign(system_.dofs(), 0.0);
+  if (part != nullptr) {
+    assembled_rhs_ = rhs_;
+    assembled_diagonal_.resize(9 * system_.vertices());
+    for (std::size_t i = 0; i < system_.vertices(); ++i) {
+      const double* block = system_.value(system_.diagonal_block(i));
+      std::copy(block, block + 9, &assembled_diagonal_[9 * i]);
+    }
+  }
+  ImplicitSolve total;
+  for (int round = 1;; ++round) {
+    if (part != nullptr) add_part(*part);
+    bool at_rest = false;
+    const ImplicitSolve solve = solve_assembled(dv, round == 1, pool, at_rest);
+    total.iterations += solve.iterations;
+    total.relative_residual = solve.relative_residual;
+    total.converged = solve.converged;
+    total.direct_failed = total.direct_failed || solve.direct_failed;
+    total.rounds = round;
+    if (at_rest || part == nullptr || !part->changed_by(dv)) break;
+    if (round >= most_rounds) {
+      total.settled = false;
+      break;
+    }
+  }
+  return total;
+}
+
+void ImplicitSolver::add_part(ImplicitLinearPart& part) {
+  const std::size_t n = system_.vertices();
+  part_blocks_.assign(6 * n, 0.0);
+  part_rhs_.assign(3 * n, 0.0);
+  part.linearise(part_blocks_, part_rhs_);
+  rhs_ = assembled_rhs_;
+  for (std::size_t i = 0; i < n; ++i) {
+    double* block = system_.mutable_value(system_.diagonal_block(i));
+    std::copy(&assembled_diagonal_[9 * i], &assembled_diagonal_[9 * i] + 9, block);
+    for (int r = 0; r < 3; ++r) {
+      if (system_.dof_held(3 * i + static_cast<std::size_t>(r))) continue;
+      rhs_[3 * i + static_cast<std::size_t>(r)] += part_rhs_[3 * i + static_cast<std::size_t>(r)];
+      for (int c = 0; c < 3; ++c)
+        if (!system_.dof_held(3 * i + static_cast<std::size_t>(c)))
+          block[3 * r + c] += part_blocks_[6 * i + static_cast<std::size_t>(kernels::symmetric_index(r, c))];
+    }
+  }
+}
+
+ImplicitSolve ImplicitSolver::solve_assembled(std::vector<double>& dv, bool first, WorkerPool& pool, bool& at_rest) {
   double b2 = 0.0;
   for (const double value : rhs_) b2 += value * value;
   ImplicitSolve solve;
   // A right-hand side this small means the system is at rest to double precision: a solver on denormals would only
   // report a spurious failure.
-  if (std::sqrt(b2) < 1e-150) {
+  at_rest = std::sqrt(b2) < 1e-150;
+  if (at_rest) {
+    std::fill(dv.begin(), dv.end(), 0.0);
     std::fill(previous_.begin(), previous_.end(), 0.0);
     return solve;
   }
   if (method_ == ImplicitMethod::Direct && direct(rhs_, dv, pool, solve)) return solve;
   const bool fell_back = method_ == ImplicitMethod::Direct;
-  if (setup_.implicit.warm_start && !fell_back) dv = previous_;
+  // A later round starts from the last round's dv.
+  if (first) dv = setup_.implicit.warm_start && !fell_back ? previous_ : std::vector<double>(system_.dofs(), 0.0);
   solve = conjugate_gradient(rhs_, dv, pool);
   solve.direct_failed = fell_back;
   previous_ = dv;

@@ -17,12 +17,27 @@
 
 namespace fmpc::sim {
 
-// What one solve reached.
+// What one solve reached (over its rounds, with a linear part).
 struct ImplicitSolve {
-  int iterations = 0;              // conjugate-gradient iterations (matrix products), or direct solves
-  double relative_residual = 0.0;  // |b - A dv| / |b| (0 when b = 0)
-  bool converged = true;           // false: stopped at max_iterations above the tolerance
+  int iterations = 0;              // conjugate-gradient iterations (matrix products), or direct solves, all rounds'
+  double relative_residual = 0.0;  // |b - A dv| / |b| (0 when b = 0), the last round's
+  bool converged = true;           // false: the last round stopped at max_iterations above the tolerance
   bool direct_failed = false;      // the factorisation failed (a zero pivot) and the step fell back to the CG
+  int rounds = 1;                  // solves with the linear part's values (ImplicitLinearPart)
+  bool settled = true;             // false: the linear part still changed after the last round allowed
+};
+
+// A part of the system that depends on its solution, which a caller adds (cpu_engine.cpp: the tools' contact, an
+// active set): per vertex a symmetric 3 x 3 block (6 values, kernels::symmetric_index's order) added to the vertex's
+// diagonal block and 3 values added to the right-hand side, on the free axes only. The solver solves with the part,
+// asks whether the solution changes it, and if so solves again with its new values from the last solution.
+class ImplicitLinearPart {
+ public:
+  virtual ~ImplicitLinearPart() = default;
+  // The part's values for the next solve into `blocks` (6 per vertex) and `rhs` (3 per vertex), both zeroed.
+  virtual void linearise(std::vector<double>& blocks, std::vector<double>& rhs) = 0;
+  // Whether the solution dv (3 per vertex) changes the part (the next linearise gives the new values).
+  virtual bool changed_by(const std::vector<double>& dv) = 0;
 };
 
 class ImplicitSolver {
@@ -37,10 +52,11 @@ class ImplicitSolver {
   ImplicitMethod method() const { return method_; }
 
   // Assembles the system at the state (ImplicitSystem::assemble's arguments) and solves it into `dv` (3 per vertex,
-  // zero on held axes).
+  // zero on held axes). With a linear `part`, solves until the part stays (each round from the last round's dv), at
+  // most `most_rounds` times.
   ImplicitSolve solve(const std::vector<double>& x, const std::vector<double>& v, const std::vector<double>& a,
                       const std::vector<double>& spring_stiffness, double h, WorkerPool& pool,
-                      std::vector<double>& dv);
+                      std::vector<double>& dv, ImplicitLinearPart* part = nullptr, int most_rounds = 1);
 
   // The conjugate gradient's starting point, carried from step to step (a checkpoint saves and restores it).
   const std::vector<double>& warm_start() const { return previous_; }
@@ -48,6 +64,10 @@ class ImplicitSolver {
 
  private:
   struct Factorisation;
+  // One solve of the assembled system with rhs_; `first`: the step's first round (else dv holds the last round's).
+  ImplicitSolve solve_assembled(std::vector<double>& dv, bool first, WorkerPool& pool, bool& at_rest);
+  // The assembled diagonal blocks and right-hand side with the part's values added on the free axes.
+  void add_part(ImplicitLinearPart& part);
   ImplicitSolve conjugate_gradient(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool);
   bool direct(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool, ImplicitSolve& solve);
   // r = b - A x; returns |r|^2, summed by chunks.
@@ -63,6 +83,8 @@ class ImplicitSolver {
   std::unique_ptr<Factorisation> factorisation_;
   std::vector<double> rhs_, r_, p_, q_, inverse_diagonal_, previous_;
   std::vector<double> partial_;  // per chunk, the dot products of one pass
+  // With a linear part: the diagonal blocks (9 per vertex) and right-hand side as assembled, and the part's values.
+  std::vector<double> assembled_diagonal_, assembled_rhs_, part_blocks_, part_rhs_;
 };
 
 }  // namespace fmpc::sim

@@ -33,6 +33,13 @@ std::string cg_stopped_message(ImplicitMethod method, std::size_t step, int iter
   return message.str();
 }
 
+std::string contact_unsettled_message(std::size_t step, int rounds) {
+  return "implicit Euler: the vertices the tools push still changed after " + std::to_string(rounds) +
+         " solves at step " + std::to_string(step) +
+         "; the step went on with the last set (a tool moving further than its contact's depth in one step): "
+         "move it less per step or use a smaller dt";
+}
+
 ImplicitSolverLog::ImplicitSolverLog(ImplicitMethod method, double tolerance, int max_iterations) {
   report_.method = method;
   report_.tolerance = tolerance;

@@ -58,6 +58,7 @@ class ImplicitSystem {
   std::size_t row_offset(std::size_t i) const { return static_cast<std::size_t>(row_offset_[i]); }
   std::int32_t column(std::size_t k) const { return column_[k]; }
   const double* value(std::size_t k) const { return &values_[9 * k]; }
+  double* mutable_value(std::size_t k) { return &values_[9 * k]; }
   std::size_t diagonal_block(std::size_t i) const { return static_cast<std::size_t>(diagonal_[i]); }
   // How many colours the element terms were split into (0 without element terms).
   std::size_t colours() const { return colour_offset_.empty() ? 0 : colour_offset_.size() - 1; }

@@ -60,6 +60,14 @@ std::unique_ptr<Simulation> Simulation::create(std::vector<SimulationSetup> scen
       diagnostics.append(scene_diagnostics);
     }
     if (!report) return nullptr;
+    DiagnosticList tool_diagnostics;
+    if (!check_tools_outside(scenes[s], tool_diagnostics)) {
+      for (Diagnostic diagnostic : tool_diagnostics.items()) {
+        if (scenes.size() > 1) diagnostic.message = "scene " + std::to_string(s) + ": " + diagnostic.message;
+        diagnostics.add(std::move(diagnostic));
+      }
+      return nullptr;
+    }
     stability.push_back(*report);
   }
   std::unique_ptr<Simulation> simulation(new Simulation(std::move(scenes), std::move(stability), options.backend));
@@ -73,6 +81,7 @@ std::unique_ptr<Simulation> Simulation::create(std::vector<SimulationSetup> scen
   simulation->engine_ = create_cpu_engine(simulation->scenes_, simulation->stability_, options.batch_threads);
 #endif
   if (!simulation->engine_) return nullptr;
+  if (!simulation->start_tools(diagnostics)) return nullptr;
   if (simulation->needs_checkpoints() && !simulation->engine_->save_checkpoint(diagnostics)) return nullptr;
   return simulation;
 }
@@ -107,6 +116,7 @@ bool Simulation::advance(std::size_t steps, DiagnosticList& diagnostics, std::si
   std::size_t checks_per_run = engine_->checks_per_run();
   for (std::size_t scene = 0; scene < scenes_.size(); ++scene)
     if (displacement_bound_checked(scene)) checks_per_run = 1;
+  if (tools_move()) checks_per_run = 1;  // steps one at a time while a tool's path moves
   const std::size_t last = engine_->steps_taken() + steps;
   while (engine_->steps_taken() < last) {
     // Checks fall on multiples of check_every counted from the run's start, and at the end.
@@ -117,7 +127,7 @@ bool Simulation::advance(std::size_t steps, DiagnosticList& diagnostics, std::si
       if (!ends.empty() && at - start > engine_->most_steps_per_run()) break;
       ends.push_back(at);
     }
-    if (!engine_->run(ends, diagnostics)) return fail();
+    if (!run_engine(ends, diagnostics)) return fail();
     // Each check acted on in order as if its chunk had been run alone: acting on a check before the run's last
     // means restoring the checkpoint (a replay), after which the run's later steps are dropped.
     for (std::size_t check = 0; check < ends.size(); ++check) {
@@ -148,7 +158,7 @@ bool Simulation::locate_non_finite(int vertex, DiagnosticList& diagnostics) {
     ++restores_;
     std::optional<int> bad = vertex_begin_.back();
     while (engine_->steps_taken() < failed_by && *bad >= vertex_begin_.back()) {
-      if (!engine_->run({engine_->steps_taken() + 1}, diagnostics)) return fail();
+      if (!run_engine({engine_->steps_taken() + 1}, diagnostics)) return fail();
       bad = engine_->first_non_finite_vertex(diagnostics);
       if (!bad) return fail();
     }
@@ -266,7 +276,7 @@ bool Simulation::check_inversions(DiagnosticList& diagnostics) {
       }
       if (stop) return false;
       if (engine_->steps_taken() >= failed_by) break;
-      if (!engine_->run({engine_->steps_taken() + 1}, diagnostics)) return false;
+      if (!run_engine({engine_->steps_taken() + 1}, diagnostics)) return false;
     }
   }
   for (std::size_t scene = 0; scene < counts.size(); ++scene) {
@@ -294,14 +304,12 @@ std::vector<ImplicitStepRecord> Simulation::take_implicit_steps(std::size_t scen
 }
 bool Simulation::reduces_in_place() const { return engine_->reduces_in_place(); }
 
-namespace {
 bool scene_exists(std::size_t scene, std::size_t count, DiagnosticList& diagnostics) {
   if (scene < count) return true;
   diagnostics.error(SourceRange{},
                     "scene " + std::to_string(scene) + " does not exist; the batch has " + std::to_string(count));
   return false;
 }
-}  // namespace
 
 std::vector<Point3> Simulation::positions(std::size_t scene, DiagnosticList& diagnostics) const {
   if (!scene_exists(scene, scenes_.size(), diagnostics)) return {};

@@ -13,6 +13,7 @@
 #include "kernels/spring_math.h"
 #include "kernels/strain_table_math.h"
 #include "runtime/fem/element_terms.h"
+#include "runtime/integrate/rigid_tools.h"
 #include "runtime/integrate/simulation_options.h"
 #include "runtime/mesh/mesh.h"
 #include "runtime/springs/spring_network.h"
@@ -168,6 +169,11 @@ struct SimulationSetup {
 
   std::optional<ProbeLoad> probe;
   std::optional<StrainStiffnessTable> strain_stiffness;  // replaces springs.stiffness every step
+
+  // Rigid tools in frictionless penalty contact with the surface (runtime/integrate/rigid_tools.h), at most
+  // kernels::kMostTools; the penalty stiffness per surface vertex is contact_stiffness_ratio x its stiffness bound.
+  std::vector<RigidTool> tools;
+  double contact_stiffness_ratio = kDefaultContactStiffnessRatio;
 };
 
 // The model's name as scenes spell it: "springs" for a spring network (with or without a term beside it), the scene
@@ -253,6 +259,18 @@ struct StabilityReport {
   bool undamped_modes = false;
 };
 
+// Per vertex, the bounds x^T K x <= sum_i s_i |x_i|^2 and x^T C x <= sum_i c_i |x_i|^2 of the springs and elements
+// that check_stability applies (a strain table's largest modulus, Basafa-Farahmand's largest slope; the tools'
+// contact not included), and the smallest damping-to-stiffness ratios of the springs (c / k) and the elements
+// (beta_e) that forward Euler's bound reads.
+struct VertexBounds {
+  std::vector<double> stiffness;  // s_i, N/m
+  std::vector<double> damping;    // c_i, N s/m (dashpots and element damping)
+  double spring_ratio_min = std::numeric_limits<double>::infinity();
+  double element_ratio_min = std::numeric_limits<double>::infinity();
+};
+VertexBounds vertex_bounds(const SimulationSetup& setup);
+
 // Sizes, indices, masses, rest lengths, parameters, the probe and the strain table; appends one error per problem,
 // naming the vertex or spring. springs.damping may be empty (no dashpots).
 bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics);
@@ -319,6 +337,17 @@ struct SimulationLaunches {
   bool clusters = false;    // in thread-block clusters
 };
 
+// Where a scene's positions live on the CUDA device: three arrays (x, y, z) of `count` floats or doubles, the
+// simulation's own state, read-only, valid until its next advance, pose or material change (an explicit Euler step
+// writes the other of two buffers). The stream that wrote them has finished when device_positions returns.
+struct DevicePositions {
+  const void* x = nullptr;
+  const void* y = nullptr;
+  const void* z = nullptr;
+  std::size_t count = 0;
+  bool double_precision = false;
+};
+
 // A running simulation: a batch of one or more scenes advanced together on one backend (the CPU: each scene's
 // vertices on worker threads, the scenes of a batch side by side; CUDA: one launch per kernel for the whole batch,
 // runtime/gpu/gpu_simulation.h), float or double state, deterministic. Both backends are written under one run
@@ -375,6 +404,9 @@ class Simulation {
   std::vector<Point3> positions(DiagnosticList& diagnostics) const { return positions(0, diagnostics); }
   std::vector<Point3> velocities(std::size_t scene, DiagnosticList& diagnostics) const;
   std::vector<Point3> velocities(DiagnosticList& diagnostics) const { return velocities(0, diagnostics); }
+  // CUDA: the scene's positions where they live, without a copy (DevicePositions); on the CPU backend an error saying
+  // to read positions().
+  std::optional<DevicePositions> device_positions(std::size_t scene, DiagnosticList& diagnostics) const;
   // Every scene's positions (and, given, velocities) now, in one download per array on CUDA (what a cohort reads at
   // every output event); false after a device error.
   bool scene_states(std::vector<std::vector<Point3>>& positions, std::vector<std::vector<Point3>>* velocities,
@@ -401,6 +433,29 @@ class Simulation {
   std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const;
   std::vector<double> current_stiffness(DiagnosticList& diagnostics) const { return current_stiffness(0, diagnostics); }
 
+  // ---- rigid tools (runtime/integrate/rigid_tools.h) ---------------------------------------------------------------
+  // Poses tool `tool` of `scene` at `pose` for the steps from now on (its path, if any, is dropped); the readings see
+  // it at once. A pose that is not finite or whose quaternion has no length, a tool or scene that does not exist, are
+  // errors naming the argument, and nothing changes. The quaternion is normalised.
+  bool set_tool_pose(std::size_t scene, std::size_t tool, ToolPose pose, DiagnosticList& diagnostics);
+  // Where each tool of the scene is now (its path's pose at the current time, or the pose last set).
+  const std::vector<ToolPose>& tool_poses(std::size_t scene = 0) const;
+  // What each tool of the scene feels now: read_tools at the current state and poses, in double on both backends
+  // (on CUDA from the positions downloaded). Empty after a device error; one zero reading per tool before any
+  // contact.
+  std::vector<ToolReading> tool_readings(std::size_t scene, DiagnosticList& diagnostics) const;
+  // The contact stiffness per vertex (N/m; empty without tools).
+  const std::vector<double>& contact_stiffness(std::size_t scene = 0) const;
+
+  // ---- the material ------------------------------------------------------------------------------------------------
+  // Replaces scene `scene`'s material between two steps, keeping its state, time and checks: the springs' stiffness
+  // and damping, the element terms' parameters and damping and the strain table are taken from `material`, a setup
+  // built from the same mesh and model with another material (a recompiled rule file or table: runtime/session/).
+  // The stability check runs again at the scene's time step, and the contact stiffness follows the new bounds.
+  // Arrays of other sizes, another model (other element laws, a strain table where there was none or the reverse),
+  // values the setup checks refuse, or a time step the new material makes unstable are errors, and nothing changes.
+  bool replace_material(std::size_t scene, const SimulationSetup& material, DiagnosticList& diagnostics);
+
  private:
   Simulation(std::vector<SimulationSetup> scenes, std::vector<StabilityReport> stability, Backend backend);
   bool locate_non_finite(int vertex, DiagnosticList& diagnostics);
@@ -411,6 +466,13 @@ class Simulation {
   std::size_t scene_of(int vertex) const;
   std::int32_t culprit_spring(std::size_t scene, std::size_t vertex, DiagnosticList& diagnostics) const;
   bool fail();
+  // The engine's run to `ends` with the tools at their poses: where a tool follows a path that still moves, one step
+  // at a time, each with the poses at its start time.
+  bool run_engine(const std::vector<std::size_t>& ends, DiagnosticList& diagnostics);
+  bool tools_move() const;
+  // Poses every scene's tools at `step`'s time along their paths; gives the engine the shapes that changed.
+  bool pose_tools(std::size_t step, DiagnosticList& diagnostics);
+  bool start_tools(DiagnosticList& diagnostics);
 
   std::vector<SimulationSetup> scenes_;
   std::vector<StabilityReport> stability_;
@@ -418,6 +480,8 @@ class Simulation {
   Backend backend_;
   std::vector<int> vertex_begin_;  // scene s owns batch vertices [vertex_begin_[s], vertex_begin_[s + 1])
   std::vector<InversionReport> inversions_;
+  std::vector<std::vector<ToolPose>> tool_poses_;  // per scene, per tool: the pose the engine holds
+  std::vector<std::vector<double>> contact_stiffness_;  // per scene (empty without tools)
   std::optional<NonFiniteReport> non_finite_;
   std::size_t restores_ = 0;
   bool failed_ = false;

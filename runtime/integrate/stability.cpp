@@ -69,34 +69,25 @@ double assumed_displacement(const SimulationSetup& setup) {
 
 }  // namespace
 
-std::optional<StabilityReport> check_stability(const SimulationSetup& setup, DiagnosticList& diagnostics) {
-  if (!validate_setup(setup, diagnostics)) return std::nullopt;
+VertexBounds vertex_bounds(const SimulationSetup& setup) {
   const SpringNetwork& net = setup.springs;
   const std::size_t n = setup.mass.size();
-  // Vertices held along every axis take no part in the bounds; a vertex held along some axes still vibrates along
-  // the others (its bound is kept, which is conservative).
-  const std::vector<unsigned char> held = held_axes(setup);
-  StabilityReport report;
-  if (setup.nodal_damping_gamma1 > 0.0) report.assumed_displacement_max = assumed_displacement(setup);
-  const double nodal_damping =
-      setup.nodal_damping_gamma0 +
-      (setup.nodal_damping_gamma1 > 0.0 ? setup.nodal_damping_gamma1 * report.assumed_displacement_max : 0.0);
-  const double table_modulus_max = setup.strain_stiffness ? *std::max_element(setup.strain_stiffness->modulus.begin(),
-                                                                              setup.strain_stiffness->modulus.end())
-                                                          : 0.0;
-  // Per-vertex stiffness and damping bounds (x^T K x <= sum_i s_i |x_i|^2, the same for C).
-  std::vector<double> stiffness_sum(n, 0.0), damping_sum(n, 0.0);
-  double spring_ratio_min = std::numeric_limits<double>::infinity();  // min_s c_s / k_s
+  const double table_modulus_max =
+      setup.strain_stiffness ? *std::max_element(setup.strain_stiffness->modulus.begin(),
+                                                 setup.strain_stiffness->modulus.end())
+                             : 0.0;
+  VertexBounds bounds;
+  bounds.stiffness.assign(n, 0.0);
+  bounds.damping.assign(n, 0.0);
   for (std::size_t s = 0; s < net.size(); ++s) {
     const double k = tangent_stiffness_bound(setup, table_modulus_max, s);
     const double c = net.damping.empty() ? 0.0 : net.damping[s];
     for (const auto v : {net.first[s], net.second[s]}) {
-      stiffness_sum[static_cast<std::size_t>(v)] += 2.0 * k;
-      damping_sum[static_cast<std::size_t>(v)] += 2.0 * c;
+      bounds.stiffness[static_cast<std::size_t>(v)] += 2.0 * k;
+      bounds.damping[static_cast<std::size_t>(v)] += 2.0 * c;
     }
-    if (k > 0.0) spring_ratio_min = std::min(spring_ratio_min, c / k);
+    if (k > 0.0) bounds.spring_ratio_min = std::min(bounds.spring_ratio_min, c / k);
   }
-  double element_ratio_min = std::numeric_limits<double>::infinity();  // min_e beta_e
   // Each element term's bound at the largest modulus the run can give it (a strain table's largest where its law
   // reads one), its damping beta_e times that.
   const kernels::StrainTableView table = setup.strain_stiffness ? strain_table_view(*setup.strain_stiffness)
@@ -113,13 +104,39 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
         const double beta = view.stiffness_damping ? view.stiffness_damping[e] : 0.0;
         for (std::size_t a = 0; a < N; ++a) {
           const auto v = static_cast<std::size_t>(geometry.nodes[N * e + a]);
-          stiffness_sum[v] += bound;
-          damping_sum[v] += beta * bound;
+          bounds.stiffness[v] += bound;
+          bounds.damping[v] += beta * bound;
         }
-        element_ratio_min = std::min(element_ratio_min, beta);
+        bounds.element_ratio_min = std::min(bounds.element_ratio_min, beta);
       }
     });
   }
+  return bounds;
+}
+
+std::optional<StabilityReport> check_stability(const SimulationSetup& setup, DiagnosticList& diagnostics) {
+  if (!validate_setup(setup, diagnostics)) return std::nullopt;
+  const std::size_t n = setup.mass.size();
+  // Vertices held along every axis take no part in the bounds; a vertex held along some axes still vibrates along
+  // the others (its bound is kept, which is conservative).
+  const std::vector<unsigned char> held = held_axes(setup);
+  StabilityReport report;
+  if (setup.nodal_damping_gamma1 > 0.0) report.assumed_displacement_max = assumed_displacement(setup);
+  const double nodal_damping =
+      setup.nodal_damping_gamma0 +
+      (setup.nodal_damping_gamma1 > 0.0 ? setup.nodal_damping_gamma1 * report.assumed_displacement_max : 0.0);
+  // Per-vertex stiffness and damping bounds (x^T K x <= sum_i s_i |x_i|^2, the same for C), with the tools' contact
+  // stiffness on the vertices they can touch (a diagonal term k_c n n^T <= k_c I).
+  VertexBounds bounds = vertex_bounds(setup);
+  std::vector<double>& stiffness_sum = bounds.stiffness;
+  const std::vector<double>& damping_sum = bounds.damping;
+  if (!setup.tools.empty()) {
+    const std::vector<unsigned char> surface = surface_vertices(setup);
+    for (std::size_t v = 0; v < n; ++v)
+      if (surface[v]) stiffness_sum[v] *= 1.0 + setup.contact_stiffness_ratio;
+  }
+  const double spring_ratio_min = bounds.spring_ratio_min;
+  const double element_ratio_min = bounds.element_ratio_min;
   double omega_squared_max = 0.0, mass_damping_min = std::numeric_limits<double>::infinity();
   for (std::size_t v = 0; v < n; ++v) {
     if (held[v] == kernels::kAllAxesFixed) continue;

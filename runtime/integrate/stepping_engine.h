@@ -63,7 +63,20 @@ class SteppingEngine {
   virtual bool reduces_in_place() const = 0;
   virtual ProbeReading probe_reading(std::size_t scene, DiagnosticList& diagnostics) const = 0;
   virtual std::vector<double> current_stiffness(std::size_t scene, DiagnosticList& diagnostics) const = 0;
+  // The scene's positions where they live on a device (the state held, the stream finished); nullopt on the host.
+  virtual std::optional<DevicePositions> device_positions(std::size_t, DiagnosticList&) const { return std::nullopt; }
   virtual SimulationLaunches launches() const { return {}; }
+
+  // ---- rigid tools and the material, for the Simulation's setters ------------------------------------------------
+  // A scene with tools: its per-vertex contact stiffness (rigid_tools.h's contact_stiffness; given at creation and
+  // after a material change) and its tools' world shapes (given before the steps they act in). Scenes without tools
+  // are never given either.
+  virtual bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList& diagnostics) = 0;
+  virtual bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,
+                               DiagnosticList& diagnostics) = 0;
+  // The scene's material arrays in its setup (the springs' stiffness and damping, the element terms' parameters and
+  // damping, the strain table) were replaced by arrays of the same sizes between two steps: the engine takes them.
+  virtual bool refresh_material(std::size_t scene, DiagnosticList& diagnostics) = 0;
 };
 
 // The CPU engine of a batch whose every scene passed check_stability (`stability`, one each), its scenes stepped side
@@ -75,6 +88,10 @@ std::unique_ptr<SteppingEngine> create_cpu_engine(const std::vector<SimulationSe
 // The warning text of a step that stopped at the cap (code `cg-not-converged`), the same for both backends.
 std::string cg_stopped_message(ImplicitMethod method, std::size_t step, int iterations, double relative_residual,
                                double tolerance);
+
+// The warning (code `contact-not-settled`) of an implicit step whose tools' contact set still changed after `rounds`
+// solves (kernels/contact_math.h), the same for both backends.
+std::string contact_unsettled_message(std::size_t step, int rounds);
 
 // One scene's implicit solves as an engine keeps them: the report's sums, the records not yet taken, and their
 // state at the checkpoint (a replay from it then counts each step once).
@@ -97,5 +114,8 @@ class ImplicitSolverLog {
   std::vector<ImplicitStepRecord> pending_;
   bool warned_ = false;
 };
+
+// True where `scene` indexes a batch of `count` scenes; otherwise an error saying so (Simulation's per-scene calls).
+bool scene_exists(std::size_t scene, std::size_t count, DiagnosticList& diagnostics);
 
 }  // namespace fmpc::sim

@@ -6,8 +6,6 @@
 namespace fmpc::sim {
 
 namespace {
-bool finite_point(const Point3& p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
-
 // The element terms as the backends read them: a known element kind and law (kernels::visit_element_term takes any
 // index), at most what the GPU backend holds, each of its law's parameters and its damping one per element, finite
 // (a builder from runtime/fem/element_law_registry.h checks the physical ranges with the scene's names; this catches
@@ -253,7 +251,7 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                              "relative tolerance in (0, 1)");
   }
   if (diagnostics.error_count() != errors_before) return false;
-  return validate_loads(setup, diagnostics);
+  return validate_loads(setup, diagnostics) && validate_tools(setup, diagnostics);
 }
 
 }  // namespace fmpc::sim

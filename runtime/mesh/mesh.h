@@ -2,6 +2,7 @@
 // A simulation mesh as plain data: points and the elements that reference them by 0-based index. Readers fill it
 // from files, generators build it in code; nothing here prints or touches the file system.
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -11,6 +12,8 @@ namespace fmpc::sim {
 using Point3 = std::array<double, 3>;
 using Tetrahedron = std::array<std::int32_t, 4>;
 using Triangle = std::array<std::int32_t, 3>;
+
+inline bool finite_point(const Point3& p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
 
 struct Mesh {
   std::vector<Point3> points;

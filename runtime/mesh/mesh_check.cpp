@@ -65,8 +65,6 @@ double longest_edge(const Mesh& mesh, const std::array<std::int32_t, N>& element
 
 int line_of(const std::vector<int>& lines, std::size_t index) { return index < lines.size() ? lines[index] : 0; }
 
-bool finite_point(const Point3& p) { return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]); }
-
 PoolLease check_pool(const Mesh& mesh, const MeshCheckOptions& options, WorkerPool* given) {
   return PoolLease(given, options.threads, mesh.points.size() + mesh.tetrahedra.size() + mesh.triangles.size());
 }

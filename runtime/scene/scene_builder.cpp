@@ -712,6 +712,21 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
     }
   }
   extend_to_added_vertices(*setup, built.mesh.points.size());
+  // Tools: mesh units to metres; Simulation::create checks that none starts inside the tissue.
+  for (const SceneTool& scene_tool : scene.tools) {
+    RigidTool tool;
+    tool.name = scene_tool.name;
+    tool.shape = scene_tool.shape;
+    tool.radius = scene_tool.radius * scene.mesh.unit;
+    tool.length = scene_tool.length * scene.mesh.unit;
+    tool.range = scene.range_of(scene_tool.field);
+    for (ToolKeyframe keyframe : scene_tool.path) {
+      for (double& coordinate : keyframe.pose.position) coordinate *= scene.mesh.unit;
+      tool.path.push_back(keyframe);
+    }
+    setup->tools.push_back(std::move(tool));
+  }
+  setup->contact_stiffness_ratio = scene.contact_stiffness_ratio;
   setup->gravity = scene.gravity;
   setup->law = scene.law.law;
   setup->basafa_k2_over_k1 = scene.law.k2_over_k1;

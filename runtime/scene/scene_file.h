@@ -130,6 +130,16 @@ struct SceneProbe {
   int cycles = 0;                // > 0: up to target and back over 2 ramp, this many times (ProbeLoad::cycles)
 };
 
+// A rigid tool (`tools:`): its geometry in mesh units, converted to metres by the builder.
+struct SceneTool {
+  std::string name;
+  RigidTool::Shape shape = RigidTool::Shape::Sphere;
+  double radius = 0.0;              // mesh units
+  double length = 0.0;              // mesh units (capsule)
+  std::vector<ToolKeyframe> path;   // positions in mesh units; one keyframe for `pose`
+  std::string field;                // "tools[i]", for errors found when the mesh is known
+};
+
 enum class SceneBackend { Auto, Cpu, Cuda };
 
 struct SceneOutputs {
@@ -184,6 +194,8 @@ struct Scene {
   std::vector<SceneHold> holds;
   Point3 gravity{0.0, 0.0, 0.0};
   std::optional<SceneProbe> probe;
+  std::vector<SceneTool> tools;
+  double contact_stiffness_ratio = kDefaultContactStiffnessRatio;  // `contact: {stiffness_ratio}`
   Integrator integrator = Integrator::SemiImplicitEuler;
   std::optional<double> dt;  // nullopt: auto
   double duration = 1.0;     // s

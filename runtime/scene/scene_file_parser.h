@@ -6,6 +6,7 @@
 //   scene_file_run.cpp       the document's top level and the run's settings (integrator, dt, backend, outputs)
 //   scene_file_material.cpp  mesh, material (sources, bindings, regions, Poisson ratio), mass, damping, springs, law
 //   scene_file_loads.cpp     fixed and held vertices, gravity and the probe
+//   scene_file_tools.cpp     rigid tools and their contact
 #include <yaml-cpp/yaml.h>
 
 #include <cstddef>
@@ -91,6 +92,13 @@ class SceneParser {
   void parse_hold(const YAML::Node& node);
   void parse_selection(const YAML::Node& node, const std::string& prefix, SceneFixed& out);
   void parse_loads(const YAML::Node& node);
+
+  // ---- rigid tools (scene_file_tools.cpp) ----
+  void parse_tools(const YAML::Node& node);
+  // A path's point (timed) or a fixed pose; the orientation defaults to the previous point's.
+  std::optional<ToolKeyframe> parse_keyframe(const YAML::Node& node, const std::string& field, bool timed,
+                                             const ToolKeyframe* previous);
+  void parse_contact(const YAML::Node& node);
 
   std::string path_;
   Scene& scene_;

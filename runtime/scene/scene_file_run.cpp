@@ -14,8 +14,8 @@ void SceneParser::parse(const YAML::Node& root) {
     return;
   }
   check_map(root, "", {"name", "model", "mesh", "material", "mass", "damping", "springs", "law", "fem", "fixed",
-                       "hold", "loads", "integrator", "dt", "duration", "backend", "precision", "threads", "outputs",
-                       "on_inversion", "solver"});
+                       "hold", "loads", "tools", "contact", "integrator", "dt", "duration", "backend", "precision",
+                       "threads", "outputs", "on_inversion", "solver"});
   if (root["name"]) {
     if (auto name = text(root["name"], "name")) {
       if (const auto problem = output_name_problem(*name))
@@ -72,6 +72,8 @@ void SceneParser::parse(const YAML::Node& root) {
   if (root["fixed"]) parse_fixed(root["fixed"]);
   if (root["hold"]) parse_hold(root["hold"]);
   if (root["loads"]) parse_loads(root["loads"]);
+  if (root["tools"]) parse_tools(root["tools"]);
+  if (root["contact"]) parse_contact(root["contact"]);
   if (root["integrator"]) {
     static const std::vector<std::string> names = {"forward_euler", "semi_implicit_euler", "velocity_verlet", "rk4",
                                                    "implicit_euler"};

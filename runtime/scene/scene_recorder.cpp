@@ -44,7 +44,9 @@ SceneRecorder::SceneRecorder(const Scene& scene, const BuiltScene& built, const 
   write_csv_ = scene.outputs.csv && scene.outputs.samples > 0;
   with_probe_ = setup.probe.has_value();
   with_solver_ = setup.integrator == Integrator::ImplicitEuler;
-  sample_steps_ = write_csv_ || with_probe_ ? spread(std::max(scene.outputs.samples, 2), total)
+  for (const RigidTool& tool : setup.tools) tool_names_.push_back(tool.name);
+  tool_peaks_.assign(setup.tools.size(), 0.0);
+  sample_steps_ = write_csv_ || with_probe_ || !tool_names_.empty() ? spread(std::max(scene.outputs.samples, 2), total)
                                             : std::vector<std::size_t>{};
   events_.insert(frame_steps_.begin(), frame_steps_.end());
   events_.insert(sample_steps_.begin(), sample_steps_.end());
@@ -56,7 +58,7 @@ SceneRecorder::SceneRecorder(const Scene& scene, const BuiltScene& built, const 
       for (std::size_t i = 0; i < 3; ++i) probe_axis_[i] = setup.probe->target[i] / length;
   }
   if (write_csv_) {
-    const auto columns = time_series_columns(with_probe_, with_solver_);
+    const auto columns = time_series_columns(with_probe_, with_solver_, tool_names_);
     for (std::size_t i = 0; i < columns.size(); ++i) csv_ += (i ? "," : "") + columns[i];
     csv_ += "\n";
   }
@@ -158,6 +160,19 @@ void SceneRecorder::record_sample(const SceneState& state, double largest, const
     row.insert(row.end(), {static_cast<double>(interval_iterations_), interval_residual_});
     interval_iterations_ = 0;
     interval_residual_ = 0.0;
+  }
+  if (!tool_names_.empty()) {
+    tool_readings_ = state.tool_readings(diagnostics);
+    if (tool_readings_.size() != tool_names_.size()) {  // a device error, already reported
+      outputs_ok_ = false;
+      return;
+    }
+    for (std::size_t t = 0; t < tool_readings_.size(); ++t) {
+      const ToolReading& reading = tool_readings_[t];
+      tool_peaks_[t] = std::max(tool_peaks_[t], std::sqrt(dot(reading.force, reading.force)));
+      row.insert(row.end(), {reading.force[0], reading.force[1], reading.force[2], reading.torque[0],
+                             reading.torque[1], reading.torque[2], static_cast<double>(reading.contacts)});
+    }
   }
   if (write_csv_) {
     for (std::size_t i = 0; i < row.size(); ++i) csv_ += (i ? "," : "") + format_number(row[i]);
@@ -288,6 +303,24 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
     probe["final_force_N"] = result.probe_curve.empty() ? 0.0 : result.probe_curve.back().force;
     probe["max_abs_force_N"] = max_force;
   }
+  if (!setup.tools.empty()) {
+    JsonDocument& tools = json["tools"] = JsonDocument::array();
+    for (std::size_t t = 0; t < setup.tools.size(); ++t) {
+      const RigidTool& tool = setup.tools[t];
+      JsonDocument entry = JsonDocument::object();
+      entry["name"] = tool.name;
+      entry["shape"] = tool.shape == RigidTool::Shape::Sphere ? "sphere" : "capsule";
+      entry["radius_m"] = tool.radius;
+      entry["length_m"] = tool.length;
+      const ToolReading last = t < tool_readings_.size() ? tool_readings_[t] : ToolReading{};
+      entry["final_force_N"] = {last.force[0], last.force[1], last.force[2]};
+      entry["final_torque_Nm"] = {last.torque[0], last.torque[1], last.torque[2]};
+      entry["final_contacts"] = last.contacts;
+      entry["max_force_N"] = tool_peaks_[t];
+      tools.push_back(entry);
+    }
+    json["contact_stiffness_ratio"] = setup.contact_stiffness_ratio;
+  }
   JsonDocument& inversions = json["inversions"];
   inversions["largest_count"] = result.inversions.largest_count;
   inversions["final_count"] = result.inversions.current_count;
@@ -355,7 +388,7 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
   return json_text(json);
 }
 
-std::vector<std::string> time_series_columns(bool with_probe, bool with_solver) {
+std::vector<std::string> time_series_columns(bool with_probe, bool with_solver, const std::vector<std::string>& tools) {
   std::vector<std::string> columns = {"time_s"};
   if (with_probe)
     columns.insert(columns.end(), {"probe_displacement_m", "probe_force_N", "probe_dx_m", "probe_dy_m", "probe_dz_m",
@@ -363,6 +396,9 @@ std::vector<std::string> time_series_columns(bool with_probe, bool with_solver) 
   columns.insert(columns.end(), {"kinetic_energy_J", "elastic_energy_J", "max_displacement_m"});
   // The worst implicit step since the row before: its iterations and its relative residual.
   if (with_solver) columns.insert(columns.end(), {"solver_iterations", "solver_relative_residual"});
+  for (const std::string& tool : tools)
+    for (const char* column : {"_fx_N", "_fy_N", "_fz_N", "_tx_Nm", "_ty_Nm", "_tz_Nm", "_contacts"})
+      columns.push_back(tool + column);
   return columns;
 }
 

@@ -33,7 +33,7 @@ class SceneRecorder {
   // Whether the event needs velocities (a frame or a sample) besides the positions.
   bool needs_velocities(std::size_t step) const { return is_frame(step) || is_sample(step); }
   bool records_at_end() const { return scene_.outputs.frames > 0; }
-  bool samples_at_end() const { return write_csv_ || with_probe_; }
+  bool samples_at_end() const { return write_csv_ || with_probe_ || !tool_names_.empty(); }
   void set_timing(const SceneRunTiming& timing) { result_.timing = timing; }
 
   void record(const SceneState& state, bool frame, bool sample, DiagnosticList& diagnostics);
@@ -63,6 +63,9 @@ class SceneRecorder {
   std::vector<std::size_t> frame_steps_, sample_steps_;
   std::set<std::size_t> events_;
   bool write_csv_ = false, with_probe_ = false;
+  std::vector<std::string> tool_names_;
+  std::vector<ToolReading> tool_readings_;  // at the last sample
+  std::vector<double> tool_peaks_;           // the largest |force| of each tool over the samples (N)
   Point3 probe_axis_{0.0, 0.0, 0.0};
   std::string csv_;
   std::vector<PvdFrame> frames_;

@@ -157,9 +157,10 @@ std::optional<double> prepare_cohort(const std::vector<BuiltScene*>& patients, c
 std::optional<CohortRunResult> run_cohort(const std::vector<CohortPatient>& patients, const CohortRunOptions& options,
                                           DiagnosticList& diagnostics);
 
-// The CSV's header for a scene with or without a probe, and with implicit Euler's solver columns (docs/scenes.md
-// lists the columns).
-std::vector<std::string> time_series_columns(bool with_probe, bool with_solver = false);
+// The CSV's header for a scene with or without a probe, with implicit Euler's solver columns, and with its tools'
+// names (docs/scenes.md lists the columns).
+std::vector<std::string> time_series_columns(bool with_probe, bool with_solver = false,
+                                             const std::vector<std::string>& tools = {});
 
 // The one warning a run gives when implicit steps stopped at the solver's cap (code `cg-not-converged`): how many,
 // the first with its residual, and the largest residual reached; nullopt when none did.

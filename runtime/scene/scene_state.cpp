@@ -36,6 +36,12 @@ ProbeReading SceneState::probe_reading(DiagnosticList& diagnostics) const {
   return read_probe(setup, time(), *positions_, *velocities_, current_stiffness(diagnostics));
 }
 
+std::vector<ToolReading> SceneState::tool_readings(DiagnosticList& diagnostics) const {
+  if (positions_ == nullptr) return simulation_.tool_readings(scene_, diagnostics);
+  return read_tools(simulation_.setup(scene_).tools, simulation_.tool_poses(scene_),
+                    simulation_.contact_stiffness(scene_), *positions_);
+}
+
 std::vector<double> SceneState::current_stiffness(DiagnosticList& diagnostics) const {
   if (stiffness_read_) return stiffness_;
   return simulation_.current_stiffness(scene_, diagnostics);

@@ -40,6 +40,8 @@ class SceneState {
   std::vector<Point3> velocities(DiagnosticList& diagnostics) const;
   ProbeReading probe_reading(DiagnosticList& diagnostics) const;
   std::vector<double> current_stiffness(DiagnosticList& diagnostics) const;
+  // What each tool feels now: the simulation's reading, or a batch's from its host copy (the same read_tools).
+  std::vector<ToolReading> tool_readings(DiagnosticList& diagnostics) const;
   // The largest distance of a vertex from `start` (its start positions): reduced where the state lives when it
   // does (reduces_in_place), else from positions().
   std::optional<double> largest_displacement(const std::vector<Point3>& start, DiagnosticList& diagnostics) const;

@@ -1,6 +1,7 @@
 # ctest example_project: installs this build of fmpc into a staging prefix, configures and builds
-# rulesets/example_project against it with find_package(fmpc), runs the program, then edits (a copy of) the rule
-# file and checks that the next build regenerated the evaluator.
+# rulesets/example_project against it with find_package(fmpc), runs its programs (liver_stiffness; tool_force,
+# which links fmpc::runtime, drives a tool in a scene, prints the force and swaps the material for the copied rule
+# file), then edits (a copy of) the rule file and checks that the next build regenerated the evaluator.
 #   cmake -DFMPC_BUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DGENERATOR=... -P example_project.cmake
 function(run)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE status OUTPUT_VARIABLE output ERROR_VARIABLE output)
@@ -26,6 +27,16 @@ string(REGEX MATCHALL "stiffness [0-9.]+ kPa \\(flags 0\\), table [0-9.]+ kPa" l
 list(LENGTH lines count)
 if(NOT count EQUAL 3)
   message(FATAL_ERROR "expected three result lines with flags 0, got:\n${last_output}")
+endif()
+
+# The runtime: the tip pressed 2 mm in and slid 1 cm across, the force printed every 50 ms (the tissue pushes the tip
+# up: a positive z force, with vertices in contact), then the material swapped for the copied rules.
+run("${WORK_DIR}/build/tool_force" "${SOURCE_DIR}/rulesets/example_project/tool_scene.yaml" "${rules}")
+message(STATUS "tool_force:\n${last_output}")
+string(REGEX MATCHALL "force \\(-?[0-9.]+, -?[0-9.]+, [0-9]+\\.[0-9]+\\) N  contacts [1-9][0-9]*" pressed "${last_output}")
+list(LENGTH pressed count)
+if(NOT count EQUAL 7 OR NOT last_output MATCHES "material swapped for ")
+  message(FATAL_ERROR "expected seven force lines with the tip in contact and a material swap, got:\n${last_output}")
 endif()
 
 # Regeneration: a rule file edit (here a comment, which changes the file's hash) must rebuild the header.

@@ -37,6 +37,19 @@ inline const char* name_of(sim::Precision precision) {
   return precision == sim::Precision::Float ? "float" : "double";
 }
 
+// The conjugate-gradient cap of the sanitizer smokes' implicit runs: every CG kernel (and every phase of the
+// cooperative one) runs in each iteration, so a few iterations check them all, while racecheck, which instruments
+// each shared-memory access, takes minutes per converged solve of the cooperative launch's one to three blocks (each
+// walks all the dot products' virtual blocks). Reaching the cap is a warning, not an error.
+inline constexpr int kSanitizedCgIterations = 6;
+
+// Forward Euler amplifies every undamped vibration, and neither the dashpots along springs nor the elements'
+// stiffness-proportional damping reach the sideways vibrations of stretched springs or the rotations of loaded
+// elements, so dt auto refuses it without mass damping (docs/simulator.md, stability): its scenes get alpha = 20 /s.
+inline double forward_euler_mass_damping(sim::Integrator integrator) {
+  return integrator == sim::Integrator::ForwardEuler ? 20.0 : 0.0;
+}
+
 inline double max_difference(const std::vector<sim::Point3>& a, const std::vector<sim::Point3>& b) {
   if (a.size() != b.size()) return std::numeric_limits<double>::infinity();
   double worst = 0.0;

@@ -343,7 +343,8 @@ FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and i
       for (const Integrator integrator : {Integrator::ForwardEuler, Integrator::SemiImplicitEuler,
                                           Integrator::VelocityVerlet, Integrator::RungeKutta4,
                                           Integrator::ImplicitEuler}) {
-        const SimulationSetup setup = held_box(model, precision, integrator);
+        SimulationSetup setup = held_box(model, precision, integrator);
+        setup.implicit.max_iterations = kSanitizedCgIterations;
         DiagnosticList diagnostics;
         const auto run = gpu_simulation(setup, diagnostics);
         FMPC_REQUIRE(run && run->advance(9, diagnostics, 4));

@@ -6,26 +6,16 @@
 
 #include "compiler/frontend/fmpc_language.h"
 #include "diagnostics/number_format.h"
-#include "tests/support/random_system.h"
+#include "tests/support/fmpc_text_checks.h"
 
 namespace fmpc {
 namespace {
 
-RuleFile read_ok(const std::string& text) {
-  DiagnosticList diagnostics;
-  RuleFile file = read_fmpc("t.fis", text, diagnostics);
-  SourceFiles sources;
-  sources.add("t.fis", text);
-  INFO(render_all(diagnostics, sources));
-  REQUIRE(diagnostics.empty());
-  return file;
-}
-
-FuzzySystem read_one(const std::string& text) {
-  RuleFile file = read_ok(text);
-  REQUIRE(file.systems.size() == 1);
-  return file.systems.front();
-}
+using testing::difference;
+using testing::format_ok;
+using testing::kLiver;
+using testing::read_ok;
+using testing::read_one;
 
 // Each diagnostic as "LINE:COL-ENDCOL: message | note | note".
 std::vector<std::string> diagnostics_of(const std::string& text) {
@@ -41,102 +31,6 @@ std::vector<std::string> diagnostics_of(const std::string& text) {
   return lines;
 }
 
-std::string format_ok(const std::string& text) {
-  DiagnosticList diagnostics;
-  std::optional<std::string> formatted = format_fmpc("t.fis", text, diagnostics);
-  INFO(render_all(diagnostics, SourceFiles{}));
-  REQUIRE(formatted.has_value());
-  return *formatted;
-}
-
-// The first field in which two systems differ (source ranges ignored), or "" when they are the same.
-std::string difference(const FuzzySystem& a, const FuzzySystem& b) {
-  std::ostringstream out;
-  const auto diff = [&](bool differs, const std::string& what) {
-    if (differs && out.str().empty()) out << what;
-  };
-  diff(a.name != b.name, "name");
-  diff(a.description != b.description, "description");
-  diff(a.type != b.type, "type");
-  diff(a.and_method != b.and_method, "and");
-  diff(a.or_method != b.or_method, "or");
-  diff(a.implication != b.implication, "implication");
-  diff(a.aggregation != b.aggregation, "aggregation");
-  diff(a.defuzzifier != b.defuzzifier, "defuzzifier");
-  diff(a.samples != b.samples, "samples");
-  diff(a.no_fire != b.no_fire, "no_fire");
-  diff(a.no_fire_value != b.no_fire_value, "no_fire_value");
-  const auto variables = [&](const std::vector<Variable>& x, const std::vector<Variable>& y, const std::string& kind) {
-    diff(x.size() != y.size(), kind + " count");
-    for (std::size_t i = 0; i < std::min(x.size(), y.size()); ++i) {
-      const std::string where = kind + " " + x[i].name;
-      diff(x[i].name != y[i].name, where + " name");
-      diff(x[i].description != y[i].description, where + " description");
-      diff(x[i].unit != y[i].unit, where + " unit");
-      diff(x[i].min != y[i].min || x[i].max != y[i].max, where + " range");
-      diff(x[i].terms.size() != y[i].terms.size(), where + " term count");
-      for (std::size_t t = 0; t < std::min(x[i].terms.size(), y[i].terms.size()); ++t) {
-        diff(x[i].terms[t].name != y[i].terms[t].name, where + " term name " + x[i].terms[t].name);
-        diff(x[i].terms[t].mf.kind != y[i].terms[t].mf.kind, where + " kind of " + x[i].terms[t].name);
-        diff(x[i].terms[t].mf.params != y[i].terms[t].mf.params, where + " params of " + x[i].terms[t].name);
-      }
-    }
-  };
-  variables(a.inputs, b.inputs, "input");
-  variables(a.outputs, b.outputs, "output");
-  diff(a.rules.size() != b.rules.size(), "rule count");
-  for (std::size_t r = 0; r < std::min(a.rules.size(), b.rules.size()); ++r) {
-    const Rule& x = a.rules[r];
-    const Rule& y = b.rules[r];
-    const std::string where = "rule " + std::to_string(r + 1);
-    diff(x.label != y.label, where + " label");
-    diff(x.weight != y.weight, where + " weight");
-    diff(x.antecedent.size() > 1 && x.connective != y.connective, where + " connective");
-    const auto clauses = [&](const std::vector<Clause>& p, const std::vector<Clause>& q, const std::string& part) {
-      diff(p.size() != q.size(), where + " " + part + " size");
-      for (std::size_t c = 0; c < std::min(p.size(), q.size()); ++c)
-        diff(p[c].variable != q[c].variable || p[c].term != q[c].term || p[c].negated != q[c].negated ||
-                 p[c].hedge != q[c].hedge,
-             where + " " + part + " clause " + std::to_string(c + 1));
-    };
-    clauses(x.antecedent, y.antecedent, "antecedent");
-    clauses(x.consequent, y.consequent, "consequent");
-  }
-  return out.str();
-}
-
-const char* const kLiver = R"(# Liver stiffness from FibroScan readings
-system liver "Fuzzy MSM parameter controller"
-  type mamdani
-  and min
-  or max
-  implication min
-  aggregation max
-  defuzzify centroid samples 101
-  when no rule fires: midrange
-
-input HCV "FibroScan stiffness, hepatitis C" in [0, 75] kPa
-  F2 is gauss(mean 7.64, sd 0.91)
-  F3 is gauss(sd 0.38, mean 9.72)
-  F4 is gauss(mean 13.81, sd 2.38)
-
-input HBV in [0, 75] kPa
-  "F0-F1" is triangle(start -20, peak 0, end 20)
-  F2 is trapezoid(start 5, top_start 6, top_end 8, end 9)
-
-output stiffness "Liver stiffness" in [0, 75] kPa
-  "F0-F1" is gauss(mean 5300 Pa, sd 1.45 kPa)
-  F2 is gauss(mean 7.64, sd 0.91)
-  F3 is gauss(mean 9.72, sd 0.38)
-
-output damping in [0, 1] dimensionless
-  low is linear_z(start 0.1, end 0.5)
-
-rule r1: if HCV is F2 and HBV is "F0-F1" then stiffness is "F0-F1"
-rule r7: if HCV is not F4 or HBV is very F2 then stiffness is F2 weight 0.5
-rule: if HCV is somewhat F3 then stiffness is F3 and damping is low
-rule r9: if HBV is extremely F2 and HCV is not very very F4 then stiffness is not somewhat F2
-)";
 
 TEST_CASE("fmpc language: the liver example parses into the expected IR", "[fmpc-language]") {
   const FuzzySystem s = read_one(kLiver);
@@ -790,6 +684,28 @@ TEST_CASE("fmpc language: fmt keeps one blank line between a comment block and i
   CHECK(difference(read_one(text), read_one(formatted)).empty());
 }
 
+TEST_CASE("fmpc language: fmt aligns the trailing comments of consecutive lines", "[fmpc-language]") {
+  // As gofmt does: a run of lines that each end in a comment shares one column, two spaces after its longest code
+  // (counted in code points: "µ" is one), a variable's header and its terms alike; a blank line, a comment line or a
+  // line without a comment ends the run.
+  const std::string header = "system s\n  type mamdani\n  and min\n  or max\n  implication min\n  aggregation max\n"
+                             "  defuzzify centroid samples 101\n  when no rule fires: midrange\n\n";
+  const std::string text = header + "input a in [0, 1]\n  lo is triangle(start 0, peak 0, end 1)     # one\n"
+                           "  \"µ\" is triangle(start 0, peak 1, end 1) # two\n  # a comment line\n"
+                           "  hi is triangle(start 0.5, peak 1, end 1)  # alone\n"
+                           "  mid is triangle(start 0, peak 0.5, end 1)\n\noutput o in [0, 1]  # three\n"
+                           "  x is triangle(start 0, peak 0, end 1)  # four\n\nrule r1: if a is lo then o is x\n";
+  const std::string expected = header + "input a in [0, 1]\n  lo is triangle(start 0, peak 0, end 1)   # one\n"
+                               "  \"µ\" is triangle(start 0, peak 1, end 1)  # two\n  # a comment line\n"
+                               "  hi is triangle(start 0.5, peak 1, end 1)  # alone\n"
+                               "  mid is triangle(start 0, peak 0.5, end 1)\n\n"
+                               "output o in [0, 1]                       # three\n"
+                               "  x is triangle(start 0, peak 0, end 1)  # four\n\nrule r1: if a is lo then o is x\n";
+  const std::string formatted = format_ok(text);
+  CHECK(formatted == expected);
+  CHECK(format_ok(formatted) == formatted);
+}
+
 TEST_CASE("fmpc language: fmt fills in the sugeno defaults and keeps several systems apart", "[fmpc-language]") {
   const std::string text = "system a type sugeno input x in [0,1] a is gauss(mean 0, sd 1) output y in [0, 1]\n"
                            "k is linear(offset 1, x 2) rule: if x is a then y is k\n\n\n\nsystem b\n"
@@ -833,175 +749,6 @@ TEST_CASE("fmpc language: fmt keeps what it cannot check as written", "[fmpc-lan
   CHECK(formatted.find("  type nonsense\n") != std::string::npos);
   CHECK(formatted.find("input x in [0, 1] \"kg/m^3\"\n  a is blob(zeta 1, alpha 2)\n") != std::string::npos);
   CHECK(format_ok(formatted) == formatted);
-}
-
-FuzzySystem hand_made_mamdani() {
-  FuzzySystem s;
-  s.name = "hand made";
-  s.description = "every family, every hedge";
-  s.and_method = TNorm::EinsteinProduct;
-  s.or_method = SNorm::EinsteinSum;
-  s.implication = TNorm::Product;
-  s.aggregation = SNorm::ProbabilisticSum;
-  s.defuzzifier = Defuzzifier::Bisector;
-  s.samples = 0;
-  s.no_fire = NoFirePolicy::Value;
-  s.no_fire_value = 0.1 + 0.2;
-  Variable x;
-  x.name = "input";  // a reserved word
-  x.unit = "kPa";
-  x.min = -1.5;
-  x.max = 1e10;
-  const std::vector<std::pair<MfKind, std::vector<double>>> families = {
-      {MfKind::Triangle, {1, 2, 3}},        {MfKind::Trapezoid, {1, 2, 3, 4}},
-      {MfKind::Gaussian, {0.91, 7.64}},     {MfKind::Gaussian2, {1, 2, 3, 4}},
-      {MfKind::GeneralizedBell, {1, 2, 3}}, {MfKind::Sigmoid, {-2, 3}},
-      {MfKind::DifferenceSigmoid, {1, 2, 3, 4}}, {MfKind::ProductSigmoid, {1, 2, -3, 4}},
-      {MfKind::ZShape, {1, 2}},             {MfKind::SShape, {1, 2}},
-      {MfKind::PiShape, {1, 2, 3, 4}},      {MfKind::LinearS, {1e-300, 2}},
-      {MfKind::LinearZ, {1, 2.5e300}},
-  };
-  for (std::size_t i = 0; i < families.size(); ++i)
-    x.terms.push_back(Term{"t" + std::to_string(i), MembershipFunction{families[i].first, families[i].second}, {}, {}});
-  x.terms[0].name = "F0-F1";
-  x.terms[1].name = "value";
-  x.terms[2].name = "is";
-  s.inputs.push_back(x);
-  Variable y = x;
-  y.name = "y";
-  y.unit = "%";
-  y.description = "second";
-  s.inputs.push_back(y);
-  Variable out;
-  out.name = "out put";
-  out.unit = "";
-  out.terms.push_back(Term{"low", MembershipFunction{MfKind::Triangle, {0, 0.25, 0.5}}, {}, {}});
-  out.terms.push_back(Term{"high", MembershipFunction{MfKind::Triangle, {0.5, 0.75, 1}}, {}, {}});
-  s.outputs.push_back(out);
-  Variable out2 = out;
-  out2.name = "b";
-  s.outputs.push_back(out2);
-  const std::vector<Hedge> hedges = {Hedge::None, Hedge::Somewhat, Hedge::Very, Hedge::Extremely, Hedge::VeryVery};
-  for (std::size_t i = 0; i < hedges.size(); ++i) {
-    Rule rule;
-    rule.label = i % 2 ? "r" + std::to_string(i) : "";
-    rule.connective = i % 2 ? Connective::Or : Connective::And;
-    rule.antecedent.push_back(Clause{1, static_cast<int>(i), i % 3 == 0, hedges[i], {}});
-    rule.antecedent.push_back(Clause{0, static_cast<int>(12 - i), i % 2 == 0, hedges[4 - i], {}});
-    rule.consequent.push_back(Clause{0, static_cast<int>(i % 2), i == 2, hedges[i], {}});
-    if (i != 3) rule.consequent.push_back(Clause{1, 1, false, Hedge::None, {}});
-    rule.weight = i == 4 ? 0.125 : 1.0;
-    s.rules.push_back(rule);
-  }
-  Rule single;
-  single.label = "then";
-  single.antecedent.push_back(Clause{0, 0, false, Hedge::None, {}});
-  single.consequent.push_back(Clause{1, 0, false, Hedge::None, {}});
-  s.rules.push_back(single);
-  return s;
-}
-
-FuzzySystem hand_made_sugeno() {
-  FuzzySystem s;
-  s.name = "sug";
-  s.type = SystemType::Sugeno;
-  s.and_method = TNorm::Product;
-  s.or_method = SNorm::Sum;
-  s.implication = TNorm::Minimum;
-  s.aggregation = SNorm::Maximum;
-  s.defuzzifier = Defuzzifier::WeightedSum;
-  s.samples = 7;  // not used by wtsum, but kept
-  s.no_fire = NoFirePolicy::Error;
-  for (const char* name : {"offset", "x"}) {
-    Variable v;
-    v.name = name;
-    v.terms.push_back(Term{"a", MembershipFunction{MfKind::Gaussian, {1, 0}}, {}, {}});
-    s.inputs.push_back(v);
-  }
-  Variable z;
-  z.name = "z";
-  z.unit = "N";
-  z.terms.push_back(Term{"c", MembershipFunction{MfKind::Constant, {-0.0}}, {}, {}});
-  z.terms.push_back(Term{"l", MembershipFunction{MfKind::Linear, {1.5, -2, 1.0 / 3.0}}, {}, {}});
-  s.outputs.push_back(z);
-  Rule rule;
-  rule.antecedent.push_back(Clause{1, 0, true, Hedge::None, {}});
-  rule.antecedent.push_back(Clause{0, 0, false, Hedge::None, {}});
-  rule.consequent.push_back(Clause{0, 1, false, Hedge::None, {}});
-  s.rules.push_back(rule);
-  return s;
-}
-
-void check_round_trip(const RuleFile& original) {
-  const std::string text = write_fmpc(original);
-  INFO(text);
-  const RuleFile read_back = read_ok(text);
-  REQUIRE(read_back.systems.size() == original.systems.size());
-  for (std::size_t i = 0; i < original.systems.size(); ++i)
-    CHECK(difference(original.systems[i], read_back.systems[i]).empty());
-  // What write_fmpc produces is already in the canonical layout.
-  CHECK(format_ok(text) == text);
-}
-
-TEST_CASE("fmpc language: write_fmpc -> read_fmpc gives the same IR (hand-made systems)", "[fmpc-language]") {
-  RuleFile file;
-  file.path = "t.fis";
-  file.systems.push_back(hand_made_mamdani());
-  file.systems.push_back(hand_made_sugeno());
-  check_round_trip(file);
-
-  // The liver example survives read -> write -> read as well.
-  check_round_trip(read_ok(kLiver));
-}
-
-TEST_CASE("fmpc language: write_fmpc prints every setting and MATLAB-ordered parameters by name",
-          "[fmpc-language]") {
-  RuleFile file;
-  file.systems.push_back(hand_made_sugeno());
-  CHECK(write_fmpc(file) == R"(system sug
-  type sugeno
-  and prod
-  or sum
-  implication min
-  aggregation max
-  defuzzify wtsum samples 7
-  when no rule fires: error
-
-input offset in [0, 1]
-  a is gauss(mean 0, sd 1)
-
-input x in [0, 1]
-  a is gauss(mean 0, sd 1)
-
-output z in [0, 1] N
-  c is constant(value 0)
-  l is linear("offset" 1.5, x -2, offset 0.3333333333333333)
-
-rule: if x is not a and offset is a then z is l
-)");
-}
-
-TEST_CASE("fmpc language: format_rule_body prints one rule without its label", "[fmpc-language]") {
-  const FuzzySystem s = read_one(kLiver);
-  CHECK(format_rule_body(s, 0) == "if HCV is F2 and HBV is \"F0-F1\" then stiffness is \"F0-F1\"");
-  CHECK(format_rule_body(s, 1) == "if HCV is not F4 or HBV is very F2 then stiffness is F2 weight 0.5");
-  CHECK(format_rule_body(s, 3) ==
-        "if HBV is extremely F2 and HCV is not very very F4 then stiffness is not somewhat F2");
-  CHECK(format_rule_body(s, 4).empty());
-}
-
-TEST_CASE("fmpc language: write_fmpc -> read_fmpc gives the same IR (seeded random systems)", "[fmpc-language]") {
-  for (std::uint64_t seed = 1; seed <= 200; ++seed) {
-    INFO("seed " << seed);
-    RuleFile file;
-    file.path = "t.fis";
-    file.systems.push_back(testing::random_system(seed));
-    if (seed % 4 == 0) {
-      file.systems.push_back(testing::random_system(seed + 1000));
-      file.systems.back().name += "_second";
-    }
-    check_round_trip(file);
-  }
 }
 
 }  // namespace

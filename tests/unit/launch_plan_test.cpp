@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <random>
 #include <set>
 #include <vector>
@@ -28,7 +29,9 @@ struct GridBatch {
     shape.vertex_begin = {0};
     shape.element_begin = {0};
     int base = 0;
-    for (const auto& [nx, ny, nz] : scenes) {
+    for (const std::array<int, 3>& cells : scenes) {
+      // Copies, not structured bindings: a lambda may not capture those before C++20 (clang refuses).
+      const int nx = cells[0], ny = cells[1], nz = cells[2];
       for (int z = 0; z < nz; ++z)
         for (int y = 0; y < ny; ++y)
           for (int x = 0; x < nx; ++x) {
@@ -61,6 +64,7 @@ struct GridBatch {
 // clusters of up to `most_cluster_blocks` blocks within the same limit. Counts its queries.
 struct FakeDevice {
   int resident = 264;
+  int cg_resident = 264;
   long long shared_limit = 227 * 1024;
   int most_cluster_blocks = 16;
   bool fail = false;
@@ -77,6 +81,11 @@ struct FakeDevice {
       ++queries;
       if (fail) return std::nullopt;
       return blocks <= most_cluster_blocks && rows <= kClusterRows && bytes <= shared_limit;
+    };
+    limits.cg_persistent_blocks = [this]() -> std::optional<int> {
+      ++queries;
+      if (fail) return std::nullopt;
+      return cg_resident;
     };
     return limits;
   }
@@ -304,6 +313,82 @@ TEST_CASE("Launch plan: checks per persistent launch, their result slots, and a 
   CHECK(plan_launches(box.shape, {}, device.limits())->check_slot_stride == 7);  // non-finite + 2 per scene
   device.fail = true;
   CHECK_FALSE(plan_launches(box.shape, {}, device.limits()));
+}
+
+// SOFA's liver (181 vertices, 596 tetrahedra: 3 blocks) and the 20^3 FEM box (9,261 vertices, 48,000 tetrahedra:
+// 188 blocks, the elements' count) fit an H100's cooperative grid; a mesh with more entries than resident threads
+// keeps the per-iteration kernels, as do explicit schemes and the persistent option off.
+TEST_CASE("Launch plan: implicit Euler's conjugate gradient in one cooperative launch where it fits", "[gpu][plan]") {
+  FakeDevice device;
+  BatchShape shape;
+  shape.implicit_scheme = true;
+  shape.vertex_count = 181;
+  shape.element_count = 596;
+  shape.vertex_begin = {0, 181};
+  shape.element_begin = {0, 596};
+  std::vector<int> offset(182, 0);
+  shape.offset = offset.data();
+  auto plan = plan_launches(shape, {}, device.limits());
+  REQUIRE(plan);
+  CHECK(plan->cg_grid_blocks == 3);  // 596 elements against 543 degrees of freedom
+  CHECK_FALSE(plan->persistent());   // the explicit launches are not planned
+  shape.vertex_count = 9261;
+  shape.element_count = 48000;
+  CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 188);
+  shape.element_count = 0;
+  CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 109);  // 27,783 degrees of freedom
+  shape.vertex_count = 1;
+  CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 1);
+  // More blocks than resident: per-iteration kernels. Exactly resident: cooperative.
+  shape.vertex_count = 9261;
+  shape.element_count = 48000;
+  device.cg_resident = 187;
+  CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 0);
+  device.cg_resident = 188;
+  CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 188);
+  device.cg_resident = 0;  // no cooperative launches
+  CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 0);
+  device.cg_resident = 264;
+  sim::GpuOptions off;
+  off.persistent = false;
+  const int queries = device.queries;
+  CHECK(plan_launches(shape, off, device.limits())->cg_grid_blocks == 0);
+  shape.implicit_scheme = false;
+  CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 0);
+  CHECK(device.queries == queries);  // neither asks the device
+  shape.implicit_scheme = true;
+  shape.vertex_count = 0;
+  CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 0);
+  shape.vertex_count = 181;
+  device.fail = true;
+  CHECK_FALSE(plan_launches(shape, {}, device.limits()));
+}
+
+TEST_CASE("Launch plan: conjugate gradient iterations between two reads of its scalars", "[gpu][plan]") {
+  // The previous step's count first, then doubling, at least 4, never beyond the cap.
+  CHECK(cg_iterations_before_read(25, 0, 25) == 25);
+  CHECK(cg_iterations_before_read(0, 0, 25) == kCgLeastIterationsPerRead);
+  CHECK(cg_iterations_before_read(1, 0, 25) == kCgLeastIterationsPerRead);
+  CHECK(cg_iterations_before_read(10, 10, 1000) == 10);
+  CHECK(cg_iterations_before_read(10, 20, 1000) == 20);
+  CHECK(cg_iterations_before_read(10, 2, 1000) == kCgLeastIterationsPerRead);
+  CHECK(cg_iterations_before_read(40, 0, 25) == 25);
+  CHECK(cg_iterations_before_read(25, 20, 25) == 5);
+  CHECK(cg_iterations_before_read(25, 25, 25) == 0);
+  CHECK(cg_iterations_before_read(25, 30, 25) == 0);
+  CHECK(cg_iterations_before_read(5, 0, 0) == 0);
+  CHECK(cg_iterations_before_read(5, 0, -3) == 0);
+  // Reads per solve of n iterations: at most 1 + log2(n / 4), never one per iteration.
+  for (const int n : {1, 3, 4, 5, 17, 138, 1000}) {
+    int enqueued = 0, reads = 0;
+    while (enqueued < n) {
+      const int chunk = cg_iterations_before_read(0, enqueued, 5000);
+      REQUIRE(chunk >= kCgLeastIterationsPerRead);
+      enqueued += chunk;
+      ++reads;
+    }
+    CHECK(reads <= 1 + std::max(0, static_cast<int>(std::ceil(std::log2(n / 4.0)))));
+  }
 }
 
 TEST_CASE("GPU batch admission: what scenes must share is named, on machines without a GPU", "[gpu][batch]") {

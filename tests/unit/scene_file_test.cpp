@@ -217,8 +217,8 @@ TEST_CASE("scene errors name the field, its position and what is allowed", "[sce
   CHECK(error_of(kMinimal + "threads: 1.5\n") == "3:10: threads: expected an integer from 0 to 256, got '1.5'");
   CHECK(error_of(kMinimal + "gravity: [0, 0, -9.81]\n") ==
         "3:1: gravity: unknown key; allowed: 'name', 'model', 'mesh', 'material', 'mass', 'damping', 'springs', "
-        "'law', 'fem', 'fixed', 'hold', 'loads', 'integrator', 'dt', 'duration', 'backend', 'precision', 'threads', "
-        "'outputs', 'on_inversion' or 'solver'");
+        "'law', 'fem', 'fixed', 'hold', 'loads', 'tools', 'contact', 'integrator', 'dt', 'duration', 'backend', "
+        "'precision', 'threads', 'outputs', 'on_inversion' or 'solver'");
   CHECK(error_of("material: {youngs_modulus: 10}\n") ==
         "1:1: mesh: missing; give a mesh file or a generated box or ellipsoid");
   CHECK(error_of("mesh: {box: {size: [1, 1, 1]}}\n") ==
@@ -337,7 +337,8 @@ TEST_CASE("unknown keys and keywords come with a suggestion", "[scene]") {
 
 TEST_CASE("every shipped scene parses", "[scene]") {
   for (const char* name :
-       {"liver_indentation", "sofa_liver_springs", "sofa_liver_fuzzy", "sofa_liver_fem", "strain_stiffening_block"}) {
+       {"liver_indentation", "sofa_liver_springs", "sofa_liver_fuzzy", "sofa_liver_fem", "strain_stiffening_block",
+        "liver_palpation"}) {
     const std::string path = std::string(FMPC_SOURCE_DIR) + "/rulesets/scenes/" + name + ".yaml";
     std::ifstream in(path);
     std::stringstream text;

@@ -206,11 +206,15 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
     const double slack = compiled.error_bound() + 1e-12 * range;
     std::vector<CellBounder> bounders;
     for (int t = 0; t < threads; ++t) bounders.emplace_back(system, options.evaluation);
+    std::vector<double> worst_bounds;
     for (;;) {
       ++stats.rounds;
       const CellBounds cells = bound_cells(table, grid.rounding(), bounders, evaluators, refinable,
                                            options.max_error - slack, threads, stats);
       const double stated = cells.bound[cells.worst] + slack;
+      worst_bounds.push_back(stated);
+      const bool stalled = worst_bounds.size() > static_cast<std::size_t>(kStalledBoundRounds) &&
+                           !(stated < kStalledBoundRatio * worst_bounds[worst_bounds.size() - 1 - kStalledBoundRounds]);
       if (stated <= options.max_error) {
         table.max_error = stated;
         table.error_kind = TableErrorKind::Bound;
@@ -236,19 +240,25 @@ std::optional<LookupTable> build_table(const FuzzySystem& source, const CompileR
       }
       std::vector<std::vector<double>> next = axes;
       refine_axes(axes, splits, weights, options, next);
-      if (next == axes || grid_size(next) > options.max_grid_points) {
+      if (next == axes || grid_size(next) > options.max_grid_points || stalled) {
         const std::vector<double> centre = cell_centre(table, cells, cells.worst);
         const bool fixed_axes_only = over.empty();
         diagnostics.error(where,
                           "cannot bound the table's error below --max-error " + format_number(options.max_error) +
                               (fixed_axes_only ? " by refining the automatic axes"
-                                               : " within " + std::to_string(options.max_grid_points) + " grid points") +
+                               : stalled ? " by refining: " + std::to_string(kStalledBoundRounds) +
+                                               " refinements left the bound where it was, as at a jump in the rules"
+                                         : " within " + std::to_string(options.max_grid_points) + " grid points") +
                               ": the grid reached " + counts_text(axes) + " and its error bound is " +
                               format_number(stated) + ", largest in the cell around " +
                               point_text(table, centre.data()),
                           {fixed_axes_only
                                ? "the error lies along axes whose point count is fixed (--vary NAME:points): give "
                                  "them more points or leave the count out"
+                               : stalled ? "where the rules jump (a step in a membership function, a region where no rule "
+                                           "fires), no grid interpolates them within less than half the jump: raise "
+                                           "--max-error above it, fix the input that jumps (--fix NAME=VALUE), or use "
+                                           "--target cpp for an evaluator without interpolation error"
                                : "raise --max-grid-points or --max-error, fix more inputs (--fix NAME=VALUE), or use "
                                  "--target cpp for an evaluator without interpolation error; where the rules jump "
                                  "(a step in a membership function, a region where no rule fires), no grid "

@@ -72,6 +72,13 @@ struct TableBuildOptions {
 
 inline constexpr int kEarlyRefusalRounds = 2;
 
+// The certified bound's refinement stops, as a jump in the rules, once the worst bound has not fallen below
+// kStalledBoundRatio of what it was kStalledBoundRounds refinements before: each refinement at least halves the
+// width of every cell above the target, which takes a smooth rule base's bound down by about 4 and a kink's by 2 a
+// round (1/16 over four), while a jump's bound stays at half the jump however narrow its cell gets.
+inline constexpr int kStalledBoundRounds = 4;
+inline constexpr double kStalledBoundRatio = 0.5;
+
 struct TableBuildStatistics {
   int rounds = 0;
   std::uint64_t grid_evaluations = 0;

@@ -1,0 +1,337 @@
+// Haptic-loop benchmark (issue 27 item 4; docs/performance.md, "Haptic loop"): what a surgical simulator's 1 kHz
+// haptic loop gets from fmpc::runtime's Session (runtime/session/session.h). A 0.1 m block of 20^3 cells (9,261
+// vertices, 48,000 tetrahedra of co-rotational FEM, E = 5 kPa, nu = 0.49, fixed at its base) and a sphere of 1 cm
+// radius on a scripted path (pressed 4 mm into the top face over 0.5 s, then circling 2 cm around its centre every
+// 4 s while its depth swings between 3 and 5 mm once a second). Every tick sets the tool's pose, advances the
+// simulated time by 1 ms and reads the tool's force: its latency (pose in -> force out) is what a haptic device
+// waits for. Two modes: one implicit Euler step of 1 ms per tick, and explicit (semi-implicit Euler at the scene's
+// critical step, `dt: auto`) substeps per tick.
+//
+// Ticks are paced at 1 kHz of wall time: a tick starts at its deadline (k ms after the first), or at once when the
+// loop is behind; each mode runs for --seconds of wall time. The real-time factor is the simulated time over the wall
+// time (1 when the loop keeps up; below 1 it falls behind); an overrun is a tick whose latency exceeds 1 ms.
+//
+//   fmpc_haptic_bench [--seconds S | --ticks N] [--modes implicit,explicit] [--backend cpu|cuda] [--cells N]
+//                     [--threads N] [--precision float|double] [--out DIR]
+//
+// --seconds     wall time per mode (default 30)
+// --ticks       exactly N ticks per mode instead (the ctest smoke test: 150 ticks on --cells 4, about a second)
+// --modes       which modes, comma-separated (default implicit,explicit)
+// --backend     cpu (default) or cuda (a build with -DFMPC_CUDA=ON)
+// --cells       cells per edge of the block (default 20)
+// --threads     CPU worker threads (the scene's `threads`; default 0: the scene's default)
+// --precision   double (default) or float
+// --out DIR     writes haptic.csv (one row per mode) and haptic_force_MODE.csv (every tick: time, pose, force,
+//               latency) into DIR
+// Prints one line per mode and a Markdown table. Exit status 0, 1 when a step or a reading fails, 2 on bad arguments.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench/setup/process_clock.h"
+#include "runtime/session/session.h"
+
+using fmpc::DiagnosticList;
+using fmpc::runtime::Session;
+using fmpc::runtime::SessionOptions;
+using fmpc::runtime::ToolPose;
+using fmpc::runtime::ToolReading;
+
+namespace {
+
+constexpr double kTick = 1e-3;         // s: a haptic device's period
+constexpr double kBlock = 0.1;         // m: the block's edge
+constexpr double kRadius = 0.01;       // m: the sphere's radius
+constexpr double kCircle = 0.02;       // m: the circle's radius
+constexpr double kCirclePeriod = 4.0;  // s
+constexpr double kPressTime = 0.5;     // s
+constexpr double kDepth = 0.004;       // m: the mean depth once pressed
+constexpr double kDepthSwing = 0.001;  // m
+constexpr double kStartGap = 0.0005;   // m: the sphere's gap to the top face at t = 0
+constexpr double kPi = 3.14159265358979323846;
+
+struct Options {
+  double seconds = 30.0;
+  std::size_t ticks = 0;  // 0: as many as --seconds allows
+  std::vector<std::string> modes = {"implicit", "explicit"};
+  std::string backend = "cpu";
+  int cells = 20;
+  int threads = 0;
+  std::string precision = "double";
+  std::string out;
+};
+
+// The scene of a mode as YAML (docs/scenes.md).
+std::string scene_yaml(const Options& options, const std::string& mode) {
+  std::ostringstream yaml;
+  yaml.precision(17);
+  const double top = kBlock + kRadius + kStartGap;
+  yaml << "name: haptic_" << mode << "\n"
+       << "mesh:\n  box: {size: [" << kBlock << ", " << kBlock << ", " << kBlock << "], cells: [" << options.cells
+       << ", " << options.cells << ", " << options.cells << "]}\n  units: m\n"
+       << "model: corotational_fem\n"
+       << "material: {youngs_modulus: 5, poisson_ratio: 0.49}\n"
+       << "mass: {density: 1060}\n"
+       << "damping: {ratio: 0.9}\n"
+       << "fixed:\n  plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n"
+       << "tools:\n  - name: tip\n    shape: sphere\n    radius: " << kRadius << "\n"
+       << "    pose: {position: [" << kBlock / 2 << ", " << kBlock / 2 << ", " << top << "]}\n"
+       << "integrator: " << (mode == "implicit" ? "implicit_euler" : "semi_implicit_euler") << "\n"
+       << "dt: " << (mode == "implicit" ? "0.001" : "auto") << "\n"
+       << "duration: 3600\n"
+       << "precision: " << options.precision << "\n"
+       << "threads: " << options.threads << "\n"
+       << "outputs: {frames: 0, precision_check: off}\n";
+  return yaml.str();
+}
+
+// The tool's scripted pose at simulated time t (s).
+// Straight down for kPressTime, then a spiral out to the circle over 1 s, the depth swinging as it goes.
+ToolPose tool_pose(double t) {
+  const double pressed = std::min(1.0, t / kPressTime);
+  const double after = std::max(0.0, t - kPressTime);
+  const double circling = std::min(1.0, after);
+  const double lowered = (kStartGap + kDepth) * pressed + kDepthSwing * circling * std::sin(2.0 * kPi * after);
+  const double angle = 2.0 * kPi * after / kCirclePeriod;
+  ToolPose pose;
+  pose.position = {kBlock / 2 + kCircle * circling * std::cos(angle), kBlock / 2 + kCircle * circling * std::sin(angle),
+                   kBlock + kRadius + kStartGap - lowered};
+  return pose;
+}
+
+double percentile(std::vector<double> values, double fraction) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const auto index = static_cast<std::size_t>(std::ceil(fraction * static_cast<double>(values.size()))) - 1;
+  return values[std::min(values.size() - 1, index)];
+}
+
+struct ModeResult {
+  std::string mode;
+  std::size_t vertices = 0;
+  std::size_t ticks = 0;
+  double steps_per_tick = 0.0;
+  double dt = 0.0;
+  double wall = 0.0, cpu = 0.0, setup = 0.0;
+  double p50 = 0.0, p99 = 0.0, max = 0.0;  // ms
+  std::size_t overruns = 0;
+  double real_time_factor = 0.0;
+  double final_force = 0.0, peak_force = 0.0;  // N, magnitudes
+  // Implicit Euler's solves (all contact rounds of a step counted): iterations per step, the largest residual.
+  double iterations_mean = 0.0;
+  int iterations_max = 0;
+  double residual_max = 0.0;
+  std::size_t capped_steps = 0;
+};
+
+bool run_mode(const Options& options, const std::string& mode, ModeResult& result) {
+  result.mode = mode;
+  DiagnosticList diagnostics;
+  SessionOptions session_options;
+  session_options.backend = options.backend == "cuda" ? SessionOptions::Backend::Cuda : SessionOptions::Backend::Cpu;
+  const auto setup_start = std::chrono::steady_clock::now();
+  const auto session =
+      Session::from_yaml(scene_yaml(options, mode), "haptic_" + mode + ".yaml", diagnostics, session_options);
+  if (!session) {
+    std::cerr << fmpc::render_all(diagnostics, fmpc::SourceFiles{});
+    return false;
+  }
+  result.setup = fmpc::bench::seconds_since(setup_start);
+  result.vertices = session->vertex_count();
+  result.dt = session->time_step();
+  std::ofstream curve;
+  if (!options.out.empty()) {
+    curve.open(std::filesystem::path(options.out) / ("haptic_force_" + mode + ".csv"));
+    curve << "tick,time_s,tool_x_m,tool_y_m,tool_z_m,fx_N,fy_N,fz_N,contacts,latency_ms\n";
+    curve.precision(9);
+  }
+  std::vector<double> latencies;
+  const auto start = std::chrono::steady_clock::now();
+  const double cpu_start = fmpc::bench::cpu_seconds();
+  const std::size_t steps_before = session->steps_taken();
+  for (std::size_t tick = 1;; ++tick) {
+    const auto deadline = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(static_cast<double>(tick - 1) * kTick));
+    std::this_thread::sleep_until(deadline);
+    if (options.ticks > 0 ? tick > options.ticks : fmpc::bench::seconds_since(start) >= options.seconds && tick > 1)
+      break;
+    const double t = static_cast<double>(tick) * kTick;
+    const ToolPose pose = tool_pose(t);
+    const auto tick_start = std::chrono::steady_clock::now();
+    if (!session->set_tool_pose(0, pose, diagnostics) || !session->step_to(t, diagnostics)) {
+      std::cerr << session->render(diagnostics);
+      return false;
+    }
+    const std::vector<ToolReading> readings = session->tool_readings(diagnostics);
+    const double latency = 1e3 * fmpc::bench::seconds_since(tick_start);
+    if (readings.size() != 1) {
+      std::cerr << session->render(diagnostics);
+      return false;
+    }
+    latencies.push_back(latency);
+    const ToolReading& reading = readings.front();
+    const double force = std::sqrt(reading.force[0] * reading.force[0] + reading.force[1] * reading.force[1] +
+                                   reading.force[2] * reading.force[2]);
+    result.peak_force = std::max(result.peak_force, force);
+    result.final_force = force;
+    result.ticks = tick;
+    if (curve.is_open())
+      curve << tick << "," << t << "," << pose.position[0] << "," << pose.position[1] << "," << pose.position[2] << ","
+            << reading.force[0] << "," << reading.force[1] << "," << reading.force[2] << "," << reading.contacts << ","
+            << latency << "\n";
+  }
+  result.wall = fmpc::bench::seconds_since(start);
+  result.cpu = fmpc::bench::cpu_seconds() - cpu_start;
+  result.steps_per_tick =
+      static_cast<double>(session->steps_taken() - steps_before) / static_cast<double>(result.ticks);
+  result.p50 = percentile(latencies, 0.50);
+  result.p99 = percentile(latencies, 0.99);
+  result.max = *std::max_element(latencies.begin(), latencies.end());
+  result.overruns = static_cast<std::size_t>(
+      std::count_if(latencies.begin(), latencies.end(), [](double ms) { return ms > 1e3 * kTick; }));
+  result.real_time_factor = static_cast<double>(result.ticks) * kTick / result.wall;
+  if (mode == "implicit") {
+    const fmpc::sim::ImplicitSolverReport solver = session->simulation().implicit_solver(0);
+    result.iterations_mean =
+        static_cast<double>(solver.iterations_total) / static_cast<double>(std::max<std::size_t>(1, solver.steps));
+    result.iterations_max = solver.iterations_max;
+    result.residual_max = solver.residual_max;
+    result.capped_steps = solver.capped_steps;
+  }
+  // The sphere reaches the surface at kPressTime kStartGap / (kStartGap + kDepth): a run past twice that which felt
+  // nothing is broken, not slow.
+  const double touch = kPressTime * kStartGap / (kStartGap + kDepth);
+  if (static_cast<double>(result.ticks) * kTick > 2.0 * touch && !(result.peak_force > 0.0)) {
+    std::cerr << "fmpc_haptic_bench: " << mode << ": the tool felt no force after " << result.ticks
+              << " ticks (it touches the tissue at t = " << touch << " s)\n";
+    return false;
+  }
+  return true;
+}
+
+bool parse(int argc, char** argv, Options& options) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (i + 1 >= argc) {
+      std::cerr << "fmpc_haptic_bench: " << arg << " needs a value\n";
+      return false;
+    }
+    const std::string value = argv[++i];
+    char* end = nullptr;
+    if (arg == "--seconds") {
+      options.seconds = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(options.seconds > 0.0 && options.seconds <= 3600.0)) {
+        std::cerr << "fmpc_haptic_bench: --seconds: expected a number of seconds in (0, 3600], got '" << value << "'\n";
+        return false;
+      }
+    } else if (arg == "--ticks") {
+      const long long number = std::strtoll(value.c_str(), &end, 10);
+      if (*end != '\0' || number < 1 || number > 3600000) {
+        std::cerr << "fmpc_haptic_bench: --ticks: expected an integer from 1 to 3600000, got '" << value << "'\n";
+        return false;
+      }
+      options.ticks = static_cast<std::size_t>(number);
+    } else if (arg == "--modes") {
+      options.modes.clear();
+      std::stringstream list(value);
+      for (std::string mode; std::getline(list, mode, ',');) {
+        if (mode != "implicit" && mode != "explicit") {
+          std::cerr << "fmpc_haptic_bench: --modes: unknown mode '" << mode << "' (implicit, explicit)\n";
+          return false;
+        }
+        options.modes.push_back(mode);
+      }
+    } else if (arg == "--backend") {
+      if (value != "cpu" && value != "cuda") {
+        std::cerr << "fmpc_haptic_bench: --backend: expected cpu or cuda, got '" << value << "'\n";
+        return false;
+      }
+      options.backend = value;
+    } else if (arg == "--cells" || arg == "--threads") {
+      const long number = std::strtol(value.c_str(), &end, 10);
+      const long lowest = arg == "--cells" ? 1 : 0, highest = arg == "--cells" ? 100 : 256;
+      if (*end != '\0' || number < lowest || number > highest) {
+        std::cerr << "fmpc_haptic_bench: " << arg << ": expected an integer from " << lowest << " to " << highest
+                  << ", got '" << value << "'\n";
+        return false;
+      }
+      (arg == "--cells" ? options.cells : options.threads) = static_cast<int>(number);
+    } else if (arg == "--precision") {
+      if (value != "float" && value != "double") {
+        std::cerr << "fmpc_haptic_bench: --precision: expected float or double, got '" << value << "'\n";
+        return false;
+      }
+      options.precision = value;
+    } else if (arg == "--out") {
+      options.out = value;
+    } else {
+      std::cerr
+          << "usage: fmpc_haptic_bench [--seconds S | --ticks N] [--modes implicit,explicit] [--backend cpu|cuda] "
+             "[--cells N] [--threads N] [--precision float|double] [--out DIR]\n";
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  if (!parse(argc, argv, options)) return 2;
+  if (!options.out.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(options.out, error);
+    if (error) {
+      std::cerr << "fmpc_haptic_bench: --out: cannot create '" << options.out << "': " << error.message() << "\n";
+      return 2;
+    }
+  }
+  std::vector<ModeResult> results;
+  for (const std::string& mode : options.modes) {
+    ModeResult result;
+    if (!run_mode(options, mode, result)) return 1;
+    std::printf(
+        "%s on %s: %zu vertices, dt %.3g s (%.3g steps per tick), %zu ticks in %.2f s wall (%.2f s CPU), "
+        "latency p50 %.3f ms, p99 %.3f ms, max %.3f ms, %zu overruns of 1 ms, real-time factor %.3f, "
+        "force %.4f N (peak %.4f N)\n",
+        mode.c_str(), options.backend.c_str(), result.vertices, result.dt, result.steps_per_tick, result.ticks,
+        result.wall, result.cpu, result.p50, result.p99, result.max, result.overruns, result.real_time_factor,
+        result.final_force, result.peak_force);
+    if (mode == "implicit")
+      std::printf(
+          "  implicit solves: %.1f iterations per step (at most %d), largest relative residual %.3g, %zu "
+          "steps at the cap\n",
+          result.iterations_mean, result.iterations_max, result.residual_max, result.capped_steps);
+    results.push_back(result);
+  }
+  std::printf(
+      "\n| mode | backend | vertices | steps per tick | ticks | latency p50 ms | p99 ms | max ms | overruns | "
+      "real-time factor | peak force N |\n| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  for (const ModeResult& r : results)
+    std::printf("| %s | %s | %zu | %.3g | %zu | %.3f | %.3f | %.3f | %zu | %.3f | %.4f |\n", r.mode.c_str(),
+                options.backend.c_str(), r.vertices, r.steps_per_tick, r.ticks, r.p50, r.p99, r.max, r.overruns,
+                r.real_time_factor, r.peak_force);
+  if (!options.out.empty()) {
+    std::ofstream csv(std::filesystem::path(options.out) / "haptic.csv");
+    csv << "mode,backend,precision,cells,vertices,dt_s,steps_per_tick,ticks,wall_s,cpu_s,setup_s,latency_p50_ms,"
+           "latency_p99_ms,latency_max_ms,overruns,real_time_factor,final_force_N,peak_force_N,iterations_mean,"
+           "iterations_max,residual_max,capped_steps\n";
+    for (const ModeResult& r : results)
+      csv << r.mode << "," << options.backend << "," << options.precision << "," << options.cells << "," << r.vertices
+          << "," << r.dt << "," << r.steps_per_tick << "," << r.ticks << "," << r.wall << "," << r.cpu << "," << r.setup
+          << "," << r.p50 << "," << r.p99 << "," << r.max << "," << r.overruns << "," << r.real_time_factor << ","
+          << r.final_force << "," << r.peak_force << "," << r.iterations_mean << "," << r.iterations_max << ","
+          << r.residual_max << "," << r.capped_steps << "\n";
+  }
+  return 0;
+}

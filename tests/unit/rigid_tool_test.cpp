@@ -1,0 +1,343 @@
+// Rigid tools in contact (kernels/contact_math.h, runtime/integrate/rigid_tools.h, Simulation's tools): the penalty
+// force's exact values and its energy, the readings, the paths, the stability bound, the checks of bad input, Hertz
+// on a small mesh, the force while sliding across elements, and a CPU batch against its scenes alone.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include "kernels/contact_math.h"
+#include "runtime/fem/fem_model_builder.h"
+#include "runtime/integrate/simulation.h"
+#include "runtime/mesh/generated_mesh.h"
+#include "tests/support/error_messages.h"
+#include "tests/support/hertz_contact.h"
+
+using namespace fmpc;
+using namespace fmpc::sim;
+
+namespace {
+
+using fmpc::testing::errors_of;
+
+// A 2 x 2 x 1 cm block of 10 kPa FEM tissue (cells of 2.5 mm), fixed at its base, and a sphere of 3 mm above the
+// middle of its top face.
+SimulationSetup block_with_sphere(Integrator integrator = Integrator::SemiImplicitEuler, int cells = 8) {
+  DiagnosticList diagnostics;
+  BoxSpec box;
+  box.size = {0.02, 0.02, 0.01};
+  box.cells_x = box.cells_y = cells;
+  box.cells_z = cells / 2;
+  const Mesh mesh = generate_box(box, diagnostics);
+  FemModelSpec spec;
+  spec.youngs_modulus = {10e3};
+  spec.poisson_ratio = {0.3};
+  spec.mass.value = 1000.0;
+  spec.damping_ratio = 0.5;
+  auto setup = build_fem_model(mesh, spec, diagnostics);
+  REQUIRE(setup);
+  for (std::size_t v = 0; v < setup->rest_positions.size(); ++v)
+    if (setup->rest_positions[v][2] == 0.0) setup->fixed_vertices.push_back(static_cast<std::int32_t>(v));
+  setup->integrator = integrator;
+  setup->precision = Precision::Double;
+  RigidTool sphere;
+  sphere.name = "tip";
+  sphere.radius = 0.003;
+  sphere.path = {ToolKeyframe{0.0, ToolPose{{0.01, 0.01, 0.0131}, {1.0, 0.0, 0.0, 0.0}}}};
+  setup->tools = {sphere};
+  return *setup;
+}
+
+ToolPose at(double x, double y, double z) { return ToolPose{{x, y, z}, {1.0, 0.0, 0.0, 0.0}}; }
+
+}  // namespace
+
+TEST_CASE("tools: a sphere's and a capsule's penetration and force, exact", "[tools]") {
+  const kernels::ToolShape<double> sphere{1.0, 2.0, 3.0, 1.0, 2.0, 3.0, 0.5};
+  double nx, ny, nz, depth;
+  REQUIRE(kernels::tool_penetration(sphere, 1.0, 2.0, 3.25, nx, ny, nz, depth));
+  CHECK(nx == 0.0);
+  CHECK(ny == 0.0);
+  CHECK(nz == 1.0);
+  CHECK(depth == 0.25);
+  CHECK_FALSE(kernels::tool_penetration(sphere, 1.0, 2.0, 3.5, nx, ny, nz, depth));  // on the surface: no force
+  CHECK_FALSE(kernels::tool_penetration(sphere, 1.0, 2.0, 3.0, nx, ny, nz, depth));  // at the centre: no direction
+  // A capsule along x from (0, 0, 0) to (2, 0, 0): beside its axis, and beyond its end (the cap).
+  const kernels::ToolShape<double> capsule{0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 1.0};
+  REQUIRE(kernels::tool_penetration(capsule, 1.5, 0.0, -0.75, nx, ny, nz, depth));
+  CHECK(nx == 0.0);
+  CHECK(nz == -1.0);
+  CHECK(depth == 0.25);
+  REQUIRE(kernels::tool_penetration(capsule, 2.5, 0.0, 0.0, nx, ny, nz, depth));
+  CHECK(nx == 1.0);
+  CHECK(depth == 0.5);
+  const kernels::ContactView<double> contact{&capsule, 1, nullptr};
+  double f[3] = {1.0, 2.0, 3.0};  // added to
+  kernels::add_contact_force(contact, 8.0, 1.5, 0.0, -0.75, f[0], f[1], f[2]);
+  CHECK(f[0] == 1.0);
+  CHECK(f[1] == 2.0);
+  CHECK(f[2] == 3.0 - 8.0 * 0.25);
+  // Implicit Euler's linear model: inside now, and predicted inside after moving out by less than the depth.
+  CHECK(kernels::contact_set(contact, 1.5, 0.0, -0.75, nullptr) == 1u);
+  const double out_a_little[3] = {0.0, 0.0, -0.2}, out_beyond[3] = {0.0, 0.0, -0.3}, in_again[3] = {0.0, 0.0, 0.6};
+  CHECK(kernels::contact_set(contact, 1.5, 0.0, -0.75, out_a_little) == 1u);
+  CHECK(kernels::contact_set(contact, 1.5, 0.0, -0.75, out_beyond) == 0u);
+  CHECK(kernels::contact_set(contact, 1.5, 0.0, -1.25, in_again) == 1u);  // outside now, inside after moving
+  double block[6], change[3];
+  kernels::contact_linear_model(contact, 1u, 8.0, 1.5, 0.0, -0.75, block, change);
+  CHECK(block[0] == 0.0);
+  CHECK(block[5] == 8.0);
+  CHECK(change[2] == 0.0);  // the model's force at x0 is the force f0 holds
+  // Outside by 0.25 but active: the model's linear force there is attraction, -8 x 0.25 along the outward -z.
+  kernels::contact_linear_model(contact, 1u, 8.0, 1.5, 0.0, -1.25, block, change);
+  CHECK(block[5] == 8.0);
+  CHECK(change[2] == 8.0 * 0.25);
+  // Inside but not active (the solution moves it out): f0's force is taken back.
+  kernels::contact_linear_model(contact, 0u, 8.0, 1.5, 0.0, -0.75, block, change);
+  CHECK(block[5] == 0.0);
+  CHECK(change[2] == 8.0 * 0.25);
+}
+
+TEST_CASE("tools: the force is minus the gradient of the penalty energy k d^2 / 2 (seeded)", "[tools]") {
+  std::mt19937 random(27);
+  std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+  int inside = 0;
+  for (int trial = 0; trial < 500; ++trial) {
+    const kernels::ToolShape<double> tool{coordinate(random),
+                                          coordinate(random),
+                                          coordinate(random),
+                                          coordinate(random),
+                                          coordinate(random),
+                                          coordinate(random),
+                                          0.8};
+    const kernels::ContactView<double> contact{&tool, 1, nullptr};
+    const double p[3] = {coordinate(random), coordinate(random), coordinate(random)};
+    const auto energy = [&](const double* x) {
+      double nx, ny, nz, depth;
+      return kernels::tool_penetration(tool, x[0], x[1], x[2], nx, ny, nz, depth) ? 0.5 * 3.0 * depth * depth : 0.0;
+    };
+    double f[3] = {0.0, 0.0, 0.0};
+    kernels::add_contact_force(contact, 3.0, p[0], p[1], p[2], f[0], f[1], f[2]);
+    if (f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0) ++inside;
+    for (int axis = 0; axis < 3; ++axis) {
+      double plus[3] = {p[0], p[1], p[2]}, minus[3] = {p[0], p[1], p[2]};
+      plus[axis] += 1e-6;
+      minus[axis] -= 1e-6;
+      const double gradient = (energy(plus) - energy(minus)) / 2e-6;
+      CHECK(f[axis] == Approx(-gradient).margin(1e-6));
+    }
+  }
+  CHECK(inside > 100);  // the trials cover both sides of the surface
+}
+
+TEST_CASE("tools: readings sum -f over the vertices inside, the torque about the tool's origin", "[tools]") {
+  RigidTool capsule;
+  capsule.shape = RigidTool::Shape::Capsule;
+  capsule.radius = 1.0;
+  capsule.length = 4.0;
+  // The tool's z axis turned onto the world's x axis: a quarter turn about y.
+  const double s = std::sqrt(0.5);
+  const ToolPose pose{{0.0, 0.0, 0.0}, {s, 0.0, s, 0.0}};
+  const kernels::ToolShape<double> shape = tool_shape(capsule, pose);
+  CHECK(shape.bx == Approx(4.0));
+  CHECK(shape.by == Approx(0.0).margin(1e-15));
+  CHECK(shape.bz == Approx(0.0).margin(1e-15));
+  // Two vertices 0.5 inside below the axis at x = 1 and x = 3, one outside.
+  const std::vector<Point3> positions = {{1.0, 0.0, -0.5}, {3.0, 0.0, -0.5}, {2.0, 0.0, 1.5}};
+  const std::vector<ToolReading> readings = read_tools({capsule}, {pose}, {10.0, 10.0, 10.0}, positions);
+  REQUIRE(readings.size() == 1);
+  const ToolReading& r = readings[0];
+  CHECK(r.contacts == 2);
+  CHECK(r.deepest == Approx(0.5));
+  // Each vertex is pushed down (-z) by 10 x 0.5: the tool is pushed up by 10 in all.
+  CHECK(r.force[2] == Approx(10.0));
+  CHECK(r.force[0] == Approx(0.0).margin(1e-12));
+  // Torque about the origin: sum of x_v x (+5 z) = (1 + 3) x 5 about -y.
+  CHECK(r.torque[1] == Approx(-20.0));
+  CHECK(r.torque[0] == Approx(0.0).margin(1e-12));
+  CHECK(r.torque[2] == Approx(0.0).margin(1e-12));
+}
+
+TEST_CASE("tools: a path's poses are linear in position, nlerp in orientation, held at the ends", "[tools]") {
+  RigidTool tool;
+  tool.radius = 1.0;
+  const double s = std::sqrt(0.5);
+  tool.path = {ToolKeyframe{1.0, ToolPose{{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0, 0.0}}},
+               ToolKeyframe{3.0, ToolPose{{2.0, 4.0, -6.0}, {-s, 0.0, 0.0, -s}}}};  // -q: the shorter way round
+  CHECK(tool_pose_at(tool, 0.0).position == Point3{0.0, 0.0, 0.0});
+  CHECK(tool_pose_at(tool, 5.0).position == Point3{2.0, 4.0, -6.0});
+  const ToolPose middle = tool_pose_at(tool, 2.0);
+  CHECK(middle.position == Point3{1.0, 2.0, -3.0});
+  // Half way from the identity to a quarter turn about z: an eighth turn, (cos 22.5, 0, 0, sin 22.5).
+  CHECK(middle.orientation[0] == Approx(std::cos(M_PI / 8)));
+  CHECK(middle.orientation[3] == Approx(std::sin(M_PI / 8)));
+}
+
+TEST_CASE("tools: the explicit critical step shrinks by 1 / sqrt(1 + ratio) where a tool can touch", "[tools]") {
+  SimulationSetup setup = block_with_sphere();
+  DiagnosticList diagnostics;
+  SimulationSetup without = setup;
+  without.tools.clear();
+  const auto with_tools = check_stability(setup, diagnostics);
+  const auto plain = check_stability(without, diagnostics);
+  REQUIRE(with_tools);
+  REQUIRE(plain);
+  // The limiting vertex of the block is on its surface: the bound scales exactly.
+  CHECK(with_tools->omega_max == Approx(plain->omega_max * std::sqrt(1.0 + kDefaultContactStiffnessRatio)));
+  const std::vector<double> k = contact_stiffness(setup);
+  const std::vector<unsigned char> surface = surface_vertices(setup);
+  const VertexBounds bounds = vertex_bounds(setup);
+  std::size_t interior = 0;
+  for (std::size_t v = 0; v < k.size(); ++v) {
+    if (!surface[v]) {
+      CHECK(k[v] == 0.0);
+      ++interior;
+    } else {
+      CHECK(k[v] == kDefaultContactStiffnessRatio * bounds.stiffness[v]);
+    }
+  }
+  CHECK(interior == 7 * 7 * 3);  // the 8 x 8 x 4 cells' inner vertices
+}
+
+TEST_CASE("tools: bad input is an error naming the tool, and nothing changes", "[tools]") {
+  DiagnosticList diagnostics;
+  SECTION("a tool inside the tissue at its start") {
+    SimulationSetup setup = block_with_sphere();
+    setup.tools[0].path[0].pose.position[2] = 0.012;  // 1 mm into the top face
+    CHECK_FALSE(Simulation::create(setup, diagnostics));
+    CHECK(errors_of(diagnostics) ==
+          "tool 0 'tip' starts inside the tissue: vertex 364 at (0.01, 0.01, 0.01) lies 0.002 m from its axis, within "
+          "its radius 0.003 m; start the tool outside the surface and move it in");
+  }
+  SECTION("a tool buried in the tissue, touching no vertex") {
+    SimulationSetup setup = block_with_sphere();
+    setup.tools[0].radius = 0.0005;
+    setup.tools[0].path[0].pose.position = {0.0112, 0.0112, 0.0062};
+    CHECK_FALSE(Simulation::create(setup, diagnostics));
+    const std::string text = errors_of(diagnostics);
+    CHECK(text.rfind("tool 0 'tip' starts inside the tissue: its axis point (0.0112, 0.0112, 0.0062) lies in "
+                     "tetrahedron ",
+                     0) == 0);
+  }
+  SECTION("values") {
+    SimulationSetup setup = block_with_sphere();
+    RigidTool capsule;
+    capsule.shape = RigidTool::Shape::Capsule;
+    capsule.radius = std::numeric_limits<double>::quiet_NaN();
+    capsule.path = {ToolKeyframe{0.0, at(0.0, 0.0, 1.0)}, ToolKeyframe{0.0, at(0.0, 0.0, 2.0)}};
+    capsule.path[1].pose.orientation = {0.0, 0.0, 0.0, 0.0};
+    setup.tools.push_back(capsule);
+    CHECK_FALSE(Simulation::create(setup, diagnostics));
+    CHECK(errors_of(diagnostics) ==
+          "tool 1: radius nan m must be finite and greater than 0\n"
+          "tool 1: a capsule's length 0 m must be finite and greater than 0 (a sphere has none)\n"
+          "tool 1 at path point 1: the pose's orientation (0, 0, 0, 0) is not a rotation; give a quaternion (w, x, y, "
+          "z) that is finite and not zero, e.g. (1, 0, 0, 0)");
+  }
+  SECTION("a NaN pose, a zero quaternion, an unknown tool: the tool stays where it was") {
+    const auto simulation = Simulation::create(block_with_sphere(), diagnostics);
+    REQUIRE(simulation);
+    REQUIRE(simulation->set_tool_pose(0, 0, at(0.01, 0.01, 0.0125), diagnostics));
+    REQUIRE(simulation->advance(400, diagnostics));
+    const std::vector<ToolReading> before = simulation->tool_readings(0, diagnostics);
+    REQUIRE(before.at(0).contacts > 0);
+    CHECK_FALSE(simulation->set_tool_pose(0, 0, at(std::nan(""), 0.01, 0.0125), diagnostics));
+    ToolPose zero = at(0.01, 0.01, 0.0125);
+    zero.orientation = {0.0, 0.0, 0.0, 0.0};
+    CHECK_FALSE(simulation->set_tool_pose(0, 0, zero, diagnostics));
+    CHECK_FALSE(simulation->set_tool_pose(0, 1, at(0.01, 0.01, 0.0125), diagnostics));
+    CHECK(errors_of(diagnostics) ==
+          "tool 0 'tip': the pose's position (nan, 0.01, 0.0125) is not finite; give a position in metres\n"
+          "tool 0 'tip': the pose's orientation (0, 0, 0, 0) is not a rotation; give a quaternion (w, x, y, z) that "
+          "is finite and not zero, e.g. (1, 0, 0, 0)\n"
+          "tool 1 does not exist; the scene has 1");
+    CHECK(simulation->tool_poses().at(0).position == Point3{0.01, 0.01, 0.0125});
+    const std::vector<ToolReading> after = simulation->tool_readings(0, diagnostics);
+    CHECK(std::memcmp(&after[0], &before[0], sizeof(ToolReading)) == 0);
+    CHECK(simulation->advance(10, diagnostics));  // the run goes on
+  }
+}
+
+TEST_CASE("tools: a sphere on a thick block against Hertz (a small mesh, converged by the bench)", "[tools]") {
+  // 14 graded cells per axis of the quarter block, a / 2 at the contact growing by 1.25: +4.3% (linear tetrahedra and
+  // the coarse far field are stiff, and so is the block's finite thickness, 40 a: bench/contact/hertz_bench.cpp and
+  // docs/simulator.md, "Rigid tools", give the convergence).
+  test_support::HertzCase hertz;
+  hertz.first_cell = 0.5;
+  hertz.growth = 1.25;
+  const test_support::HertzResult result = test_support::run_hertz(hertz);
+  REQUIRE(result.ok);
+  std::printf("Hertz: %d cells per axis, %zu vertices, %zu in contact: F = %.6g N against %.6g N (error %+.2f%%)\n",
+              result.cells, result.vertices, result.contacts, result.force, result.hertz,
+              100.0 * result.relative_error);
+  CHECK(result.contacts >= 4);
+  CHECK(std::abs(result.relative_error) < 0.05);
+}
+
+TEST_CASE("tools: no jump in the force as the sphere slides across elements", "[tools]") {
+  // The sphere (radius 3 mm) pressed 0.8 mm into a block of 1.67 mm cells (a contact radius of about one cell) and
+  // slid one cell (the ripple's period) along x in steps of 1/10 of a cell, one implicit step of 1 s (a Newton step of
+  // the quasi-static problem) at each: the normal force follows the vertices entering and leaving the contact
+  // continuously (each vertex's force grows from zero with its depth), so it ripples with the element period and
+  // never jumps.
+  const int cells = 12;
+  const double cell = 0.02 / cells;
+  SimulationSetup setup = block_with_sphere(Integrator::ImplicitEuler, cells);
+  setup.time_step = 1.0;
+  DiagnosticList diagnostics;
+  const auto simulation = Simulation::create(setup, diagnostics);
+  REQUIRE(simulation);
+  const double depth = 0.0008, top = 0.01, radius = 0.003, start = 0.01 - 1.5 * cell;
+  for (int step = 1; step <= 8; ++step) {
+    REQUIRE(simulation->set_tool_pose(0, 0, at(start, 0.01, top + radius - depth * std::min(1.0, step / 4.0)),
+                                      diagnostics));
+    REQUIRE(simulation->advance(1, diagnostics));
+  }
+  std::vector<double> force;
+  for (int step = 0; step <= 10; ++step) {
+    REQUIRE(simulation->set_tool_pose(0, 0, at(start + 0.1 * cell * step, 0.01, top + radius - depth), diagnostics));
+    REQUIRE(simulation->advance(1, diagnostics));
+    force.push_back(simulation->tool_readings(0, diagnostics).at(0).force[2]);
+  }
+  double low = force[0], high = force[0], mean = 0.0, jump = 0.0;
+  for (std::size_t i = 0; i < force.size(); ++i) {
+    low = std::min(low, force[i]);
+    high = std::max(high, force[i]);
+    mean += force[i] / static_cast<double>(force.size());
+    if (i > 0) jump = std::max(jump, std::abs(force[i] - force[i - 1]));
+  }
+  std::printf("sliding: F_z %.6g N mean, ripple %.2f%% (max - min), largest change between steps %.3f%% of the mean\n",
+              mean, 100.0 * (high - low) / mean, 100.0 * jump / mean);
+  CHECK(mean > 0.0);
+  CHECK((high - low) / mean < 0.15);
+  // A step of 1/10 of the element period: a continuous ripple changes by at most about 2 pi / 10 of its amplitude.
+  CHECK(jump <= 0.7 * (high - low) + 1e-3 * mean);
+}
+
+TEST_CASE("tools: a CPU batch of scenes with tools gives each scene's bits alone", "[tools]") {
+  SimulationSetup a = block_with_sphere(Integrator::SemiImplicitEuler, 4);
+  SimulationSetup b = block_with_sphere(Integrator::SemiImplicitEuler, 6);
+  a.tools[0].path.push_back(ToolKeyframe{0.01, at(0.01, 0.01, 0.0121)});
+  b.tools[0].path.push_back(ToolKeyframe{0.005, at(0.009, 0.01, 0.0125)});
+  DiagnosticList diagnostics;
+  SimulationOptions options;
+  options.batch_threads = 2;
+  const auto batch = Simulation::create({a, b}, options, diagnostics);
+  const auto alone_a = Simulation::create(a, diagnostics);
+  const auto alone_b = Simulation::create(b, diagnostics);
+  REQUIRE(batch);
+  REQUIRE(alone_a);
+  REQUIRE(alone_b);
+  REQUIRE(batch->advance(300, diagnostics));
+  REQUIRE(alone_a->advance(300, diagnostics));
+  REQUIRE(alone_b->advance(300, diagnostics));
+  const std::vector<Point3> pa = batch->positions(0, diagnostics), pb = batch->positions(1, diagnostics);
+  const std::vector<Point3> qa = alone_a->positions(diagnostics), qb = alone_b->positions(diagnostics);
+  CHECK(std::memcmp(pa.data(), qa.data(), pa.size() * sizeof(Point3)) == 0);
+  CHECK(std::memcmp(pb.data(), qb.data(), pb.size() * sizeof(Point3)) == 0);
+  CHECK(batch->tool_readings(1, diagnostics).at(0).contacts > 0);
+  CHECK(batch->tool_poses(0).at(0).position == Point3{0.01, 0.01, 0.0121});
+  CHECK(diagnostics.error_count() == 0);
+}

@@ -1,0 +1,288 @@
+// fmpc::runtime::Session (runtime/session/session.h): a scene from YAML text and from a setup, stepped by steps and to
+// a time, a tool posed every tick and read back, the state read, and the material swapped for other rules between
+// two steps; bad input (other inputs, a rule file with errors, an unstable step, a session from a setup) is an
+// error and changes nothing.
+#include "runtime/session/session.h"
+
+#include <catch2/catch.hpp>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "runtime/fem/fem_model_builder.h"
+#include "runtime/mesh/generated_mesh.h"
+#include "runtime/scene/scene_builder.h"
+#include "runtime/scene/scene_file.h"
+#include "runtime/scene/scene_run.h"
+#include "tests/support/error_messages.h"
+
+using namespace fmpc;
+using fmpc::runtime::Session;
+
+namespace {
+
+std::filesystem::path scratch_folder() {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "fmpc_session_test";
+  std::filesystem::create_directories(folder);
+  return folder;
+}
+
+// A one-input MATLAB rule file: Young's modulus (kPa, the FIS default unit) from a fibrosis score F in [0, 4],
+// between `soft` and `hard` kPa.
+std::string rules_text(const std::string& input, double soft, double hard) {
+  char text[1024];
+  std::snprintf(text, sizeof text,
+                "[System]\nName='stiffness'\nType='mamdani'\nVersion=2.0\nNumInputs=1\nNumOutputs=1\nNumRules=2\n"
+                "AndMethod='min'\nOrMethod='max'\nImpMethod='min'\nAggMethod='max'\nDefuzzMethod='centroid'\n\n"
+                "[Input1]\nName='%s'\nRange=[0 4]\nNumMFs=2\nMF1='low':'trimf',[-4 0 4]\nMF2='high':'trimf',[0 4 8]\n\n"
+                "[Output1]\nName='E'\nRange=[%g %g]\nNumMFs=2\nMF1='soft':'trimf',[%g %g %g]\n"
+                "MF2='hard':'trimf',[%g %g %g]\n\n[Rules]\n1, 1 (1) : 1\n2, 2 (1) : 1\n",
+                input.c_str(), soft, hard, 2 * soft - hard, soft, hard, soft, hard, 2 * hard - soft);
+  return text;
+}
+
+std::string write_file(const std::string& name, const std::string& text) {
+  const std::filesystem::path path = scratch_folder() / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+// A 2 x 2 x 1 cm FEM block whose modulus comes from `rules` at F = 2, fixed at its base, with a sphere above it.
+std::string scene_text(const std::string& rules, const std::string& extra = "") {
+  return "name: session_block\nmodel: corotational_fem\n"
+         "mesh:\n  box: {size: [0.02, 0.02, 0.01], cells: [6, 6, 3]}\n  units: m\n"
+         "material:\n  rules: " +
+         rules +
+         "\n  inputs: {F: 2}\n  poisson_ratio: 0.4\n"
+         "mass: {density: 1000}\ndamping: {ratio: 0.5}\n"
+         "fixed:\n  plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n"
+         "tools:\n  - name: tip\n    shape: sphere\n    radius: 0.003\n    pose: {position: [0.01, 0.01, 0.0131]}\n"
+         "integrator: semi_implicit_euler\nprecision: double\n" +
+         extra;
+}
+
+using fmpc::testing::errors_of;
+
+}  // namespace
+
+TEST_CASE("session: a scene from YAML, stepped, a tool posed and read, the state read", "[session]") {
+  const std::string rules = write_file("soft.fis", rules_text("F", 5, 15));
+  DiagnosticList diagnostics;
+  const auto session = Session::from_yaml(scene_text(rules), (scratch_folder() / "block.yaml").string(), diagnostics);
+  REQUIRE(session);
+  INFO(session->render(diagnostics));
+  CHECK(session->backend() == sim::Backend::Cpu);
+  CHECK(session->tool_count() == 1);
+  CHECK(session->find_tool("tip") == std::optional<std::size_t>(0));
+  CHECK_FALSE(session->find_tool("shaft"));
+  CHECK(session->vertex_count() == 7 * 7 * 4);
+  REQUIRE(session->step(3, diagnostics));
+  CHECK(session->steps_taken() == 3);
+  // step_to takes the steps that reach the time (none when it is there already).
+  const double dt = session->time_step();
+  REQUIRE(session->step_to(10.5 * dt, diagnostics));
+  CHECK(session->steps_taken() == 11);
+  REQUIRE(session->step_to(2.0 * dt, diagnostics));
+  CHECK(session->steps_taken() == 11);
+  CHECK_FALSE(session->step_to(std::nan(""), diagnostics));
+  CHECK(errors_of(diagnostics) == "the time nan s is not finite");
+  diagnostics = DiagnosticList{};
+  // A haptic loop: the tip pressed 1 mm in over 100 ticks of 1 ms, then held.
+  for (int tick = 1; tick <= 150; ++tick) {
+    runtime::ToolPose pose;
+    pose.position = {0.01, 0.01, 0.0131 - 0.001 * std::min(1.0, tick / 100.0)};
+    REQUIRE(session->set_tool_pose(0, pose, diagnostics));
+    REQUIRE(session->step_to(tick * 1e-3, diagnostics));
+  }
+  const std::vector<runtime::ToolReading> readings = session->tool_readings(diagnostics);
+  REQUIRE(readings.size() == 1);
+  CHECK(readings[0].force[2] > 0.0);  // the tissue pushes the tip up
+  CHECK(readings[0].contacts > 0);
+  CHECK(session->positions(diagnostics).size() == session->vertex_count());
+  CHECK(session->velocities(diagnostics).size() == session->vertex_count());
+  const auto energies = session->energies(diagnostics);
+  REQUIRE(energies);
+  CHECK(energies->elastic > 0.0);
+  CHECK(session->inversions().largest_count == 0);
+  CHECK_FALSE(session->device_positions(diagnostics));
+  CHECK(errors_of(diagnostics) ==
+        "the positions live on the host with the CPU backend; read positions() instead of a device pointer");
+}
+
+TEST_CASE("session: the material swapped between two steps, keeping the state", "[session]") {
+  const std::string soft = write_file("soft.fis", rules_text("F", 5, 15));
+  const std::string hard = write_file("hard.fis", rules_text("F", 10, 30));
+  const std::string other_inputs = write_file("other.fis", rules_text("HBV", 10, 30));
+  const std::string broken = write_file("broken.fis", "[System]\nName='x'\nNumInputs=one\n");
+  DiagnosticList diagnostics;
+  // An explicit step small enough for the harder material too (its critical step is 1 / sqrt(2) of the soft one's).
+  auto session =
+      Session::from_yaml(scene_text(soft, "dt: 5e-5\n"), (scratch_folder() / "block.yaml").string(), diagnostics);
+  REQUIRE(session);
+  REQUIRE(session->stability().critical_time_step > 2.0 * 5e-5);
+  runtime::ToolPose pressed;
+  pressed.position = {0.01, 0.01, 0.0121};
+  REQUIRE(session->set_tool_pose(0, pressed, diagnostics));
+  REQUIRE(session->step_to(0.05, diagnostics));
+  const std::vector<double> before = session->simulation().setup().elements.terms.at(0).parameter[0];
+  const std::vector<runtime::Point3> positions = session->positions(diagnostics);
+  const std::size_t steps = session->steps_taken();
+
+  SECTION("a rule file with other inputs, or with errors: an error, and nothing changes") {
+    CHECK_FALSE(session->swap_material(other_inputs, diagnostics));
+    CHECK(errors_of(diagnostics) == "'" + other_inputs +
+                                        "' takes the inputs HBV, but the scene binds F; the material was not "
+                                        "replaced (a new rule file must keep the inputs the scene's material.inputs "
+                                        "bind)");
+    diagnostics = DiagnosticList{};
+    CHECK_FALSE(session->swap_material(broken, diagnostics));
+    CHECK(errors_of(diagnostics).find("' cannot be read as rules (above); fix it with fmpc check") !=
+          std::string::npos);
+    CHECK_FALSE(session->swap_material((scratch_folder() / "missing.fis").string(), diagnostics));
+    CHECK(session->simulation().setup().elements.terms.at(0).parameter[0] == before);
+    CHECK(session->steps_taken() == steps);
+    const std::vector<runtime::Point3> now = session->positions(diagnostics);
+    CHECK(std::memcmp(now.data(), positions.data(), now.size() * sizeof(runtime::Point3)) == 0);
+    diagnostics = DiagnosticList{};
+    CHECK(session->step(10, diagnostics));  // the run goes on
+  }
+  SECTION("harder rules: the elements stiffen, the state and time go on, the tip feels more") {
+    const double force_before = session->tool_readings(diagnostics).at(0).force[2];
+    REQUIRE(session->swap_material(hard, diagnostics));
+    INFO(session->render(diagnostics));
+    const std::vector<double> after = session->simulation().setup().elements.terms.at(0).parameter[0];
+    REQUIRE(after.size() == before.size());
+    CHECK(after[0] > 1.5 * before[0]);
+    CHECK(session->steps_taken() == steps);
+    const std::vector<runtime::Point3> now = session->positions(diagnostics);
+    CHECK(std::memcmp(now.data(), positions.data(), now.size() * sizeof(runtime::Point3)) == 0);
+    REQUIRE(session->step_to(0.1, diagnostics));
+    CHECK(session->tool_readings(diagnostics).at(0).force[2] > 1.5 * force_before);
+  }
+  SECTION("a material too stiff for the time step in use: an error, and nothing changes") {
+    diagnostics = DiagnosticList{};
+    session = Session::from_yaml(
+        scene_text(soft, "dt: " + std::to_string(0.9 * session->stability().critical_time_step) + "\n"),
+        (scratch_folder() / "block.yaml").string(), diagnostics);
+    REQUIRE(session);
+    REQUIRE(session->step(5, diagnostics));
+    CHECK_FALSE(session->swap_material(hard, diagnostics));
+    const std::string text = errors_of(diagnostics);
+    CHECK(text.rfind("the new material: dt: time step ", 0) == 0);
+    CHECK(text.find("the material was not replaced; the simulation goes on with the old one") != std::string::npos);
+    CHECK(session->simulation().setup().elements.terms.at(0).parameter[0] == before);
+  }
+}
+
+TEST_CASE("session: a setup built in code, bad scenes and tools", "[session]") {
+  DiagnosticList diagnostics;
+  sim::BoxSpec box;
+  box.size = {0.01, 0.01, 0.01};
+  box.cells_x = box.cells_y = box.cells_z = 2;
+  sim::FemModelSpec spec;
+  spec.youngs_modulus = {5e3};
+  spec.poisson_ratio = {0.3};
+  spec.mass.value = 1000.0;
+  auto setup = sim::build_fem_model(sim::generate_box(box, diagnostics), spec, diagnostics);
+  REQUIRE(setup);
+  setup->fixed_vertices = {0};
+  const auto session = Session::from_setup(*setup, diagnostics);
+  REQUIRE(session);
+  CHECK(session->step(5, diagnostics));
+  CHECK(session->tool_count() == 0);
+  CHECK(session->tool_readings(diagnostics).empty());
+  CHECK_FALSE(session->swap_material("rules.fis", diagnostics));
+  CHECK(errors_of(diagnostics) ==
+        "this session was made from a setup, which has no scene to build with 'rules.fis'; "
+        "pass a setup built with the new material instead");
+  // Another material built in code: taken; another mesh: refused.
+  sim::FemModelSpec harder = spec;
+  harder.youngs_modulus = {5.5e3};  // stable at the automatic step (0.8 of the critical one) of 5 kPa
+  auto material = sim::build_fem_model(sim::generate_box(box, diagnostics), harder, diagnostics);
+  REQUIRE(material);
+  diagnostics = DiagnosticList{};
+  CHECK(session->swap_material(*material, diagnostics));
+  box.cells_z = 3;
+  auto other_mesh = sim::build_fem_model(sim::generate_box(box, diagnostics), harder, diagnostics);
+  REQUIRE(other_mesh);
+  CHECK_FALSE(session->swap_material(*other_mesh, diagnostics));
+  CHECK(errors_of(diagnostics) ==
+        "the new material does not fit this simulation: it has 36 vertices where the "
+        "simulation has 27; build it from the same mesh and model");
+
+  diagnostics = DiagnosticList{};
+  const std::string rules = write_file("soft.fis", rules_text("F", 5, 15));
+  std::string text = scene_text(rules);
+  text.replace(text.find("0.0131"), 6, "0.0121");  // 1 mm into the top face
+  CHECK_FALSE(Session::from_yaml(text, "inside.yaml", diagnostics));
+  CHECK(errors_of(diagnostics).rfind("tool 0 'tip' starts inside the tissue: vertex ", 0) == 0);
+  diagnostics = DiagnosticList{};
+  text = scene_text(rules);
+  text.replace(text.find("shape: sphere"), 13, "shape: cylinder");
+  CHECK_FALSE(Session::from_yaml(text, "bad.yaml", diagnostics));
+  CHECK(errors_of(diagnostics).rfind("tools[0].shape: ", 0) == 0);
+  CHECK_FALSE(Session::open((scratch_folder() / "no_such_scene.yaml").string(), diagnostics));
+}
+
+TEST_CASE("session: tools in a scene file: a path, the CSV's columns and the summary", "[session][tools]") {
+  const std::string text =
+      "name: tool_path\nmesh:\n  box: {size: [0.02, 0.02, 0.01], cells: [4, 4, 2]}\n  units: m\n"
+      "material: {youngs_modulus: 10}\nmass: {density: 1000}\ndamping: {ratio: 0.9}\n"
+      "fixed:\n  plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n"
+      "tools:\n"
+      "  - name: tip\n    shape: sphere\n    radius: 0.003\n"
+      "    path:\n      - {time: 0, position: [0.01, 0.01, 0.0131]}\n      - {time: 0.05, position: [0.01, 0.01, "
+      "0.012]}\n"
+      "  - name: shaft\n    shape: capsule\n    radius: 0.001\n    length: 0.01\n"
+      "    pose: {position: [0.0, 0.005, 0.0115], orientation: [0.7071067811865476, 0, 0.7071067811865476, 0]}\n"
+      "contact: {stiffness_ratio: 2}\nduration: 0.06\nprecision: double\n"
+      "outputs: {frames: 0, samples: 4, precision_check: off}\n";
+  DiagnosticList diagnostics;
+  const std::string path = (scratch_folder() / "tool_path.yaml").string();
+  const auto scene = sim::parse_scene(path, text, diagnostics);
+  REQUIRE(scene);
+  REQUIRE(scene->tools.size() == 2);
+  CHECK(scene->tools[0].path.size() == 2);
+  CHECK(scene->contact_stiffness_ratio == 2.0);
+  const auto built = sim::build_scene(*scene, diagnostics);
+  REQUIRE(built);
+  CHECK(built->setup.tools[1].length == 0.01);
+  sim::SceneRunOptions options;
+  options.output_directory = (scratch_folder() / "tool_path.out").string();
+  const auto result = sim::run_scene(*scene, *built, options, diagnostics);
+  REQUIRE(result);
+  INFO(errors_of(diagnostics));
+  CHECK(result->completed);
+  std::ifstream csv(result->csv_path);
+  std::string header;
+  std::getline(csv, header);
+  CHECK(header ==
+        "time_s,kinetic_energy_J,elastic_energy_J,max_displacement_m,tip_fx_N,tip_fy_N,tip_fz_N,tip_tx_Nm,tip_ty_Nm,"
+        "tip_tz_Nm,tip_contacts,shaft_fx_N,shaft_fy_N,shaft_fz_N,shaft_tx_Nm,shaft_ty_Nm,shaft_tz_Nm,shaft_contacts");
+  CHECK(result->summary_json.find("\"tools\": [") != std::string::npos);
+  CHECK(result->summary_json.find("\"name\": \"shaft\"") != std::string::npos);
+
+  // Errors name the field.
+  const auto fails = [&](const std::string& from, const std::string& to) {
+    std::string changed = text;
+    changed.replace(changed.find(from), from.size(), to);
+    DiagnosticList errors;
+    CHECK_FALSE(sim::parse_scene(path, changed, errors));
+    return errors_of(errors);
+  };
+  CHECK(fails("- {time: 0.05,", "- {time: 0,") ==
+        "tools[0].path[1].time: the path's times must increase; the point before is at 0 s");
+  CHECK(fails("radius: 0.001\n    length: 0.01", "radius: 0.001") ==
+        "tools[1]: a capsule needs 'length' (mesh units): its axis runs from its pose's position along the tool's z "
+        "axis");
+  CHECK(fails("orientation: [0.7071067811865476, 0, 0.7071067811865476, 0]", "orientation: [0, 0, 0, 0]") ==
+        "tools[1].pose.orientation: expected a rotation as a quaternion [w, x, y, z] of four finite numbers, not all "
+        "zero (e.g. [1, 0, 0, 0]), got a list of 4");
+  CHECK(fails("name: shaft", "name: tip") == "tools[1].name: two tools are named 'tip'; give each its own name");
+  CHECK(fails("name: shaft", "name: 'shaft,1'") ==
+        "tools[1].name: 'shaft,1' cannot name a tool: use up to 64 letters, digits and '_', starting with a letter (it "
+        "names the tool's columns in time_series.csv)");
+  CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {stiffness_ratio: 0}") ==
+        "contact.stiffness_ratio: expected a positive number, got 0");
+}
