@@ -48,6 +48,7 @@ const std::vector<WarningCode>& warning_codes() {
       {"precision-dependent", "simulate"},
       {"probe-load", "scene"},
       {"scene-scale", "scene"},
+      {"element-locking", "scene"},
       // meshes, scenes and the simulator
       {"mesh-ignored-elements", "scene"},
       {"mesh-repaired", "scene"},

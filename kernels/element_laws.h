@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "kernels/elements/linear_tetrahedron.h"
+#include "kernels/elements/quadratic_tetrahedron.h"
 #include "kernels/fmpc_hd.h"
 #include "kernels/laws/corotational_linear.h"
 #include "kernels/laws/stable_neo_hookean.h"
@@ -20,7 +21,7 @@ struct TypeList {
 };
 
 using ElementLaws = TypeList<CorotationalLinear, VolumePreservation, StableNeoHookean>;
-using ElementKinds = TypeList<LinearTetrahedron>;
+using ElementKinds = TypeList<LinearTetrahedron, QuadraticTetrahedron>;
 
 // The dispatch over a list, defined twice: for host code (launchers, host loops) and for device code (a kernel that
 // meets a term at run time), because a host lambda may not be called from a __host__ __device__ function.
@@ -119,5 +120,41 @@ __device__ __forceinline__ auto visit_element_term_on_device(int element, int la
   return detail::device_visit_in(ElementTermTypes{}, element * ElementLaws::count + law, by_pair);
 }
 #endif
+
+// The kind whose nodes are a tetrahedron's four corners: inversion checks read a mesh without element terms (springs)
+// as elements of this kind.
+constexpr int kTetrahedronKind = element_kind_index<LinearTetrahedron>;
+
+namespace detail {
+template <typename Real, typename First, typename... Rest>
+FMPC_HD bool element_inverted_from(int kind, int e, const int* nodes, const Real* x, const Real* y, const Real* z) {
+  if constexpr (sizeof...(Rest) > 0) {
+    if (kind != element_kind_index<First>) return element_inverted_from<Real, Rest...>(kind, e, nodes, x, y, z);
+  }
+  constexpr int N = First::kNodes;
+  Real p[N][3];
+  for (int a = 0; a < N; ++a) {
+    const int vertex = nodes[N * e + a];
+    p[a][0] = x[vertex];
+    p[a][1] = y[vertex];
+    p[a][2] = z[vertex];
+  }
+  return First::inverted(p);
+}
+template <typename Real, typename... Kinds>
+FMPC_HD bool element_inverted_in(TypeList<Kinds...>, int kind, int e, const int* nodes, const Real* x, const Real* y,
+                                 const Real* z) {
+  return element_inverted_from<Real, Kinds...>(kind, e, nodes, x, y, z);
+}
+}  // namespace detail
+
+// Whether element e of kind `kind` (index in ElementKinds; `nodes` holds its kNodes per element) is inverted or flat
+// at positions (x, y, z): the kind's own test (the linear tetrahedron's signed volume, the quadratic one's Jacobian
+// at its quadrature points), for the inversion counts of the CPU loop and the CUDA kernels alike. A dispatch of its
+// own over the kinds, not visit_element_term: it serves host and device code, and needs no law.
+template <typename Real>
+FMPC_HD bool element_inverted(int kind, int e, const int* nodes, const Real* x, const Real* y, const Real* z) {
+  return detail::element_inverted_in(ElementKinds{}, kind, e, nodes, x, y, z);
+}
 
 }  // namespace fmpc::kernels

@@ -114,17 +114,17 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
   }
 }
 
-// Whether element e of `corners` is inverted or flat at positions s (signed volume <= 0), for the inversion count.
-template <typename Real>
-FMPC_HD bool tetrahedron_inverted(int e, const int* corners, const Real* x, const Real* y, const Real* z) {
-  Real p[4][3];
-  for (int a = 0; a < 4; ++a) {
-    const int vertex = corners[4 * e + a];
-    p[a][0] = x[vertex];
-    p[a][1] = y[vertex];
-    p[a][2] = z[vertex];
+// An element's rest nodes from its tetrahedron's corners: the corners, then (kinds with kEdgeNodes) the midpoint of
+// each edge Element::edge_end(m, 0..1) in the kind's order.
+template <typename Element>
+FMPC_HD void element_rest_nodes(const double corners[4][3], double out[Element::kNodes][3]) {
+  for (int a = 0; a < 4; ++a)
+    for (int i = 0; i < 3; ++i) out[a][i] = corners[a][i];
+  if constexpr (Element::kEdgeNodes > 0) {
+    for (int m = 0; m < Element::kEdgeNodes; ++m)
+      for (int i = 0; i < 3; ++i)
+        out[4 + m][i] = 0.5 * (corners[Element::edge_end(m, 0)][i] + corners[Element::edge_end(m, 1)][i]);
   }
-  return !(tetrahedron_volume(p) > Real(0));
 }
 
 // The largest modulus a strain table gives (Pa): a law's stiffness bound over a run whose modulus follows it.

@@ -52,7 +52,7 @@ __device__ void run_chunk_checks(const PersistentChecks& c, const kernels::State
   for (int v = thread; v < n; v += stride)
     if (non_finite_vertex(end, v)) atomicMin(c.first_non_finite, v);
   for (int e = thread; e < c.element_count; e += stride)
-    count_if_inverted(c.corners, e, c.element_scene, end, c.inverted_count, c.inverted_first);
+    count_if_inverted(c.nodes, c.element_kind, e, c.element_scene, end, c.inverted_count, c.inverted_first);
 }
 
 // Checkpoint slot k of a persistent launch (PersistentEulerArguments::checkpoints).
@@ -331,7 +331,7 @@ __global__ void __launch_bounds__(kPersistentThreads, (PersistentOccupancy<Real,
         const PersistentChecks at = check_slot(c, check);
         const kernels::StateView<Real> checkpoint = read_only(checkpoint_slot(a, check + 1));
         for (int e = thread; e < c.element_count; e += stride)
-          count_if_inverted(c.corners, e, c.element_scene, checkpoint, at.inverted_count, at.inverted_first);
+          count_if_inverted(c.nodes, c.element_kind, e, c.element_scene, checkpoint, at.inverted_count, at.inverted_first);
       }
       ++check;
       check_after += a.check_every;
@@ -454,7 +454,7 @@ __global__ void __launch_bounds__(kClusterRows, 1) cluster_euler_kernel(ClusterE
   if (me.element_first == me.element_end) return;
   cluster.sync();  // the elements' corners may be other blocks' vertices
   for (int e = me.element_first + local; e < me.element_end; e += rows)
-    count_if_inverted(c.corners, e, c.element_scene, end, c.inverted_count, c.inverted_first);
+    count_if_inverted(c.nodes, c.element_kind, e, c.element_scene, end, c.inverted_count, c.inverted_first);
 #endif
 }
 

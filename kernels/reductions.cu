@@ -102,11 +102,11 @@ __global__ void energy_final_kernel(const double* partial, double* result) {
 }
 
 template <typename Real>
-__global__ void count_inverted_kernel(const int* corners, int element_count, const int* element_scene,
+__global__ void count_inverted_kernel(const int* nodes, int element_kind, int element_count, const int* element_scene,
                                       kernels::StateView<Real> s, unsigned int* count, int* first) {
   const int e = vertex_index();
   if (e >= element_count) return;
-  count_if_inverted(corners, e, element_scene, s, count, first);
+  count_if_inverted(nodes, element_kind, e, element_scene, s, count, first);
 }
 
 }  // namespace
@@ -123,12 +123,12 @@ cudaError_t launch_largest_displacement(const kernels::StateView<Real>& state, c
 }
 
 template <typename Real>
-cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
+cudaError_t launch_count_inverted(const int* nodes, int element_kind, int element_count, const int* element_scene,
                                   const kernels::StateView<Real>& state, unsigned int* count, int* first,
                                   cudaStream_t stream) {
   if (element_count <= 0) return cudaSuccess;
   count_inverted_kernel<Real><<<blocks_for(element_count), kThreadsPerBlock, 0, stream>>>(
-      corners, element_count, element_scene, state, count, first);
+      nodes, element_kind, element_count, element_scene, state, count, first);
   return cudaGetLastError();
 }
 
@@ -154,7 +154,7 @@ cudaError_t launch_energy_sum(const EnergyArguments<Real>& arguments, EnergyTerm
 #define FMPC_REDUCTION_LAUNCHERS(Real)                                                                                \
   template cudaError_t launch_largest_displacement<Real>(const kernels::StateView<Real>&, const StartPositions&, int, \
                                                          int, double*, double*, cudaStream_t);                        \
-  template cudaError_t launch_count_inverted<Real>(const int*, int, const int*, const kernels::StateView<Real>&,      \
+  template cudaError_t launch_count_inverted<Real>(const int*, int, int, const int*, const kernels::StateView<Real>&, \
                                                    unsigned int*, int*, cudaStream_t);                                \
   template cudaError_t launch_find_non_finite<Real>(const kernels::StateView<Real>&, int, int*, cudaStream_t);        \
   template cudaError_t launch_energy_sum<Real>(const EnergyArguments<Real>&, EnergyTerm, int, int, double*, double*,  \

@@ -104,9 +104,9 @@ __device__ bool non_finite_vertex(const kernels::StateView<Real>& s, int v) {
 
 // Element e counted into its scene's inversion count and first inverted element where it is inverted at s.
 template <typename Real>
-__device__ void count_if_inverted(const int* corners, int e, const int* element_scene,
+__device__ void count_if_inverted(const int* nodes, int element_kind, int e, const int* element_scene,
                                   const kernels::StateView<Real>& s, unsigned int* count, int* first) {
-  if (!kernels::tetrahedron_inverted(e, corners, s.x, s.y, s.z)) return;
+  if (!kernels::element_inverted(element_kind, e, nodes, s.x, s.y, s.z)) return;
   const int scene = element_scene ? element_scene[e] : 0;
   atomicAdd(count + scene, 1u);
   atomicMin(first + scene, e);

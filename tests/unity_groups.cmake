@@ -74,7 +74,8 @@ fmpc_unity_group(fmpc_tests tests_10
   unit/sliced_springs_test.cpp
   unit/generated_code_injection_test.cpp
   unit/launch_plan_test.cpp
-  unit/law_unit_test.cpp)
+  unit/law_unit_test.cpp
+  unit/quadratic_element_test.cpp)
 fmpc_unity_group(fmpc_tests tests_11
   unit/mesh_refinement_test.cpp
   unit/plot_test.cpp

@@ -5,11 +5,15 @@
 // constitutive law (kernels/laws/: first_piola, energy_density, linearise and stress_differential, rest_lame,
 // stress_output); the element kinds are listed in kernels/element_laws.h.
 #include "kernels/element_term.h"
+#include "kernels/elements/element_kind_tangent.h"
 
 namespace fmpc::kernels {
 
-struct LinearTetrahedron {
+struct LinearTetrahedron : ElementKindTangent<LinearTetrahedron> {
   static constexpr int kNodes = 4;
+  static constexpr int kEdgeNodes = 0;  // nodes beyond the corners, one per edge (kernels/element_term.h)
+  // Each corner's lumped mass as a fraction of the element's (rho V0): a quarter (the consistent mass's row sums).
+  static constexpr double kMassFraction[kNodes] = {0.25, 0.25, 0.25, 0.25};
   static constexpr int kPoints = 1;  // material points (per-point state: kernels/prony_viscoelasticity.h)
 
   // F at each material point from node positions x.
@@ -68,40 +72,6 @@ struct LinearTetrahedron {
         out[a][i] = t.rest_volume[e] * (dP[3 * i] * g[a][0] + dP[3 * i + 1] * g[a][1] + dP[3 * i + 2] * g[a][2]);
   }
 
-  // Column (3 b + j) of the 12 x 12 tangent: its action on the unit displacement of node b along axis j.
-  template <typename Law>
-  static FMPC_HD void stiffness_column(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin, int b,
-                                       int j, double out[kNodes][3]) {
-    double p[kNodes][3] = {};
-    p[b][j] = 1.0;
-    stiffness_action<Law>(t, e, lin, p, out);
-  }
-
-  // The diagonal entries K_(3a+i),(3a+i) (Jacobi's preconditioner), as [node][axis].
-  template <typename Law>
-  static FMPC_HD void stiffness_diagonal(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
-                                         double diagonal[kNodes][3]) {
-    for (int a = 0; a < kNodes; ++a)
-      for (int i = 0; i < 3; ++i) {
-        double column[kNodes][3];
-        stiffness_column<Law>(t, e, lin, a, i, column);
-        diagonal[a][i] = column[a][i];
-      }
-  }
-
-  // The whole 12 x 12 tangent, row-major: K[12 (3 a + i) + 3 b + j].
-  template <typename Law>
-  static FMPC_HD void stiffness_matrix(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
-                                       double* K) {
-    for (int b = 0; b < kNodes; ++b)
-      for (int j = 0; j < 3; ++j) {
-        double column[kNodes][3];
-        stiffness_column<Law>(t, e, lin, b, j, column);
-        for (int a = 0; a < kNodes; ++a)
-          for (int i = 0; i < 3; ++i) K[3 * kNodes * (3 * a + i) + 3 * b + j] = column[a][i];
-      }
-  }
-
   // Elastic energy at positions x (J).
   template <typename Law>
   static FMPC_HD double energy(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
@@ -116,6 +86,12 @@ struct LinearTetrahedron {
     double F[9];
     corner_gradient(x, t.rest_inverse + 9 * e, F);
     return Law::stress_output(Law::material(t, e), F);
+  }
+
+  // Whether the element is inverted or flat at x (signed volume <= 0).
+  template <typename Real>
+  static FMPC_HD bool inverted(const Real x[kNodes][3]) {
+    return !(tetrahedron_volume(x) > Real(0));
   }
 
   // An upper bound of the largest eigenvalue of the element's rest stiffness (N/m), for the critical time step and the

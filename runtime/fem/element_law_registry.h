@@ -69,6 +69,11 @@ struct ElementKindRow {
   const char* keyword;      // fem: {element: KEYWORD}
   const char* description;  // one line for docs and errors, with its source
   int kind;                 // index in kernels::ElementKinds
+  int vtk_cell_type;        // frames write the elements' nodes as this VTK cell (10: VTK_TETRA, 24: quadratic)
+  double largest_poisson_ratio;  // a larger material.poisson_ratio is an error on this kind
+  // Above this ratio the kind locks (too stiff): build_fem_model warns with `locking_note`; 1: it does not.
+  double locking_poisson_ratio;
+  const char* locking_note;  // the measured error the warning quotes (docs/validation.md)
 };
 
 // Every row, in kernels::ElementKinds' order.

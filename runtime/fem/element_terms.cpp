@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "diagnostics/number_format.h"
@@ -9,7 +10,7 @@
 namespace fmpc::sim {
 
 std::optional<ElementGeometry> element_geometry(const std::vector<Point3>& points,
-                                                const std::vector<Tetrahedron>& tetrahedra,
+                                                const std::vector<Tetrahedron>& tetrahedra, int kind,
                                                 DiagnosticList& diagnostics) {
   ElementGeometry geometry;
   const std::size_t count = tetrahedra.size();
@@ -58,12 +59,57 @@ std::optional<ElementGeometry> element_geometry(const std::vector<Point3>& point
     inverse[8] = (dm[0] * dm[4] - dm[1] * dm[3]) / det;
     geometry.rest_volume[e] = volume;
   }
-  geometry.kind = kernels::element_kind_index<kernels::LinearTetrahedron>;
-  geometry.nodes_per_element = kernels::LinearTetrahedron::kNodes;
-  geometry.nodes.reserve(4 * count);
-  for (const Tetrahedron& t : tetrahedra) geometry.nodes.insert(geometry.nodes.end(), t.begin(), t.end());
-  build_node_csr(geometry, points.size());
+  geometry.kind = kind;
+  kernels::visit_element_term(kind, 0, [&](auto element_kind, auto) {
+    using Element = decltype(element_kind);
+    geometry.nodes_per_element = Element::kNodes;
+    geometry.nodes.reserve(static_cast<std::size_t>(Element::kNodes) * count);
+    // Each mesh edge's node once, numbered in the order the elements meet them.
+    std::map<std::pair<std::int32_t, std::int32_t>, std::int32_t> edge_vertex;
+    for (const Tetrahedron& t : tetrahedra) {
+      geometry.nodes.insert(geometry.nodes.end(), t.begin(), t.end());
+      if constexpr (Element::kEdgeNodes > 0) {
+        for (int m = 0; m < Element::kEdgeNodes; ++m) {
+          const std::int32_t a = t[static_cast<std::size_t>(Element::edge_end(m, 0))];
+          const std::int32_t b = t[static_cast<std::size_t>(Element::edge_end(m, 1))];
+          const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+          auto found = edge_vertex.find(key);
+          if (found == edge_vertex.end()) {
+            const auto index = static_cast<std::int32_t>(points.size() + geometry.added_vertex_ends.size());
+            geometry.added_vertex_ends.push_back({key.first, key.second});
+            found = edge_vertex.emplace(key, index).first;
+          }
+          geometry.nodes.push_back(found->second);
+        }
+      }
+    }
+  });
+  build_node_csr(geometry, points.size() + geometry.added_vertex_ends.size());
   return geometry;
+}
+
+std::vector<Point3> with_added_vertices(const std::vector<Point3>& points, const ElementGeometry& geometry) {
+  std::vector<Point3> out = points;
+  out.reserve(points.size() + geometry.added_vertex_ends.size());
+  for (const auto& ends : geometry.added_vertex_ends) {
+    const Point3& a = points[static_cast<std::size_t>(ends[0])];
+    const Point3& b = points[static_cast<std::size_t>(ends[1])];
+    out.push_back({0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])});
+  }
+  return out;
+}
+
+std::vector<double> element_lumped_masses(const ElementGeometry& geometry, std::size_t vertex_count, double density) {
+  std::vector<double> mass(vertex_count, 0.0);
+  kernels::visit_element_term(geometry.kind, 0, [&](auto element_kind, auto) {
+    using Element = decltype(element_kind);
+    constexpr auto N = static_cast<std::size_t>(Element::kNodes);
+    for (std::size_t e = 0; e < geometry.size(); ++e)
+      for (std::size_t a = 0; a < N; ++a)
+        mass[static_cast<std::size_t>(geometry.nodes[N * e + a])] +=
+            density * geometry.rest_volume[e] * Element::kMassFraction[a];
+  });
+  return mass;
 }
 
 void build_node_csr(ElementGeometry& geometry, std::size_t vertex_count) {
@@ -167,7 +213,10 @@ void assign_element_damping(const ElementGeometry& geometry, ElementTerm& term, 
     using Law = decltype(element_law);
     for (std::size_t e = 0; e < geometry.size(); ++e) {
       const double stiffness = Element::template stiffness_bound<Law>(view, static_cast<int>(e));
-      const double corner_mass = density * geometry.rest_volume[e] / Element::kNodes;
+      // The element's lightest node: its own fastest mode moves that node most.
+      double fraction = Element::kMassFraction[0];
+      for (const double f : Element::kMassFraction) fraction = std::min(fraction, f);
+      const double corner_mass = density * geometry.rest_volume[e] * fraction;
       const double omega = std::sqrt(stiffness / corner_mass);
       damping[e] = (omega > 0.0 ? 2.0 * ratio / omega : 0.0) + rayleigh_stiffness;
     }

@@ -3,6 +3,7 @@
 // and node CSR, shared by the terms, and the list of terms, each one law (kernels/laws/, listed in kernels/
 // element_laws.h; runtime/fem/element_law_registry.h builds them) with its per-element parameters, summed in list
 // order. The backends read them through kernels::ElementTermView. Nothing here names a law or an element kind.
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -28,6 +29,9 @@ struct ElementGeometry {
   // node forces at their slots, so each vertex's gather reads one contiguous run (no 12-byte reads scattered over
   // element-major memory: docs/performance.md).
   std::vector<std::int32_t> corner_slot;
+  // The vertices the kind adds to the mesh's (its edge nodes, one per mesh edge, shared by the elements around it),
+  // numbered from the mesh's vertex count on: vertex (mesh vertices + i) is the midpoint of added_vertex_ends[i].
+  std::vector<std::array<std::int32_t, 2>> added_vertex_ends;
 
   std::size_t size() const { return rest_volume.size(); }
 };
@@ -56,12 +60,20 @@ struct ElementTerms {
   bool empty() const { return terms.empty(); }
 };
 
-// Linear tetrahedra on `tetrahedra` over `points` (metres): their nodes, rest geometry (Dm^-1, volumes) and node
-// CSR. An element whose volume is not positive (|V| <= 1e-9 l_max^3, or inverted) is an error naming it: repair the
-// mesh first.
+// Elements of kind `kind` (index in kernels::ElementKinds) on `tetrahedra` over `points` (metres): their nodes (the
+// corners, then the kind's edge nodes as added vertices after the mesh's), rest geometry (Dm^-1, volumes of the
+// tetrahedra) and node CSR over all vertices. An element whose volume is not positive (|V| <= 1e-9 l_max^3, or
+// inverted) is an error naming it: repair the mesh first.
 std::optional<ElementGeometry> element_geometry(const std::vector<Point3>& points,
-                                                const std::vector<Tetrahedron>& tetrahedra,
+                                                const std::vector<Tetrahedron>& tetrahedra, int kind,
                                                 DiagnosticList& diagnostics);
+
+// `points` followed by the geometry's added vertices (each the midpoint of its two ends).
+std::vector<Point3> with_added_vertices(const std::vector<Point3>& points, const ElementGeometry& geometry);
+
+// Lumped masses over every vertex of the geometry (the mesh's and the added ones) at density rho (kg/m^3): each
+// element gives node a rho V0 times its kind's kMassFraction[a], in element order.
+std::vector<double> element_lumped_masses(const ElementGeometry& geometry, std::size_t vertex_count, double density);
 
 // geometry.nodes' CSR by vertex (corner_offset, corner_index, corner_slot) over `vertex_count` vertices.
 void build_node_csr(ElementGeometry& geometry, std::size_t vertex_count);

@@ -1,5 +1,6 @@
 #include "runtime/fem/fem_model_builder.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -54,6 +55,29 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
   material.youngs_modulus = std::move(*youngs);
   material.poisson_ratio = std::move(*poisson);
   material.where = range;
+  if (spec.element < 0 || spec.element >= kernels::ElementKinds::count) {
+    diagnostics.error(range, "element kind " + std::to_string(spec.element) + " is not one of the " +
+                                 std::to_string(kernels::ElementKinds::count) + " element kinds");
+    return std::nullopt;
+  }
+  // The element kind's range of Poisson ratios, and its locking warning (once, for the largest ratio).
+  const ElementKindRow& kind = element_kind_row(spec.element);
+  const double largest_nu = *std::max_element(material.poisson_ratio.begin(), material.poisson_ratio.end());
+  const SourceRange& nu_where = spec.poisson_where.file.empty() ? range : spec.poisson_where;
+  const std::string kind_name = std::string("fem.element ") + kind.keyword;
+  if (largest_nu > kind.largest_poisson_ratio) {
+    diagnostics.error(nu_where, "material.poisson_ratio: " + format_number(largest_nu) + " is above " +
+                                    format_number(kind.largest_poisson_ratio) + ", the most " + kind_name +
+                                    " takes; use fem: {element: quadratic} (up to 0.4999) for nearly incompressible "
+                                    "tissue");
+    return std::nullopt;
+  }
+  if (largest_nu > kind.locking_poisson_ratio)
+    diagnostics.warning(nu_where, "element-locking",
+                        "material.poisson_ratio " + format_number(largest_nu) + ": " + kind_name +
+                            " locks (is too stiff) above nu = " + format_number(kind.locking_poisson_ratio) + "; " +
+                            kind.locking_note,
+                        {"use fem: {element: quadratic} for nearly incompressible tissue"});
   const ElementLawRow& row = element_law_row(spec.law);
   auto build = row.build(material, diagnostics);
   if (!build) return std::nullopt;
@@ -61,21 +85,23 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
   for (Point3& p : scaled.points)
     for (double& coordinate : p) coordinate *= spec.length_unit;
   SimulationSetup setup;
-  setup.rest_positions = scaled.points;
-  setup.tetrahedra = scaled.tetrahedra;
-  setup.springs.vertex_count = scaled.points.size();
-  setup.springs.adjacency_offset.assign(scaled.points.size() + 1, 0);
-  auto geometry = element_geometry(scaled.points, scaled.tetrahedra, diagnostics);
+  auto geometry = element_geometry(scaled.points, scaled.tetrahedra, spec.element, diagnostics);
   if (!geometry) return std::nullopt;
-  if (geometry->kind != spec.element) {
-    diagnostics.error(range, std::string("internal error: element kind '") + element_kind_row(spec.element).keyword +
-                                 "' has no geometry builder in runtime/fem (element_geometry builds '" +
-                                 element_kind_row(geometry->kind).keyword + "')");
-    return std::nullopt;
-  }
-  setup.elements.geometry = std::move(*geometry);
+  setup.rest_positions = with_added_vertices(scaled.points, *geometry);
+  setup.tetrahedra = scaled.tetrahedra;
+  setup.springs.vertex_count = setup.rest_positions.size();
+  setup.springs.adjacency_offset.assign(setup.rest_positions.size() + 1, 0);
   setup.mass = lumped_masses(scaled, spec.mass, diagnostics);
   if (setup.mass.empty()) return std::nullopt;
+  if (!geometry->added_vertex_ends.empty()) {
+    // The kind's own lumping at the mesh's density (a total mass gives rho = M / V).
+    double total_mass = 0.0, total_volume = 0.0;
+    for (const double m : setup.mass) total_mass += m;
+    for (const double v : geometry->rest_volume) total_volume += v;
+    const double density = spec.mass.source == MassSpec::Source::Density ? spec.mass.value : total_mass / total_volume;
+    setup.mass = element_lumped_masses(*geometry, setup.rest_positions.size(), density);
+  }
+  setup.elements.geometry = std::move(*geometry);
   if (!(spec.damping_ratio >= 0.0) || !(spec.rayleigh_stiffness >= 0.0)) {
     diagnostics.error(range, "damping ratio and Rayleigh stiffness damping must be finite and non-negative");
     return std::nullopt;
@@ -93,14 +119,53 @@ bool add_element_term(SimulationSetup& setup, ElementTerm term, double damping_r
                                          ") acts on tetrahedra; the mesh has none (it is a surface mesh)");
     return false;
   }
-  if (setup.elements.empty()) {
-    auto geometry = element_geometry(setup.rest_positions, setup.tetrahedra, diagnostics);
+  if (setup.elements.geometry.nodes.empty()) {
+    // Beside springs: linear tetrahedra (the first kind), on the springs' own vertices.
+    auto geometry = element_geometry(setup.rest_positions, setup.tetrahedra, 0, diagnostics);
     if (!geometry) return false;
     setup.elements.geometry = std::move(*geometry);
   }
   assign_element_damping(setup.elements.geometry, term, setup.mass, damping_ratio, rayleigh_stiffness);
   setup.elements.terms.push_back(std::move(term));
   return true;
+}
+
+void extend_to_added_vertices(SimulationSetup& setup, std::size_t mesh_vertices) {
+  const auto& ends = setup.elements.geometry.added_vertex_ends;
+  if (ends.empty()) return;
+  const std::size_t total = mesh_vertices + ends.size();
+  const auto in = [](const std::vector<std::int32_t>& sorted, std::int32_t v) {
+    return std::binary_search(sorted.begin(), sorted.end(), v);
+  };
+  std::vector<std::int32_t> fixed = setup.fixed_vertices;
+  std::sort(fixed.begin(), fixed.end());
+  std::vector<std::int32_t> probe;
+  if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement) {
+    probe = setup.probe->vertices;
+    std::sort(probe.begin(), probe.end());
+  }
+  const auto midpoint = [&](std::vector<Point3>& values) {
+    if (values.size() != mesh_vertices) return;
+    values.resize(total);
+    for (std::size_t i = 0; i < ends.size(); ++i)
+      for (std::size_t axis = 0; axis < 3; ++axis)
+        values[mesh_vertices + i][axis] = 0.5 * (values[static_cast<std::size_t>(ends[i][0])][axis] +
+                                                 values[static_cast<std::size_t>(ends[i][1])][axis]);
+  };
+  midpoint(setup.initial_positions);
+  midpoint(setup.initial_velocities);
+  if (setup.external_forces.size() == mesh_vertices) setup.external_forces.resize(total, Point3{0.0, 0.0, 0.0});
+  if (setup.fixed_axes.size() == mesh_vertices) {
+    setup.fixed_axes.resize(total, 0);
+    for (std::size_t i = 0; i < ends.size(); ++i)
+      setup.fixed_axes[mesh_vertices + i] = static_cast<std::uint8_t>(
+          setup.fixed_axes[static_cast<std::size_t>(ends[i][0])] & setup.fixed_axes[static_cast<std::size_t>(ends[i][1])]);
+  }
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    const auto v = static_cast<std::int32_t>(mesh_vertices + i);
+    if (in(fixed, ends[i][0]) && in(fixed, ends[i][1])) setup.fixed_vertices.push_back(v);
+    if (in(probe, ends[i][0]) && in(probe, ends[i][1])) setup.probe->vertices.push_back(v);
+  }
 }
 
 }  // namespace fmpc::sim

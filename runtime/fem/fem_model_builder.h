@@ -23,11 +23,14 @@ struct FemModelSpec {
   double damping_ratio = 0.0;       // zeta of each element's own fastest mode (assign_element_damping)
   double rayleigh_stiffness = 0.0;  // beta (s), added to every element's
   double length_unit = 1.0;         // metres per mesh unit
+  SourceRange poisson_where;        // the Poisson ratio's place in the scene (the element kind's limit and warning)
   std::vector<PronyTerm> prony;     // viscoelasticity on the law; empty: elastic
 };
 
 // Scales the points to metres, checks every element (positive volume: repair the mesh first) and the material (the
-// law's builder), and fills the masses (lumped: rho V / 4 per corner), the element term and its damping. The setup
+// law's builder), and fills the masses (lumped: rho V / 4 per corner on linear tetrahedra; a kind with edge nodes
+// adds them as vertices after the mesh's, setup.elements.geometry.added_vertex_ends, and lumps by its
+// kMassFraction), the element term and its damping. The setup
 // has no springs (an empty network with an all-zero adjacency). Returns nullopt after appending errors.
 std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelSpec& spec, DiagnosticList& diagnostics);
 
@@ -36,6 +39,14 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
 // 2 zeta / omega_e + rayleigh_stiffness (assign_element_damping). False after appending an error.
 bool add_element_term(SimulationSetup& setup, ElementTerm term, double damping_ratio, double rayleigh_stiffness,
                       DiagnosticList& diagnostics);
+
+// Carries what a scene chose for the mesh's vertices over to the vertices the element kind added (their edge nodes,
+// setup.elements.geometry.added_vertex_ends, numbered from `mesh_vertices` on): an added vertex is fixed, held on an
+// axis or moved by a displacement probe where both of its edge's ends are (a clamped face stays clamped between its
+// corners), starts at its ends' mean position and velocity, and carries no external force. Arrays sized for the mesh's
+// vertices are extended; a probe's vertex list and the fixed list gain the added vertices. Nothing changes for a kind
+// that adds none.
+void extend_to_added_vertices(SimulationSetup& setup, std::size_t mesh_vertices);
 
 // The centroid of every tetrahedron of `mesh`, in mesh units (places elements in a scene's regions).
 std::vector<Point3> tetrahedron_centroids(const Mesh& mesh);

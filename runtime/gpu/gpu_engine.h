@@ -302,6 +302,10 @@ class GpuEngine final : public sim::SteppingEngine {
   int element_count_ = 0;
   DeviceArray<int> corners_, element_scene_, corner_offset_, corner_index_, corner_slot_, inverted_first_;
   DeviceArray<int> nodes_;  // the element kind's nodes per element (the element pass's; corners_: the tetrahedra's)
+  // What the inversion counts read (kernels::element_inverted): the element kind's nodes where the batch has element
+  // terms, else the tetrahedra's corners (corners_, uploaded only then) as kernels::kTetrahedronKind.
+  const int* inversion_nodes_ = nullptr;
+  int inversion_kind_ = 0;
   // The springs' records: in the sliced layout (then vertex_order_ and sliced_row_ are set) or in CSR order.
   DeviceArray<kernels::SpringIncidence<Real>> incidence_;
   DeviceArray<int> vertex_order_;

@@ -35,10 +35,10 @@ bool GpuEngine<Real>::count_inverted(std::vector<unsigned int>& counts, std::vec
   FMPC_CUDA_CHECK(
       cudaMemcpyAsync(inverted_first_.data(), firsts.data(), scenes * sizeof(int), cudaMemcpyHostToDevice, stream_),
       diagnostics, false);
-  FMPC_CUDA_CHECK(
-      launch_count_inverted(corners_.data(), element_count_, scenes > 1 ? element_scene_.data() : nullptr,
-                            state_[current_].view(), inverted_count_.data(), inverted_first_.data(), stream_),
-      diagnostics, false);
+  FMPC_CUDA_CHECK(launch_count_inverted(inversion_nodes_, inversion_kind_, element_count_,
+                                        scenes > 1 ? element_scene_.data() : nullptr, state_[current_].view(),
+                                        inverted_count_.data(), inverted_first_.data(), stream_),
+                  diagnostics, false);
   FMPC_CUDA_CHECK(cudaMemcpyAsync(counts.data(), inverted_count_.data(), scenes * sizeof(unsigned int),
                                   cudaMemcpyDeviceToHost, stream_),
                   diagnostics, false);

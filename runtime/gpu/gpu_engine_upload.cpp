@@ -80,12 +80,15 @@ bool GpuEngine<Real>::upload(DiagnosticList& diagnostics) {
   element_begin_ = c.element_begin;
   element_count_ = element_begin_.back();
   if (element_count_ > 0) {
-    FMPC_CUDA_CHECK(corners_.upload(c.corners), diagnostics, false);
+    // The tetrahedra's corners only where no element kind's nodes (nodes_, upload_elements) hold them.
+    if (!c.has_elements) FMPC_CUDA_CHECK(corners_.upload(c.corners), diagnostics, false);
     if (scenes_.size() > 1) FMPC_CUDA_CHECK(element_scene_.upload(c.element_scene), diagnostics, false);
     FMPC_CUDA_CHECK(inverted_count_.allocate(scenes_.size()), diagnostics, false);
     FMPC_CUDA_CHECK(inverted_first_.allocate(scenes_.size()), diagnostics, false);
   }
   if (c.has_elements && !upload_elements(c, diagnostics)) return false;
+  inversion_kind_ = c.has_elements ? c.element_kind : kernels::kTetrahedronKind;
+  inversion_nodes_ = c.has_elements ? nodes_.data() : corners_.data();
 
   if (!upload_probes(diagnostics) || !upload_single_scene_features(diagnostics)) return false;
 
@@ -342,7 +345,8 @@ PersistentChecks GpuEngine<Real>::persistent_checks() const {
   unsigned int* results = check_results_.data();
   c.first_non_finite = reinterpret_cast<int*>(results);
   if (element_count_ > 0) {
-    c.corners = corners_.data();
+    c.nodes = inversion_nodes_;
+    c.element_kind = inversion_kind_;
     c.element_count = element_count_;
     c.element_scene = scenes_.size() > 1 ? element_scene_.data() : nullptr;
     c.scene_count = static_cast<int>(scenes_.size());

@@ -196,7 +196,8 @@ cudaError_t launch_runge_kutta4_stage(const RungeKutta4Arguments<Real>& argument
 // 0's results; check j's are slot_stride entries further (one buffer of slot_stride x checks).
 struct PersistentChecks {
   int* first_non_finite;
-  const int* corners;  // 4 per element
+  const int* nodes;  // the element kind's nodes, its kNodes per element (kernels::element_inverted)
+  int element_kind;  // index in kernels::ElementKinds
   int element_count;
   const int* element_scene;  // null: every element is scene 0's
   int scene_count;
@@ -424,11 +425,12 @@ template <typename Real>
 cudaError_t launch_find_non_finite(const kernels::StateView<Real>& state, int vertex_count, int* first_vertex,
                                    cudaStream_t stream);
 
-// Inverted tetrahedra (signed volume <= 0) at `state`, per scene: count[scene] += 1 (integer atomics: the count does
-// not depend on scheduling) and first[scene] = the smallest inverted element index (atomicMin). element_scene null:
-// every element is scene 0's. count and first are preset by the caller (0 and element_count).
+// Inverted elements of kind `element_kind` (kernels::element_inverted: the kind's own test on its nodes, kNodes per
+// element in `nodes`) at `state`, per scene: count[scene] += 1 (integer atomics: the count does not depend on
+// scheduling) and first[scene] = the smallest inverted element index (atomicMin). element_scene null: every element
+// is scene 0's. count and first are preset by the caller (0 and element_count).
 template <typename Real>
-cudaError_t launch_count_inverted(const int* corners, int element_count, const int* element_scene,
+cudaError_t launch_count_inverted(const int* nodes, int element_kind, int element_count, const int* element_scene,
                                   const kernels::StateView<Real>& state, unsigned int* count, int* first,
                                   cudaStream_t stream);
 

@@ -343,11 +343,16 @@ class CpuScene final : public CpuSceneBase {
     }
   }
 
+  // The element kind's own test (kernels::element_inverted) where the scene has element terms, else the tetrahedra's
+  // signed volumes.
   InversionCount count_inversions() const override {
     InversionCount found;
+    const bool elements = !setup_.elements.empty();
+    const int kind = elements ? setup_.elements.geometry.kind : kernels::kTetrahedronKind;
+    const int* nodes = elements ? setup_.elements.geometry.nodes.data() : corners_.data();
     for (std::size_t e = 0; e < setup_.tetrahedra.size(); ++e) {
-      if (!kernels::tetrahedron_inverted(static_cast<int>(e), corners_.data(), position_.x.data(), position_.y.data(),
-                                         position_.z.data()))
+      if (!kernels::element_inverted(kind, static_cast<int>(e), nodes, position_.x.data(), position_.y.data(),
+                                     position_.z.data()))
         continue;
       if (found.count == 0) found.first = static_cast<std::int32_t>(e);
       ++found.count;

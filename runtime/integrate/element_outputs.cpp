@@ -3,6 +3,7 @@
 // Generic over the element kinds and laws: each term's are visited once per call (kernels/element_laws.h).
 #include <sstream>
 
+#include "kernels/element_laws.h"
 #include "runtime/fem/element_law_registry.h"
 #include "runtime/integrate/simulation.h"
 
@@ -133,8 +134,14 @@ std::vector<ElementStressOutput> element_stress_outputs(const SimulationSetup& s
 std::string inversion_message(const SimulationSetup& setup, const InversionReport& report) {
   std::ostringstream message;
   const Tetrahedron& t = setup.tetrahedra[static_cast<std::size_t>(report.first_element)];
-  message << "tetrahedron " << report.first_element << " (vertices " << t[0] << ", " << t[1] << ", " << t[2] << ", "
-          << t[3] << ") turned inside out ";
+  // A kind beyond the tetrahedron's corners is named: its test is its own (a quadratic element's Jacobian at its
+  // quadrature points), which can fail while its corner tetrahedron is positive.
+  const int kind = setup.elements.empty() ? kernels::kTetrahedronKind : setup.elements.geometry.kind;
+  if (kind == kernels::kTetrahedronKind)
+    message << "tetrahedron " << report.first_element << " (vertices ";
+  else
+    message << element_kind_row(kind).keyword << " element " << report.first_element << " (corners ";
+  message << t[0] << ", " << t[1] << ", " << t[2] << ", " << t[3] << ") turned inside out ";
   if (report.first_step == 0)
     message << "at the start";
   else

@@ -288,9 +288,11 @@ struct NonFiniteReport {
   std::int32_t spring = -1;  // the spring at that vertex that is non-finite or the most strained
 };
 
-// Tetrahedra turned inside out (signed volume <= 0) during a run, in every model and on both backends. Counted at
-// every check (every `inversion_check_every` steps and at the end of every advance); the first step is exact: when
-// a check first finds one, the run replays from the previous check one step at a time (the steps are deterministic).
+// Elements turned inside out during a run, in every model and on both backends: the element kind's own test
+// (kernels::element_inverted: a tetrahedron's signed volume <= 0, a quadratic element's Jacobian <= 0 at one of its
+// quadrature points), the tetrahedra's signed volumes where the model has no element terms. Counted at every check
+// (every `inversion_check_every` steps and at the end of every advance); the first step is exact: when a check first
+// finds one, the run replays from the previous check one step at a time (the steps are deterministic).
 struct InversionReport {
   std::size_t first_step = 0;    // the first step after which an element was inverted (0: at the start)
   double first_time = 0.0;       // s

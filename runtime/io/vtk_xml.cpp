@@ -314,16 +314,24 @@ VtuArray vtu_flags(std::string name, const std::vector<std::uint8_t>& values) {
 }
 
 std::optional<VtuCells> encode_vtu_cells(const Mesh& mesh, const VtuOptions& options, DiagnosticList& diagnostics) {
+  const bool tetrahedra = !mesh.tetrahedra.empty();
+  const std::size_t count = tetrahedra ? mesh.tetrahedra.size() : mesh.triangles.size();
+  const std::int32_t* corner = tetrahedra ? mesh.tetrahedra.empty() ? nullptr : mesh.tetrahedra[0].data()
+                                          : mesh.triangles.empty() ? nullptr : mesh.triangles[0].data();
+  // VTK_TETRA, VTK_TRIANGLE
+  return encode_vtu_cells(corner, count, tetrahedra ? 4 : 3, tetrahedra ? 10 : 5, mesh.source, options, diagnostics);
+}
+
+std::optional<VtuCells> encode_vtu_cells(const std::int32_t* corner, std::size_t count, std::size_t corners,
+                                         std::uint8_t type, const std::string& source, const VtuOptions& options,
+                                         DiagnosticList& diagnostics) {
   SourceRange range;
-  range.file = mesh.source;
+  range.file = source;
   if (options.format == VtuFormat::Binary && (options.compression_level < 0 || options.compression_level > 9)) {
     diagnostics.error(range, "VTU frame: compression level " + std::to_string(options.compression_level) +
                                  " is not a zlib level; give 0 (none) to 9");
     return std::nullopt;
   }
-  const bool tetrahedra = !mesh.tetrahedra.empty();
-  const std::size_t count = tetrahedra ? mesh.tetrahedra.size() : mesh.triangles.size();
-  const std::size_t corners = tetrahedra ? 4 : 3;
   constexpr auto int32_max = static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max());
   if (count > int32_max) {
     diagnostics.error(range, "VTU frame: " + std::to_string(count) + " cells, more than a frame can hold (2^31 - 1)");
@@ -336,8 +344,6 @@ std::optional<VtuCells> encode_vtu_cells(const Mesh& mesh, const VtuOptions& opt
   cells.format_ = options.format;
   cells.compression_level_ = options.compression_level;
   cells.arrays_.resize(3);
-  const std::int32_t* corner = tetrahedra ? mesh.tetrahedra.empty() ? nullptr : mesh.tetrahedra[0].data()
-                                          : mesh.triangles.empty() ? nullptr : mesh.triangles[0].data();
   bool ok = true;
   VtuCells::Encoded connectivity{element_attributes("Int32", "connectivity", 1), {}};
   ok = ok && encode(connectivity.body, options, count * corners, 4, false, count,
@@ -369,7 +375,6 @@ std::optional<VtuCells> encode_vtu_cells(const Mesh& mesh, const VtuOptions& opt
                       to += "          " + std::to_string((cell + 1) * corners) + "\n";
                     },
                     pool);
-  const std::uint8_t type = tetrahedra ? 10 : 5;  // VTK_TETRA, VTK_TRIANGLE
   VtuCells::Encoded types{element_attributes("UInt8", "types", 1), {}};
   ok = ok && encode(types.body, options, count, 1, false, count,
                     [type](std::size_t first, std::size_t last, unsigned char* to) {

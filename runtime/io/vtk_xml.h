@@ -64,7 +64,9 @@ class VtuCells {
   std::size_t size() const { return count_; }
 
  private:
-  friend std::optional<VtuCells> encode_vtu_cells(const Mesh& cells, const VtuOptions& options,
+  friend std::optional<VtuCells> encode_vtu_cells(const std::int32_t* nodes, std::size_t count,
+                                                  std::size_t nodes_per_cell, std::uint8_t type,
+                                                  const std::string& source, const VtuOptions& options,
                                                   DiagnosticList& diagnostics);
   friend std::optional<std::string> vtu_document(const std::vector<Point3>& points, const VtuCells& cells,
                                                  const std::vector<VtuArray>& point_data,
@@ -83,6 +85,11 @@ class VtuCells {
 // Encodes the cells for frames written with `options` (the same format and compression level); an error when the
 // mesh has more than 2^31 - 1 cells or zlib fails.
 std::optional<VtuCells> encode_vtu_cells(const Mesh& cells, const VtuOptions& options, DiagnosticList& diagnostics);
+// `count` cells of VTK type `type` (e.g. 24, VTK_QUADRATIC_TETRA), `nodes_per_cell` point indices each from `nodes`
+// (cell-major, in VTK's node order); `source` names the mesh in errors.
+std::optional<VtuCells> encode_vtu_cells(const std::int32_t* nodes, std::size_t count, std::size_t nodes_per_cell,
+                                         std::uint8_t type, const std::string& source, const VtuOptions& options,
+                                         DiagnosticList& diagnostics);
 
 // A frame: the points (m) with point data, the cells with cell data. Errors (nullopt) name the array: a tuple count
 // other than the points' (point data) or the cells' (cell data), components other than 1 or 3, no values or two

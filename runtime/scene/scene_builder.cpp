@@ -420,6 +420,7 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
   const std::vector<Point3> centroids = tetrahedron_centroids(built.mesh);
   FemModelSpec spec;
   spec.law = scene.element_law;
+  spec.poisson_where = scene.range_of("material.poisson_ratio");
   spec.element = scene.element_kind;
   // "FEM (law corotational, element linear)": the registry's names, as the scene writes them.
   const std::string model = std::string("FEM (law ") + element_law_row(scene.element_law).keyword + ", element " +
@@ -706,6 +707,7 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
       setup->probe = load;
     }
   }
+  extend_to_added_vertices(*setup, built.mesh.points.size());
   // Tools: mesh units to metres; Simulation::create checks that none starts inside the tissue.
   for (const SceneTool& scene_tool : scene.tools) {
     RigidTool tool;

@@ -91,7 +91,8 @@ struct SceneMaterial {
   // Young's modulus -> spring constants (`mapping`): YoungsModulus, Rules and Table only.
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
   bool mapping_given = false;
-  // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.499].
+  // The co-rotational FEM's, or the springs' with the volume term (default 0.45 for both); in [0, 0.4999] (the
+  // element kind may take less: build_fem_model).
   std::optional<RegionalValue> poisson_ratio;
   // material.viscoelastic: {prony: [{weight, time}, ...]} (kernels/prony_viscoelasticity.h); empty: elastic. FEM only.
   std::vector<PronyTerm> prony;

@@ -332,15 +332,16 @@ void SceneParser::parse_viscoelastic(const YAML::Node& node) {
   scene_.material.prony = std::move(prony);
 }
 
-// A Poisson ratio in [0, 0.499]: a number, or {regions: [...], default: NUMBER}.
+// A Poisson ratio in [0, 0.4999]: a number, or {regions: [...], default: NUMBER}. The element kind's own limit (the
+// linear tetrahedron's 0.499) is checked where the model is built (build_fem_model).
 std::optional<RegionalValue> SceneParser::poisson_ratio(const YAML::Node& node) {
   const std::string field = "material.poisson_ratio";
   remember(node, field);
-  const std::string allowed = "a number in [0, 0.499]";
+  const std::string allowed = "a number in [0, 0.4999]";
   const auto in_range = [&](const YAML::Node& at, const std::string& where, double v) {
-    if (v >= 0.0 && v <= 0.499) return true;
-    error(at, where, "expected " + allowed + " (0.5 is incompressible, which linear tetrahedra cannot represent "
-                     "without locking), got " + format_number(v));
+    if (v >= 0.0 && v <= 0.4999) return true;
+    error(at, where, "expected " + allowed + " (0.5 is incompressible, which no element here represents; linear "
+                     "tetrahedra take at most 0.499), got " + format_number(v));
     return false;
   };
   RegionalValue out;

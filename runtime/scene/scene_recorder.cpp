@@ -95,7 +95,17 @@ void SceneRecorder::record(const SceneState& state, bool frame, bool sample, Dia
       write_frame || sample ? state.velocities(diagnostics) : std::vector<Point3>{};
   if (write_frame) {
     const std::string name = frame_name(frames_.size());
-    if (!vtu_cells_) vtu_cells_ = encode_vtu_cells(built_.mesh, vtu_options_, diagnostics);
+    if (!vtu_cells_) {
+      // Elements whose kind has more nodes than the tetrahedron's corners are written with all of them, as the
+      // kind's VTK cell (its edge nodes are points of the frame).
+      const ElementGeometry& geometry = setup.elements.geometry;
+      vtu_cells_ = !setup.elements.empty() && geometry.nodes_per_element != 4
+                       ? encode_vtu_cells(geometry.nodes.data(), geometry.size(),
+                                          static_cast<std::size_t>(geometry.nodes_per_element),
+                                          static_cast<std::uint8_t>(element_kind_row(geometry.kind).vtk_cell_type),
+                                          built_.mesh.source, vtu_options_, diagnostics)
+                       : encode_vtu_cells(built_.mesh, vtu_options_, diagnostics);
+    }
     // Element stresses as cell data where the cells are the elements: each element term's stress output (its law's:
     // a von Mises stress, or the volume term's pressure magnitude; springs carry no continuum stress).
     // The arrays point into the stresses' values, which must outlive the document's encoding.

@@ -1,6 +1,7 @@
-// The force models on the CUDA backend against the CPU loop (the host reference): the co-rotational FEM, springs with
-// the volume term, Rayleigh mass damping, per-axis holds, inversion counting with its exact first step (replay) and
-// on_inversion: stop, on odd mesh sizes (never a multiple of the block size), alone and in a batch.
+// The force models on the CUDA backend against the CPU loop (the host reference): the co-rotational FEM on linear and
+// quadratic tetrahedra, springs with the volume term, Rayleigh mass damping, per-axis holds, inversion counting with
+// its exact first step (replay) and on_inversion: stop, quadratic elements' inversion at their quadrature points, on
+// odd mesh sizes (never a multiple of the block size), alone and in a batch.
 //
 // Stated tolerances as for springs (tests/gpu/cpu_gpu_comparison.h): explicit integrators 1e-5 m in float and
 // 1e-12 m in double (expected 0: the element pass is the same FMPC_HD code in the same order, --fmad=false);
@@ -16,6 +17,7 @@
 #include "runtime/fem/element_law_registry.h"
 #include "tests/support/volume_term.h"
 #include "runtime/gpu/gpu_simulation.h"
+#include "runtime/integrate/stepping_engine.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/scene/spring_model_builder.h"
 #include "tests/gpu/cpu_gpu_comparison.h"
@@ -27,9 +29,11 @@ using namespace fmpc::gpu_test;
 
 namespace {
 
-enum class Model { Fem, SpringsWithVolumeTerm };
+enum class Model { Fem, QuadraticFem, SpringsWithVolumeTerm };
 
-const char* name_of(Model model) { return model == Model::Fem ? "FEM" : "springs + volume term"; }
+const char* name_of(Model model) {
+  return model == Model::Fem ? "FEM" : model == Model::QuadraticFem ? "quadratic FEM" : "springs + volume term";
+}
 
 Mesh box_mesh(int nx, int ny, int nz) {
   DiagnosticList diagnostics;
@@ -48,8 +52,9 @@ SimulationSetup hanging_box(Model model, Precision precision, Integrator integra
   const Mesh mesh = box_mesh(nx, ny, nz);
   DiagnosticList diagnostics;
   SimulationSetup out;
-  if (model == Model::Fem) {
+  if (model == Model::Fem || model == Model::QuadraticFem) {
     FemModelSpec spec;
+    if (model == Model::QuadraticFem) spec.element = element_kind_by_keyword("quadratic")->kind;
     spec.youngs_modulus = {5000.0};
     spec.poisson_ratio = {0.45};
     spec.mass.value = 1060.0;
@@ -117,7 +122,7 @@ SimulationSetup thrown_corner(Precision precision, double speed = 3.0) {
   return setup;
 }
 
-const Model kModels[] = {Model::Fem, Model::SpringsWithVolumeTerm};
+const Model kModels[] = {Model::Fem, Model::QuadraticFem, Model::SpringsWithVolumeTerm};
 
 }  // namespace
 
@@ -273,6 +278,61 @@ FMPC_GPU_TEST(inversions_match_cpu, "inversions: the GPU finds the CPU's first s
   const auto alone = sim::Simulation::create(scenes[1], single);
   FMPC_REQUIRE(alone && alone->advance(1000, single));
   FMPC_EXPECT(batch->inversions(1).first_step == alone->inversions().first_step);
+}
+
+// A quadratic FEM box (2^3 cells) with one edge node moved past its edge's end (1.2 of the way): the elements around
+// that edge fold between their corners (tests/unit/quadratic_element_test.cpp), which only the Jacobian at their
+// quadrature points shows (kernels::element_inverted).
+SimulationSetup folded_quadratic_box(Precision precision) {
+  const Mesh mesh = box_mesh(2, 2, 2);
+  DiagnosticList diagnostics;
+  FemModelSpec spec;
+  spec.element = element_kind_by_keyword("quadratic")->kind;
+  spec.youngs_modulus = {5000.0};
+  spec.poisson_ratio = {0.45};
+  spec.mass.value = 1060.0;
+  spec.damping_ratio = 0.9;
+  SimulationSetup out;
+  if (auto setup = build_fem_model(mesh, spec, diagnostics)) out = *setup;
+  if (diagnostics.has_errors()) note("setup: " + describe(diagnostics));
+  out.initial_positions = out.rest_positions;
+  const auto ends = out.elements.geometry.added_vertex_ends.front();
+  const Point3& from = out.rest_positions[static_cast<std::size_t>(ends[0])];
+  const Point3& to = out.rest_positions[static_cast<std::size_t>(ends[1])];
+  for (std::size_t i = 0; i < 3; ++i) out.initial_positions[mesh.points.size()][i] = from[i] + 1.2 * (to[i] - from[i]);
+  out.precision = precision;
+  return out;
+}
+
+FMPC_GPU_TEST(inversions_quadratic_points, "quadratic elements folded between their corners: the GPU counts the CPU's",
+              true) {
+  for (const Precision precision : {Precision::Float, Precision::Double}) {
+    const std::vector<SimulationSetup> scenes = {folded_quadratic_box(precision)};
+    DiagnosticList diagnostics;
+    const auto stability = check_stability(scenes.front(), diagnostics);
+    FMPC_REQUIRE(stability);
+    const std::vector<StabilityReport> reports = {*stability};
+    const auto cpu = create_cpu_engine(scenes, reports, 1);
+    const auto device = gpu::create_engine(scenes, reports, gpu::GpuOptions{}, diagnostics);
+    FMPC_REQUIRE(device);
+    std::vector<unsigned> cpu_counts, gpu_counts;
+    std::vector<int> cpu_firsts, gpu_firsts;
+    FMPC_REQUIRE(cpu->count_inverted(cpu_counts, cpu_firsts, diagnostics));
+    FMPC_REQUIRE(device->count_inverted(gpu_counts, gpu_firsts, diagnostics));
+    note(std::string("folded quadratic box, ") + name_of(precision) + ": " + std::to_string(cpu_counts.front()) +
+         " inverted (CPU), " + std::to_string(gpu_counts.front()) + " (GPU)");
+    FMPC_EXPECT(cpu_counts.front() > 0u);
+    FMPC_EXPECT(gpu_counts == cpu_counts);
+    FMPC_EXPECT(gpu_firsts == cpu_firsts);
+    // The persistent kernel's own count (its chunk checks) against the CPU's over a short run.
+    DiagnosticList cpu_diagnostics, gpu_diagnostics;
+    const auto cpu_run = sim::Simulation::create(scenes.front(), cpu_diagnostics);
+    const auto gpu_run = gpu_simulation(scenes.front(), gpu_diagnostics);
+    FMPC_REQUIRE(cpu_run && gpu_run && cpu_run->advance(200, cpu_diagnostics) && gpu_run->advance(200, gpu_diagnostics));
+    FMPC_EXPECT(gpu_run->inversions().largest_count == cpu_run->inversions().largest_count);
+    FMPC_EXPECT(gpu_run->inversions().first_element == cpu_run->inversions().first_element);
+    FMPC_EXPECT(gpu_run->inversions().first_step == cpu_run->inversions().first_step);
+  }
 }
 
 // Every element kernel on tiny scenes for compute-sanitizer: forces, energy, inversion counts, implicit products,

@@ -27,6 +27,8 @@ const char* model_name(ProblemModel model) {
       return "springs (Lloyd)";
     case ProblemModel::SpringsVolumeTerm:
       return "springs + volume term";
+    case ProblemModel::QuadraticFem:
+      return "quadratic FEM";
   }
   return "?";
 }
@@ -37,8 +39,9 @@ std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, Prob
   mass.source = sim::MassSpec::Source::Density;
   mass.value = problem.density;
   std::optional<sim::SimulationSetup> setup;
-  if (model == ProblemModel::CorotationalFem) {
+  if (model == ProblemModel::CorotationalFem || model == ProblemModel::QuadraticFem) {
     sim::FemModelSpec spec;
+    if (model == ProblemModel::QuadraticFem) spec.element = sim::element_kind_by_keyword("quadratic")->kind;
     spec.youngs_modulus = {problem.youngs_modulus};
     spec.poisson_ratio = {problem.poisson_ratio};
     spec.mass = mass;
@@ -72,12 +75,14 @@ std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, Prob
   setup->external_forces = problem.forces;
   setup->precision = sim::Precision::Double;
   if (!problem.prescribed.empty()) {
-    setup->initial_positions = setup->rest_positions;
+    setup->initial_positions.assign(setup->rest_positions.begin(), setup->rest_positions.begin() + static_cast<std::ptrdiff_t>(n));
     for (std::size_t v = 0; v < n; ++v)
       for (int a = 0; a < 3; ++a)
         if ((problem.held[v] >> a) & 1u)
           setup->initial_positions[v][static_cast<std::size_t>(a)] += problem.prescribed[v][static_cast<std::size_t>(a)];
   }
+  // A kind's added edge nodes follow their ends' supports and prescribed displacements (as the C3D10 deck's do).
+  sim::extend_to_added_vertices(*setup, n);
   sim::StaticOptions options;
   options.linear = true;
   const auto result = sim::static_equilibrium(*setup, options, diagnostics);
@@ -89,7 +94,7 @@ std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, Prob
   answer.displacement.resize(n);
   for (std::size_t v = 0; v < n; ++v)
     for (std::size_t i = 0; i < 3; ++i) answer.displacement[v][i] = result->positions[v][i] - setup->rest_positions[v][i];
-  answer.nodes = problem.mesh.points;
+  answer.nodes = setup->rest_positions;
   answer.reaction = result->reactions;
   return answer;
 }
@@ -99,9 +104,13 @@ bool calculix_available() { return std::system("command -v ccx > /dev/null 2>&1"
 
 namespace {
 
+// CalculiX reads each number of a card from its first 20 characters (Fortran's f20.0): longer text is cut there,
+// which drops digits of 0.00029999999999999997 silently and makes -5.0000000000000009e-05 an error ("*ERROR
+// reading *BOUNDARY"). Thirteen significant digits in scientific notation fill at most 20.
 std::string number(double value) {
   std::ostringstream out;
-  out.precision(17);
+  out << std::scientific;
+  out.precision(12);
   out << value;
   return out.str();
 }

@@ -33,11 +33,12 @@ enum class ProblemModel {
   SpringsVanGelder,
   SpringsLloyd,
   SpringsVolumeTerm,  // Van Gelder springs with the volume term calibrated to the problem's Poisson ratio
+  QuadraticFem,       // the co-rotational law on quadratic (10-node) tetrahedra: edge midpoints added
 };
 const char* model_name(ProblemModel model);
 
 struct ElasticAnswer {
-  std::vector<sim::Point3> displacement;  // m, per vertex of the problem's mesh
+  std::vector<sim::Point3> displacement;  // m, per vertex of the problem's mesh (corners: not the added edge nodes)
   // Every node (the vertices, then C3D10's mid-edge nodes) and the force the supports exert on it (N; zero on free
   // axes): a quadratic element carries most of a face's force at its mid-edge nodes.
   std::vector<sim::Point3> nodes;

@@ -1,6 +1,6 @@
 #pragma once
 // A 0.1 m box of 5 kPa tissue (1060 kg/m^3, nu 0.45, damping ratio 0.3) with a Prony series, hanging from its top
-// face under gravity: the viscoelastic scene of the CPU and GPU tests (tests/unit/viscoelastic_test.cpp, tests/gpu/
+// face under gravity, on elements of kind `element` (index in kernels::ElementKinds): the viscoelastic scene of the CPU and GPU tests (tests/unit/viscoelastic_test.cpp, tests/gpu/
 // gpu_viscoelastic_test.cpp). Header-only, so that the GPU tests (which do not link tests/support) use it too.
 #include <cstdint>
 #include <optional>
@@ -12,7 +12,7 @@
 namespace fmpc::sim {
 
 inline std::optional<SimulationSetup> viscoelastic_box(int nx, int ny, int nz, const std::vector<PronyTerm>& prony,
-                                                       DiagnosticList& diagnostics) {
+                                                       DiagnosticList& diagnostics, int element = 0) {
   BoxSpec box;
   box.cells_x = nx;
   box.cells_y = ny;
@@ -25,6 +25,7 @@ inline std::optional<SimulationSetup> viscoelastic_box(int nx, int ny, int nz, c
   spec.mass.value = 1060.0;
   spec.damping_ratio = 0.3;
   spec.prony = prony;
+  spec.element = element;
   auto setup = build_fem_model(mesh, spec, diagnostics);
   if (!setup) return std::nullopt;
   for (std::size_t v = 0; v < setup->rest_positions.size(); ++v)

@@ -348,6 +348,23 @@ TEST_CASE("ASCII VTU frames: the layout, numbers that read back exactly, cell da
   CHECK(write(frame, ascii_one) == write(frame, ascii_three));
 }
 
+TEST_CASE("VTU cells of a given type and node count: a quadratic tetrahedron is type 24 with its ten nodes", "[vtu]") {
+  const std::int32_t nodes[10] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9};
+  VtuOptions options;
+  options.format = VtuFormat::Ascii;
+  DiagnosticList diagnostics;
+  const auto cells = encode_vtu_cells(nodes, 1, 10, 24, "quadratic.msh", options, diagnostics);
+  REQUIRE(cells);
+  std::vector<Point3> points(10, Point3{0, 0, 0});
+  const auto file = vtu_document(points, *cells, {}, {}, options, diagnostics);
+  REQUIRE(file);
+  CHECK(file->find("          0 1 2 3 4 5 6 7 8 9\n") != std::string::npos);
+  CHECK(file->find("<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n          10\n") !=
+        std::string::npos);
+  CHECK(file->find("<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">\n          24\n") !=
+        std::string::npos);
+}
+
 TEST_CASE("VTU frame errors name the array and what to give", "[vtu]") {
   Mesh mesh;
   mesh.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
