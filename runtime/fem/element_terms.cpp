@@ -224,19 +224,6 @@ void assign_element_damping(const ElementGeometry& geometry, ElementTerm& term, 
   term.stiffness_damping = std::move(damping);
 }
 
-InversionCount count_inverted_tetrahedra(const std::vector<Tetrahedron>& tetrahedra,
-                                         const std::vector<Point3>& positions) {
-  InversionCount result;
-  for (std::size_t e = 0; e < tetrahedra.size(); ++e) {
-    double x[4][3];
-    tetrahedron_corners(tetrahedra, e, positions, x);
-    if (kernels::tetrahedron_volume(x) > 0.0) continue;
-    if (result.count == 0) result.first = static_cast<std::int32_t>(e);
-    ++result.count;
-  }
-  return result;
-}
-
 void tetrahedron_corners(const std::vector<Tetrahedron>& tetrahedra, std::size_t e, const std::vector<Point3>& points,
                          double out[4][3]) {
   for (std::size_t a = 0; a < 4; ++a)

@@ -126,13 +126,11 @@ bool reads_strain_table(const ElementTerm& term);
 void assign_element_damping(const ElementGeometry& geometry, ElementTerm& term, const std::vector<double>& vertex_mass,
                             double ratio, double rayleigh_stiffness);
 
-// Tetrahedra whose signed volume at `positions` is not positive (inverted or flat): how many, and the first.
+// Elements found inverted or flat at some positions: how many, and the first.
 struct InversionCount {
   std::size_t count = 0;
   std::int32_t first = -1;  // the smallest index, -1 when none
 };
-InversionCount count_inverted_tetrahedra(const std::vector<Tetrahedron>& tetrahedra,
-                                         const std::vector<Point3>& positions);
 
 // The four corners of tetrahedron e as rows [corner][axis] of `points`.
 void tetrahedron_corners(const std::vector<Tetrahedron>& tetrahedra, std::size_t e, const std::vector<Point3>& points,
