@@ -271,13 +271,14 @@ bool PlyParser::read_element(const PlyElement& element) {
       polygon.clear();
       for (std::size_t i = 0; i < length; ++i) {
         if (!read_value(property.type, value)) return false;
-        polygon.push_back(static_cast<std::int64_t>(value));
+        // Checked before the conversion: a value outside int64's range (1e308) is undefined behaviour to convert.
         if (value != std::floor(value) || value < 0.0 || value >= static_cast<double>(mesh_.points.size())) {
           error_at(line, "face " + std::to_string(item) + " refers to vertex " + format_number(value) +
                              " but the file has " + std::to_string(mesh_.points.size()) +
                              " vertices (0-based); fix the face");
           return false;
         }
+        polygon.push_back(static_cast<std::int64_t>(value));
       }
       if (!face || static_cast<int>(k) != indices_property) continue;
       if (length < 3) {

@@ -171,6 +171,11 @@ TEST_CASE("broken STL and PLY files are errors with their place", "[mesher]") {
        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
        "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n",
        13, "face 0 refers to vertex 3 but the file has 3 vertices (0-based); fix the face"},
+      // Beyond any integer's range (fuzz_surface: converted before it was checked, undefined behaviour).
+      {"face_huge.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+       "property list uchar double vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1e308 2\n",
+       13, "face 0 refers to vertex 1e+308 but the file has 3 vertices (0-based); fix the face"},
       {"count.ply",
        "ply\nformat binary_little_endian 1.0\nelement vertex 1000000\nproperty float x\nproperty float y\n"
        "property float z\nend_header\n",
