@@ -6,6 +6,7 @@
 // (tests/unit/law_unit_test.cpp).
 #include <type_traits>
 
+#include "kernels/elements/linear_nodal_pressure.h"
 #include "kernels/elements/linear_tetrahedron.h"
 #include "kernels/elements/quadratic_tetrahedron.h"
 #include "kernels/fmpc_hd.h"
@@ -21,7 +22,7 @@ struct TypeList {
 };
 
 using ElementLaws = TypeList<CorotationalLinear, VolumePreservation, StableNeoHookean>;
-using ElementKinds = TypeList<LinearTetrahedron, QuadraticTetrahedron>;
+using ElementKinds = TypeList<LinearTetrahedron, QuadraticTetrahedron, LinearNodalPressure>;
 
 // The dispatch over a list, defined twice: for host code (launchers, host loops) and for device code (a kernel that
 // meets a term at run time), because a host lambda may not be called from a __host__ __device__ function.
@@ -120,6 +121,12 @@ __device__ __forceinline__ auto visit_element_term_on_device(int element, int la
   return detail::device_visit_in(ElementTermTypes{}, element * ElementLaws::count + law, by_pair);
 }
 #endif
+
+// Whether element kind `kind` reads a nodal pass (its kNodalPressure): the engines run element_nodal_shares and
+// nodal_pressure_at (kernels/element_term.h) before its element pass.
+inline bool element_kind_has_nodal_pass(int kind) {
+  return visit_element_term(kind, 0, [](auto element_kind, auto) { return decltype(element_kind)::kNodalPressure; });
+}
 
 // The kind whose nodes are a tetrahedron's four corners: inversion checks read a mesh without element terms (springs)
 // as elements of this kind.

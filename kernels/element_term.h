@@ -40,6 +40,10 @@ struct ElementTermView {
   // them empty: the tangent and the energy are the law's (docs/simulator.md, "Per-point state").
   PointStateView<Real> state;
   PronyConstants<Real> prony;
+  // Kinds with kNodalPressure (kernels/elements/linear_nodal_pressure.h): per vertex, the nodal pass's pressure p_a
+  // (Pa) and dilatation theta_a at the positions the element pass reads; null for the other kinds.
+  const Real* nodal_pressure;
+  const Real* nodal_dilatation;
 };
 
 // Element e's node positions and, where `velocities`, velocities [node][axis].
@@ -59,13 +63,19 @@ FMPC_HD void element_nodes(int e, const int* nodes, const StateView<Real>& s, bo
   }
 }
 
-// P at material point `point` (element e's, numbered kPoints e + q) of deformation gradient F: the law's stress,
-// then the term's Prony series on the state held. Element kinds call this, never the law's first_piola directly.
+// P at material point `point` (element e's, numbered kPoints e + q) of deformation gradient F: the law's stress at
+// `material`, then the term's Prony series on the state held. Element kinds call this, never the law's first_piola
+// directly; point_first_piola takes the element's own material.
+template <typename Law, typename Real>
+FMPC_HD void point_first_piola_of(const typename Law::template Material<Real>& material, const ElementTermView<Real>& t,
+                                  int point, const Real* F, const Real* F_rate, Real* P) {
+  Law::first_piola(material, F, F_rate, P);
+  if (t.prony.count > 0) prony_first_piola(t.prony, t.state, point, F, P);
+}
 template <typename Law, typename Real>
 FMPC_HD void point_first_piola(const ElementTermView<Real>& t, int e, int point, const Real* F, const Real* F_rate,
                                Real* P) {
-  Law::first_piola(Law::material(t, e), F, F_rate, P);
-  if (t.prony.count > 0) prony_first_piola(t.prony, t.state, point, F, P);
+  point_first_piola_of<Law>(Law::material(t, e), t, point, F, F_rate, P);
 }
 
 // The state update of element e after an accepted step, at positions s (the step's end): each point's Prony history
@@ -79,7 +89,7 @@ FMPC_HD void element_state_update(int e, const ElementTermView<Real>& t, const S
   Element::deformation_gradients(t, e, x, F);
   for (int q = 0; q < Q; ++q) {
     Real P[9];
-    Law::first_piola(Law::material(t, e), F[q], static_cast<const Real*>(nullptr), P);
+    Law::first_piola(Element::template point_material<Law>(t, e), F[q], static_cast<const Real*>(nullptr), P);
     prony_update(t.prony, t.state, Q * e + q, F[q], P);
   }
 }
@@ -112,6 +122,35 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
       to = {out[a][0], out[a][1], out[a][2], Real(0)};
     }
   }
+}
+
+// The nodal pass of a kind with kNodalPressure (kernels/elements/linear_nodal_pressure.h): element e's shares of
+// its nodes' sums, written at its corner slots in the corner-force layout (x: volume change, y: rest volume, z:
+// modulus times rest volume), so that each vertex's gather (nodal_pressure_at) sums them in CSR order as it sums forces.
+template <typename Element, typename Law, typename Real>
+FMPC_HD void element_nodal_shares(int e, const ElementTermView<Real>& t, const StateView<Real>& s,
+                                  CornerForce<Real>* slot) {
+  if constexpr (Element::kNodalPressure) {
+    constexpr int N = Element::kNodes;
+    Real x[N][3], v[N][3], share[3];
+    element_nodes<N>(e, t.corners, s, false, x, v);
+    Element::template nodal_shares<Law>(t, e, x, share);
+    for (int a = 0; a < N; ++a) slot[t.corner_slot[N * e + a]] = {share[0], share[1], share[2], Real(0)};
+  }
+}
+
+// Vertex v's nodal dilatation theta = sum (V - V0) / sum V0 and pressure K theta, K = sum lambda V0 / sum V0, from
+// the shares at its slots; zero at a vertex no element touches.
+template <typename Real>
+FMPC_HD void nodal_pressure_at(int v, const CornerForceView<Real>& shares, Real& pressure, Real& dilatation) {
+  Real change, volume, modulus_volume;
+  gather_corner_force(v, shares, change, volume, modulus_volume);
+  if (!(volume > Real(0))) {
+    pressure = dilatation = Real(0);
+    return;
+  }
+  dilatation = change / volume;
+  pressure = modulus_volume / volume * dilatation;
 }
 
 // An element's rest nodes from its tetrahedron's corners: the corners, then (kinds with kEdgeNodes) the midpoint of

@@ -15,6 +15,14 @@ struct LinearTetrahedron : ElementKindTangent<LinearTetrahedron> {
   // Each corner's lumped mass as a fraction of the element's (rho V0): a quarter (the consistent mass's row sums).
   static constexpr double kMassFraction[kNodes] = {0.25, 0.25, 0.25, 0.25};
   static constexpr int kPoints = 1;  // material points (per-point state: kernels/prony_viscoelasticity.h)
+  // Whether the element pass reads a nodal pass's pressure (kernels/elements/linear_nodal_pressure.h): no.
+  static constexpr bool kNodalPressure = false;
+
+  // The material each point integrates (the Prony series' elastic stress reads it): the law's own.
+  template <typename Law, typename Real>
+  static FMPC_HD typename Law::template Material<Real> point_material(const ElementTermView<Real>& t, int e) {
+    return Law::material(t, e);
+  }
 
   // F at each material point from node positions x.
   template <typename Real>
@@ -95,31 +103,12 @@ struct LinearTetrahedron : ElementKindTangent<LinearTetrahedron> {
   }
 
   // An upper bound of the largest eigenvalue of the element's rest stiffness (N/m), for the critical time step and the
-  // element damping: the smaller of the Frobenius norm and the largest absolute row sum (Gershgorin) of the 12 x 12
-  // matrix K_ab = V0 (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a . g_b) I) with the law's rest Lame parameters, both of
-  // which bound the spectral radius of a symmetric matrix.
+  // element damping, at the law's rest Lame parameters (corner_stiffness_bound).
   template <typename Law>
   static FMPC_HD double stiffness_bound(const ElementTermView<double>& t, int e) {
-    double g[4][3], mu, lambda;
-    shape_gradients(t.rest_inverse + 9 * e, g);
+    double mu, lambda;
     Law::rest_lame(Law::material(t, e), mu, lambda);
-    const double volume = t.rest_volume[e];
-    double frobenius = 0.0, row_max = 0.0;
-    double rows[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-    for (int a = 0; a < kNodes; ++a)
-      for (int b = 0; b < kNodes; ++b) {
-        const double gg = dot3(g[a], g[b]);
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) {
-            const double entry =
-                volume * (lambda * g[a][i] * g[b][j] + mu * g[b][i] * g[a][j] + (i == j ? mu * gg : 0.0));
-            frobenius += entry * entry;
-            rows[3 * a + i] += entry < 0.0 ? -entry : entry;
-          }
-      }
-    for (int r = 0; r < 12; ++r) row_max = rows[r] > row_max ? rows[r] : row_max;
-    frobenius = square_root(frobenius);
-    return frobenius < row_max ? frobenius : row_max;
+    return corner_stiffness_bound(t.rest_inverse + 9 * e, t.rest_volume[e], mu, lambda);
   }
 };
 

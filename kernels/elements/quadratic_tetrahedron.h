@@ -19,6 +19,14 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
   static constexpr int kNodes = 10;
   static constexpr int kEdgeNodes = 6;
   static constexpr int kPoints = 4;
+  // Whether the element pass reads a nodal pass's pressure (kernels/elements/linear_nodal_pressure.h): no.
+  static constexpr bool kNodalPressure = false;
+
+  // The material each point integrates (the Prony series' elastic stress reads it): the law's own.
+  template <typename Law, typename Real>
+  static FMPC_HD typename Law::template Material<Real> point_material(const ElementTermView<Real>& t, int e) {
+    return Law::material(t, e);
+  }
   // Edge node 4 + m lies between corners edge_end(m, 0) and edge_end(m, 1): edges 0-1, 1-2, 2-0, then k-3 for k = 0,
   // 1, 2 (arithmetic rather than a table: a constant array indexed at run time is not addressable in device code).
   static FMPC_HD constexpr int edge_end(int m, int end) {

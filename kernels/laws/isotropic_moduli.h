@@ -31,6 +31,22 @@ struct IsotropicModuli {
     m.strain_table = t.strain_table;
     return m;
   }
+
+  // The split of the average nodal pressure element (kernels/elements/linear_nodal_pressure.h): the material at the
+  // same shear modulus with lambda = 0 (E / (1 + nu) and nu = 0: mu = E / (2 (1 + nu)) is kept), and lambda. A
+  // strain table's E would lose the 1 / (1 + nu): runtime/fem refuses tables on that element.
+  template <typename Real>
+  static FMPC_HD Material<Real> shear_part(Material<Real> m) {
+    m.youngs_modulus = m.youngs_modulus / (Real(1) + m.poisson_ratio);
+    m.poisson_ratio = Real(0);
+    return m;
+  }
+  template <typename Real>
+  static FMPC_HD Real volumetric_modulus(const Material<Real>& m) {
+    Real mu, lambda;
+    lame_parameters(m.youngs_modulus, m.poisson_ratio, mu, lambda);
+    return lambda;
+  }
 };
 
 }  // namespace fmpc::kernels

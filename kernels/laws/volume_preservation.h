@@ -31,6 +31,18 @@ struct VolumePreservation {
     return m;
   }
 
+  // The average nodal pressure element's split (kernels/elements/linear_nodal_pressure.h): the term is volumetric
+  // alone, kappa (J - 1)^2 / 2, so its shear part is zero and its modulus kappa.
+  template <typename Real>
+  static FMPC_HD Material<Real> shear_part(Material<Real> m) {
+    m.bulk_modulus = Real(0);
+    return m;
+  }
+  template <typename Real>
+  static FMPC_HD Real volumetric_modulus(const Material<Real>& m) {
+    return m.bulk_modulus;
+  }
+
   template <typename Real>
   static FMPC_HD void first_piola(const Material<Real>& m, const Real* F, const Real* F_rate, Real* P) {
     Real C[9];

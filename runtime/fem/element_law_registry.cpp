@@ -120,6 +120,11 @@ const std::vector<ElementKindRow>& element_kind_rows() {
        "midpoint, 4-point (degree-2) quadrature, HRZ-lumped masses (1/36 at corners, 4/27 on edges; Hinton, Rock & "
        "Zienkiewicz 1976)",
        kernels::element_kind_index<kernels::QuadraticTetrahedron>, 24, 0.4999, 1.0, ""},
+      {"linear_nodal_pressure",
+       "4-node linear tetrahedra with the average nodal pressure of Bonet & Burton 1998: the law's shear part per "
+       "element, its volumetric part lambda/2 (J - 1)^2 with J averaged over each node's elements, so that "
+       "nearly incompressible materials do not lock on a linear mesh",
+       kernels::element_kind_index<kernels::LinearNodalPressure>, 10, 0.4999, 1.0, ""},
   };
   return rows;
 }

@@ -145,6 +145,37 @@ kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, st
   return view;
 }
 
+void NodalField::attach(kernels::ElementTermView<double>& view) const {
+  view.nodal_pressure = pressure.empty() ? nullptr : pressure.data();
+  view.nodal_dilatation = dilatation.empty() ? nullptr : dilatation.data();
+}
+
+NodalField nodal_field(const ElementGeometry& geometry, const kernels::ElementTermView<double>& view,
+                       const std::vector<Point3>& positions) {
+  NodalField field;
+  if (!kernels::element_kind_has_nodal_pass(view.element)) return field;
+  const std::size_t n = positions.size();
+  std::vector<double> x(n), y(n), z(n);
+  for (std::size_t v = 0; v < n; ++v) {
+    x[v] = positions[v][0];
+    y[v] = positions[v][1];
+    z[v] = positions[v][2];
+  }
+  const kernels::StateView<double> state{x.data(), y.data(), z.data(), nullptr, nullptr, nullptr};
+  std::vector<kernels::CornerForce<double>> shares(geometry.nodes.size());
+  kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
+    for (int e = 0; e < view.count; ++e)
+      kernels::element_nodal_shares<decltype(kind), decltype(element_law)>(e, view, state, shares.data());
+  });
+  const kernels::CornerForceView<double> gathered{geometry.corner_offset.data(), geometry.corner_index.data(),
+                                                  shares.data()};
+  field.pressure.resize(n);
+  field.dilatation.resize(n);
+  for (std::size_t v = 0; v < n; ++v)
+    kernels::nodal_pressure_at(static_cast<int>(v), gathered, field.pressure[v], field.dilatation[v]);
+  return field;
+}
+
 kernels::PronyConstants<double> prony_constants(const std::vector<PronyTerm>& prony, double dt, bool step_end_stress) {
   kernels::PronyConstants<double> c{};
   c.count = static_cast<int>(std::min<std::size_t>(prony.size(), kernels::kMostPronyTerms));

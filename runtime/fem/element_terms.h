@@ -84,6 +84,17 @@ void build_node_csr(ElementGeometry& geometry, std::size_t vertex_count);
 kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, std::size_t term,
                                                    const kernels::StrainTableView* table);
 
+// A kind's nodal pass on the host, in double (kernels::element_nodal_shares and nodal_pressure_at, as the engines
+// run them): per vertex of the geometry, the pressure and dilatation of `view`'s term at `positions`. Empty for a
+// kind without a nodal pass (kernels::element_kind_has_nodal_pass). `attach` points the view at them (valid while
+// the field lives).
+struct NodalField {
+  std::vector<double> pressure, dilatation;
+  void attach(kernels::ElementTermView<double>& view) const;
+};
+NodalField nodal_field(const ElementGeometry& geometry, const kernels::ElementTermView<double>& view,
+                       const std::vector<Point3>& positions);
+
 // The Prony series' constants at time step dt (s), in double (exp evaluated here, on the host, once per run): the
 // update's a_i = exp(-dt / tau_i), c_i = g_i (1 - a_i) / (dt / tau_i), and the stress's (kernels/
 // prony_viscoelasticity.h): at the step's end t_(n+1) where `step_end_stress` (implicit Euler: a_i, c_i and

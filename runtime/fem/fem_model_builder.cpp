@@ -68,8 +68,8 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
   if (largest_nu > kind.largest_poisson_ratio) {
     diagnostics.error(nu_where, "material.poisson_ratio: " + format_number(largest_nu) + " is above " +
                                     format_number(kind.largest_poisson_ratio) + ", the most " + kind_name +
-                                    " takes; use fem: {element: quadratic} (up to 0.4999) for nearly incompressible "
-                                    "tissue");
+                                    " takes; use fem: {element: quadratic} or fem: {element: linear_nodal_pressure} "
+                                    "(up to 0.4999) for nearly incompressible tissue");
     return std::nullopt;
   }
   if (largest_nu > kind.locking_poisson_ratio)
@@ -77,7 +77,8 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
                         "material.poisson_ratio " + format_number(largest_nu) + ": " + kind_name +
                             " locks (is too stiff) above nu = " + format_number(kind.locking_poisson_ratio) + "; " +
                             kind.locking_note,
-                        {"use fem: {element: quadratic} for nearly incompressible tissue"});
+                        {"use fem: {element: quadratic} or fem: {element: linear_nodal_pressure} for nearly "
+                         "incompressible tissue"});
   const ElementLawRow& row = element_law_row(spec.law);
   auto build = row.build(material, diagnostics);
   if (!build) return std::nullopt;

@@ -156,6 +156,13 @@ bool GpuEngine<Real>::upload_spring_records(const ConcatenatedScenes& c, Diagnos
 
 template <typename Real>
 bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
+  // A kind with a nodal pass (kernels::element_kind_has_nodal_pass) has no CUDA kernels for that pass yet: its
+  // views' nodal pressure would be null (runtime/scene/scene_run.cpp sends such scenes to the CPU).
+  if (kernels::element_kind_has_nodal_pass(c.element_kind)) {
+    diagnostics.error(scenes_.front().source_range, "this element kind runs on the CPU backend only for now (its "
+                                                    "nodal pass has no CUDA kernel yet); use the CPU backend");
+    return false;
+  }
   const std::size_t count = static_cast<std::size_t>(element_count_);
   const std::size_t node_entries = c.nodes.size();
   FMPC_CUDA_CHECK(nodes_.upload(c.nodes), diagnostics, false);

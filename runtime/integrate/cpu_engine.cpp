@@ -130,6 +130,10 @@ class CpuScene final : public CpuSceneBase {
         const int width = point_state_width(term);
         const int points = static_cast<int>(geometry.size()) * points_per_element(geometry.kind);
         arrays.state.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(points), Real(0));
+        if (kernels::element_kind_has_nodal_pass(geometry.kind)) {
+          arrays.nodal_pressure.assign(n_, Real(0));
+          arrays.nodal_dilatation.assign(n_, Real(0));
+        }
         term_arrays_.push_back(std::move(arrays));
         const TermArrays& held = term_arrays_.back();
         const auto data_or_null = [](const std::vector<Real>& values) {
@@ -145,6 +149,8 @@ class CpuScene final : public CpuSceneBase {
         view.rest_volume = rest_volume_.data();
         for (int p = 0; p < kernels::kMostLawParameters; ++p) view.parameter[p] = data_or_null(held.parameter[p]);
         view.stiffness_damping = data_or_null(held.damping);
+        view.nodal_pressure = data_or_null(held.nodal_pressure);
+        view.nodal_dilatation = data_or_null(held.nodal_dilatation);
         view.strain_table = reads_strain_table(term) ? table : kernels::StrainTableView{nullptr, nullptr, 0};
         view.state = {width > 0 ? term_arrays_.back().state.data() : nullptr, width, points};
         view.prony = kernels::PronyConstants<Real>{};
@@ -278,6 +284,7 @@ class CpuScene final : public CpuSceneBase {
   void accelerations(const Vector3Arrays<Real>& p, const Vector3Arrays<Real>& v, Vector3Arrays<Real>& a) {
     const kernels::StateView<Real> state = view(p, v);
     if (!term_views_.empty()) {
+      nodal_pass(state);
       // Each term's pass in list order: the first writes the corner forces, the later ones add to them.
       for (std::size_t term = 0; term < term_views_.size(); ++term) {
         const kernels::ElementTermView<Real>& field = term_views_[term];
@@ -304,6 +311,29 @@ class CpuScene final : public CpuSceneBase {
       return;
     }
     vertex_pass(kernels::SpringForces<Real>{network_view_}, state, a);
+  }
+
+  // Where the element kind reads nodal values (kernels::element_kind_has_nodal_pass): every term's nodal pressure at
+  // `state`, before any term's element pass (the shares use the corner-force slots that those passes then write).
+  void nodal_pass(const kernels::StateView<Real>& state) {
+    for (std::size_t term = 0; term < term_views_.size(); ++term) {
+      const kernels::ElementTermView<Real>& field = term_views_[term];
+      if (field.nodal_pressure == nullptr) continue;
+      kernels::visit_element_term(field.element, field.law, [&](auto kind, auto element_law) {
+        using Element = decltype(kind);
+        using Law = decltype(element_law);
+        pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
+          for (std::size_t e = begin; e < end; ++e)
+            kernels::element_nodal_shares<Element, Law>(static_cast<int>(e), field, state, corner_force_.data());
+        });
+      });
+      TermArrays& arrays = term_arrays_[term];
+      pool_.run(n_, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t v = begin; v < end; ++v)
+          kernels::nodal_pressure_at(static_cast<int>(v), corner_view_, arrays.nodal_pressure[v],
+                                     arrays.nodal_dilatation[v]);
+      });
+    }
   }
 
   template <typename Forces>
@@ -612,6 +642,8 @@ class CpuScene final : public CpuSceneBase {
     std::vector<Real> parameter[kernels::kMostLawParameters];
     std::vector<Real> damping;
     std::vector<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
+    // Per vertex, a kind with a nodal pass (view.nodal_pressure, view.nodal_dilatation); empty for the others.
+    std::vector<Real> nodal_pressure, nodal_dilatation;
   };
   std::vector<Real> rest_inverse_, rest_volume_;
   std::vector<TermArrays> term_arrays_;  // the views point into its vectors' buffers, which moves keep

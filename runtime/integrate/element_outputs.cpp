@@ -17,11 +17,14 @@ kernels::StrainTableView table_of(const SimulationSetup& setup) {
 }
 
 // visit(Element, Law, view) for each element term in list order, its view reading the strain table where its law
-// does.
+// does and its kind's nodal pass at `positions` where it has one.
 template <typename Visit>
-void for_each_term(const SimulationSetup& setup, const kernels::StrainTableView& table, Visit visit) {
+void for_each_term(const SimulationSetup& setup, const kernels::StrainTableView& table,
+                   const std::vector<Point3>& positions, Visit visit) {
   for (std::size_t t = 0; t < setup.elements.terms.size(); ++t) {
-    const kernels::ElementTermView<double> view = element_term_view(setup.elements, t, &table);
+    kernels::ElementTermView<double> view = element_term_view(setup.elements, t, &table);
+    const NodalField nodal = nodal_field(setup.elements.geometry, view, positions);
+    nodal.attach(view);
     kernels::visit_element_term(view.element, view.law,
                                 [&](auto kind, auto element_law) { visit(kind, element_law, view); });
   }
@@ -59,8 +62,12 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
   const kernels::StrainTableView table = table_of(setup);
   // Per vertex the terms' node forces in the backends' order: for each node, term after term.
   std::vector<kernels::ElementTermView<double>> views;
+  std::vector<NodalField> nodal;
+  nodal.reserve(setup.elements.terms.size());
   for (std::size_t t = 0; t < setup.elements.terms.size(); ++t) {
     views.push_back(element_term_view(setup.elements, t, &table));
+    nodal.push_back(nodal_field(geometry, views.back(), positions));
+    nodal.back().attach(views.back());
     // The stress at the state's time t_n (the start-of-step constants: the convolution's stress exactly).
     const ElementTerm& term = setup.elements.terms[t];
     const int width = point_state_width(term);
@@ -100,7 +107,7 @@ std::vector<Point3> internal_forces(const SimulationSetup& setup, const std::vec
 double element_elastic_energy(const SimulationSetup& setup, const std::vector<Point3>& positions) {
   double energy = 0.0;
   const ElementGeometry& geometry = setup.elements.geometry;
-  for_each_term(setup, table_of(setup), [&](auto kind, auto element_law, const kernels::ElementTermView<double>& view) {
+  for_each_term(setup, table_of(setup), positions, [&](auto kind, auto element_law, const kernels::ElementTermView<double>& view) {
     using Element = decltype(kind);
     double term_energy = 0.0;
     for (std::size_t e = 0; e < geometry.size(); ++e) {
@@ -117,7 +124,7 @@ std::vector<ElementStressOutput> element_stress_outputs(const SimulationSetup& s
                                                         const std::vector<Point3>& positions) {
   std::vector<ElementStressOutput> out;
   const ElementGeometry& geometry = setup.elements.geometry;
-  for_each_term(setup, table_of(setup), [&](auto kind, auto element_law, const kernels::ElementTermView<double>& view) {
+  for_each_term(setup, table_of(setup), positions, [&](auto kind, auto element_law, const kernels::ElementTermView<double>& view) {
     using Element = decltype(kind);
     using Law = decltype(element_law);
     ElementStressOutput output{Law::kStressOutput, std::vector<double>(geometry.size())};

@@ -1,6 +1,7 @@
 #include <cmath>
 
 #include "diagnostics/number_format.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/integrate/simulation.h"
 
 namespace fmpc::sim {
@@ -65,6 +66,24 @@ bool validate_element_terms(const SimulationSetup& setup, const SourceRange& ran
                                    std::to_string(setup.rest_positions.size()) + " vertices");
       return false;
     }
+  // A kind with a nodal pass (kernels::element_kind_has_nodal_pass) runs its pass in the CPU engine's explicit
+  // integrators, its energy and forces in the host's sums and its tangent in the static solver; implicit Euler's
+  // system and the CUDA backend do not run it yet (docs/simulator.md, "Element kinds"), and a strain table's modulus
+  // would change its shear split (kernels/laws/isotropic_moduli.h, shear_part).
+  if (kernels::element_kind_has_nodal_pass(geometry.kind)) {
+    const std::string kind = std::string("fem.element ") + element_kind_row(geometry.kind).keyword;
+    if (setup.integrator == Integrator::ImplicitEuler) {
+      diagnostics.error(range, kind + " runs with the explicit integrators (semi_implicit_euler, velocity_verlet, "
+                                      "rk4) and the static solver, not yet with implicit_euler; choose one of those "
+                                      "or fem.element quadratic, which also does not lock");
+      return false;
+    }
+    if (setup.strain_stiffness) {
+      diagnostics.error(range, kind + " takes a constant Young's modulus, not a strain table; give "
+                                      "material.youngs_modulus or use fem.element quadratic");
+      return false;
+    }
+  }
   if (elements.terms.size() > static_cast<std::size_t>(kernels::kMostElementTerms)) {
     diagnostics.error(range, std::to_string(elements.terms.size()) + " element terms given; a model takes at most " +
                                  std::to_string(kernels::kMostElementTerms));

@@ -3,6 +3,7 @@
 #include "runtime/scene/scene_batch_run.h"
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
 #include "runtime/gpu/gpu_simulation.h"
+#include "runtime/fem/element_law_registry.h"
 #endif
 
 namespace fmpc::sim {
@@ -16,12 +17,18 @@ std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& 
   device = "this fmpc was built without CUDA";
 #endif
   const bool direct = scene.integrator == Integrator::ImplicitEuler && scene.solver.method == ImplicitMethod::Direct;
+  // An element kind with a nodal pass has no CUDA kernels yet (validate_setup's note).
+  const bool nodal = scene.model == ForceModel::Elements && kernels::element_kind_has_nodal_pass(scene.element_kind);
   switch (scene.backend) {
     case SceneBackend::Cpu:
       return BackendChoice{"cpu", ""};
     case SceneBackend::Auto:
       if (have_device && direct)
         return BackendChoice{"cpu", "backend auto: solver.method direct runs on the CPU only; running on the CPU"};
+      if (have_device && nodal)
+        return BackendChoice{"cpu", std::string("backend auto: fem.element ") +
+                                        element_kind_row(scene.element_kind).keyword +
+                                        " runs on the CPU only for now; running on the CPU"};
       if (have_device) return BackendChoice{"cuda", "backend auto: running on CUDA (" + device + ")"};
       return BackendChoice{"cpu", "backend auto: no GPU (" + device + "); running on the CPU"};
     case SceneBackend::Cuda:
@@ -29,6 +36,12 @@ std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& 
         diagnostics.error(scene.range_of("solver.method"),
                           "solver.method: the direct solver runs on the CPU only; this scene asks for backend cuda: "
                           "use method cg (or auto, the CG on CUDA) or backend cpu");
+        return std::nullopt;
+      }
+      if (nodal) {
+        diagnostics.error(scene.range_of("backend"), std::string("backend: fem.element ") +
+                                                         element_kind_row(scene.element_kind).keyword +
+                                                         " runs on the CPU only for now; use backend cpu or auto");
         return std::nullopt;
       }
       if (have_device) return BackendChoice{"cuda", ""};

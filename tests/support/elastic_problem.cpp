@@ -29,6 +29,8 @@ const char* model_name(ProblemModel model) {
       return "springs + volume term";
     case ProblemModel::QuadraticFem:
       return "quadratic FEM";
+    case ProblemModel::NodalPressureFem:
+      return "nodal pressure FEM";
   }
   return "?";
 }
@@ -39,9 +41,12 @@ std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, Prob
   mass.source = sim::MassSpec::Source::Density;
   mass.value = problem.density;
   std::optional<sim::SimulationSetup> setup;
-  if (model == ProblemModel::CorotationalFem || model == ProblemModel::QuadraticFem) {
+  if (model == ProblemModel::CorotationalFem || model == ProblemModel::QuadraticFem ||
+      model == ProblemModel::NodalPressureFem) {
     sim::FemModelSpec spec;
     if (model == ProblemModel::QuadraticFem) spec.element = sim::element_kind_by_keyword("quadratic")->kind;
+    if (model == ProblemModel::NodalPressureFem)
+      spec.element = sim::element_kind_by_keyword("linear_nodal_pressure")->kind;
     spec.youngs_modulus = {problem.youngs_modulus};
     spec.poisson_ratio = {problem.poisson_ratio};
     spec.mass = mass;

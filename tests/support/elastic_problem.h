@@ -34,6 +34,7 @@ enum class ProblemModel {
   SpringsLloyd,
   SpringsVolumeTerm,  // Van Gelder springs with the volume term calibrated to the problem's Poisson ratio
   QuadraticFem,       // the co-rotational law on quadratic (10-node) tetrahedra: edge midpoints added
+  NodalPressureFem,   // the co-rotational law on average nodal pressure tetrahedra (fem.element linear_nodal_pressure)
 };
 const char* model_name(ProblemModel model);
 

@@ -172,6 +172,22 @@ TEST_CASE(
         // The kind's test element: the tetrahedron's corners and the kind's further rest nodes.
         double rest[N][3];
         kernels::element_rest_nodes<Kind>(e.rest, rest);
+        // A kind with a nodal pass reads its nodes' pressure: for the lone element each node's patch is the element
+        // itself (theta_a = J - 1, p_a = lambda (J - 1)), refreshed at every position the checks evaluate.
+        double nodal_pressure[32] = {}, nodal_dilatation[32] = {};
+        view.nodal_pressure = nodal_pressure;
+        view.nodal_dilatation = nodal_dilatation;
+        const auto at = [&](const double(&positions)[N][3]) -> const double(&)[N][3] {
+          if constexpr (Kind::kNodalPressure) {
+            double share[3];
+            Kind::template nodal_shares<Law>(view, 0, positions, share);
+            for (int a = 0; a < N; ++a) {
+              nodal_dilatation[a] = share[0] / share[1];
+              nodal_pressure[a] = share[2] / share[1] * nodal_dilatation[a];
+            }
+          }
+          return positions;
+        };
         // An affine motion x = A X + b gives F = A at every point of every kind: the energy is V0 W(A).
         {
           const double A[9] = {1.05, 0.02, -0.03, 0.01, 0.97, 0.04, -0.02, 0.03, 1.02};
@@ -179,8 +195,15 @@ TEST_CASE(
           for (int a = 0; a < N; ++a)
             for (int i = 0; i < 3; ++i)
               x[a][i] = A[3 * i] * rest[a][0] + A[3 * i + 1] * rest[a][1] + A[3 * i + 2] * rest[a][2] + 0.01 * i;
-          const double expected = e.volume * Law::energy_density(Law::material(view, 0), A);
-          CHECK(Kind::template energy<Law>(view, 0, x) == Approx(expected).epsilon(1e-9));
+          // A kind with a nodal pass: the law's shear part plus lambda/2 (J - 1)^2.
+          double volumetric = 0.0;
+          if constexpr (Kind::kNodalPressure) {
+            const double change = kernels::determinant_minus_one(A);
+            volumetric = Law::volumetric_modulus(Law::material(view, 0)) * change * change / 2;
+          }
+          const double expected =
+              e.volume * (Law::energy_density(Kind::template point_material<Law>(view, 0), A) + volumetric);
+          CHECK(Kind::template energy<Law>(view, 0, at(x)) == Approx(expected).epsilon(1e-9));
         }
         const double(*undamped)[3] = nullptr;
         for (int n = 0; n < 50; ++n) {
@@ -188,7 +211,7 @@ TEST_CASE(
           double x[N][3], f[N][3];
           for (int a = 0; a < N; ++a)
             for (int i = 0; i < 3; ++i) x[a][i] = rest[a][i] * (1.0 + jitter(rng)) + 0.02;
-          Kind::template forces<Law>(view, 0, x, undamped, f);
+          Kind::template forces<Law>(view, 0, at(x), undamped, f);
           const double scale = 5000.0 * 1e-4;  // N: E l^2 for l = 1 cm
           const double h = 1e-9;
           for (int a = 0; a < N; ++a)
@@ -199,7 +222,8 @@ TEST_CASE(
               plus[a][i] += h;
               minus[a][i] -= h;
               const double gradient =
-                  (Kind::template energy<Law>(view, 0, plus) - Kind::template energy<Law>(view, 0, minus)) / (2 * h);
+                  (Kind::template energy<Law>(view, 0, at(plus)) - Kind::template energy<Law>(view, 0, at(minus))) /
+                  (2 * h);
               CHECK(std::abs(f[a][i] + gradient) < 1e-5 * scale);
             }
           double sum[3] = {0, 0, 0};
@@ -217,6 +241,16 @@ TEST_CASE(
         Eigen::Matrix<double, D, D> K;
         for (int r = 0; r < D; ++r)
           for (int c = 0; c < D; ++c) K(r, c) = whole[D * r + c];
+        const Eigen::Matrix<double, D, D> local = K;  // what the kind's action and diagonal give
+        // A kind with a nodal pass: its element-local tangent plus the nodal Gauss-Newton term, for the lone element
+        // lambda / V0 dV dV^T (model_tangent's B^T D B with B = dV/4 per node, D = lambda / (V0/4)).
+        if constexpr (Kind::kNodalPressure) {
+          double dV[N][3];
+          Kind::volume_gradient(view, 0, x, dV);
+          const double lambda = Law::volumetric_modulus(Law::material(view, 0));
+          for (int r = 0; r < D; ++r)
+            for (int c = 0; c < D; ++c) K(r, c) += lambda / e.volume * dV[r / 3][r % 3] * dV[c / 3][c % 3];
+        }
         const double largest_entry = K.cwiseAbs().maxCoeff();
         REQUIRE(largest_entry > 0.0);
         CHECK((K - K.transpose()).cwiseAbs().maxCoeff() < 1e-12 * largest_entry);
@@ -228,8 +262,8 @@ TEST_CASE(
             std::copy(&x[0][0], &x[0][0] + D, &minus[0][0]);
             plus[b][j] += h;
             minus[b][j] -= h;
-            Kind::template forces<Law>(view, 0, plus, undamped, fp);
-            Kind::template forces<Law>(view, 0, minus, undamped, fm);
+            Kind::template forces<Law>(view, 0, at(plus), undamped, fp);
+            Kind::template forces<Law>(view, 0, at(minus), undamped, fm);
             for (int a = 0; a < N; ++a)
               for (int i = 0; i < 3; ++i)
                 CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * largest_entry);
@@ -240,10 +274,10 @@ TEST_CASE(
           for (int i = 0; i < 3; ++i) p[a][i] = pv[3 * a + i] = std::sin(1.0 + 3 * a + i);
         Kind::template stiffness_action<Law>(view, 0, lin, p, out);
         Kind::template stiffness_diagonal<Law>(view, 0, lin, diagonal);
-        const Eigen::Matrix<double, D, 1> product = K * pv;
+        const Eigen::Matrix<double, D, 1> product = local * pv;
         for (int r = 0; r < D; ++r) {
           CHECK(out[r / 3][r % 3] == Approx(product[r]).margin(1e-12 * largest_entry));
-          CHECK(diagonal[r / 3][r % 3] == K(r, r));
+          CHECK(diagonal[r / 3][r % 3] == local(r, r));
         }
         const double eigenvalue =
             Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>>(K).eigenvalues().maxCoeff();
@@ -253,7 +287,7 @@ TEST_CASE(
         CHECK(bound <= 4 * eigenvalue);  // a bound, not a guess: within the norms' known slack
         // At rest: no force, no energy, no stress output.
         double f[N][3];
-        Kind::template forces<Law>(view, 0, x, undamped, f);
+        Kind::template forces<Law>(view, 0, at(x), undamped, f);
         for (int a = 0; a < N; ++a)
           for (int i = 0; i < 3; ++i) CHECK(std::abs(f[a][i]) < 1e-12 * 5000.0 * 1e-4);
         CHECK(std::abs(Kind::template energy<Law>(view, 0, x)) < 1e-18);

@@ -648,8 +648,8 @@ TEST_CASE("model: fem takes its law and element kind from the registries; corota
         "write model: fem (model: corotational_fem is fem: {law: corotational, element: linear})");
 }
 
-TEST_CASE("each element kind's Poisson limit and locking warning: linear up to 0.499 warned above 0.45, quadratic to "
-          "0.4999",
+TEST_CASE("each element kind's Poisson limit and locking warning: linear up to 0.499 warned above 0.45, quadratic and "
+          "nodal pressure to 0.4999",
           "[scene][fem][quadratic]") {
   const auto build = [](const std::string& kind, const std::string& nu, DiagnosticList& diagnostics) {
     const Scene scene = parse_text("model: fem\nfem: {element: " + kind +
@@ -667,6 +667,7 @@ TEST_CASE("each element kind's Poisson limit and locking warning: linear up to 0
   DiagnosticList quiet;
   CHECK(build("linear", "0.45", quiet));
   CHECK(build("quadratic", "0.4999", quiet));
+  CHECK(build("linear_nodal_pressure", "0.4999", quiet));
   CHECK(quiet.empty());
   DiagnosticList locking;
   CHECK(build("linear", "0.49", locking));
@@ -681,7 +682,8 @@ TEST_CASE("each element kind's Poisson limit and locking warning: linear up to 0
   CHECK(!build("linear", "0.4995", refused));
   CHECK(located(refused) ==
         std::vector<std::string>{"5:46: material.poisson_ratio: 0.4995 is above 0.499, the most fem.element linear "
-                                 "takes; use fem: {element: quadratic} (up to 0.4999) for nearly incompressible tissue"});
+                                 "takes; use fem: {element: quadratic} or fem: {element: linear_nodal_pressure} (up to "
+                                 "0.4999) for nearly incompressible tissue"});
 }
 
 TEST_CASE("implicit Euler's solves in summary.json and the time series; steps at the cap warned once with the count",

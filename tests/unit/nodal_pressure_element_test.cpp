@@ -1,0 +1,240 @@
+// The average nodal pressure tetrahedron (fem: {element: linear_nodal_pressure}; kernels/elements/
+// linear_nodal_pressure.h, docs/simulator.md): the patch test (a homogeneous deformation is an equilibrium, and the
+// static solver reproduces one prescribed on the boundary), its energy against the linear element's (equal for
+// stable neo-Hookean in any homogeneous deformation, for every law at nu = 0, to third order in the strain for the
+// co-rotational law), the explicit CPU path (no inversion growth, the same bits for any thread count), and what the
+// scene refuses. The bending case where linear tetrahedra lock is in tests/unit/validation_test.cpp.
+#include <Eigen/Dense>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "runtime/fem/element_law_registry.h"
+#include "runtime/fem/fem_model_builder.h"
+#include "runtime/integrate/model_tangent.h"
+#include "runtime/integrate/simulation.h"
+#include "runtime/integrate/static_equilibrium.h"
+#include "runtime/mesh/generated_mesh.h"
+
+using namespace fmpc;
+using namespace fmpc::sim;
+
+namespace {
+
+// A 3 x 3 x 3-cell box of 3 cm (a vertex inside, every element on or near the boundary).
+Mesh nodal_test_box(int cells) {
+  DiagnosticList diagnostics;
+  BoxSpec box;
+  box.cells_x = box.cells_y = box.cells_z = cells;
+  box.size = {0.03, 0.03, 0.03};
+  return generate_box(box, diagnostics);
+}
+
+SimulationSetup nodal_test_model(const Mesh& mesh, const char* law, const char* element, double nu) {
+  DiagnosticList diagnostics;
+  FemModelSpec spec;
+  spec.law = fem_law_by_keyword(law)->law;
+  spec.element = element_kind_by_keyword(element)->kind;
+  spec.youngs_modulus = {5000.0};
+  spec.poisson_ratio = {nu};
+  spec.mass.value = 1000.0;
+  auto setup = build_fem_model(mesh, spec, diagnostics);
+  INFO(render_all(diagnostics, {}));
+  REQUIRE(setup);
+  setup->precision = Precision::Double;
+  return *setup;
+}
+
+// x = A X + b at every vertex.
+std::vector<Point3> affine(const std::vector<Point3>& rest, const double A[9]) {
+  std::vector<Point3> out(rest.size());
+  for (std::size_t v = 0; v < rest.size(); ++v)
+    for (std::size_t i = 0; i < 3; ++i)
+      out[v][i] = A[3 * i] * rest[v][0] + A[3 * i + 1] * rest[v][1] + A[3 * i + 2] * rest[v][2] + 0.001 * static_cast<double>(i);
+  return out;
+}
+
+bool on_boundary(const Point3& p) {
+  for (std::size_t i = 0; i < 3; ++i)
+    if (std::abs(p[i]) < 1e-12 || std::abs(p[i] - 0.03) < 1e-12) return true;
+  return false;
+}
+
+std::vector<std::int32_t> all_vertices(std::size_t n) {
+  std::vector<std::int32_t> out(n);
+  for (std::size_t v = 0; v < n; ++v) out[v] = static_cast<std::int32_t>(v);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("nodal pressure tetrahedra pass the patch test", "[fem][nodal]") {
+  const Mesh mesh = nodal_test_box(3);
+  // A finite homogeneous deformation (10 % stretch, shear, 6 % volume change): every element has the same F, every
+  // node the same theta = J - 1, so the interior nodes' forces cancel as the linear element's do.
+  const double A[9] = {1.10, 0.05, -0.02, 0.01, 0.97, 0.04, -0.03, 0.02, 0.99};
+  for (const char* law : {"corotational", "stable_neo_hookean"})
+    for (const double nu : {0.3, 0.49, 0.4999}) {
+      INFO(law << " at nu " << nu);
+      const SimulationSetup setup = nodal_test_model(mesh, law, "linear_nodal_pressure", nu);
+      const std::vector<Point3> x = affine(setup.rest_positions, A);
+      const std::vector<Point3> zero(x.size(), Point3{0.0, 0.0, 0.0});
+      const std::vector<Point3> f = internal_forces(setup, x, zero, {}, all_vertices(x.size()));
+      double largest = 0.0, interior = 0.0;
+      for (std::size_t v = 0; v < x.size(); ++v)
+        for (std::size_t i = 0; i < 3; ++i) {
+          largest = std::max(largest, std::abs(f[v][i]));
+          if (!on_boundary(setup.rest_positions[v])) interior = std::max(interior, std::abs(f[v][i]));
+        }
+      REQUIRE(largest > 0.0);
+      CHECK(interior < 1e-12 * largest);
+    }
+  // The static solver with the boundary moved affinely (small strain) puts every interior vertex at the affine
+  // position.
+  const double G[9] = {1.001, 0.0004, -0.0002, 0.0001, 0.9993, 0.0003, -0.0003, 0.0002, 1.0008};
+  for (const double nu : {0.3, 0.4999}) {
+    INFO("static patch test at nu " << nu);
+    SimulationSetup setup = nodal_test_model(mesh, "corotational", "linear_nodal_pressure", nu);
+    const std::vector<Point3> target = affine(setup.rest_positions, G);
+    setup.initial_positions = setup.rest_positions;
+    setup.fixed_axes.assign(setup.rest_positions.size(), 0);
+    for (std::size_t v = 0; v < target.size(); ++v)
+      if (on_boundary(setup.rest_positions[v])) {
+        setup.fixed_axes[v] = 7;
+        setup.initial_positions[v] = target[v];
+      }
+    DiagnosticList diagnostics;
+    StaticOptions options;
+    options.linear = true;
+    const auto result = static_equilibrium(setup, options, diagnostics);
+    INFO(render_all(diagnostics, {}));
+    REQUIRE(result);
+    double error = 0.0;
+    for (std::size_t v = 0; v < target.size(); ++v)
+      for (std::size_t i = 0; i < 3; ++i) error = std::max(error, std::abs(result->positions[v][i] - target[v][i]));
+    CHECK(error < 1e-12);
+  }
+}
+
+TEST_CASE("nodal pressure tetrahedra: energy and forces against the linear element's", "[fem][nodal]") {
+  const Mesh mesh = nodal_test_box(2);
+  const double A[9] = {1.20, 0.05, -0.02, 0.01, 0.90, 0.04, -0.03, 0.02, 1.05};
+  // Stable neo-Hookean splits exactly (its lambda' (alpha - 1) = mu for every lambda): in a homogeneous deformation
+  // the element's energy is the linear element's at any strain.
+  for (const double nu : {0.3, 0.499}) {  // linear tetrahedra take up to 0.499
+    const SimulationSetup nodal = nodal_test_model(mesh, "stable_neo_hookean", "linear_nodal_pressure", nu);
+    const SimulationSetup linear = nodal_test_model(mesh, "stable_neo_hookean", "linear", nu);
+    const std::vector<Point3> x = affine(nodal.rest_positions, A);
+    CHECK(elastic_energy(nodal, x) == Approx(elastic_energy(linear, x)).epsilon(1e-12));
+  }
+  // The co-rotational law's volumetric energy is lambda/2 tr(eps)^2 on the linear element, lambda/2 (J - 1)^2 here:
+  // equal to second order, so at strain s the energies differ by O(s) relative.
+  for (const double strain : {1e-3, 1e-4}) {
+    const double B[9] = {1 + strain, 0.5 * strain, 0, 0, 1 - 0.3 * strain, 0.2 * strain, 0, 0, 1 + 0.7 * strain};
+    const SimulationSetup nodal = nodal_test_model(mesh, "corotational", "linear_nodal_pressure", 0.45);
+    const SimulationSetup linear = nodal_test_model(mesh, "corotational", "linear", 0.45);
+    const std::vector<Point3> x = affine(nodal.rest_positions, B);
+    const double relative = elastic_energy(nodal, x) / elastic_energy(linear, x) - 1;
+    INFO("strain " << strain << ": relative difference " << relative);
+    CHECK(std::abs(relative) < 3 * strain);
+  }
+  // At nu = 0 lambda = 0: no volumetric part, the element is the linear one for any deformation, bit for bit.
+  std::mt19937_64 rng(26);
+  std::uniform_real_distribution<double> jitter(-0.002, 0.002);
+  for (const char* law : {"corotational", "stable_neo_hookean"}) {
+    INFO(law);
+    const SimulationSetup nodal = nodal_test_model(mesh, law, "linear_nodal_pressure", 0.0);
+    const SimulationSetup linear = nodal_test_model(mesh, law, "linear", 0.0);
+    std::vector<Point3> x = nodal.rest_positions;
+    for (Point3& p : x)
+      for (double& c : p) c += jitter(rng);
+    const std::vector<Point3> zero(x.size(), Point3{0.0, 0.0, 0.0});
+    CHECK(elastic_energy(nodal, x) == elastic_energy(linear, x));
+    CHECK(internal_forces(nodal, x, zero, {}, all_vertices(x.size())) ==
+          internal_forces(linear, x, zero, {}, all_vertices(x.size())));
+  }
+}
+
+TEST_CASE("nodal pressure tetrahedra on the CPU engine: a block resting on its base keeps every element positive, "
+          "the same bits for any thread count",
+          "[fem][nodal]") {
+  // A 2 cm cube of 4^3 cells (E = 1 kPa, nu = 0.4999, stable neo-Hookean) dropped under gravity onto its fixed
+  // base, semi-implicit Euler at the automatic step for 0.1 s, float, lightly damped.
+  BoxSpec box;
+  box.cells_x = box.cells_y = box.cells_z = 4;
+  box.size = {0.02, 0.02, 0.02};
+  DiagnosticList diagnostics;
+  const Mesh mesh = generate_box(box, diagnostics);
+  FemModelSpec spec;
+  spec.law = fem_law_by_keyword("stable_neo_hookean")->law;
+  spec.element = element_kind_by_keyword("linear_nodal_pressure")->kind;
+  spec.youngs_modulus = {1000.0};
+  spec.poisson_ratio = {0.4999};
+  spec.mass.value = 1000.0;
+  spec.damping_ratio = 0.1;
+  auto setup = build_fem_model(mesh, spec, diagnostics);
+  REQUIRE(setup);
+  setup->gravity = {0.0, 0.0, -9.81};
+  setup->fixed_axes.assign(setup->rest_positions.size(), 0);
+  for (std::size_t v = 0; v < setup->rest_positions.size(); ++v)
+    if (std::abs(setup->rest_positions[v][2]) < 1e-12) setup->fixed_axes[v] = 7;
+  setup->precision = Precision::Float;
+  std::vector<std::vector<Point3>> finals;
+  for (const unsigned threads : {1u, 2u}) {
+    setup->threads = threads;
+    auto simulation = Simulation::create(*setup, diagnostics);
+    INFO(render_all(diagnostics, {}));
+    REQUIRE(simulation);
+    const double dt = simulation->stability().time_step;
+    const auto steps = static_cast<std::size_t>(std::ceil(0.1 / dt));
+    REQUIRE(simulation->advance(steps, diagnostics, 32));
+    CHECK(simulation->inversions().largest_count == 0);
+    finals.push_back(simulation->positions(diagnostics));
+    double sag = 0.0;
+    for (std::size_t v = 0; v < finals.back().size(); ++v)
+      sag = std::min(sag, finals.back()[v][2] - setup->rest_positions[v][2]);
+    INFO("sag " << sag << " m after " << steps << " steps");
+    CHECK(sag < -1e-5);  // it moved
+    CHECK(sag > -0.01);  // and did not collapse
+  }
+  CHECK(finals[0] == finals[1]);
+}
+
+TEST_CASE("nodal pressure tetrahedra refuse what they do not run yet, naming the choice", "[fem][nodal]") {
+  const Mesh mesh = nodal_test_box(1);
+  SimulationSetup setup = nodal_test_model(mesh, "corotational", "linear_nodal_pressure", 0.49);
+  setup.integrator = Integrator::ImplicitEuler;
+  DiagnosticList diagnostics;
+  CHECK(!Simulation::create(setup, diagnostics));
+  CHECK(render_all(diagnostics, {}).find("fem.element linear_nodal_pressure runs with the explicit integrators") !=
+        std::string::npos);
+}
+
+TEST_CASE("nodal pressure tetrahedra: the static solver's tangent is the forces' derivative at rest", "[fem][nodal]") {
+  // model_tangent's element blocks plus the nodal pass's B^T D B, against central differences of internal_forces on
+  // a 2 x 2 x 2-cell box (every vertex's patch differs).
+  const Mesh mesh = nodal_test_box(2);
+  for (const char* law : {"corotational", "stable_neo_hookean"}) {
+    INFO(law);
+    const SimulationSetup setup = nodal_test_model(mesh, law, "linear_nodal_pressure", 0.45);
+    const std::vector<Point3>& rest = setup.rest_positions;
+    const std::size_t n = rest.size();
+    const Eigen::MatrixXd K = Eigen::MatrixXd(model_tangent(setup, rest, {}).stiffness);
+    const std::vector<Point3> zero(n, Point3{0.0, 0.0, 0.0});
+    const double h = 1e-8;
+    double largest = K.cwiseAbs().maxCoeff(), worst = 0.0;
+    for (std::size_t column = 0; column < 3 * n; ++column) {
+      std::vector<Point3> plus = rest, minus = rest;
+      plus[column / 3][column % 3] += h;
+      minus[column / 3][column % 3] -= h;
+      const std::vector<Point3> fp = internal_forces(setup, plus, zero, {}, all_vertices(n));
+      const std::vector<Point3> fm = internal_forces(setup, minus, zero, {}, all_vertices(n));
+      for (std::size_t row = 0; row < 3 * n; ++row) {
+        const double derivative = -(fp[row / 3][row % 3] - fm[row / 3][row % 3]) / (2 * h);
+        worst = std::max(worst, std::abs(derivative - K(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(column))));
+      }
+    }
+    CHECK(worst < 1e-5 * largest);
+  }
+}
