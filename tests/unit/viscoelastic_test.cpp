@@ -234,6 +234,10 @@ TEST_CASE("every element kind with every law: each material point keeps its own 
         for (int p = 0; p < kernels::kMostLawParameters; ++p)
           view.parameter[p] = term.parameter[p].empty() ? nullptr : term.parameter[p].data();
         view.state = {state.data(), point_state_width(term), points};
+        // A kind with a nodal pass: its nodal pressure held at zero, so that its forces are the shear part's, which
+        // carries the Prony series (the volumetric part is elastic).
+        const std::vector<double> no_pressure(2 * N, 0.0);
+        view.nodal_pressure = view.nodal_dilatation = no_pressure.data();
         // x = X + u(X), u quadratic in X (so that a quadratic element's points see different F), larger on element 1.
         std::vector<double> x(2 * N), y(2 * N), z(2 * N), zero(2 * N, 0.0);
         double at[2][N][3];
@@ -254,6 +258,13 @@ TEST_CASE("every element kind with every law: each material point keeps its own 
         };
         double elastic[2][N][3];
         for (int e = 0; e < 2; ++e) forces(e, elastic[e]);  // the state is zero: the law's own stress
+        // A purely volumetric law (the volume term) has no shear part on a kind with a nodal pass: nothing to relax.
+        if (Kind::kNodalPressure) {
+          bool moves = false;
+          for (int a = 0; a < N; ++a)
+            for (int i = 0; i < 3; ++i) moves = moves || elastic[1][a][i] != 0.0;
+          if (!moves) return;
+        }
         const auto update = [&](double dt) {
           kernels::ElementTermView<double> constants = view;
           constants.prony = prony_constants(term.prony, dt, false);
@@ -344,6 +355,8 @@ TEST_CASE("a viscoelastic FEM's per-point state is saved and restored with the C
                                           Integrator::RungeKutta4, Integrator::ImplicitEuler}) {
         INFO(kind.keyword << " elements, " << static_cast<int>(integrator) << ", "
                           << (precision == Precision::Float ? "float" : "double"));
+        // A kind with a nodal pass does not run under implicit Euler yet (validate_setup refuses it).
+        if (integrator == Integrator::ImplicitEuler && kernels::element_kind_has_nodal_pass(kind.kind)) continue;
         SimulationSetup scene = *setup;
         scene.precision = precision;
         scene.integrator = integrator;
