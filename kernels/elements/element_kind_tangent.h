@@ -3,7 +3,6 @@
 // out)): a column of the tangent, its diagonal (Jacobi's preconditioner) and the whole matrix (tests, small direct
 // solves). A kind derives from ElementKindTangent<Kind> (the curiously recurring template pattern).
 #include "kernels/fmpc_hd.h"
-#include "kernels/tetrahedron_math.h"
 
 namespace fmpc::kernels {
 
@@ -42,29 +41,5 @@ struct ElementKindTangent {
       }
   }
 };
-
-// An upper bound of the largest eigenvalue of a 4-node tetrahedron's rest stiffness (N/m) from its Dm^-1, volume V0
-// and Lame parameters: the smaller of the Frobenius norm and the largest absolute row sum (Gershgorin) of the 12 x 12
-// matrix K_ab = V0 (lambda g_a g_b^T + mu g_b g_a^T + mu (g_a . g_b) I), both of which bound the spectral radius of
-// a symmetric matrix. The kinds on four corners share it.
-FMPC_HD double corner_stiffness_bound(const double* rest_inverse, double volume, double mu, double lambda) {
-  double g[4][3];
-  shape_gradients(rest_inverse, g);
-  double frobenius = 0.0, row_max = 0.0;
-  double rows[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
-  for (int a = 0; a < 4; ++a)
-    for (int b = 0; b < 4; ++b) {
-      const double gg = dot3(g[a], g[b]);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-          const double entry = volume * (lambda * g[a][i] * g[b][j] + mu * g[b][i] * g[a][j] + (i == j ? mu * gg : 0.0));
-          frobenius += entry * entry;
-          rows[3 * a + i] += entry < 0.0 ? -entry : entry;
-        }
-    }
-  for (int r = 0; r < 12; ++r) row_max = rows[r] > row_max ? rows[r] : row_max;
-  frobenius = square_root(frobenius);
-  return frobenius < row_max ? frobenius : row_max;
-}
 
 }  // namespace fmpc::kernels

@@ -25,28 +25,19 @@
 // corner slots, each vertex sums its own), then the element pass reads the nodal pressure through
 // ElementTermView::nodal_pressure (and the energy nodal_dilatation). Kinds with kNodalPressure are the only ones the
 // engines run that pass for. The Prony series (viscoelasticity) and the stiffness damping act on the shear part.
-#include "kernels/element_term.h"
-#include "kernels/elements/element_kind_tangent.h"
+#include "kernels/elements/corner_tetrahedron.h"
 
 namespace fmpc::kernels {
 
-struct LinearNodalPressure : ElementKindTangent<LinearNodalPressure> {
-  static constexpr int kNodes = 4;
-  static constexpr int kEdgeNodes = 0;
-  static constexpr double kMassFraction[kNodes] = {0.25, 0.25, 0.25, 0.25};
-  static constexpr int kPoints = 1;
+struct LinearNodalPressure : CornerTetrahedron<LinearNodalPressure> {
   static constexpr bool kNodalPressure = true;
 
-  // What the element integrates per point (the Prony series' elastic stress, the damping): the law's shear part.
+  // What the element integrates per point (the Prony series' elastic stress, the damping, the tangent's element part,
+  // the stress output: the pressure is hydrostatic in the Cauchy stress, p cof(F) F^T / J = p I, so the von Mises
+  // stress the laws write is the shear part's alone): the law's shear part.
   template <typename Law, typename Real>
   static FMPC_HD typename Law::template Material<Real> point_material(const ElementTermView<Real>& t, int e) {
     return Law::shear_part(Law::material(t, e));
-  }
-
-  template <typename Real>
-  static FMPC_HD void deformation_gradients(const ElementTermView<Real>& t, int e, const Real x[kNodes][3],
-                                            Real F[kPoints][9]) {
-    corner_gradient(x, t.rest_inverse + 9 * e, F[0]);
   }
 
   // Element e's share of each corner's sums, the same at every corner: (V - V0) / 4, V0 / 4 and lambda V0 / 4.
@@ -68,56 +59,29 @@ struct LinearNodalPressure : ElementKindTangent<LinearNodalPressure> {
     return ((field[node[0]] + field[node[1]]) + (field[node[2]] + field[node[3]])) / Real(4);
   }
 
-  template <typename Law, typename Real>
-  static FMPC_HD void forces(const ElementTermView<Real>& t, int e, const Real x[kNodes][3], const Real (*v)[3],
-                             Real out[kNodes][3]) {
-    const Real* rest_inverse = t.rest_inverse + 9 * e;
-    const typename Law::template Material<Real> shear = point_material<Law>(t, e);
-    Real g[4][3], F[9], P[9], C[9];
-    shape_gradients(rest_inverse, g);
-    corner_gradient(x, rest_inverse, F);
-    // Two calls with a constant pointer each, as LinearTetrahedron::forces says why.
-    if (v) {
-      Real F_rate[9];
-      corner_gradient(v, rest_inverse, F_rate);
-      point_first_piola_of<Law>(shear, t, kPoints * e, F, F_rate, P);
-    } else {
-      point_first_piola_of<Law>(shear, t, kPoints * e, F, static_cast<const Real*>(nullptr), P);
-    }
+  // P += p_e cof(F), p_e the mean nodal pressure: the corner forces -p_e dV_e/dx_b.
+  template <typename Real>
+  static FMPC_HD void add_volumetric_stress(const ElementTermView<Real>& t, int e, const Real* F, Real* P) {
     const Real pressure = corner_mean(t, e, t.nodal_pressure);
+    Real C[9];
     cofactor3(F, C);
     for (int i = 0; i < 9; ++i) P[i] += pressure * C[i];
-    corner_forces_from_stress(P, g, t.rest_volume[e], out);
   }
 
-  // Implicit Euler's and the static solver's element-local part: the shear part's tangent. The nodal part (the
-  // Gauss-Newton term sum_a V0_a K_a dtheta_a dtheta_a^T of the volumetric energy) couples each node's patch and is
-  // added by the assembly that runs the nodal pass (runtime/integrate/model_tangent.cpp, nodal_pressure_tangent).
-  template <typename Law>
-  struct Linearisation {
-    typename Law::Linearisation point;
-  };
-
-  template <typename Law>
-  static FMPC_HD void linearise(const ElementTermView<double>& t, int e, const double x[kNodes][3],
-                                Linearisation<Law>& lin) {
-    double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
-    Law::linearise(point_material<Law>(t, e), F, lin.point);
+  // The element's share of the nodal energy per rest volume: V0_a = sum_e V0_e / 4, so sum_a V0_a K_a theta_a^2 / 2 =
+  // sum_e V0_e times the mean over e's corners of p_a theta_a / 2.
+  static FMPC_HD double volumetric_energy_density(const ElementTermView<double>& t, int e) {
+    const int* node = t.corners + kNodes * e;
+    double nodal = 0.0;
+    for (int a = 0; a < kNodes; ++a) nodal += t.nodal_pressure[node[a]] * t.nodal_dilatation[node[a]];
+    return nodal / 8.0;
   }
 
-  template <typename Law>
-  static FMPC_HD void stiffness_action(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
-                                       const double p[kNodes][3], double out[kNodes][3]) {
-    const double* rest_inverse = t.rest_inverse + 9 * e;
-    double g[4][3], dF[9], dP[9];
-    shape_gradients(rest_inverse, g);
-    corner_gradient(p, rest_inverse, dF);
-    Law::stress_differential(point_material<Law>(t, e), lin.point, dF, dP);
-    corner_forces_from_stress(dP, g, -t.rest_volume[e], out);
-  }
-
-  // dV_e/dx_b = V0 cof(F) g_b at positions x: the element's row of the nodal pass's volume gradient.
+  // dV_e/dx_b = V0 cof(F) g_b at positions x: the element's row of the nodal pass's volume gradient (the static
+  // solver's B^T D B, runtime/integrate/model_tangent.cpp; the element's own tangent, stiffness_action, is the shear
+  // part's). The stable step's bound is the linear tetrahedron's at the law's rest mu and lambda: by Cauchy-Schwarz,
+  // V0_a theta_a^2 <= sum over a's elements of V0_e (dV_e / V0_e)^2 / 4, so the averaged volumetric energy never
+  // exceeds the linear element's lambda/2 sum_e V0_e (dV_e / V0_e)^2, and neither does the largest eigenvalue.
   static FMPC_HD void volume_gradient(const ElementTermView<double>& t, int e, const double x[kNodes][3],
                                       double out[kNodes][3]) {
     const double* rest_inverse = t.rest_inverse + 9 * e;
@@ -126,43 +90,6 @@ struct LinearNodalPressure : ElementKindTangent<LinearNodalPressure> {
     corner_gradient(x, rest_inverse, F);
     cofactor3(F, C);
     corner_forces_from_stress(C, g, -t.rest_volume[e], out);
-  }
-
-  // The shear energy plus the element's share of the nodal energy: V0_a = sum_e V0_e / 4, so sum_a V0_a K_a
-  // theta_a^2 / 2 = sum_e V0_e mean over e's corners of p_a theta_a / 2.
-  template <typename Law>
-  static FMPC_HD double energy(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
-    double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
-    const int* node = t.corners + kNodes * e;
-    double nodal = 0.0;
-    for (int a = 0; a < kNodes; ++a) nodal += t.nodal_pressure[node[a]] * t.nodal_dilatation[node[a]];
-    return t.rest_volume[e] * (Law::energy_density(point_material<Law>(t, e), F) + nodal / 8.0);
-  }
-
-  // The shear part's output: the pressure is hydrostatic in the Cauchy stress (p cof(F) F^T / J = p I), so the von
-  // Mises stress the laws write is the shear part's alone.
-  template <typename Law>
-  static FMPC_HD double stress_output(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
-    double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
-    return Law::stress_output(point_material<Law>(t, e), F);
-  }
-
-  // Inverted or flat where its signed volume is not positive, as the linear tetrahedron.
-  template <typename Real>
-  static FMPC_HD bool inverted(const Real x[kNodes][3]) {
-    return !(tetrahedron_volume(x) > Real(0));
-  }
-
-  // The linear tetrahedron's bound (corner_stiffness_bound) at the law's rest mu and lambda bounds this kind's too: by Cauchy-Schwarz,
-  // V0_a theta_a^2 <= sum over a's elements of V0_e (dV_e / V0_e)^2 / 4, so the averaged volumetric energy never
-  // exceeds the linear element's lambda/2 sum_e V0_e (dV_e / V0_e)^2, and neither does the largest eigenvalue.
-  template <typename Law>
-  static FMPC_HD double stiffness_bound(const ElementTermView<double>& t, int e) {
-    double mu, lambda;
-    Law::rest_lame(Law::material(t, e), mu, lambda);
-    return corner_stiffness_bound(t.rest_inverse + 9 * e, t.rest_volume[e], mu, lambda);
   }
 };
 

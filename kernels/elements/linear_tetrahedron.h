@@ -1,20 +1,13 @@
 #pragma once
-// The linear (4-node) tetrahedron as an element kind: constant shape-function gradients g_a (rows of Dm^-1, g_0 =
-// -(g_1 + g_2 + g_3)), one material point, F = sum_a x_a g_a^T and corner forces f_a = -V0 P(F) g_a (Bonet & Wood,
-// "Nonlinear Continuum Mechanics for Finite Element Analysis", 2nd ed., 9.4). Every function is generic over the
-// constitutive law (kernels/laws/: first_piola, energy_density, linearise and stress_differential, rest_lame,
-// stress_output); the element kinds are listed in kernels/element_laws.h.
-#include "kernels/element_term.h"
-#include "kernels/elements/element_kind_tangent.h"
+// The linear (4-node) tetrahedron as an element kind: one material point, F = sum_a x_a g_a^T and corner forces
+// f_a = -V0 P(F) g_a (kernels/elements/corner_tetrahedron.h), the law's own material at the point. Every function is
+// generic over the constitutive law (kernels/laws/: first_piola, energy_density, linearise and stress_differential,
+// rest_lame, stress_output); the element kinds are listed in kernels/element_laws.h.
+#include "kernels/elements/corner_tetrahedron.h"
 
 namespace fmpc::kernels {
 
-struct LinearTetrahedron : ElementKindTangent<LinearTetrahedron> {
-  static constexpr int kNodes = 4;
-  static constexpr int kEdgeNodes = 0;  // nodes beyond the corners, one per edge (kernels/element_term.h)
-  // Each corner's lumped mass as a fraction of the element's (rho V0): a quarter (the consistent mass's row sums).
-  static constexpr double kMassFraction[kNodes] = {0.25, 0.25, 0.25, 0.25};
-  static constexpr int kPoints = 1;  // material points (per-point state: kernels/prony_viscoelasticity.h)
+struct LinearTetrahedron : CornerTetrahedron<LinearTetrahedron> {
   // Whether the element pass reads a nodal pass's pressure (kernels/elements/linear_nodal_pressure.h): no.
   static constexpr bool kNodalPressure = false;
 
@@ -24,92 +17,10 @@ struct LinearTetrahedron : ElementKindTangent<LinearTetrahedron> {
     return Law::material(t, e);
   }
 
-  // F at each material point from node positions x.
+  // Nothing beyond the law's stress and energy.
   template <typename Real>
-  static FMPC_HD void deformation_gradients(const ElementTermView<Real>& t, int e, const Real x[kNodes][3],
-                                            Real F[kPoints][9]) {
-    corner_gradient(x, t.rest_inverse + 9 * e, F[0]);
-  }
-
-  // The element's forces on its nodes at positions x and, where the term is damped (v non-null), velocities v.
-  template <typename Law, typename Real>
-  static FMPC_HD void forces(const ElementTermView<Real>& t, int e, const Real x[kNodes][3], const Real (*v)[3],
-                             Real out[kNodes][3]) {
-    const Real* rest_inverse = t.rest_inverse + 9 * e;
-    Real g[4][3], F[9], P[9];
-    shape_gradients(rest_inverse, g);
-    corner_gradient(x, rest_inverse, F);
-    // Two calls, not one with `v ? F_rate : nullptr`: a pointer chosen at run time keeps F_rate, and the velocities
-    // behind v, in local memory on the GPU (ptxas: a 208-byte stack frame in float, the element pass 24% slower).
-    if (v) {
-      Real F_rate[9];
-      corner_gradient(v, rest_inverse, F_rate);
-      point_first_piola<Law>(t, e, kPoints * e, F, F_rate, P);
-    } else {
-      point_first_piola<Law>(t, e, kPoints * e, F, static_cast<const Real*>(nullptr), P);
-    }
-    corner_forces_from_stress(P, g, t.rest_volume[e], out);
-  }
-
-  // What implicit Euler holds over a step: the law's linearisation at the element's point.
-  template <typename Law>
-  struct Linearisation {
-    typename Law::Linearisation point;
-  };
-
-  template <typename Law>
-  static FMPC_HD void linearise(const ElementTermView<double>& t, int e, const double x[kNodes][3],
-                                Linearisation<Law>& lin) {
-    double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
-    Law::linearise(Law::material(t, e), F, lin.point);
-  }
-
-  // The tangent stiffness applied to a nodal field p [node][axis]: out_a = sum_b K_ab p_b = V0 dP(dF) g_a with
-  // dF = sum_b p_b g_b^T.
-  template <typename Law>
-  static FMPC_HD void stiffness_action(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
-                                       const double p[kNodes][3], double out[kNodes][3]) {
-    const double* rest_inverse = t.rest_inverse + 9 * e;
-    double g[4][3], dF[9], dP[9];
-    shape_gradients(rest_inverse, g);
-    corner_gradient(p, rest_inverse, dF);
-    Law::stress_differential(Law::material(t, e), lin.point, dF, dP);
-    for (int a = 0; a < kNodes; ++a)
-      for (int i = 0; i < 3; ++i)
-        out[a][i] = t.rest_volume[e] * (dP[3 * i] * g[a][0] + dP[3 * i + 1] * g[a][1] + dP[3 * i + 2] * g[a][2]);
-  }
-
-  // Elastic energy at positions x (J).
-  template <typename Law>
-  static FMPC_HD double energy(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
-    double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
-    return t.rest_volume[e] * Law::energy_density(Law::material(t, e), F);
-  }
-
-  // The law's stress output (its kStressOutput) at positions x.
-  template <typename Law>
-  static FMPC_HD double stress_output(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
-    double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
-    return Law::stress_output(Law::material(t, e), F);
-  }
-
-  // Whether the element is inverted or flat at x (signed volume <= 0).
-  template <typename Real>
-  static FMPC_HD bool inverted(const Real x[kNodes][3]) {
-    return !(tetrahedron_volume(x) > Real(0));
-  }
-
-  // An upper bound of the largest eigenvalue of the element's rest stiffness (N/m), for the critical time step and the
-  // element damping, at the law's rest Lame parameters (corner_stiffness_bound).
-  template <typename Law>
-  static FMPC_HD double stiffness_bound(const ElementTermView<double>& t, int e) {
-    double mu, lambda;
-    Law::rest_lame(Law::material(t, e), mu, lambda);
-    return corner_stiffness_bound(t.rest_inverse + 9 * e, t.rest_volume[e], mu, lambda);
-  }
+  static FMPC_HD void add_volumetric_stress(const ElementTermView<Real>&, int, const Real*, Real*) {}
+  static FMPC_HD double volumetric_energy_density(const ElementTermView<double>&, int) { return 0.0; }
 };
 
 }  // namespace fmpc::kernels
