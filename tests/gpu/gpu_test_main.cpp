@@ -29,6 +29,11 @@ void note(const std::string& text) { std::cout << "    " << text << "\n"; }
 
 int main(int argc, char** argv) {
   using namespace fmpc::gpu_test;
+  // bench/run_gpu.sh runs each sanitizer smoke under each tool in a process of its own.
+  if (argc == 2 && std::string(argv[1]) == "--list") {
+    for (const TestCase& test : registry()) std::cout << test.name << "\n";
+    return 0;
+  }
   std::string device;
   const bool have_device = fmpc::gpu::cuda_device_available(device);
   std::cout << (have_device ? "CUDA device: " + device : "no CUDA device (" + device + ")") << "\n";
