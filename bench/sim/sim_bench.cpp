@@ -184,9 +184,12 @@ std::size_t element_count(const SimulationSetup& setup) {
 std::string model_label(const SimulationSetup& setup) {
   if (setup.springs.size() > 0 && !setup.elements.empty())
     return element_law_row(setup.elements.terms.front().law).trade_label;
+  // The default law keeps its model name (the rows of earlier runs in docs/performance.md); another law is named.
+  const int law = setup.elements.empty() ? default_fem_law().law : setup.elements.terms.front().law;
+  const std::string name = law == default_fem_law().law ? sim::model_name(setup) : element_law_row(law).keyword;
   const int kind = setup.elements.geometry.kind;
-  if (kind == default_element_kind().kind) return sim::model_name(setup);
-  return sim::model_name(setup) + " (" + element_kind_rows()[static_cast<std::size_t>(kind)].keyword + ")";
+  if (kind == default_element_kind().kind) return name;
+  return name + " (" + element_kind_rows()[static_cast<std::size_t>(kind)].keyword + ")";
 }
 
 // Runs advance(chunk) until at least min_seconds have passed (the chunk doubling from `first`), after one untimed

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   using namespace fmpc::gpu_test;
   // bench/run_gpu.sh runs each sanitizer smoke under each tool in a process of its own.
   if (argc == 2 && std::string(argv[1]) == "--list") {
-    for (const TestCase& test : registry()) std::cout << test.name << "\n";
+    for (const TestCase& test : registry()) std::cout << test.id << "\n";
     return 0;
   }
   std::string device;
@@ -40,7 +40,10 @@ int main(int argc, char** argv) {
   int passed = 0, failed = 0, skipped = 0;
   for (const TestCase& test : registry()) {
     bool selected = argc < 2;
-    for (int i = 1; i < argc; ++i) selected = selected || std::string(test.name).find(argv[i]) != std::string::npos;
+    // An argument selects the tests whose id or sentence contains it.
+    for (int i = 1; i < argc; ++i)
+      selected = selected || std::string(test.id).find(argv[i]) != std::string::npos ||
+                 std::string(test.name).find(argv[i]) != std::string::npos;
     if (!selected) continue;
     if (test.needs_device && !have_device) {
       std::cout << "[ SKIP ] " << test.name << "\n";
