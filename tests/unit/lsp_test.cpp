@@ -431,7 +431,8 @@ TEST_CASE("fmpc lsp: MATLAB .fis files get hover, completion, definitions and fo
   server.request("initialize", Json{{"capabilities", Json::object()}});
   const std::string uri = "file:///tmp/tipper.fis";
   server.notify("textDocument/didOpen", open_params(uri, kLspTipper));
-  for (const Json& d : server.diagnostics_for(uri)["diagnostics"]) CHECK(d["severity"] != 1);
+  const Json opened = server.diagnostics_for(uri);
+  for (const Json& d : opened["diagnostics"]) CHECK(d["severity"] != 1);
   const auto hover_text = [&](int line, int character) {
     const Json hover = server.request("textDocument/hover", at(uri, line, character))["result"];
     return hover.is_null() ? std::string() : std::string(hover["contents"]["value"]);
