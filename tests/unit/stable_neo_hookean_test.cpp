@@ -429,6 +429,32 @@ double uniaxial_stress(double s, Piola piola) {
   return piola(lateral((low + high) / 2))(2, 2);
 }
 
+// A box of nx x ny x nz cells with E = kE, nothing held or moved yet, for CalculiX's NEO HOOKE (10 increments).
+testing::ElasticProblem neo_hooke_block(Point3 size, int nx, int ny, int nz, double nu) {
+  testing::ElasticProblem p;
+  BoxSpec box;
+  box.size = size;
+  box.cells_x = nx;
+  box.cells_y = ny;
+  box.cells_z = nz;
+  DiagnosticList diagnostics;
+  p.mesh = generate_box(box, diagnostics);
+  p.youngs_modulus = kE;
+  p.poisson_ratio = nu;
+  p.density = 1000.0;
+  p.neo_hooke = true;
+  p.held.assign(p.mesh.points.size(), 0);
+  p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
+  return p;
+}
+
+// Whether ccx is missing, after saying so (the CalculiX cases skip visibly).
+bool calculix_missing() {
+  if (testing::calculix_available()) return false;
+  WARN("skipped: CalculiX (ccx, Debian's calculix-ccx) is not installed; tools/run installs it");
+  return true;
+}
+
 // fmpc's stable neo-Hookean static solution of `problem` (held axes moved by `prescribed`), loaded in `increments`
 // equal steps, each from the last one's answer.
 std::vector<Point3> fmpc_stable_neo_hookean(const testing::ElasticProblem& problem, int increments,
@@ -466,28 +492,14 @@ std::vector<Point3> fmpc_stable_neo_hookean(const testing::ElasticProblem& probl
 
 TEST_CASE("stable neo-Hookean against CalculiX's NEO HOOKE with NLGEOM: a cube compressed by 30 %",
           "[fem][snh][validation]") {
-  if (!testing::calculix_available()) {
-    WARN("skipped: CalculiX (ccx, Debian's calculix-ccx) is not installed; tools/run installs it");
-    return;
-  }
+  if (calculix_missing()) return;
   const double nu = 0.45;
   std::ostringstream table;
   {
     // A 1 cm cube, 2^3 cells, its x = 0, y = 0 and z = 0 faces sliding on their planes, its top face pushed down 3 mm
     // (also sliding): homogeneous uniaxial stress, so each code's reaction is its law's uniaxial curve at s = 0.7.
     const double L = 0.01;
-    testing::ElasticProblem p;
-    BoxSpec box;
-    box.size = {L, L, L};
-    box.cells_x = box.cells_y = box.cells_z = 2;
-    DiagnosticList diagnostics;
-    p.mesh = generate_box(box, diagnostics);
-    p.youngs_modulus = kE;
-    p.poisson_ratio = nu;
-    p.density = 1000.0;
-    p.neo_hooke = true;
-    p.held.assign(p.mesh.points.size(), 0);
-    p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
+    testing::ElasticProblem p = neo_hooke_block({L, L, L}, 2, 2, 2, nu);
     for (std::size_t v = 0; v < p.mesh.points.size(); ++v) {
       for (std::size_t a = 0; a < 3; ++a)
         if (p.mesh.points[v][a] == 0.0) p.held[v] = static_cast<std::uint8_t>(p.held[v] | (1u << a));
@@ -555,28 +567,12 @@ double stored_energy(const Mesh& mesh, const std::vector<Point3>& x, Energy ener
 
 TEST_CASE("stable neo-Hookean against CalculiX's NEO HOOKE with NLGEOM: a 20 % indentation",
           "[fem][snh][validation]") {
-  if (!testing::calculix_available()) {
-    WARN("skipped: CalculiX (ccx, Debian's calculix-ccx) is not installed; tools/run installs it");
-    return;
-  }
+  if (calculix_missing()) return;
   // A 2 x 2 x 1 cm block of 6 x 6 x 3 cells (648 linear tetrahedra, C3D4 in CalculiX), its base clamped; the 3 x 3
   // top vertices of its middle third (a 6.7 mm square punch) pushed down by 2 mm, 20 % of the height, free to slide
   // sideways (a frictionless flat punch by prescribed displacement).
   const double nu = 0.45, W = 0.02, H = 0.01, depth = 0.2 * H;
-  testing::ElasticProblem p;
-  BoxSpec box;
-  box.size = {W, W, H};
-  box.cells_x = box.cells_y = 6;
-  box.cells_z = 3;
-  DiagnosticList diagnostics;
-  p.mesh = generate_box(box, diagnostics);
-  p.youngs_modulus = kE;
-  p.poisson_ratio = nu;
-  p.density = 1000.0;
-  p.neo_hooke = true;
-  p.increments = 10;
-  p.held.assign(p.mesh.points.size(), 0);
-  p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
+  testing::ElasticProblem p = neo_hooke_block({W, W, H}, 6, 6, 3, nu);
   std::vector<std::size_t> punch;
   for (std::size_t v = 0; v < p.mesh.points.size(); ++v) {
     const Point3& x = p.mesh.points[v];
