@@ -100,9 +100,9 @@ TEST_CASE("Cook's membrane: every law and element kind converges towards Calculi
                                       << " per side (" << std::setprecision(10) << tip
                                       << "): run build/tests/fmpc_tests \"[.cook_table]\" and add it to kStored");
         }
-        // Displacement elements are too stiff on coarse meshes and approach the answer from below.
-        CHECK(error[0] < error[1]);
-        CHECK(error[1] < 0.0);
+        // Every kind converges towards the reference (the linear and quadratic ones from below: too stiff; a mixed
+        // kind such as average nodal pressure may come from above).
+        CHECK(std::abs(error[1]) < std::abs(error[0]));
         table << "\n  nu " << std::setprecision(5) << nu << ", " << law << " / " << kind.keyword << ": "
               << percent(error[0] * 100) << " (4 per side), " << percent(error[1] * 100) << " (8)";
       }
