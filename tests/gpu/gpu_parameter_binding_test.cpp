@@ -14,6 +14,7 @@
 #include "runtime/scene/scene_file.h"
 #include "tests/gpu/cpu_gpu_comparison.h"
 #include "tests/gpu/gpu_test_harness.h"
+#include "tests/support/bound_material_rules.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
@@ -21,35 +22,16 @@ using namespace fmpc::gpu_test;
 
 namespace {
 
-// E = 2 F + 1 kPa, nu = 0.3 + 0.01 F; and, of strain s, E = 10 (1 + 2 s) kPa.
-const char* kRules = R"(system tissue
-  type sugeno
-input F in [0, 10]
-  all is gauss(mean 5, sd 1000)
-output stiffness in [0, 30] kPa
-  model is linear(F 2, offset 1)
-output nu in [0.3, 0.45] dimensionless
-  model is linear(F 0.01, offset 0.3)
-rule r1: if F is all then stiffness is model and nu is model
-
-system stiffening
-  type sugeno
-input s in [-0.3, 0.3]
-  all is gauss(mean 0, sd 1000)
-output stiffness in [0, 30] kPa
-  model is linear(s 20, offset 10)
-rule r1: if s is all then stiffness is model
-)";
-
 // A 2 cm block of 3 x 4 x 3 cells hanging from its top face under gravity, of `law` on `element`; its material
-// `material` (YAML lines under material:).
+// `material` (YAML lines under material:) reads tissue.fis (E and nu of F) or stiffening.fis (E of strain s).
 SimulationSetup bound_block(const std::string& law, const std::string& element, const std::string& material,
                             Precision precision, Integrator integrator) {
   const auto folder = std::filesystem::temp_directory_path() / "fmpc_gpu_bind";
   std::filesystem::create_directories(folder);
-  std::ofstream(folder / "tissue.fis") << kRules;
+  std::ofstream(folder / "tissue.fis") << test_rules::kTwoOutputRules;
+  std::ofstream(folder / "stiffening.fis") << test_rules::kStrainStiffeningRules;
   const std::string yaml = "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [3, 4, 3]}}\nmodel: fem\nfem: {law: " + law +
-                           ", element: " + element + "}\nmaterial:\n  rules: tissue.fis\n" + material +
+                           ", element: " + element + "}\nmaterial:\n" + material +
                            "fixed: {box: {min: [-1, -1, 0.0199], max: [1, 1, 1]}}\nloads: {gravity: [0, 0, -9.81]}\n";
   const std::string path = (folder / "scene.yaml").string();
   std::ofstream(path) << yaml;
@@ -65,9 +47,9 @@ SimulationSetup bound_block(const std::string& law, const std::string& element, 
 }
 
 const char* kBoundMaterial =
-    "  system: tissue\n  inputs:\n    F: {regions: [{box: {min: [0, 0, 0], max: [1, 1, 0.01]}, value: 2}], default: 8}\n"
+    "  rules: tissue.fis\n  inputs:\n    F: {regions: [{box: {min: [0, 0, 0], max: [1, 1, 0.01]}, value: 2}], default: 8}\n"
     "  bind: {youngs_modulus: stiffness, poisson_ratio: nu}\n";
-const char* kStrainMaterial = "  system: stiffening\n  inputs: {s: strain}\n  poisson_ratio: 0.4\n";
+const char* kStrainMaterial = "  rules: stiffening.fis\n  inputs: {s: strain}\n  poisson_ratio: 0.4\n";
 
 }  // namespace
 

@@ -15,34 +15,13 @@
 #include "runtime/fem/fem_model_builder.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
+#include "tests/support/bound_material_rules.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
+using namespace fmpc::test_rules;
 
 namespace {
-
-// E = 2 F + 1 kPa and nu = 0.3 + 0.01 F (Sugeno, one rule that always fires): two outputs of one input.
-const char* kTwoOutputs = R"(system tissue
-  type sugeno
-input F in [0, 10]
-  all is gauss(mean 5, sd 1000)
-output stiffness in [0, 30] kPa
-  model is linear(F 2, offset 1)
-output nu in [0.3, 0.45] dimensionless
-  model is linear(F 0.01, offset 0.3)
-rule r1: if F is all then stiffness is model and nu is model
-)";
-
-// E = 10 (1 + 2 s) kPa over strain s in [-0.3, 0.3]: linear in s, so the strain table interpolates it exactly (to
-// rounding) between any breakpoints.
-const char* kStrainStiffening = R"(system stiffening
-  type sugeno
-input s in [-0.3, 0.3]
-  all is gauss(mean 0, sd 1000)
-output stiffness in [0, 30] kPa
-  model is linear(s 20, offset 10)
-rule r1: if s is all then stiffness is model
-)";
 
 struct Folder {
   std::filesystem::path path;
@@ -57,10 +36,37 @@ struct Folder {
   }
 };
 
+// The scene `yaml` (written to the folder as scene.yaml) parsed and built; REQUIREs both.
+struct Built {
+  Scene scene;
+  BuiltScene built;
+};
+Built parse_and_build(const Folder& folder, const std::string& yaml);
+
 std::string all_messages(const DiagnosticList& diagnostics) {
   std::string out;
   for (const Diagnostic& d : diagnostics.items()) out += d.message + "\n";
   return out;
+}
+
+Built parse_and_build(const Folder& folder, const std::string& yaml) {
+  DiagnosticList diagnostics;
+  auto scene = parse_scene(folder.write("scene.yaml", yaml), yaml, diagnostics);
+  INFO(all_messages(diagnostics));
+  REQUIRE(scene);
+  auto built = build_scene(*scene, diagnostics);
+  INFO(all_messages(diagnostics));
+  REQUIRE(built);
+  return {std::move(*scene), std::move(*built)};
+}
+
+// The messages of the scene `yaml`, which parses but does not build.
+std::string build_errors(const Folder& folder, const std::string& yaml) {
+  DiagnosticList diagnostics;
+  const auto scene = parse_scene(folder.write("scene.yaml", yaml), yaml, diagnostics);
+  REQUIRE(scene);
+  CHECK_FALSE(build_scene(*scene, diagnostics));
+  return all_messages(diagnostics);
 }
 
 // Two regions of F (2 below z = 0.01, 8 above) on a 2 x 2 x 2-cell box of 2 cm.
@@ -77,22 +83,18 @@ std::string two_region_scene(const std::string& law, const std::string& element,
 TEST_CASE("material.bind: E and nu per element from two outputs equal the values set directly, bit for bit",
           "[scene][bind]") {
   Folder folder("two_outputs");
-  folder.write("tissue.fis", kTwoOutputs);
+  folder.write("tissue.fis", kTwoOutputRules);
   DiagnosticList load_diagnostics;
-  const RuleFile rules = load_rule_file("tissue.fis", kTwoOutputs, load_diagnostics);
+  const RuleFile rules = load_rule_file("tissue.fis", kTwoOutputRules, load_diagnostics);
   REQUIRE_FALSE(load_diagnostics.has_errors());
   Interpreter interpreter(rules.systems.front());
   for (const ElementLawRow& law : element_law_rows()) {
     if (law.beside_springs) continue;
     for (const ElementKindRow& element : element_kind_rows()) {
       INFO(law.keyword << " on " << element.keyword << " elements");
-      const std::string yaml = two_region_scene(law.keyword, element.keyword);
-      DiagnosticList diagnostics;
-      const auto scene = parse_scene(folder.write("scene.yaml", yaml), yaml, diagnostics);
-      REQUIRE(scene);
-      const auto built = build_scene(*scene, diagnostics);
-      INFO(all_messages(diagnostics));
-      REQUIRE(built);
+      const Built made = parse_and_build(folder, two_region_scene(law.keyword, element.keyword));
+      const Scene* scene = &made.scene;
+      const BuiltScene* built = &made.built;
       // The same material set directly: the interpreter at each element's region value (kPa -> Pa), through the
       // library's builder with the scene's mass and damping.
       FemModelSpec spec;
@@ -152,7 +154,7 @@ TEST_CASE("strain-bound E: every law on every element kind reads E at the princi
   // (stretch - 1) of largest magnitude of F. Stretched (s = +0.12) and compressed (s = -0.2, the lateral stretch
   // 1.05 smaller in magnitude), each law and element kind; E(s) is linear, so the table gives it to rounding.
   Folder folder("strain");
-  folder.write("stiffening.fis", kStrainStiffening);
+  folder.write("stiffening.fis", kStrainStiffeningRules);
   struct Case {
     double stretch[3];
     double strain;
@@ -165,12 +167,8 @@ TEST_CASE("strain-bound E: every law on every element kind reads E at the princi
       const std::string yaml = std::string("mesh: {box: {size: [0.02, 0.03, 0.04], cells: [2, 2, 2]}}\nmodel: fem\n") +
                                "fem: {law: " + law.keyword + ", element: " + element.keyword +
                                "}\nmaterial:\n  rules: stiffening.fis\n  inputs: {s: strain}\n  poisson_ratio: 0.4\n";
-      DiagnosticList diagnostics;
-      const auto scene = parse_scene(folder.write("scene.yaml", yaml), yaml, diagnostics);
-      REQUIRE(scene);
-      const auto built = build_scene(*scene, diagnostics);
-      INFO(all_messages(diagnostics));
-      REQUIRE(built);
+      const Built made = parse_and_build(folder, yaml);
+      const BuiltScene* built = &made.built;
       REQUIRE(built->setup.strain_stiffness);
       const SimulationSetup& strained = built->setup;
       std::vector<std::int32_t> every(strained.rest_positions.size());
@@ -232,13 +230,8 @@ rule r1: if F is all then stiffness is model and fast is model and slow is model
            "    viscoelastic.prony[1].weight: slow\nfixed: {box: {min: [0, 0, 0], max: [1, 1, 0.001]}}\n";
   };
   SECTION("constant inputs: the series' weights are the outputs") {
-    const std::string yaml = scene_with("{F: 4}");
-    DiagnosticList diagnostics;
-    const auto scene = parse_scene(folder.write("scene.yaml", yaml), yaml, diagnostics);
-    REQUIRE(scene);
-    const auto built = build_scene(*scene, diagnostics);
-    INFO(all_messages(diagnostics));
-    REQUIRE(built);
+    const Built made = parse_and_build(folder, scene_with("{F: 4}"));
+    const BuiltScene* built = &made.built;
     const Evaluation evaluation = Interpreter(file.systems.front()).evaluate({4.0});
     const std::vector<PronyTerm>& prony = built->setup.elements.terms.front().prony;
     REQUIRE(prony.size() == 2);
@@ -248,29 +241,20 @@ rule r1: if F is all then stiffness is model and fast is model and slow is model
     CHECK(prony[1].time == 51.3);
   }
   SECTION("inputs per region: a weight that varies over the elements is refused") {
-    const std::string yaml =
-        scene_with("{F: {regions: [{box: {min: [0, 0, 0], max: [1, 1, 0.01]}, value: 2}], default: 8}}");
-    DiagnosticList diagnostics;
-    const auto scene = parse_scene(folder.write("scene.yaml", yaml), yaml, diagnostics);
-    REQUIRE(scene);
-    CHECK_FALSE(build_scene(*scene, diagnostics));
-    CHECK(all_messages(diagnostics) ==
+    CHECK(build_errors(folder, scene_with("{F: {regions: [{box: {min: [0, 0, 0], max: [1, 1, 0.01]}, value: 2}], "
+                                          "default: 8}}")) ==
           "material.bind.viscoelastic.prony[0].weight: output 'fast' of system 'tissue' varies over the elements "
-          "(0.24000000000000002 to 0.36); a Prony series is one per scene, so its weights cannot vary per element: bind the inputs "
-          "it depends on to constants\n");
+          "(0.24000000000000002 to 0.36); a Prony series is one per scene, so its weights cannot vary per element: "
+          "bind the inputs it depends on to constants\n");
   }
 }
 
 TEST_CASE("material.bind on springs, and the parameter rows of every law", "[scene][bind]") {
   Folder folder("springs");
-  folder.write("tissue.fis", kTwoOutputs);
+  folder.write("tissue.fis", kTwoOutputRules);
   const std::string yaml = "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [1, 1, 1]}}\nmaterial:\n  rules: tissue.fis\n"
                            "  inputs: {F: 4}\n  bind: {youngs_modulus: stiffness}\n";
-  DiagnosticList diagnostics;
-  const auto scene = parse_scene(folder.write("scene.yaml", yaml), yaml, diagnostics);
-  REQUIRE(scene);
-  CHECK_FALSE(build_scene(*scene, diagnostics));
-  CHECK(all_messages(diagnostics) ==
+  CHECK(build_errors(folder, yaml) ==
         "material.bind: binds the parameters of a finite-element law (model: fem); a spring network takes Young's "
         "modulus alone: name its output with 'output'\n");
   // Every law names Young's modulus (the rules' own output) and every parameter its builder reads; the rows' ranges
