@@ -44,6 +44,9 @@ class GpuEngine final : public sim::SteppingEngine {
       : scenes_(scenes), stability_(stability), options_(options) {}
 
   ~GpuEngine() override {
+    // The device's own memory, stream and graphs are released on it, whichever thread destroys the engine; a
+    // destructor cannot report, and a failure here leaves the frees below to fail alike.
+    if (options_.device >= 0) cudaSetDevice(options_.device);
     graphs_.clear();
     if (stream_ != nullptr) cudaStreamDestroy(stream_);
   }
