@@ -21,6 +21,12 @@
 #               bundles it with fmpc) runs the 1 kHz haptic loop on the 20^3 block with the sphere tool, 30 s of wall
 #               time per mode (HAPTIC_SECONDS), implicit Euler and explicit substeps, on CUDA and on the CPU: per-tick
 #               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv), haptic.md
+#   multigpu    (only when asked: --only multigpu) the carried fmpc runs the demo's cohort of 1,000 patients (inputs
+#               drawn uniformly within the ranges of liver_indentation_patients.csv, awk seed 13) on CUDA on one GPU
+#               (--devices 0) and on every GPU of the machine (--devices all), checks the two cohort.csv equal in every
+#               column but steps_per_second (a timing), and writes the speed-ups of the stepping, of stepping and
+#               recording, and of the whole command into summary.md (issue 27 item 6: >= 1.8x on two GPUs);
+#               outputs under $OUT/multigpu
 #   setup       (only when asked: --only setup) bench/setup's fmpc_setup_bench on the GPU machine's cores: boxes of
 #               60^3, 120^3 and 240^3 cells (issue 13: 100M springs set up in 20 s, 64 bytes per spring at peak)
 #               with the model builder's breakdown and the simulators' peak, then 120^3 on one thread (same checksum)
@@ -242,8 +248,8 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | scenes | haptic | evaluator | fuzz | setup | profile | baseline) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, haptic, evaluator, fuzz, setup, profile, baseline)" >&2
+          tests | sanitizers | bench | scenes | haptic | multigpu | evaluator | fuzz | setup | profile | baseline) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, haptic, multigpu, evaluator, fuzz, setup, profile, baseline)" >&2
              exit 2 ;;
         esac
       done
@@ -498,6 +504,66 @@ haptic_section() {
   cat "$OUT/haptic.md" >> "$SUMMARY"
 }
 
+# A cohort over every GPU of the machine (issue 27 item 6; docs/cohorts.md, "Every GPU of a node"): the demo's 1,000
+# patients on one GPU and on all of them, one process each time (fmpc simulate --devices).
+multigpu_section() {
+  section "multigpu: the demo's 1,000-patient cohort on one GPU and on every GPU (fmpc simulate --devices)"
+  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc" ]]; then
+    fail "no fmpc in $CARRY/programs.tar.xz: run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare' on the build machine"
+    return 1
+  fi
+  local gpus
+  gpus=$(nvidia-smi -L 2>/dev/null | grep -c '^GPU ')
+  record "GPUs: $gpus ($(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | sort | uniq -c | sed -E 's/^ +//' | paste -sd ';' -))"
+  [[ $gpus -ge 2 ]] || record "only $gpus GPU: 'all' is that one GPU, so the speed-up below is about 1 (run on a machine of two or more)"
+  mkdir -p "$OUT/multigpu" "$BUILD/multigpu"
+  local demo="$ROOT/rulesets/scenes/liver_indentation.yaml" patients="$BUILD/multigpu/patients_1000.csv"
+  # Uniform within each input's range over the demo's 12 patients (HCV 5-26, HBV 5-24, ALD 5-40, CLD 5-21, NAFLD 5-32).
+  awk 'BEGIN { srand(13); print "label,HCV,HBV,ALD,CLD,NAFLD"
+               for (p = 1; p <= 1000; ++p)
+                 printf "P%04d,%.3f,%.3f,%.3f,%.3f,%.3f\n", p, 5 + 21 * rand(), 5 + 19 * rand(), 5 + 35 * rand(),
+                        5 + 16 * rand(), 5 + 27 * rand() }' > "$patients"
+  cp "$patients" "$OUT/multigpu/"
+  local run devices
+  for run in one all; do
+    devices=$([[ $run == one ]] && echo 0 || echo all)
+    rm -rf "$BUILD/multigpu/$run"
+    if "$UNPACKED/bin/fmpc" simulate "$demo" --backend cuda --patients "$patients" --devices "$devices" \
+        -o "$BUILD/multigpu/$run" > "$OUT/multigpu/$run.log" 2>&1; then
+      cp "$BUILD/multigpu/$run/cohort.csv" "$OUT/multigpu/cohort_$run.csv"
+      record "--devices $devices: $(grep -E '^  (stepping|whole command)' "$OUT/multigpu/$run.log" | sed -E 's/^ +//' | paste -sd ';' -)"
+    else
+      tail -5 "$OUT/multigpu/$run.log"
+      fail "cohort with --devices $devices (see multigpu/$run.log)"
+    fi
+  done
+  [[ -f "$OUT/multigpu/cohort_one.csv" && -f "$OUT/multigpu/cohort_all.csv" ]] || return 1
+  if cmp -s <(cut -d, -f1-15 "$OUT/multigpu/cohort_one.csv") <(cut -d, -f1-15 "$OUT/multigpu/cohort_all.csv"); then
+    record "cohort.csv: one GPU and $gpus GPUs equal in every column but steps_per_second ($(($(wc -l < "$OUT/multigpu/cohort_one.csv") - 1)) patients)"
+  else
+    fail "cohort.csv differs between one GPU and all (multigpu/cohort_{one,all}.csv)"
+  fi
+  # Seconds from the report: the stepping, stepping and recording, the whole command.
+  seconds() {
+    case "$2" in
+      stepping) grep -E '^  stepping' "$1" | sed -E 's/.*checks included\): ([0-9.e+-]+) s.*/\1/' ;;
+      recording) grep -E '^  whole command' "$1" | sed -E 's/.*stepping and recording ([0-9.e+-]+) s.*/\1/' ;;
+      command) grep -E '^  whole command' "$1" | sed -E 's/^  whole command: ([0-9.e+-]+) s.*/\1/' ;;
+    esac
+  }
+  local what one all
+  record ""
+  record "| $gpus GPUs against one | one GPU s | all s | speed-up |"
+  record "| --- | --- | --- | --- |"
+  for what in stepping recording command; do
+    one=$(seconds "$OUT/multigpu/one.log" "$what")
+    all=$(seconds "$OUT/multigpu/all.log" "$what")
+    record "| $(case $what in stepping) echo "stepping (the advance calls; the slowest GPU's)" ;; recording) echo "stepping and recording" ;; command) echo "whole command" ;; esac) | $one | $all | $(awk -v a="$one" -v b="$all" 'BEGIN { if (b > 0) printf "%.2fx", a / b; else print "n/a" }') |"
+  done
+  record ""
+  record "goal (issue 27 item 6): >= 1.8x one GPU on two"
+}
+
 # The median of the numbers on stdin.
 median() { sort -g | awk '{ v[NR] = $1 } END { if (NR == 0) print "nan"; else if (NR % 2) print v[(NR + 1) / 2]; else print (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 
@@ -731,6 +797,7 @@ if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted p
 fi
 wanted scenes && scenes_section
 wanted haptic && haptic_section
+wanted multigpu && multigpu_section
 wanted evaluator && evaluator_section
 wanted fuzz && fuzz_section
 
