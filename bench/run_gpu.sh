@@ -20,7 +20,9 @@
 #   haptic      the carried fmpc_haptic_bench (bench/haptic, from the same CUDA build as the carried fmpc: --prepare
 #               bundles it with fmpc) runs the 1 kHz haptic loop on the 20^3 block with the sphere tool, 30 s of wall
 #               time per mode (HAPTIC_SECONDS), implicit Euler and explicit substeps, on CUDA and on the CPU: per-tick
-#               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv), haptic.md
+#               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv: each tick's mean
+#               force and its tick-end force), haptic.md; on CUDA the explicit mode again with the tick-end force only
+#               (--force end, one call per tick) and with contact damping (--contact-damping 1)
 #   multigpu    (only when asked: --only multigpu) the carried fmpc runs the demo's cohort of 1,000 patients (inputs
 #               drawn uniformly within the ranges of liver_indentation_patients.csv, awk seed 13) on CUDA on one GPU
 #               (--devices 0) and on every GPU of the machine (--devices all), checks the two cohort.csv equal in every
@@ -57,7 +59,7 @@
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
 # device.txt, summary.md. Options: --skip-sanitizers, --quick (shorter benchmark), --evaluator-only (that section
-# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, haptic, evaluator, fuzz; the build
+# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, haptic, multigpu, evaluator, fuzz; the build
 # runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses it). Exit status: 0
 # when every step passed.
 set -u -o pipefail
@@ -489,16 +491,26 @@ haptic_section() {
   [[ $QUICK -eq 1 ]] && seconds=5
   mkdir -p "$OUT/haptic"
   : > "$OUT/haptic.md"
-  for backend in cuda cpu; do
-    mkdir -p "$OUT/haptic/$backend"
-    if "$UNPACKED/bin/fmpc_haptic_bench" --backend "$backend" --seconds "$seconds" --out "$OUT/haptic/$backend" \
-        > "$OUT/haptic/$backend.log" 2>&1; then
-      grep -E '^(implicit|explicit) on ' "$OUT/haptic/$backend.log" | tee -a "$SUMMARY"
-      grep -E '^\|' "$OUT/haptic/$backend.log" | awk -v first="$([[ -s "$OUT/haptic.md" ]] && echo 0 || echo 1)" \
+  # Each tick reports its mean force (one step and one reading at a time); on CUDA the explicit mode also runs as one
+  # call per tick with the tick-end force only (--force end: the loop's latency without the readings) and with
+  # contact damping (--contact-damping 1: the chatter of the undamped contact gone).
+  local run extra
+  for run in cuda cpu cuda_end cuda_damped; do
+    backend=${run%%_*}
+    case "$run" in
+      cuda_end) extra=(--modes explicit --force end) ;;
+      cuda_damped) extra=(--modes explicit --contact-damping 1) ;;
+      *) extra=() ;;
+    esac
+    mkdir -p "$OUT/haptic/$run"
+    if "$UNPACKED/bin/fmpc_haptic_bench" --backend "$backend" --seconds "$seconds" ${extra[@]+"${extra[@]}"} \
+        --out "$OUT/haptic/$run" > "$OUT/haptic/$run.log" 2>&1; then
+      grep -E '^(implicit|explicit) on |^  force change' "$OUT/haptic/$run.log" | sed "s/^/$run: /" | tee -a "$SUMMARY"
+      grep -E '^\|' "$OUT/haptic/$run.log" | awk -v first="$([[ -s "$OUT/haptic.md" ]] && echo 0 || echo 1)" \
         'first == 1 || NR > 2' >> "$OUT/haptic.md"
     else
-      tail -5 "$OUT/haptic/$backend.log"
-      fail "fmpc_haptic_bench --backend $backend (see haptic/$backend.log)"
+      tail -5 "$OUT/haptic/$run.log"
+      fail "fmpc_haptic_bench --backend $backend ${extra[*]} (see haptic/$run.log)"
     fi
   done
   cat "$OUT/haptic.md" >> "$SUMMARY"
@@ -551,14 +563,19 @@ multigpu_section() {
       command) grep -E '^  whole command' "$1" | sed -E 's/^  whole command: ([0-9.e+-]+) s.*/\1/' ;;
     esac
   }
-  local what one all
+  local what one all label
   record ""
   record "| $gpus GPUs against one | one GPU s | all s | speed-up |"
   record "| --- | --- | --- | --- |"
   for what in stepping recording command; do
     one=$(seconds "$OUT/multigpu/one.log" "$what")
     all=$(seconds "$OUT/multigpu/all.log" "$what")
-    record "| $(case $what in stepping) echo "stepping (the advance calls; the slowest GPU's)" ;; recording) echo "stepping and recording" ;; command) echo "whole command" ;; esac) | $one | $all | $(awk -v a="$one" -v b="$all" 'BEGIN { if (b > 0) printf "%.2fx", a / b; else print "n/a" }') |"
+    case $what in
+      stepping) label="stepping (the advance calls; the slowest GPU's)" ;;
+      recording) label="stepping and recording" ;;
+      command) label="whole command" ;;
+    esac
+    record "| $label | $one | $all | $(awk -v a="$one" -v b="$all" 'BEGIN { if (b > 0) printf "%.2fx", a / b; else print "n/a" }') |"
   done
   record ""
   record "goal (issue 27 item 6): >= 1.8x one GPU on two"

@@ -285,6 +285,23 @@ TEST_CASE("session: tools in a scene file: a path, the CSV's columns and the sum
         "names the tool's columns in time_series.csv)");
   CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {stiffness_ratio: 0}") ==
         "contact.stiffness_ratio: expected a positive number, got 0");
+  // contact.damping_ratio: from 0 to 100, explicit integrators only; the setup and summary.json carry it.
+  CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {damping_ratio: -1}") ==
+        "contact.damping_ratio: expected a non-negative number, got -1");
+  CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {damping_ratio: 101}") ==
+        "contact.damping_ratio: 101 is above the limit of 100 (1 is critical damping of a vertex on its contact spring)");
+  CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {damping_ratio: 1}\nintegrator: implicit_euler") ==
+        "contact.damping_ratio: contact damping is for the explicit integrators (a pressed vertex bouncing off the "
+        "tool between substeps); implicit Euler's step damps that itself: leave it out");
+  std::string damped_text = text;
+  damped_text.replace(damped_text.find("contact: {stiffness_ratio: 2}"), 29, "contact: {damping_ratio: 0.7}");
+  const auto damped = sim::parse_scene(path, damped_text, diagnostics);
+  REQUIRE(damped);
+  CHECK(damped->contact_damping_ratio == 0.7);
+  const auto damped_built = sim::build_scene(*damped, diagnostics);
+  REQUIRE(damped_built);
+  CHECK(damped_built->setup.contact_damping_ratio == 0.7);
+  CHECK(damped_built->setup.contact_stiffness_ratio == sim::kDefaultContactStiffnessRatio);
 }
 
 TEST_CASE("session: a tick's mean tool force is its impulse over its duration", "[session][tools]") {
