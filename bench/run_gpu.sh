@@ -8,10 +8,13 @@
 #
 # Sections (each appends to $OUT/summary.md, printed last):
 #   build       configure + build, Release, sm_90, FMPC_GPU_ONLY=ON
-#   simulator   gpu-labelled tests (CPU vs CUDA after 10,000 steps, bitwise reruns, batches, NaN location),
+#   simulator   gpu-labelled tests (CPU vs CUDA after 10,000 steps, bitwise reruns, batches, NaN location; GPU_TESTS="NAME
+#               ..." runs only fmpc_gpu_tests' cases whose names contain one of these),
 #               compute-sanitizer memcheck/racecheck/initcheck/synccheck on the small GPU test,
 #               bench/sim (CPU threads vs CUDA float/double, graphs on/off, 1k..1M springs, batch of scenes,
 #               a cohort of 1,000 demo-scene patients with their probes in one launch: row cuda-cohort)
+#   laws        fmpc_sim_bench --fem-only at 120^3 cells for each law on each element kind (LAW_ELEMENTS, law:element
+#               pairs; LAW_CELLS), float and double, semi-implicit Euler: element-steps/s (issue 26 item 7)
 #   scenes      the carried fmpc (a CUDA build of the build machine with its libraries and fonts: --prepare bundles
 #               $FMPC into build-gpu-carry/programs.tar.xz) runs the README's demo scene with backend auto (CUDA)
 #               and cpu, and SOFA's liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as
@@ -59,9 +62,9 @@
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
 # device.txt, summary.md. Options: --skip-sanitizers, --quick (shorter benchmark), --evaluator-only (that section
-# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, haptic, multigpu, evaluator, fuzz; the build
-# runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses it). Exit status: 0
-# when every step passed.
+# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, laws, scenes, haptic, multigpu,
+# evaluator, fuzz; the build runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses
+# it). Exit status: 0 when every step passed.
 set -u -o pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -237,7 +240,7 @@ fi
 SKIP_SANITIZERS=0
 QUICK=0
 EVALUATOR_ONLY=0
-ONLY="tests,sanitizers,bench,scenes,haptic,evaluator"
+ONLY="tests,sanitizers,bench,laws,scenes,haptic,evaluator"
 usage="usage: bash bench/run_gpu.sh [--prepare | --skip-sanitizers | --quick | --evaluator-only | --only LIST]"
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -250,8 +253,8 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | scenes | haptic | multigpu | evaluator | fuzz | setup | profile | baseline) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, haptic, multigpu, evaluator, fuzz, setup, profile, baseline)" >&2
+          tests | sanitizers | bench | laws | scenes | haptic | multigpu | evaluator | fuzz | setup | profile | baseline) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, laws, scenes, haptic, multigpu, evaluator, fuzz, setup, profile, baseline)" >&2
              exit 2 ;;
         esac
       done
@@ -323,7 +326,13 @@ build_section() {
 simulator_section() {
   if wanted tests; then
   section "simulator: GPU tests"
-  (cd "$BUILD" && ctest -L gpu --output-on-failure -V) > "$OUT/gpu_tests.log" 2>&1
+  # GPU_TESTS="NAME ...": only the fmpc_gpu_tests cases whose names contain one of these (fmpc_gpu_tests --list).
+  if [[ -n "${GPU_TESTS:-}" ]]; then
+    # shellcheck disable=SC2086
+    "$BUILD/tests/gpu/fmpc_gpu_tests" $GPU_TESTS > "$OUT/gpu_tests.log" 2>&1
+  else
+    (cd "$BUILD" && ctest -L gpu --output-on-failure -V) > "$OUT/gpu_tests.log" 2>&1
+  fi
   local status=$?
   grep -E '\[ (PASS|FAIL|SKIP) \]|[0-9]+ passed, |max \|GPU - CPU\||GPU step|FAILED: ' "$OUT/gpu_tests.log" \
     | sed -E 's/^[0-9]+: *//' | tee -a "$SUMMARY"
@@ -342,29 +351,37 @@ simulator_section() {
     if [[ -z "$sanitizer" ]]; then
       fail "compute-sanitizer not found"
     else
-      # The four tools at once (each instruments the same small scenes; racecheck alone takes minutes), each under
-      # SANITIZER_SECONDS (default 480): a tool cut off is reported as such with the last test it started.
-      local tool
+      # Each smoke test (fmpc_gpu_tests --list: the names that start with sanitizer_) under each of the four tools in
+      # a process of its own, all at once (racecheck alone takes minutes on the cooperative CG), each under
+      # SANITIZER_SECONDS (default 480): a pair cut off is reported as such. Logs: sanitizer_TOOL_TEST.log.
+      local tool smoke
+      local -a smokes
+      mapfile -t smokes < <("$BUILD/tests/gpu/fmpc_gpu_tests" --list | grep -E '^sanitizer_')
+      [[ ${#smokes[@]} -gt 0 ]] || fail "no sanitizer smoke tests in fmpc_gpu_tests --list"
       local -A pids=()
       for tool in memcheck racecheck initcheck synccheck; do
         local extra=()
         [[ $tool == memcheck ]] && extra=(--leak-check full)
-        timeout "${SANITIZER_SECONDS:-480}" "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
-          "$BUILD/tests/gpu/fmpc_gpu_tests" sanitizer > "$OUT/sanitizer_$tool.log" 2>&1 &
-        pids[$tool]=$!
+        for smoke in "${smokes[@]}"; do
+          timeout "${SANITIZER_SECONDS:-480}" "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
+            "$BUILD/tests/gpu/fmpc_gpu_tests" "$smoke" > "$OUT/sanitizer_${tool}_$smoke.log" 2>&1 &
+          pids[$tool/$smoke]=$!
+        done
       done
       for tool in memcheck racecheck initcheck synccheck; do
-        wait "${pids[$tool]}"
-        local rc=$?
-        local errors
-        errors=$(grep -E 'ERROR SUMMARY|RACECHECK SUMMARY' "$OUT/sanitizer_$tool.log" | tail -1)
-        if [[ $rc -eq 124 ]]; then
-          fail "$tool: cut off after ${SANITIZER_SECONDS:-480} s in '$(grep -E '^\[ RUN' "$OUT/sanitizer_$tool.log" | tail -1)'"
-        elif [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$OUT/sanitizer_$tool.log"; then
-          record "$tool: ok (${errors:-no summary line})"
-        else
-          fail "$tool: exit $rc (${errors:-see sanitizer_$tool.log})"
-        fi
+        for smoke in "${smokes[@]}"; do
+          wait "${pids[$tool/$smoke]}"
+          local rc=$? log="$OUT/sanitizer_${tool}_$smoke.log"
+          local errors
+          errors=$(grep -E 'ERROR SUMMARY|RACECHECK SUMMARY' "$log" | tail -1)
+          if [[ $rc -eq 124 ]]; then
+            fail "$tool $smoke: cut off after ${SANITIZER_SECONDS:-480} s"
+          elif [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$log"; then
+            record "$tool $smoke: ok (${errors:-no summary line})"
+          else
+            fail "$tool $smoke: exit $rc (${errors:-see sanitizer_${tool}_$smoke.log})"
+          fi
+        done
       done
     fi
   fi
@@ -667,6 +684,26 @@ unpack_programs() {
 }
 
 # Host setup of large boxes on this machine's cores (bench/setup; docs/performance.md "Host setup and frames").
+# Issue 26 item 7: each law on each element kind at 120^3 cells (10,368,000 elements), float and double,
+# semi-implicit Euler, GPU only; LAW_ELEMENTS (law:element pairs, the scene keywords) picks them.
+laws_section() {
+  section "laws: element-steps/s per law and element kind (fmpc_sim_bench --fem-only --fem-cells 120)"
+  local bench="$BUILD/bench/sim/fmpc_sim_bench" pair
+  [[ -x "$bench" ]] || { fail "no $bench (the build section builds it)"; return 1; }
+  for pair in ${LAW_ELEMENTS:-corotational:linear stable_neo_hookean:linear corotational:quadratic stable_neo_hookean:quadratic}; do
+    local law=${pair%%:*} element=${pair##*:}
+    mkdir -p "$OUT/laws/$law-$element"
+    if "$bench" --fem-only --fem-cells "${LAW_CELLS:-120}" --fem-law "$law" --fem-element "$element" \
+        --out "$OUT/laws/$law-$element" > "$OUT/laws/$law-$element.log" 2>&1; then
+      record "$law on $element elements:"
+      grep -E '^\| .*cuda' "$OUT/laws/$law-$element/sim_bench.md" | tee -a "$SUMMARY"
+    else
+      tail -5 "$OUT/laws/$law-$element.log"
+      fail "laws: $law on $element (see laws/$law-$element.log)"
+    fi
+  done
+}
+
 setup_section() {
   section "setup: fmpc_setup_bench (host setup, peak bytes per spring)"
   local bench="$BUILD/bench/setup/fmpc_setup_bench"
@@ -804,9 +841,10 @@ evaluator_section() {
 }
 
 device_info
-if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted profile || wanted baseline; then
+if wanted tests || wanted sanitizers || wanted bench || wanted laws || wanted setup || wanted profile || wanted baseline; then
   if build_section; then
     simulator_section
+    wanted laws && laws_section
     wanted setup && setup_section
     wanted profile && profile_section
     wanted baseline && baseline_section

@@ -93,7 +93,9 @@ bool GpuEngine<Real>::upload(DiagnosticList& diagnostics) {
   if (!upload_probes(diagnostics) || !upload_single_scene_features(diagnostics)) return false;
 
   model_.kind = gather_kind(common);
-  model_.element_blocks = options_.element_blocks_per_sm == 2 ? 2 : 3;
+  model_.element_blocks = options_.element_blocks_per_sm == 2 || options_.element_blocks_per_sm == 3
+                              ? options_.element_blocks_per_sm
+                              : 0;
   model_.springs = {offset_.data(),
                     spring_.data(),
                     neighbour_.data(),
