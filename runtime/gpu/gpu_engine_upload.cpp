@@ -119,7 +119,7 @@ bool GpuEngine<Real>::upload(DiagnosticList& diagnostics) {
             static_cast<Real>(common.nodal_damping_gamma0),
             static_cast<Real>(common.nodal_damping_gamma1),
             static_cast<Real>(common.mass_damping),
-            {nullptr, 0, nullptr}};  // the tools' contact: set_contact
+            {nullptr, 0, nullptr, nullptr}};  // the tools' contact: set_contact
   step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
   if (!plan_launches(c, diagnostics) || !upload_spring_records(c, diagnostics)) return false;
   // DeviceArray's cudaMemset and cudaMemcpy from pageable memory run on the legacy stream, which the non-blocking

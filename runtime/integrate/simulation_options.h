@@ -44,6 +44,11 @@ struct GpuOptions {
   // either way; false and the window are for measuring.
   bool sliced_springs = true;
   int slice_window = 0;
+  // The CUDA device the engine runs on: made current (cudaSetDevice, checked) in the thread that creates the
+  // simulation, before anything is allocated; the simulation is then used from that thread (or from one that made
+  // the device current). -1: the creating thread's current device, whatever it is (a program that chose it itself).
+  // A cohort spread over GPUs (docs/cohorts.md, --devices) runs one batch per device, each in its own thread.
+  int device = -1;
 };
 
 struct SimulationOptions {

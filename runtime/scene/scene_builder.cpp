@@ -737,6 +737,7 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
     setup->tools.push_back(std::move(tool));
   }
   setup->contact_stiffness_ratio = scene.contact_stiffness_ratio;
+  setup->contact_damping_ratio = scene.contact_damping_ratio;
   setup->gravity = scene.gravity;
   setup->law = scene.law.law;
   setup->basafa_k2_over_k1 = scene.law.k2_over_k1;

@@ -215,6 +215,7 @@ struct Scene {
   std::optional<SceneProbe> probe;
   std::vector<SceneTool> tools;
   double contact_stiffness_ratio = kDefaultContactStiffnessRatio;  // `contact: {stiffness_ratio}`
+  double contact_damping_ratio = 0.0;                               // `contact: {damping_ratio}`
   Integrator integrator = Integrator::SemiImplicitEuler;
   std::optional<double> dt;  // nullopt: auto
   double duration = 1.0;     // s
