@@ -433,8 +433,8 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
 
   // Rounds: the reference, its checks and the variants on the coarsest mesh; with --max-error the reference is then
   // refined (or its step halved) while an estimate is above a fifth of it. Then the variants on finer meshes, level
-  // by level: with --max-error, one whose run one refinement coarser took more than an eighth of the fastest
-  // variant's that meets it is skipped (a refinement costs 8 times the elements and at least as many steps: it
+  // by level: with --max-error, one whose run one refinement coarser took more than an eighth of the cheapest
+  // variant's that meets it (CPU seconds) is skipped (a refinement costs 8 times the elements and at least as many steps: it
   // cannot be faster).
   std::map<RunKey, RunOutcome> outcomes;
   double reference_factor = options.reference_dt_factor;
@@ -579,8 +579,8 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
       if (it == outcomes.end() || !it->second.row.completed) continue;
       const TradeErrors e = compare(it->second.displacement, it->second.row.final_probe_force, ref.displacement,
                                     ref.row.final_probe_force, result.has_probe_force);
-      if (within(e, *measures, *options.max_error) && it->second.row.wall_seconds < best_wall) {
-        best_wall = it->second.row.wall_seconds;
+      if (within(e, *measures, *options.max_error) && it->second.row.cpu_seconds < best_wall) {
+        best_wall = it->second.row.cpu_seconds;
         best = run_label(key);
       }
     }
@@ -590,8 +590,8 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
       RunKey coarser = key;
       coarser.build.refinements = level - 1;
       const auto it = outcomes.find(coarser);
-      if (it != outcomes.end() && it->second.row.completed && 8.0 * it->second.row.wall_seconds > best_wall) {
-        skipped[key] = "skipped: " + run_label(coarser) + " took " + significant_digits(it->second.row.wall_seconds, 3) +
+      if (it != outcomes.end() && it->second.row.completed && 8.0 * it->second.row.cpu_seconds > best_wall) {
+        skipped[key] = "skipped: " + run_label(coarser) + " took " + significant_digits(it->second.row.cpu_seconds, 3) +
                        " s, and one refinement costs at least 8 times that; " + best + ", which meets --max-error, "
                        "took " + significant_digits(best_wall, 3) + " s";
         continue;
@@ -644,7 +644,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
       const SimulationTradeRow& row = result.rows[i];
       if (!meets_max_error(result, row)) continue;
       ++result.meeting;
-      if (!result.chosen || row.real_time_factor > result.rows[*result.chosen].real_time_factor) result.chosen = i;
+      if (!result.chosen || row.cpu_seconds < result.rows[*result.chosen].cpu_seconds) result.chosen = i;
     }
   }
   return result;

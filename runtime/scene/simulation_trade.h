@@ -108,7 +108,8 @@ struct SimulationTradeOptions {
   // twice it (with max_error: halved until the check is under a fifth of it).
   double reference_dt_factor = 0.5;
   std::optional<double> duration;  // s; nullopt: the scene's
-  // The decision (docs/trade.md, "Deciding"): the cheapest variant whose errors (`measures`) are at most this.
+  // The decision (docs/trade.md, "Deciding"): the cheapest variant (CPU seconds of stepping) whose errors
+  // (`measures`) are at most this.
   std::optional<double> max_error;
   std::optional<TradeMeasures> measures;  // nullopt: displacement, and the probe force when there is a probe
   // The reference is refined no further when its next round is estimated (from the speed of its last) to take
@@ -151,7 +152,7 @@ struct SimulationTradeRow {
   std::size_t tetrahedra = 0;
   bool completed = false;
   std::string failure;  // why it did not complete (the first error), empty when it did
-  std::string skipped;  // why it was not run (it cannot be the fastest within --max-error), empty when it ran
+  std::string skipped;  // why it was not run (it cannot be the cheapest within --max-error), empty when it ran
   TradeErrors errors;   // zeros when it did not complete
   double final_probe_force = 0.0;  // N, along the probe's target direction
   double final_max_displacement = 0.0;  // m, over the coarse vertices
@@ -176,7 +177,8 @@ struct SimulationTradeResult {
   std::optional<TradeErrors> reference_mesh_difference;
   std::string reference_description;
   // The decision (with max_error): the errors it keeps, the reference's refinement rounds (one line each), and the
-  // cheapest row (highest real-time factor) meeting it; nullopt when none does.
+  // cheapest row meeting it (the fewest CPU seconds of stepping; on a GPU, of its batch's wall time); nullopt when
+  // none does.
   std::optional<double> max_error;
   TradeMeasures measures;
   std::vector<std::string> reference_rounds;

@@ -106,10 +106,10 @@ std::string simulation_trade_decision(const SimulationTradeResult& result) {
   if (result.chosen) {
     const SimulationTradeRow& row = result.rows[*result.chosen];
     line << row.variant << " meets --max-error " << trade_percent(*result.max_error) << " ("
-         << measured_text(result, row.errors) << ") at a real-time factor of "
-         << significant_digits(row.real_time_factor, 3) << " (" << significant_digits(row.wall_seconds, 3)
-         << " s of wall time for " << format_number(result.duration) << " s simulated): the fastest of the "
-         << result.meeting << " of " << variants << " variants that meet it.";
+         << measured_text(result, row.errors) << ") in " << significant_digits(row.cpu_seconds, 3)
+         << " s of CPU time for " << format_number(result.duration) << " s simulated (real-time factor "
+         << significant_digits(row.real_time_factor, 3) << "): the cheapest of the " << result.meeting << " of "
+         << variants << " variants that meet it.";
     return line.str();
   }
   const SimulationTradeRow* closest = nullptr;
@@ -190,6 +190,7 @@ std::optional<std::string> chosen_scene_text(const Scene& scene, const std::stri
   } else {
     root["model"] = "fem";
     YAML::Node fem(YAML::NodeType::Map);
+    fem.SetStyle(YAML::EmitterStyle::Flow);
     fem["law"] = element_law_row(model.element_law).keyword;
     fem["element"] = element_kind_row(std::max(row.element_kind, 0)).keyword;
     root["fem"] = fem;
@@ -214,7 +215,7 @@ std::optional<std::string> chosen_scene_text(const Scene& scene, const std::stri
   emitter << root;
   std::ostringstream out;
   out << "# Written by fmpc trade --max-error " << format_number(*result.max_error) << " from " << scene.path << ": "
-      << row.variant << ", the fastest of the " << result.meeting << " of " << result.rows.size() - 1
+      << row.variant << ", the cheapest of the " << result.meeting << " of " << result.rows.size() - 1
       << " variants that met it.\n";
   out << "# Measured against the reference (" << result.reference_description << ") over "
       << format_number(result.duration) << " s: " << measured_text(result, row.errors) << " (displacement RMS "

@@ -219,7 +219,7 @@ std::shared_ptr<SceneTradeArguments> add_scene_trade_options(CLI::App& command) 
                      "Scenes: graded (the scene's mesh from a surface), uniform (size_near everywhere); default both")
       ->delimiter(',');
   command.add_option("--max-error", arguments->max_error,
-                     "Scenes: decide: the fastest variant whose relative errors are at most this (0.05 is 5%)");
+                     "Scenes: decide: the cheapest variant whose relative errors are at most this (0.05 is 5%)");
   command.add_option("--error", arguments->error,
                      "Scenes: the errors --max-error bounds: displacement, probe_force (default: both, or "
                      "displacement without a displacement probe)")
