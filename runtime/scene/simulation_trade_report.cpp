@@ -157,6 +157,10 @@ std::string simulation_trade_markdown(const SimulationTradeResult& result) {
     const SimulationTradeRow& row = result.rows[i];
     const auto error = [&](double value) { return row.completed ? trade_percent(value) : std::string("-"); };
     const std::string mark = result.chosen && *result.chosen == i ? "**" : "";
+    if (!row.skipped.empty()) {
+      md << "| " << row.variant << " | - | - | - | - | - | - | - | - | - | " << row.skipped << " |\n";
+      continue;
+    }
     md << "| " << mark << row.variant << mark << " | " << significant_digits(row.dt, 3) << " | " << row.vertices
        << " | " << error(row.errors.displacement_max) << " | " << error(row.errors.displacement_rms) << " | "
        << (row.completed && row.errors.probe_force ? trade_percent(*row.errors.probe_force) : "-") << " | "

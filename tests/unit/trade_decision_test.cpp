@@ -195,8 +195,9 @@ TEST_CASE("the trade's reference is refined until its estimates are under a fift
           "[trade][scene]") {
   const Scene scene = parsed(kOneCell);
   SimulationTradeOptions options;
-  options.axes = {TradeAxis::Laws};
+  options.axes = {TradeAxis::Laws, TradeAxis::Refinements};
   options.models = {*parse_trade_model("stable_neo_hookean")};
+  options.refinements = {0, 1};
   options.threads = 2;
   // 100%: a fifth is 20%. The displacement one refinement coarser moves by 34% on 48 tetrahedra and 37% on 384
   // (the first of a dynamic drop: not yet converging), 14% on 3,072: refined twice more, and then it holds.
@@ -215,7 +216,16 @@ TEST_CASE("the trade's reference is refined until its estimates are under a fift
     CHECK(result->reference_time_difference.displacement_max <= 0.2);
     REQUIRE(result->chosen);
     CHECK(result->rows[*result->chosen].variant == "SNH f32 SIE r0");  // the scene's precision: float
+    // Its refined sibling costs at least 8 times as much: not run.
+    REQUIRE(result->rows.size() == 3);
+    CHECK(result->rows[2].variant == "SNH f32 SIE r1");
+    CHECK(result->rows[2].skipped.rfind("skipped: SNH f32 SIE r0 took ", 0) == 0);
+    CHECK(result->rows[2].skipped.find("s, and one refinement costs at least 8 times that; SNH f32 SIE r0, which "
+                                       "meets --max-error, took ") != std::string::npos);
+    CHECK(simulation_trade_markdown(*result).find("\n| SNH f32 SIE r1 | - | - | - | - | - | - | - | - | - | skipped: ") !=
+          std::string::npos);
   }
+  options.axes = {TradeAxis::Laws};
   // The same with no time for a second round: it says it cannot, and why.
   options.max_reference_seconds = 1e-6;
   {
