@@ -11,6 +11,7 @@
 #include <string>
 
 #include "runtime/fem/element_law_registry.h"
+#include "runtime/scene/scene_builder.h"
 #include "runtime/scene/simulation_trade.h"
 #include "tests/support/generated_program.h"
 
@@ -301,6 +302,21 @@ TEST_CASE("--variants laws,elements runs each law on each element kind, the rest
     CHECK(row.completed);
     CHECK(row.real_time_factor > 0.0);
   }
+}
+
+TEST_CASE("mesh.refinements: 0 to 3, and at most 2^22 tetrahedra after it, checked before it runs", "[trade][scene]") {
+  const auto error = [](const std::string& mesh) {
+    DiagnosticList diagnostics;
+    auto scene = parse_scene("/tmp/fmpc_refined.yaml", "mesh: " + mesh + "\nmaterial: {youngs_modulus: 5}\n",
+                             diagnostics);
+    if (scene && !diagnostics.has_errors()) build_scene(*scene, diagnostics);
+    return first_error(diagnostics);
+  };
+  CHECK(error("{box: {size: [1, 1, 1], cells: [1, 1, 1]}, refinements: 2}").empty());
+  CHECK(error("{box: {size: [1, 1, 1], cells: [1, 1, 1]}, refinements: 4}").find("1:63: mesh.refinements") == 0);
+  CHECK(error("{box: {size: [1, 1, 1], cells: [60, 60, 60]}, refinements: 3}") ==
+        "1:66: mesh.refinements: 1296000 tetrahedra refined 3 times make 663552000, above the limit of 4194304; "
+        "refine less");
 }
 
 TEST_CASE("the trade's measures: probe force without a probe is an error at the scene's loads", "[trade][scene]") {
