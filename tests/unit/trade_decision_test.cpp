@@ -379,6 +379,9 @@ TEST_CASE("fmpc trade SCENE --max-error: the decision, the written scene, and ex
   CHECK(run("block.yaml --max-error nan" + quick) == 2);
   CHECK(run("resting.yaml --max-error 0.05 --error probe_force") == 2);
   CHECK(testing::read_text_file(dir / "err.txt").find("resting.yaml:9:8: error: loads: the scene has no probe") == 0);
+  CHECK(run("resting.yaml --plot p.png --plot-error probe_force") == 2);
+  CHECK(testing::read_text_file(dir / "err.txt").find("resting.yaml:9:8: error: --plot-error probe_force: the scene has "
+                                                      "no displacement probe") == 0);
   CHECK(run("resting.yaml --variants laws --precisions double") == 2);
   CHECK(testing::read_text_file(dir / "err.txt") ==
         "fmpc trade: error: --precisions gives values of the axis 'precisions', which --variants leaves out (it holds "

@@ -304,9 +304,19 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
               << sim::gibibytes_text(plan.largest_memory_bytes) << " of memory)" << std::endl;
   };
   options->progress = [&](std::size_t done, std::size_t total, const std::string& what) {
-    running = "run " + std::to_string(std::min(done + 1, total)) + " of " + std::to_string(total) + " (" + what + ")";
+    // Runs go side by side (or in batches), a round at a time: the count of runs done, and the round's first run.
+    running = std::to_string(done) + " of " + std::to_string(total) + " runs done (" + what + ")";
   };
   options->work_progress = [&](double done, double total) { progress.show_fraction(done, total, running + ", work"); };
+  // Checked before anything runs: a probe force to plot needs a displacement probe.
+  if (arguments.plot_error == "probe_force" &&
+      !(scene->probe && scene->probe->mode == sim::ProbeLoad::Mode::Displacement)) {
+    diagnostics.error(scene->range_of(scene->probe ? "loads.probe" : "loads"),
+                      "--plot-error probe_force: the scene has no displacement probe, so there is no probe force to "
+                      "plot; use --plot-error displacement");
+    report();
+    return kExitErrors;
+  }
   // On a GPU the runs go as batches (runtime/scene/trade_runs.h); otherwise side by side on every core.
   std::string device;
 #if defined(FMPC_RUNTIME_HAVE_CUDA)
@@ -343,13 +353,6 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
   }
   if (!plot.empty()) {
     const bool force = arguments.plot_error == "probe_force";
-    if (force && !shown.has_probe_force) {
-      diagnostics.error(scene->range_of(scene->probe ? "loads.probe" : "loads"),
-                        "--plot-error probe_force: the scene has no displacement probe, so there is no probe force "
-                        "to plot; use --plot-error displacement");
-      report();
-      return kExitErrors;
-    }
     plot::TradePlot figure;
     figure.error_unit = force ? "probe force, relative" : "displacement (max), relative";
     figure.speed_label = "real-time factor (simulated s per wall s)";
