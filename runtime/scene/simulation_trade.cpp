@@ -373,8 +373,13 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   std::size_t compared_vertices = 0;
   {
     DiagnosticList build_diagnostics;
+    // The scene's own model (a membrane of springs builds, and is refused below as a mesh without tetrahedra).
     BuildKey coarse_key = reference_build;
     coarse_key.refinements = 0;
+    if (trade_has_springs(own)) {
+      coarse_key.model = own;
+      coarse_key.element_kind = -1;
+    }
     const auto coarse = build_scene(trade_variant_scene(scene, coarse_key, duration), build_diagnostics);
     if (!coarse) {
       diagnostics.append(build_diagnostics);

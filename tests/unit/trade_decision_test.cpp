@@ -148,7 +148,7 @@ TEST_CASE("the trade's decision line names the fastest variant within --max-erro
   CHECK(simulation_trade_decision(result).empty());
 }
 
-TEST_CASE("--write-scene writes the chosen variant as a scene that reads back", "[trade][scene]") {
+TEST_CASE("write-scene: the chosen variant is written as a scene that reads back", "[trade][scene]") {
   const testing::ScratchFolder folder("trade_write_scene");
   const fs::path scene_path = folder.path() / "block.yaml";
   const std::string text = std::string(kBlock) + "precision: float\n";
@@ -279,7 +279,7 @@ TEST_CASE("the trade's batches (the GPU's way) give the runs' results alone, bit
   CHECK(batch->backend == "the CPU, the runs in batches");
 }
 
-TEST_CASE("--variants laws,elements runs each law on each element kind, the rest as the scene has it",
+TEST_CASE("variants laws,elements: each law runs on each element kind, the rest as the scene has it",
           "[trade][scene]") {
   const Scene scene = parsed(kResting);
   SimulationTradeOptions options;
