@@ -789,7 +789,19 @@ std::optional<BuiltScene> build_scene(const Scene& scene, DiagnosticList& diagno
                         notes);
   }
   built.mesh = std::move(*mesh);
-  for (unsigned level = 0; level < refinements; ++level) built.mesh = subdivide_tetrahedra(built.mesh);
+  if (scene.mesh.refinements > 0) {
+    // Checked before the refinement allocates: each level multiplies the tetrahedra by 8.
+    const double refined = static_cast<double>(built.mesh.tetrahedra.size()) * std::pow(8.0, scene.mesh.refinements);
+    if (refined > static_cast<double>(kMaxRefinedTetrahedra)) {
+      diagnostics.error(scene.range_of("mesh.refinements"),
+                        "mesh.refinements: " + std::to_string(built.mesh.tetrahedra.size()) + " tetrahedra refined " +
+                            std::to_string(scene.mesh.refinements) + " times make " + format_number(refined) +
+                            ", above the limit of " + std::to_string(kMaxRefinedTetrahedra) + "; refine less");
+      return std::nullopt;
+    }
+  }
+  for (unsigned level = 0; level < scene.mesh.refinements + refinements; ++level)
+    built.mesh = subdivide_tetrahedra(built.mesh);
   std::optional<SimulationSetup> setup =
       scene.model == ForceModel::Elements ? build_fem(scene, built, rules, diagnostics)
                                                  : build_springs(scene, built, rules, diagnostics);

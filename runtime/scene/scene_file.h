@@ -33,7 +33,14 @@ struct SceneMesh {
   double unit = 1.0;        // metres per mesh unit (`units: m|cm|mm|NUMBER`)
   BoxSpec box;              // mesh units
   EllipsoidSpec ellipsoid;  // mesh units
+  // `refinements: N`: the mesh subdivided N times (subdivide_tetrahedra, 8 tetrahedra each) before anything is built
+  // on it; `fmpc trade --write-scene` writes it for a refined variant.
+  unsigned refinements = 0;
 };
+
+// The most `mesh.refinements` (each multiplies the tetrahedra by 8), and the most tetrahedra they may make.
+inline constexpr unsigned kMaxSceneMeshRefinements = 3;
+inline constexpr std::size_t kMaxRefinedTetrahedra = std::size_t{1} << 22;
 
 // An axis-aligned box in mesh units (fixed nodes, regions).
 struct SceneBox {

@@ -13,7 +13,7 @@ void SceneParser::parse_mesh(const YAML::Node& node) {
   const std::vector<std::string> meshing_keys = {"size_far", "size_near", "near_distance", "grading",
                                                  "radius_edge_ratio", "min_dihedral", "keep_surface",
                                                  "smooth_intersections", "refine_near"};
-  std::vector<std::string> allowed = {"file", "box", "ellipsoid", "surface", "units"};
+  std::vector<std::string> allowed = {"file", "box", "ellipsoid", "surface", "units", "refinements"};
   allowed.insert(allowed.end(), meshing_keys.begin(), meshing_keys.end());
   if (!check_map(node, "mesh", allowed)) return;
   SceneMesh& mesh = scene_.mesh;
@@ -93,6 +93,11 @@ void SceneParser::parse_mesh(const YAML::Node& node) {
       break;
     default:
       break;
+  }
+  if (node["refinements"]) {
+    remember(node["refinements"], "mesh.refinements");
+    if (auto n = integer(node["refinements"], "mesh.refinements", 0, kMaxSceneMeshRefinements))
+      mesh.refinements = static_cast<unsigned>(*n);
   }
   if (node["units"]) {
     const YAML::Node units = node["units"];
