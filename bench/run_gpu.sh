@@ -6,12 +6,18 @@
 #   bash bench/run_gpu.sh --prepare     # build machine: copy /usr/include/eigen3/Eigen to build-gpu-carry/eigen3
 #   bash bench/run_gpu.sh               # GPU machine, from the repository root, with build-gpu-carry/ carried
 #
+# The device tool brings back at most 8 files from its $OUT, two folders deep: write elsewhere and pack, e.g.
+#   D=$OUT; OUT=/tmp/gpu bash bench/run_gpu.sh --only tests,sanitizers; tar -C /tmp -czf $D/gpu.tgz gpu
+#
 # Sections (each appends to $OUT/summary.md, printed last):
 #   build       configure + build, Release, sm_90, FMPC_GPU_ONLY=ON
-#   simulator   gpu-labelled tests (CPU vs CUDA after 10,000 steps, bitwise reruns, batches, NaN location),
+#   simulator   gpu-labelled tests (CPU vs CUDA after 10,000 steps, bitwise reruns, batches, NaN location; GPU_TESTS="NAME
+#               ..." runs only fmpc_gpu_tests' cases whose names contain one of these),
 #               compute-sanitizer memcheck/racecheck/initcheck/synccheck on the small GPU test,
 #               bench/sim (CPU threads vs CUDA float/double, graphs on/off, 1k..1M springs, batch of scenes,
 #               a cohort of 1,000 demo-scene patients with their probes in one launch: row cuda-cohort)
+#   laws        fmpc_sim_bench --fem-only at 120^3 cells for each law on each element kind (LAW_ELEMENTS, law:element
+#               pairs; LAW_CELLS), float and double, semi-implicit Euler: element-steps/s (issue 26 item 7)
 #   scenes      the carried fmpc (a CUDA build of the build machine with its libraries and fonts: --prepare bundles
 #               $FMPC into build-gpu-carry/programs.tar.xz) runs the README's demo scene with backend auto (CUDA)
 #               and cpu, and SOFA's liver scenes (implicit Euler: springs, fuzzy springs, co-rotational FEM as
@@ -20,7 +26,15 @@
 #   haptic      the carried fmpc_haptic_bench (bench/haptic, from the same CUDA build as the carried fmpc: --prepare
 #               bundles it with fmpc) runs the 1 kHz haptic loop on the 20^3 block with the sphere tool, 30 s of wall
 #               time per mode (HAPTIC_SECONDS), implicit Euler and explicit substeps, on CUDA and on the CPU: per-tick
-#               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv), haptic.md
+#               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv: each tick's mean
+#               force and its tick-end force), haptic.md; on CUDA the explicit mode again with the tick-end force only
+#               (--force end, one call per tick) and with contact damping (--contact-damping 1)
+#   multigpu    (only when asked: --only multigpu) the carried fmpc runs the demo's cohort of 1,000 patients (inputs
+#               drawn uniformly within the ranges of liver_indentation_patients.csv, awk seed 13) on CUDA on one GPU
+#               (--devices 0) and on every GPU of the machine (--devices all), checks the two cohort.csv equal in every
+#               column but steps_per_second (a timing), and writes the speed-ups of the stepping, of stepping and
+#               recording, and of the whole command into summary.md (issue 27 item 6: >= 1.8x on two GPUs);
+#               outputs under $OUT/multigpu
 #   setup       (only when asked: --only setup) bench/setup's fmpc_setup_bench on the GPU machine's cores: boxes of
 #               60^3, 120^3 and 240^3 cells (issue 13: 100M springs set up in 20 s, 64 bytes per spring at peak)
 #               with the model builder's breakdown and the simulators' peak, then 120^3 on one thread (same checksum)
@@ -51,9 +65,9 @@
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
 # device.txt, summary.md. Options: --skip-sanitizers, --quick (shorter benchmark), --evaluator-only (that section
-# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, scenes, haptic, evaluator, fuzz; the build
-# runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses it). Exit status: 0
-# when every step passed.
+# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, laws, scenes, haptic, multigpu,
+# evaluator, fuzz; the build runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses
+# it). Exit status: 0 when every step passed.
 set -u -o pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -229,7 +243,7 @@ fi
 SKIP_SANITIZERS=0
 QUICK=0
 EVALUATOR_ONLY=0
-ONLY="tests,sanitizers,bench,scenes,haptic,evaluator"
+ONLY="tests,sanitizers,bench,laws,scenes,haptic,evaluator"
 usage="usage: bash bench/run_gpu.sh [--prepare | --skip-sanitizers | --quick | --evaluator-only | --only LIST]"
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -242,8 +256,8 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | scenes | haptic | evaluator | fuzz | setup | profile | baseline) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, scenes, haptic, evaluator, fuzz, setup, profile, baseline)" >&2
+          tests | sanitizers | bench | laws | scenes | haptic | multigpu | evaluator | fuzz | setup | profile | baseline) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, laws, scenes, haptic, multigpu, evaluator, fuzz, setup, profile, baseline)" >&2
              exit 2 ;;
         esac
       done
@@ -315,7 +329,13 @@ build_section() {
 simulator_section() {
   if wanted tests; then
   section "simulator: GPU tests"
-  (cd "$BUILD" && ctest -L gpu --output-on-failure -V) > "$OUT/gpu_tests.log" 2>&1
+  # GPU_TESTS="NAME ...": only the fmpc_gpu_tests cases whose names contain one of these (fmpc_gpu_tests --list).
+  if [[ -n "${GPU_TESTS:-}" ]]; then
+    # shellcheck disable=SC2086
+    "$BUILD/tests/gpu/fmpc_gpu_tests" $GPU_TESTS > "$OUT/gpu_tests.log" 2>&1
+  else
+    (cd "$BUILD" && ctest -L gpu --output-on-failure -V) > "$OUT/gpu_tests.log" 2>&1
+  fi
   local status=$?
   grep -E '\[ (PASS|FAIL|SKIP) \]|[0-9]+ passed, |max \|GPU - CPU\||GPU step|FAILED: ' "$OUT/gpu_tests.log" \
     | sed -E 's/^[0-9]+: *//' | tee -a "$SUMMARY"
@@ -334,29 +354,37 @@ simulator_section() {
     if [[ -z "$sanitizer" ]]; then
       fail "compute-sanitizer not found"
     else
-      # The four tools at once (each instruments the same small scenes; racecheck alone takes minutes), each under
-      # SANITIZER_SECONDS (default 480): a tool cut off is reported as such with the last test it started.
-      local tool
+      # Each smoke test (fmpc_gpu_tests --list: the names that start with sanitizer_) under each of the four tools in
+      # a process of its own, all at once (racecheck alone takes minutes on the cooperative CG), each under
+      # SANITIZER_SECONDS (default 480): a pair cut off is reported as such. Logs: sanitizer_TOOL_TEST.log.
+      local tool smoke
+      local -a smokes
+      mapfile -t smokes < <("$BUILD/tests/gpu/fmpc_gpu_tests" --list | grep -E '^sanitizer_')
+      [[ ${#smokes[@]} -gt 0 ]] || fail "no sanitizer smoke tests in fmpc_gpu_tests --list"
       local -A pids=()
       for tool in memcheck racecheck initcheck synccheck; do
         local extra=()
         [[ $tool == memcheck ]] && extra=(--leak-check full)
-        timeout "${SANITIZER_SECONDS:-480}" "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
-          "$BUILD/tests/gpu/fmpc_gpu_tests" sanitizer > "$OUT/sanitizer_$tool.log" 2>&1 &
-        pids[$tool]=$!
+        for smoke in "${smokes[@]}"; do
+          timeout "${SANITIZER_SECONDS:-480}" "$sanitizer" --tool "$tool" ${extra[@]+"${extra[@]}"} --error-exitcode 99 \
+            "$BUILD/tests/gpu/fmpc_gpu_tests" "$smoke" > "$OUT/sanitizer_${tool}_$smoke.log" 2>&1 &
+          pids[$tool/$smoke]=$!
+        done
       done
       for tool in memcheck racecheck initcheck synccheck; do
-        wait "${pids[$tool]}"
-        local rc=$?
-        local errors
-        errors=$(grep -E 'ERROR SUMMARY|RACECHECK SUMMARY' "$OUT/sanitizer_$tool.log" | tail -1)
-        if [[ $rc -eq 124 ]]; then
-          fail "$tool: cut off after ${SANITIZER_SECONDS:-480} s in '$(grep -E '^\[ RUN' "$OUT/sanitizer_$tool.log" | tail -1)'"
-        elif [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$OUT/sanitizer_$tool.log"; then
-          record "$tool: ok (${errors:-no summary line})"
-        else
-          fail "$tool: exit $rc (${errors:-see sanitizer_$tool.log})"
-        fi
+        for smoke in "${smokes[@]}"; do
+          wait "${pids[$tool/$smoke]}"
+          local rc=$? log="$OUT/sanitizer_${tool}_$smoke.log"
+          local errors
+          errors=$(grep -E 'ERROR SUMMARY|RACECHECK SUMMARY' "$log" | tail -1)
+          if [[ $rc -eq 124 ]]; then
+            fail "$tool $smoke: cut off after ${SANITIZER_SECONDS:-480} s"
+          elif [[ $rc -eq 0 ]] && grep -q '\[ PASS \]' "$log"; then
+            record "$tool $smoke: ok (${errors:-no summary line})"
+          else
+            fail "$tool $smoke: exit $rc (${errors:-see sanitizer_${tool}_$smoke.log})"
+          fi
+        done
       done
     fi
   fi
@@ -483,19 +511,94 @@ haptic_section() {
   [[ $QUICK -eq 1 ]] && seconds=5
   mkdir -p "$OUT/haptic"
   : > "$OUT/haptic.md"
-  for backend in cuda cpu; do
-    mkdir -p "$OUT/haptic/$backend"
-    if "$UNPACKED/bin/fmpc_haptic_bench" --backend "$backend" --seconds "$seconds" --out "$OUT/haptic/$backend" \
-        > "$OUT/haptic/$backend.log" 2>&1; then
-      grep -E '^(implicit|explicit) on ' "$OUT/haptic/$backend.log" | tee -a "$SUMMARY"
-      grep -E '^\|' "$OUT/haptic/$backend.log" | awk -v first="$([[ -s "$OUT/haptic.md" ]] && echo 0 || echo 1)" \
+  # Each tick reports its mean force (one step and one reading at a time); on CUDA the explicit mode also runs as one
+  # call per tick with the tick-end force only (--force end: the loop's latency without the readings) and with
+  # contact damping (--contact-damping 1: the chatter of the undamped contact gone).
+  local run extra
+  for run in cuda cpu cuda_end cuda_damped; do
+    backend=${run%%_*}
+    case "$run" in
+      cuda_end) extra=(--modes explicit --force end) ;;
+      cuda_damped) extra=(--modes explicit --contact-damping 1) ;;
+      *) extra=() ;;
+    esac
+    mkdir -p "$OUT/haptic/$run"
+    if "$UNPACKED/bin/fmpc_haptic_bench" --backend "$backend" --seconds "$seconds" ${extra[@]+"${extra[@]}"} \
+        --out "$OUT/haptic/$run" > "$OUT/haptic/$run.log" 2>&1; then
+      grep -E '^(implicit|explicit) on |^  force change' "$OUT/haptic/$run.log" | sed "s/^/$run: /" | tee -a "$SUMMARY"
+      grep -E '^\|' "$OUT/haptic/$run.log" | awk -v first="$([[ -s "$OUT/haptic.md" ]] && echo 0 || echo 1)" \
         'first == 1 || NR > 2' >> "$OUT/haptic.md"
     else
-      tail -5 "$OUT/haptic/$backend.log"
-      fail "fmpc_haptic_bench --backend $backend (see haptic/$backend.log)"
+      tail -5 "$OUT/haptic/$run.log"
+      fail "fmpc_haptic_bench --backend $backend ${extra[*]} (see haptic/$run.log)"
     fi
   done
   cat "$OUT/haptic.md" >> "$SUMMARY"
+}
+
+# A cohort over every GPU of the machine (issue 27 item 6; docs/cohorts.md, "Every GPU of a node"): the demo's 1,000
+# patients on one GPU and on all of them, one process each time (fmpc simulate --devices).
+multigpu_section() {
+  section "multigpu: the demo's 1,000-patient cohort on one GPU and on every GPU (fmpc simulate --devices)"
+  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc" ]]; then
+    fail "no fmpc in $CARRY/programs.tar.xz: run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare' on the build machine"
+    return 1
+  fi
+  local gpus
+  gpus=$(nvidia-smi -L 2>/dev/null | grep -c '^GPU ')
+  record "GPUs: $gpus ($(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | sort | uniq -c | sed -E 's/^ +//' | paste -sd ';' -))"
+  [[ $gpus -ge 2 ]] || record "only $gpus GPU: 'all' is that one GPU, so the speed-up below is about 1 (run on a machine of two or more)"
+  mkdir -p "$OUT/multigpu" "$BUILD/multigpu"
+  local demo="$ROOT/rulesets/scenes/liver_indentation.yaml" patients="$BUILD/multigpu/patients_1000.csv"
+  # Uniform within each input's range over the demo's 12 patients (HCV 5-26, HBV 5-24, ALD 5-40, CLD 5-21, NAFLD 5-32).
+  awk 'BEGIN { srand(13); print "label,HCV,HBV,ALD,CLD,NAFLD"
+               for (p = 1; p <= 1000; ++p)
+                 printf "P%04d,%.3f,%.3f,%.3f,%.3f,%.3f\n", p, 5 + 21 * rand(), 5 + 19 * rand(), 5 + 35 * rand(),
+                        5 + 16 * rand(), 5 + 27 * rand() }' > "$patients"
+  cp "$patients" "$OUT/multigpu/"
+  local run devices
+  for run in one all; do
+    devices=$([[ $run == one ]] && echo 0 || echo all)
+    rm -rf "$BUILD/multigpu/$run"
+    if "$UNPACKED/bin/fmpc" simulate "$demo" --backend cuda --patients "$patients" --devices "$devices" \
+        -o "$BUILD/multigpu/$run" > "$OUT/multigpu/$run.log" 2>&1; then
+      cp "$BUILD/multigpu/$run/cohort.csv" "$OUT/multigpu/cohort_$run.csv"
+      record "--devices $devices: $(grep -E '^  (stepping|whole command)' "$OUT/multigpu/$run.log" | sed -E 's/^ +//' | paste -sd ';' -)"
+    else
+      tail -5 "$OUT/multigpu/$run.log"
+      fail "cohort with --devices $devices (see multigpu/$run.log)"
+    fi
+  done
+  [[ -f "$OUT/multigpu/cohort_one.csv" && -f "$OUT/multigpu/cohort_all.csv" ]] || return 1
+  if cmp -s <(cut -d, -f1-15 "$OUT/multigpu/cohort_one.csv") <(cut -d, -f1-15 "$OUT/multigpu/cohort_all.csv"); then
+    record "cohort.csv: one GPU and $gpus GPUs equal in every column but steps_per_second ($(($(wc -l < "$OUT/multigpu/cohort_one.csv") - 1)) patients)"
+  else
+    fail "cohort.csv differs between one GPU and all (multigpu/cohort_{one,all}.csv)"
+  fi
+  # Seconds from the report: the stepping, stepping and recording, the whole command.
+  seconds() {
+    case "$2" in
+      stepping) grep -E '^  stepping' "$1" | sed -E 's/.*checks included\): ([0-9.e+-]+) s.*/\1/' ;;
+      recording) grep -E '^  whole command' "$1" | sed -E 's/.*stepping and recording ([0-9.e+-]+) s.*/\1/' ;;
+      command) grep -E '^  whole command' "$1" | sed -E 's/^  whole command: ([0-9.e+-]+) s.*/\1/' ;;
+    esac
+  }
+  local what one all label
+  record ""
+  record "| $gpus GPUs against one | one GPU s | all s | speed-up |"
+  record "| --- | --- | --- | --- |"
+  for what in stepping recording command; do
+    one=$(seconds "$OUT/multigpu/one.log" "$what")
+    all=$(seconds "$OUT/multigpu/all.log" "$what")
+    case $what in
+      stepping) label="stepping (the advance calls; the slowest GPU's)" ;;
+      recording) label="stepping and recording" ;;
+      command) label="whole command" ;;
+    esac
+    record "| $label | $one | $all | $(awk -v a="$one" -v b="$all" 'BEGIN { if (b > 0) printf "%.2fx", a / b; else print "n/a" }') |"
+  done
+  record ""
+  record "goal (issue 27 item 6): >= 1.8x one GPU on two"
 }
 
 # The median of the numbers on stdin.
@@ -584,6 +687,26 @@ unpack_programs() {
 }
 
 # Host setup of large boxes on this machine's cores (bench/setup; docs/performance.md "Host setup and frames").
+# Issue 26 item 7: each law on each element kind at 120^3 cells (10,368,000 elements), float and double,
+# semi-implicit Euler, GPU only; LAW_ELEMENTS (law:element pairs, the scene keywords) picks them.
+laws_section() {
+  section "laws: element-steps/s per law and element kind (fmpc_sim_bench --fem-only --fem-cells 120)"
+  local bench="$BUILD/bench/sim/fmpc_sim_bench" pair
+  [[ -x "$bench" ]] || { fail "no $bench (the build section builds it)"; return 1; }
+  for pair in ${LAW_ELEMENTS:-corotational:linear stable_neo_hookean:linear corotational:quadratic stable_neo_hookean:quadratic}; do
+    local law=${pair%%:*} element=${pair##*:}
+    mkdir -p "$OUT/laws/$law-$element"
+    if "$bench" --fem-only --fem-cells "${LAW_CELLS:-120}" --fem-law "$law" --fem-element "$element" \
+        --out "$OUT/laws/$law-$element" > "$OUT/laws/$law-$element.log" 2>&1; then
+      record "$law on $element elements:"
+      grep -E '^\| .*cuda' "$OUT/laws/$law-$element/sim_bench.md" | tee -a "$SUMMARY"
+    else
+      tail -5 "$OUT/laws/$law-$element.log"
+      fail "laws: $law on $element (see laws/$law-$element.log)"
+    fi
+  done
+}
+
 setup_section() {
   section "setup: fmpc_setup_bench (host setup, peak bytes per spring)"
   local bench="$BUILD/bench/setup/fmpc_setup_bench"
@@ -721,9 +844,10 @@ evaluator_section() {
 }
 
 device_info
-if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted profile || wanted baseline; then
+if wanted tests || wanted sanitizers || wanted bench || wanted laws || wanted setup || wanted profile || wanted baseline; then
   if build_section; then
     simulator_section
+    wanted laws && laws_section
     wanted setup && setup_section
     wanted profile && profile_section
     wanted baseline && baseline_section
@@ -731,6 +855,7 @@ if wanted tests || wanted sanitizers || wanted bench || wanted setup || wanted p
 fi
 wanted scenes && scenes_section
 wanted haptic && haptic_section
+wanted multigpu && multigpu_section
 wanted evaluator && evaluator_section
 wanted fuzz && fuzz_section
 

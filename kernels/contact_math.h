@@ -5,7 +5,10 @@
 //
 // A tool is a capsule: the points within `radius` of the segment [a, b]; a sphere is the capsule with b = a. A surface
 // vertex at x, with q the closest point of the segment, r = |x - q| and depth d = radius - r > 0, is pushed out along
-// n = (x - q) / r by f = k d n, k the vertex's contact stiffness (zero for interior vertices, which never touch a tool).
+// n = (x - q) / r by f = max(k d - c (v . n), 0) n, k the vertex's contact stiffness (zero for interior vertices, which
+// never touch a tool) and c its contact damping (zero unless the scene asks: contact.damping_ratio), acting on the
+// vertex's normal velocity v . n (the tool taken at rest between its poses); the damper pushes, it never pulls the
+// surface onto the tool.
 // A vertex exactly on the axis (r = 0) has no direction and gets no force; it can only get there by passing through
 // the tool. The tool feels -f at x.
 #include "kernels/fmpc_hd.h"
@@ -23,12 +26,14 @@ struct ToolShape {
   Real radius;
 };
 
-// What the step reads of the tools: their shapes (null or count 0: no tool) and each vertex's contact stiffness.
+// What the step reads of the tools: their shapes (null or count 0: no tool), each vertex's contact stiffness and
+// damping.
 template <typename Real>
 struct ContactView {
   const ToolShape<Real>* tools;
   int tool_count;
   const Real* stiffness;  // N/m per vertex; zero for a vertex that cannot touch a tool
+  const Real* damping;    // N s/m per vertex; null: no contact damping
 };
 
 // The offset of (x, y, z) from the closest point of the tool's segment: (rx, ry, rz).
@@ -66,15 +71,19 @@ FMPC_HD bool tool_penetration(const ToolShape<Real>& tool, Real x, Real y, Real 
   return true;
 }
 
-// The contact force of every tool, in list order, on a vertex at (x, y, z) with contact stiffness k, added to (fx,
-// fy, fz).
+// The contact force of every tool, in list order, on a vertex at (x, y, z) moving at (vx, vy, vz) with contact
+// stiffness k and damping c, added to (fx, fy, fz).
 template <typename Real>
-FMPC_HD void add_contact_force(const ContactView<Real>& contact, Real k, Real x, Real y, Real z, Real& fx, Real& fy,
-                               Real& fz) {
+FMPC_HD void add_contact_force(const ContactView<Real>& contact, Real k, Real c, Real x, Real y, Real z, Real vx,
+                               Real vy, Real vz, Real& fx, Real& fy, Real& fz) {
   for (int t = 0; t < contact.tool_count; ++t) {
     Real nx, ny, nz, depth;
     if (!tool_penetration(contact.tools[t], x, y, z, nx, ny, nz, depth)) continue;
-    const Real magnitude = k * depth;
+    Real magnitude = k * depth;
+    if (c > Real(0)) {
+      magnitude -= c * (vx * nx + vy * ny + vz * nz);
+      if (!(magnitude > Real(0))) magnitude = Real(0);
+    }
     fx += magnitude * nx;
     fy += magnitude * ny;
     fz += magnitude * nz;

@@ -19,7 +19,7 @@ namespace {
 // The element pass needs 91 registers per thread in float unbounded (ptxas, sm_90), which leaves 2 blocks of 256 per
 // SM; bounded to 3 blocks it gets 80 registers and spills 20 bytes (ncu: the spills' local stores became the pass's
 // largest L2 traffic once the corner forces were written as vectors). ForceModelView::element_blocks picks the
-// instance; double keeps its registers (1).
+// instance (0: the element kind's kFloatElementBlocks); double keeps its registers (1).
 template <typename Real, typename Element, typename Law, bool Accumulate, int MinBlocks>
 __global__ void __launch_bounds__(kThreadsPerBlock, MinBlocks)
     element_forces_kernel(kernels::ElementTermView<Real> term, kernels::StateView<Real> state,
@@ -35,7 +35,7 @@ cudaError_t launch_term_forces(const ForceModelView<Real>& model, const kernels:
                                const kernels::StateView<Real>& state, cudaStream_t stream) {
   const int blocks = blocks_for(term.count);
   if constexpr (std::is_same_v<Real, float>) {
-    if (model.element_blocks == 2) {
+    if ((model.element_blocks == 0 ? Element::kFloatElementBlocks : model.element_blocks) == 2) {
       element_forces_kernel<Real, Element, Law, Accumulate, 2>
           <<<blocks, kThreadsPerBlock, 0, stream>>>(term, state, model.corner_force);
       return cudaGetLastError();

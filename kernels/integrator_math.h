@@ -37,11 +37,12 @@ struct VertexLoadValues {
   Real rest_x, rest_y, rest_z;     // read where there is nodal damping
   Real force_x, force_y, force_z;  // zero without external forces
   Real contact_stiffness;          // zero without tools
+  Real contact_damping;            // zero without contact damping
 };
 
 template <typename Real>
 FMPC_HD VertexLoadValues<Real> vertex_load_values(const VertexLoads<Real>& loads, int v) {
-  VertexLoadValues<Real> l{loads.mass[v], Real(0), Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
+  VertexLoadValues<Real> l{loads.mass[v], Real(0), Real(0), Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
     l.rest_x = loads.rest_x[v];
     l.rest_y = loads.rest_y[v];
@@ -53,6 +54,7 @@ FMPC_HD VertexLoadValues<Real> vertex_load_values(const VertexLoads<Real>& loads
     l.force_z = loads.force_z[v];
   }
   if (loads.contact.tool_count > 0) l.contact_stiffness = loads.contact.stiffness[v];
+  if (loads.contact.damping) l.contact_damping = loads.contact.damping[v];
   return l;
 }
 
@@ -69,7 +71,8 @@ FMPC_HD void loaded_acceleration(const VertexLoadValues<Real>& own, unsigned cha
     fz += own.force_z;
   }
   if (own.contact_stiffness > Real(0))
-    add_contact_force(loads.contact, own.contact_stiffness, self.x, self.y, self.z, fx, fy, fz);
+    add_contact_force(loads.contact, own.contact_stiffness, own.contact_damping, self.x, self.y, self.z, self.vx,
+                      self.vy, self.vz, fx, fy, fz);
   if (loads.gamma0 != Real(0) || loads.gamma1 != Real(0)) {
     const Real dx = self.x - own.rest_x, dy = self.y - own.rest_y, dz = self.z - own.rest_z;
     const Real gamma = loads.gamma0 + loads.gamma1 * square_root(dx * dx + dy * dy + dz * dz);

@@ -7,12 +7,19 @@
 // waits for. Two modes: one implicit Euler step of 1 ms per tick, and explicit (semi-implicit Euler at the scene's
 // critical step, `dt: auto`) substeps per tick.
 //
+// The force a tick reports is what a haptic device should render for it: the tool's impulse over the tick's steps
+// divided by their duration (Session::step_to_averaging: each substep's force, read at its start for semi-implicit
+// Euler and at its end for implicit Euler). The reading at the tick's end alone chatters with explicit substeps (a
+// vertex pressed by the penalty bounces between substeps); it stays in the CSV. --force end steps each tick in one
+// call (step_to) and reports only that reading: the loop without the per-substep readings, for its latency.
+//
 // Ticks are paced at 1 kHz of wall time: a tick starts at its deadline (k ms after the first), or at once when the
 // loop is behind; each mode runs for --seconds of wall time. The real-time factor is the simulated time over the wall
 // time (1 when the loop keeps up; below 1 it falls behind); an overrun is a tick whose latency exceeds 1 ms.
 //
 //   fmpc_haptic_bench [--seconds S | --ticks N] [--modes implicit,explicit] [--backend cpu|cuda] [--cells N]
-//                     [--threads N] [--precision float|double] [--out DIR]
+//                     [--threads N] [--precision float|double] [--force mean|end] [--contact-damping R]
+//                     [--out DIR]
 //
 // --seconds     wall time per mode (default 30)
 // --ticks       exactly N ticks per mode instead (the ctest smoke test: 150 ticks on --cells 4, about a second)
@@ -21,8 +28,10 @@
 // --cells       cells per edge of the block (default 20)
 // --threads     CPU worker threads (the scene's `threads`; default 0: the scene's default)
 // --precision   double (default) or float
-// --out DIR     writes haptic.csv (one row per mode) and haptic_force_MODE.csv (every tick: time, pose, force,
-//               latency) into DIR
+// --force       mean (default): the tick's mean force, one step and one reading at a time; end: the tick-end reading
+// --contact-damping  the scene's contact.damping_ratio in explicit mode (default 0: none; implicit mode takes none)
+// --out DIR     writes haptic.csv (one row per mode) and haptic_force_MODE.csv (every tick: time, pose, the mean
+//               force, the tick-end force, contacts, latency) into DIR
 // Prints one line per mode and a Markdown table. Exit status 0, 1 when a step or a reading fails, 2 on bad arguments.
 #include <algorithm>
 #include <chrono>
@@ -32,6 +41,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -67,6 +77,8 @@ struct Options {
   int cells = 20;
   int threads = 0;
   std::string precision = "double";
+  bool mean_force = true;  // --force mean
+  double contact_damping = 0.0;
   std::string out;
 };
 
@@ -85,6 +97,9 @@ std::string scene_yaml(const Options& options, const std::string& mode) {
        << "fixed:\n  plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n"
        << "tools:\n  - name: tip\n    shape: sphere\n    radius: " << kRadius << "\n"
        << "    pose: {position: [" << kBlock / 2 << ", " << kBlock / 2 << ", " << top << "]}\n"
+       << (mode == "explicit" && options.contact_damping > 0.0
+               ? "contact: {damping_ratio: " + std::to_string(options.contact_damping) + "}\n"
+               : std::string())
        << "integrator: " << (mode == "implicit" ? "implicit_euler" : "semi_implicit_euler") << "\n"
        << "dt: " << (mode == "implicit" ? "0.001" : "auto") << "\n"
        << "duration: 3600\n"
@@ -108,6 +123,12 @@ ToolPose tool_pose(double t) {
   return pose;
 }
 
+double magnitude(const fmpc::sim::Point3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+fmpc::sim::Point3 difference(const fmpc::sim::Point3& a, const fmpc::sim::Point3& b) {
+  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+
 double percentile(std::vector<double> values, double fraction) {
   if (values.empty()) return 0.0;
   std::sort(values.begin(), values.end());
@@ -125,7 +146,10 @@ struct ModeResult {
   double p50 = 0.0, p99 = 0.0, max = 0.0;  // ms
   std::size_t overruns = 0;
   double real_time_factor = 0.0;
-  double final_force = 0.0, peak_force = 0.0;  // N, magnitudes
+  double final_force = 0.0, peak_force = 0.0;  // N, magnitudes of the reported force (--force)
+  // How much the reported force jumps from tick to tick once in contact: the mean |F(k) - F(k-1)| (N), for the mean
+  // and for the tick-end force (the chatter).
+  double mean_step = 0.0, end_step = 0.0;
   // Implicit Euler's solves (all contact rounds of a step counted): iterations per step, the largest residual.
   double iterations_mean = 0.0;
   int iterations_max = 0;
@@ -151,10 +175,12 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
   std::ofstream curve;
   if (!options.out.empty()) {
     curve.open(std::filesystem::path(options.out) / ("haptic_force_" + mode + ".csv"));
-    curve << "tick,time_s,tool_x_m,tool_y_m,tool_z_m,fx_N,fy_N,fz_N,contacts,latency_ms\n";
+    curve << "tick,time_s,tool_x_m,tool_y_m,tool_z_m,fx_N,fy_N,fz_N,fx_end_N,fy_end_N,fz_end_N,contacts,latency_ms\n";
     curve.precision(9);
   }
   std::vector<double> latencies;
+  std::optional<ToolReading> previous_end, previous_mean;
+  std::size_t steps_compared = 0;
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start = fmpc::bench::cpu_seconds();
   const std::size_t steps_before = session->steps_taken();
@@ -167,27 +193,43 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
     const double t = static_cast<double>(tick) * kTick;
     const ToolPose pose = tool_pose(t);
     const auto tick_start = std::chrono::steady_clock::now();
-    if (!session->set_tool_pose(0, pose, diagnostics) || !session->step_to(t, diagnostics)) {
-      std::cerr << session->render(diagnostics);
-      return false;
-    }
-    const std::vector<ToolReading> readings = session->tool_readings(diagnostics);
+    std::vector<ToolReading> mean, end;
+    const bool stepped = session->set_tool_pose(0, pose, diagnostics) &&
+                         (options.mean_force ? session->step_to_averaging(t, mean, diagnostics, &end)
+                                             : session->step_to(t, diagnostics));
+    if (stepped && !options.mean_force) end = session->tool_readings(diagnostics);
     const double latency = 1e3 * fmpc::bench::seconds_since(tick_start);
-    if (readings.size() != 1) {
+    if (!stepped || end.size() != 1 || (options.mean_force && mean.size() != 1)) {
       std::cerr << session->render(diagnostics);
       return false;
     }
     latencies.push_back(latency);
-    const ToolReading& reading = readings.front();
-    const double force = std::sqrt(reading.force[0] * reading.force[0] + reading.force[1] * reading.force[1] +
-                                   reading.force[2] * reading.force[2]);
+    const ToolReading& reading = options.mean_force ? mean.front() : end.front();
+    const double force = magnitude(reading.force);
     result.peak_force = std::max(result.peak_force, force);
     result.final_force = force;
     result.ticks = tick;
-    if (curve.is_open())
-      curve << tick << "," << t << "," << pose.position[0] << "," << pose.position[1] << "," << pose.position[2] << ","
-            << reading.force[0] << "," << reading.force[1] << "," << reading.force[2] << "," << reading.contacts << ","
-            << latency << "\n";
+    if (previous_end) {
+      result.end_step += magnitude(difference(end.front().force, previous_end->force));
+      if (options.mean_force) result.mean_step += magnitude(difference(reading.force, previous_mean->force));
+      ++steps_compared;
+    }
+    // From the first tick in contact on.
+    if (previous_end || end.front().contacts > 0 || force > 0.0) {
+      previous_end = end.front();
+      previous_mean = reading;
+    }
+    if (curve.is_open()) {
+      curve << tick << "," << t << "," << pose.position[0] << "," << pose.position[1] << "," << pose.position[2] << ",";
+      if (options.mean_force) curve << reading.force[0] << "," << reading.force[1] << "," << reading.force[2];
+      else curve << ",,";
+      curve << "," << end.front().force[0] << "," << end.front().force[1] << "," << end.front().force[2] << ","
+            << end.front().contacts << "," << latency << "\n";
+    }
+  }
+  if (steps_compared > 0) {
+    result.mean_step /= static_cast<double>(steps_compared);
+    result.end_step /= static_cast<double>(steps_compared);
   }
   result.wall = fmpc::bench::seconds_since(start);
   result.cpu = fmpc::bench::cpu_seconds() - cpu_start;
@@ -271,12 +313,25 @@ bool parse(int argc, char** argv, Options& options) {
         return false;
       }
       options.precision = value;
+    } else if (arg == "--contact-damping") {
+      options.contact_damping = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(options.contact_damping >= 0.0 && options.contact_damping <= 100.0)) {
+        std::cerr << "fmpc_haptic_bench: --contact-damping: expected a ratio from 0 to 100, got '" << value << "'\n";
+        return false;
+      }
+    } else if (arg == "--force") {
+      if (value != "mean" && value != "end") {
+        std::cerr << "fmpc_haptic_bench: --force: expected mean or end, got '" << value << "'\n";
+        return false;
+      }
+      options.mean_force = value == "mean";
     } else if (arg == "--out") {
       options.out = value;
     } else {
       std::cerr
           << "usage: fmpc_haptic_bench [--seconds S | --ticks N] [--modes implicit,explicit] [--backend cpu|cuda] "
-             "[--cells N] [--threads N] [--precision float|double] [--out DIR]\n";
+             "[--cells N] [--threads N] [--precision float|double] [--force mean|end] [--contact-damping R] "
+             "[--out DIR]\n";
       return false;
     }
   }
@@ -303,10 +358,15 @@ int main(int argc, char** argv) {
     std::printf(
         "%s on %s: %zu vertices, dt %.3g s (%.3g steps per tick), %zu ticks in %.2f s wall (%.2f s CPU), "
         "latency p50 %.3f ms, p99 %.3f ms, max %.3f ms, %zu overruns of 1 ms, real-time factor %.3f, "
-        "force %.4f N (peak %.4f N)\n",
+        "%s force %.4f N (peak %.4f N)\n",
         mode.c_str(), options.backend.c_str(), result.vertices, result.dt, result.steps_per_tick, result.ticks,
         result.wall, result.cpu, result.p50, result.p99, result.max, result.overruns, result.real_time_factor,
-        result.final_force, result.peak_force);
+        options.mean_force ? "mean" : "tick-end", result.final_force, result.peak_force);
+    if (options.mean_force)
+      std::printf(
+          "  force change from tick to tick in contact: %.4g N for the tick's mean force, %.4g N at tick ends "
+          "(contact damping ratio %g)\n",
+          result.mean_step, result.end_step, mode == "explicit" ? options.contact_damping : 0.0);
     if (mode == "implicit")
       std::printf(
           "  implicit solves: %.1f iterations per step (at most %d), largest relative residual %.3g, %zu "
@@ -324,13 +384,16 @@ int main(int argc, char** argv) {
   if (!options.out.empty()) {
     std::ofstream csv(std::filesystem::path(options.out) / "haptic.csv");
     csv << "mode,backend,precision,cells,vertices,dt_s,steps_per_tick,ticks,wall_s,cpu_s,setup_s,latency_p50_ms,"
-           "latency_p99_ms,latency_max_ms,overruns,real_time_factor,final_force_N,peak_force_N,iterations_mean,"
-           "iterations_max,residual_max,capped_steps\n";
+           "latency_p99_ms,latency_max_ms,overruns,real_time_factor,force,final_force_N,peak_force_N,"
+           "mean_force_change_N,end_force_change_N,contact_damping_ratio,iterations_mean,iterations_max,residual_max,"
+           "capped_steps\n";
     for (const ModeResult& r : results)
       csv << r.mode << "," << options.backend << "," << options.precision << "," << options.cells << "," << r.vertices
           << "," << r.dt << "," << r.steps_per_tick << "," << r.ticks << "," << r.wall << "," << r.cpu << "," << r.setup
           << "," << r.p50 << "," << r.p99 << "," << r.max << "," << r.overruns << "," << r.real_time_factor << ","
-          << r.final_force << "," << r.peak_force << "," << r.iterations_mean << "," << r.iterations_max << ","
+          << (options.mean_force ? "mean" : "end") << "," << r.final_force << "," << r.peak_force << ","
+          << r.mean_step << "," << r.end_step << "," << (r.mode == "explicit" ? options.contact_damping : 0.0) << ","
+          << r.iterations_mean << "," << r.iterations_max << ","
           << r.residual_max << "," << r.capped_steps << "\n";
   }
   return 0;

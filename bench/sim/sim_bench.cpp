@@ -6,7 +6,10 @@
 // from ~8k to ~10M tetrahedra and springs with the volume term. Writes a CSV and prints a table.
 //
 //   fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only]
-//                  [--cohort PATIENTS] [--liver PATH] [--implicit-only]
+//                  [--cohort PATIENTS] [--liver PATH] [--implicit-only] [--fem-law LAW] [--fem-element ELEMENT]
+//
+// --fem-law / --fem-element: the FEM rows of that law (fem: {law}) on that element kind (fem: {element}); the
+// springs-with-the-volume-term rows only with the defaults.
 //
 // --cohort N: the cohort row's patients (default 1,000; 64 with --quick unless --cohort is given): the demo scene's
 // block with its probe, one batch (fmpc simulate --patients), aggregate spring-steps/s.
@@ -77,6 +80,9 @@ struct Options {
   bool cohort_only = false;    // only the cohort rows (with --spring-cells: both)
   std::string liver;           // SOFA's liver.msh for the implicit rows (empty: the liver row is skipped)
   bool implicit_only = false;  // only the implicit Euler rows
+  // The element rows' law and element kind (fem: {law, element} keywords; empty: the registries' defaults).
+  std::string fem_law;
+  std::string fem_element;
 };
 
 struct Row {
@@ -127,9 +133,9 @@ SimulationSetup benchmark_box(int cells, Precision precision, Integrator integra
   return *setup;
 }
 
-// The same box as a finite-element model of the default law (nu 0.45, damping ratio 0.9), or, with_springs, as
-// springs with the law beside them calibrated for nu 0.45.
-SimulationSetup benchmark_element_box(int cells, bool with_springs) {
+// The same box as a finite-element model of `law` on `element` (registry indices; nu 0.45, damping ratio 0.9), or,
+// with_springs, as springs with the law beside them calibrated for nu 0.45.
+SimulationSetup benchmark_element_box(int cells, bool with_springs, int law, int element) {
   DiagnosticList diagnostics;
   BoxSpec box;
   box.cells_x = box.cells_y = box.cells_z = cells;
@@ -138,6 +144,8 @@ SimulationSetup benchmark_element_box(int cells, bool with_springs) {
   std::optional<SimulationSetup> setup;
   if (!with_springs) {
     FemModelSpec spec;
+    spec.law = law;
+    spec.element = element;
     spec.youngs_modulus = {5000.0};
     spec.poisson_ratio = {0.45};
     spec.mass.value = 1060.0;
@@ -176,7 +184,12 @@ std::size_t element_count(const SimulationSetup& setup) {
 std::string model_label(const SimulationSetup& setup) {
   if (setup.springs.size() > 0 && !setup.elements.empty())
     return element_law_row(setup.elements.terms.front().law).trade_label;
-  return sim::model_name(setup);
+  // The default law keeps its model name (the rows of earlier runs in docs/performance.md); another law is named.
+  const int law = setup.elements.empty() ? default_fem_law().law : setup.elements.terms.front().law;
+  const std::string name = law == default_fem_law().law ? sim::model_name(setup) : element_law_row(law).keyword;
+  const int kind = setup.elements.geometry.kind;
+  if (kind == default_element_kind().kind) return name;
+  return name + " (" + element_kind_rows()[static_cast<std::size_t>(kind)].keyword + ")";
 }
 
 // Runs advance(chunk) until at least min_seconds have passed (the chunk doubling from `first`), after one untimed
@@ -544,7 +557,7 @@ std::vector<Row> implicit_rows(const Options& options, bool have_device, unsigne
       return {row};
     }
   }
-  SimulationSetup box = benchmark_element_box(20, false);
+  SimulationSetup box = benchmark_element_box(20, false, default_fem_law().law, default_element_kind().kind);
   box.integrator = Integrator::ImplicitEuler;
   box.precision = Precision::Double;
   box.time_step = 0.001;
@@ -596,10 +609,15 @@ bool parse(int argc, char** argv, Options& options) {
       options.liver = argv[++i];
     } else if (arg == "--implicit-only") {
       options.implicit_only = true;
+    } else if (arg == "--fem-law" && i + 1 < argc) {
+      options.fem_law = argv[++i];
+    } else if (arg == "--fem-element" && i + 1 < argc) {
+      options.fem_element = argv[++i];
     } else {
       std::cerr
           << "usage: fmpc_sim_bench [--out DIR] [--quick] [--threads N] [--min-seconds S] [--fem-cells N] [--fem-only] "
-             "[--cohort PATIENTS] [--cohort-only] [--spring-cells N] [--liver PATH] [--implicit-only]\n";
+             "[--cohort PATIENTS] [--cohort-only] [--spring-cells N] [--liver PATH] [--implicit-only] [--fem-law LAW] "
+             "[--fem-element ELEMENT]\n";
       return false;
     }
   }
@@ -693,6 +711,17 @@ int main(int argc, char** argv) {
 
   // The force models with an element pass. CPU rows up to 52^3 cells (843,648 tetrahedra); the largest box on the
   // GPU only, semi-implicit Euler in float and double (issue 10: 10 G tetrahedron-steps/s at 10M tetrahedra).
+  // --fem-law / --fem-element: the FEM rows of that law on that element kind (springs beside the law are left out).
+  const ElementLawRow* law_row = options.fem_law.empty() ? &default_fem_law() : fem_law_by_keyword(options.fem_law);
+  const ElementKindRow* kind_row =
+      options.fem_element.empty() ? &default_element_kind() : element_kind_by_keyword(options.fem_element);
+  if (!law_row || !kind_row) {
+    std::cerr << "fmpc_sim_bench: unknown " << (law_row ? "--fem-element " + options.fem_element : "--fem-law " + options.fem_law)
+              << "\n";
+    return 2;
+  }
+  const int law = law_row->law, element = kind_row->kind;
+  const bool default_model = law == default_fem_law().law && element == default_element_kind().kind;
   std::vector<int> fem_sizes = options.quick ? std::vector<int>{5, 11} : std::vector<int>{11, 24, 52};
   if (!options.quick && have_device && options.fem_cells > 52) fem_sizes.push_back(options.fem_cells);
   if (options.spring_cells > 0 || options.cohort_only || options.implicit_only) fem_sizes.clear();
@@ -700,9 +729,9 @@ int main(int argc, char** argv) {
   for (const int cells : fem_sizes) {
     for (const bool with_springs : {false, true}) {
       const bool largest = cells > 52;
-      if (largest && with_springs) continue;
+      if ((largest || !default_model) && with_springs) continue;
       const auto start = std::chrono::steady_clock::now();
-      const SimulationSetup base = benchmark_element_box(cells, with_springs);
+      const SimulationSetup base = benchmark_element_box(cells, with_springs, law, element);
       const double setup_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::cout << model_label(base) << " box " << cells << "^3: " << base.rest_positions.size() << " vertices, "
                 << base.tetrahedra.size() << " tetrahedra, set up in " << format(setup_seconds, 2) << " s\n"
@@ -722,10 +751,11 @@ int main(int argc, char** argv) {
       if (!have_device) continue;
       for (const Precision precision : {Precision::Float, Precision::Double})
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options));
-      // The element pass's register bound: 2 blocks per SM (no spills) against the default 3.
+      // The element pass's register bound, 2 and 3 blocks per SM, against the element kind's default (the row above).
       if (largest || cells >= 52)
-        rows.push_back(
-            gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0, kCheckEvery, 2));
+        for (const int element_blocks : {2, 3})
+          rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0,
+                                 kCheckEvery, element_blocks));
       if (!largest && cells <= 24)
         rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Persistent, options));
       if (!largest && cells == 24)

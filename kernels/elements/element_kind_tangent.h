@@ -8,6 +8,9 @@ namespace fmpc::kernels {
 
 template <typename Kind>
 struct ElementKindTangent {
+  // The float element pass's register bound by default, in blocks of 256 threads per SM (kernels/explicit_step.cu):
+  // three unless a kind declares its own.
+  static constexpr int kFloatElementBlocks = 3;
   // Column (3 b + j) of the 3N x 3N tangent: its action on the unit displacement of node b along axis j.
   template <typename Law, typename View, typename Linearisation, int N>
   static FMPC_HD void stiffness_column(const View& t, int e, const Linearisation& lin, int b, int j,

@@ -27,6 +27,11 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
   static FMPC_HD typename Law::template Material<Real> point_material(const ElementTermView<Real>& t, int e) {
     return Law::material(t, e);
   }
+
+  // The float element pass's register bound by default (blocks of 256 threads per SM; kernels/explicit_step.cu): two
+  // (no spills) measured 2.32e9 element-steps/s against 1.77e9 at three on 10M elements (docs/performance.md,
+  // fifteenth run).
+  static constexpr int kFloatElementBlocks = 2;
   // Edge node 4 + m lies between corners edge_end(m, 0) and edge_end(m, 1): edges 0-1, 1-2, 2-0, then k-3 for k = 0,
   // 1, 2 (arithmetic rather than a table: a constant array indexed at run time is not addressable in device code).
   static FMPC_HD constexpr int edge_end(int m, int end) {

@@ -44,6 +44,9 @@ class GpuEngine final : public sim::SteppingEngine {
       : scenes_(scenes), stability_(stability), options_(options) {}
 
   ~GpuEngine() override {
+    // The device's own memory, stream and graphs are released on it, whichever thread destroys the engine; a
+    // destructor cannot report, and a failure here leaves the frees below to fail alike.
+    if (options_.device >= 0) cudaSetDevice(options_.device);
     graphs_.clear();
     if (stream_ != nullptr) cudaStreamDestroy(stream_);
   }
@@ -123,7 +126,8 @@ class GpuEngine final : public sim::SteppingEngine {
   // Rigid tools and the material (gpu_engine_contact.cpp): a batch with tools is one scene (batch_accepts). The
   // contact stiffness and the tools' shapes are written into allocations made once, whose pointers loads_ (and so
   // every captured graph) keeps; a pose costs one copy of kMostTools shapes on the stream.
-  bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList& diagnostics) override;
+  bool set_contact(std::size_t scene, const std::vector<double>& stiffness, const std::vector<double>& damping,
+                   DiagnosticList& diagnostics) override;
   bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,
                        DiagnosticList& diagnostics) override;
   // The scenes' material arrays copied again into their allocations (Real and double), and the springs' records
@@ -330,7 +334,7 @@ class GpuEngine final : public sim::SteppingEngine {
   kernels::VertexLoads<Real> loads_{};
   // The tools' contact (set_contact, set_tool_shapes): loads_.contact points at these.
   DeviceArray<kernels::ToolShape<Real>> tools_;
-  DeviceArray<Real> contact_stiffness_;
+  DeviceArray<Real> contact_stiffness_, contact_damping_;  // the damping allocated only where the scene has it
   DeviceArray<double> contact_blocks_, contact_rhs_;  // implicit Euler's contact part: 6 and 3 per vertex
   DeviceArray<unsigned char> contact_active_;  // implicit Euler's contact set per vertex
   DeviceArray<unsigned int> contact_changes_;

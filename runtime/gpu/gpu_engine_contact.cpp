@@ -25,9 +25,11 @@ std::vector<double> to_double(const Values& values) {
 }  // namespace
 
 template <typename Real>
-bool GpuEngine<Real>::set_contact(std::size_t, const std::vector<double>& stiffness, DiagnosticList& diagnostics) {
+bool GpuEngine<Real>::set_contact(std::size_t, const std::vector<double>& stiffness, const std::vector<double>& damping,
+                                  DiagnosticList& diagnostics) {
   if (contact_stiffness_.size() == 0) {
     FMPC_CUDA_CHECK(contact_stiffness_.upload(to_real<Real>(stiffness)), diagnostics, false);
+    if (!damping.empty()) FMPC_CUDA_CHECK(contact_damping_.upload(to_real<Real>(damping)), diagnostics, false);
     FMPC_CUDA_CHECK(tools_.allocate(static_cast<std::size_t>(kernels::kMostTools)), diagnostics, false);
     if (scheme() == sim::Integrator::ImplicitEuler) {
       FMPC_CUDA_CHECK(contact_blocks_.allocate(6 * static_cast<std::size_t>(n_)), diagnostics, false);
@@ -38,11 +40,14 @@ bool GpuEngine<Real>::set_contact(std::size_t, const std::vector<double>& stiffn
     // Allocated on the legacy stream, which the non-blocking stream_ does not wait for.
     FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
     loads_.contact.stiffness = contact_stiffness_.data();
+    loads_.contact.damping = damping.empty() ? nullptr : contact_damping_.data();
     loads_.contact.tools = tools_.data();
     graphs_.clear();  // captured with the loads before the contact
     return true;
   }
   FMPC_CUDA_CHECK(contact_stiffness_.overwrite(to_real<Real>(stiffness), stream_), diagnostics, false);
+  // The damping ratio is the setup's, fixed for the run: present from the start or never.
+  if (!damping.empty()) FMPC_CUDA_CHECK(contact_damping_.overwrite(to_real<Real>(damping), stream_), diagnostics, false);
   return synchronize(diagnostics);
 }
 
@@ -128,7 +133,7 @@ std::optional<sim::DevicePositions> GpuEngine<Real>::device_positions(std::size_
 
 #define FMPC_GPU_ENGINE_CONTACT_MEMBERS(Real)                                                                        \
   template bool GpuEngine<Real>::set_contact(std::size_t, const std::vector<double>& stiffness,                      \
-                                             DiagnosticList& diagnostics);                                           \
+                                             const std::vector<double>& damping, DiagnosticList& diagnostics);       \
   template bool GpuEngine<Real>::set_tool_shapes(std::size_t, const std::vector<kernels::ToolShape<double>>& shapes, \
                                                  DiagnosticList& diagnostics);                                       \
   template bool GpuEngine<Real>::refresh_material(std::size_t, DiagnosticList& diagnostics);                         \

@@ -33,7 +33,8 @@ struct ForceModelView {
   int element_count;
   kernels::CornerForceView<Real> corners;    // corners.force == corner_force
   kernels::CornerForce<Real>* corner_force;  // 4 per element
-  int element_blocks = 3;  // float: the element pass's register bound, 2 or 3 blocks per SM (GpuOptions)
+  // float: the element pass's register bound, 2 or 3 blocks per SM (GpuOptions); 0: the element kind's default.
+  int element_blocks = 0;
   // Thread r of the kernels with one thread per vertex takes vertex vertex_order[r] (springs.sliced's order); null:
   // vertex r. A permutation within each block, so a block covers the same vertices either way.
   const int* vertex_order = nullptr;

@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "runtime/gpu/cuda_check.h"
 #include "runtime/gpu/gpu_engine.h"
 
 namespace fmpc::gpu {
@@ -29,6 +30,19 @@ bool cuda_device_available(std::string& description) {
   return true;
 }
 
+std::optional<int> cuda_device_count(std::string& error) {
+  int count = 0;
+  const cudaError_t status = cudaGetDeviceCount(&count);
+  // No driver or no device: CUDA says so through this call's status; both mean no device to run on.
+  if (status == cudaErrorNoDevice || status == cudaErrorInsufficientDriver) return 0;
+  if (status != cudaSuccess) {
+    error = std::string("cudaGetDeviceCount failed: ") + cudaGetErrorName(status) + " (" + cudaGetErrorString(status) +
+            ")";
+    return std::nullopt;
+  }
+  return count;
+}
+
 std::unique_ptr<sim::SteppingEngine> create_engine(const std::vector<sim::SimulationSetup>& scenes,
                                                    const std::vector<sim::StabilityReport>& stability,
                                                    const GpuOptions& options, DiagnosticList& diagnostics) {
@@ -44,6 +58,8 @@ std::unique_ptr<sim::SteppingEngine> create_engine(const std::vector<sim::Simula
                                          " spring ends are too many: split the batch");
     return nullptr;
   }
+  // Before the engine allocates anything: its device, in this thread (GpuOptions::device).
+  if (options.device >= 0) FMPC_CUDA_CHECK(cudaSetDevice(options.device), diagnostics, nullptr);
   if (scenes.front().precision == sim::Precision::Float) {
     auto engine = std::make_unique<GpuEngine<float>>(scenes, stability, options);
     if (!engine->upload(diagnostics)) return nullptr;

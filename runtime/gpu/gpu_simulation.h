@@ -10,10 +10,12 @@
 // network and advanced by one launch per kernel: they share the integrator, the precision, the spring law and its
 // parameters, the element laws, gravity and the nodal damping (batch_accepts); sizes, materials, fixed vertices,
 // forces, probes and initial states may differ, and each scene's probe is applied by its own threads from its own
-// values (no atomics), so a scene's results are bitwise those it has alone. Implicit Euler and strain tables need a
+// values (no atomics), so a scene's results are bitwise those it has alone. The engine runs on GpuOptions::device,
+// made current in the creating thread before any allocation (a cohort spread over GPUs: one thread per device). Implicit Euler and strain tables need a
 // batch of one scene. Every CUDA call and launch is checked and turned into a Diagnostic; nothing exits.
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +31,10 @@ using sim::GpuOptions;
 
 // Whether a CUDA device can be used, with its name or the reason it cannot.
 bool cuda_device_available(std::string& description);
+
+// The CUDA devices this process sees (cudaGetDeviceCount: CUDA_VISIBLE_DEVICES applies), or nullopt with CUDA's
+// reason in `error`. No device at all is a count of 0, not an error.
+std::optional<int> cuda_device_count(std::string& error);
 
 // Whether scene s can join the batch (what a batch cannot share is refused before the device is touched, with an
 // error naming the scene); false after appending the error.

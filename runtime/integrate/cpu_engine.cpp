@@ -50,7 +50,7 @@ class CpuSceneBase {
   virtual ProbeReading probe_reading() const = 0;
   virtual std::vector<double> current_stiffness() const = 0;
   virtual const SimulationSetup& setup() const = 0;
-  virtual void set_contact(const std::vector<double>& stiffness) = 0;
+  virtual void set_contact(const std::vector<double>& stiffness, const std::vector<double>& damping) = 0;
   virtual void set_tool_shapes(const std::vector<kernels::ToolShape<double>>& shapes) = 0;
   virtual void refresh_material() = 0;
 };
@@ -193,10 +193,12 @@ class CpuScene final : public CpuSceneBase {
     }
   }
 
-  // Contact: the stiffness per vertex and the tools' shapes, in Real, which loads_.contact points at.
-  void set_contact(const std::vector<double>& stiffness) override {
+  // Contact: the stiffness and damping per vertex and the tools' shapes, in Real, which loads_.contact points at.
+  void set_contact(const std::vector<double>& stiffness, const std::vector<double>& damping) override {
     contact_stiffness_.assign(stiffness.begin(), stiffness.end());
+    contact_damping_.assign(damping.begin(), damping.end());
     loads_.contact.stiffness = contact_stiffness_.data();
+    loads_.contact.damping = contact_damping_.empty() ? nullptr : contact_damping_.data();
   }
 
   void set_tool_shapes(const std::vector<kernels::ToolShape<double>>& shapes) override {
@@ -628,7 +630,7 @@ class CpuScene final : public CpuSceneBase {
   std::size_t n_;
   std::vector<Real> rest_length_, stiffness_, damping_, mass_;
   std::vector<unsigned char> fixed_;
-  std::vector<Real> contact_stiffness_;
+  std::vector<Real> contact_stiffness_, contact_damping_;
   std::vector<kernels::ToolShape<Real>> tools_;
   Vector3Arrays<Real> position_, velocity_, rest_, acceleration_, force_;
   Vector3Arrays<Real> stage_position_, stage_velocity_, next_acceleration_;
@@ -795,8 +797,9 @@ class CpuEngine final : public SteppingEngine {
   std::vector<double> current_stiffness(std::size_t scene, DiagnosticList&) const override {
     return scenes_[scene]->current_stiffness();
   }
-  bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList&) override {
-    scenes_[scene]->set_contact(stiffness);
+  bool set_contact(std::size_t scene, const std::vector<double>& stiffness, const std::vector<double>& damping,
+                   DiagnosticList&) override {
+    scenes_[scene]->set_contact(stiffness, damping);
     return true;
   }
   bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,

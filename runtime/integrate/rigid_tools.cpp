@@ -101,13 +101,27 @@ std::vector<double> contact_stiffness(const SimulationSetup& setup) {
   return stiffness;
 }
 
+double contact_damping_coefficient(double ratio, double contact_stiffness, double mass) {
+  return 2.0 * ratio * std::sqrt(contact_stiffness * mass);
+}
+
+std::vector<double> contact_damping(const SimulationSetup& setup, const std::vector<double>& stiffness) {
+  if (setup.tools.empty() || !(setup.contact_damping_ratio > 0.0) || stiffness.size() != setup.mass.size()) return {};
+  std::vector<double> damping(stiffness.size(), 0.0);
+  for (std::size_t v = 0; v < stiffness.size(); ++v)
+    damping[v] = contact_damping_coefficient(setup.contact_damping_ratio, stiffness[v], setup.mass[v]);
+  return damping;
+}
+
 std::vector<ToolReading> read_tools(const std::vector<RigidTool>& tools, const std::vector<ToolPose>& poses,
-                                    const std::vector<double>& stiffness, const std::vector<Point3>& positions) {
+                                    const std::vector<double>& stiffness, const std::vector<Point3>& positions,
+                                    const std::vector<double>& damping, const std::vector<Point3>& velocities) {
   std::vector<ToolReading> readings(tools.size());
   if (stiffness.size() != positions.size() || poses.size() != tools.size()) return readings;
+  const bool damped = !damping.empty() && damping.size() == positions.size() && velocities.size() == positions.size();
   for (std::size_t t = 0; t < tools.size(); ++t) {
     const kernels::ToolShape<double> shape = tool_shape(tools[t], poses[t]);
-    const kernels::ContactView<double> one{&shape, 1, nullptr};
+    const kernels::ContactView<double> one{&shape, 1, nullptr, nullptr};
     const Point3& origin = poses[t].position;
     ToolReading& reading = readings[t];
     for (std::size_t v = 0; v < positions.size(); ++v) {
@@ -116,7 +130,9 @@ std::vector<ToolReading> read_tools(const std::vector<RigidTool>& tools, const s
       double nx, ny, nz, depth;
       if (!kernels::tool_penetration(shape, x[0], x[1], x[2], nx, ny, nz, depth)) continue;
       double f[3] = {0.0, 0.0, 0.0};
-      kernels::add_contact_force(one, stiffness[v], x[0], x[1], x[2], f[0], f[1], f[2]);
+      const Point3 u = damped ? velocities[v] : Point3{0.0, 0.0, 0.0};
+      kernels::add_contact_force(one, stiffness[v], damped ? damping[v] : 0.0, x[0], x[1], x[2], u[0], u[1], u[2], f[0],
+                                 f[1], f[2]);
       const double arm[3] = {x[0] - origin[0], x[1] - origin[1], x[2] - origin[2]};
       // The tool feels -f at x.
       for (std::size_t i = 0; i < 3; ++i) reading.force[i] -= f[i];
@@ -163,6 +179,19 @@ bool validate_tools(const SimulationSetup& setup, DiagnosticList& diagnostics) {
                                                format_number(setup.contact_stiffness_ratio) +
                                                " must be finite and greater than 0 (default " +
                                                format_number(kDefaultContactStiffnessRatio) + ")");
+    return false;
+  }
+  const double damping_ratio = setup.contact_damping_ratio;
+  if (!(damping_ratio >= 0.0 && damping_ratio <= kMostContactDampingRatio)) {
+    diagnostics.error(tools.front().range, "contact.damping_ratio: " + format_number(damping_ratio) +
+                                               " must be a number from 0 (no contact damping, the default) to " +
+                                               format_number(kMostContactDampingRatio) + " (1: critical)");
+    return false;
+  }
+  if (damping_ratio > 0.0 && setup.integrator == Integrator::ImplicitEuler) {
+    diagnostics.error(tools.front().range,
+                      "contact.damping_ratio: contact damping is for the explicit integrators, whose substeps let a "
+                      "pressed vertex bounce off the tool; implicit Euler's step damps that itself: leave it out");
     return false;
   }
   for (std::size_t t = 0; t < tools.size(); ++t) {

@@ -62,8 +62,21 @@ std::vector<unsigned char> surface_vertices(const SimulationSetup& setup);
 // elsewhere. Empty without tools.
 std::vector<double> contact_stiffness(const SimulationSetup& setup);
 
+// The most contact damping ratio a scene may ask for (contact.damping_ratio): far past critical, where the damper
+// alone would hold a vertex still.
+constexpr double kMostContactDampingRatio = 100.0;
+
+// A surface vertex's contact damping (N s/m): `ratio` of critical against its contact stiffness k_c (N/m) and its
+// mass m (kg) alone, 2 ratio sqrt(k_c m).
+double contact_damping_coefficient(double ratio, double contact_stiffness, double mass);
+
+// Every vertex's contact damping for `stiffness` (contact_stiffness's): empty without tools or without contact
+// damping (contact_damping_ratio 0).
+std::vector<double> contact_damping(const SimulationSetup& setup, const std::vector<double>& stiffness);
+
 // What one tool feels at a state, in double on both backends: the reaction of the tissue on the tool, the sum of
-// -f over the vertices inside it (kernels::add_contact_force's terms), and its torque about the tool's origin.
+// -f over the vertices inside it (kernels::add_contact_force's terms: with `damping`, from the vertices' velocities
+// too), and its torque about the tool's origin.
 struct ToolReading {
   Point3 force{0.0, 0.0, 0.0};   // N
   Point3 torque{0.0, 0.0, 0.0};  // N m
@@ -72,11 +85,14 @@ struct ToolReading {
 };
 
 std::vector<ToolReading> read_tools(const std::vector<RigidTool>& tools, const std::vector<ToolPose>& poses,
-                                    const std::vector<double>& stiffness, const std::vector<Point3>& positions);
+                                    const std::vector<double>& stiffness, const std::vector<Point3>& positions,
+                                    const std::vector<double>& damping = {},
+                                    const std::vector<Point3>& velocities = {});
 
 // The tools' values (validate_setup calls it): a finite positive radius (and length for a capsule), at most
 // kernels::kMostTools tools, a path of finite poses with a non-zero quaternion at increasing finite times, a finite
-// positive contact stiffness ratio. Errors name the tool.
+// positive contact stiffness ratio, a contact damping ratio in [0, kMostContactDampingRatio] and none with implicit
+// Euler. Errors name the tool.
 bool validate_tools(const SimulationSetup& setup, DiagnosticList& diagnostics);
 
 // No tool inside the tissue at its start (Simulation::create): no vertex inside it at its path's first pose, and no

@@ -174,6 +174,9 @@ struct SimulationSetup {
   // kernels::kMostTools; the penalty stiffness per surface vertex is contact_stiffness_ratio x its stiffness bound.
   std::vector<RigidTool> tools;
   double contact_stiffness_ratio = kDefaultContactStiffnessRatio;
+  // The contact's damping as a fraction of critical for each surface vertex against its contact spring alone:
+  // c = 2 ratio sqrt(k_c m) (rigid_tools.h's contact_damping). 0 (the default): none. Explicit integrators only.
+  double contact_damping_ratio = 0.0;
 };
 
 // The model's name as scenes spell it: "springs" for a spring network (with or without a term beside it), the scene
@@ -446,6 +449,8 @@ class Simulation {
   std::vector<ToolReading> tool_readings(std::size_t scene, DiagnosticList& diagnostics) const;
   // The contact stiffness per vertex (N/m; empty without tools).
   const std::vector<double>& contact_stiffness(std::size_t scene = 0) const;
+  // Its contact damping per vertex (N s/m; empty without contact damping: SimulationSetup::contact_damping_ratio).
+  const std::vector<double>& contact_damping(std::size_t scene = 0) const;
 
   // ---- the material ------------------------------------------------------------------------------------------------
   // Replaces scene `scene`'s material between two steps, keeping its state, time and checks: the springs' stiffness
@@ -482,6 +487,7 @@ class Simulation {
   std::vector<InversionReport> inversions_;
   std::vector<std::vector<ToolPose>> tool_poses_;  // per scene, per tool: the pose the engine holds
   std::vector<std::vector<double>> contact_stiffness_;  // per scene (empty without tools)
+  std::vector<std::vector<double>> contact_damping_;    // per scene (empty without tools or contact damping)
   std::optional<NonFiniteReport> non_finite_;
   std::size_t restores_ = 0;
   bool failed_ = false;

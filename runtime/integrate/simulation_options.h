@@ -35,7 +35,8 @@ struct GpuOptions {
   // results for any value.
   int gather_lanes = 0;
   // The float element pass's register bound, in blocks of 256 threads per multiprocessor: 3 (80 registers, 20 bytes
-  // spilled) or 2 (91 registers, no spills); 0: the default, 3. The same bits either way.
+  // spilled on linear tetrahedra) or 2 (no spills); 0: the element kind's default (kFloatElementBlocks: 3 on linear
+  // tetrahedra, 2 on quadratic ones). The same bits either way.
   int element_blocks_per_sm = 0;
   // The kernels with one thread per vertex read the springs' records in the sliced layout (kernels::
   // SlicedSpringsView) instead of in CSR order, their threads ordered by entry count within windows of
@@ -43,6 +44,11 @@ struct GpuOptions {
   // either way; false and the window are for measuring.
   bool sliced_springs = true;
   int slice_window = 0;
+  // The CUDA device the engine runs on: made current (cudaSetDevice, checked) in the thread that creates the
+  // simulation, before anything is allocated; the simulation is then used from that thread (or from one that made
+  // the device current). -1: the creating thread's current device, whatever it is (a program that chose it itself).
+  // A cohort spread over GPUs (docs/cohorts.md, --devices) runs one batch per device, each in its own thread.
+  int device = -1;
 };
 
 struct SimulationOptions {

@@ -101,12 +101,14 @@ bool Simulation::pose_tools(std::size_t step, DiagnosticList& diagnostics) {
 bool Simulation::start_tools(DiagnosticList& diagnostics) {
   tool_poses_.assign(scenes_.size(), {});
   contact_stiffness_.assign(scenes_.size(), {});
+  contact_damping_.assign(scenes_.size(), {});
   for (std::size_t s = 0; s < scenes_.size(); ++s) {
     const std::vector<RigidTool>& tools = scenes_[s].tools;
     if (tools.empty()) continue;
     for (const RigidTool& tool : tools) tool_poses_[s].push_back(tool_pose_at(tool, 0.0));
     contact_stiffness_[s] = sim::contact_stiffness(scenes_[s]);
-    if (!engine_->set_contact(s, contact_stiffness_[s], diagnostics) ||
+    contact_damping_[s] = sim::contact_damping(scenes_[s], contact_stiffness_[s]);
+    if (!engine_->set_contact(s, contact_stiffness_[s], contact_damping_[s], diagnostics) ||
         !engine_->set_tool_shapes(s, tool_shapes(tools, tool_poses_[s]), diagnostics))
       return false;
   }
@@ -158,10 +160,17 @@ const std::vector<double>& Simulation::contact_stiffness(std::size_t scene) cons
   return contact_stiffness_.at(scene);
 }
 
+const std::vector<double>& Simulation::contact_damping(std::size_t scene) const { return contact_damping_.at(scene); }
+
 std::vector<ToolReading> Simulation::tool_readings(std::size_t scene, DiagnosticList& diagnostics) const {
   const std::vector<Point3> now = positions(scene, diagnostics);
   if (now.size() != scenes_.at(scene).rest_positions.size()) return {};
-  return read_tools(scenes_[scene].tools, tool_poses_[scene], contact_stiffness_[scene], now);
+  if (contact_damping_[scene].empty())
+    return read_tools(scenes_[scene].tools, tool_poses_[scene], contact_stiffness_[scene], now);
+  const std::vector<Point3> moving = velocities(scene, diagnostics);
+  if (moving.size() != now.size()) return {};
+  return read_tools(scenes_[scene].tools, tool_poses_[scene], contact_stiffness_[scene], now, contact_damping_[scene],
+                    moving);
 }
 
 bool Simulation::replace_material(std::size_t scene, const SimulationSetup& material, DiagnosticList& diagnostics) {
@@ -217,7 +226,8 @@ bool Simulation::replace_material(std::size_t scene, const SimulationSetup& mate
   if (!engine_->refresh_material(scene, diagnostics)) return fail();
   if (!current.tools.empty()) {
     contact_stiffness_[scene] = sim::contact_stiffness(current);
-    if (!engine_->set_contact(scene, contact_stiffness_[scene], diagnostics)) return fail();
+    contact_damping_[scene] = sim::contact_damping(current, contact_stiffness_[scene]);
+    if (!engine_->set_contact(scene, contact_stiffness_[scene], contact_damping_[scene], diagnostics)) return fail();
   }
   return true;
 }

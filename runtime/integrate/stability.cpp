@@ -129,11 +129,17 @@ std::optional<StabilityReport> check_stability(const SimulationSetup& setup, Dia
   // stiffness on the vertices they can touch (a diagonal term k_c n n^T <= k_c I).
   VertexBounds bounds = vertex_bounds(setup);
   std::vector<double>& stiffness_sum = bounds.stiffness;
-  const std::vector<double>& damping_sum = bounds.damping;
+  std::vector<double>& damping_sum = bounds.damping;
   if (!setup.tools.empty()) {
+    // And the contact's damping on those vertices (rigid_tools.h's contact_damping, from the same bound).
     const std::vector<unsigned char> surface = surface_vertices(setup);
-    for (std::size_t v = 0; v < n; ++v)
-      if (surface[v]) stiffness_sum[v] *= 1.0 + setup.contact_stiffness_ratio;
+    for (std::size_t v = 0; v < n; ++v) {
+      if (!surface[v]) continue;
+      if (setup.contact_damping_ratio > 0.0)
+        damping_sum[v] += contact_damping_coefficient(setup.contact_damping_ratio,
+                                                      setup.contact_stiffness_ratio * stiffness_sum[v], setup.mass[v]);
+      stiffness_sum[v] *= 1.0 + setup.contact_stiffness_ratio;
+    }
   }
   const double spring_ratio_min = bounds.spring_ratio_min;
   const double element_ratio_min = bounds.element_ratio_min;

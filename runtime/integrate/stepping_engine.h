@@ -68,10 +68,11 @@ class SteppingEngine {
   virtual SimulationLaunches launches() const { return {}; }
 
   // ---- rigid tools and the material, for the Simulation's setters ------------------------------------------------
-  // A scene with tools: its per-vertex contact stiffness (rigid_tools.h's contact_stiffness; given at creation and
-  // after a material change) and its tools' world shapes (given before the steps they act in). Scenes without tools
-  // are never given either.
-  virtual bool set_contact(std::size_t scene, const std::vector<double>& stiffness, DiagnosticList& diagnostics) = 0;
+  // A scene with tools: its per-vertex contact stiffness and damping (rigid_tools.h's contact_stiffness and
+  // contact_damping, the latter empty without contact damping; given at creation and after a material change) and its
+  // tools' world shapes (given before the steps they act in). Scenes without tools are never given either.
+  virtual bool set_contact(std::size_t scene, const std::vector<double>& stiffness, const std::vector<double>& damping,
+                           DiagnosticList& diagnostics) = 0;
   virtual bool set_tool_shapes(std::size_t scene, const std::vector<kernels::ToolShape<double>>& shapes,
                                DiagnosticList& diagnostics) = 0;
   // The scene's material arrays in its setup (the springs' stiffness and damping, the element terms' parameters and

@@ -62,6 +62,61 @@ std::vector<std::size_t> shard_patients(std::size_t patient_count, const CohortS
   return members;
 }
 
+std::optional<std::vector<int>> parse_device_list(const std::string& text, int device_count, std::string& error) {
+  const std::string present = device_count == 1 ? "the one device present is 0"
+                                                 : "the devices present are 0 to " + std::to_string(device_count - 1);
+  if (text == "all") {
+    if (device_count <= 0) {
+      error = "'all': no CUDA device is present";
+      return std::nullopt;
+    }
+    std::vector<int> all(static_cast<std::size_t>(device_count));
+    for (int d = 0; d < device_count; ++d) all[static_cast<std::size_t>(d)] = d;
+    return all;
+  }
+  std::vector<int> devices;
+  std::size_t from = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', from);
+    const std::string entry = text.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+    bool digits = !entry.empty() && entry.size() <= 4;
+    for (const char c : entry) digits = digits && std::isdigit(static_cast<unsigned char>(c));
+    if (!digits) {
+      error = "'" + text + "': '" + entry + "' is not a device number (give 'all' or numbers separated by commas, e.g. 0,1)";
+      return std::nullopt;
+    }
+    const int device = std::atoi(entry.c_str());
+    if (device >= device_count) {
+      error = "'" + text + "': device " + entry + " is not present; " +
+              (device_count <= 0 ? std::string("no CUDA device is present") : present);
+      return std::nullopt;
+    }
+    for (const int earlier : devices)
+      if (earlier == device) {
+        error = "'" + text + "': device " + entry + " is named twice (each device runs one batch)";
+        return std::nullopt;
+      }
+    devices.push_back(device);
+    if (comma == std::string::npos) break;
+    from = comma + 1;
+  }
+  return devices;
+}
+
+std::vector<PatientRange> split_patients(std::size_t patient_count, std::size_t parts) {
+  std::vector<PatientRange> ranges;
+  if (parts == 0 || patient_count == 0) return ranges;
+  const std::size_t used = parts < patient_count ? parts : patient_count;
+  const std::size_t base = patient_count / used, larger = patient_count % used;
+  std::size_t begin = 0;
+  for (std::size_t r = 0; r < used; ++r) {
+    const std::size_t size = base + (r < larger ? 1 : 0);
+    ranges.push_back(PatientRange{begin, begin + size});
+    begin += size;
+  }
+  return ranges;
+}
+
 Scene patient_scene(const Scene& scene, const std::string& label, const std::vector<std::string>& inputs,
                     const std::vector<double>& values) {
   Scene patient = scene;

@@ -39,6 +39,22 @@ std::optional<CohortShard> parse_cohort_shard(const std::string& text, std::stri
 // The patients (indices into the file's rows, 0-based) shard `shard` runs: index, index + count, ...
 std::vector<std::size_t> shard_patients(std::size_t patient_count, const CohortShard& shard);
 
+// A cohort spread over the GPUs of one node (fmpc simulate --patients --devices, docs/cohorts.md): the devices
+// parsed from "all" or a comma-separated list of CUDA device numbers ("0,1"). `device_count` is how many the process
+// sees. "all" with no device, an entry that is not a whole number, a device out of range, a repeated device or an
+// empty list: nullopt with the reason in `error`.
+std::optional<std::vector<int>> parse_device_list(const std::string& text, int device_count, std::string& error);
+
+// Patients [begin, end) of a run that one device (or one CPU slot) runs as its batch.
+struct PatientRange {
+  std::size_t begin = 0;
+  std::size_t end = 0;
+};
+
+// `patient_count` patients in file order over `parts` batches: consecutive ranges whose sizes differ by at most one,
+// the larger first; never an empty range (fewer ranges than parts when there are fewer patients).
+std::vector<PatientRange> split_patients(std::size_t patient_count, std::size_t parts);
+
 // The scene for one patient: each named input's constant binding set to the patient's value, material.patient set
 // to the label, and its frames and force-displacement picture left out unless outputs.cohort asks for them (a
 // patient writes summary.json and time_series.csv by default). Every name must be an input the scene binds to a

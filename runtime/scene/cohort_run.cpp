@@ -1,7 +1,13 @@
 #include <algorithm>
+#include <exception>
+#include <functional>
+#include <mutex>
 #include <regex>
+#include <thread>
 
+#include "runtime/integrate/worker_pool.h"
 #include "runtime/io/atomic_file.h"
+#include "runtime/scene/cohort.h"
 #include "runtime/scene/scene_batch_run.h"
 #include "runtime/scene/scene_run.h"
 
@@ -69,6 +75,16 @@ std::optional<CohortRunResult> run_cohort(const std::vector<CohortPatient>& pati
     diagnostics.error(SourceRange{}, "a cohort needs at least one patient");
     return std::nullopt;
   }
+  for (std::size_t d = 0; d < options.devices.size(); ++d) {
+    const int device = options.devices[d];
+    const bool repeated = std::find(options.devices.begin(), options.devices.begin() + static_cast<long>(d), device) !=
+                          options.devices.begin() + static_cast<long>(d);
+    if (device < 0 || repeated) {
+      diagnostics.error(SourceRange{}, "a cohort's devices are distinct device numbers from 0; device " +
+                                           std::to_string(device) + (repeated ? " is named twice" : " is negative"));
+      return std::nullopt;
+    }
+  }
   for (const CohortPatient& patient : patients)
     if (!ensure_directory(patient.output_directory, diagnostics)) return std::nullopt;
 #if !defined(FMPC_RUNTIME_HAVE_CUDA)
@@ -77,29 +93,89 @@ std::optional<CohortRunResult> run_cohort(const std::vector<CohortPatient>& pati
     return std::nullopt;
   }
 #endif
-  // Each patient's messages kept apart, then named by its label; the batch's ("scene N: ...") named by the patient
+  const Backend backend = run_backend(options.backend);
+  // One batch per device (or CPU slot), each a consecutive range of the patients in its own host thread; one batch
+  // alone runs in the caller's thread as a scene does.
+  const std::vector<PatientRange> ranges = split_patients(patients.size(), std::max<std::size_t>(1, options.devices.size()));
+  const unsigned threads =
+      ranges.size() == 1 ? options.threads
+                         : std::max(1u, resolve_thread_count(options.threads, patients.size(), 2) /
+                                            static_cast<unsigned>(ranges.size()));
+  // Each patient's messages kept apart, then named by its label; each batch's ("scene N: ...") named by the patient
   // they are about.
   std::vector<DiagnosticList> patient_diagnostics(patients.size());
-  std::vector<SceneBatchMember> members(patients.size());
-  for (std::size_t p = 0; p < patients.size(); ++p) {
-    members[p].scene = patients[p].scene;
-    members[p].built = patients[p].built;
-    members[p].options.output_directory = patients[p].output_directory;
-    members[p].options.backend = options.backend;
-    members[p].diagnostics = &patient_diagnostics[p];
+  struct Batch {
+    std::vector<CohortPatient> patients;
+    std::vector<SceneBatchMember> members;
+    SimulationOptions options;
+    DiagnosticList diagnostics;
+    std::optional<SceneBatchResult> run;
+    std::exception_ptr failure;
+  };
+  std::vector<Batch> batches(ranges.size());
+  for (std::size_t b = 0; b < ranges.size(); ++b) {
+    Batch& batch = batches[b];
+    for (std::size_t p = ranges[b].begin; p < ranges[b].end; ++p) {
+      batch.patients.push_back(patients[p]);
+      SceneBatchMember member;
+      member.scene = patients[p].scene;
+      member.built = patients[p].built;
+      member.options.output_directory = patients[p].output_directory;
+      member.options.backend = options.backend;
+      member.diagnostics = &patient_diagnostics[p];
+      batch.members.push_back(member);
+    }
+    batch.options.backend = backend;
+    batch.options.batch_threads = threads;
+    if (backend == Backend::Cuda && !options.devices.empty()) batch.options.gpu.device = options.devices[b];
   }
-  DiagnosticList batch_diagnostics;
-  const auto run =
-      run_scene_batch(members, run_backend(options.backend), options.threads, options.progress, batch_diagnostics);
-  append_for_patients(batch_diagnostics, patients, std::nullopt, diagnostics);
+  // Progress over batches: the steps every batch has done, said when that grows.
+  std::mutex progress_mutex;
+  std::vector<std::size_t> steps_done(batches.size(), 0);
+  std::size_t steps_said = 0;
+  const auto batch_progress = [&](std::size_t b) -> std::function<void(std::size_t, std::size_t)> {
+    if (!options.progress) return {};
+    if (batches.size() == 1) return options.progress;
+    return [&, b](std::size_t done, std::size_t total) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      steps_done[b] = done;
+      const std::size_t everywhere = *std::min_element(steps_done.begin(), steps_done.end());
+      if (everywhere <= steps_said) return;
+      steps_said = everywhere;
+      options.progress(everywhere, total);
+    };
+  };
+  const auto run_batch = [&](std::size_t b) {
+    Batch& batch = batches[b];
+    try {
+      batch.run = run_scene_batch(batch.members, batch.options, batch_progress(b), batch.diagnostics);
+    } catch (...) {
+      batch.failure = std::current_exception();  // rethrown in the caller's thread, as a batch alone would throw
+    }
+  };
+  if (batches.size() == 1) {
+    run_batch(0);
+  } else {
+    std::vector<std::thread> workers;
+    for (std::size_t b = 0; b < batches.size(); ++b) workers.emplace_back(run_batch, b);
+    for (std::thread& worker : workers) worker.join();
+  }
+  for (const Batch& batch : batches)
+    if (batch.failure) std::rethrow_exception(batch.failure);
+  bool every_batch = true;
+  CohortRunResult result;
+  for (const Batch& batch : batches) {
+    append_for_patients(batch.diagnostics, batch.patients, std::nullopt, diagnostics);
+    every_batch = every_batch && batch.run.has_value();
+    if (!batch.run) continue;
+    result.patients.insert(result.patients.end(), batch.run->results.begin(), batch.run->results.end());
+    result.wall_seconds = std::max(result.wall_seconds, batch.run->wall_seconds);
+    result.stepping_seconds = std::max(result.stepping_seconds, batch.run->stepping_seconds);
+    result.spring_steps += batch.run->spring_steps;
+  }
   for (std::size_t p = 0; p < patients.size(); ++p)
     append_for_patients(patient_diagnostics[p], patients, p, diagnostics);
-  if (!run) return std::nullopt;
-  CohortRunResult result;
-  result.patients = run->results;
-  result.wall_seconds = run->wall_seconds;
-  result.stepping_seconds = run->stepping_seconds;
-  result.spring_steps = run->spring_steps;
+  if (!every_batch) return std::nullopt;
   return result;
 }
 

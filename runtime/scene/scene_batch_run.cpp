@@ -63,16 +63,13 @@ void for_each_member(std::size_t count, WorkerPool* pool, Task task) {
 
 }  // namespace
 
-std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMember>& members, Backend backend,
-                                                unsigned threads,
+std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMember>& members,
+                                                const SimulationOptions& options,
                                                 const std::function<void(std::size_t, std::size_t)>& progress,
                                                 DiagnosticList& diagnostics) {
   SceneRunTiming timing;
   std::vector<SimulationSetup> setups;
   for (const SceneBatchMember& member : members) setups.push_back(member.built->setup);
-  SimulationOptions options;
-  options.backend = backend;
-  options.batch_threads = threads;
   const auto created = Clock::now();
   const auto simulation = Simulation::create(std::move(setups), options, diagnostics);
   if (!simulation) return std::nullopt;
@@ -89,7 +86,7 @@ std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMemb
   for (const SceneBatchMember& member : members)
     recorders.push_back(std::make_unique<SceneRecorder>(*member.scene, *member.built, member.options, total));
   std::unique_ptr<WorkerPool> pool;
-  if (members.size() > 1) pool = std::make_unique<WorkerPool>(resolve_thread_count(threads, members.size(), 2));
+  if (members.size() > 1) pool = std::make_unique<WorkerPool>(resolve_thread_count(options.batch_threads, members.size(), 2));
   // Every member has the same events (the same scene outputs, the same step count): the first recorder's.
   const SceneRecorder& plan = *recorders.front();
   const bool implicit = simulation->setup(0).integrator == Integrator::ImplicitEuler;

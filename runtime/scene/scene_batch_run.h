@@ -29,9 +29,11 @@ struct SceneBatchResult {
 
 // The members share the scene's outputs and step count (a scene alone, or a cohort's patients prepared at one time
 // step). Errors of the batch (creating it, stepping) go to `diagnostics`. nullopt when nothing could start.
-// `threads`: the CPU's workers over the members (SimulationOptions::batch_threads; 0: every hardware thread).
-std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMember>& members, Backend backend,
-                                                unsigned threads,
+// `options`: the backend, the CPU's workers over the members (batch_threads; 0: every hardware thread, also the
+// workers that record and write the members side by side) and on CUDA the device (gpu.device: the batch and its
+// precision check run on it from the calling thread).
+std::optional<SceneBatchResult> run_scene_batch(const std::vector<SceneBatchMember>& members,
+                                                const SimulationOptions& options,
                                                 const std::function<void(std::size_t, std::size_t)>& progress,
                                                 DiagnosticList& diagnostics);
 

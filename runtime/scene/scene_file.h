@@ -33,7 +33,14 @@ struct SceneMesh {
   double unit = 1.0;        // metres per mesh unit (`units: m|cm|mm|NUMBER`)
   BoxSpec box;              // mesh units
   EllipsoidSpec ellipsoid;  // mesh units
+  // `refinements: N`: the mesh subdivided N times (subdivide_tetrahedra, 8 tetrahedra each) before anything is built
+  // on it; `fmpc trade --write-scene` writes it for a refined variant.
+  unsigned refinements = 0;
 };
+
+// The most `mesh.refinements` (each multiplies the tetrahedra by 8), and the most tetrahedra they may make.
+inline constexpr unsigned kMaxSceneMeshRefinements = 3;
+inline constexpr std::size_t kMaxRefinedTetrahedra = std::size_t{1} << 22;
 
 // An axis-aligned box in mesh units (fixed nodes, regions).
 struct SceneBox {
@@ -67,6 +74,14 @@ struct InputBinding {
   std::vector<RegionValue> regions;
 };
 
+// `material.bind: {PARAMETER: OUTPUT}`: a material parameter of the element law (its registry row's parameters,
+// runtime/fem/element_law_registry.h) given per element by an output of the rules or table. Scene::ranges holds
+// "material.bind.PARAMETER" (the key) and "material.bind.PARAMETER.output" (the output's name).
+struct ParameterBinding {
+  std::string parameter;
+  std::string output;
+};
+
 struct StrainAxis {
   double min = -0.3;
   double max = 0.3;
@@ -87,6 +102,7 @@ struct SceneMaterial {
   std::string output;  // which output; empty: the only one
   std::string patient;  // a label, carried into the summary
   std::vector<InputBinding> bindings;  // in the order given
+  std::vector<ParameterBinding> bind;  // material.bind, in the order given; empty: `output` is Young's modulus
   std::optional<StrainAxis> strain_axis;  // Rules with a strain binding; default: the input's range, 101 points
   // Young's modulus -> spring constants (`mapping`): YoungsModulus, Rules and Table only.
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;
@@ -206,6 +222,7 @@ struct Scene {
   std::optional<SceneProbe> probe;
   std::vector<SceneTool> tools;
   double contact_stiffness_ratio = kDefaultContactStiffnessRatio;  // `contact: {stiffness_ratio}`
+  double contact_damping_ratio = 0.0;                               // `contact: {damping_ratio}`
   Integrator integrator = Integrator::SemiImplicitEuler;
   std::optional<double> dt;  // nullopt: auto
   double duration = 1.0;     // s

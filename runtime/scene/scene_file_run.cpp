@@ -112,6 +112,10 @@ void SceneParser::parse(const YAML::Node& root) {
     if (auto value = integer(root["threads"], "threads", 0, 256)) scene_.threads = static_cast<unsigned>(*value);
   }
   if (root["solver"]) parse_solver(root["solver"]);
+  if (scene_.contact_damping_ratio > 0.0 && scene_.integrator == Integrator::ImplicitEuler)
+    error(root["contact"]["damping_ratio"], "contact.damping_ratio",
+          "contact damping is for the explicit integrators (a pressed vertex bouncing off the tool between substeps); "
+          "implicit Euler's step damps that itself: leave it out");
   if (root["solver"] && scene_.integrator != Integrator::ImplicitEuler) {
     error(root["solver"], "solver",
           std::string("only implicit_euler solves a linear system each step; this scene's integrator is ") +

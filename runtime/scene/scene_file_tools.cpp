@@ -161,7 +161,17 @@ void SceneParser::parse_tools(const YAML::Node& node) {
 
 void SceneParser::parse_contact(const YAML::Node& node) {
   remember(node, "contact");
-  if (!check_map(node, "contact", {"stiffness_ratio"})) return;
+  if (!check_map(node, "contact", {"stiffness_ratio", "damping_ratio"})) return;
+  if (node["damping_ratio"])
+    if (const auto ratio = non_negative(node["damping_ratio"], "contact.damping_ratio", "")) {
+      if (*ratio > kMostContactDampingRatio) {
+        error(node["damping_ratio"], "contact.damping_ratio",
+              format_number(*ratio) + " is above the limit of " + format_number(kMostContactDampingRatio) +
+                  " (1 is critical damping of a vertex on its contact spring)");
+        return;
+      }
+      scene_.contact_damping_ratio = *ratio;
+    }
   if (node["stiffness_ratio"])
     if (const auto ratio = positive(node["stiffness_ratio"], "contact.stiffness_ratio", "")) {
       if (*ratio > 1e6) {

@@ -367,6 +367,7 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
       tools.push_back(entry);
     }
     json["contact_stiffness_ratio"] = setup.contact_stiffness_ratio;
+    json["contact_damping_ratio"] = setup.contact_damping_ratio;
   }
   JsonDocument& inversions = json["inversions"];
   inversions["largest_count"] = result.inversions.largest_count;

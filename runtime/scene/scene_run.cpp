@@ -62,7 +62,9 @@ Backend run_backend(const std::string& name) { return name == "cuda" ? Backend::
 std::optional<SceneRunResult> run_scene(const Scene& scene, const BuiltScene& built, const SceneRunOptions& options,
                                         DiagnosticList& diagnostics) {
   SceneBatchMember member{&scene, &built, options, &diagnostics};
-  const auto run = run_scene_batch({member}, run_backend(options.backend), 0, options.progress, diagnostics);
+  SimulationOptions simulation_options;
+  simulation_options.backend = run_backend(options.backend);
+  const auto run = run_scene_batch({member}, simulation_options, options.progress, diagnostics);
   if (!run) return std::nullopt;
   return std::move(run->results.front());
 }

@@ -130,6 +130,12 @@ struct CohortPatient {
 struct CohortRunOptions {
   std::string backend = "cpu";  // every patient in one Simulation batch on this backend ("cpu" or "cuda")
   unsigned threads = 0;         // CPU workers stepping and writing patients side by side (0: every hardware thread)
+  // Spread over devices (docs/cohorts.md, "Every GPU of a node"): empty, one batch (on CUDA on the thread's current
+  // device). Else the patients split into consecutive ranges (split_patients), one per entry, each run as its own
+  // batch in its own host thread: on CUDA on that device (GpuOptions::device, set before anything is allocated), on
+  // the CPU as that many batches side by side sharing `threads` (the entries' numbers are not used there). The
+  // results are gathered in patient order and are bitwise those of one batch. Entries: distinct, non-negative.
+  std::vector<int> devices;
   // (steps done, steps planned) after each output event.
   std::function<void(std::size_t, std::size_t)> progress;
 };
@@ -138,8 +144,10 @@ struct CohortRunResult {
   // Per patient, in the order given: nullopt when it could not start or its outputs could not be written (errors
   // appended). A non-finite state in one patient stops the batch: every patient then has completed: false.
   std::vector<std::optional<SceneRunResult>> patients;
-  double wall_seconds = 0.0;      // all patients: stepping and recording (outputs and the precision check excluded)
-  double stepping_seconds = 0.0;  // the simulator's advance calls alone (their checks included)
+  // All patients: stepping and recording (outputs and the precision check excluded); over devices, the slowest
+  // device's (they run at once).
+  double wall_seconds = 0.0;
+  double stepping_seconds = 0.0;  // the simulator's advance calls alone (their checks included); the slowest device's
   double spring_steps = 0.0;      // the sum over patients of springs x steps taken
 };
 

@@ -39,7 +39,8 @@ ProbeReading SceneState::probe_reading(DiagnosticList& diagnostics) const {
 std::vector<ToolReading> SceneState::tool_readings(DiagnosticList& diagnostics) const {
   if (positions_ == nullptr) return simulation_.tool_readings(scene_, diagnostics);
   return read_tools(simulation_.setup(scene_).tools, simulation_.tool_poses(scene_),
-                    simulation_.contact_stiffness(scene_), *positions_);
+                    simulation_.contact_stiffness(scene_), *positions_, simulation_.contact_damping(scene_),
+                    velocities_ != nullptr ? *velocities_ : std::vector<Point3>{});
 }
 
 std::vector<double> SceneState::current_stiffness(DiagnosticList& diagnostics) const {

@@ -1,14 +1,12 @@
 #include "runtime/scene/simulation_trade.h"
 
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
 #include <map>
 #include <memory>
-#include <sstream>
+#include <thread>
 #include <tuple>
 #include <utility>
 
@@ -18,6 +16,7 @@
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/mesh/mesh_refinement.h"
 #include "runtime/scene/scene_builder.h"
+#include "runtime/scene/trade_runs.h"
 
 namespace fmpc::sim {
 
@@ -48,141 +47,36 @@ std::optional<TradeModel> parse_trade_model(const std::string& name) {
   return std::nullopt;
 }
 
-std::vector<std::string> simulation_trade_columns() {
-  return {"variant",          "model",       "precision",  "integrator",
-          "dt_s",             "vertices",    "displacement_max_rel_error",
-          "displacement_rms_rel_error",      "probe_force_rel_error",
-          "steps_per_second", "memory_bytes", "mapping",   "refinements",
-          "tetrahedra",       "steps",       "inverted_elements", "status"};
+const std::vector<TradeAxisRow>& trade_axes() {
+  static const std::vector<TradeAxisRow> rows{
+      {TradeAxis::Laws, "laws", "--models", "the scene's own model"},
+      {TradeAxis::Elements, "elements", "--elements", "the scene's element kind (linear for a spring scene)"},
+      {TradeAxis::Meshes, "meshes", "--meshes", "the scene's mesh (graded, when it comes from a surface)"},
+      {TradeAxis::Precisions, "precisions", "--precisions", "the scene's precision"},
+      {TradeAxis::Integrators, "integrators", "--integrators",
+       "the scene's integrator at the automatic step (implicit Euler: at 4 of them)"},
+      {TradeAxis::Refinements, "refinements", "--refinements", "0: the scene's mesh as it is"},
+  };
+  return rows;
+}
+
+std::optional<TradeAxis> parse_trade_axis(const std::string& name) {
+  for (const TradeAxisRow& row : trade_axes())
+    if (name == row.name) return row.axis;
+  return std::nullopt;
 }
 
 namespace {
 
-// CPU time of the whole process (every thread the stepping uses): on a shared machine wall time counts the other
-// processes too.
-double process_cpu_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
-}
-
-std::string short_model(const TradeModel& model) {
-  if (model.element_law >= 0) return element_law_row(model.element_law).trade_label;
-  return model.mapping == StiffnessMapping::LloydSzekelyHarders2007 ? "springs LSH" : "springs VG";
-}
-
-// Whether the model has springs (alone or with a law beside them).
-bool has_springs(const TradeModel& model) {
-  return model.element_law < 0 || element_law_row(model.element_law).beside_springs;
-}
-
-const char* short_integrator(Integrator integrator) {
-  switch (integrator) {
-    case Integrator::ForwardEuler:
-      return "FE";
-    case Integrator::SemiImplicitEuler:
-      return "SIE";
-    case Integrator::VelocityVerlet:
-      return "VV";
-    case Integrator::RungeKutta4:
-      return "RK4";
-    case Integrator::ImplicitEuler:
-      return "IE";
-  }
-  return "?";
-}
-
-// One run: what it is (the map key orders and deduplicates runs).
-struct RunKey {
-  TradeModel model = trade_reference_model();
-  Precision precision = Precision::Double;
-  Integrator integrator = Integrator::SemiImplicitEuler;
-  double dt_factor = 1.0;
-  unsigned refinements = 0;
-
-  auto tied() const { return std::make_tuple(refinements, model, precision, integrator, dt_factor); }
-  bool operator<(const RunKey& other) const { return tied() < other.tied(); }
-};
-
-std::string label(const RunKey& key) {
-  std::string text = short_model(key.model) + (key.precision == Precision::Float ? " f32 " : " f64 ") +
-                     short_integrator(key.integrator);
-  if (key.dt_factor != 1.0) text += " x" + significant_digits(key.dt_factor, 3);
-  return text + " r" + std::to_string(key.refinements);
-}
-
-struct RunOutcome {
-  SimulationTradeRow row;
-  std::vector<Point3> displacement;  // of the coarse vertices at the final time
-  double extent = 0.0;               // m, the diagonal of the rest positions' bounding box
-};
-
-Scene variant_scene(const Scene& scene, const TradeModel& model, double duration) {
-  Scene variant = scene;
-  variant.duration = duration;
-  variant.steps.reset();
-  variant.volume_term = model.element_law >= 0 && element_law_row(model.element_law).beside_springs;
-  variant.model = has_springs(model) ? ForceModel::Springs : ForceModel::Elements;
-  if (!has_springs(model)) variant.element_law = model.element_law;
-  if (model.element_law < 0) variant.material.mapping = model.mapping;
-  return variant;
-}
-
-double dot(const Point3& a, const Point3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
-// Bytes of the arrays the CPU stepping reads and writes, in the run's precision (indices 4 bytes): the vertex state
-// and its loads, the model's per-spring and per-element arrays with their CSR, and the integrator's extra vectors;
-// implicit Euler adds its assembled sparse matrix (9 entries per vertex and per edge twice, double value + int
-// index) and its conjugate-gradient vectors. Not counted: the setup kept in double, the worker pool, the allocator.
-double memory_estimate(const SimulationSetup& setup, std::size_t edges) {
-  const double real = setup.precision == Precision::Float ? 4.0 : 8.0;
-  const auto vertices = static_cast<double>(setup.rest_positions.size());
-  const auto springs = static_cast<double>(setup.springs.size());
-  const auto elements = static_cast<double>(setup.tetrahedra.size());
-  // position, velocity, rest, acceleration (3 each), mass, held axes; the inversion replay's checkpoint (3 x 3).
-  double bytes = vertices * (12.0 * real + real + 1.0);
-  if (!setup.tetrahedra.empty()) bytes += vertices * 9.0 * real + elements * 16.0;
-  if (!setup.external_forces.empty()) bytes += vertices * 3.0 * real;
-  // Springs: rest length, stiffness, damping; CSR offset, spring and neighbour per endpoint.
-  if (springs > 0.0)
-    bytes += springs * (real * (setup.springs.damping.empty() ? 2.0 : 3.0)) + (vertices + 1.0) * 4.0 + springs * 16.0;
-  if (!setup.elements.empty()) {
-    // Dm^-1 and V0, each term's parameters and damping, the corner forces.
-    double per_element = 9.0 + 1.0 + 12.0;
-    for (const ElementTerm& term : setup.elements.terms) {
-      for (const std::vector<double>& parameter : term.parameter) per_element += parameter.empty() ? 0.0 : 1.0;
-      per_element += term.stiffness_damping.empty() ? 0.0 : 1.0;
-    }
-    bytes += elements * per_element * real + (vertices + 1.0) * 4.0 + elements * 16.0;
-  }
-  switch (setup.integrator) {
-    case Integrator::VelocityVerlet:
-      bytes += vertices * 9.0 * real;
-      break;
-    case Integrator::RungeKutta4:
-      bytes += vertices * (9.0 + 24.0) * real;
-      break;
-    case Integrator::ImplicitEuler: {
-      const double entries = 9.0 * (vertices + 2.0 * static_cast<double>(edges));
-      bytes += entries * (8.0 + 4.0) + entries * 16.0;  // the matrix and its triplets
-      bytes += vertices * 3.0 * 8.0 * 7.0;              // right-hand side, solution, r, p, q, z, Jacobi diagonal
-      break;
-    }
-    case Integrator::ForwardEuler:
-    case Integrator::SemiImplicitEuler:
-      break;
-  }
-  return bytes;
-}
-
-// |a - b| / |b| as TradeErrors, over the first `count` vertices.
+// |a - b| / |b| as TradeErrors, over the compared vertices.
 TradeErrors compare(const std::vector<Point3>& got, double got_force, const std::vector<Point3>& reference,
                     double reference_force, bool probe) {
   TradeErrors errors;
   double largest_difference = 0.0, largest_reference = 0.0, sum_difference = 0.0, sum_reference = 0.0;
   for (std::size_t v = 0; v < reference.size() && v < got.size(); ++v) {
     const double d = distance(got[v], reference[v]);
-    const double r = std::sqrt(dot(reference[v], reference[v]));
+    const double r = std::sqrt(reference[v][0] * reference[v][0] + reference[v][1] * reference[v][1] +
+                               reference[v][2] * reference[v][2]);
     largest_difference = std::max(largest_difference, d);
     largest_reference = std::max(largest_reference, r);
     sum_difference += d * d;
@@ -194,10 +88,24 @@ TradeErrors compare(const std::vector<Point3>& got, double got_force, const std:
   return errors;
 }
 
+// The largest error of the measures kept.
+double measured(const TradeErrors& errors, const TradeMeasures& measures) {
+  double value = measures.displacement ? errors.displacement_max : 0.0;
+  if (measures.probe_force && errors.probe_force) value = std::max(value, *errors.probe_force);
+  return value;
+}
+
+// Whether every kept measure is at most `bound` (a NaN never is).
+bool within(const TradeErrors& errors, const TradeMeasures& measures, double bound) {
+  if (measures.displacement && !(errors.displacement_max <= bound)) return false;
+  if (measures.probe_force && !(errors.probe_force && *errors.probe_force <= bound)) return false;
+  return true;
+}
+
 // What the scene must be for every model to be built from it and compared; errors name the field.
-bool check_comparable(const Scene& scene, const SimulationTradeOptions& options, DiagnosticList& diagnostics) {
+bool check_comparable(const Scene& scene, const std::vector<TradeModel>& models, DiagnosticList& diagnostics) {
   const std::size_t errors = diagnostics.error_count();
-  const std::string why = "fmpc trade compares force models against the co-rotational FEM";
+  const std::string why = "fmpc trade compares force models against a finite-element reference";
   if (scene.material.source == SceneMaterial::Source::Stiffness ||
       scene.material.source == SceneMaterial::Source::StiffnessOverLength)
     diagnostics.error(scene.range_of("material"),
@@ -211,7 +119,7 @@ bool check_comparable(const Scene& scene, const SimulationTradeOptions& options,
                       "damping: " + why + ", which is damped by `ratio` and `rayleigh`; per-spring dashpot settings "
                       "(coefficient, natural_frequency) have no counterpart there");
   // A law beside springs takes one Poisson ratio and no strain-dependent modulus (scene_builder's checks).
-  for (const TradeModel& model : options.models) {
+  for (const TradeModel& model : models) {
     if (model.element_law < 0 || !element_law_row(model.element_law).beside_springs) continue;
     const std::string name = trade_model_name(model);
     for (const InputBinding& binding : scene.material.bindings)
@@ -227,168 +135,198 @@ bool check_comparable(const Scene& scene, const SimulationTradeOptions& options,
   return diagnostics.error_count() == errors;
 }
 
-class TradeRunner {
+// The scene's own model as a trade model.
+TradeModel scene_model(const Scene& scene) {
+  if (scene.model == ForceModel::Elements) return TradeModel{scene.element_law, StiffnessMapping::VanGelder1998};
+  if (scene.volume_term) return TradeModel{element_law_beside_springs().law, StiffnessMapping::VanGelder1998};
+  return TradeModel{-1, scene.material.mapping};
+}
+
+// Whether the scene's mesh is graded from a surface: then its uniform counterpart (size_near everywhere) differs.
+bool graded_surface(const Scene& scene) {
+  const SceneSurfaceMeshing& surface = scene.mesh.surface;
+  return scene.mesh.kind == SceneMesh::Kind::Surface && surface.size_near_given &&
+         (!surface.size_far_given || surface.options.size.size_near < surface.options.size.size_far);
+}
+
+bool varies(const SimulationTradeOptions& options, TradeAxis axis) {
+  return std::find(options.axes.begin(), options.axes.end(), axis) != options.axes.end();
+}
+
+// Every axis's values: the options' where the axis varies, the scene's own where it does not.
+struct TradeAxesValues {
+  std::vector<TradeModel> models;
+  std::vector<int> element_kinds;
+  std::vector<TradeMesh> meshes;
+  std::vector<Precision> precisions;
+  std::vector<TradeIntegrator> integrators;
+  std::vector<unsigned> refinements;
+};
+
+std::optional<TradeAxesValues> axes_values(const Scene& scene, const SimulationTradeOptions& options,
+                                           DiagnosticList& diagnostics) {
+  TradeAxesValues values;
+  const SourceRange nowhere{};
+  values.models = varies(options, TradeAxis::Laws) ? options.models : std::vector<TradeModel>{scene_model(scene)};
+  if (varies(options, TradeAxis::Elements)) {
+    values.element_kinds = options.element_kinds;
+    if (values.element_kinds.empty())
+      for (const ElementKindRow& row : element_kind_rows()) values.element_kinds.push_back(row.kind);
+  } else {
+    values.element_kinds = {scene.model == ForceModel::Elements ? scene.element_kind : default_element_kind().kind};
+  }
+  values.meshes = {TradeMesh::Scene};
+  if (varies(options, TradeAxis::Meshes)) {
+    const bool uniform = std::find(options.meshes.begin(), options.meshes.end(), TradeMesh::Uniform) != options.meshes.end();
+    if (uniform && graded_surface(scene)) values.meshes = options.meshes;
+    else if (uniform && options.meshes_given)
+      diagnostics.error(scene.range_of("mesh"),
+                        "mesh: --meshes uniform compares a mesh graded from a surface with its uniform counterpart; "
+                        "this scene's mesh is not graded (it needs mesh: {surface} with size_near below size_far, "
+                        "docs/meshing.md): leave out --meshes");
+  }
+  values.precisions = varies(options, TradeAxis::Precisions) ? options.precisions
+                                                             : std::vector<Precision>{scene.precision};
+  values.integrators =
+      varies(options, TradeAxis::Integrators)
+          ? options.integrators
+          : std::vector<TradeIntegrator>{{scene.integrator, scene.integrator == Integrator::ImplicitEuler ? 4.0 : 1.0}};
+  values.refinements = varies(options, TradeAxis::Refinements) ? options.refinements : std::vector<unsigned>{0};
+  if (values.models.empty() || values.element_kinds.empty() || values.meshes.empty() || values.precisions.empty() ||
+      values.integrators.empty() || values.refinements.empty())
+    diagnostics.error(nowhere, "--models, --elements, --meshes, --precisions, --integrators and --refinements each "
+                               "need at least one value");
+  for (const TradeIntegrator& integrator : values.integrators)
+    if (!(integrator.dt_factor > 0.0) || !std::isfinite(integrator.dt_factor))
+      diagnostics.error(nowhere, "--integrators: the step factor of " + std::string(scene_name(integrator.integrator)) +
+                                     " must be a positive number, got " + format_number(integrator.dt_factor));
+  if (diagnostics.has_errors()) return std::nullopt;
+  return values;
+}
+
+// The measures a decision keeps: the options', or the displacement and (with a displacement probe) the probe force.
+std::optional<TradeMeasures> resolved_measures(const Scene& scene, const SimulationTradeOptions& options,
+                                               DiagnosticList& diagnostics) {
+  const bool probe = scene.probe && scene.probe->mode == ProbeLoad::Mode::Displacement;
+  TradeMeasures measures;
+  measures.probe_force = probe;
+  if (options.measures) {
+    measures = *options.measures;
+    if (measures.probe_force && !probe) {
+      diagnostics.error(scene.range_of(scene.probe ? "loads.probe" : "loads"),
+                        std::string(scene.probe ? "loads.probe: this probe is given a force, not a displacement"
+                                                : "loads: the scene has no probe") +
+                            ", so there is no probe force to compare; --error probe_force needs loads.probe with a "
+                            "displacement: use --error displacement");
+      return std::nullopt;
+    }
+    if (!measures.displacement && !measures.probe_force) {
+      diagnostics.error(SourceRange{}, "--error: name displacement, probe_force or both");
+      return std::nullopt;
+    }
+  }
+  return measures;
+}
+
+// What the runs cost, checked before they run: every run's steps, the largest run's memory, the work in all.
+class TradePlanner {
  public:
-  TradeRunner(const Scene& scene, double duration) : scene_(scene), duration_(duration) {}
+  TradePlanner(const Scene& scene, TradeScenes& scenes, double duration, bool reference_factor_named)
+      : scene_(scene), scenes_(scenes), duration_(duration), reference_factor_named_(reference_factor_named) {}
 
-  // The scene built for `model` on `refinements`, the last one kept (runs are ordered by refinement and model).
-  const BuiltScene* built(const TradeModel& model, unsigned refinements, DiagnosticList& diagnostics) {
-    if (built_ && built_model_ == model && built_refinements_ == refinements) return &*built_;
-    built_.reset();
-    DiagnosticList build_diagnostics;
-    auto scene = build_scene(variant_scene(scene_, model, duration_), build_diagnostics, refinements);
-    if (!scene) {
-      for (const Diagnostic& d : build_diagnostics.items())
-        if (d.severity == Severity::Error) diagnostics.error(d.range, d.message, d.notes);
-      diagnostics.error(scene_.range_of("model"), "the " + trade_model_name(model) +
-                                                       " variant cannot be built from this scene (above); leave it "
-                                                       "out with --models");
-      return nullptr;
+  // The work of each key (element-steps), after checking each; nullopt after an error.
+  std::optional<std::vector<double>> check(const std::vector<RunKey>& keys, const std::vector<RunKey>& variants,
+                                           TradePlan& plan, DiagnosticList& diagnostics) {
+    const SourceRange nowhere{};
+    const MemoryLimit memory = memory_limit();
+    std::vector<double> work(keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      const RunKey& key = keys[i];
+      BuildKey coarse = key.build;
+      coarse.refinements = 0;
+      const std::shared_ptr<const BuiltRun> built = scenes_.get(coarse, diagnostics);
+      if (!built) return std::nullopt;
+      const double scale = std::pow(8.0, key.build.refinements);
+      const double tetrahedra = static_cast<double>(built->scene.mesh.tetrahedra.size()) * scale;
+      const double step = key.dt_factor * built->automatic_step / std::pow(2.0, key.build.refinements);
+      const double steps = std::max(1.0, std::ceil(duration_ / step * (1.0 - 1e-12)));
+      SimulationSetup setup = built->scene.setup;
+      setup.precision = key.precision;
+      setup.integrator = key.integrator;
+      // The run's arrays, and the refined mesh and its setup while it is built (generated_mesh.h's measured figure).
+      const double memory_bytes = trade_memory_estimate(setup, built->edges) * scale +
+                                  static_cast<double>(kEstimatedBytesPerTetrahedron) * tetrahedra;
+      const bool reference_run = std::find(variants.begin(), variants.end(), key) == variants.end();
+      if (!(steps <= kMaxSimulationSteps)) {
+        diagnostics.error(nowhere, "the run " + run_label(key) + " would take " + significant_digits(steps, 3) +
+                                       " steps (" + significant_digits(duration_, 3) + " s at about " +
+                                       significant_digits(duration_ / steps, 3) + " s a step); the limit is " +
+                                       format_number(kMaxSimulationSteps) + " steps a run, as for simulate",
+                          {"shorten --duration, or raise " +
+                           std::string(reference_run ? (reference_factor_named_ ? "--reference-dt-factor"
+                                                                                : "--max-error")
+                                                     : "the step factor of --integrators " +
+                                                           std::string(scene_name(key.integrator)))});
+        return std::nullopt;
+      }
+      if (memory.bytes > 0 && memory_bytes > static_cast<double>(memory.bytes)) {
+        diagnostics.error(scene_.range_of("mesh"),
+                          "mesh: the run " + run_label(key) + " needs an estimated " + gibibytes_text(memory_bytes) +
+                              " (" + significant_digits(tetrahedra, 3) + " tetrahedra); the limit is " +
+                              memory.source + ", " + gibibytes_text(static_cast<double>(memory.bytes)),
+                          {"lower --refinements or --reference-refinements, or coarsen the mesh"});
+        return std::nullopt;
+      }
+      work[i] = tetrahedra * steps;
+      plan.runs += 1;
+      plan.element_steps += work[i];
+      plan.largest_tetrahedra = std::max(plan.largest_tetrahedra, tetrahedra);
+      plan.largest_steps = std::max(plan.largest_steps, steps);
+      plan.largest_memory_bytes = std::max(plan.largest_memory_bytes, memory_bytes);
     }
-    built_ = std::move(scene);
-    built_model_ = model;
-    built_refinements_ = refinements;
-    edges_ = distinct_edge_count(built_->mesh);
-    // Semi-implicit Euler's automatic step on this model and mesh: what every variant's step is a factor of.
-    SimulationSetup setup = built_->setup;
-    setup.integrator = Integrator::SemiImplicitEuler;
-    setup.precision = Precision::Double;
-    setup.time_step.reset();
-    DiagnosticList stability_diagnostics;
-    const auto report = check_stability(setup, stability_diagnostics);
-    automatic_step_ = report ? report->time_step : 0.0;
-    if (!report || !(automatic_step_ > 0.0) || !std::isfinite(automatic_step_)) {
-      for (const Diagnostic& d : stability_diagnostics.items())
-        if (d.severity == Severity::Error) diagnostics.error(d.range, d.message, d.notes);
-      diagnostics.error(scene_.range_of("model"), "the " + trade_model_name(model) +
-                                                       " variant has no automatic step to scale (above)");
-      built_.reset();
-      return nullptr;
+    if (!(plan.element_steps <= kMaxTradeWork)) {
+      diagnostics.error(nowhere, "the trade's " + std::to_string(plan.runs) + " runs would take about " +
+                                     significant_digits(plan.element_steps, 3) + " element-steps (tetrahedra x "
+                                     "steps); the limit is " + format_number(kMaxTradeWork),
+                        {"fewer --refinements, models, precisions or integrators, a larger step factor, or a shorter "
+                         "--duration"});
+      return std::nullopt;
     }
-    return &*built_;
+    return work;
   }
 
-  // What `key` will cost, from the scene's own mesh (see TradePlan); nullopt when the model cannot be built.
-  struct Estimate {
-    double tetrahedra = 0.0, steps = 0.0, memory_bytes = 0.0;
-  };
-  std::optional<Estimate> estimate(const RunKey& key, DiagnosticList& diagnostics) {
-    const BuiltScene* scene = built(key.model, 0, diagnostics);
-    if (!scene) return std::nullopt;
-    const double scale = std::pow(8.0, key.refinements);
-    Estimate e;
-    e.tetrahedra = static_cast<double>(scene->mesh.tetrahedra.size()) * scale;
-    const double step = key.dt_factor * automatic_step_ / std::pow(2.0, key.refinements);
-    e.steps = std::max(1.0, std::ceil(duration_ / step * (1.0 - 1e-12)));
-    SimulationSetup setup = scene->setup;
-    setup.precision = key.precision;
-    setup.integrator = key.integrator;
-    // The run's arrays, and the refined mesh and its setup while it is built (generated_mesh.h's measured figure).
-    e.memory_bytes = memory_estimate(setup, edges_) * scale +
-                     static_cast<double>(kEstimatedBytesPerTetrahedron) * e.tetrahedra;
-    return e;
-  }
-
-  // Runs one variant to the duration; nullopt when it could not be built (errors appended). A run that stops
-  // (non-finite, inversion under on_inversion: stop, a conjugate gradient at its cap) is an outcome saying why.
-  // `stepped` is told (steps taken, steps of the run) every hundredth of the run.
-  std::optional<RunOutcome> run(const RunKey& key, std::size_t coarse_vertices, DiagnosticList& diagnostics,
-                                const std::function<void(std::size_t, std::size_t)>& stepped = {}) {
-    const BuiltScene* scene = built(key.model, key.refinements, diagnostics);
-    if (!scene) return std::nullopt;
-    RunOutcome outcome;
-    SimulationTradeRow& row = outcome.row;
-    row.variant = label(key);
-    row.model = key.model;
-    row.mapping = key.model.element_law < 0 ? key.model.mapping : scene_.material.mapping;
-    row.precision = key.precision;
-    row.integrator = {key.integrator, key.dt_factor};
-    row.refinements = key.refinements;
-    row.vertices = scene->mesh.points.size();
-    row.tetrahedra = scene->mesh.tetrahedra.size();
-    SimulationSetup setup = scene->setup;
-    setup.precision = key.precision;
-    setup.integrator = key.integrator;
-    setup.threads = 1;
-    // A whole number of steps ending at the duration, each at most dt_factor x the automatic step.
-    const double step = key.dt_factor * automatic_step_;
-    row.steps = static_cast<std::size_t>(std::max(1.0, std::ceil(duration_ / step * (1.0 - 1e-12))));
-    row.dt = duration_ / static_cast<double>(row.steps);
-    setup.time_step = row.dt;
-    setup.step_count = row.steps;
-    row.memory_bytes = memory_estimate(setup, edges_);
-    Point3 low = setup.rest_positions.front(), high = low;
-    for (const Point3& p : setup.rest_positions)
-      for (std::size_t a = 0; a < 3; ++a) low[a] = std::min(low[a], p[a]), high[a] = std::max(high[a], p[a]);
-    outcome.extent = distance(low, high);
-    DiagnosticList run_diagnostics;
-    auto simulation = Simulation::create(setup, run_diagnostics);
-    if (simulation) {
-      const double start = process_cpu_seconds();
-      // In hundredths, so that progress is told during a run of hours (advance resumes where it stopped).
-      const std::size_t chunk = std::max<std::size_t>(1, row.steps / 100);
-      row.completed = true;
-      for (std::size_t done = 0; done < row.steps && row.completed;) {
-        const std::size_t now = std::min(chunk, row.steps - done);
-        row.completed = simulation->advance(now, run_diagnostics);
-        done += now;
-        if (stepped) stepped(done, row.steps);
-      }
-      row.cpu_seconds = process_cpu_seconds() - start;
-      row.steps_per_second = static_cast<double>(simulation->steps_taken()) / std::max(row.cpu_seconds, 1e-9);
-      row.inverted_elements = simulation->inversions().largest_count;
-      const std::vector<Point3> positions = simulation->positions(run_diagnostics);
-      outcome.displacement.resize(coarse_vertices);
-      for (std::size_t v = 0; v < coarse_vertices; ++v) {
-        const Point3& start_point = start_position(setup, v);
-        for (std::size_t a = 0; a < 3; ++a) outcome.displacement[v][a] = positions[v][a] - start_point[a];
-        row.final_max_displacement = std::max(row.final_max_displacement,
-                                              std::sqrt(dot(outcome.displacement[v], outcome.displacement[v])));
-      }
-      if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement) {
-        const double length = std::sqrt(dot(setup.probe->target, setup.probe->target));
-        if (length > 0.0) row.final_probe_force = dot(simulation->probe_reading(run_diagnostics).force, setup.probe->target) / length;
-      }
-    }
-    if (!row.completed) {
-      for (const Diagnostic& d : run_diagnostics.items())
-        if (d.severity == Severity::Error) {
-          row.failure = d.message;
-          break;
-        }
-      if (row.failure.empty()) row.failure = "did not complete";
-    }
-    return outcome;
+  // The scene's tetrahedra refined `level` times.
+  double tetrahedra(const BuildKey& key, DiagnosticList& diagnostics) {
+    BuildKey coarse = key;
+    coarse.refinements = 0;
+    const std::shared_ptr<const BuiltRun> built = scenes_.get(coarse, diagnostics);
+    return built ? static_cast<double>(built->scene.mesh.tetrahedra.size()) * std::pow(8.0, key.refinements) : 0.0;
   }
 
  private:
   const Scene& scene_;
+  TradeScenes& scenes_;
   double duration_;
-  std::optional<BuiltScene> built_;
-  TradeModel built_model_ = trade_reference_model();
-  unsigned built_refinements_ = 0;
-  std::size_t edges_ = 0;
-  double automatic_step_ = 0.0;
+  bool reference_factor_named_;
 };
 
-std::string csv_field(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (const char c : text) {
-    if (c == '"') quoted += '"';
-    quoted += c == '\n' ? ' ' : c;
+// The reference's runs at one refinement level and step: itself, its step check (twice the step) and its mesh
+// check (one refinement coarser; none on the scene's own mesh).
+struct ReferenceRuns {
+  RunKey reference, time_check;
+  std::optional<RunKey> mesh_check;
+};
+
+ReferenceRuns reference_runs(const BuildKey& build, double dt_factor) {
+  ReferenceRuns runs;
+  runs.reference = RunKey{build, Precision::Double, Integrator::SemiImplicitEuler, dt_factor};
+  runs.time_check = runs.reference;
+  runs.time_check.dt_factor = 2.0 * dt_factor;
+  if (build.refinements > 0) {
+    runs.mesh_check = runs.reference;
+    runs.mesh_check->build.refinements = build.refinements - 1;
   }
-  return quoted + "\"";
-}
-
-std::string model_column(const TradeModel& model) {
-  return model.element_law >= 0 ? trade_model_name(model) : std::string("springs");
-}
-
-std::string status_text(const SimulationTradeRow& row) {
-  if (!row.completed) return "failed: " + row.failure;
-  if (row.inverted_elements > 0) return "completed, " + std::to_string(row.inverted_elements) + " inverted elements";
-  return "completed";
+  return runs;
 }
 
 }  // namespace
@@ -397,21 +335,18 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
                                                           DiagnosticList& diagnostics) {
   const std::size_t errors = diagnostics.error_count();
   const SourceRange nowhere{};
-  if (options.models.empty() || options.precisions.empty() || options.integrators.empty() ||
-      options.refinements.empty()) {
-    diagnostics.error(nowhere, "--models, --precisions, --integrators and --refinements each need at least one value");
-    return std::nullopt;
-  }
-  for (const TradeIntegrator& integrator : options.integrators)
-    if (!(integrator.dt_factor > 0.0) || !std::isfinite(integrator.dt_factor))
-      diagnostics.error(nowhere, "--integrators: the step factor of " + std::string(scene_name(integrator.integrator)) +
-                                     " must be a positive number, got " + format_number(integrator.dt_factor));
+  const std::optional<TradeAxesValues> values = axes_values(scene, options, diagnostics);
+  if (!values) return std::nullopt;
   // Its step check runs at twice the factor, which must stay within the automatic (stable) step.
   if (!(options.reference_dt_factor > 0.0) || !(options.reference_dt_factor <= 0.5))
     diagnostics.error(nowhere, "--reference-dt-factor must be in (0, 0.5] (its check runs at twice it), got " +
                                    format_number(options.reference_dt_factor));
-  const unsigned finest = *std::max_element(options.refinements.begin(), options.refinements.end());
-  const unsigned reference_level = options.reference_refinements.value_or(finest);
+  if (options.max_error && !(*options.max_error > 0.0 && *options.max_error <= 1.0))
+    diagnostics.error(nowhere, "--max-error must be a relative error in (0, 1] (0.05 is 5%), got " +
+                                   format_number(*options.max_error));
+  const unsigned finest = *std::max_element(values->refinements.begin(), values->refinements.end());
+  const unsigned reference_level =
+      options.reference_refinements.value_or(std::max(finest, options.max_error ? 1u : finest));
   if (std::max(finest, reference_level) > kMaxTradeRefinements)
     diagnostics.error(nowhere, "--refinements and --reference-refinements go up to " +
                                    std::to_string(kMaxTradeRefinements) + " (each multiplies the tetrahedra by 8)");
@@ -422,13 +357,30 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   const double duration = options.duration.value_or(scene.duration);
   if (!(duration > 0.0) || !std::isfinite(duration))
     diagnostics.error(nowhere, "--duration must be a positive number of seconds, got " + format_number(duration));
-  if (diagnostics.error_count() != errors || !check_comparable(scene, options, diagnostics)) return std::nullopt;
+  const std::optional<TradeMeasures> measures = resolved_measures(scene, options, diagnostics);
+  if (diagnostics.error_count() != errors || !measures || !check_comparable(scene, values->models, diagnostics))
+    return std::nullopt;
+
+  // The reference: the scene's own finite-element law and element kind (a spring scene: the default law on linear
+  // tetrahedra), in double, semi-implicit Euler, on the scene's mesh refined.
+  const TradeModel own = scene_model(scene);
+  BuildKey reference_build;
+  reference_build.model = trade_has_springs(own) ? trade_reference_model() : own;
+  reference_build.element_kind = scene.model == ForceModel::Elements ? scene.element_kind : default_element_kind().kind;
+  reference_build.refinements = reference_level;
 
   // The scene's own mesh, sized before anything is refined.
-  std::size_t coarse_vertices = 0;
+  std::size_t compared_vertices = 0;
   {
     DiagnosticList build_diagnostics;
-    const auto coarse = build_scene(variant_scene(scene, TradeModel{}, duration), build_diagnostics);
+    // The scene's own model (a membrane of springs builds, and is refused below as a mesh without tetrahedra).
+    BuildKey coarse_key = reference_build;
+    coarse_key.refinements = 0;
+    if (trade_has_springs(own)) {
+      coarse_key.model = own;
+      coarse_key.element_kind = -1;
+    }
+    const auto coarse = build_scene(trade_variant_scene(scene, coarse_key, duration), build_diagnostics);
     if (!coarse) {
       diagnostics.append(build_diagnostics);
       return std::nullopt;
@@ -447,146 +399,227 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
                             "; lower --refinements or --reference-refinements, or coarsen the mesh");
       return std::nullopt;
     }
-    coarse_vertices = coarse->mesh.points.size();
+    // A mesh from a surface is compared at the surface's vertices (the first ones of every mesh of it: graded,
+    // uniform, refined); any other at the scene's own vertices (a refinement keeps them first).
+    compared_vertices = coarse->meshing ? coarse->meshing->result.surface_vertices : coarse->mesh.points.size();
   }
 
-  // Every run once: the reference, its two convergence checks, the variants.
-  const RunKey reference{trade_reference_model(), Precision::Double, Integrator::SemiImplicitEuler,
-                         options.reference_dt_factor, reference_level};
-  RunKey time_check = reference;
-  time_check.dt_factor = 2.0 * options.reference_dt_factor;
-  std::optional<RunKey> mesh_check;
-  if (reference_level > 0) {
-    mesh_check = reference;
-    mesh_check->refinements = reference_level - 1;
-  }
   std::vector<RunKey> variants;
-  for (const TradeModel model : options.models)
-    for (const unsigned refinements : options.refinements)
-      for (const Precision precision : options.precisions)
-        for (const TradeIntegrator& integrator : options.integrators)
-          variants.push_back({model, precision, integrator.integrator, integrator.dt_factor, refinements});
-  std::vector<RunKey> planned = variants;
-  planned.push_back(time_check);
-  if (mesh_check) planned.push_back(*mesh_check);
-  std::sort(planned.begin(), planned.end());
-  planned.erase(std::unique(planned.begin(), planned.end(),
-                            [](const RunKey& a, const RunKey& b) { return !(a < b) && !(b < a); }),
-                planned.end());
-  planned.erase(std::remove_if(planned.begin(), planned.end(),
-                               [&](const RunKey& k) { return !(k < reference) && !(reference < k); }),
-                planned.end());
-  planned.insert(planned.begin(), reference);  // first: nothing is compared without it
+  for (const TradeModel& model : values->models)
+    for (const int kind : trade_has_springs(model) ? std::vector<int>{-1} : values->element_kinds)
+      for (const TradeMesh mesh : values->meshes)
+        for (const unsigned refinements : values->refinements)
+          for (const Precision precision : values->precisions)
+            for (const TradeIntegrator& integrator : values->integrators)
+              variants.push_back(RunKey{BuildKey{model, kind, mesh, refinements}, precision, integrator.integrator,
+                                        integrator.dt_factor});
+  std::sort(variants.begin(), variants.end());
+  variants.erase(std::unique(variants.begin(), variants.end()), variants.end());
 
-  TradeRunner runner(scene, duration);
-  // The plan, checked before anything runs: every run's steps, the largest run's memory, the work in all.
-  TradePlan plan;
-  plan.runs = planned.size();
-  std::vector<double> work(planned.size());
-  const MemoryLimit memory = memory_limit();
-  for (std::size_t i = 0; i < planned.size(); ++i) {
-    const RunKey& key = planned[i];
-    const auto estimate = runner.estimate(key, diagnostics);
-    if (!estimate) return std::nullopt;
-    // The reference and its checks take their step from --reference-dt-factor, the variants from --integrators.
-    const bool reference_run = std::none_of(variants.begin(), variants.end(),
-                                            [&](const RunKey& v) { return !(v < key) && !(key < v); });
-    if (!(estimate->steps <= kMaxSimulationSteps)) {
-      diagnostics.error(nowhere, "the run " + label(key) + " would take " + significant_digits(estimate->steps, 3) +
-                                     " steps (" + significant_digits(duration, 3) + " s at about " +
-                                     significant_digits(duration / estimate->steps, 3) + " s a step); the limit is " +
-                                     format_number(kMaxSimulationSteps) + " steps a run, as for simulate",
-                        {"shorten --duration, or raise " +
-                         std::string(reference_run ? "--reference-dt-factor" : "the step factor of --integrators " +
-                                                                                   std::string(scene_name(key.integrator)))});
-      return std::nullopt;
-    }
-    if (memory.bytes > 0 && estimate->memory_bytes > static_cast<double>(memory.bytes)) {
-      diagnostics.error(scene.range_of("mesh"),
-                        "mesh: the run " + label(key) + " needs an estimated " + gibibytes_text(estimate->memory_bytes) +
-                            " (" + significant_digits(estimate->tetrahedra, 3) + " tetrahedra); the limit is " +
-                            memory.source + ", " + gibibytes_text(static_cast<double>(memory.bytes)),
-                        {"lower --refinements or --reference-refinements, or coarsen the mesh"});
-      return std::nullopt;
-    }
-    work[i] = estimate->tetrahedra * estimate->steps;
-    plan.element_steps += work[i];
-    plan.largest_tetrahedra = std::max(plan.largest_tetrahedra, estimate->tetrahedra);
-    plan.largest_steps = std::max(plan.largest_steps, estimate->steps);
-    plan.largest_memory_bytes = std::max(plan.largest_memory_bytes, estimate->memory_bytes);
-  }
-  if (!(plan.element_steps <= kMaxTradeWork)) {
-    diagnostics.error(nowhere, "the trade's " + std::to_string(plan.runs) + " runs would take about " +
-                                   significant_digits(plan.element_steps, 3) + " element-steps (tetrahedra x steps); the "
-                                   "limit is " + format_number(kMaxTradeWork),
-                      {"fewer --refinements, models, precisions or integrators, a larger step factor, or a shorter "
-                       "--duration"});
-    return std::nullopt;
-  }
-  if (options.plan) options.plan(plan);
-  double work_done = 0.0;
-  std::map<RunKey, RunOutcome> outcomes;
-  for (std::size_t i = 0; i < planned.size(); ++i) {
-    if (options.progress) options.progress(i, planned.size(), (i == 0 ? "reference " : "") + label(planned[i]));
-    const auto stepped = [&](std::size_t steps, std::size_t steps_in_run) {
-      if (options.work_progress)
-        options.work_progress(work_done + work[i] * static_cast<double>(steps) / static_cast<double>(steps_in_run),
-                              plan.element_steps);
-    };
-    auto outcome = runner.run(planned[i], coarse_vertices, diagnostics, stepped);
-    work_done += work[i];
-    if (!outcome) return std::nullopt;
-    if (i == 0) {
-      if (!outcome->row.completed) {
-        diagnostics.error(scene.range_of("model"), "the reference (" + label(reference) + ") did not complete: " +
-                                                       outcome->row.failure);
-        return std::nullopt;
-      }
-      // Rounding moves a block at rest by about 1e-16 of its size: what moves less than 1e-9 of it does not move.
-      if (!(outcome->row.final_max_displacement > 1e-9 * outcome->extent)) {
-        diagnostics.error(scene.range_of("loads"), "the reference (" + label(reference) +
-                                                       ") does not move: no displacement to compare; give the scene "
-                                                       "a load (probe, gravity or forces)");
-        return std::nullopt;
-      }
-    }
-    outcomes.emplace(planned[i], std::move(*outcome));
-  }
-  if (options.progress) options.progress(planned.size(), planned.size(), "done");
+  TradeScenes scenes(scene, duration);
+  TradePlanner planner(scene, scenes, duration, !options.max_error);
+  TradeExecution execution;
+  execution.gpu = options.gpu;
+  execution.batch = options.batch;
+  execution.threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+  execution.duration = duration;
+  execution.compared_vertices = compared_vertices;
 
   SimulationTradeResult result;
   result.scene_name = scene.name;
   result.duration = duration;
-  result.coarse_vertices = coarse_vertices;
-  const RunOutcome& ref = outcomes.at(reference);
-  result.has_probe_force =
-      scene.probe && scene.probe->mode == ProbeLoad::Mode::Displacement && ref.row.final_probe_force != 0.0;
+  result.coarse_vertices = compared_vertices;
+  result.max_error = options.max_error;
+  result.measures = *measures;
+  result.backend = options.gpu ? "CUDA, the runs in batches"
+                               : options.batch ? "the CPU, the runs in batches"
+                                               : "the CPU, " + std::to_string(execution.threads) +
+                                                     " run(s) side by side, one thread each";
+
+  // Rounds: the reference, its checks and the variants on the coarsest mesh; with --max-error the reference is then
+  // refined (or its step halved) while an estimate is above a fifth of it. Then the variants on finer meshes, level
+  // by level: with --max-error, one whose run one refinement coarser took more than an eighth of the cheapest
+  // variant's that meets it (CPU seconds) is skipped (a refinement costs 8 times the elements and at least as many steps: it
+  // cannot be faster).
+  std::map<RunKey, RunOutcome> outcomes;
+  double reference_factor = options.reference_dt_factor;
+  ReferenceRuns current = reference_runs(reference_build, reference_factor);
+  const unsigned coarsest = *std::min_element(values->refinements.begin(), values->refinements.end());
+  const auto unrun = [&](std::vector<RunKey> keys) {
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    keys.erase(std::remove_if(keys.begin(), keys.end(), [&](const RunKey& k) { return outcomes.count(k) > 0; }),
+               keys.end());
+    return keys;
+  };
+  {
+    // What everything will cost, said (and checked against the limits) before anything runs.
+    std::vector<RunKey> all{current.reference, current.time_check};
+    if (current.mesh_check) all.push_back(*current.mesh_check);
+    all.insert(all.end(), variants.begin(), variants.end());
+    all = unrun(all);
+    TradePlan plan;
+    if (!planner.check(all, variants, plan, diagnostics)) return std::nullopt;
+    if (options.plan) options.plan(plan);
+  }
+  double work_before = 0.0;
+  std::size_t runs_planned = 0;
+  // Runs `keys` (those not run yet) on the execution; false after an error.
+  const auto run_keys = [&](const std::vector<RunKey>& wanted, const std::string& what) {
+    const std::vector<RunKey> keys = unrun(wanted);
+    TradePlan round_plan;
+    const auto work = planner.check(keys, variants, round_plan, diagnostics);
+    if (!work) return false;
+    runs_planned += keys.size();
+    if (options.progress) options.progress(outcomes.size(), runs_planned, what);
+    const double round_work = round_plan.element_steps;
+    auto ran = execute_trade_runs(keys, *work, scenes, execution,
+                                  [&](double done) {
+                                    if (options.work_progress)
+                                      options.work_progress(work_before + done, work_before + round_work);
+                                  },
+                                  diagnostics);
+    work_before += round_work;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (!ran[i]) return false;
+      outcomes.emplace(keys[i], std::move(*ran[i]));
+    }
+    return true;
+  };
+  for (std::size_t round = 0;; ++round) {
+    std::vector<RunKey> keys{current.reference, current.time_check};
+    if (current.mesh_check) keys.push_back(*current.mesh_check);
+    if (round == 0)
+      for (const RunKey& key : variants)
+        if (key.build.refinements == coarsest || !options.max_error) keys.push_back(key);
+    if (!run_keys(keys, (round == 0 ? "reference " : "reference round " + std::to_string(round + 1) + ", ") +
+                            run_label(current.reference)))
+      return std::nullopt;
+    const RunOutcome& ref = outcomes.at(current.reference);
+    const std::string name = run_label(current.reference);
+    if (!ref.row.completed) {
+      diagnostics.error(scene.range_of("model"), "the reference (" + name + ") did not complete: " + ref.row.failure);
+      return std::nullopt;
+    }
+    // Rounding moves a block at rest by about 1e-16 of its size: what moves less than 1e-9 of it does not move.
+    if (!(ref.row.final_max_displacement > 1e-9 * ref.extent)) {
+      diagnostics.error(scene.range_of("loads"), "the reference (" + name + ") does not move: no displacement to "
+                                                 "compare; give the scene a load (probe, gravity or forces)");
+      return std::nullopt;
+    }
+    result.has_probe_force =
+        scene.probe && scene.probe->mode == ProbeLoad::Mode::Displacement && ref.row.final_probe_force != 0.0;
+    const auto errors_of = [&](const RunOutcome& outcome) {
+      return compare(outcome.displacement, outcome.row.final_probe_force, ref.displacement,
+                     ref.row.final_probe_force, result.has_probe_force);
+    };
+    for (const auto& [key, label] : {std::make_pair(current.time_check, "step check"),
+                                     std::make_pair(current.mesh_check.value_or(current.reference), "mesh check")}) {
+      const RunOutcome& check = outcomes.at(key);
+      if (!check.row.completed) {
+        diagnostics.error(scene.range_of("model"), "the reference's " + std::string(label) + " (" + run_label(key) +
+                                                       ") did not complete: " + check.row.failure);
+        return std::nullopt;
+      }
+    }
+    result.reference_time_difference = errors_of(outcomes.at(current.time_check));
+    result.reference_mesh_difference.reset();
+    if (current.mesh_check) result.reference_mesh_difference = errors_of(outcomes.at(*current.mesh_check));
+    const double step_estimate = measured(result.reference_time_difference, *measures);
+    const double mesh_estimate =
+        result.reference_mesh_difference ? measured(*result.reference_mesh_difference, *measures) : 0.0;
+    result.reference_rounds.push_back(name + ": step estimate " + trade_percent(step_estimate) + ", mesh estimate " +
+                                      (current.mesh_check ? trade_percent(mesh_estimate) : std::string("none")) + " (" +
+                                      significant_digits(ref.row.cpu_seconds, 3) + " s of one core)");
+    if (!options.max_error) break;
+    const double target = *options.max_error / 5.0;
+    const bool refine = mesh_estimate > target, halve = step_estimate > target;
+    if (!refine && !halve) break;
+    // The next round: a refinement multiplies the reference's work by 16 (8 times the tetrahedra, twice the steps),
+    // a halved step by 2, each with its checks (about half again).
+    BuildKey next_build = current.reference.build;
+    if (refine) ++next_build.refinements;
+    const double next_factor = halve ? reference_factor / 2.0 : reference_factor;
+    const double next_seconds = ref.row.cpu_seconds * (refine ? 16.0 : 1.0) * (halve ? 2.0 : 1.0) * 1.5;
+    std::string cannot;
+    if (refine && next_build.refinements > kMaxTradeRefinements)
+      cannot = "refinement " + std::to_string(next_build.refinements) + " is past the trade's limit of " +
+               std::to_string(kMaxTradeRefinements);
+    else if (refine && planner.tetrahedra(next_build, diagnostics) > static_cast<double>(kMaxTradeTetrahedra))
+      cannot = "refinement " + std::to_string(next_build.refinements) + " would make " +
+               format_number(planner.tetrahedra(next_build, diagnostics)) + " tetrahedra, above the trade's limit of " +
+               std::to_string(kMaxTradeTetrahedra);
+    else if (next_seconds > options.max_reference_seconds)
+      cannot = std::string(refine ? "refinement " + std::to_string(next_build.refinements) : "a halved step") +
+               " would take about " + significant_digits(next_seconds, 2) + " s of one core (from this round's " +
+               significant_digits(ref.row.cpu_seconds, 3) + " s), above --max-reference-seconds " +
+               format_number(options.max_reference_seconds);
+    if (!cannot.empty()) {
+      const double floor = 5.0 * std::max(step_estimate, mesh_estimate);
+      diagnostics.error(nowhere, "--max-error " + trade_percent(*options.max_error) + ": the reference cannot be refined "
+                                 "until its own estimated error is under a fifth of it (" + trade_percent(target) + "): " +
+                                 name + " has a " + (refine ? "mesh" : "step") + " estimate of " +
+                                 trade_percent(refine ? mesh_estimate : step_estimate) + ", and " + cannot,
+                        {"ask for --max-error " + trade_percent(floor) + " or more (five times the reference's estimate)" +
+                             (cannot.find("--max-reference-seconds") != std::string::npos
+                                  ? ", or allow the reference more time with --max-reference-seconds"
+                                  : ", or start from a finer mesh")});
+      return std::nullopt;
+    }
+    reference_factor = next_factor;
+    current = reference_runs(next_build, next_factor);
+  }
+  // The finer variants, level by level (with --max-error; without it they ran in the first round).
+  std::map<RunKey, std::string> skipped;
+  std::vector<unsigned> levels = values->refinements;
+  std::sort(levels.begin(), levels.end());
+  levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+  for (const unsigned level : levels) {
+    if (!options.max_error || level == coarsest) continue;
+    const RunOutcome& ref = outcomes.at(current.reference);
+    double best_wall = HUGE_VAL;
+    std::string best;
+    for (const RunKey& key : variants) {
+      const auto it = outcomes.find(key);
+      if (it == outcomes.end() || !it->second.row.completed) continue;
+      const TradeErrors e = compare(it->second.displacement, it->second.row.final_probe_force, ref.displacement,
+                                    ref.row.final_probe_force, result.has_probe_force);
+      if (within(e, *measures, *options.max_error) && it->second.row.cpu_seconds < best_wall) {
+        best_wall = it->second.row.cpu_seconds;
+        best = run_label(key);
+      }
+    }
+    std::vector<RunKey> wave;
+    for (const RunKey& key : variants) {
+      if (key.build.refinements != level) continue;
+      RunKey coarser = key;
+      coarser.build.refinements = level - 1;
+      const auto it = outcomes.find(coarser);
+      if (it != outcomes.end() && it->second.row.completed && 8.0 * it->second.row.cpu_seconds > best_wall) {
+        skipped[key] = "skipped: " + run_label(coarser) + " took " + significant_digits(it->second.row.cpu_seconds, 3) +
+                       " s, and one refinement costs at least 8 times that; " + best + ", which meets --max-error, "
+                       "took " + significant_digits(best_wall, 3) + " s";
+        continue;
+      }
+      wave.push_back(key);
+    }
+    if (!run_keys(wave, "variants on refinement " + std::to_string(level))) return std::nullopt;
+  }
+  if (options.progress) options.progress(outcomes.size(), outcomes.size(), "done");
+
+  const RunOutcome& ref = outcomes.at(current.reference);
   const auto errors_of = [&](const RunOutcome& outcome) {
     return compare(outcome.displacement, outcome.row.final_probe_force, ref.displacement, ref.row.final_probe_force,
                    result.has_probe_force);
   };
-  result.reference_description = "co-rotational FEM, double, semi-implicit Euler at " +
-                                 format_number(options.reference_dt_factor) + " x its automatic step (dt " +
-                                 significant_digits(ref.row.dt, 3) + " s), the scene's mesh refined " +
-                                 std::to_string(reference_level) + " time" + (reference_level == 1 ? "" : "s") + " (" +
-                                 std::to_string(ref.row.vertices) + " vertices, " +
-                                 std::to_string(ref.row.tetrahedra) + " tetrahedra)";
-  const RunOutcome& time_outcome = outcomes.at(time_check);
-  if (!time_outcome.row.completed) {
-    diagnostics.error(scene.range_of("model"), "the reference's step check (" + label(time_check) +
-                                                   ") did not complete: " + time_outcome.row.failure);
-    return std::nullopt;
-  }
-  result.reference_time_difference = errors_of(time_outcome);
-  if (mesh_check) {
-    const RunOutcome& mesh_outcome = outcomes.at(*mesh_check);
-    if (!mesh_outcome.row.completed) {
-      diagnostics.error(scene.range_of("model"), "the reference's mesh check (" + label(*mesh_check) +
-                                                     ") did not complete: " + mesh_outcome.row.failure);
-      return std::nullopt;
-    }
-    result.reference_mesh_difference = errors_of(mesh_outcome);
-  }
+  const ElementKindRow& reference_kind = element_kind_row(current.reference.build.element_kind);
+  result.reference_description =
+      std::string(element_law_row(current.reference.build.model.element_law).keyword) + " FEM on " +
+      reference_kind.keyword + " elements, double, semi-implicit Euler at " + format_number(reference_factor) +
+      " x its automatic step (dt " + significant_digits(ref.row.dt, 3) + " s), the scene's mesh refined " +
+      std::to_string(current.reference.build.refinements) + " time" +
+      (current.reference.build.refinements == 1 ? "" : "s") + " (" + std::to_string(ref.row.vertices) +
+      " vertices, " + std::to_string(ref.row.tetrahedra) + " tetrahedra)";
   SimulationTradeRow reference_row = ref.row;
   reference_row.reference = true;
   reference_row.variant = "reference: " + reference_row.variant;
@@ -594,65 +627,36 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   else reference_row.errors.probe_force = 0.0;
   result.rows.push_back(reference_row);
   for (const RunKey& key : variants) {
+    if (const auto it = skipped.find(key); it != skipped.end()) {
+      SimulationTradeRow row;
+      row.variant = run_label(key);
+      row.model = key.build.model;
+      row.element_kind = key.build.element_kind;
+      row.mesh = key.build.mesh;
+      row.precision = key.precision;
+      row.integrator = {key.integrator, key.dt_factor};
+      row.refinements = key.build.refinements;
+      row.skipped = it->second;
+      result.rows.push_back(row);
+      continue;
+    }
     SimulationTradeRow row = outcomes.at(key).row;
     if (row.completed) row.errors = errors_of(outcomes.at(key));
     result.rows.push_back(row);
   }
+  if (options.max_error) {
+    for (std::size_t i = 1; i < result.rows.size(); ++i) {
+      const SimulationTradeRow& row = result.rows[i];
+      if (!meets_max_error(result, row)) continue;
+      ++result.meeting;
+      if (!result.chosen || row.cpu_seconds < result.rows[*result.chosen].cpu_seconds) result.chosen = i;
+    }
+  }
   return result;
 }
 
-std::string simulation_trade_csv(const SimulationTradeResult& result) {
-  std::ostringstream csv;
-  const std::vector<std::string> columns = simulation_trade_columns();
-  for (std::size_t c = 0; c < columns.size(); ++c) csv << (c ? "," : "") << columns[c];
-  csv << '\n';
-  for (const SimulationTradeRow& row : result.rows) {
-    const bool springs = has_springs(row.model);
-    const auto error_text = [&](double value) { return row.completed ? format_number(value) : std::string(); };
-    csv << csv_field(row.variant) << ',' << model_column(row.model) << ','
-        << (row.precision == Precision::Float ? "float" : "double") << ',' << scene_name(row.integrator.integrator)
-        << ',' << format_number(row.dt) << ',' << row.vertices << ',' << error_text(row.errors.displacement_max) << ','
-        << error_text(row.errors.displacement_rms) << ','
-        << (row.completed && row.errors.probe_force ? format_number(*row.errors.probe_force) : "") << ','
-        << format_number(row.steps_per_second) << ',' << format_number(row.memory_bytes) << ','
-        << (springs ? scene_name(row.mapping) : "") << ',' << row.refinements << ',' << row.tetrahedra << ','
-        << row.steps << ',' << row.inverted_elements << ',' << csv_field(status_text(row)) << '\n';
-  }
-  return csv.str();
-}
-
-std::string simulation_trade_markdown(const SimulationTradeResult& result) {
-  std::ostringstream md;
-  const auto percent = [](double value) { return significant_digits(100.0 * value, 3) + "%"; };
-  const auto errors_text = [&](const TradeErrors& e) {
-    std::string text = "displacement max " + percent(e.displacement_max) + ", RMS " + percent(e.displacement_rms);
-    if (e.probe_force) text += ", probe force " + percent(*e.probe_force);
-    return text;
-  };
-  md << "# fmpc trade: scene " << result.scene_name << "\n\n";
-  md << "Every run simulates " << format_number(result.duration)
-     << " s on the CPU, one thread; errors are relative, at the final time, against the reference, over the scene's "
-     << result.coarse_vertices << " own vertices" << (result.has_probe_force ? " and the probe force" : "")
-     << "; speed in steps per CPU second; memory an estimate from the array sizes (docs/trade.md).\n\n";
-  md << "Reference: " << result.reference_description << ".\n";
-  md << "Its estimated error (its difference from itself with twice the step";
-  if (result.reference_mesh_difference) md << ", and on the mesh one refinement coarser";
-  md << "; at most the difference if it converges at first order or better): step " << errors_text(result.reference_time_difference);
-  if (result.reference_mesh_difference) md << "; mesh " << errors_text(*result.reference_mesh_difference);
-  else md << "; mesh: not estimated (the reference is on the scene's own mesh)";
-  md << ".\n\n";
-  md << "| variant | dt (s) | vertices | displacement max error | displacement RMS error | probe force error | "
-        "steps/s | memory | inverted | status |\n";
-  md << "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- |\n";
-  for (const SimulationTradeRow& row : result.rows) {
-    const auto error = [&](double value) { return row.completed ? percent(value) : std::string("-"); };
-    md << "| " << row.variant << " | " << significant_digits(row.dt, 3) << " | " << row.vertices << " | "
-       << error(row.errors.displacement_max) << " | " << error(row.errors.displacement_rms) << " | "
-       << (row.completed && row.errors.probe_force ? percent(*row.errors.probe_force) : "-") << " | "
-       << significant_digits(row.steps_per_second, 3) << " | " << significant_digits(row.memory_bytes / 1024.0, 3) << " KiB | "
-       << row.inverted_elements << " | " << (row.completed ? "completed" : "failed: " + row.failure) << " |\n";
-  }
-  return md.str();
+bool meets_max_error(const SimulationTradeResult& result, const SimulationTradeRow& row) {
+  return result.max_error && row.completed && !row.reference && within(row.errors, result.measures, *result.max_error);
 }
 
 }  // namespace fmpc::sim

@@ -163,6 +163,58 @@ bool Session::step_to(double time, DiagnosticList& diagnostics) {
   return step(static_cast<std::size_t>(steps), diagnostics);
 }
 
+bool Session::step_to_averaging(double time, std::vector<ToolReading>& mean, DiagnosticList& diagnostics,
+                                std::vector<ToolReading>* end) {
+  const double dt = time_step();
+  if (!std::isfinite(time)) {
+    diagnostics.error(argument("time"), "the time " + format_number(time) + " s is not finite");
+    return false;
+  }
+  const double ahead = time > this->time() ? std::ceil((time - this->time()) / dt * (1.0 - 1e-12)) : 0.0;
+  if (!(ahead <= sim::kMaxSimulationSteps)) return step_to(time, diagnostics);  // step_to's error
+  const auto steps = static_cast<std::size_t>(ahead);
+  // The weight of the readings at a step's start and at its end in the force the step applies.
+  double start_weight = 1.0, end_weight = 0.0;
+  switch (simulation_->setup().integrator) {
+    case sim::Integrator::ImplicitEuler: start_weight = 0.0, end_weight = 1.0; break;
+    case sim::Integrator::VelocityVerlet:
+    case sim::Integrator::RungeKutta4: start_weight = 0.5, end_weight = 0.5; break;
+    default: break;
+  }
+  std::vector<ToolReading> reading = tool_readings(diagnostics);
+  if (reading.size() != tool_count()) return false;
+  std::vector<ToolReading> sum(reading.size());
+  const auto add = [&](const std::vector<ToolReading>& now, double weight) {
+    for (std::size_t t = 0; t < now.size(); ++t) {
+      for (int i = 0; i < 3; ++i) {
+        sum[t].force[i] += weight * now[t].force[i];
+        sum[t].torque[i] += weight * now[t].torque[i];
+      }
+      sum[t].contacts = std::max(sum[t].contacts, now[t].contacts);
+      sum[t].deepest = std::max(sum[t].deepest, now[t].deepest);
+    }
+  };
+  for (std::size_t k = 0; k < steps; ++k) {
+    add(reading, start_weight);
+    if (!step(1, diagnostics)) return false;
+    reading = tool_readings(diagnostics);
+    if (reading.size() != tool_count()) return false;
+    add(reading, end_weight);
+  }
+  if (steps == 0) {
+    mean = reading;
+  } else {
+    for (ToolReading& tool : sum)
+      for (int i = 0; i < 3; ++i) {
+        tool.force[i] /= static_cast<double>(steps);  // the impulse sum over dt each, over steps x dt
+        tool.torque[i] /= static_cast<double>(steps);
+      }
+    mean = std::move(sum);
+  }
+  if (end != nullptr) *end = std::move(reading);
+  return true;
+}
+
 double Session::time() const { return simulation_->time(); }
 double Session::time_step() const { return simulation_->stability().time_step; }
 std::size_t Session::steps_taken() const { return simulation_->steps_taken(); }

@@ -82,6 +82,16 @@ class Session {
   const std::vector<ToolPose>& tool_poses() const;
   // What every tool feels now: the tissue's force on it (N) and its torque about the tool's origin (N m).
   std::vector<ToolReading> tool_readings(DiagnosticList& diagnostics) const;
+  // step_to(time), one step at a time, and what every tool felt over those steps: its impulse (the force each step
+  // applies, times dt) over their duration, the force a haptic device should render for the tick; likewise the
+  // torque. `contacts` and `deepest` are the largest at a step. The force a step applies is the reading at its start
+  // for forward and semi-implicit Euler, at its end for implicit Euler (so one implicit step per tick averages to
+  // the end-of-tick reading) and the mean of both for velocity Verlet (exact) and RK4 (an estimate). `end`, when
+  // given, receives the readings at the last step's end (tool_readings() then). Each step is one advance with its
+  // checks and one reading (on CUDA a download of the positions), so this costs more than step_to. With no step
+  // to take, `mean` is the reading now.
+  bool step_to_averaging(double time, std::vector<ToolReading>& mean, DiagnosticList& diagnostics,
+                         std::vector<ToolReading>* end = nullptr);
 
   // ---- the state ---------------------------------------------------------------------------------------------------
   std::size_t vertex_count() const;

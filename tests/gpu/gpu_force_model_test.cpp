@@ -1,7 +1,7 @@
-// The force models on the CUDA backend against the CPU loop (the host reference): the co-rotational FEM on linear and
-// quadratic tetrahedra, springs with the volume term, Rayleigh mass damping, per-axis holds, inversion counting with
-// its exact first step (replay) and on_inversion: stop, quadratic elements' inversion at their quadrature points, on
-// odd mesh sizes (never a multiple of the block size), alone and in a batch.
+// The force models on the CUDA backend against the CPU loop (the host reference): every fem law of the registry on
+// every element kind (kModels), springs with the volume term, Rayleigh mass damping, per-axis holds, inversion
+// counting with its exact first step (replay) and on_inversion: stop, quadratic elements' inversion at their
+// quadrature points, on odd mesh sizes (never a multiple of the block size), alone and in a batch.
 //
 // Stated tolerances as for springs (tests/gpu/cpu_gpu_comparison.h): explicit integrators 1e-5 m in float and
 // 1e-12 m in double (expected 0: the element pass is the same FMPC_HD code in the same order, --fmad=false);
@@ -29,11 +29,27 @@ using namespace fmpc::gpu_test;
 
 namespace {
 
-enum class Model { Fem, QuadraticFem, SpringsWithVolumeTerm };
+// A model under test: an element law on an element kind (indices in the registries), or springs with the volume
+// term (law < 0). Every fem law on every element kind is covered, so that a new row of either registry is compared
+// with the CPU and runs under the sanitizers without an edit here.
+struct Model {
+  int law = -1;
+  int element = 0;
+  std::string name;
+};
 
-const char* name_of(Model model) {
-  return model == Model::Fem ? "FEM" : model == Model::QuadraticFem ? "quadratic FEM" : "springs + volume term";
+std::vector<Model> all_models() {
+  std::vector<Model> models;
+  for (const ElementLawRow& law : element_law_rows()) {
+    if (law.beside_springs) continue;
+    for (const ElementKindRow& kind : element_kind_rows())
+      models.push_back(Model{law.law, kind.kind, std::string(law.keyword) + " FEM (" + kind.keyword + ")"});
+  }
+  models.push_back(Model{-1, 0, "springs + volume term"});
+  return models;
 }
+
+const std::string& name_of(const Model& model) { return model.name; }
 
 Mesh box_mesh(int nx, int ny, int nz) {
   DiagnosticList diagnostics;
@@ -47,14 +63,15 @@ Mesh box_mesh(int nx, int ny, int nz) {
 
 // A 0.1 m box of 5 kPa tissue (1060 kg/m^3, nu 0.45, damping ratio 0.9, Rayleigh mass damping 2 /s) hanging from its
 // top face under gravity, with seeded random initial velocities so that every vertex moves.
-SimulationSetup hanging_box(Model model, Precision precision, Integrator integrator, int nx = 3, int ny = 5,
+SimulationSetup hanging_box(const Model& model, Precision precision, Integrator integrator, int nx = 3, int ny = 5,
                             int nz = 2, unsigned seed = 1) {
   const Mesh mesh = box_mesh(nx, ny, nz);
   DiagnosticList diagnostics;
   SimulationSetup out;
-  if (model == Model::Fem || model == Model::QuadraticFem) {
+  if (model.law >= 0) {
     FemModelSpec spec;
-    if (model == Model::QuadraticFem) spec.element = element_kind_by_keyword("quadratic")->kind;
+    spec.law = model.law;
+    spec.element = model.element;
     spec.youngs_modulus = {5000.0};
     spec.poisson_ratio = {0.45};
     spec.mass.value = 1060.0;
@@ -88,7 +105,7 @@ SimulationSetup hanging_box(Model model, Precision precision, Integrator integra
 
 // The hanging box whose bottom face slides on its plane (y held, x and z free: SOFA's PartialFixedConstraint) and
 // whose x = 0 face holds x only.
-SimulationSetup held_box(Model model, Precision precision, Integrator integrator) {
+SimulationSetup held_box(const Model& model, Precision precision, Integrator integrator) {
   SimulationSetup setup = hanging_box(model, precision, integrator, 4, 3, 3, 7);
   setup.fixed_axes.assign(setup.rest_positions.size(), 0);
   for (std::size_t v = 0; v < setup.rest_positions.size(); ++v) {
@@ -122,12 +139,12 @@ SimulationSetup thrown_corner(Precision precision, double speed = 3.0) {
   return setup;
 }
 
-const Model kModels[] = {Model::Fem, Model::QuadraticFem, Model::SpringsWithVolumeTerm};
+const std::vector<Model> kModels = all_models();
 
 }  // namespace
 
 FMPC_GPU_TEST(force_models_match_cpu, "FEM and springs with the volume term: every integrator matches the CPU", true) {
-  for (const Model model : kModels) {
+  for (const Model& model : kModels) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       for (const Integrator integrator : kGpuIntegrators) {
         for (const bool held : {false, true}) {
@@ -148,7 +165,7 @@ FMPC_GPU_TEST(force_models_match_cpu, "FEM and springs with the volume term: eve
 }
 
 FMPC_GPU_TEST(force_models_held_axes, "a held axis stays at rest on the GPU, the free axes move", true) {
-  const SimulationSetup setup = held_box(Model::Fem, Precision::Double, Integrator::SemiImplicitEuler);
+  const SimulationSetup setup = held_box(kModels.front(), Precision::Double, Integrator::SemiImplicitEuler);
   DiagnosticList diagnostics;
   const auto run = gpu_simulation(setup, diagnostics);
   FMPC_REQUIRE(run && run->advance(500, diagnostics));
@@ -168,10 +185,10 @@ FMPC_GPU_TEST(force_models_held_axes, "a held axis stays at rest on the GPU, the
 }
 
 FMPC_GPU_TEST(force_models_implicit, "implicit Euler on the FEM and the volume term: GPU CG agrees with Eigen's", true) {
-  for (const Model model : kModels) {
+  for (const Model& model : kModels) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       const SimulationSetup setup = hanging_box(model, precision, Integrator::ImplicitEuler);
-      check_implicit_against_cpu(setup, std::string(name_of(model)) + ", " + name_of(precision));
+      check_implicit_against_cpu(setup, name_of(model) + ", " + name_of(precision));
     }
   }
 }
@@ -179,7 +196,7 @@ FMPC_GPU_TEST(force_models_implicit, "implicit Euler on the FEM and the volume t
 FMPC_GPU_TEST(force_models_bitwise,
               "FEM runs are bitwise identical: run to run, graphs, persistent or not, sliced springs or not, any check",
               true) {
-  for (const Model model : kModels) {
+  for (const Model& model : kModels) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       for (const Integrator integrator : kGpuIntegrators) {
         // 8 x 7 x 6 = 336 vertices and 1,260 tetrahedra: blocks partly idle in both passes.
@@ -216,7 +233,7 @@ FMPC_GPU_TEST(force_models_bitwise,
 }
 
 FMPC_GPU_TEST(force_models_energy, "the elements' potential energy on the GPU equals the CPU's sum", true) {
-  for (const Model model : kModels) {
+  for (const Model& model : kModels) {
     const SimulationSetup setup = hanging_box(model, Precision::Double, Integrator::RungeKutta4);
     DiagnosticList diagnostics;
     const auto cpu = sim::Simulation::create(setup, diagnostics);
@@ -224,7 +241,7 @@ FMPC_GPU_TEST(force_models_energy, "the elements' potential energy on the GPU eq
     FMPC_REQUIRE(cpu && device && cpu->advance(300, diagnostics) && device->advance(300, diagnostics));
     const auto potential = device->potential_energy(diagnostics);
     FMPC_REQUIRE(potential);
-    note(std::string(name_of(model)) + ": potential energy GPU " + std::to_string(*potential) + " J, CPU " +
+    note(name_of(model) + ": potential energy GPU " + std::to_string(*potential) + " J, CPU " +
          std::to_string(*cpu->potential_energy(diagnostics)) + " J");
     FMPC_EXPECT_WITHIN(*potential, *cpu->potential_energy(diagnostics), 1e-10 * std::abs(*cpu->potential_energy(diagnostics)) + 1e-12);
   }
@@ -337,12 +354,12 @@ FMPC_GPU_TEST(inversions_quadratic_points, "quadratic elements folded between th
 
 // Every element kernel on tiny scenes for compute-sanitizer: forces, energy, inversion counts, implicit products,
 // batches of FEM and volume-term scenes.
-FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and implicit element kernels", true) {
-  for (const Model model : kModels) {
+// The element kernels under compute-sanitizer; explicit and implicit apart, so that bench/run_gpu.sh runs them in
+// processes of their own (racecheck instruments every shared access of the cooperative CG: minutes).
+void sanitize_force_models(const std::vector<Integrator>& integrators) {
+  for (const Model& model : kModels) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
-      for (const Integrator integrator : {Integrator::ForwardEuler, Integrator::SemiImplicitEuler,
-                                          Integrator::VelocityVerlet, Integrator::RungeKutta4,
-                                          Integrator::ImplicitEuler}) {
+      for (const Integrator integrator : integrators) {
         SimulationSetup setup = held_box(model, precision, integrator);
         setup.implicit.max_iterations = kSanitizedCgIterations;
         DiagnosticList diagnostics;
@@ -350,9 +367,19 @@ FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and i
         FMPC_REQUIRE(run && run->advance(9, diagnostics, 4));
         FMPC_EXPECT(run->potential_energy(diagnostics).has_value());
         FMPC_EXPECT(run->kinetic_energy(diagnostics).has_value());
-        if (diagnostics.has_errors()) note(describe(diagnostics));
+        if (diagnostics.has_errors()) note(name_of(model) + ": " + describe(diagnostics));
         FMPC_EXPECT(!diagnostics.has_errors());
       }
+    }
+  }
+}
+
+FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and batch kernels, explicit integrators",
+              true) {
+  sanitize_force_models({Integrator::ForwardEuler, Integrator::SemiImplicitEuler, Integrator::VelocityVerlet,
+                         Integrator::RungeKutta4});
+  for (const Model& model : kModels) {
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
       std::vector<SimulationSetup> scenes{hanging_box(model, precision, Integrator::VelocityVerlet, 1, 1, 1),
                                           hanging_box(model, precision, Integrator::VelocityVerlet, 2, 3, 1)};
       DiagnosticList diagnostics;
@@ -372,6 +399,10 @@ FMPC_GPU_TEST(sanitizer_force_models, "sanitizer smoke: element, inversion and i
     FMPC_EXPECT(run->advance(600, diagnostics, 64) == (policy == InversionPolicy::Warn));
     FMPC_EXPECT(run->inversions().largest_count == 1);
   }
+}
+
+FMPC_GPU_TEST(sanitizer_implicit_force_models, "sanitizer smoke: implicit element kernels (CG capped)", true) {
+  sanitize_force_models({Integrator::ImplicitEuler});
 }
 
 // Nodal pressure tetrahedra (fem.element linear_nodal_pressure) have no CUDA kernel for their nodal pass yet: the

@@ -11,7 +11,8 @@
 namespace fmpc::gpu_test {
 
 struct TestCase {
-  const char* name;
+  const char* id;    // the function's name: what the runner's arguments and --list name
+  const char* name;  // a sentence for the log
   bool needs_device;
   void (*run)();
 };
@@ -22,7 +23,9 @@ void record_failure(const char* file, int line, const std::string& what);
 void note(const std::string& text);
 
 struct Registration {
-  Registration(const char* name, bool needs_device, void (*run)()) { registry().push_back({name, needs_device, run}); }
+  Registration(const char* id, const char* name, bool needs_device, void (*run)()) {
+    registry().push_back({id, name, needs_device, run});
+  }
 };
 
 }  // namespace fmpc::gpu_test
@@ -32,8 +35,8 @@ struct Registration {
 // FMPC_GPU_TEST(function, "name", needs_device) { body }
 #define FMPC_GPU_TEST(function, name, needs_device)                                                             \
   static void function();                                                                                       \
-  static const ::fmpc::gpu_test::Registration FMPC_GPU_TEST_CONCAT(function, _registration)(name, needs_device, \
-                                                                                            function);          \
+  static const ::fmpc::gpu_test::Registration FMPC_GPU_TEST_CONCAT(function, _registration)(#function, name,   \
+                                                                                            needs_device, function); \
   static void function()
 
 #define FMPC_EXPECT(condition)                                                                      \

@@ -29,13 +29,21 @@ void note(const std::string& text) { std::cout << "    " << text << "\n"; }
 
 int main(int argc, char** argv) {
   using namespace fmpc::gpu_test;
+  // bench/run_gpu.sh runs each sanitizer smoke under each tool in a process of its own.
+  if (argc == 2 && std::string(argv[1]) == "--list") {
+    for (const TestCase& test : registry()) std::cout << test.id << "\n";
+    return 0;
+  }
   std::string device;
   const bool have_device = fmpc::gpu::cuda_device_available(device);
   std::cout << (have_device ? "CUDA device: " + device : "no CUDA device (" + device + ")") << "\n";
   int passed = 0, failed = 0, skipped = 0;
   for (const TestCase& test : registry()) {
     bool selected = argc < 2;
-    for (int i = 1; i < argc; ++i) selected = selected || std::string(test.name).find(argv[i]) != std::string::npos;
+    // An argument selects the tests whose id or sentence contains it.
+    for (int i = 1; i < argc; ++i)
+      selected = selected || std::string(test.id).find(argv[i]) != std::string::npos ||
+                 std::string(test.name).find(argv[i]) != std::string::npos;
     if (!selected) continue;
     if (test.needs_device && !have_device) {
       std::cout << "[ SKIP ] " << test.name << "\n";

@@ -264,3 +264,23 @@ FMPC_GPU_TEST(tools_batch_refused, "a GPU batch of scenes with tools is refused 
       "scene 1: a scene with rigid tools runs on its own on the GPU (its tools' poses are the launch's); run it "
       "as a simulation of its own");
 }
+
+// The contact kernels (tool readings, the implicit contact set) under compute-sanitizer: a few poses on each kind of
+// tissue, explicit and implicit (CG capped: racecheck instruments every shared access of the cooperative CG).
+FMPC_GPU_TEST(sanitizer_tools, "sanitizer smoke: rigid tool contact, explicit and implicit", true) {
+  for (const bool fem : {true, false}) {
+    for (const Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::ImplicitEuler}) {
+      SimulationSetup setup = block_with_tools(fem, Precision::Float, integrator);
+      if (integrator == Integrator::ImplicitEuler) {
+        setup.time_step = 1e-3;
+        setup.implicit.max_iterations = kSanitizedCgIterations;
+      }
+      DiagnosticList diagnostics;
+      const auto run = gpu_simulation(setup, diagnostics);
+      FMPC_REQUIRE(run && drive(*run, 2, diagnostics));
+      FMPC_EXPECT(run->tool_readings(0, diagnostics).size() == 2);
+      if (diagnostics.has_errors()) note(describe(diagnostics));
+      FMPC_EXPECT(!diagnostics.has_errors());
+    }
+  }
+}

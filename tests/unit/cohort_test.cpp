@@ -191,9 +191,17 @@ TEST_CASE("a CPU cohort gives every patient its single run's bits, at the smalle
   std::vector<CohortPatient> patients;
   for (std::size_t p = 0; p < built.size(); ++p)
     patients.push_back(CohortPatient{labels[p], &scenes[p], &built[p], (dir / "cohort" / labels[p]).string()});
-  for (const unsigned threads : {1u, 2u, 3u}) {
+  // One batch on 1, 2 and 3 workers, then spread over "devices" (on the CPU: batches side by side, the code path
+  // that runs one batch per GPU): 2 slots (patients 0-2 and 3-4) and 3 slots named in any order (0-1, 2-3, 4).
+  struct Spread {
+    unsigned threads;
+    std::vector<int> devices;
+  };
+  for (const Spread& spread : {Spread{1u, {}}, Spread{2u, {}}, Spread{3u, {}}, Spread{2u, {0, 1}}, Spread{1u, {4, 0, 2}}}) {
+    const unsigned threads = spread.threads;
     CohortRunOptions options;
     options.threads = threads;
+    options.devices = spread.devices;
     // Progress in steps (the batch's events), on the CPU as on CUDA: increasing, ending at the planned count.
     std::size_t calls = 0, last_done = 0, last_total = 0;
     options.progress = [&](std::size_t done, std::size_t total) {
@@ -212,7 +220,7 @@ TEST_CASE("a CPU cohort gives every patient its single run's bits, at the smalle
     REQUIRE(run->patients.size() == patients.size());
     CHECK(run->spring_steps == Approx(300.0 * static_cast<double>(built[0].setup.springs.size()) * 5));
     for (std::size_t p = 0; p < patients.size(); ++p) {
-      INFO("patient " << p << ", " << threads << " threads");
+      INFO("patient " << p << ", " << threads << " threads, " << spread.devices.size() << " devices");
       REQUIRE(run->patients[p]);
       const SceneRunResult& cohort = *run->patients[p];
       SceneRunOptions alone_options;
@@ -236,6 +244,57 @@ TEST_CASE("a CPU cohort gives every patient its single run's bits, at the smalle
     CHECK(run->patients[1]->probe_curve.back().force != run->patients[2]->probe_curve.back().force);
   }
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a cohort over devices: the device list and the patients' split", "[cohort]") {
+  std::string error;
+  CHECK(*parse_device_list("all", 2, error) == std::vector<int>{0, 1});
+  CHECK(*parse_device_list("1,0", 2, error) == std::vector<int>{1, 0});
+  CHECK(*parse_device_list("3", 8, error) == std::vector<int>{3});
+  const auto refused = [&](const std::string& text, int count, const std::string& reason) {
+    INFO(text << " with " << count << " devices");
+    error.clear();
+    CHECK_FALSE(parse_device_list(text, count, error));
+    CHECK(error == reason);
+  };
+  refused("all", 0, "'all': no CUDA device is present");
+  refused("0", 0, "'0': device 0 is not present; no CUDA device is present");
+  refused("0,2", 2, "'0,2': device 2 is not present; the devices present are 0 to 1");
+  refused("1", 1, "'1': device 1 is not present; the one device present is 0");
+  refused("0,1,0", 2, "'0,1,0': device 0 is named twice (each device runs one batch)");
+  // {text, the entry refused}
+  for (const auto& [bad, entry] : std::vector<std::pair<std::string, std::string>>{
+           {"", ""}, {",", ""}, {"0,", ""}, {",1", ""}, {"-1", "-1"}, {"x", "x"}, {"0;1", "0;1"}, {"1.0", "1.0"},
+           {" 0", " 0"}, {"99999", "99999"}, {"ALL", "ALL"}})
+    refused(bad, 4, "'" + bad + "': '" + entry + "' is not a device number (give 'all' or numbers separated by commas, "
+                    "e.g. 0,1)");
+
+  CHECK(split_patients(0, 2).empty());
+  CHECK(split_patients(5, 0).empty());
+  const auto sizes = [](std::size_t patients, std::size_t parts) {
+    std::vector<std::size_t> out;
+    for (const PatientRange& range : split_patients(patients, parts)) out.push_back(range.end - range.begin);
+    return out;
+  };
+  CHECK(sizes(1000, 2) == std::vector<std::size_t>{500, 500});
+  CHECK(sizes(7, 3) == std::vector<std::size_t>{3, 2, 2});
+  CHECK(sizes(2, 4) == std::vector<std::size_t>{1, 1});  // never an empty batch
+  // Every patient exactly once, in order, the sizes within one of each other.
+  for (std::size_t patients = 1; patients <= 40; ++patients)
+    for (std::size_t parts = 1; parts <= 9; ++parts) {
+      const auto ranges = split_patients(patients, parts);
+      REQUIRE(ranges.size() == std::min(patients, parts));
+      std::size_t next = 0, smallest = patients, largest = 0;
+      for (const PatientRange& range : ranges) {
+        CHECK(range.begin == next);
+        CHECK(range.end > range.begin);
+        next = range.end;
+        smallest = std::min(smallest, range.end - range.begin);
+        largest = std::max(largest, range.end - range.begin);
+      }
+      CHECK(next == patients);
+      CHECK(largest - smallest <= 1);
+    }
 }
 
 TEST_CASE("fmpc simulate --patients checks the whole patients file before running anything", "[cohort][cli]") {
@@ -295,6 +354,17 @@ TEST_CASE("fmpc simulate --patients checks the whole patients file before runnin
   const auto no_patients = fmpc::testing::run_fmpc("simulate " + kDemo + " --shard 0/2");
   CHECK(no_patients.status == 2);
   CHECK(no_patients.out.find("--shard: a shard is a share of a cohort") != std::string::npos);
+  // --devices: a cohort's, on CUDA only. Here (backend cpu) refused whatever this build and machine have: no CUDA in
+  // the build, no device 0 present, or a cohort that runs on the CPU; nothing written.
+  for (const char* devices : {" --devices 0", " --devices 0,0"}) {
+    const auto refused = run_with(header + "P1,1,2,3,4,5\n", devices);
+    CHECK(refused.status == 2);
+    CHECK(refused.out.find("argument --devices: error: --devices") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir / "out"));
+  }
+  const auto alone_devices = fmpc::testing::run_fmpc("simulate " + kDemo + " --devices all");
+  CHECK(alone_devices.status == 2);
+  CHECK(alone_devices.out.find("--devices: a scene alone runs on one device") != std::string::npos);
 
   // A good cohort with a value out of range: two folders of numbers, cohort.csv and the overlay; no frames and no
   // patient's picture unless outputs.cohort asks.

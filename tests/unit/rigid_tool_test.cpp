@@ -73,9 +73,9 @@ TEST_CASE("tools: a sphere's and a capsule's penetration and force, exact", "[to
   REQUIRE(kernels::tool_penetration(capsule, 2.5, 0.0, 0.0, nx, ny, nz, depth));
   CHECK(nx == 1.0);
   CHECK(depth == 0.5);
-  const kernels::ContactView<double> contact{&capsule, 1, nullptr};
+  const kernels::ContactView<double> contact{&capsule, 1, nullptr, nullptr};
   double f[3] = {1.0, 2.0, 3.0};  // added to
-  kernels::add_contact_force(contact, 8.0, 1.5, 0.0, -0.75, f[0], f[1], f[2]);
+  kernels::add_contact_force(contact, 8.0, 0.0, 1.5, 0.0, -0.75, 0.0, 0.0, 0.0, f[0], f[1], f[2]);
   CHECK(f[0] == 1.0);
   CHECK(f[1] == 2.0);
   CHECK(f[2] == 3.0 - 8.0 * 0.25);
@@ -112,14 +112,14 @@ TEST_CASE("tools: the force is minus the gradient of the penalty energy k d^2 / 
                                           coordinate(random),
                                           coordinate(random),
                                           0.8};
-    const kernels::ContactView<double> contact{&tool, 1, nullptr};
+    const kernels::ContactView<double> contact{&tool, 1, nullptr, nullptr};
     const double p[3] = {coordinate(random), coordinate(random), coordinate(random)};
     const auto energy = [&](const double* x) {
       double nx, ny, nz, depth;
       return kernels::tool_penetration(tool, x[0], x[1], x[2], nx, ny, nz, depth) ? 0.5 * 3.0 * depth * depth : 0.0;
     };
     double f[3] = {0.0, 0.0, 0.0};
-    kernels::add_contact_force(contact, 3.0, p[0], p[1], p[2], f[0], f[1], f[2]);
+    kernels::add_contact_force(contact, 3.0, 0.0, p[0], p[1], p[2], 0.0, 0.0, 0.0, f[0], f[1], f[2]);
     if (f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0) ++inside;
     for (int axis = 0; axis < 3; ++axis) {
       double plus[3] = {p[0], p[1], p[2]}, minus[3] = {p[0], p[1], p[2]};
@@ -199,6 +199,95 @@ TEST_CASE("tools: the explicit critical step shrinks by 1 / sqrt(1 + ratio) wher
     }
   }
   CHECK(interior == 7 * 7 * 3);  // the 8 x 8 x 4 cells' inner vertices
+}
+
+TEST_CASE("tools: contact damping: its force, its reading, its stability bound, the chatter it removes", "[tools]") {
+  // The force: k d - c (v . n) along the outward normal, never below zero.
+  const kernels::ToolShape<double> sphere{0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0};
+  const kernels::ContactView<double> contact{&sphere, 1, nullptr, nullptr};
+  const auto force_z = [&](double c, double vz) {
+    double f[3] = {0.0, 0.0, 0.0};
+    kernels::add_contact_force(contact, 8.0, c, 0.0, 0.0, 0.75, 0.0, 0.0, vz, f[0], f[1], f[2]);
+    CHECK(f[0] == 0.0);
+    return f[2];
+  };
+  CHECK(force_z(0.0, -5.0) == 2.0);           // no damping: the velocity plays no part
+  CHECK(force_z(3.0, -0.5) == 2.0 + 1.5);     // moving in (v . n < 0): pushed out harder
+  CHECK(force_z(3.0, 0.5) == 2.0 - 1.5);      // moving out: less
+  CHECK(force_z(3.0, 1.0) == 0.0);            // never pulls the surface onto the tool
+  CHECK(contact_damping_coefficient(0.5, 400.0, 0.01) == Approx(2.0));  // 2 x 0.5 x sqrt(400 x 0.01)
+
+  // The reading sums the damper's force too, from the velocities given.
+  SimulationSetup setup = block_with_sphere();
+  setup.contact_damping_ratio = 1.0;
+  const std::vector<double> k = contact_stiffness(setup);
+  const std::vector<double> c = contact_damping(setup, k);
+  REQUIRE(c.size() == k.size());
+  for (std::size_t v = 0; v < k.size(); ++v) CHECK(c[v] == 2.0 * std::sqrt(k[v] * setup.mass[v]));
+  CHECK(contact_damping(block_with_sphere(), k).empty());  // ratio 0: none
+  std::vector<Point3> positions = setup.rest_positions, velocities(positions.size(), Point3{0.0, 0.0, 0.0});
+  const ToolPose pressed = at(0.01, 0.01, 0.0125);  // 0.5 mm into the top face's middle vertex
+  const auto still = read_tools(setup.tools, {pressed}, k, positions, c, velocities);
+  for (Point3& v : velocities) v = {0.0, 0.0, -0.01};  // moving down, away from the sphere above
+  const auto away = read_tools(setup.tools, {pressed}, k, positions, c, velocities);
+  for (Point3& v : velocities) v = {0.0, 0.0, 0.001};  // moving up into the sphere
+  const auto into = read_tools(setup.tools, {pressed}, k, positions, c, velocities);
+  REQUIRE(still.at(0).contacts > 0);
+  CHECK(still[0].force == read_tools(setup.tools, {pressed}, k, positions)[0].force);
+  CHECK(into[0].force[2] > still[0].force[2]);  // the tissue pushes the tool up harder
+  CHECK(away[0].force[2] < still[0].force[2]);
+  CHECK(away[0].force[2] >= 0.0);
+
+  // The stability bound: the damper's rate enters the damping bound, so the explicit step shrinks a little.
+  DiagnosticList diagnostics;
+  const auto undamped = check_stability(block_with_sphere(), diagnostics);
+  const auto damped = check_stability(setup, diagnostics);
+  REQUIRE(undamped);
+  REQUIRE(damped);
+  CHECK(damped->damping_rate_max > undamped->damping_rate_max);
+  CHECK(damped->critical_time_step < undamped->critical_time_step);
+
+  // The chatter: the sphere pressed 1 mm in over 40 ticks of 1 ms and held, semi-implicit Euler at the automatic
+  // step (substeps). Without contact damping the tick-end force jumps from tick to tick as the pressed vertices
+  // bounce between the tool and their springs; critically damped they follow the tool.
+  const auto mean_jump = [&](double ratio) {
+    SimulationSetup run = block_with_sphere();
+    run.contact_damping_ratio = ratio;
+    DiagnosticList messages;
+    auto simulation = Simulation::create(run, messages);
+    REQUIRE(simulation);
+    const double dt = simulation->stability().time_step;
+    double jumps = 0.0, previous = 0.0;
+    int counted = 0;
+    for (int tick = 1; tick <= 80; ++tick) {
+      REQUIRE(simulation->set_tool_pose(0, 0, at(0.01, 0.01, 0.0131 - 0.0011 * std::min(1.0, tick / 40.0)), messages));
+      const auto steps = static_cast<std::size_t>(std::ceil((tick * 1e-3 - simulation->time()) / dt * (1.0 - 1e-12)));
+      REQUIRE(simulation->advance(steps, messages));
+      const double force = simulation->tool_readings(0, messages).at(0).force[2];
+      if (tick > 45) {  // held still, in contact
+        jumps += std::abs(force - previous);
+        ++counted;
+      }
+      previous = force;
+    }
+    CHECK(previous > 0.0);
+    return jumps / counted;
+  };
+  const double without = mean_jump(0.0), with = mean_jump(1.0);
+  INFO("mean tick-to-tick change of the tick-end force while held: " << without << " N undamped, " << with
+                                                                     << " N with contact.damping_ratio 1");
+  CHECK(with < 0.2 * without);
+  // Implicit Euler refuses it.
+  SimulationSetup implicit = block_with_sphere(Integrator::ImplicitEuler);
+  implicit.contact_damping_ratio = 1.0;
+  CHECK_FALSE(Simulation::create(implicit, diagnostics));
+  CHECK(errors_of(diagnostics).find("contact.damping_ratio: contact damping is for the explicit integrators") == 0);
+  diagnostics = DiagnosticList{};
+  SimulationSetup negative = block_with_sphere();
+  negative.contact_damping_ratio = -1.0;
+  CHECK_FALSE(Simulation::create(negative, diagnostics));
+  CHECK(errors_of(diagnostics) ==
+        "contact.damping_ratio: -1 must be a number from 0 (no contact damping, the default) to 100 (1: critical)");
 }
 
 TEST_CASE("tools: bad input is an error naming the tool, and nothing changes", "[tools]") {

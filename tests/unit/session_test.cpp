@@ -285,4 +285,103 @@ TEST_CASE("session: tools in a scene file: a path, the CSV's columns and the sum
         "names the tool's columns in time_series.csv)");
   CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {stiffness_ratio: 0}") ==
         "contact.stiffness_ratio: expected a positive number, got 0");
+  // contact.damping_ratio: from 0 to 100, explicit integrators only; the setup and summary.json carry it.
+  CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {damping_ratio: -1}") ==
+        "contact.damping_ratio: expected a non-negative number, got -1");
+  CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {damping_ratio: 101}") ==
+        "contact.damping_ratio: 101 is above the limit of 100 (1 is critical damping of a vertex on its contact spring)");
+  CHECK(fails("contact: {stiffness_ratio: 2}", "contact: {damping_ratio: 1}\nintegrator: implicit_euler") ==
+        "contact.damping_ratio: contact damping is for the explicit integrators (a pressed vertex bouncing off the "
+        "tool between substeps); implicit Euler's step damps that itself: leave it out");
+  std::string damped_text = text;
+  damped_text.replace(damped_text.find("contact: {stiffness_ratio: 2}"), 29, "contact: {damping_ratio: 0.7}");
+  const auto damped = sim::parse_scene(path, damped_text, diagnostics);
+  REQUIRE(damped);
+  CHECK(damped->contact_damping_ratio == 0.7);
+  const auto damped_built = sim::build_scene(*damped, diagnostics);
+  REQUIRE(damped_built);
+  CHECK(damped_built->setup.contact_damping_ratio == 0.7);
+  CHECK(damped_built->setup.contact_stiffness_ratio == sim::kDefaultContactStiffnessRatio);
+}
+
+TEST_CASE("session: a tick's mean tool force is its impulse over its duration", "[session][tools]") {
+  const std::string rules = write_file("mean.fis", rules_text("F", 5, 15));
+  const auto open = [&](bool implicit) {
+    std::string text = scene_text(rules);
+    if (implicit) {
+      const std::string explicit_line = "integrator: semi_implicit_euler\n";
+      text.replace(text.find(explicit_line), explicit_line.size(), "integrator: implicit_euler\ndt: 0.001\n");
+    }
+    DiagnosticList diagnostics;
+    auto session = Session::from_yaml(text, (scratch_folder() / "mean.yaml").string(), diagnostics);
+    INFO(render_all(diagnostics, SourceFiles{}));
+    REQUIRE(session);
+    return session;
+  };
+  DiagnosticList diagnostics;
+  // The tip pressed 1.5 mm in over 40 ticks of 1 ms, then held.
+  const auto press = [&](Session& session, int tick) {
+    runtime::ToolPose pose;
+    pose.position = {0.01, 0.01, 0.0131 - 0.0015 * std::min(1.0, tick / 40.0)};
+    REQUIRE(session.set_tool_pose(0, pose, diagnostics));
+  };
+  // Semi-implicit Euler: a step applies the force read at its start. The same ticks stepped one step at a time by
+  // hand give every step's reading: the mean is their sum over the steps; the tick-end reading and the state are
+  // step_to's, bit for bit.
+  const auto averaged = open(false), by_hand = open(false), plain = open(false);
+  double largest_gap = 0.0, largest_mean = 0.0;
+  for (int tick = 1; tick <= 60; ++tick) {
+    INFO("tick " << tick);
+    const double t = tick * 1e-3;
+    for (Session* session : {averaged.get(), by_hand.get(), plain.get()}) press(*session, tick);
+    std::vector<runtime::ToolReading> mean, end;
+    REQUIRE(averaged->step_to_averaging(t, mean, diagnostics, &end));
+    REQUIRE(plain->step_to(t, diagnostics));
+    sim::Point3 force{0, 0, 0}, torque{0, 0, 0};
+    std::size_t steps = 0;
+    while (by_hand->steps_taken() < averaged->steps_taken()) {
+      const runtime::ToolReading start = by_hand->tool_readings(diagnostics).at(0);
+      for (int i = 0; i < 3; ++i) {
+        force[i] += start.force[i];
+        torque[i] += start.torque[i];
+      }
+      REQUIRE(by_hand->step(1, diagnostics));
+      ++steps;
+    }
+    REQUIRE(steps > 1);  // substeps
+    REQUIRE(mean.size() == 1);
+    for (int i = 0; i < 3; ++i) {
+      CHECK(mean[0].force[i] == Approx(force[i] / static_cast<double>(steps)).margin(1e-15));
+      CHECK(mean[0].torque[i] == Approx(torque[i] / static_cast<double>(steps)).margin(1e-17));
+    }
+    CHECK(end.at(0).force == plain->tool_readings(diagnostics).at(0).force);
+    CHECK(end.at(0).force == averaged->tool_readings(diagnostics).at(0).force);
+    CHECK(averaged->positions(diagnostics) == plain->positions(diagnostics));
+    largest_gap = std::max(largest_gap, std::abs(end[0].force[2] - mean[0].force[2]));
+    largest_mean = std::max(largest_mean, std::abs(mean[0].force[2]));
+  }
+  CHECK(averaged->tool_readings(diagnostics).at(0).contacts > 0);
+  CHECK(largest_mean > 0.0);
+  CHECK(largest_gap > 1e-3 * largest_mean);  // with substeps the tick-end reading is not the tick's mean
+  // Implicit Euler, one step per tick: its step applies the force at its end, so the mean is the tick-end reading,
+  // bit for bit (the haptic bench's implicit numbers do not change).
+  const auto implicit = open(true), implicit_plain = open(true);
+  for (int tick = 1; tick <= 30; ++tick) {
+    INFO("implicit tick " << tick);
+    press(*implicit, tick);
+    press(*implicit_plain, tick);
+    std::vector<runtime::ToolReading> mean, end;
+    REQUIRE(implicit->step_to_averaging(tick * 1e-3, mean, diagnostics, &end));
+    REQUIRE(implicit_plain->step_to(tick * 1e-3, diagnostics));
+    CHECK(mean.at(0).force == end.at(0).force);
+    CHECK(mean.at(0).torque == end.at(0).torque);
+    CHECK(end.at(0).force == implicit_plain->tool_readings(diagnostics).at(0).force);
+  }
+  CHECK(implicit->tool_readings(diagnostics).at(0).force[2] > 0.0);
+  // Nothing to step: the mean is the reading now; a time that is not finite is step_to's error.
+  std::vector<runtime::ToolReading> now;
+  REQUIRE(averaged->step_to_averaging(averaged->time(), now, diagnostics));
+  CHECK(now.at(0).force == averaged->tool_readings(diagnostics).at(0).force);
+  CHECK_FALSE(averaged->step_to_averaging(std::nan(""), now, diagnostics));
+  CHECK(errors_of(diagnostics) == "the time nan s is not finite");
 }

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <string>
 
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/scene/simulation_trade.h"
 #include "tests/support/generated_program.h"
 
@@ -55,6 +56,7 @@ TEST_CASE("the simulation trade: the reference has no error, the FEM is closer t
   options.precisions = {Precision::Float, Precision::Double};
   options.integrators = {{Integrator::SemiImplicitEuler, 1.0}};
   options.refinements = {1};
+  options.element_kinds = {default_element_kind().kind};
   std::vector<std::string> progress;
   options.progress = [&](std::size_t, std::size_t, const std::string& what) { progress.push_back(what); };
   DiagnosticList diagnostics;
@@ -62,9 +64,9 @@ TEST_CASE("the simulation trade: the reference has no error, the FEM is closer t
   INFO((diagnostics.items().empty() ? std::string() : diagnostics.items().front().message));
   REQUIRE(result);
   CHECK_FALSE(diagnostics.has_errors());
-  // The reference, its mesh check (FEM f64 SIE x0.5 r0) and six variants, one of which (FEM f64 SIE r1) is its
-  // step check; then "done".
-  CHECK(progress.size() == 1 + 1 + 6 + 1);
+  // One round (the reference, its mesh check FEM f64 SIE x0.5 r0 and six variants, one of which, FEM f64 SIE r1, is
+  // its step check, side by side); then "done".
+  CHECK(progress.size() == 1 + 1);
   REQUIRE(result->rows.size() == 1 + 6);
   CHECK(result->coarse_vertices == 100);
   CHECK(result->has_probe_force);
@@ -118,13 +120,14 @@ TEST_CASE("the simulation trade: the reference has no error, the FEM is closer t
   CHECK(header ==
         "variant,model,precision,integrator,dt_s,vertices,displacement_max_rel_error,displacement_rms_rel_error,"
         "probe_force_rel_error,steps_per_second,memory_bytes,mapping,refinements,tetrahedra,steps,inverted_elements,"
-        "status");
+        "status,element,mesh,real_time_factor,wall_seconds,meets_max_error");
   CHECK(std::count(csv.begin(), csv.end(), '\n') == 1 + 7);
   CHECK(csv.find("\nreference: FEM f64 SIE x0.5 r1,corotational_fem,double,semi_implicit_euler,") != std::string::npos);
   CHECK(csv.find("\nsprings LSH f32 SIE r1,springs,float,semi_implicit_euler,") != std::string::npos);
   CHECK(csv.find(",lloyd_szekely_harders_2007,1,2304,") != std::string::npos);
   const std::string markdown = simulation_trade_markdown(*result);
-  CHECK(markdown.find("Reference: co-rotational FEM, double, semi-implicit Euler at 0.5 x its automatic step") !=
+  CHECK(markdown.find("Reference: corotational FEM on linear elements, double, semi-implicit Euler at 0.5 x its "
+                      "automatic step") !=
         std::string::npos);
   CHECK(markdown.find("| reference: FEM f64 SIE x0.5 r1 |") != std::string::npos);
 }
@@ -168,7 +171,7 @@ TEST_CASE("fmpc trade SCENE.yaml writes the table, the CSV and the Pareto plot",
   // Two models, both integrators, the scene's mesh, 20 ms: five runs (the reference and four variants, one of
   // which, FEM f64 SIE r0, is the reference's step check).
   std::string command = std::string(FMPC_BINARY) + " trade tiny.yaml --refinements 0 --duration 0.02";
-  command += " --models springs_volume_term,corotational_fem --precisions double";
+  command += " --models springs_volume_term,corotational_fem --elements linear --precisions double";
   command += " --integrators semi_implicit_euler,implicit_euler:4 --csv t.csv --plot t.png > out.md 2> err.txt";
   const int status = std::system(("cd " + dir.string() + " && " + command).c_str());
   INFO(testing::read_text_file(dir / "err.txt"));

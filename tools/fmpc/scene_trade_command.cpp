@@ -14,7 +14,11 @@
 #include "diagnostics/number_format.h"
 #include "runtime/scene/scene_file.h"
 #include "runtime/io/memory_limit.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/scene/simulation_trade.h"
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+#include "runtime/gpu/gpu_simulation.h"
+#endif
 #include "tools/fmpc/progress_line.h"
 #include "tools/fmpc/rule_file_session.h"
 #include "tools/fmpc/text_files.h"
@@ -27,8 +31,11 @@ namespace {
 const char* const kRuleOptions[] = {"--system",          "--fix",         "--vary", "--points", "--seed",
                                     "--resolutions",     "--max-grid-points", "--min-seconds", "--cxx",
                                     "--cxx-flags"};
-const char* const kSceneOptions[] = {"--models",   "--precisions", "--integrators", "--refinements",
-                                     "--reference-refinements", "--reference-dt-factor", "--duration"};
+const char* const kSceneOptions[] = {"--models",     "--precisions",  "--integrators",  "--refinements",
+                                     "--reference-refinements", "--reference-dt-factor", "--duration",
+                                     "--variants",   "--elements",    "--meshes",        "--max-error",
+                                     "--error",      "--plot-error",  "--write-scene",   "--max-reference-seconds",
+                                     "--threads"};
 
 std::string join(const std::vector<std::string>& names) {
   std::string text;
@@ -107,6 +114,70 @@ std::optional<sim::SimulationTradeOptions> trade_options(const SceneTradeArgumen
     }
   }
   if (!arguments.refinements.empty()) options.refinements = arguments.refinements;
+  if (!arguments.variants.empty()) {
+    options.axes.clear();
+    std::string names;
+    for (const sim::TradeAxisRow& row : sim::trade_axes()) names += std::string(names.empty() ? "" : ", ") + row.name;
+    for (const std::string& name : arguments.variants) {
+      if (const auto axis = sim::parse_trade_axis(name)) options.axes.push_back(*axis);
+      else diagnostics.error(nowhere, "--variants: '" + name + "' is not an axis; use " + names);
+    }
+    // An axis's values given while the axis is held at the scene's value would be ignored: a mistake.
+    for (const sim::TradeAxisRow& row : sim::trade_axes()) {
+      const bool held = std::find(options.axes.begin(), options.axes.end(), row.axis) == options.axes.end();
+      const bool given = [&] {
+        switch (row.axis) {
+          case sim::TradeAxis::Laws: return !arguments.models.empty();
+          case sim::TradeAxis::Elements: return !arguments.elements.empty();
+          case sim::TradeAxis::Meshes: return !arguments.meshes.empty();
+          case sim::TradeAxis::Precisions: return !arguments.precisions.empty();
+          case sim::TradeAxis::Integrators: return !arguments.integrators.empty();
+          case sim::TradeAxis::Refinements: return !arguments.refinements.empty();
+        }
+        return false;
+      }();
+      if (held && given)
+        diagnostics.error(nowhere, std::string(row.option) + " gives values of the axis '" + row.name +
+                                       "', which --variants leaves out (it holds " + row.held + "); add " + row.name +
+                                       " to --variants or leave out " + row.option);
+    }
+  }
+  for (const std::string& name : arguments.elements) {
+    if (const sim::ElementKindRow* row = sim::element_kind_by_keyword(name)) options.element_kinds.push_back(row->kind);
+    else diagnostics.error(nowhere, "--elements: '" + name + "' is not an element kind; use " + join(sim::element_kind_keywords()));
+  }
+  if (!arguments.meshes.empty()) {
+    options.meshes.clear();
+    options.meshes_given = true;
+    for (const std::string& name : arguments.meshes) {
+      if (name == "graded") options.meshes.push_back(sim::TradeMesh::Scene);
+      else if (name == "uniform") options.meshes.push_back(sim::TradeMesh::Uniform);
+      else diagnostics.error(nowhere, "--meshes: '" + name + "' is not a mesh; use graded (the scene's) or uniform");
+    }
+  }
+  options.max_error = arguments.max_error;
+  if (!arguments.error.empty()) {
+    sim::TradeMeasures measures{false, false};
+    for (const std::string& name : arguments.error) {
+      if (name == "displacement") measures.displacement = true;
+      else if (name == "probe_force") measures.probe_force = true;
+      else diagnostics.error(nowhere, "--error: '" + name + "' is not an error; use displacement or probe_force");
+    }
+    options.measures = measures;
+  }
+  if ((!arguments.error.empty() || !arguments.write_scene.empty()) && !arguments.max_error)
+    diagnostics.error(nowhere, std::string(arguments.write_scene.empty() ? "--error" : "--write-scene") +
+                                   " needs --max-error (the decision it is about)");
+  if (!arguments.plot_error.empty() && arguments.plot_error != "displacement" && arguments.plot_error != "probe_force")
+    diagnostics.error(nowhere, "--plot-error: '" + arguments.plot_error + "' is not an error; use displacement or "
+                               "probe_force");
+  if (arguments.max_reference_seconds) {
+    options.max_reference_seconds = *arguments.max_reference_seconds;
+    if (!(*arguments.max_reference_seconds > 0.0) || !std::isfinite(*arguments.max_reference_seconds))
+      diagnostics.error(nowhere, "--max-reference-seconds: give a positive number of seconds, got " +
+                                     format_number(*arguments.max_reference_seconds));
+  }
+  if (arguments.threads) options.threads = *arguments.threads;
   options.reference_refinements = arguments.reference_refinements;
   if (arguments.reference_dt_factor) options.reference_dt_factor = *arguments.reference_dt_factor;
   options.duration = arguments.duration;
@@ -136,6 +207,31 @@ std::shared_ptr<SceneTradeArguments> add_scene_trade_options(CLI::App& command) 
   command.add_option("--reference-dt-factor", arguments->reference_dt_factor,
                      "Scenes: the reference's step in automatic steps (default 0.5)");
   command.add_option("--duration", arguments->duration, "Scenes: simulated seconds (default: the scene's)");
+  std::string axes;
+  for (const sim::TradeAxisRow& row : sim::trade_axes()) axes += std::string(axes.empty() ? "" : ", ") + row.name;
+  command.add_option("--variants", arguments->variants,
+                     "Scenes: the axes that vary (" + axes + "; default all); the others hold the scene's value")
+      ->delimiter(',');
+  command.add_option("--elements", arguments->elements,
+                     "Scenes: element kinds of the FEM models (" + join(sim::element_kind_keywords()) + "; default all)")
+      ->delimiter(',');
+  command.add_option("--meshes", arguments->meshes,
+                     "Scenes: graded (the scene's mesh from a surface), uniform (size_near everywhere); default both")
+      ->delimiter(',');
+  command.add_option("--max-error", arguments->max_error,
+                     "Scenes: decide: the cheapest variant whose relative errors are at most this (0.05 is 5%)");
+  command.add_option("--error", arguments->error,
+                     "Scenes: the errors --max-error bounds: displacement, probe_force (default: both, or "
+                     "displacement without a displacement probe)")
+      ->delimiter(',');
+  command.add_option("--write-scene", arguments->write_scene,
+                     "Scenes: write the chosen variant as a scene (with --max-error)");
+  command.add_option("--max-reference-seconds", arguments->max_reference_seconds,
+                     "Scenes: the most CPU seconds a refinement round of the reference may take (default 300)");
+  command.add_option("--plot-error", arguments->plot_error,
+                     "Scenes: the error the plot shows: displacement (default) or probe_force");
+  command.add_option("--threads", arguments->threads, "Scenes: CPU runs side by side (default: every hardware thread)")
+      ->check(CLI::Range(1u, 1024u));
   return arguments;
 }
 
@@ -208,35 +304,72 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
               << sim::gibibytes_text(plan.largest_memory_bytes) << " of memory)" << std::endl;
   };
   options->progress = [&](std::size_t done, std::size_t total, const std::string& what) {
-    running = "run " + std::to_string(std::min(done + 1, total)) + " of " + std::to_string(total) + " (" + what + ")";
+    // Runs go side by side (or in batches), a round at a time: the count of runs done, and the round's first run.
+    running = std::to_string(done) + " of " + std::to_string(total) + " runs done (" + what + ")";
   };
   options->work_progress = [&](double done, double total) { progress.show_fraction(done, total, running + ", work"); };
+  // Checked before anything runs: a probe force to plot needs a displacement probe.
+  if (arguments.plot_error == "probe_force" &&
+      !(scene->probe && scene->probe->mode == sim::ProbeLoad::Mode::Displacement)) {
+    diagnostics.error(scene->range_of(scene->probe ? "loads.probe" : "loads"),
+                      "--plot-error probe_force: the scene has no displacement probe, so there is no probe force to "
+                      "plot; use --plot-error displacement");
+    report();
+    return kExitErrors;
+  }
+  // On a GPU the runs go as batches (runtime/scene/trade_runs.h); otherwise side by side on every core.
+  std::string device;
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+  options->gpu = scene->backend != sim::SceneBackend::Cpu && gpu::cuda_device_available(device);
+#endif
   const std::optional<sim::SimulationTradeResult> result = sim::run_simulation_trade(*scene, *options, diagnostics);
   progress.finish();
-  report();
-  if (!result) return kExitErrors;
-
-  const std::string table = sim::simulation_trade_markdown(*result);
+  if (!result) {
+    report();
+    return kExitErrors;
+  }
+  sim::SimulationTradeResult shown = *result;
+  if (options->gpu) shown.backend = "CUDA (" + device + "), the runs in batches";
+  const std::string table = sim::simulation_trade_markdown(shown);
   std::cout << table;
+  if (shown.max_error && !shown.chosen) {
+    // Unreachable: the table says how close each variant came; nothing is written.
+    diagnostics.error(SourceRange{}, "--max-error " + format_number(*shown.max_error) + ": " +
+                                         sim::simulation_trade_decision(shown).substr(std::string("Decision: ").size()),
+                      {"raise --max-error, or add finer variants (--refinements, --elements quadratic)"});
+    report();
+    return kExitErrors;
+  }
   std::vector<std::pair<std::string, std::string>> writes;  // all or none
   if (!markdown.empty()) writes.emplace_back(markdown, table);
-  if (!csv.empty()) writes.emplace_back(csv, sim::simulation_trade_csv(*result));
+  if (!csv.empty()) writes.emplace_back(csv, sim::simulation_trade_csv(shown));
+  if (!arguments.write_scene.empty()) {
+    const auto written = sim::chosen_scene_text(*scene, *text, shown, arguments.write_scene, diagnostics);
+    if (!written) {
+      report();
+      return kExitErrors;
+    }
+    writes.emplace_back(arguments.write_scene, *written);
+  }
   if (!plot.empty()) {
+    const bool force = arguments.plot_error == "probe_force";
     plot::TradePlot figure;
-    figure.error_unit = "displacement, relative";
-    figure.speed_label = "steps per CPU second (one thread)";
-    figure.title = {"fmpc trade: scene " + result->scene_name,
-                    format_number(result->duration) + " s, CPU, one thread, against the FEM reference"};
-    for (const sim::SimulationTradeRow& row : result->rows)
-      if (row.completed && row.steps_per_second > 0.0)
-        figure.points.push_back(
-            {row.variant, row.steps_per_second, row.errors.displacement_max, sim::trade_model_name(row.model)});
+    figure.error_unit = force ? "probe force, relative" : "displacement (max), relative";
+    figure.speed_label = "real-time factor (simulated s per wall s)";
+    figure.title = {"fmpc trade: scene " + shown.scene_name,
+                    format_number(shown.duration) + " s on " + shown.backend + ", against the FEM reference"};
+    for (const sim::SimulationTradeRow& row : shown.rows)
+      if (row.completed && row.real_time_factor > 0.0 && (!force || row.errors.probe_force))
+        figure.points.push_back({row.variant, row.real_time_factor,
+                                 force ? *row.errors.probe_force : row.errors.displacement_max,
+                                 sim::trade_model_name(row.model)});
     // Only the front is labelled: the dominated variants crowd together (the CSV names every point).
     const std::vector<std::size_t> front = plot::pareto_front(figure.points);
     for (std::size_t i = 0; i < figure.points.size(); ++i)
       if (std::find(front.begin(), front.end(), i) == front.end()) figure.points[i].label.clear();
     writes.emplace_back(plot, plot::render_trade_plot(figure, plot::image_format_for(plot)));
   }
+  report();
   std::string error;
   if (!write_text_files_atomically(writes, error)) {
     std::cerr << "fmpc trade: error: " << error << '\n';

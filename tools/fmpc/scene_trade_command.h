@@ -20,10 +20,19 @@ struct SceneTradeArguments {
   std::optional<unsigned> reference_refinements;
   std::optional<double> reference_dt_factor;
   std::optional<double> duration;
+  std::vector<std::string> variants;  // axes (trade_axes' names)
+  std::vector<std::string> elements;  // element kinds' keywords
+  std::vector<std::string> meshes;    // graded, uniform
+  std::optional<double> max_error;
+  std::vector<std::string> error;  // displacement, probe_force
+  std::string plot_error;          // displacement or probe_force
+  std::string write_scene;
+  std::optional<double> max_reference_seconds;
+  std::optional<unsigned> threads;
 };
 
-// Adds --models, --precisions, --integrators, --refinements, --reference-refinements, --reference-dt-factor and
-// --duration to the trade command.
+// Adds the scene options (--variants and each axis's values, --max-error, --error, --write-scene, the reference's
+// options, --duration, --plot-error, --threads) to the trade command.
 std::shared_ptr<SceneTradeArguments> add_scene_trade_options(CLI::App& command);
 
 // A scene file by its extension (.yaml or .yml); anything else is a rule file.

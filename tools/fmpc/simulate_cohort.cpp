@@ -1,7 +1,8 @@
-// fmpc simulate SCENE --patients FILE [--shard I/N]: one scene for a cohort of patients (docs/cohorts.md). Every
-// row of the patients file is checked first; then the patients of this shard are built, given one time step and run
-// together (one GPU batch, or worker threads on the CPU), each writing the usual outputs into its own folder, and
-// cohort.csv and an overlay of the force-displacement curves are written beside the folders, both or neither.
+// fmpc simulate SCENE --patients FILE [--shard I/N] [--devices LIST|all]: one scene for a cohort of patients
+// (docs/cohorts.md). Every row of the patients file is checked first; then the patients of this shard are built,
+// given one time step and run together (one GPU batch, one per GPU with --devices, or worker threads on the CPU),
+// each writing the usual outputs into its own folder, and cohort.csv and an overlay of the force-displacement curves
+// are written beside the folders, both or neither.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -28,6 +29,9 @@
 #include "tools/fmpc/simulate_command.h"
 #include "tools/plot/heat_map.h"
 #include "tools/plot/line_chart.h"
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+#include "runtime/gpu/gpu_simulation.h"
+#endif
 
 namespace fmpc::cli {
 
@@ -139,6 +143,28 @@ std::string cohort_plot(const sim::Scene& scene, const PatientsFile& file, const
   return plot::render_line_chart(chart, plot::ImageFormat::Png);
 }
 
+// --devices: nullopt after an error; empty when not given. Checked against the devices this process sees before
+// anything is read or built.
+std::optional<std::vector<int>> cohort_devices(const std::string& text, DiagnosticList& diagnostics) {
+  if (text.empty()) return std::vector<int>{};
+  const SourceRange where{"argument --devices", 0, 0, 0, 0};
+  std::string error;
+#if defined(FMPC_RUNTIME_HAVE_CUDA)
+  const std::optional<int> count = gpu::cuda_device_count(error);
+#else
+  const std::optional<int> count;
+  error = "this fmpc was built without CUDA; a cohort spreads over GPUs only in a CUDA build";
+#endif
+  if (!count) {
+    diagnostics.error(where, "--devices: " + error);
+    return std::nullopt;
+  }
+  auto devices = sim::parse_device_list(text, *count, error);
+  if (!devices)
+    diagnostics.error(where, "--devices: " + error, {"list the GPUs with nvidia-smi -L; 'all' takes every one"});
+  return devices;
+}
+
 }  // namespace
 
 int run_cohort_command(const SimulateOptions& options) {
@@ -155,6 +181,7 @@ int run_cohort_command(const SimulateOptions& options) {
     if (parsed) shard = *parsed;
     else diagnostics.error(SourceRange{"argument --shard", 0, 0, 0, 0}, "--shard: " + error);
   }
+  const std::optional<std::vector<int>> devices = cohort_devices(options.devices, diagnostics);
   std::optional<sim::Scene> scene = read_scene(options, sources, diagnostics);
   if (!scene) {
     report(diagnostics, sources);
@@ -217,7 +244,12 @@ int run_cohort_command(const SimulateOptions& options) {
   }
   const std::optional<sim::BackendChoice> backend = sim::choose_backend(*scene, diagnostics);
   if (backend && !backend->note.empty()) std::cerr << "fmpc simulate: " << backend->note << '\n';
-  if (!backend) {
+  if (backend && backend->backend != "cuda" && devices && !devices->empty())
+    diagnostics.error(SourceRange{"argument --devices", 0, 0, 0, 0},
+                      "--devices spreads a cohort over GPUs, and this one runs on the CPU (" +
+                          (backend->note.empty() ? "backend cpu" : backend->note) +
+                          "); drop --devices (the CPU's workers are the scene's `threads`) or use --backend cuda");
+  if (!backend || diagnostics.has_errors()) {
     report(diagnostics, sources);
     return kExitErrors;
   }
@@ -318,6 +350,7 @@ int run_cohort_command(const SimulateOptions& options) {
   sim::CohortRunOptions run_options;
   run_options.backend = backend->backend;
   run_options.threads = scene->threads;
+  if (devices) run_options.devices = *devices;
   ProgressLine progress("simulate");
   run_options.progress = [&](std::size_t done, std::size_t total) {
     progress.show_fraction(done, total, "step");

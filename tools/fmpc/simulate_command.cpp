@@ -188,8 +188,11 @@ namespace {
 int run_simulate(const SimulateOptions& options) {
   if (!options.patients.empty()) return run_cohort_command(options);
   DiagnosticList diagnostics;
-  if (!options.shard.empty()) {
-    diagnostics.error(kCommandLine, "--shard: a shard is a share of a cohort; give the patients with --patients FILE");
+  if (!options.shard.empty() || !options.devices.empty()) {
+    diagnostics.error(kCommandLine, !options.shard.empty()
+                                        ? "--shard: a shard is a share of a cohort; give the patients with --patients FILE"
+                                        : "--devices: a scene alone runs on one device; --devices spreads a cohort's "
+                                          "patients (--patients FILE) over GPUs");
     report(diagnostics, SourceFiles{});
     return kExitErrors;
   }
@@ -299,6 +302,9 @@ void register_simulate_command(CLI::App& app, int& exit_code) {
                       "patient runs in one batch (docs/cohorts.md)");
   command->add_option("--shard", options->shard,
                       "With --patients: I/N runs every N-th patient from the I-th (0-based)");
+  command->add_option("--devices", options->devices,
+                      "With --patients on CUDA: 'all' or device numbers (0,1): the patients split over those GPUs, "
+                      "one batch and host thread each, cohort.csv as on one GPU");
   command->callback([options, &exit_code] { exit_code = run_simulate(*options); });
 }
 

@@ -26,6 +26,7 @@ struct SimulateOptions {
   std::string output_directory;
   std::string patients;  // a cohort's patients file (CSV); empty: the scene alone
   std::string shard;     // I/N: every N-th patient from the I-th (0-based); empty: all
+  std::string devices;   // "all" or a list of CUDA devices ("0,1") the cohort is spread over; empty: one batch
 };
 
 // Six significant digits (hiding residues such as 0.6000000000000001): tick labels and the run's report.
@@ -45,7 +46,7 @@ bool apply_overrides(const SimulateOptions& options, sim::Scene& scene, Diagnost
 // Diagnostics in file order, printed.
 void report(DiagnosticList& diagnostics, const SourceFiles& sources);
 
-// fmpc simulate SCENE --patients FILE [--shard I/N] (docs/cohorts.md).
+// fmpc simulate SCENE --patients FILE [--shard I/N] [--devices LIST|all] (docs/cohorts.md).
 int run_cohort_command(const SimulateOptions& options);
 
 }  // namespace fmpc::cli
