@@ -111,6 +111,18 @@ const ElementKindRow* element_kind_by_keyword(const std::string& name);
 const ElementKindRow& default_element_kind();
 std::vector<std::string> element_kind_keywords();
 
+// What the engines do not run yet for an element kind (docs/simulator.md, "Element kinds"): each a reason that
+// completes "fem.element KEYWORD ...", null where they run it. It follows from the kind's kernels (a kind with a
+// nodal pass, kernels::element_kind_has_nodal_pass, has no CUDA kernel for that pass and no implicit Euler system
+// yet), so that the engines' refusals, fmpc trade's skipped variants and the tests that visit every kind read one
+// answer.
+struct ElementKindLimits {
+  const char* cuda = nullptr;            // the CUDA backend
+  const char* implicit_euler = nullptr;  // integrator: implicit_euler
+  const char* strain_table = nullptr;    // a Young's modulus bound to strain (a strain table)
+};
+ElementKindLimits element_kind_limits(int kind);
+
 // Springs plus the volume term reaching a Young's modulus E and Poisson ratio nu (docs/simulator.md): a central
 // spring network obeys the Cauchy relation lambda = mu, with mu = 2 E_s / 5 for the Van Gelder mapping at E_s (the
 // bulk modulus 2 E_s / 3 is exact for every tetrahedron, docs/simulator.md) and 24/25 of it for Lloyd's. The springs

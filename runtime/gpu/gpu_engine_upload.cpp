@@ -4,6 +4,7 @@
 #include <type_traits>
 #include <utility>
 
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/gpu/cuda_check.h"
 #include "runtime/gpu/gpu_engine.h"
 #include "runtime/integrate/worker_pool.h"
@@ -165,11 +166,12 @@ bool GpuEngine<Real>::upload_spring_records(const ConcatenatedScenes& c, Diagnos
 
 template <typename Real>
 bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
-  // A kind with a nodal pass (kernels::element_kind_has_nodal_pass) has no CUDA kernels for that pass yet: its
-  // views' nodal pressure would be null (runtime/scene/scene_run.cpp sends such scenes to the CPU).
-  if (kernels::element_kind_has_nodal_pass(c.element_kind)) {
-    diagnostics.error(scenes_.front().source_range, "this element kind runs on the CPU backend only for now (its "
-                                                    "nodal pass has no CUDA kernel yet); use the CPU backend");
+  // A kind the registry says CUDA does not run yet (element_kind_limits: a nodal pass, whose views' nodal pressure
+  // would be null here; runtime/scene/scene_run.cpp sends such scenes to the CPU).
+  if (const char* refusal = sim::element_kind_limits(c.element_kind).cuda) {
+    diagnostics.error(scenes_.front().source_range, std::string("fem.element ") +
+                                                        sim::element_kind_row(c.element_kind).keyword + " " + refusal +
+                                                        "; use the CPU backend");
     return false;
   }
   const std::size_t count = static_cast<std::size_t>(element_count_);

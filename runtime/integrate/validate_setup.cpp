@@ -66,23 +66,19 @@ bool validate_element_terms(const SimulationSetup& setup, const SourceRange& ran
                                    std::to_string(setup.rest_positions.size()) + " vertices");
       return false;
     }
-  // A kind with a nodal pass (kernels::element_kind_has_nodal_pass) runs its pass in the CPU engine's explicit
-  // integrators, its energy and forces in the host's sums and its tangent in the static solver; implicit Euler's
-  // system and the CUDA backend do not run it yet (docs/simulator.md, "Element kinds"), and a strain table's modulus
-  // would change its shear split (kernels/laws/isotropic_moduli.h, shear_part).
-  if (kernels::element_kind_has_nodal_pass(geometry.kind)) {
-    const std::string kind = std::string("fem.element ") + element_kind_row(geometry.kind).keyword;
-    if (setup.integrator == Integrator::ImplicitEuler) {
-      diagnostics.error(range, kind + " runs with the explicit integrators (semi_implicit_euler, velocity_verlet, "
-                                      "rk4) and the static solver, not yet with implicit_euler; choose one of those "
-                                      "or fem.element quadratic, which also does not lock");
-      return false;
-    }
-    if (setup.strain_stiffness) {
-      diagnostics.error(range, kind + " takes a constant Young's modulus, not a strain table; give "
-                                      "material.youngs_modulus or use fem.element quadratic");
-      return false;
-    }
+  // What the kind does not run yet (element_kind_limits: a kind with a nodal pass runs it in the CPU engine's
+  // explicit integrators, its energy and forces in the host's sums and its tangent in the static solver).
+  const ElementKindLimits limits = element_kind_limits(geometry.kind);
+  const std::string kind = std::string("fem.element ") + element_kind_row(geometry.kind).keyword;
+  if (limits.implicit_euler && setup.integrator == Integrator::ImplicitEuler) {
+    diagnostics.error(range, kind + " " + limits.implicit_euler + "; choose an explicit integrator or fem.element "
+                                  "quadratic, which also does not lock");
+    return false;
+  }
+  if (limits.strain_table && setup.strain_stiffness) {
+    diagnostics.error(range, kind + " " + limits.strain_table + "; give material.youngs_modulus or use fem.element "
+                                  "quadratic");
+    return false;
   }
   if (elements.terms.size() > static_cast<std::size_t>(kernels::kMostElementTerms)) {
     diagnostics.error(range, std::to_string(elements.terms.size()) + " element terms given; a model takes at most " +

@@ -17,18 +17,19 @@ std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& 
   device = "this fmpc was built without CUDA";
 #endif
   const bool direct = scene.integrator == Integrator::ImplicitEuler && scene.solver.method == ImplicitMethod::Direct;
-  // An element kind with a nodal pass has no CUDA kernels yet (validate_setup's note).
-  const bool nodal = scene.model == ForceModel::Elements && kernels::element_kind_has_nodal_pass(scene.element_kind);
+  // An element kind CUDA does not run yet (element_kind_limits).
+  const char* cuda_refusal =
+      scene.model == ForceModel::Elements ? element_kind_limits(scene.element_kind).cuda : nullptr;
   switch (scene.backend) {
     case SceneBackend::Cpu:
       return BackendChoice{"cpu", ""};
     case SceneBackend::Auto:
       if (have_device && direct)
         return BackendChoice{"cpu", "backend auto: solver.method direct runs on the CPU only; running on the CPU"};
-      if (have_device && nodal)
+      if (have_device && cuda_refusal)
         return BackendChoice{"cpu", std::string("backend auto: fem.element ") +
-                                        element_kind_row(scene.element_kind).keyword +
-                                        " runs on the CPU only for now; running on the CPU"};
+                                        element_kind_row(scene.element_kind).keyword + " " + cuda_refusal +
+                                        "; running on the CPU"};
       if (have_device) return BackendChoice{"cuda", "backend auto: running on CUDA (" + device + ")"};
       return BackendChoice{"cpu", "backend auto: no GPU (" + device + "); running on the CPU"};
     case SceneBackend::Cuda:
@@ -38,10 +39,10 @@ std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& 
                           "use method cg (or auto, the CG on CUDA) or backend cpu");
         return std::nullopt;
       }
-      if (nodal) {
+      if (cuda_refusal) {
         diagnostics.error(scene.range_of("backend"), std::string("backend: fem.element ") +
-                                                         element_kind_row(scene.element_kind).keyword +
-                                                         " runs on the CPU only for now; use backend cpu or auto");
+                                                         element_kind_row(scene.element_kind).keyword + " " +
+                                                         cuda_refusal + "; use backend cpu or auto");
         return std::nullopt;
       }
       if (have_device) return BackendChoice{"cuda", ""};

@@ -368,6 +368,12 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   reference_build.model = trade_has_springs(own) ? trade_reference_model() : own;
   reference_build.element_kind = scene.model == ForceModel::Elements ? scene.element_kind : default_element_kind().kind;
   reference_build.refinements = reference_level;
+  if (const char* refusal = options.gpu ? element_kind_limits(reference_build.element_kind).cuda : nullptr) {
+    diagnostics.error(scene.range_of("fem"), std::string("--gpu: the reference is the scene's element kind, fem.element ") +
+                                                 element_kind_row(reference_build.element_kind).keyword + ", which " +
+                                                 refusal + "; run the trade on the CPU (leave out --gpu)");
+    return std::nullopt;
+  }
 
   // The scene's own mesh, sized before anything is refined.
   std::size_t compared_vertices = 0;
@@ -415,6 +421,23 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
                                         integrator.dt_factor});
   std::sort(variants.begin(), variants.end());
   variants.erase(std::unique(variants.begin(), variants.end()), variants.end());
+  // The table lists every variant; those the engines do not run (element_kind_limits: a kind on CUDA or with implicit
+  // Euler) are skipped with the registry's reason, as are finer ones that cannot win (below).
+  const std::vector<RunKey> listed = variants;
+  std::map<RunKey, std::string> skipped;
+  variants.erase(std::remove_if(variants.begin(), variants.end(),
+                                [&](const RunKey& key) {
+                                  if (key.build.element_kind < 0) return false;
+                                  const ElementKindLimits limits = element_kind_limits(key.build.element_kind);
+                                  const char* refusal = options.gpu ? limits.cuda : nullptr;
+                                  if (!refusal && key.integrator == Integrator::ImplicitEuler)
+                                    refusal = limits.implicit_euler;
+                                  if (!refusal) return false;
+                                  skipped[key] = std::string("skipped: fem.element ") +
+                                                 element_kind_row(key.build.element_kind).keyword + " " + refusal;
+                                  return true;
+                                }),
+                 variants.end());
 
   TradeScenes scenes(scene, duration);
   TradePlanner planner(scene, scenes, duration, !options.max_error);
@@ -570,7 +593,6 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
     current = reference_runs(next_build, next_factor);
   }
   // The finer variants, level by level (with --max-error; without it they ran in the first round).
-  std::map<RunKey, std::string> skipped;
   std::vector<unsigned> levels = values->refinements;
   std::sort(levels.begin(), levels.end());
   levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
@@ -626,7 +648,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   if (!result.has_probe_force) reference_row.errors.probe_force.reset();
   else reference_row.errors.probe_force = 0.0;
   result.rows.push_back(reference_row);
-  for (const RunKey& key : variants) {
+  for (const RunKey& key : listed) {
     if (const auto it = skipped.find(key); it != skipped.end()) {
       SimulationTradeRow row;
       row.variant = run_label(key);

@@ -30,8 +30,9 @@ using namespace fmpc::gpu_test;
 namespace {
 
 // A model under test: an element law on an element kind (indices in the registries), or springs with the volume
-// term (law < 0). Every fem law on every element kind is covered, so that a new row of either registry is compared
-// with the CPU and runs under the sanitizers without an edit here.
+// term (law < 0). Every fem law on every element kind that the CUDA engine runs (element_kind_limits; the others:
+// cuda_refused_kinds below) is covered, so that a new row of either registry is compared with the CPU and runs under
+// the sanitizers without an edit here.
 struct Model {
   int law = -1;
   int element = 0;
@@ -43,7 +44,8 @@ std::vector<Model> all_models() {
   for (const ElementLawRow& law : element_law_rows()) {
     if (law.beside_springs) continue;
     for (const ElementKindRow& kind : element_kind_rows())
-      models.push_back(Model{law.law, kind.kind, std::string(law.keyword) + " FEM (" + kind.keyword + ")"});
+      if (!element_kind_limits(kind.kind).cuda)
+        models.push_back(Model{law.law, kind.kind, std::string(law.keyword) + " FEM (" + kind.keyword + ")"});
   }
   models.push_back(Model{-1, 0, "springs + volume term"});
   return models;
@@ -405,24 +407,29 @@ FMPC_GPU_TEST(sanitizer_implicit_force_models, "sanitizer smoke: implicit elemen
   sanitize_force_models({Integrator::ImplicitEuler});
 }
 
-// Nodal pressure tetrahedra (fem.element linear_nodal_pressure) have no CUDA kernel for their nodal pass yet: the
-// engine refuses them with a message rather than run their element pass without the nodal pressure (a scene with
-// backend auto runs them on the CPU: runtime/scene/scene_run.cpp). When the pass is ported, this test becomes the
-// CPU-against-GPU comparison the other kinds have.
-FMPC_GPU_TEST(nodal_pressure_refused, "nodal pressure tetrahedra: the CUDA engine refuses them, naming the CPU", true) {
+// The element kinds the registry says CUDA does not run yet (element_kind_limits: a kind with a nodal pass): the
+// engine refuses each with the registry's reason rather than run its element pass without its nodal values (a scene
+// with backend auto runs them on the CPU: runtime/scene/scene_run.cpp). When a kind is ported, it leaves this test for
+// kModels' CPU-against-GPU comparisons.
+FMPC_GPU_TEST(cuda_refused_kinds, "element kinds CUDA does not run yet: the engine refuses each, naming the CPU", true) {
   const Mesh mesh = box_mesh(2, 2, 2);
-  DiagnosticList diagnostics;
-  FemModelSpec spec;
-  spec.element = element_kind_by_keyword("linear_nodal_pressure")->kind;
-  spec.youngs_modulus = {5000.0};
-  spec.poisson_ratio = {0.4999};
-  spec.mass.value = 1060.0;
-  const auto setup = build_fem_model(mesh, spec, diagnostics);
-  FMPC_REQUIRE(setup);
-  const std::vector<SimulationSetup> scenes = {*setup};
-  const auto stability = check_stability(scenes.front(), diagnostics);
-  FMPC_REQUIRE(stability);
-  const auto device = gpu::create_engine(scenes, {*stability}, gpu::GpuOptions{}, diagnostics);
-  FMPC_EXPECT(!device);
-  FMPC_EXPECT(describe(diagnostics).find("nodal pass has no CUDA kernel yet") != std::string::npos);
+  for (const ElementKindRow& kind : element_kind_rows()) {
+    const char* refusal = element_kind_limits(kind.kind).cuda;
+    if (!refusal) continue;
+    note(std::string(kind.keyword) + ": " + refusal);
+    DiagnosticList diagnostics;
+    FemModelSpec spec;
+    spec.element = kind.kind;
+    spec.youngs_modulus = {5000.0};
+    spec.poisson_ratio = {0.45};
+    spec.mass.value = 1060.0;
+    const auto setup = build_fem_model(mesh, spec, diagnostics);
+    FMPC_REQUIRE(setup);
+    const std::vector<SimulationSetup> scenes = {*setup};
+    const auto stability = check_stability(scenes.front(), diagnostics);
+    FMPC_REQUIRE(stability);
+    const auto device = gpu::create_engine(scenes, {*stability}, gpu::GpuOptions{}, diagnostics);
+    FMPC_EXPECT(!device);
+    FMPC_EXPECT(describe(diagnostics).find(refusal) != std::string::npos);
+  }
 }

@@ -43,8 +43,8 @@ FMPC_GPU_TEST(viscoelastic_matches_cpu, "a viscoelastic FEM: every integrator ma
               true) {
   for (const ElementKindRow& kind : element_kind_rows())
     for (const Precision precision : {Precision::Float, Precision::Double}) {
-      // A kind with a nodal pass runs on the CPU only for now (gpu_force_model_test.cpp: nodal_pressure_refused).
-      if (kernels::element_kind_has_nodal_pass(kind.kind)) continue;
+      // A kind CUDA does not run yet (gpu_force_model_test.cpp: cuda_refused_kinds).
+      if (element_kind_limits(kind.kind).cuda) continue;
       const std::string name = std::string("viscoelastic FEM (") + kind.keyword + " elements), ";
       for (const Integrator integrator : kGpuIntegrators) {
         const SimulationSetup setup = stretched_box(precision, integrator, kind.kind);
@@ -65,8 +65,8 @@ FMPC_GPU_TEST(viscoelastic_checkpoint, "the GPU checkpoint restores the per-poin
               true) {
   for (const ElementKindRow& kind : element_kind_rows())
     for (const Precision precision : {Precision::Float, Precision::Double}) {
-      // A kind with a nodal pass runs on the CPU only for now (gpu_force_model_test.cpp: nodal_pressure_refused).
-      if (kernels::element_kind_has_nodal_pass(kind.kind)) continue;
+      // A kind CUDA does not run yet (gpu_force_model_test.cpp: cuda_refused_kinds).
+      if (element_kind_limits(kind.kind).cuda) continue;
       for (const Integrator integrator : kGpuIntegrators) {
         const std::vector<SimulationSetup> scenes = {stretched_box(precision, integrator, kind.kind)};
         DiagnosticList diagnostics;
