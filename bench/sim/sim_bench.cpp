@@ -749,6 +749,10 @@ int main(int argc, char** argv) {
         if (threads > 1) rows.push_back(cpu_row(base, threads, Precision::Float, options));
       }
       if (!have_device) continue;
+      if (const char* refusal = element_kind_limits(element).cuda) {
+        std::cout << "GPU rows skipped: fem.element " << kind_row->keyword << " " << refusal << "\n";
+        continue;
+      }
       for (const Precision precision : {Precision::Float, Precision::Double})
         rows.push_back(gpu_row(base, precision, Integrator::SemiImplicitEuler, Launch::Graphs, options));
       // The element pass's register bound, 2 and 3 blocks per SM, against the element kind's default (the row above).
