@@ -273,12 +273,18 @@ TEST_CASE("SOFA's liver: the dynamics' CPU cost per law x element kind (docs/val
     for (const ElementKindRow& kind : element_kind_rows()) {
       const int law_index = fem_law_by_keyword(law)->law;
       const Cost explicit_cost = step_cost(*mesh, law_index, kind.kind, Integrator::SemiImplicitEuler);
-      const Cost implicit_cost = step_cost(*mesh, law_index, kind.kind, Integrator::ImplicitEuler);
-      const Cost direct_cost = step_cost(*mesh, law_index, kind.kind, Integrator::ImplicitEuler, ImplicitMethod::Direct);
       out << "\n| " << law << " | " << kind.keyword << " | "
           << fixed(1e9 / (explicit_cost.steps_per_second * static_cast<double>(mesh->tetrahedra.size())), 0) << " ns, "
-          << std::setprecision(3) << explicit_cost.time_step << " s | " << fixed(implicit_cost.steps_per_second, 0)
-          << " (" << implicit_cost.solver << ") | " << fixed(direct_cost.steps_per_second, 0) << " |";
+          << std::setprecision(3) << explicit_cost.time_step << " s | ";
+      // A kind implicit Euler does not run yet (element_kind_limits) says why in both implicit columns.
+      if (const char* refusal = element_kind_limits(kind.kind).implicit_euler) {
+        out << refusal << " | - |";
+        continue;
+      }
+      const Cost implicit_cost = step_cost(*mesh, law_index, kind.kind, Integrator::ImplicitEuler);
+      const Cost direct_cost = step_cost(*mesh, law_index, kind.kind, Integrator::ImplicitEuler, ImplicitMethod::Direct);
+      out << fixed(implicit_cost.steps_per_second, 0) << " (" << implicit_cost.solver << ") | "
+          << fixed(direct_cost.steps_per_second, 0) << " |";
     }
   WARN("SOFA's liver held at vertices 3, 39, 64, nu 0.49, one thread, double, CPU time of the process:" << out.str());
 }
