@@ -24,7 +24,6 @@ fmpc_unity_group(fmpc_tests tests_2
   unit/passes_test.cpp
   unit/cohort_test.cpp
   unit/liver_benchmark_test.cpp
-  unit/organ_step_response_test.cpp
   support/system_comparison.cpp
   unit/spring_scene_test.cpp)
 fmpc_unity_group(fmpc_tests tests_3
