@@ -6,6 +6,9 @@
 #   bash bench/run_gpu.sh --prepare     # build machine: copy /usr/include/eigen3/Eigen to build-gpu-carry/eigen3
 #   bash bench/run_gpu.sh               # GPU machine, from the repository root, with build-gpu-carry/ carried
 #
+# The device tool brings back at most 8 files from its $OUT, two folders deep: write elsewhere and pack, e.g.
+#   D=$OUT; OUT=/tmp/gpu bash bench/run_gpu.sh --only tests,sanitizers; tar -C /tmp -czf $D/gpu.tgz gpu
+#
 # Sections (each appends to $OUT/summary.md, printed last):
 #   build       configure + build, Release, sm_90, FMPC_GPU_ONLY=ON
 #   simulator   gpu-labelled tests (CPU vs CUDA after 10,000 steps, bitwise reruns, batches, NaN location; GPU_TESTS="NAME

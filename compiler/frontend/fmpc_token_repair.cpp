@@ -49,6 +49,10 @@ class TokenRepair {
   TokenRepair(const SourceMap& source, antlr4::BufferedTokenStream& lexed, DiagnosticList& diagnostics)
       : source_(source), diagnostics_(diagnostics) {
     for (std::size_t i = 0; i < lexed.size(); ++i) tokens_.push_back(lexed.get(i));
+    // ',' is an implicit token of the grammar: its type is looked up by its literal.
+    if (const auto* lexer = dynamic_cast<const antlr4::Lexer*>(lexed.getTokenSource()))
+      for (std::size_t type = 1; type <= lexer->getVocabulary().getMaxTokenType(); ++type)
+        if (lexer->getVocabulary().getLiteralName(type) == "','") comma_type_ = type;
   }
 
   RepairedTokens run() {
@@ -98,6 +102,7 @@ class TokenRepair {
     if (text == "(") ++parenthesis_depth_;
     else if (text == ")" && parenthesis_depth_ > 0) --parenthesis_depth_;
     else if (token->getType() >= FmpcLexer::SYSTEM && token->getType() <= FmpcLexer::RULE) parenthesis_depth_ = 0;
+    if (parenthesis_depth_ == 0) comma_reported_ = false;
   }
 
   // Tries every repair at token `i`; returns the index after what it consumed, or `i` when none applies.
@@ -108,11 +113,34 @@ class TokenRepair {
       if (std::size_t next = repair_number(i); next > i) return next;
       if (std::size_t next = repair_operator(i); next > i) return next;
     }
+    if (std::size_t next = insert_comma(i); next > i) return next;
     const antlr4::Token* before = last_emitted();
     if (is_word(token) || is_non_ascii(token) ||
         (token->getType() == FmpcLexer::NUMBER && before && before->getText() == "]"))
       return quote_name(i);
     return i;
+  }
+
+  // MATLAB's vector written inside a call, `trimf(0 5 10)`: a number after a number in parentheses is read as if
+  // the comma between them were written (the parser then asks for the parameters' names).
+  std::size_t insert_comma(std::size_t i) {
+    const antlr4::Token* token = tokens_[i];
+    if (comma_type_ == 0 || parenthesis_depth_ == 0 || token->getType() != FmpcLexer::NUMBER || !previous_ ||
+        previous_->getType() != FmpcLexer::NUMBER || previous_->getLine() != token->getLine() ||
+        glued_to_previous_name(token))
+      return i;
+    // One error a call (its first gap); the commas of the others are inserted too.
+    if (!comma_reported_) {
+      SourceRange after = source_.token(previous_);
+      after.line = after.end_line;
+      after.column = after.end_column;
+      error(source_.token(token), "parameters are separated by ',': write " + previous_->getText() + ", " +
+                                      token->getText(), FixIt{after, ","});
+      comma_reported_ = true;
+    }
+    emit(token, comma_type_, ",", token, token);
+    keep(i);
+    return i + 1;
   }
 
   // An unterminated quoted name is read as if closed at the end of its line.
@@ -317,6 +345,8 @@ class TokenRepair {
   std::vector<antlr4::Token*> tokens_;
   const antlr4::Token* previous_ = nullptr;  // the last visible source token handled
   int parenthesis_depth_ = 0;
+  std::size_t comma_type_ = 0;
+  bool comma_reported_ = false;  // in the call open now
   RepairedTokens result_;
 };
 

@@ -113,8 +113,8 @@ const std::vector<ElementKindRow>& element_kind_rows() {
        "4-node linear tetrahedra, one point per element (Bonet & Wood, Nonlinear Continuum Mechanics for Finite "
        "Element Analysis, 2nd ed., 9.4)",
        kernels::element_kind_index<kernels::LinearTetrahedron>, 10, 0.499, 0.45,
-       "docs/validation.md measures linear tetrahedra 6.4% too stiff at nu 0.45 on an 8^3-cell cube against CalculiX "
-       "C3D10, and the stiffening grows as nu approaches 0.5"},
+       "docs/validation.md measures linear tetrahedra 6.4% too stiff at nu 0.45 on an 8^3-cell cube and 3.3 times too "
+       "stiff on SOFA's liver at nu 0.49, against CalculiX C3D10"},
       {"quadratic",
        "10-node quadratic tetrahedra (CalculiX / Abaqus C3D10), built from the linear mesh by adding each edge's "
        "midpoint, 4-point (degree-2) quadrature, HRZ-lumped masses (1/36 at corners, 4/27 on edges; Hinton, Rock & "

@@ -122,10 +122,11 @@ bool GpuEngine<Real>::upload(DiagnosticList& diagnostics) {
             {nullptr, 0, nullptr}};  // the tools' contact: set_contact
   step_ = {vertex_scene_.data(), scene_h_.data(), static_cast<Real>(scene_h.front())};
   if (!plan_launches(c, diagnostics) || !upload_spring_records(c, diagnostics)) return false;
-  if (!enqueue_point_state_update(state_[current_], true, diagnostics)) return false;
-  // cudaMemcpy from pageable memory and cudaMemset may still run on the legacy stream, which the non-blocking
-  // stream_ does not wait for.
+  // DeviceArray's cudaMemset and cudaMemcpy from pageable memory run on the legacy stream, which the non-blocking
+  // stream_ does not wait for (a pageable copy may return before its transfer lands): every kernel the upload
+  // enqueues on stream_ comes after a device synchronisation, or a memset landing late zeroes what it wrote.
   FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
+  if (!enqueue_point_state_update(state_[current_], true, diagnostics)) return false;
   return synchronize(diagnostics);
 }
 
@@ -144,6 +145,12 @@ bool GpuEngine<Real>::upload_spring_records(const ConcatenatedScenes& c, Diagnos
   if (sliced) {
     FMPC_CUDA_CHECK(vertex_order_.upload(layout.vertex_order), diagnostics, false);
     FMPC_CUDA_CHECK(sliced_row_.upload(layout.row), diagnostics, false);
+  }
+  // The allocation's memset and the uploads ran on the legacy stream (upload, above): the records kernels on stream_
+  // must not start before they end. Without this a late memset zeroed records on a GPU shared with other processes
+  // (springs dropped: the volume-term box went non-finite; docs/performance.md, fifteenth run).
+  FMPC_CUDA_CHECK(cudaDeviceSynchronize(), diagnostics, false);
+  if (sliced) {
     model_.springs.sliced = {sliced_row_.data(), incidence_.data()};
     FMPC_CUDA_CHECK(launch_sliced_springs(model_.springs, vertex_order_.data(), n_, incidence_.data(), stream_),
                     diagnostics, false);

@@ -33,59 +33,58 @@ const char* model_name(ProblemModel model) {
   return "?";
 }
 
-std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, ProblemModel model, std::string& error) {
-  DiagnosticList diagnostics;
-  sim::MassSpec mass;
-  mass.source = sim::MassSpec::Source::Density;
-  mass.value = problem.density;
-  std::optional<sim::SimulationSetup> setup;
-  if (model == ProblemModel::CorotationalFem || model == ProblemModel::QuadraticFem) {
-    sim::FemModelSpec spec;
-    if (model == ProblemModel::QuadraticFem) spec.element = sim::element_kind_by_keyword("quadratic")->kind;
-    spec.youngs_modulus = {problem.youngs_modulus};
-    spec.poisson_ratio = {problem.poisson_ratio};
-    spec.mass = mass;
-    setup = sim::build_fem_model(problem.mesh, spec, diagnostics);
-  } else {
-    sim::SpringModelSpec spec;
-    spec.stiffness.mapping = model == ProblemModel::SpringsLloyd ? sim::StiffnessMapping::LloydSzekelyHarders2007
-                                                                 : sim::StiffnessMapping::VanGelder1998;
-    spec.stiffness.value = problem.youngs_modulus;
-    std::optional<sim::VolumeTermCalibration> calibration;
-    if (model == ProblemModel::SpringsVolumeTerm) {
-      calibration = sim::calibrate_volume_term(problem.youngs_modulus, problem.poisson_ratio,
-                                               sim::StiffnessMapping::VanGelder1998, SourceRange{}, diagnostics);
-      if (calibration) spec.stiffness.value = calibration->spring_modulus;
-    }
-    spec.mass = mass;
-    spec.damping.ratio = 0.0;
-    setup = sim::build_spring_model(problem.mesh, spec, diagnostics);
-    if (setup) {
-      setup->tetrahedra = problem.mesh.tetrahedra;
-      if (calibration && !sim::add_volume_term(*setup, calibration->bulk_modulus, 0.0, 0.0, diagnostics)) setup.reset();
+namespace {
+
+// The consistent nodal loads of problem.traction (ElasticProblem::traction_faces) added to `loads`: `edge_node(a,
+// b)` is the node on the edge from vertex a to vertex b of a quadratic discretisation, -1 for a linear one.
+template <typename EdgeNode>
+void add_traction_loads(const ElasticProblem& problem, EdgeNode edge_node, std::vector<sim::Point3>& loads) {
+  for (const sim::Triangle& face : problem.traction_faces) {
+    const double third = sim::triangle_area(problem.mesh, face) / 3.0;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const int on_edge = edge_node(face[k], face[(k + 1) % 3]);
+      const auto node = static_cast<std::size_t>(on_edge < 0 ? face[k] : on_edge);
+      for (std::size_t a = 0; a < 3; ++a) loads[node][a] += third * problem.traction[a];
     }
   }
-  if (!setup) {
-    error = render_all(diagnostics, {});
-    return std::nullopt;
-  }
+}
+
+std::pair<int, int> edge_key(int a, int b) { return {std::min(a, b), std::max(a, b)}; }
+
+// The problem's supports, prescribed displacements and loads applied to a model's setup.
+void apply_problem(const ElasticProblem& problem, sim::SimulationSetup& setup) {
   const std::size_t n = problem.mesh.points.size();
-  setup->gravity = problem.gravity;
-  setup->fixed_axes = problem.held;
-  setup->external_forces = problem.forces;
-  setup->precision = sim::Precision::Double;
+  setup.gravity = problem.gravity;
+  setup.fixed_axes = problem.held;
+  setup.external_forces = problem.forces;
+  setup.precision = sim::Precision::Double;
   if (!problem.prescribed.empty()) {
-    setup->initial_positions.assign(setup->rest_positions.begin(), setup->rest_positions.begin() + static_cast<std::ptrdiff_t>(n));
+    setup.initial_positions.assign(setup.rest_positions.begin(), setup.rest_positions.begin() + static_cast<std::ptrdiff_t>(n));
     for (std::size_t v = 0; v < n; ++v)
       for (int a = 0; a < 3; ++a)
         if ((problem.held[v] >> a) & 1u)
-          setup->initial_positions[v][static_cast<std::size_t>(a)] += problem.prescribed[v][static_cast<std::size_t>(a)];
+          setup.initial_positions[v][static_cast<std::size_t>(a)] += problem.prescribed[v][static_cast<std::size_t>(a)];
   }
   // A kind's added edge nodes follow their ends' supports and prescribed displacements (as the C3D10 deck's do).
-  sim::extend_to_added_vertices(*setup, n);
+  sim::extend_to_added_vertices(setup, n);
+  if (!problem.traction_faces.empty()) {
+    setup.external_forces.resize(setup.rest_positions.size(), sim::Point3{0.0, 0.0, 0.0});
+    std::map<std::pair<int, int>, int> added;
+    const auto& ends = setup.elements.geometry.added_vertex_ends;
+    for (std::size_t i = 0; i < ends.size(); ++i) added[edge_key(ends[i][0], ends[i][1])] = static_cast<int>(n + i);
+    add_traction_loads(
+        problem, [&](int a, int b) { return added.empty() ? -1 : added.at(edge_key(a, b)); }, setup.external_forces);
+  }
+}
+
+std::optional<ElasticAnswer> solve_setup(const ElasticProblem& problem, sim::SimulationSetup& setup,
+                                         std::string& error) {
+  DiagnosticList diagnostics;
+  const std::size_t n = problem.mesh.points.size();
+  apply_problem(problem, setup);
   sim::StaticOptions options;
   options.linear = true;
-  const auto result = sim::static_equilibrium(*setup, options, diagnostics);
+  const auto result = sim::static_equilibrium(setup, options, diagnostics);
   if (!result) {
     error = render_all(diagnostics, {});
     return std::nullopt;
@@ -93,21 +92,89 @@ std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, Prob
   ElasticAnswer answer;
   answer.displacement.resize(n);
   for (std::size_t v = 0; v < n; ++v)
-    for (std::size_t i = 0; i < 3; ++i) answer.displacement[v][i] = result->positions[v][i] - setup->rest_positions[v][i];
-  answer.nodes = setup->rest_positions;
+    for (std::size_t i = 0; i < 3; ++i) answer.displacement[v][i] = result->positions[v][i] - setup.rest_positions[v][i];
+  answer.nodes = setup.rest_positions;
   answer.reaction = result->reactions;
   return answer;
+}
+
+sim::MassSpec density_mass(const ElasticProblem& problem) {
+  sim::MassSpec mass;
+  mass.source = sim::MassSpec::Source::Density;
+  mass.value = problem.density;
+  return mass;
+}
+
+}  // namespace
+
+namespace {
+
+std::optional<sim::SimulationSetup> build_fem(const ElasticProblem& problem, int law, int kind, std::string& error) {
+  DiagnosticList diagnostics;
+  sim::FemModelSpec spec;
+  spec.law = law;
+  spec.element = kind;
+  spec.youngs_modulus = {problem.youngs_modulus};
+  spec.poisson_ratio = {problem.poisson_ratio};
+  spec.mass = density_mass(problem);
+  auto setup = sim::build_fem_model(problem.mesh, spec, diagnostics);
+  if (!setup) error = render_all(diagnostics, {});
+  return setup;
+}
+
+}  // namespace
+
+std::optional<sim::SimulationSetup> fmpc_fem_setup(const ElasticProblem& problem, int law, int kind,
+                                                   std::string& error) {
+  auto setup = build_fem(problem, law, kind, error);
+  if (setup) apply_problem(problem, *setup);
+  return setup;
+}
+
+std::optional<ElasticAnswer> solve_with_fmpc_fem(const ElasticProblem& problem, int law, int kind, std::string& error) {
+  auto setup = build_fem(problem, law, kind, error);
+  if (!setup) return std::nullopt;
+  return solve_setup(problem, *setup, error);
+}
+
+std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, ProblemModel model, std::string& error) {
+  if (model == ProblemModel::CorotationalFem || model == ProblemModel::QuadraticFem)
+    return solve_with_fmpc_fem(problem, sim::default_fem_law().law,
+                               model == ProblemModel::QuadraticFem ? sim::element_kind_by_keyword("quadratic")->kind
+                                                                   : sim::default_element_kind().kind,
+                               error);
+  DiagnosticList diagnostics;
+  sim::SpringModelSpec spec;
+  spec.stiffness.mapping = model == ProblemModel::SpringsLloyd ? sim::StiffnessMapping::LloydSzekelyHarders2007
+                                                               : sim::StiffnessMapping::VanGelder1998;
+  spec.stiffness.value = problem.youngs_modulus;
+  std::optional<sim::VolumeTermCalibration> calibration;
+  if (model == ProblemModel::SpringsVolumeTerm) {
+    calibration = sim::calibrate_volume_term(problem.youngs_modulus, problem.poisson_ratio,
+                                             sim::StiffnessMapping::VanGelder1998, SourceRange{}, diagnostics);
+    if (calibration) spec.stiffness.value = calibration->spring_modulus;
+  }
+  spec.mass = density_mass(problem);
+  spec.damping.ratio = 0.0;
+  auto setup = sim::build_spring_model(problem.mesh, spec, diagnostics);
+  if (setup) {
+    setup->tetrahedra = problem.mesh.tetrahedra;
+    if (calibration && !sim::add_volume_term(*setup, calibration->bulk_modulus, 0.0, 0.0, diagnostics)) setup.reset();
+  }
+  if (!setup) {
+    error = render_all(diagnostics, {});
+    return std::nullopt;
+  }
+  return solve_setup(problem, *setup, error);
 }
 
 // `ccx -v` prints its version and exits 1, so its presence is what is checked.
 bool calculix_available() { return std::system("command -v ccx > /dev/null 2>&1") == 0; }
 
-namespace {
-
 // CalculiX reads each number of a card from its first 20 characters (Fortran's f20.0): longer text is cut there,
 // which drops digits of 0.00029999999999999997 silently and makes -5.0000000000000009e-05 an error ("*ERROR
 // reading *BOUNDARY"). Thirteen significant digits in scientific notation fill at most 20.
-std::string number(double value) {
+std::string calculix_number(double value) {
   std::ostringstream out;
   out << std::scientific;
   out.precision(12);
@@ -115,8 +182,7 @@ std::string number(double value) {
   return out.str();
 }
 
-// Rows "node a b c" after a header line containing `header`, until a blank line after data.
-std::map<int, sim::Point3> read_block(const std::string& dat, const std::string& header) {
+std::map<int, sim::Point3> read_calculix_block(const std::string& dat, const std::string& header) {
   std::map<int, sim::Point3> out;
   std::istringstream in(dat);
   std::string line;
@@ -141,13 +207,29 @@ std::map<int, sim::Point3> read_block(const std::string& dat, const std::string&
   return out;
 }
 
-}  // namespace
+std::optional<std::string> run_calculix(const std::string& deck, const std::filesystem::path& folder,
+                                        std::string& error) {
+  std::filesystem::create_directories(folder);
+  {
+    std::ofstream out(folder / "problem.inp");
+    out << deck;
+  }
+  const std::string command = "cd '" + folder.string() + "' && OMP_NUM_THREADS=1 ccx -i problem > ccx.log 2>&1";
+  if (std::system(command.c_str()) != 0) {
+    error = "ccx failed; see " + (folder / "ccx.log").string();
+    return std::nullopt;
+  }
+  std::ifstream in(folder / "problem.dat");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 std::optional<ElasticAnswer> solve_with_calculix(const ElasticProblem& problem, bool quadratic,
                                                  const std::filesystem::path& folder, std::string& error) {
   const std::size_t n = problem.mesh.points.size();
   if (quadratic && !problem.forces.empty()) {
-    error = "C3D10 needs consistent loads; give this problem displacements or gravity";
+    error = "C3D10 needs consistent loads; give this problem displacements, gravity or a traction";
     return std::nullopt;
   }
   // Nodes: the vertices, then (C3D10) one per edge, in the order edges are met.
@@ -164,7 +246,7 @@ std::optional<ElasticAnswer> solve_with_calculix(const ElasticProblem& problem, 
       static const int edges[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
       for (const auto& e : edges) {
         const int a = t[static_cast<std::size_t>(e[0])], b = t[static_cast<std::size_t>(e[1])];
-        const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+        const auto key = edge_key(a, b);
         auto found = midside.find(key);
         if (found == midside.end()) {
           const auto ia = static_cast<std::size_t>(a), ib = static_cast<std::size_t>(b);
@@ -183,7 +265,7 @@ std::optional<ElasticAnswer> solve_with_calculix(const ElasticProblem& problem, 
   std::ostringstream deck;
   deck << "*NODE, NSET=Nall\n";
   for (std::size_t v = 0; v < nodes.size(); ++v)
-    deck << v + 1 << ", " << number(nodes[v][0]) << ", " << number(nodes[v][1]) << ", " << number(nodes[v][2]) << "\n";
+    deck << v + 1 << ", " << calculix_number(nodes[v][0]) << ", " << calculix_number(nodes[v][1]) << ", " << calculix_number(nodes[v][2]) << "\n";
   deck << "*ELEMENT, TYPE=" << (quadratic ? "C3D10" : "C3D4") << ", ELSET=Eall\n";
   for (std::size_t e = 0; e < elements.size(); ++e) {
     deck << e + 1;
@@ -198,50 +280,43 @@ std::optional<ElasticAnswer> solve_with_calculix(const ElasticProblem& problem, 
   if (problem.neo_hooke) {
     const double mu = problem.youngs_modulus / (2 * (1 + problem.poisson_ratio));
     const double bulk = problem.youngs_modulus / (3 * (1 - 2 * problem.poisson_ratio));
-    deck << "*HYPERELASTIC, NEO HOOKE\n" << number(mu / 2) << ", " << number(2 / bulk) << "\n";
+    deck << "*HYPERELASTIC, NEO HOOKE\n" << calculix_number(mu / 2) << ", " << calculix_number(2 / bulk) << "\n";
   } else {
-    deck << "*ELASTIC\n" << number(problem.youngs_modulus) << ", " << number(problem.poisson_ratio) << "\n";
+    deck << "*ELASTIC\n" << calculix_number(problem.youngs_modulus) << ", " << calculix_number(problem.poisson_ratio) << "\n";
   }
-  deck << "*DENSITY\n" << number(problem.density) << "\n*SOLID SECTION, ELSET=Eall, MATERIAL=tissue\n";
+  deck << "*DENSITY\n" << calculix_number(problem.density) << "\n*SOLID SECTION, ELSET=Eall, MATERIAL=tissue\n";
   if (problem.neo_hooke) {
     const double increment = 1.0 / problem.increments;
-    deck << "*STEP, NLGEOM, INC=" << 100 * problem.increments << "\n*STATIC\n" << number(increment) << ", 1.0, "
-         << number(increment / 64) << ", " << number(increment) << "\n*BOUNDARY\n";
+    deck << "*STEP, NLGEOM, INC=" << 100 * problem.increments << "\n*STATIC\n" << calculix_number(increment) << ", 1.0, "
+         << calculix_number(increment / 64) << ", " << calculix_number(increment) << "\n*BOUNDARY\n";
   } else {
     deck << "*STEP\n*STATIC\n*BOUNDARY\n";
   }
   for (std::size_t v = 0; v < nodes.size(); ++v)
     for (int a = 0; a < 3; ++a)
       if ((held[v] >> a) & 1u)
-        deck << v + 1 << ", " << a + 1 << ", " << a + 1 << ", " << number(prescribed[v][static_cast<std::size_t>(a)])
+        deck << v + 1 << ", " << a + 1 << ", " << a + 1 << ", " << calculix_number(prescribed[v][static_cast<std::size_t>(a)])
              << "\n";
   const double g = std::sqrt(problem.gravity[0] * problem.gravity[0] + problem.gravity[1] * problem.gravity[1] +
                              problem.gravity[2] * problem.gravity[2]);
   if (g > 0.0)
-    deck << "*DLOAD\nEall, GRAV, " << number(g) << ", " << number(problem.gravity[0] / g) << ", "
-         << number(problem.gravity[1] / g) << ", " << number(problem.gravity[2] / g) << "\n";
-  if (!problem.forces.empty()) {
+    deck << "*DLOAD\nEall, GRAV, " << calculix_number(g) << ", " << calculix_number(problem.gravity[0] / g) << ", "
+         << calculix_number(problem.gravity[1] / g) << ", " << calculix_number(problem.gravity[2] / g) << "\n";
+  std::vector<sim::Point3> loads(nodes.size(), sim::Point3{0.0, 0.0, 0.0});
+  std::copy(problem.forces.begin(), problem.forces.end(), loads.begin());
+  add_traction_loads(
+      problem, [&](int a, int b) { return quadratic ? midside.at(edge_key(a, b)) : -1; }, loads);
+  if (!problem.forces.empty() || !problem.traction_faces.empty()) {
     deck << "*CLOAD\n";
-    for (std::size_t v = 0; v < n; ++v)
+    for (std::size_t v = 0; v < nodes.size(); ++v)
       for (std::size_t a = 0; a < 3; ++a)
-        if (problem.forces[v][a] != 0.0) deck << v + 1 << ", " << a + 1 << ", " << number(problem.forces[v][a]) << "\n";
+        if (loads[v][a] != 0.0) deck << v + 1 << ", " << a + 1 << ", " << calculix_number(loads[v][a]) << "\n";
   }
   deck << "*NODE PRINT, NSET=Nall\nU\n*NODE PRINT, NSET=Nheld\nRF\n*END STEP\n";
-  std::filesystem::create_directories(folder);
-  {
-    std::ofstream out(folder / "problem.inp");
-    out << deck.str();
-  }
-  const std::string command = "cd '" + folder.string() + "' && OMP_NUM_THREADS=1 ccx -i problem > ccx.log 2>&1";
-  if (std::system(command.c_str()) != 0) {
-    error = "ccx failed; see " + (folder / "ccx.log").string();
-    return std::nullopt;
-  }
-  std::ifstream in(folder / "problem.dat");
-  std::ostringstream text;
-  text << in.rdbuf();
-  const auto u = read_block(text.str(), "displacements (vx,vy,vz)");
-  const auto rf = read_block(text.str(), "forces (fx,fy,fz)");
+  const auto dat = run_calculix(deck.str(), folder, error);
+  if (!dat) return std::nullopt;
+  const auto u = read_calculix_block(*dat, "displacements (vx,vy,vz)");
+  const auto rf = read_calculix_block(*dat, "forces (fx,fy,fz)");
   if (u.size() != nodes.size()) {
     error = "ccx wrote " + std::to_string(u.size()) + " displacements for " + std::to_string(nodes.size()) + " nodes";
     return std::nullopt;

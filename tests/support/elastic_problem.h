@@ -4,10 +4,12 @@
 // mid-edge nodes added (the quadratic element, for converged answers). Used by tests/unit/validation_test.cpp.
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "runtime/integrate/simulation.h"
 #include "runtime/mesh/mesh.h"
 
 namespace fmpc::testing {
@@ -21,6 +23,12 @@ struct ElasticProblem {
   std::vector<std::uint8_t> held;        // per vertex: held axes, bit a for axis a
   std::vector<sim::Point3> prescribed;   // per vertex: the held axes' displacement (m); empty: zero
   std::vector<sim::Point3> forces;       // per vertex (N); empty: none (C3D10 refuses them: no consistent loads)
+  // A uniform traction (Pa) on these boundary triangles of the mesh, applied as each element's consistent nodal
+  // loads: A t / 3 at each corner of a linear face, A t / 3 at each edge node and none at the corners of a quadratic
+  // one (the 6-node triangle's shape functions integrate to 0 at corners and 1/3 at mid-edges). Every element kind
+  // and C3D4 / C3D10 get the same load this way.
+  std::vector<sim::Triangle> traction_faces;
+  sim::Point3 traction{0.0, 0.0, 0.0};
   // CalculiX: the compressible neo-Hookean material (*HYPERELASTIC, NEO HOOKE: W = C10 (J^-2/3 I_1 - 3) +
   // (J - 1)^2 / D1 with C10 = mu / 2 and D1 = 2 / K, the small-strain moduli of E and nu) solved with NLGEOM in
   // `increments` equal steps, instead of linear elasticity.
@@ -47,6 +55,13 @@ struct ElasticAnswer {
 
 // fmpc's linear static solution (static_equilibrium with options.linear: the small-strain answer).
 std::optional<ElasticAnswer> solve_with_fmpc(const ElasticProblem& problem, ProblemModel model, std::string& error);
+// The same for `model: fem` with any law and element kind (their indices in runtime/fem/element_law_registry.h's
+// rows), so that a table over the registry's rows gains a row when a law or kind is added.
+std::optional<ElasticAnswer> solve_with_fmpc_fem(const ElasticProblem& problem, int law, int kind, std::string& error);
+// The model solve_with_fmpc_fem solves, with the problem's supports, prescribed displacements and loads, in double
+// (for timing its dynamics).
+std::optional<sim::SimulationSetup> fmpc_fem_setup(const ElasticProblem& problem, int law, int kind,
+                                                   std::string& error);
 
 // Whether `ccx` runs here.
 bool calculix_available();
@@ -56,6 +71,15 @@ bool calculix_available();
 // RF, which leaves out loads applied at the held nodes themselves (zero for problems without gravity there).
 std::optional<ElasticAnswer> solve_with_calculix(const ElasticProblem& problem, bool quadratic,
                                                  const std::filesystem::path& folder, std::string& error);
+
+// CalculiX reads each number of a card from its first 20 characters: 13 significant digits in scientific notation.
+std::string calculix_number(double value);
+// Writes `deck` as folder/problem.inp, runs ccx on it (one thread) and returns its .dat file's text; nullopt with
+// `error` naming the log when ccx fails.
+std::optional<std::string> run_calculix(const std::string& deck, const std::filesystem::path& folder,
+                                        std::string& error);
+// The rows "node a b c" of a .dat file after the header line containing `header`, until a blank line after data.
+std::map<int, sim::Point3> read_calculix_block(const std::string& dat, const std::string& header);
 
 // Hayes, Keer, Herrmann & Mockros (1972), "A mathematical analysis for indentation tests of articular cartilage",
 // J. Biomech. 5:541-551: a rigid flat-ended cylindrical punch of radius a pressed frictionlessly by delta into an

@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -16,6 +17,8 @@
 #include <nlohmann/json.hpp>
 
 #include "compiler/frontend/fmpc_language.h"
+#include "compiler/frontend/matlab_fis.h"
+#include "compiler/frontend/rule_file_loader.h"
 #include "tests/support/fmpc_process.h"
 
 namespace {
@@ -372,6 +375,141 @@ TEST_CASE("the VS Code extension launches fmpc lsp and its grammar knows the lan
   CHECK(extension.find("args: ['lsp']") != std::string::npos);
   for (const char* word : {"system", "input", "output", "rule", "if", "then", "is", "not", "and", "or", "weight",
                            "somewhat", "very", "extremely", "interval_type2", "defuzzify", "triangle", "gauss2",
-                           "linear_z", "trimf", "gbellmf", "linzmf"})
+                           "linear_z", "trimf", "gbellmf", "linzmf", "System", "Rules", "AndMethod", "NumMFs"})
     CHECK(grammar_text.find(word) != std::string::npos);
+}
+
+namespace {
+
+const char* const kLspTipper = R"([System]
+Name='tipper'
+Type='mamdani'
+NumInputs=2
+NumOutputs=1
+NumRules=2
+AndMethod='min'
+
+[Input1]
+Name='service'
+Range=[0 10]
+NumMFs=2
+MF1='poor':'gaussmf',[1.5 0]
+MF2='good':'gaussmf',[1.5 5]
+
+[Input2]
+Name='food'
+Range=[0 10]
+NumMFs=1
+MF1='rancid':'trapmf',[0 0 1 3]
+
+[Output1]
+Name='tip'
+Range=[0 30]
+NumMFs=2
+MF1='cheap':'trimf',[0 5 10]
+MF2='average':'trimf',[10 15 20]
+
+[Rules]
+1 1, 1 (1) : 2
+2 0, 2 (1) : 1
+)";
+
+std::vector<std::string> completion_labels(const Json& completion) {
+  std::vector<std::string> labels;
+  for (const Json& item : completion["result"]["items"]) labels.push_back(item["label"]);
+  return labels;
+}
+
+bool has_label(const std::vector<std::string>& labels, const std::string& label) {
+  return std::find(labels.begin(), labels.end(), label) != labels.end();
+}
+
+}  // namespace
+
+TEST_CASE("fmpc lsp: MATLAB .fis files get hover, completion, definitions and formatting too", "[lsp]") {
+  LspProcess server;
+  server.request("initialize", Json{{"capabilities", Json::object()}});
+  const std::string uri = "file:///tmp/tipper.fis";
+  server.notify("textDocument/didOpen", open_params(uri, kLspTipper));
+  const Json opened = server.diagnostics_for(uri);
+  for (const Json& d : opened["diagnostics"]) CHECK(d["severity"] != 1);
+  const auto hover_text = [&](int line, int character) {
+    const Json hover = server.request("textDocument/hover", at(uri, line, character))["result"];
+    return hover.is_null() ? std::string() : std::string(hover["contents"]["value"]);
+  };
+
+  // A term's name, its type, a number of a range, a key of [System].
+  std::string text = hover_text(12, 6);
+  CHECK(text.find("**poor**, a term of input **service** is MATLAB's `gaussmf [1.5 0]`") != std::string::npos);
+  CHECK(text.find("| 0 | 1 |") != std::string::npos);
+  CHECK(hover_text(12, 14).find("MATLAB's name for fmpc's `gauss`") != std::string::npos);
+  text = hover_text(10, 10);
+  CHECK(text.find("**service = 10**") != std::string::npos);
+  CHECK(text.find("| good | ") != std::string::npos);
+  CHECK(hover_text(6, 2).find("**AndMethod**: how `and` joins") != std::string::npos);
+  CHECK(hover_text(9, 2).find("named by 2 of 2 rules") != std::string::npos);
+  // A rule line reads as the rule it means; an entry as the term it names, 0 as "takes no part".
+  text = hover_text(29, 2);
+  CHECK(text.find("`if service is poor or food is rancid then tip is cheap`") != std::string::npos);
+  CHECK(text.find("**rancid**, a term of input **food** is MATLAB's `trapmf [0 0 1 3]`") != std::string::npos);
+  CHECK(hover_text(30, 2).find("input **food** takes no part in this rule") != std::string::npos);
+  CHECK(hover_text(29, 13).find("joined by `or`") != std::string::npos);
+
+  // Go to definition: from a rule's entry to the term's name.
+  CHECK(server.request("textDocument/definition", at(uri, 30, 5))["result"] ==
+        Json{{"uri", uri}, {"range", {{"start", position(26, 5)}, {"end", position(26, 12)}}}});
+  CHECK(server.request("textDocument/definition", at(uri, 30, 2))["result"].is_null());  // 0 names no term
+
+  // Completion: a rule being typed (the file does not load meanwhile) offers the terms by number, with their
+  // names; keys not yet given and the next sections; the values of a method; MATLAB's types.
+  std::string typed = std::string(kLspTipper) + "2 ";
+  server.notify("textDocument/didChange", Json{{"textDocument", {{"uri", uri}, {"version", 2}}},
+                                               {"contentChanges", Json::array({{{"text", typed}}})}});
+  server.diagnostics_for(uri);
+  Json completion = server.request("textDocument/completion", at(uri, 31, 2));
+  CHECK(completion_labels(completion) == std::vector<std::string>{"1", "0"});
+  CHECK(completion["result"]["items"][0]["detail"] == "food is rancid");
+  typed += "1, ";
+  server.notify("textDocument/didChange", Json{{"textDocument", {{"uri", uri}, {"version", 3}}},
+                                               {"contentChanges", Json::array({{{"text", typed}}})}});
+  server.diagnostics_for(uri);
+  CHECK(completion_labels(server.request("textDocument/completion", at(uri, 31, 5))) ==
+        std::vector<std::string>{"1", "2", "0"});
+  std::vector<std::string> labels = completion_labels(server.request("textDocument/completion", at(uri, 20, 0)));
+  CHECK(has_label(labels, "MF2"));
+  CHECK(has_label(labels, "[Input3]"));
+  CHECK(!has_label(labels, "Name"));
+  CHECK(!has_label(labels, "[System]"));
+  labels = completion_labels(server.request("textDocument/completion", at(uri, 6, 10)));
+  CHECK(labels == std::vector<std::string>{"'min'", "'prod'", "'einstein_product'"});
+  typed += "\n[Output1]\nMF3='x':";
+  server.notify("textDocument/didChange", Json{{"textDocument", {{"uri", uri}, {"version", 4}}},
+                                               {"contentChanges", Json::array({{{"text", typed}}})}});
+  server.diagnostics_for(uri);
+  labels = completion_labels(server.request("textDocument/completion", at(uri, 33, 8)));
+  CHECK(has_label(labels, "'trimf'"));
+  CHECK(has_label(labels, "'gaussmf'"));
+
+  // Formatting: MATLAB's writefis layout, as fmpc convert --to matlab writes it; refused while a comment would be
+  // lost.
+  server.notify("textDocument/didChange", Json{{"textDocument", {{"uri", uri}, {"version", 5}}},
+                                               {"contentChanges", Json::array({{{"text", kLspTipper}}})}});
+  server.diagnostics_for(uri);
+  const Json options{{"tabSize", 2}, {"insertSpaces", true}};
+  Json formatting = server.request("textDocument/formatting", Json{{"textDocument", {{"uri", uri}}}, {"options", options}});
+  REQUIRE(formatting["result"].size() == 1);
+  fmpc::DiagnosticList read;
+  const fmpc::RuleFile file = fmpc::load_rule_file("tipper.fis", kLspTipper, read);
+  fmpc::DiagnosticList written;
+  CHECK(formatting["result"][0]["newText"] == fmpc::write_matlab_fis(file.systems.at(0), written));
+  server.notify("textDocument/didChange",
+                Json{{"textDocument", {{"uri", uri}, {"version", 6}}},
+                     {"contentChanges", Json::array({{{"text", "% tips\n" + std::string(kLspTipper)}}})}});
+  server.diagnostics_for(uri);
+  formatting = server.request("textDocument/formatting", Json{{"textDocument", {{"uri", uri}}}, {"options", options}});
+  CHECK(formatting["error"]["code"] == -32803);
+  CHECK(std::string(formatting["error"]["message"]).find("line 1 has a comment") != std::string::npos);
+  server.request("shutdown", nullptr);
+  server.notify("exit", nullptr);
+  CHECK(server.wait() == 0);
 }

@@ -429,6 +429,32 @@ double uniaxial_stress(double s, Piola piola) {
   return piola(lateral((low + high) / 2))(2, 2);
 }
 
+// A box of nx x ny x nz cells with E = kE, nothing held or moved yet, for CalculiX's NEO HOOKE (10 increments).
+testing::ElasticProblem neo_hooke_block(Point3 size, int nx, int ny, int nz, double nu) {
+  testing::ElasticProblem p;
+  BoxSpec box;
+  box.size = size;
+  box.cells_x = nx;
+  box.cells_y = ny;
+  box.cells_z = nz;
+  DiagnosticList diagnostics;
+  p.mesh = generate_box(box, diagnostics);
+  p.youngs_modulus = kE;
+  p.poisson_ratio = nu;
+  p.density = 1000.0;
+  p.neo_hooke = true;
+  p.held.assign(p.mesh.points.size(), 0);
+  p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
+  return p;
+}
+
+// Whether ccx is missing, after saying so (the CalculiX cases skip visibly).
+bool calculix_missing() {
+  if (testing::calculix_available()) return false;
+  WARN("skipped: CalculiX (ccx, Debian's calculix-ccx) is not installed; tools/run installs it");
+  return true;
+}
+
 // fmpc's stable neo-Hookean static solution of `problem` (held axes moved by `prescribed`), loaded in `increments`
 // equal steps, each from the last one's answer.
 std::vector<Point3> fmpc_stable_neo_hookean(const testing::ElasticProblem& problem, int increments,
@@ -466,28 +492,14 @@ std::vector<Point3> fmpc_stable_neo_hookean(const testing::ElasticProblem& probl
 
 TEST_CASE("stable neo-Hookean against CalculiX's NEO HOOKE with NLGEOM: a cube compressed by 30 %",
           "[fem][snh][validation]") {
-  if (!testing::calculix_available()) {
-    WARN("skipped: CalculiX (ccx, Debian's calculix-ccx) is not installed; tools/run installs it");
-    return;
-  }
+  if (calculix_missing()) return;
   const double nu = 0.45;
   std::ostringstream table;
   {
     // A 1 cm cube, 2^3 cells, its x = 0, y = 0 and z = 0 faces sliding on their planes, its top face pushed down 3 mm
     // (also sliding): homogeneous uniaxial stress, so each code's reaction is its law's uniaxial curve at s = 0.7.
     const double L = 0.01;
-    testing::ElasticProblem p;
-    BoxSpec box;
-    box.size = {L, L, L};
-    box.cells_x = box.cells_y = box.cells_z = 2;
-    DiagnosticList diagnostics;
-    p.mesh = generate_box(box, diagnostics);
-    p.youngs_modulus = kE;
-    p.poisson_ratio = nu;
-    p.density = 1000.0;
-    p.neo_hooke = true;
-    p.held.assign(p.mesh.points.size(), 0);
-    p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
+    testing::ElasticProblem p = neo_hooke_block({L, L, L}, 2, 2, 2, nu);
     for (std::size_t v = 0; v < p.mesh.points.size(); ++v) {
       for (std::size_t a = 0; a < 3; ++a)
         if (p.mesh.points[v][a] == 0.0) p.held[v] = static_cast<std::uint8_t>(p.held[v] | (1u << a));
@@ -522,4 +534,102 @@ TEST_CASE("stable neo-Hookean against CalculiX's NEO HOOKE with NLGEOM: a cube c
           << predicted * 100 << " %";
   }
   WARN("stable neo-Hookean against CalculiX NEO HOOKE (NLGEOM), nu = " << nu << ":" << table.str());
+}
+
+namespace {
+
+// CalculiX's NEO HOOKE energy density with C10 = mu / 2, D1 = 2 / K: W = mu / 2 (J^-2/3 I_1 - 3) + K / 2 (J - 1)^2.
+double calculix_neo_hooke_energy(const Matrix3& F, double nu) {
+  const double mu = kE / (2 * (1 + nu)), bulk = kE / (3 * (1 - 2 * nu));
+  const double J = F.determinant();
+  return mu / 2 * (std::pow(J, -2.0 / 3.0) * F.squaredNorm() - 3) + bulk / 2 * (J - 1) * (J - 1);
+}
+
+// The stored energy of the deformed mesh (vertex positions x): the sum over its linear tetrahedra of V W(F), F = Ds
+// Dm^-1 constant in each (C3D4 is the same element).
+template <typename Energy>
+double stored_energy(const Mesh& mesh, const std::vector<Point3>& x, Energy energy) {
+  double total = 0.0;
+  for (const Tetrahedron& t : mesh.tetrahedra) {
+    Matrix3 rest, deformed;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) {
+        const auto a = static_cast<std::size_t>(t[0]), b = static_cast<std::size_t>(t[static_cast<std::size_t>(c + 1)]);
+        rest(r, c) = mesh.points[b][static_cast<std::size_t>(r)] - mesh.points[a][static_cast<std::size_t>(r)];
+        deformed(r, c) = x[b][static_cast<std::size_t>(r)] - x[a][static_cast<std::size_t>(r)];
+      }
+    total += rest.determinant() / 6 * energy(Matrix3(deformed * rest.inverse()));
+  }
+  return total;
+}
+
+}  // namespace
+
+TEST_CASE("stable neo-Hookean against CalculiX's NEO HOOKE with NLGEOM: a 20 % indentation",
+          "[fem][snh][validation]") {
+  if (calculix_missing()) return;
+  // A 2 x 2 x 1 cm block of 6 x 6 x 3 cells (648 linear tetrahedra, C3D4 in CalculiX), its base clamped; the 3 x 3
+  // top vertices of its middle third (a 6.7 mm square punch) pushed down by 2 mm, 20 % of the height, free to slide
+  // sideways (a frictionless flat punch by prescribed displacement).
+  const double nu = 0.45, W = 0.02, H = 0.01, depth = 0.2 * H;
+  testing::ElasticProblem p = neo_hooke_block({W, W, H}, 6, 6, 3, nu);
+  std::vector<std::size_t> punch;
+  for (std::size_t v = 0; v < p.mesh.points.size(); ++v) {
+    const Point3& x = p.mesh.points[v];
+    if (x[2] < 1e-12) p.held[v] = 7u;
+    const bool middle = x[0] > W / 3 - 1e-12 && x[0] < 2 * W / 3 + 1e-12 && x[1] > W / 3 - 1e-12 && x[1] < 2 * W / 3 + 1e-12;
+    if (std::abs(x[2] - H) < 1e-12 && middle) {
+      p.held[v] = 4u;
+      p.prescribed[v][2] = -depth;
+      punch.push_back(v);
+    }
+  }
+  REQUIRE(punch.size() == 9);
+  const auto snh_energy = [&](const Matrix3& F) { return Paper(nu).energy(F); };
+  const auto nh_energy = [&](const Matrix3& F) { return calculix_neo_hooke_energy(F, nu); };
+  const auto punch_force = [&](const std::vector<Point3>& reaction) {
+    double sum = 0.0;
+    for (const std::size_t v : punch) sum += reaction[v][2];
+    return sum;
+  };
+
+  testing::ScratchFolder folder("ccx_snh_indentation");
+  std::string error;
+  const auto calculix = testing::solve_with_calculix(p, false, folder.path(), error);
+  INFO(error);
+  REQUIRE(calculix);
+  std::vector<Point3> x_nh(p.mesh.points.size());
+  for (std::size_t v = 0; v < x_nh.size(); ++v)
+    for (std::size_t a = 0; a < 3; ++a) x_nh[v][a] = p.mesh.points[v][a] + calculix->displacement[v][a];
+  // fmpc at the depth and 1 % either side of it (the energies' derivative in the depth is the punch force).
+  std::vector<Point3> reactions;
+  const std::vector<Point3> x_snh = fmpc_stable_neo_hookean(p, 10, reactions);
+  const double force_snh = punch_force(reactions), force_nh = punch_force(calculix->reaction);
+  const double h = 0.01;
+  double nh_at_snh_state[2];
+  for (int side = 0; side < 2; ++side) {
+    testing::ElasticProblem shifted = p;
+    for (Point3& u : shifted.prescribed) u[2] *= side == 0 ? 1 - h : 1 + h;
+    std::vector<Point3> ignored;
+    nh_at_snh_state[side] = stored_energy(p.mesh, fmpc_stable_neo_hookean(shifted, 10, ignored), nh_energy);
+  }
+
+  // Each code's answer minimises its own energy over the fields with the punch's displacement, so the energies at
+  // the two answers bracket the difference of the minima: Pi_NH(x_NH) - Pi_SNH(x_NH) <= E_NH - E_SNH <=
+  // Pi_NH(x_SNH) - Pi_SNH(x_SNH). The bracket's width is second order in the laws' difference.
+  const double e_snh = stored_energy(p.mesh, x_snh, snh_energy), e_nh = stored_energy(p.mesh, x_nh, nh_energy);
+  const double lower = e_nh - stored_energy(p.mesh, x_nh, snh_energy);
+  const double upper = stored_energy(p.mesh, x_snh, nh_energy) - e_snh;
+  const double measured = e_nh - e_snh;
+  CHECK(measured >= lower - 1e-4 * e_snh);
+  CHECK(measured <= upper + 1e-4 * e_snh);
+  // The force: d E_NH / d depth, with E_NH(d) = Pi_NH(x_SNH(d)) to second order, by central differences.
+  const double predicted_nh_force = -(nh_at_snh_state[1] - nh_at_snh_state[0]) / (2 * h * depth);
+  const double predicted = predicted_nh_force / force_snh - 1, difference = force_nh / force_snh - 1;
+  CHECK(std::abs(difference - predicted) < 0.1 * std::abs(predicted));
+  WARN("stable neo-Hookean against CalculiX NEO HOOKE (NLGEOM), nu = "
+       << nu << ", a 20 % indentation:\n  stored energy: fmpc " << e_snh << " J, CalculiX " << e_nh
+       << " J, difference " << measured / e_snh * 100 << " %, the energies bracket it in [" << lower / e_snh * 100
+       << ", " << upper / e_snh * 100 << "] %\n  punch force: fmpc " << force_snh << " N, CalculiX " << force_nh
+       << " N, difference " << difference * 100 << " %, predicted " << predicted * 100 << " %");
 }

@@ -7,6 +7,7 @@
 
 #include <httplib.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "compiler/eval/agreement.h"
+#include "compiler/eval/control_surface.h"
 #include "compiler/eval/interpreter.h"
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/frontend/rule_file_loader.h"
@@ -251,6 +253,34 @@ TEST_CASE("studio API: evaluate equals the interpreter, digit for digit", "[stud
   CHECK(garbage->status == 400);
   CHECK(body(garbage)["error"].get<std::string>().rfind("the request is not JSON", 0) == 0);
   CHECK(studio.post("/api/evaluate", {{"text", kRules}})->status == 400);
+}
+
+TEST_CASE("studio API: membership curves and the control surface are the library's numbers", "[studio]") {
+  Studio studio;
+  DiagnosticList diagnostics;
+  const FuzzySystem system = load_rule_file("tissue.fis", kRules, diagnostics).systems.front();
+  // Every term's grade at every sample is term_membership's, the triangle's peak among the samples.
+  const json curves = body(studio.post("/api/memberships", {{"path", "tissue.fis"}, {"text", kRules}, {"variable", "reading"}}));
+  const std::vector<double> x = curves["x"].get<std::vector<double>>();
+  CHECK(std::find(x.begin(), x.end(), 20.0) != x.end());
+  REQUIRE(curves["terms"].size() == 3);
+  for (std::size_t t = 0; t < 3; ++t)
+    for (std::size_t k = 0; k < x.size(); ++k)
+      CHECK(curves["terms"][t]["upper"][k].get<double>() == term_membership(system.inputs[0].terms[t], x[k]).upper);
+  CHECK(studio.post("/api/memberships", {{"path", "tissue.fis"}, {"text", kRules}, {"variable", "nosuch"}})->status == 400);
+  // The surface is control_surface's (what fmpc plot --x --y draws), with the strongest firing that marks holes.
+  const json surface = body(studio.post("/api/surface", {{"path", "tissue.fis"}, {"text", kRules}, {"x", 0}, {"y", 1},
+                                                         {"output", 0}, {"point", {12, 35}}, {"resolution", 11}}));
+  const ControlSurface expected = control_surface(system, 0, 1, 0, {12, 35}, 11);
+  CHECK(surface["x"].get<std::vector<double>>() == expected.x);
+  CHECK(surface["y"].get<std::vector<double>>() == expected.y);
+  CHECK(surface["z"].get<std::vector<double>>() == expected.z);
+  CHECK(surface["strongest_firing"].get<std::vector<double>>() == expected.strongest_firing);
+  CHECK(surface["threshold"] == 0.1);
+  // reading 0 (soft's foot) fires no rule at 0.1: a coverage hole the page hatches.
+  CHECK(expected.strongest_firing[0] < 0.1);
+  CHECK(studio.post("/api/surface", {{"path", "tissue.fis"}, {"text", kRules}, {"x", 0}, {"y", 0}, {"output", 0},
+                                     {"point", {12, 35}}, {"resolution", 11}})->status == 400);
 }
 
 TEST_CASE("studio API: edits, then saving the canonical layout, refused after a change on disk", "[studio]") {

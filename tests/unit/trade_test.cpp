@@ -49,14 +49,15 @@ TEST_CASE("fmpc trade measures every variant and writes markdown, CSV and a PNG"
   const fs::path folder = fs::temp_directory_path() / ("fmpc_trade_test_" + std::to_string(device()));
   fs::create_directories(folder);
   const std::string command = std::string(FMPC_BINARY) + " trade " + tipper.string() +
-                              " --points 60 --min-seconds 0.01 --resolutions 3,9 --csv " +
-                              (folder / "t.csv").string() + " --plot " + (folder / "t.png").string() + " > " +
+                              " --points 60 --min-seconds 0.01 --resolutions 3,9 -o " + (folder / "t.md").string() +
+                              " --csv " + (folder / "t.csv").string() + " --plot " + (folder / "t.png").string() + " > " +
                               (folder / "out.md").string() + " 2> " + (folder / "err.txt").string();
   const int status = std::system(command.c_str());
   INFO(read_text(folder / "err.txt"));
   REQUIRE(status == 0);
   const std::string markdown = read_text(folder / "out.md");
   const std::string csv = read_text(folder / "t.csv");
+  CHECK(read_text(folder / "t.md") == markdown);  // -o writes what is printed, as in validate and diff
   CHECK(markdown.find("| interpreter | samples exact (reference) | 0 | 0 |") != std::string::npos);
   CHECK(markdown.find("| compiled C++ | double") != std::string::npos);
   CHECK(markdown.find("| compiled C++ | float") != std::string::npos);

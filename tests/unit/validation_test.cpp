@@ -5,8 +5,10 @@
 // printed tables. The CalculiX parts skip visibly without ccx.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <iomanip>
 #include <sstream>
 
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "tests/support/elastic_problem.h"
 #include "tests/support/generated_program.h"
@@ -87,22 +89,146 @@ double field_difference(const ElasticAnswer& a, const ElasticAnswer& b) {
   return difference / largest;
 }
 
-}  // namespace
+// The cases' problems, shared by their tests and by the table of every law x element kind ("[.element_table]").
 
-TEST_CASE("validation: uniaxial block with sliding faces, u = F L / (E A) and lateral strain -nu axial", "[validation]") {
-  const Point3 size{0.03, 0.03, 0.06};
-  const double E = 5000.0, nu = 0.45, traction = 100.0;
-  ElasticProblem p = problem_on(box(size, 3, 3, 6), E, nu, 1000.0);
-  p.forces.assign(p.mesh.points.size(), Point3{0, 0, 0});
+// Uniaxial block: 3 x 3 x 6 cm, faces x = 0, y = 0, z = 0 sliding, a traction on the top face.
+const Point3 kUniaxialSize{0.03, 0.03, 0.06};
+constexpr double kUniaxialModulus = 5000.0, kUniaxialPoissonRatio = 0.45, kUniaxialTraction = 100.0;
+ElasticProblem uniaxial_problem() {
+  ElasticProblem p = problem_on(box(kUniaxialSize, 3, 3, 6), kUniaxialModulus, kUniaxialPoissonRatio, 1000.0);
   for (std::size_t v = 0; v < p.mesh.points.size(); ++v)
     for (int a = 0; a < 3; ++a)
       if (on(p.mesh.points[v][static_cast<std::size_t>(a)], 0.0)) p.held[v] = static_cast<std::uint8_t>(p.held[v] | (1u << a));
   for (const Triangle& t : boundary_triangles(p.mesh)) {
     bool top = true;
-    for (const auto v : t) top = top && on(p.mesh.points[static_cast<std::size_t>(v)][2], size[2]);
-    if (top)
-      for (const auto v : t) p.forces[static_cast<std::size_t>(v)][2] += traction * triangle_area(p.mesh, t) / 3.0;
+    for (const auto v : t) top = top && on(p.mesh.points[static_cast<std::size_t>(v)][2], kUniaxialSize[2]);
+    if (top) p.traction_faces.push_back(t);
   }
+  p.traction = {0.0, 0.0, kUniaxialTraction};
+  return p;
+}
+
+// Self-weight column: a quarter column 2 x 2 x 10 cm (2n x 2n x 5n cells), nu = 0, symmetry planes and base sliding.
+constexpr double kColumnModulus = 5000.0, kColumnDensity = 1060.0, kColumnLength = 0.1, kGravity = 9.81;
+double column_exact() { return -kColumnDensity * kGravity * kColumnLength * kColumnLength / (2 * kColumnModulus); }
+bool column_top(const Point3& x) { return on(x[2], kColumnLength); }
+ElasticProblem column_problem(int n) {
+  ElasticProblem p = problem_on(box({0.02, 0.02, kColumnLength}, 2 * n, 2 * n, 5 * n), kColumnModulus, 0.0, kColumnDensity);
+  p.gravity = {0.0, 0.0, -kGravity};
+  for (std::size_t v = 0; v < p.mesh.points.size(); ++v)
+    for (int a = 0; a < 3; ++a)
+      if (on(p.mesh.points[v][static_cast<std::size_t>(a)], 0.0)) p.held[v] = static_cast<std::uint8_t>(p.held[v] | (1u << a));
+  return p;
+}
+
+// Slender cantilever: 10 x 1 x 1 cm (10n x n x n cells), E = 1 MPa, nu = 0.45, clamped at x = 0, under gravity.
+bool cantilever_tip(const Point3& x) { return on(x[0], 0.1); }
+ElasticProblem cantilever_problem(int n) {
+  ElasticProblem p = problem_on(box({0.1, 0.01, 0.01}, 10 * n, n, n), 1e6, 0.45, 1060.0);
+  p.gravity = {0.0, 0.0, -kGravity};
+  for (std::size_t v = 0; v < p.mesh.points.size(); ++v)
+    if (on(p.mesh.points[v][0], 0.0)) p.held[v] = 7;
+  return p;
+}
+
+// Cubes of 10 cm (n^3 cells), E = 5 kPa. Hanging: top face clamped, gravity; the mean displacement of the bottom
+// face. Compressed: base clamped, top face clamped and moved down 1 mm; the force on the top face.
+constexpr double kCubeEdge = 0.1;
+ElasticProblem hanging_cube(int n, double nu) {
+  ElasticProblem p = problem_on(box({kCubeEdge, kCubeEdge, kCubeEdge}, n, n, n), 5000.0, nu, 1060.0);
+  p.gravity = {0.0, 0.0, -kGravity};
+  for (std::size_t v = 0; v < p.mesh.points.size(); ++v)
+    if (on(p.mesh.points[v][2], kCubeEdge)) p.held[v] = 7;
+  return p;
+}
+ElasticProblem compressed_cube(int n, double nu) {
+  ElasticProblem p = problem_on(box({kCubeEdge, kCubeEdge, kCubeEdge}, n, n, n), 5000.0, nu, 1060.0);
+  p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
+  for (std::size_t v = 0; v < p.mesh.points.size(); ++v) {
+    if (on(p.mesh.points[v][2], 0.0)) p.held[v] = 7;
+    if (on(p.mesh.points[v][2], kCubeEdge)) {
+      p.held[v] = 7;
+      p.prescribed[v][2] = -0.001;
+    }
+  }
+  return p;
+}
+bool cube_bottom(const Point3& x) { return on(x[2], 0.0); }
+double cube_top_force(const ElasticAnswer& a) {
+  double sum = 0.0;
+  for (std::size_t v = 0; v < a.nodes.size(); ++v)
+    if (on(a.nodes[v][2], kCubeEdge)) sum += a.reaction[v][2];
+  return sum;
+}
+
+// Hayes et al.'s bonded layer: a flat punch of radius a = 5 mm pressed 0.1 mm into a 10 mm layer (a/h = 0.5) bonded
+// to a rigid base. Quarter model (12n x 12n x 4n cells): the punch's axis on the corner x = y = 0, symmetry planes
+// slide, the layer 6 a wide, the punch's vertices held in z only (frictionless).
+constexpr double kHayesModulus = 5000.0, kHayesPoissonRatio = 0.45, kHayesRadius = 0.005, kHayesHeight = 0.01,
+                 kHayesDepth = 1e-4;
+struct HayesProblem {
+  ElasticProblem problem;
+  double effective_radius = 0.0;  // the radius of the discrete punch's footprint
+  double expected_force = 0.0;    // Hayes' force at that radius (N)
+  // The same for a kind with edge nodes: an edge node is held where both ends of its edge are, and a node's share of
+  // the face is its consistent load's (a third of each triangle at its edge nodes, none at its corners).
+  double expected_force_edge_nodes = 0.0;
+};
+HayesProblem hayes_problem(int n) {
+  const double a = kHayesRadius, h = kHayesHeight, nu = kHayesPoissonRatio;
+  HayesProblem hayes;
+  ElasticProblem& p = hayes.problem;
+  p = problem_on(box({6 * a, 6 * a, h}, 12 * n, 12 * n, 4 * n), kHayesModulus, nu, 1000.0);
+  p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
+  std::vector<bool> punch(p.mesh.points.size(), false);
+  for (std::size_t v = 0; v < p.mesh.points.size(); ++v) {
+    const Point3& x = p.mesh.points[v];
+    if (on(x[0], 0.0)) p.held[v] |= 1;
+    if (on(x[1], 0.0)) p.held[v] |= 2;
+    if (on(x[2], 0.0)) p.held[v] = 7;
+    if (on(x[2], h) && std::hypot(x[0], x[1]) <= a * (1 + 1e-9)) {
+      p.held[v] |= 4;
+      p.prescribed[v][2] = -kHayesDepth;
+      punch[v] = true;
+    }
+  }
+  // The discrete punch is a set of vertices: its footprint is their share of the face (a third of each top
+  // triangle's area to each of its vertices), and its force is compared at the radius of equal area.
+  double footprint = 0.0, edge_footprint = 0.0;
+  for (const Triangle& t : boundary_triangles(p.mesh)) {
+    bool top = true;
+    for (const auto v : t) top = top && on(p.mesh.points[static_cast<std::size_t>(v)][2], h);
+    if (!top) continue;
+    for (std::size_t k = 0; k < 3; ++k) {
+      const bool held = punch[static_cast<std::size_t>(t[k])];
+      if (held) footprint += triangle_area(p.mesh, t) / 3.0;
+      if (held && punch[static_cast<std::size_t>(t[(k + 1) % 3])]) edge_footprint += triangle_area(p.mesh, t) / 3.0;
+    }
+  }
+  const auto expected = [&](double area) {
+    const double radius = std::sqrt(4 * area / M_PI);
+    return 2 * radius * kHayesModulus * kHayesDepth / (1 - nu * nu) * hayes_kappa(radius / h, nu);
+  };
+  hayes.effective_radius = std::sqrt(4 * footprint / M_PI);
+  hayes.expected_force = expected(footprint);
+  hayes.expected_force_edge_nodes = expected(edge_footprint);
+  return hayes;
+}
+// The whole punch's force (the quarter's, times 4), from the supports' reactions at its nodes (edge nodes included).
+double hayes_punch_force(const ElasticAnswer& answer) {
+  double sum = 0.0;
+  for (std::size_t v = 0; v < answer.nodes.size(); ++v)
+    if (on(answer.nodes[v][2], kHayesHeight) && std::hypot(answer.nodes[v][0], answer.nodes[v][1]) <= kHayesRadius * (1 + 1e-9))
+      sum += answer.reaction[v][2];
+  return -4 * sum;
+}
+
+}  // namespace
+
+TEST_CASE("validation: uniaxial block with sliding faces, u = F L / (E A) and lateral strain -nu axial", "[validation]") {
+  const Point3& size = kUniaxialSize;
+  const double E = kUniaxialModulus, nu = kUniaxialPoissonRatio, traction = kUniaxialTraction;
+  const ElasticProblem p = uniaxial_problem();
   const double axial = traction / E * size[2];      // F L / (E A)
   const double lateral = -nu * traction / E * size[0];
   const auto top = [&](const Point3& x) { return on(x[2], size[2]); };
@@ -189,17 +315,12 @@ TEST_CASE("validation: self-weight column, rho g L^2 / 2E, converging at second 
   // rho g (L - z), and the top face sinks by rho g L^2 / (2 E). With nu = 0 this is the exact 3-D solution; with
   // nu > 0 the exact field has a term nu rho g (x^2 + y^2) / 2E in u_z that a flat base does not allow, and a
   // boundary layer (Saint-Venant) moves the answer by a few 0.01% (measured below at nu = 0.3).
-  const double E = 5000.0, nu = 0.0, rho = 1060.0, g = 9.81, W = 0.02, L = 0.1;
-  const double exact = -rho * g * L * L / (2 * E);
+  const double exact = column_exact();
   std::vector<double> errors;
   std::ostringstream table;
   for (const int n : {1, 2, 4}) {
-    ElasticProblem p = problem_on(box({W, W, L}, 2 * n, 2 * n, 5 * n), E, nu, rho);
-    p.gravity = {0.0, 0.0, -g};
-    for (std::size_t v = 0; v < p.mesh.points.size(); ++v)
-      for (int a = 0; a < 3; ++a)
-        if (on(p.mesh.points[v][static_cast<std::size_t>(a)], 0.0)) p.held[v] = static_cast<std::uint8_t>(p.held[v] | (1u << a));
-    const auto top = [&](const Point3& x) { return on(x[2], L); };
+    const ElasticProblem p = column_problem(n);
+    const auto top = column_top;
     const ElasticAnswer fem = fmpc_answer(p, ProblemModel::CorotationalFem);
     const double error = mean_displacement(p, fem, 2, top) / exact - 1;
     errors.push_back(std::abs(error));
@@ -233,14 +354,8 @@ TEST_CASE("validation: slender cantilever under gravity against Euler-Bernoulli 
   const double E = 1e6, nu = 0.45, rho = 1060.0, g = 9.81, L = 0.1, h = 0.01;
   const double bernoulli = -3 * rho * g * L * L * L * L / (2 * E * h * h);
   const double shear = -rho * g * h * h * L * L / (2 * (5.0 / 6.0) * E / (2 * (1 + nu)) * h * h);
-  const auto make = [&](int n) {
-    ElasticProblem p = problem_on(box({L, h, h}, 10 * n, n, n), E, nu, rho);
-    p.gravity = {0.0, 0.0, -g};
-    for (std::size_t v = 0; v < p.mesh.points.size(); ++v)
-      if (on(p.mesh.points[v][0], 0.0)) p.held[v] = 7;
-    return p;
-  };
-  const auto tip = [&](const Point3& x) { return on(x[0], L); };
+  const auto make = cantilever_problem;
+  const auto tip = cantilever_tip;
   std::ostringstream table;
   table << "\n  Euler-Bernoulli " << bernoulli << " m, with Timoshenko's shear term " << bernoulli + shear << " m";
   std::optional<double> converged;
@@ -284,37 +399,12 @@ TEST_CASE("validation: hanging and compressed cubes against converged C3D10", "[
     warn_skip();
     return;
   }
-  const double E = 5000.0, rho = 1060.0, g = 9.81, edge = 0.1;
   std::ostringstream table;
   for (const double nu : {0.25, 0.45}) {
-    // Hanging: top face clamped, gravity; the mean displacement of the bottom face.
-    const auto hanging = [&](int n) {
-      ElasticProblem p = problem_on(box({edge, edge, edge}, n, n, n), E, nu, rho);
-      p.gravity = {0.0, 0.0, -g};
-      for (std::size_t v = 0; v < p.mesh.points.size(); ++v)
-        if (on(p.mesh.points[v][2], edge)) p.held[v] = 7;
-      return p;
-    };
-    // Compressed: base clamped, top face clamped and moved down 1 mm; the force on the top face.
-    const auto compressed = [&](int n) {
-      ElasticProblem p = problem_on(box({edge, edge, edge}, n, n, n), E, nu, rho);
-      p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
-      for (std::size_t v = 0; v < p.mesh.points.size(); ++v) {
-        if (on(p.mesh.points[v][2], 0.0)) p.held[v] = 7;
-        if (on(p.mesh.points[v][2], edge)) {
-          p.held[v] = 7;
-          p.prescribed[v][2] = -0.001;
-        }
-      }
-      return p;
-    };
-    const auto bottom = [&](const Point3& x) { return on(x[2], 0.0); };
-    const auto top_force = [&](const ElasticProblem&, const ElasticAnswer& a) {
-      double sum = 0.0;
-      for (std::size_t v = 0; v < a.nodes.size(); ++v)
-        if (on(a.nodes[v][2], edge)) sum += a.reaction[v][2];
-      return sum;
-    };
+    const auto hanging = [&](int n) { return hanging_cube(n, nu); };
+    const auto compressed = [&](int n) { return compressed_cube(n, nu); };
+    const auto bottom = cube_bottom;
+    const auto top_force = [&](const ElasticProblem&, const ElasticAnswer& a) { return cube_top_force(a); };
     const ElasticProblem fine_hanging = hanging(8), fine_compressed = compressed(8);
     const auto hanging_c3d10 = calculix_answer(fine_hanging, true, "hanging10");
     const auto compressed_c3d10 = calculix_answer(fine_compressed, true, "compressed10");
@@ -350,45 +440,16 @@ TEST_CASE("validation: Hayes et al. 1972 indentation of a bonded layer", "[valid
   // A flat punch of radius a = 5 mm pressed 0.1 mm into a 10 mm layer (a/h = 0.5) bonded to a rigid base. Quarter
   // model: the punch's axis on the corner x = y = 0, symmetry planes slide, the layer 6 a wide, the punch's vertices
   // held in z only (frictionless).
-  const double E = 5000.0, nu = 0.45, a = 0.005, h = 0.01, delta = 1e-4;
+  const double E = kHayesModulus, nu = kHayesPoissonRatio, a = kHayesRadius, h = kHayesHeight, delta = kHayesDepth;
   const double kappa = hayes_kappa(a / h, nu);
   const double expected = 2 * a * E * delta / (1 - nu * nu) * kappa;
   std::ostringstream table;
   table << "\n  kappa(a/h = 0.5, nu = 0.45) = " << kappa << ", P = " << expected << " N";
   for (const int n : {1, 2}) {
-    ElasticProblem p = problem_on(box({6 * a, 6 * a, h}, 12 * n, 12 * n, 4 * n), E, nu, 1000.0);
-    p.prescribed.assign(p.mesh.points.size(), Point3{0, 0, 0});
-    double footprint = 0.0;
-    std::vector<bool> punch(p.mesh.points.size(), false);
-    for (std::size_t v = 0; v < p.mesh.points.size(); ++v) {
-      const Point3& x = p.mesh.points[v];
-      if (on(x[0], 0.0)) p.held[v] |= 1;
-      if (on(x[1], 0.0)) p.held[v] |= 2;
-      if (on(x[2], 0.0)) p.held[v] = 7;
-      if (on(x[2], h) && std::hypot(x[0], x[1]) <= a * (1 + 1e-9)) {
-        p.held[v] |= 4;
-        p.prescribed[v][2] = -delta;
-        punch[v] = true;
-      }
-    }
-    // The discrete punch is a set of vertices: its footprint is their share of the face (a third of each top
-    // triangle's area to each of its vertices), and its force is compared at the radius of equal area.
-    for (const Triangle& t : boundary_triangles(p.mesh)) {
-      bool top = true;
-      for (const auto v : t) top = top && on(p.mesh.points[static_cast<std::size_t>(v)][2], h);
-      if (!top) continue;
-      for (const auto v : t)
-        if (punch[static_cast<std::size_t>(v)]) footprint += triangle_area(p.mesh, t) / 3.0;
-    }
-    const double a_effective = std::sqrt(4 * footprint / M_PI);
-    const double expected_here = 2 * a_effective * E * delta / (1 - nu * nu) * hayes_kappa(a_effective / h, nu);
-    const auto punch_force = [&](const ElasticAnswer& answer) {
-      double sum = 0.0;
-      for (std::size_t v = 0; v < answer.nodes.size(); ++v)
-        if (on(answer.nodes[v][2], h) && std::hypot(answer.nodes[v][0], answer.nodes[v][1]) <= a * (1 + 1e-9))
-          sum += answer.reaction[v][2];
-      return -4 * sum;
-    };
+    const HayesProblem hayes = hayes_problem(n);
+    const ElasticProblem& p = hayes.problem;
+    const double a_effective = hayes.effective_radius, expected_here = hayes.expected_force;
+    const auto punch_force = hayes_punch_force;
     table << "\n  " << 12 * n << " x " << 12 * n << " x " << 4 * n << " cells (footprint radius " << a_effective * 1000
           << " mm, Hayes P = " << expected_here << " N):";
     for (const ProblemModel model : kModels) {
@@ -408,4 +469,104 @@ TEST_CASE("validation: Hayes et al. 1972 indentation of a bonded layer", "[valid
     }
   }
   WARN("indentation, error against Hayes et al.:" << table.str());
+}
+
+namespace {
+
+// Every finite-element law x element kind of the registry (runtime/fem/element_law_registry.h): a law or kind added
+// there is one more row of the tables below.
+struct FemVariant {
+  std::string name;  // "law / kind"
+  int law = 0, kind = 0;
+};
+std::vector<FemVariant> fem_variants() {
+  std::vector<FemVariant> out;
+  for (const std::string& law : fem_law_keywords())
+    for (const ElementKindRow& kind : element_kind_rows())
+      out.push_back({law + " / " + kind.keyword, fem_law_by_keyword(law)->law, kind.kind});
+  return out;
+}
+
+ElasticAnswer fem_answer(const ElasticProblem& p, const FemVariant& variant) {
+  std::string error;
+  auto answer = solve_with_fmpc_fem(p, variant.law, variant.kind, error);
+  INFO(variant.name << ": " << error);
+  REQUIRE(answer);
+  return *answer;
+}
+
+}  // namespace
+
+TEST_CASE("validation: every law and element kind is exact for uniform strain", "[validation]") {
+  // Linear and quadratic tetrahedra represent a uniform strain exactly, and every law's small-strain tangent is
+  // Hooke's: the uniaxial block's answer to rounding.
+  const ElasticProblem p = uniaxial_problem();
+  const double axial = kUniaxialTraction / kUniaxialModulus * kUniaxialSize[2];
+  const double lateral = -kUniaxialPoissonRatio * kUniaxialTraction / kUniaxialModulus * kUniaxialSize[0];
+  for (const FemVariant& variant : fem_variants()) {
+    const ElasticAnswer a = fem_answer(p, variant);
+    INFO(variant.name);
+    CHECK(mean_displacement(p, a, 2, [](const Point3& x) { return on(x[2], kUniaxialSize[2]); }) ==
+          Approx(axial).epsilon(1e-9));
+    CHECK(mean_displacement(p, a, 0, [](const Point3& x) { return on(x[0], kUniaxialSize[0]); }) ==
+          Approx(lateral).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("validation: the analytic and CalculiX cases for every law x element kind (docs/validation.md)",
+          "[.element_table]") {
+  REQUIRE(calculix_available());
+  std::ostringstream out;
+  out << std::setprecision(4);
+  const auto percent = [](double value) {
+    std::ostringstream text;
+    text << std::showpos << std::fixed << std::setprecision(std::abs(value) < 1 ? 3 : 1) << value << " %";
+    return text.str();
+  };
+  // The converged references the suite's cases use: C3D10 on the fine meshes.
+  const ElasticProblem cantilever_fine = cantilever_problem(4);
+  const double cantilever_reference =
+      mean_displacement(cantilever_fine, *calculix_answer(cantilever_fine, true, "cantilever10"), 2, cantilever_tip);
+  double hanging_reference[2], compressed_reference[2];
+  for (int i = 0; i < 2; ++i) {
+    const double nu = i == 0 ? 0.25 : 0.45;
+    const ElasticProblem hanging = hanging_cube(8, nu), compressed = compressed_cube(8, nu);
+    hanging_reference[i] = mean_displacement(hanging, *calculix_answer(hanging, true, "hanging10"), 2, cube_bottom);
+    compressed_reference[i] = cube_top_force(*calculix_answer(compressed, true, "compressed10"));
+  }
+  out << "\n| law / element | column 2x2x5 | column 4x4x10 | cantilever 10x1x1 | cantilever 20x2x2 | cantilever "
+         "40x4x4 | hanging cube 6^3, nu 0.25 | compressed, 0.25 | hanging, 0.45 | compressed, 0.45 | Hayes 12x12x4 "
+         "|\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|";
+  for (const FemVariant& variant : fem_variants()) {
+    out << "\n| " << variant.name << " |";
+    for (const int n : {1, 2}) {
+      const ElasticProblem p = column_problem(n);
+      out << " " << percent((mean_displacement(p, fem_answer(p, variant), 2, column_top) / column_exact() - 1) * 100)
+          << " |";
+    }
+    for (const int n : {1, 2, 4}) {
+      const ElasticProblem p = cantilever_problem(n);
+      out << " "
+          << percent((mean_displacement(p, fem_answer(p, variant), 2, cantilever_tip) / cantilever_reference - 1) * 100)
+          << " |";
+    }
+    for (int i = 0; i < 2; ++i) {
+      const double nu = i == 0 ? 0.25 : 0.45;
+      const ElasticProblem hanging = hanging_cube(6, nu), compressed = compressed_cube(6, nu);
+      out << " "
+          << percent((mean_displacement(hanging, fem_answer(hanging, variant), 2, cube_bottom) / hanging_reference[i] - 1) *
+                     100)
+          << " | " << percent((cube_top_force(fem_answer(compressed, variant)) / compressed_reference[i] - 1) * 100)
+          << " |";
+    }
+    const HayesProblem hayes = hayes_problem(1);
+    const ElasticAnswer indented = fem_answer(hayes.problem, variant);
+    const bool edge_nodes = indented.nodes.size() > hayes.problem.mesh.points.size();
+    out << " "
+        << percent((hayes_punch_force(indented) / (edge_nodes ? hayes.expected_force_edge_nodes : hayes.expected_force) -
+                    1) *
+                   100)
+        << " |";
+  }
+  WARN("every law x element kind, error against the analytic answer or converged C3D10:" << out.str());
 }

@@ -4,6 +4,7 @@
 #include "tools/fmpc/text_files.h"
 
 #include <algorithm>
+#include <cctype>
 
 namespace fmpc::cli {
 
@@ -133,6 +134,24 @@ std::optional<CsvTable> read_csv_file(const std::string& path, const std::string
   CsvTable table = parse_csv(name, *text, diagnostics, header_example);
   if (diagnostics.error_count() > errors_before) return std::nullopt;
   return table;
+}
+
+HeaderColumn split_header_unit(const CsvCell& cell) {
+  HeaderColumn column{cell.text, "", cell.range};
+  const std::string& text = cell.text;
+  if (text.size() < 3) return column;
+  const char close = text.back();
+  const char open = close == ')' ? '(' : close == ']' ? '[' : '\0';
+  if (open == '\0') return column;
+  const std::size_t start = text.rfind(open);
+  if (start == std::string::npos || start == 0) return column;
+  std::string name = text.substr(0, start);
+  while (!name.empty() && std::isspace(static_cast<unsigned char>(name.back()))) name.pop_back();
+  std::string unit = text.substr(start + 1, text.size() - start - 2);
+  if (name.empty() || unit.empty()) return column;
+  column.name = name;
+  column.unit = unit;
+  return column;
 }
 
 }  // namespace fmpc::cli

@@ -35,6 +35,15 @@ std::optional<CsvTable> read_csv_file(const std::string& path, const std::string
                                       const std::string& what, const SourceRange& unreadable, SourceFiles& sources,
                                       DiagnosticList& diagnostics, const std::string& header_example = "");
 
+// A header cell that states a unit, "HCV (kPa)" or "stiffness [Pa]": the name without it and the unit (empty when
+// none is stated).
+struct HeaderColumn {
+  std::string name;
+  std::string unit;
+  SourceRange range;
+};
+HeaderColumn split_header_unit(const CsvCell& cell);
+
 // One CSV line (with its '\n'); fields are quoted only when they need it.
 std::string format_csv_row(const std::vector<std::string>& fields);
 

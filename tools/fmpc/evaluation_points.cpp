@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "compiler/ir/units.h"
 #include "diagnostics/number_format.h"
 
 namespace fmpc::cli {
@@ -121,18 +122,36 @@ bool is_output_interval_column(const std::string& name, const FuzzySystem& syste
 }  // namespace
 
 // A CSV table with a header row -> points. Columns naming outputs are ignored (so a golden file with inputs and
-// outputs can be fed back in); any other unknown column is an error.
+// outputs, or fmpc validate's measured data, can be fed back in); any other unknown column is an error. A header
+// may state a unit, "HCV (Pa)", as fmpc validate's CSV does: values are converted into the input's.
 bool is_label_column(const std::string& header) { return header == "label" || header == "patient"; }
 
 std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzySystem& system,
                                              DiagnosticList& diagnostics, std::string* label_column) {
   std::vector<EvaluationPoint> points;
   std::vector<int> column_input(table.header.size(), -1);
+  // A header's stated unit ("HCV (Pa)", as fmpc validate reads it) where it differs from the input's: converted.
+  std::vector<std::string> column_unit(table.header.size());
   std::vector<bool> seen(system.inputs.size(), false);
   std::optional<std::size_t> label;
   for (std::size_t c = 0; c < table.header.size(); ++c) {
     const CsvCell& cell = table.header[c];
-    const int index = system.find_input(cell.text);
+    const HeaderColumn named = split_header_unit(cell);
+    int index = system.find_input(cell.text);
+    if (index < 0 && !named.unit.empty() && (index = system.find_input(named.name)) >= 0) {
+      const Variable& input = system.inputs[static_cast<std::size_t>(index)];
+      if (!input.unit.empty() && named.unit != input.unit) {
+        if (!convert_unit(1.0, named.unit, input.unit)) {
+          diagnostics.error(cell.range, "column '" + cell.text + "' is in " + named.unit + ", which does not convert to " +
+                                            input.unit + ", the unit of '" + input.name + "'",
+                            {"give the values in " + input.unit +
+                             " (or a unit fmpc converts: docs/language.md, \"Units\")"});
+          seen[static_cast<std::size_t>(index)] = true;  // located above; not also "no column for input"
+          continue;
+        }
+        column_unit[c] = named.unit;
+      }
+    }
     if (index < 0 && is_label_column(cell.text)) {
       if (label)
         diagnostics.error(cell.range, "two label columns ('" + table.header[*label].text + "' and '" + cell.text + "')",
@@ -143,7 +162,8 @@ std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzyS
         diagnostics.error(cell.range, "column '" + cell.text + "' appears twice");
       seen[static_cast<std::size_t>(index)] = true;
       column_input[c] = index;
-    } else if (system.find_output(cell.text) < 0 && !is_output_interval_column(cell.text, system)) {
+    } else if (system.find_output(cell.text) < 0 && system.find_output(named.name) < 0 &&
+               !is_output_interval_column(cell.text, system)) {
       report_unknown_input(cell.text, system, cell.range, diagnostics, true);
     }
   }
@@ -175,7 +195,9 @@ std::vector<EvaluationPoint> points_from_csv(const CsvTable& table, const FuzzyS
       const std::optional<double> value = parse_input_value(
           row[c].text, system.inputs[static_cast<std::size_t>(column_input[c])], row[c].range, diagnostics);
       if (!value) continue;
-      point.inputs[static_cast<std::size_t>(column_input[c])] = *value;
+      const Variable& input = system.inputs[static_cast<std::size_t>(column_input[c])];
+      point.inputs[static_cast<std::size_t>(column_input[c])] =
+          column_unit[c].empty() ? *value : convert_unit(*value, column_unit[c], input.unit).value_or(*value);
       point.origins[static_cast<std::size_t>(column_input[c])] = row[c].range;
     }
     points.push_back(std::move(point));

@@ -13,30 +13,6 @@ namespace fmpc::cli {
 
 namespace {
 
-struct HeaderColumn {
-  std::string name;  // without the unit
-  std::string unit;  // from "NAME (UNIT)" or "NAME [UNIT]"; empty when none is stated
-  SourceRange range;
-};
-
-HeaderColumn split_unit(const CsvCell& cell) {
-  HeaderColumn column{cell.text, "", cell.range};
-  const std::string& text = cell.text;
-  if (text.size() < 3) return column;
-  const char close = text.back();
-  const char open = close == ')' ? '(' : close == ']' ? '[' : '\0';
-  if (open == '\0') return column;
-  const std::size_t start = text.rfind(open);
-  if (start == std::string::npos || start == 0) return column;
-  std::string name = text.substr(0, start);
-  while (!name.empty() && std::isspace(static_cast<unsigned char>(name.back()))) name.pop_back();
-  std::string unit = text.substr(start + 1, text.size() - start - 2);
-  if (name.empty() || unit.empty()) return column;
-  column.name = name;
-  column.unit = unit;
-  return column;
-}
-
 std::string lower_case(std::string text) {
   for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return text;
@@ -66,7 +42,7 @@ class PatientDataReader {
                            "'" + input + "' is not an input of the rules",
                            {"the inputs are: " + input_list()});
     }
-    for (const CsvCell& cell : table_.header) header_.push_back(split_unit(cell));
+    for (const CsvCell& cell : table_.header) header_.push_back(split_header_unit(cell));
     used_.assign(header_.size(), false);
     find_duplicates();
     find_label();

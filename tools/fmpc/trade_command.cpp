@@ -453,7 +453,7 @@ void register_trade_command(CLI::App& app, int& exit_code) {
   command->add_option("--cxx", options->compiler, "C++ compiler for the generated evaluator (default: $CXX or c++)");
   command->add_option("--cxx-flags", options->flags, "Its flags (default: -std=c++17 -O2)");
   command->add_option("--csv", options->csv, "Write the rows as CSV");
-  command->add_option("--markdown", options->markdown, "Write the markdown table");
+  command->add_option("-o,--output,--markdown", options->markdown, "Write the markdown table (also printed)");
   command->add_option("--plot", options->plot, "Write the Pareto plot (PNG, or SVG for NAME.svg)");
   // A scene file (.yaml) is traded as a simulation (tools/fmpc/scene_trade_command.cpp).
   const auto scene_arguments = add_scene_trade_options(*command);

@@ -4,45 +4,12 @@
 #include <algorithm>
 
 #include "compiler/frontend/fmpc_ast.h"
+#include "tools/lsp/completion_list.h"
 #include "tools/lsp/lsp_document.h"
 
 namespace fmpc::lsp {
 
 namespace {
-
-// CompletionItemKind (LSP 3.17).
-constexpr int kItemFunction = 3;
-constexpr int kItemVariable = 6;
-constexpr int kItemProperty = 10;
-constexpr int kItemUnit = 11;
-constexpr int kItemValue = 12;
-constexpr int kItemKeyword = 14;
-constexpr int kItemEnumMember = 20;
-
-class Completions {
- public:
-  void add(const std::string& label, int kind, const std::string& detail = "", const std::string& snippet = "") {
-    for (const Json& item : items_)
-      if (item["label"] == label) return;
-    Json item{{"label", label}, {"kind", kind}};
-    if (!detail.empty()) item["detail"] = detail;
-    if (!snippet.empty()) {
-      item["insertText"] = snippet;
-      item["insertTextFormat"] = 2;  // InsertTextFormat.Snippet
-    }
-    items_.push_back(std::move(item));
-  }
-  void keywords(std::initializer_list<const char*> words) {
-    for (const char* word : words) add(word, kItemKeyword);
-  }
-  void values(std::initializer_list<const char*> words, const std::string& detail) {
-    for (const char* word : words) add(word, kItemValue, detail);
-  }
-  Json list() const { return Json{{"isIncomplete", false}, {"items", items_}}; }
-
- private:
-  Json items_ = Json::array();
-};
 
 bool is(const FmpcToken& token, const char* word) {
   return token.kind != FmpcTokenKind::QuotedName && token.kind != FmpcTokenKind::Comment && token.text == word;
@@ -51,6 +18,7 @@ bool is(const FmpcToken& token, const char* word) {
 }  // namespace
 
 Json Document::completion(const Position& position, bool snippets) const {
+  if (dialect_ == Dialect::Matlab) return matlab_completion(position, snippets);
   Completions out;
   if (!outline_) return out.list();
   const std::vector<FmpcToken>& tokens = outline_->tokens();

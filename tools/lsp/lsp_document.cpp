@@ -108,6 +108,7 @@ const FuzzySystem* Document::lowered_system(const std::string& name) const {
 }
 
 Json Document::definition(const Position& position) const {
+  if (dialect_ == Dialect::Matlab) return matlab_definition(position);
   if (!outline_) return nullptr;
   const std::optional<std::size_t> token = outline_->token_at(positions_.offset(position), true);
   if (!token) return nullptr;
@@ -211,8 +212,9 @@ Json Document::symbols() const {
 }
 
 std::optional<Json> Document::formatting(std::string& why) const {
+  if (dialect_ == Dialect::Matlab) return matlab_formatting(why);
   if (dialect_ != Dialect::Fmpc) {
-    why = std::string("fmpc formats only its own language; this is ") + dialect_name(dialect_) +
+    why = std::string("fmpc formats its own language and MATLAB .fis; this is ") + dialect_name(dialect_) +
           " (fmpc convert --to fmpc turns it into fmpc text)";
     return std::nullopt;
   }

@@ -1,7 +1,7 @@
 #pragma once
 // One open document as the language server sees it: its text read and checked exactly as `fmpc check` does
 // (load_rule_file and lint, every dialect), and for fmpc-language text the token outline (rule_outline.h) that
-// symbols, definitions, hover and completion stand on. Each feature returns the LSP 3.17 JSON shape of its answer
+// symbols, definitions, hover and completion stand on; MATLAB .fis text is read line by line (lsp_matlab.cpp). Each feature returns the LSP 3.17 JSON shape of its answer
 // (https://microsoft.github.io/language-server-protocol/specifications/lsp/3.17/specification/).
 #include <optional>
 #include <string>
@@ -40,7 +40,8 @@ class Document {
   Json definition(const Position& position) const;
   // DocumentSymbol[]: systems, their variables and terms, and rules.
   Json symbols() const;
-  // TextEdit[] giving `fmpc fmt`'s canonical layout, or nullopt with `why` (syntax errors, another dialect).
+  // TextEdit[] giving `fmpc fmt`'s canonical layout (MATLAB .fis: MATLAB's writefis layout, as `fmpc convert --to
+  // matlab` writes it), or nullopt with `why` (errors; comments in MATLAB text; FLL and FCL).
   std::optional<Json> formatting(std::string& why) const;
   // CodeAction[]: the fix-its of the diagnostics that touch `range`.
   Json code_actions(const Position& start, const Position& end) const;
@@ -53,6 +54,12 @@ class Document {
   Json hover_term(const TokenRole& role) const;
   Json hover_number(const TokenRole& role) const;
   Json hover_variable(const TokenRole& role) const;
+  // MATLAB .fis text (lsp_matlab.cpp). The system it loads into, or nullptr while it has errors.
+  const FuzzySystem* matlab_system() const;
+  Json matlab_hover(const Position& position) const;
+  Json matlab_definition(const Position& position) const;
+  Json matlab_completion(const Position& position, bool snippets) const;
+  std::optional<Json> matlab_formatting(std::string& why) const;
 
   std::string uri_;
   std::string path_;

@@ -10,6 +10,7 @@
 #include "compiler/frontend/fmpc_language.h"
 #include "compiler/sema/term_shape.h"
 #include "diagnostics/number_format.h"
+#include "tools/lsp/hover_text.h"
 #include "tools/lsp/lsp_document.h"
 
 namespace fmpc::lsp {
@@ -27,18 +28,24 @@ std::string grade_text(const GradeInterval<double>& grade) {
   return "[" + digits4(grade.lower) + ", " + digits4(grade.upper) + "]";
 }
 
-std::string with_unit(double value, const Variable& variable) {
+std::string with_unit(const std::string& number, const Variable& variable) {
   const bool unit = !variable.unit.empty() && variable.unit != "dimensionless";
-  return format_number(value) + (unit ? (variable.unit == "%" ? "" : " ") + variable.unit : "");
+  return number + (unit ? (variable.unit == "%" ? "" : " ") + variable.unit : "");
+}
+
+std::string with_unit(double value, const Variable& variable) { return with_unit(format_number(value), variable); }
+
+// A point computed from the parameters (a Gaussian's mean - sd): 12 significant digits, so that 7.64 - 0.91 reads
+// 6.73, not its binary neighbour 6.7299999999999995.
+std::string computed_point(double value, const Variable& variable) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.12g", value);
+  return with_unit(text, variable);
 }
 
 std::string range_text(const Variable& variable) {
   return "[" + format_number(variable.min) + ", " + format_number(variable.max) + "]" +
          (variable.unit.empty() ? "" : " " + variable.unit);
-}
-
-Json markdown(const std::string& text, const Json& range) {
-  return Json{{"contents", {{"kind", "markdown"}, {"value", text}}}, {"range", range}};
 }
 
 bool gradable(const Term& term) { return term.mf.kind != MfKind::Constant && term.mf.kind != MfKind::Linear; }
@@ -55,16 +62,6 @@ std::string sparkline(const Term& term, const Variable& variable) {
     line += kBlocks[static_cast<int>(std::lround(grade * 7.0))];
   }
   return line;
-}
-
-const Variable* find_variable(const FuzzySystem& system, const std::string& name, bool* is_output = nullptr) {
-  for (const auto* variables : {&system.inputs, &system.outputs})
-    for (const Variable& variable : *variables)
-      if (variable.name == name) {
-        if (is_output) *is_output = variables == &system.outputs;
-        return &variable;
-      }
-  return nullptr;
 }
 
 // Where a family's shape turns, from its MATLAB parameter vector (kernels/fuzzy_kinds.h gives the orders).
@@ -102,7 +99,95 @@ std::string hedge_text(const std::string& word) {
 
 }  // namespace
 
+Json markdown_hover(const std::string& text, const Json& range) {
+  return Json{{"contents", {{"kind", "markdown"}, {"value", text}}}, {"range", range}};
+}
+
+const Variable* find_variable(const FuzzySystem& system, const std::string& name, bool* is_output) {
+  for (const auto* variables : {&system.inputs, &system.outputs})
+    for (const Variable& variable : *variables)
+      if (variable.name == name) {
+        if (is_output) *is_output = variables == &system.outputs;
+        return &variable;
+      }
+  return nullptr;
+}
+
+std::string term_hover_text(const Variable& variable, const Term& term) {
+  std::string vector;
+  for (double p : term.mf.params) vector += (vector.empty() ? "" : " ") + format_number(p);
+  std::string text = "MATLAB's `" + std::string(matlab_name(term.mf.kind)) + " [" + vector + "]`" +
+                     (variable.unit.empty() ? "" : " in " + variable.unit);
+  if (!gradable(term)) return text;
+  // Exact grades at the range's ends and where the shape turns (its feet, peaks, centres; a Gaussian's mean and
+  // one sd either side), inside the range.
+  std::set<double> at{variable.min, variable.max};
+  for (double p : turning_points(term.mf))
+    if (std::isfinite(p) && p > variable.min && p < variable.max) at.insert(p);
+  if (const std::optional<CoreInterval> core = term_core(term)) {
+    if (std::isfinite(core->lo) && core->lo > variable.min && core->lo < variable.max) at.insert(core->lo);
+    if (std::isfinite(core->hi) && core->hi > variable.min && core->hi < variable.max) at.insert(core->hi);
+  }
+  text += "\n\n| " + variable.name + " | grade |\n|---:|---:|\n";
+  for (double x : at) text += "| " + computed_point(x, variable) + " | " + grade_text(term_membership(term, x)) + " |\n";
+  text += "\n`" + sparkline(term, variable) + "` over " + range_text(variable) + " (sampled at 48 points)";
+  return text;
+}
+
+std::string value_hover_text(const Variable& variable, double value) {
+  std::string text = "**" + variable.name + " = " + with_unit(value, variable) + "**";
+  if (value < variable.min || value > variable.max)
+    text += " (outside " + range_text(variable) + ": evaluated as given)";
+  bool any = false;
+  std::string table = "\n\n| term | grade |\n|---|---:|\n";
+  for (const Term& term : variable.terms) {
+    if (!gradable(term)) continue;
+    any = true;
+    table += "| " + term.name + " | " + grade_text(term_membership(term, value)) + " |\n";
+  }
+  if (any) text += table;
+  return text;
+}
+
+std::string variable_hover_text(const FuzzySystem& system, const Variable& variable, bool is_output) {
+  std::string text = std::string("**") + (is_output ? "output" : "input") + " " + variable.name + "**";
+  if (!variable.description.empty()) text += ": " + variable.description;
+  std::string terms;
+  for (const Term& term : variable.terms) terms += (terms.empty() ? "" : ", ") + term.name;
+  text += "\n\nrange " + range_text(variable) + "; " + std::to_string(variable.terms.size()) + " term" +
+          (variable.terms.size() == 1 ? "" : "s") + (terms.empty() ? "" : ": " + terms);
+  std::size_t rules = 0;
+  const int index = is_output ? system.find_output(variable.name) : system.find_input(variable.name);
+  for (const Rule& rule : system.rules)
+    for (const Clause& clause : is_output ? rule.consequent : rule.antecedent)
+      if (clause.variable == index) ++rules;
+  text += "\n\nnamed by " + std::to_string(rules) + " of " + std::to_string(system.rules.size()) + " rules";
+  return text;
+}
+
+std::string family_hover_text(const std::string& written) {
+  bool alias = false;
+  const ast::FamilySignature* family = ast::find_family_or_alias(written, &alias);
+  if (!family) {
+    // A MATLAB name that is also fmpc's spelling of another family (`constant`, `linear`) or one fmpc lacks.
+    const std::optional<MfKind> kind = mf_kind_from_matlab_name(written);
+    if (!kind) return "";
+    family = &ast::family_of(*kind);
+    alias = true;
+  }
+  std::string parameters;
+  for (const char* parameter : family->parameters) parameters += (parameters.empty() ? "" : ", ") + std::string(parameter);
+  if (family->kind == MfKind::Linear) parameters = "INPUT coefficient ..., offset";
+  std::string text = "`" + std::string(family->name) + "(" + parameters + ")`";
+  if (alias && written != family->name) text += ": MATLAB's name for fmpc's `" + std::string(family->name) + "`";
+  std::string matlab;
+  for (const char* parameter : family->matlab_parameters) matlab += (matlab.empty() ? "" : " ") + std::string(parameter);
+  text += "\n\nMATLAB: `" + std::string(matlab_name(family->kind)) + " [" + matlab + "]`";
+  return text;
+}
+
 Json Document::hover(const Position& position) const {
+  if (dialect_ == Dialect::Matlab) return matlab_hover(position);
   if (!outline_) return nullptr;
   const std::optional<std::size_t> token = outline_->token_at(positions_.offset(position), true);
   if (!token) return nullptr;
@@ -115,20 +200,10 @@ Json Document::hover(const Position& position) const {
     case TokenRole::Kind::Number: return hover_number(role);
     case TokenRole::Kind::VariableName:
     case TokenRole::Kind::VariableReference: return hover_variable(role);
-    case TokenRole::Kind::Hedge: return markdown(hedge_text(t.text), range);
+    case TokenRole::Kind::Hedge: return markdown_hover(hedge_text(t.text), range);
     case TokenRole::Kind::Family: {
-      bool alias = false;
-      const ast::FamilySignature* family = ast::find_family_or_alias(t.text, &alias);
-      if (!family) return nullptr;
-      std::string parameters;
-      for (const char* parameter : family->parameters) parameters += (parameters.empty() ? "" : ", ") + std::string(parameter);
-      if (family->kind == MfKind::Linear) parameters = "INPUT coefficient ..., offset";
-      std::string text = "`" + std::string(family->name) + "(" + parameters + ")`";
-      if (alias) text += ": MATLAB's name for fmpc's `" + std::string(family->name) + "`";
-      std::string matlab;
-      for (const char* parameter : family->matlab_parameters) matlab += (matlab.empty() ? "" : " ") + std::string(parameter);
-      text += "\n\nMATLAB: `" + std::string(matlab_name(family->kind)) + " [" + matlab + "]`";
-      return markdown(text, range);
+      const std::string text = family_hover_text(t.text);
+      return text.empty() ? Json(nullptr) : markdown_hover(text, range);
     }
     case TokenRole::Kind::RuleLabel: {
       if (!role.system || !role.rule) return nullptr;
@@ -136,7 +211,7 @@ Json Document::hover(const Position& position) const {
       if (system)
         for (std::size_t r = 0; r < system->rules.size(); ++r)
           if (system->rules[r].label == role.rule->label)
-            return markdown("**rule " + role.rule->label + "**: `" + format_rule_body(*system, r) + "`", range);
+            return markdown_hover("**rule " + role.rule->label + "**: `" + format_rule_body(*system, r) + "`", range);
       return nullptr;
     }
     default: return nullptr;
@@ -168,27 +243,10 @@ Json Document::hover_term(const TokenRole& role) const {
   }
   if (!variable || index < 0) {
     if (role.term) text += "\n\n*Grades are shown once the system has no errors.*";
-    return markdown(text, range);
+    return markdown_hover(text, range);
   }
-  const Term& term = variable->terms[static_cast<std::size_t>(index)];
-  std::string vector;
-  for (double p : term.mf.params) vector += (vector.empty() ? "" : " ") + format_number(p);
-  text += " is MATLAB's `" + std::string(matlab_name(term.mf.kind)) + " [" + vector + "]`" +
-          (variable->unit.empty() ? "" : " in " + variable->unit);
-  if (!gradable(term)) return markdown(text, range);
-  // Exact grades at the range's ends and where the shape turns (its feet, peaks, centres; a Gaussian's mean and
-  // one sd either side), inside the range.
-  std::set<double> at{variable->min, variable->max};
-  for (double p : turning_points(term.mf))
-    if (std::isfinite(p) && p > variable->min && p < variable->max) at.insert(p);
-  if (const std::optional<CoreInterval> core = term_core(term)) {
-    if (std::isfinite(core->lo) && core->lo > variable->min && core->lo < variable->max) at.insert(core->lo);
-    if (std::isfinite(core->hi) && core->hi > variable->min && core->hi < variable->max) at.insert(core->hi);
-  }
-  text += "\n\n| " + variable->name + " | grade |\n|---:|---:|\n";
-  for (double x : at) text += "| " + with_unit(x, *variable) + " | " + grade_text(term_membership(term, x)) + " |\n";
-  text += "\n`" + sparkline(term, *variable) + "` over " + range_text(*variable) + " (sampled at 48 points)";
-  return markdown(text, range);
+  return markdown_hover(text + " is " + term_hover_text(*variable, variable->terms[static_cast<std::size_t>(index)]),
+                        range);
 }
 
 Json Document::hover_number(const TokenRole& role) const {
@@ -199,52 +257,34 @@ Json Document::hover_number(const TokenRole& role) const {
   bool is_output = false;
   const Variable* variable = system ? find_variable(*system, role.variable->name, &is_output) : nullptr;
   if (!variable) return nullptr;
-  const double value = std::strtod(t.text.c_str(), nullptr);
   // A unit written after the number other than the variable's own: the value is not in the variable's unit.
   const std::vector<FmpcToken>& tokens = outline_->tokens();
   if (role.token + 1 < tokens.size()) {
     const FmpcToken& next = tokens[role.token + 1];
     if ((is_name_token(next) || next.text == "%") && next.range.line == t.range.line && unquoted_name(next) != variable->unit &&
         next.text != "," && next.text != ")" && !variable->unit.empty())
-      return markdown("A value in " + unquoted_name(next) + "; grades are shown for values in the unit of **" +
-                          variable->name + "** (" + variable->unit + ")",
-                      range);
+      return markdown_hover("A value in " + unquoted_name(next) + "; grades are shown for values in the unit of **" +
+                                variable->name + "** (" + variable->unit + ")",
+                            range);
   }
-  std::string text = "**" + variable->name + " = " + with_unit(value, *variable) + "**";
-  if (value < variable->min || value > variable->max)
-    text += " (outside " + range_text(*variable) + ": evaluated as given)";
-  bool any = false;
-  std::string table = "\n\n| term | grade |\n|---|---:|\n";
-  for (const Term& term : variable->terms) {
-    if (!gradable(term)) continue;
-    any = true;
-    table += "| " + term.name + " | " + grade_text(term_membership(term, value)) + " |\n";
-  }
-  if (any) text += table;
-  return markdown(text, range);
+  return markdown_hover(value_hover_text(*variable, std::strtod(t.text.c_str(), nullptr)), range);
 }
 
 Json Document::hover_variable(const TokenRole& role) const {
   const FmpcToken& t = outline_->tokens()[role.token];
   const Json range = range_json(t.range);
-  if (!role.variable) return markdown("*no variable called " + unquoted_name(t) + " in this system*", range);
+  if (!role.variable) return markdown_hover("*no variable called " + unquoted_name(t) + " in this system*", range);
   const FuzzySystem* system = role.system ? lowered_system(role.system->name) : nullptr;
   bool is_output = role.variable->is_output;
   const Variable* variable = system ? find_variable(*system, role.variable->name, &is_output) : nullptr;
-  std::string text = std::string("**") + (is_output ? "output" : "input") + " " + role.variable->name + "**";
-  std::string terms;
-  for (const OutlineTerm& term : role.variable->terms) terms += (terms.empty() ? "" : ", ") + term.name;
-  if (!variable) return markdown(text + "\n\nterms: " + (terms.empty() ? "none" : terms), range);
-  if (!variable->description.empty()) text += ": " + variable->description;
-  text += "\n\nrange " + range_text(*variable) + "; " + std::to_string(variable->terms.size()) + " term" +
-          (variable->terms.size() == 1 ? "" : "s") + (terms.empty() ? "" : ": " + terms);
-  std::size_t rules = 0;
-  const int index = is_output ? system->find_output(variable->name) : system->find_input(variable->name);
-  for (const Rule& rule : system->rules)
-    for (const Clause& clause : is_output ? rule.consequent : rule.antecedent)
-      if (clause.variable == index) ++rules;
-  text += "\n\nnamed by " + std::to_string(rules) + " of " + std::to_string(system->rules.size()) + " rules";
-  return markdown(text, range);
+  if (!variable) {
+    std::string terms;
+    for (const OutlineTerm& term : role.variable->terms) terms += (terms.empty() ? "" : ", ") + term.name;
+    return markdown_hover(std::string("**") + (is_output ? "output" : "input") + " " + role.variable->name +
+                              "**\n\nterms: " + (terms.empty() ? "none" : terms),
+                          range);
+  }
+  return markdown_hover(variable_hover_text(*system, *variable, is_output), range);
 }
 
 }  // namespace fmpc::lsp

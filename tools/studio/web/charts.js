@@ -21,12 +21,20 @@ Studio.frame = function (svg, xDomain, yDomain, xLabel, yLabel, options) {
   if (options.grid !== false)
     g.append("g").attr("class", "grid").call(d3.svg.axis().scale(y).orient("left").ticks(6).tickSize(-w).tickFormat(""));
   g.append("g").attr("class", "axis").attr("transform", "translate(0," + h + ")")
-    .call(d3.svg.axis().scale(x).orient("bottom").ticks(8));
-  g.append("g").attr("class", "axis").call(d3.svg.axis().scale(y).orient("left").ticks(6));
+    .call(d3.svg.axis().scale(x).orient("bottom").ticks(8).tickFormat(Studio.tickFormat(x, 8)));
+  g.append("g").attr("class", "axis").call(d3.svg.axis().scale(y).orient("left").ticks(6).tickFormat(Studio.tickFormat(y, 6)));
   g.append("text").attr("class", "axis-title").attr("x", w / 2).attr("y", h + 38).attr("text-anchor", "middle").text(xLabel);
   g.append("text").attr("class", "axis-title").attr("transform", "rotate(-90)").attr("x", -h / 2).attr("y", -46)
     .attr("text-anchor", "middle").text(yLabel);
   return { root: root, g: g, x: x, y: y, width: w, height: h, margin: margin };
+};
+
+// d3's tick labels, with zero written "0": d3 3.5 reaches the tick at zero by adding steps, so it can be -1e-17,
+// which its format writes "-0.0".
+Studio.tickFormat = function (scale, count) {
+  const format = scale.tickFormat(count), domain = scale.domain();
+  const tiny = 1e-9 * Math.abs(domain[1] - domain[0]);
+  return (v) => format(Math.abs(v) < tiny ? 0 : v);
 };
 
 // [lo, hi] of the finite values, widened by 5% (or to a unit span when flat) so that no point sits on the frame.

@@ -45,9 +45,11 @@ Studio.compare.show = function (answer) {
     section.append(Studio.element("h3", { text: out.name + ": change per patient (" + answer.second + " − " + answer.first + ")" }));
     if (out.agreement) {
       const g = out.agreement;
+      // The largest change with its sign, as fmpc diff prints it (a decrease reads as one).
+      const largest = out.difference.findIndex((d) => d !== null && Math.abs(d) === g.largest.value);
       section.append(Studio.element("p", { class: "summary", text:
-        g.count + " patients; mean |change| " + g.mae.text + "; largest change " + g.largest.text + " (" +
-        answer.labels[out.difference.findIndex((d) => d !== null && Math.abs(d) === g.largest.value)] + "); mean change " + g.bias.text +
+        g.count + " patients; mean |change| " + g.mae.text + "; largest change " +
+        Studio.withUnit(Studio.four(out.difference[largest]), out.unit) + " (" + answer.labels[largest] + "); mean change " + g.bias.text +
         "; " + (out.stage_changes.length ? out.stage_changes.length + " patient" + (out.stage_changes.length === 1 ? " changes" : "s change") + " stage"
           : "no patient changes stage") }));
     }

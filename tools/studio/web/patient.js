@@ -14,6 +14,9 @@ Studio.patient.evaluate = Studio.latest(async function () {
     answer.milliseconds = performance.now() - started;
     Studio.patient.answer = answer;
     Studio.patient.show(system, answer);
+    // The time shown includes drawing the panel, not only the server's answer.
+    const hint = document.querySelector("#patient-outputs .hint");
+    if (hint) hint.textContent = "updated in " + Math.round(performance.now() - started) + " ms";
     Studio.emit("evaluated", answer);
   } catch (error) {
     Studio.message(error.message, "bad");

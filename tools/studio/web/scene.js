@@ -29,11 +29,17 @@ Studio.scene.run = async function () {
   }
 };
 
+// The runtime's description of the material writes its modulus with every digit (20.8283800234838 kPa): four
+// significant digits here, as the patient panel shows its output.
+Studio.scene.shortNumbers = function (text) {
+  return text.replace(/-?\d+\.\d{5,}(e[-+]?\d+)?/g, (number) => Studio.four(Number(number)));
+};
+
 Studio.scene.show = function (answer) {
   document.getElementById("scene-results").hidden = false;
   const patient = Studio.system().inputs.map((v, i) => v.name + " " + Studio.withUnit(String(Studio.state.patient[i]), v.unit)).join(", ");
   document.getElementById("scene-summary").textContent =
-    answer.scene + ": " + answer.stiffness + (answer.patient_and_rules_used ? " (this edit's rules, patient " + patient + ")"
+    answer.scene + ": " + Studio.scene.shortNumbers(answer.stiffness) + (answer.patient_and_rules_used ? " (this edit's rules, patient " + patient + ")"
       : " (the scene's own rules and inputs: its material names " + answer.rules + ")") + ". " + answer.steps +
     " steps of " + Studio.four(answer.time_step * 1000) + " ms in " + Studio.four(answer.wall_seconds) + " s; the largest displacement " +
     Studio.four(answer.max_displacement * 1000) + " mm." + (answer.completed ? "" : " The run stopped early: see the messages.");

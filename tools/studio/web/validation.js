@@ -133,7 +133,7 @@ Studio.validation.show = function (system, answer) {
   });
   p.forEach((q, i) => dot(b.g, b.x(q.mean), b.y(q.difference), q, i));
   const table = document.getElementById("validation-worst");
-  table.replaceChildren(Studio.element("tr", {}, ["patient", "measured", "predicted", "difference", "strongest rule", ""]
+  table.replaceChildren(Studio.element("tr", {}, ["patient", "measured" + unit, "predicted" + unit, "difference" + unit, "strongest rule (firing)", ""]
     .map((h) => Studio.element("th", { text: h }))));
   for (const i of answer.worst) {
     const q = p[i];
