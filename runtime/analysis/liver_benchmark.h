@@ -66,7 +66,8 @@ struct LiverBenchmarkOptions {
 // Limits on the options (checked before anything is allocated).
 constexpr std::size_t kLiverBenchmarkStepsMax = 100'000'000;
 constexpr std::size_t kLiverBenchmarkSamplesMax = 100'000;
-// Runs x samples a report may hold: every run keeps 4 curves (64 bytes a sample), so at most 256 MiB.
+// Runs x samples a report may hold: every run keeps 4 curves (64 bytes a sample), so at most 256 MiB (6 curves with
+// an organ: 384 MiB).
 constexpr std::size_t kLiverBenchmarkRunSamplesMax = std::size_t(1) << 22;
 
 // The sample steps: `samples` (at least 2) evenly spread over [0, steps], first and last included, strictly
