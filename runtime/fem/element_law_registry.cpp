@@ -1,6 +1,7 @@
 #include "runtime/fem/element_law_registry.h"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "diagnostics/number_format.h"
@@ -8,6 +9,23 @@
 namespace fmpc::sim {
 
 namespace {
+
+// The largest Poisson ratio a law given by E and nu takes (its lambda is infinite at 0.5); the element kind may take
+// less (element_kind_rows()).
+constexpr double kLargestPoissonRatio = 0.4999;
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// What the laws given by Young's modulus and Poisson's ratio read (IsotropicModuli).
+std::vector<MaterialParameterRow> youngs_modulus_and_poisson_ratio(double lowest_ratio, double highest_ratio) {
+  using Quantity = MaterialParameterRow::Quantity;
+  return {
+      {"youngs_modulus", "Young's modulus", Quantity::Pressure, 0.0, kInfinity, false, false,
+       &ElementMaterial::youngs_modulus},
+      {"poisson_ratio", "Poisson ratio", Quantity::Dimensionless, lowest_ratio, highest_ratio, true, true,
+       &ElementMaterial::poisson_ratio},
+  };
+}
 
 // A law whose parameters are Young's modulus and Poisson's ratio per element (kYoungsModulus, kPoissonRatio): both
 // checked, nu in [0, 0.4999] (the element kind's own limit is build_fem_model's).
@@ -24,7 +42,7 @@ std::optional<ElementLawBuild> build_youngs_modulus_and_poisson_ratio(const Elem
       return std::nullopt;
     }
     // The law's own range; the element kind's (linear tetrahedra: 0.499) is checked by build_fem_model.
-    if (!(poisson >= 0.0 && poisson <= 0.4999)) {
+    if (!(poisson >= 0.0 && poisson <= kLargestPoissonRatio)) {
       diagnostics.error(material.where, "tetrahedron " + std::to_string(e) + ": Poisson ratio " +
                                             format_number(poisson) +
                                             " is outside [0, 0.4999] (0.5 is incompressible: the law's lambda is "
@@ -65,19 +83,55 @@ const std::vector<ElementLawRow>& element_law_rows() {
        "co-rotational linear elasticity on linear tetrahedra (Mueller & Gross 2004; Nesme, Payan & Faure 2005), "
        "E and nu per element, E optionally from a strain table",
        kernels::element_law_index<kernels::CorotationalLinear>, kernels::CorotationalLinear::kStressOutput,
-       build_youngs_modulus_and_poisson_ratio<kernels::CorotationalLinear>},
+       build_youngs_modulus_and_poisson_ratio<kernels::CorotationalLinear>,
+       youngs_modulus_and_poisson_ratio(0.0, kLargestPoissonRatio)},
       {"volume_preservation", nullptr, true, "springs_volume_term", "springs+volume",
        "the volume term beside springs (Teschner et al. 2004), kappa calibrated with the springs to E and nu",
        kernels::element_law_index<kernels::VolumePreservation>, kernels::VolumePreservation::kStressOutput,
-       build_volume_preservation},
+       build_volume_preservation, youngs_modulus_and_poisson_ratio(0.25, 0.499)},
       {"stable_neo_hookean", nullptr, false, "stable_neo_hookean", "SNH",
        "stable neo-Hookean hyperelasticity (Smith, de Goes & Kim 2018, ACM TOG 37(2)) with the paper's Lame "
        "re-parameterisation from E and nu, finite and restoring for inverted elements; E optionally from a strain "
        "table at the principal strain of largest magnitude",
        kernels::element_law_index<kernels::StableNeoHookean>, kernels::StableNeoHookean::kStressOutput,
-       build_youngs_modulus_and_poisson_ratio<kernels::StableNeoHookean>},
+       build_youngs_modulus_and_poisson_ratio<kernels::StableNeoHookean>,
+       youngs_modulus_and_poisson_ratio(0.0, kLargestPoissonRatio)},
   };
   return rows;
+}
+
+const MaterialParameterRow* material_parameter(const ElementLawRow& row, const std::string& name) {
+  for (const MaterialParameterRow& parameter : row.parameters)
+    if (name == parameter.keyword) return &parameter;
+  return nullptr;
+}
+
+std::optional<double> si_per_unit(const MaterialParameterRow& parameter, const std::string& unit) {
+  switch (parameter.quantity) {
+    case MaterialParameterRow::Quantity::Pressure:
+      if (unit.empty() || unit == "kPa") return 1000.0;
+      if (unit == "Pa") return 1.0;
+      if (unit == "MPa") return 1e6;
+      return std::nullopt;
+    case MaterialParameterRow::Quantity::Dimensionless:
+      if (unit.empty() || unit == "dimensionless") return 1.0;
+      if (unit == "%") return 0.01;
+      return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+bool in_valid_range(const MaterialParameterRow& parameter, double value) {
+  const bool above = parameter.lowest_included ? value >= parameter.lowest : value > parameter.lowest;
+  const bool below = parameter.highest_included ? value <= parameter.highest : value < parameter.highest;
+  return above && below;
+}
+
+std::string valid_range_text(const MaterialParameterRow& parameter) {
+  const auto end = [](double v) { return std::isinf(v) ? std::string("inf") : format_number(v); };
+  return std::string(parameter.lowest_included ? "[" : "(") + end(parameter.lowest) + ", " + end(parameter.highest) +
+         (parameter.highest_included ? "]" : ")") +
+         (parameter.quantity == MaterialParameterRow::Quantity::Pressure ? " Pa" : "");
 }
 
 const ElementLawRow& element_law_row(int law) { return element_law_rows().at(static_cast<std::size_t>(law)); }

@@ -22,6 +22,21 @@ struct ElementMaterial {
   SourceRange where;                                                  // the material's place in the scene, for errors
 };
 
+// A material parameter a law's builder reads from ElementMaterial, and so one that a rule file's output can give per
+// element (`material.bind: {KEYWORD: OUTPUT}`, docs/scenes.md): its name, the quantity its unit must measure, the
+// range a valid value lies in (SI), and where the builder reads it. A law lists its own in its registry row.
+struct MaterialParameterRow {
+  const char* keyword;      // material.bind's key (the scene's own field of the same name sets it otherwise)
+  const char* description;  // "Young's modulus", for messages
+  enum class Quantity {
+    Pressure,       // Pa, kPa or MPa; an output without a unit is read as kPa (with a warning), as material.rules is
+    Dimensionless,  // no unit, `dimensionless` or `%`
+  } quantity;
+  double lowest, highest;                    // the valid range (SI)
+  bool lowest_included, highest_included;    // whether each end is a valid value
+  std::vector<double> ElementMaterial::*values;  // where the builder reads it, one value per element
+};
+
 struct ElementLawBuild {
   ElementTerm term;  // its law and parameters (no damping yet)
   // Beside springs: the factor the springs' stiffness (from the mapping at E) is scaled by so that the springs and
@@ -43,10 +58,21 @@ struct ElementLawRow {
   // The term's parameters from the material, checked (an error names the element and the field); nullopt after
   // appending errors.
   std::optional<ElementLawBuild> (*build)(const ElementMaterial& material, DiagnosticList& diagnostics);
+  // The material parameters the builder reads, each bindable to a rule output.
+  std::vector<MaterialParameterRow> parameters;
 };
 
 // Every row, in kernels::ElementLaws' order.
 const std::vector<ElementLawRow>& element_law_rows();
+// The parameter of `row` with keyword `name`; null when it has none.
+const MaterialParameterRow* material_parameter(const ElementLawRow& row, const std::string& name);
+// SI units per unit `unit` of a rule output that gives `parameter` (kPa -> 1000 for a pressure, % -> 0.01); nullopt
+// when the unit does not measure the parameter's quantity. An empty unit: kPa for a pressure (the caller warns), 1
+// for a ratio.
+std::optional<double> si_per_unit(const MaterialParameterRow& parameter, const std::string& unit);
+// Whether `value` (SI) lies in the parameter's valid range; and the range as text ("(0, inf) Pa", "[0, 0.4999]").
+bool in_valid_range(const MaterialParameterRow& parameter, double value);
+std::string valid_range_text(const MaterialParameterRow& parameter);
 const ElementLawRow& element_law_row(int law);
 // The row whose model_keyword (or trade_name) is `name`; null when none is.
 const ElementLawRow* element_law_by_model_keyword(const std::string& name);

@@ -66,7 +66,7 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
   const SourceRange& nu_where = spec.poisson_where.file.empty() ? range : spec.poisson_where;
   const std::string kind_name = std::string("fem.element ") + kind.keyword;
   if (largest_nu > kind.largest_poisson_ratio) {
-    diagnostics.error(nu_where, "material.poisson_ratio: " + format_number(largest_nu) + " is above " +
+    diagnostics.error(nu_where, spec.poisson_field + ": " + format_number(largest_nu) + " is above " +
                                     format_number(kind.largest_poisson_ratio) + ", the most " + kind_name +
                                     " takes; use fem: {element: quadratic} (up to 0.4999) for nearly incompressible "
                                     "tissue");
@@ -74,7 +74,7 @@ std::optional<SimulationSetup> build_fem_model(const Mesh& mesh, const FemModelS
   }
   if (largest_nu > kind.locking_poisson_ratio)
     diagnostics.warning(nu_where, "element-locking",
-                        "material.poisson_ratio " + format_number(largest_nu) + ": " + kind_name +
+                        spec.poisson_field + " " + format_number(largest_nu) + ": " + kind_name +
                             " locks (is too stiff) above nu = " + format_number(kind.locking_poisson_ratio) + "; " +
                             kind.locking_note,
                         {"use fem: {element: quadratic} for nearly incompressible tissue"});

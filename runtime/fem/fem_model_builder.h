@@ -24,6 +24,7 @@ struct FemModelSpec {
   double rayleigh_stiffness = 0.0;  // beta (s), added to every element's
   double length_unit = 1.0;         // metres per mesh unit
   SourceRange poisson_where;        // the Poisson ratio's place in the scene (the element kind's limit and warning)
+  std::string poisson_field = "material.poisson_ratio";  // and its name in those messages
   std::vector<PronyTerm> prony;     // viscoelasticity on the law; empty: elastic
 };
 

@@ -159,7 +159,7 @@ void report_flags(const EvaluationFlags& flags, const FuzzySystem& system, const
 
 std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_index, const Scene& scene,
                                           const std::vector<Point3>& points, MaterialPoint kind,
-                                          DiagnosticList& diagnostics) {
+                                          DiagnosticList& diagnostics, const std::vector<int>& bound_outputs) {
   std::vector<std::string> names;
   for (const Variable& v : system.inputs) names.push_back(v.name);
   const auto resolved = resolve_bindings(names, "system '" + system.name + "'", scene, diagnostics);
@@ -175,8 +175,17 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
   Interpreter interpreter(system);
   std::vector<bool> warned_range(system.inputs.size(), false);
   bool warned_no_fire = false;
+  for (const int index : bound_outputs) {
+    const Variable& variable = system.outputs[static_cast<std::size_t>(index)];
+    binding.bound.push_back({index, variable.name, variable.unit, true, variable.min, variable.max, {}});
+  }
+  // Young's modulus, then each bound output.
+  std::vector<double> all_outputs;
   const auto evaluate = [&](const std::vector<double>& inputs) -> std::optional<double> {
     const Evaluation evaluation = interpreter.evaluate(inputs);
+    all_outputs.clear();
+    for (const BoundOutput& bound : binding.bound)
+      all_outputs.push_back(evaluation.outputs[static_cast<std::size_t>(bound.index)]);
     ++binding.evaluations;
     report_flags(evaluation.flags, system, inputs, scene, warned_range, warned_no_fire, diagnostics);
     if (evaluation.flags.no_fire_error) {
@@ -206,23 +215,26 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
       binding.strain_modulus.push_back(*value);
     }
   } else {
-    std::map<std::vector<double>, double> cache;
+    // Per distinct input values: Young's modulus, then each bound output.
+    std::map<std::vector<double>, std::vector<double>> cache;
     binding.modulus_per_spring.resize(points.size());
+    for (BoundOutput& bound : binding.bound) bound.values.resize(points.size());
     for (std::size_t s = 0; s < points.size(); ++s) {
       for (std::size_t i = 0; i < inputs.size(); ++i) {
         const auto value = bound_value(*resolved->by_input[i], points[s], s, kind, scene, diagnostics);
         if (!value) return std::nullopt;
         inputs[i] = *value;
       }
-      const auto cached = cache.find(inputs);
-      if (cached != cache.end()) {
-        binding.modulus_per_spring[s] = cached->second;
-        continue;
+      auto cached = cache.find(inputs);
+      if (cached == cache.end()) {
+        const auto value = evaluate(inputs);
+        if (!value) return std::nullopt;
+        std::vector<double> values = {*value};
+        values.insert(values.end(), all_outputs.begin(), all_outputs.end());
+        cached = cache.emplace(inputs, std::move(values)).first;
       }
-      const auto value = evaluate(inputs);
-      if (!value) return std::nullopt;
-      cache.emplace(inputs, *value);
-      binding.modulus_per_spring[s] = *value;
+      binding.modulus_per_spring[s] = cached->second[0];
+      for (std::size_t b = 0; b < binding.bound.size(); ++b) binding.bound[b].values[s] = cached->second[b + 1];
     }
   }
   if (!finish(binding, kind, scene, diagnostics)) return std::nullopt;
@@ -231,7 +243,7 @@ std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_
 
 std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const Scene& scene,
                                           const std::vector<Point3>& points, MaterialPoint kind,
-                                          DiagnosticList& diagnostics) {
+                                          DiagnosticList& diagnostics, const std::vector<int>& bound_outputs) {
   std::vector<std::string> names;
   for (const TableAxis& axis : table.axes) names.push_back(axis.input_name);
   const auto resolved = resolve_bindings(names, "table '" + table.system_name + "'", scene, diagnostics);
@@ -266,6 +278,12 @@ std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_i
     }
   } else {
     binding.modulus_per_spring.resize(points.size());
+    for (const int index : bound_outputs) {
+      const auto i = static_cast<std::size_t>(index);
+      binding.bound.push_back({index, table.output_names[i],
+                               i < table.output_units.size() ? table.output_units[i] : std::string(), false, 0.0, 0.0,
+                               std::vector<double>(points.size())});
+    }
     for (std::size_t s = 0; s < points.size(); ++s) {
       for (std::size_t i = 0; i < query.size(); ++i) {
         const auto value = bound_value(*resolved->by_input[i], points[s], s, kind, scene, diagnostics);
@@ -273,6 +291,7 @@ std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_i
         query[i] = *value;
       }
       binding.modulus_per_spring[s] = evaluate(query);
+      for (BoundOutput& bound : binding.bound) bound.values[s] = all_outputs[static_cast<std::size_t>(bound.index)];
     }
   }
   if (!finish(binding, kind, scene, diagnostics)) return std::nullopt;

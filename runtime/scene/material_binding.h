@@ -16,6 +16,17 @@
 
 namespace fmpc::sim {
 
+// An output of the evaluator besides Young's modulus, evaluated at the same material points (material.bind), in the
+// output's own unit: the caller converts and checks it against the parameter it gives.
+struct BoundOutput {
+  int index = 0;         // the output's index in the system (or table)
+  std::string name;      // the output's name
+  std::string unit;      // as the rule file (or the table) gives it; empty: none
+  bool has_range = false;  // a table records no range
+  double range_min = 0.0, range_max = 0.0;  // the output's declared range, in its unit
+  std::vector<double> values;               // one per material point
+};
+
 struct MaterialBinding {
   std::string system;  // the system (or table) evaluated
   std::string output;  // its output used as Young's modulus
@@ -25,6 +36,8 @@ struct MaterialBinding {
   // A strain binding: modulus (Pa) at each strain breakpoint (the other inputs at their constants).
   std::vector<double> strain;
   std::vector<double> strain_modulus;
+  // material.bind's other outputs, one value per material point each (none with a strain binding).
+  std::vector<BoundOutput> bound;
   std::size_t evaluations = 0;  // interpreter (or table) evaluations made
   double modulus_min = 0.0, modulus_max = 0.0;  // Pa, over the springs or the strain table
 };
@@ -36,18 +49,19 @@ enum class MaterialPoint { SpringMidpoint, ElementCentroid };
 // Pa per unit of a FIS output: Pa, kPa, MPa. nullopt otherwise (also for no unit: see output_unit_scale).
 std::optional<double> pascals_per_unit(const std::string& unit);
 
-// Evaluates `system`'s output `output_index` for the bindings. `points` (mesh units, one per spring or element, as
+// Evaluates `system`'s output `output_index` (Young's modulus), and each output of `bound_outputs` (their values
+// in MaterialBinding::bound, in that order), for the bindings. `points` (mesh units, one per spring or element, as
 // `kind` says) place the material points in regions; messages name them "spring N (midpoint ...)" or
 // "element N (centroid ...)". Every input must be bound exactly once; a strain binding cannot be combined with
 // per-region bindings. Errors are located at the scene's fields (scene.range_of("material.inputs.NAME")).
 std::optional<MaterialBinding> bind_rules(const FuzzySystem& system, int output_index, const Scene& scene,
                                           const std::vector<Point3>& points, MaterialPoint kind,
-                                          DiagnosticList& diagnostics);
+                                          DiagnosticList& diagnostics, const std::vector<int>& bound_outputs = {});
 
 // The same for a compiled table: its axes are the inputs to bind; the strain axis uses the table's breakpoints;
 // the output's unit is the one the table records (.fzt version 2).
 std::optional<MaterialBinding> bind_table(const LookupTable& table, int output_index, const Scene& scene,
                                           const std::vector<Point3>& points, MaterialPoint kind,
-                                          DiagnosticList& diagnostics);
+                                          DiagnosticList& diagnostics, const std::vector<int>& bound_outputs = {});
 
 }  // namespace fmpc::sim

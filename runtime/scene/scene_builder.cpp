@@ -20,6 +20,7 @@
 #include "runtime/mesh/mesh_check.h"
 #include "runtime/mesh/mesh_refinement.h"
 #include "runtime/mesh/mesh_reader.h"
+#include "runtime/scene/parameter_binding.h"
 #include "runtime/scene/scene_meshing.h"
 #include "runtime/scene/spring_model_builder.h"
 
@@ -264,7 +265,26 @@ std::optional<std::vector<std::int32_t>> pick_by_ray(const Scene& scene, const S
 struct Selection {
   const FuzzySystem* system = nullptr;
   int output = -1;
+  std::vector<int> bound;  // material.bind's other outputs
 };
+
+// Young's modulus's output among `outputs` of `what` ("system 'liver'", "the table"): material.output, the output
+// material.bind gives youngs_modulus, or the only output.
+std::optional<int> select_output(const Scene& scene, const std::vector<std::string>& outputs, const std::string& what,
+                                 DiagnosticList& diagnostics) {
+  const SceneMaterial& material = scene.material;
+  if (material.output.empty() && material.bind.empty()) {
+    if (outputs.size() == 1) return 0;
+    const std::string field = material.source == SceneMaterial::Source::Table ? "material.table" : "material.rules";
+    diagnostics.error(scene.range_of(field), "material.output: " + what + " has " + std::to_string(outputs.size()) +
+                                                 " outputs; name the Young's modulus with 'output'");
+    return std::nullopt;
+  }
+  for (const ParameterBinding& bound : material.bind)
+    if (bound.parameter == "youngs_modulus")
+      return output_index(scene, outputs, bound.output, "material.bind.youngs_modulus.output", what, diagnostics);
+  return output_index(scene, outputs, material.output, "material.output", what, diagnostics);
+}
 
 std::optional<Selection> select_rules(const Scene& scene, const RuleFile& rules, DiagnosticList& diagnostics) {
   Selection selection;
@@ -295,43 +315,17 @@ std::optional<Selection> select_rules(const Scene& scene, const RuleFile& rules,
   const FuzzySystem& system = *selection.system;
   std::vector<std::string> outputs;
   for (const Variable& v : system.outputs) outputs.push_back(v.name);
-  if (material.output.empty()) {
-    if (outputs.size() != 1) {
-      diagnostics.error(scene.range_of("material.rules"), "material.output: system '" + system.name + "' has " +
-                                                              std::to_string(outputs.size()) +
-                                                              " outputs; name the Young's modulus with 'output'");
-      return std::nullopt;
-    }
-    selection.output = 0;
-  } else {
-    selection.output = system.find_output(material.output);
-    if (selection.output < 0) {
-      std::vector<std::string> notes;
-      if (auto suggestion = closest_name(material.output, outputs)) notes.push_back("did you mean '" + *suggestion + "'?");
-      diagnostics.error(scene.range_of("material.output"),
-                        "material.output: system '" + system.name + "' has no output '" + material.output + "'", notes);
-      return std::nullopt;
-    }
-  }
+  const std::string what = "system '" + system.name + "'";
+  const auto output = select_output(scene, outputs, what, diagnostics);
+  const auto bound = bound_output_indices(scene, outputs, what, diagnostics);
+  if (!output || !bound) return std::nullopt;
+  selection.output = *output;
+  selection.bound = *bound;
   return selection;
 }
 
 std::optional<int> select_table_output(const Scene& scene, const LookupTable& table, DiagnosticList& diagnostics) {
-  if (scene.material.output.empty()) {
-    if (table.output_names.size() == 1) return 0;
-    diagnostics.error(scene.range_of("material.table"), "material.output: the table has " +
-                                                            std::to_string(table.output_names.size()) +
-                                                            " outputs; name the Young's modulus with 'output'");
-    return std::nullopt;
-  }
-  for (std::size_t i = 0; i < table.output_names.size(); ++i)
-    if (table.output_names[i] == scene.material.output) return static_cast<int>(i);
-  std::vector<std::string> notes;
-  if (auto suggestion = closest_name(scene.material.output, table.output_names))
-    notes.push_back("did you mean '" + *suggestion + "'?");
-  diagnostics.error(scene.range_of("material.output"),
-                    "material.output: the table has no output '" + scene.material.output + "'", notes);
-  return std::nullopt;
+  return select_output(scene, table.output_names, "the table", diagnostics);
 }
 
 // Where each spring sits, for regions: its midpoint in mesh units.
@@ -357,7 +351,7 @@ std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std
     built.sources.emplace_back(loaded->path, loaded->text);
     const auto selection = select_rules(scene, loaded->rules, diagnostics);
     if (!selection) return std::nullopt;
-    return bind_rules(*selection->system, selection->output, scene, points, kind, diagnostics);
+    return bind_rules(*selection->system, selection->output, scene, points, kind, diagnostics, selection->bound);
   }
   std::string read_error;
   const auto text = read_input_file(scene.material.file, is_table ? kMaxTableFileBytes : kMaxRuleFileBytes,
@@ -371,8 +365,9 @@ std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std
     const auto table = parse_fzt(scene.material.file, *text, diagnostics);
     if (!table) return std::nullopt;
     const auto output = select_table_output(scene, *table, diagnostics);
-    if (!output) return std::nullopt;
-    return bind_table(*table, *output, scene, points, kind, diagnostics);
+    const auto bound = bound_output_indices(scene, table->output_names, "the table", diagnostics);
+    if (!output || !bound) return std::nullopt;
+    return bind_table(*table, *output, scene, points, kind, diagnostics, *bound);
   }
   built.sources.emplace_back(scene.material.file, *text);
   DiagnosticList rule_diagnostics;
@@ -387,7 +382,7 @@ std::optional<MaterialBinding> bind_fuzzy_material(const Scene& scene, const std
   }
   const auto selection = select_rules(scene, rules, diagnostics);
   if (!selection) return std::nullopt;
-  return bind_rules(*selection->system, selection->output, scene, points, kind, diagnostics);
+  return bind_rules(*selection->system, selection->output, scene, points, kind, diagnostics, selection->bound);
 }
 
 // A regional value at each point (mesh units): the first region containing it, else the default.
@@ -445,6 +440,16 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
       built.material = bind_fuzzy_material(scene, centroids, MaterialPoint::ElementCentroid, built, loaded, diagnostics);
       if (!built.material) return std::nullopt;
       const MaterialBinding& binding = *built.material;
+      if (!binding.bound.empty()) {
+        ElementMaterial bound;
+        bound.youngs_modulus = std::move(spec.youngs_modulus);
+        bound.poisson_ratio = std::move(spec.poisson_ratio);
+        if (!apply_bound_parameters(scene, element_law_row(scene.element_law), binding, centroids, bound, spec.prony,
+                                    diagnostics))
+          return std::nullopt;
+        spec.youngs_modulus = std::move(bound.youngs_modulus);
+        spec.poisson_ratio = std::move(bound.poisson_ratio);
+      }
       if (binding.strain.empty()) {
         spec.youngs_modulus = binding.modulus_per_spring;  // one per material point: here, per element
         built.stiffness_description =
@@ -469,7 +474,16 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
     case SceneMaterial::Source::StiffnessOverLength:
       return std::nullopt;  // refused by the scene parser
   }
-  const std::string nu_text = poisson.regions.empty() ? format_number(poisson.value) : "per region";
+  std::string nu_text = poisson.regions.empty() ? format_number(poisson.value) : "per region";
+  if (built.material)
+    for (std::size_t b = 0; b < material.bind.size(); ++b) {
+      if (material.bind[b].parameter != "poisson_ratio") continue;
+      const auto [low, high] = std::minmax_element(spec.poisson_ratio.begin(), spec.poisson_ratio.end());
+      nu_text = format_number(*low) + (*low == *high ? "" : " to " + format_number(*high)) + " from '" +
+                built.material->system + "' output '" + material.bind[b].output + "'";
+      spec.poisson_where = scene.range_of("material.bind.poisson_ratio.output");
+      spec.poisson_field = "material.bind.poisson_ratio (output '" + material.bind[b].output + "')";
+    }
   built.stiffness_description += ", nu = " + nu_text;
   if (!material.prony.empty()) {
     built.stiffness_description += "; viscoelastic, Prony series (g, tau)";

@@ -67,6 +67,14 @@ struct InputBinding {
   std::vector<RegionValue> regions;
 };
 
+// `material.bind: {PARAMETER: OUTPUT}`: a material parameter of the element law (its registry row's parameters,
+// runtime/fem/element_law_registry.h) given per element by an output of the rules or table. Scene::ranges holds
+// "material.bind.PARAMETER" (the key) and "material.bind.PARAMETER.output" (the output's name).
+struct ParameterBinding {
+  std::string parameter;
+  std::string output;
+};
+
 struct StrainAxis {
   double min = -0.3;
   double max = 0.3;
@@ -87,6 +95,7 @@ struct SceneMaterial {
   std::string output;  // which output; empty: the only one
   std::string patient;  // a label, carried into the summary
   std::vector<InputBinding> bindings;  // in the order given
+  std::vector<ParameterBinding> bind;  // material.bind, in the order given; empty: `output` is Young's modulus
   std::optional<StrainAxis> strain_axis;  // Rules with a strain binding; default: the input's range, 101 points
   // Young's modulus -> spring constants (`mapping`): YoungsModulus, Rules and Table only.
   StiffnessMapping mapping = StiffnessMapping::VanGelder1998;

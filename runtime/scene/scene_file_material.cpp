@@ -177,7 +177,7 @@ void SceneParser::parse_material(const YAML::Node& node) {
   remember(node, "material");
   if (!check_map(node, "material", {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table",
                                     "system", "output", "patient", "inputs", "strain_axis", "thickness",
-                                    "flexion_fraction", "mapping", "poisson_ratio", "viscoelastic"}))
+                                    "flexion_fraction", "mapping", "poisson_ratio", "viscoelastic", "bind"}))
     return;
   SceneMaterial& material = scene_.material;
   const std::vector<std::string> sources = {"youngs_modulus", "stiffness", "stiffness_over_length", "rules", "table"};
@@ -208,7 +208,7 @@ void SceneParser::parse_material(const YAML::Node& node) {
       break;
   }
   const bool fuzzy = material.source == SceneMaterial::Source::Rules || material.source == SceneMaterial::Source::Table;
-  for (const char* only_fuzzy : {"system", "output", "inputs", "strain_axis"}) {
+  for (const char* only_fuzzy : {"system", "output", "inputs", "strain_axis", "bind"}) {
     if (node[only_fuzzy] && !fuzzy)
       error(node[only_fuzzy], std::string("material.") + only_fuzzy, "only allowed with 'rules' or 'table'");
   }
@@ -234,7 +234,7 @@ void SceneParser::parse_material(const YAML::Node& node) {
     }
   }
   if (node["poisson_ratio"]) material.poisson_ratio = poisson_ratio(node["poisson_ratio"]);
-  if (node["viscoelastic"]) parse_viscoelastic(node["viscoelastic"]);
+  if (node["viscoelastic"]) parse_viscoelastic(node["viscoelastic"], node["bind"]);
   if (node["thickness"])
     if (auto v = positive(node["thickness"], "material.thickness", " (m)")) material.thickness = *v;
   if (node["flexion_fraction"])
@@ -242,6 +242,7 @@ void SceneParser::parse_material(const YAML::Node& node) {
   if (fuzzy && !node["inputs"])
     error(node, "material.inputs", "missing; bind every input of the rules to a constant, regions or strain");
   if (node["inputs"] && fuzzy) parse_inputs(node["inputs"]);
+  if (node["bind"] && fuzzy) parse_bind(node);
   bool has_strain = false;
   for (const auto& b : material.bindings) has_strain = has_strain || b.kind == InputBinding::Kind::Strain;
   if (node["strain_axis"] && fuzzy) {
@@ -289,7 +290,7 @@ bool SceneParser::parse_regions(const YAML::Node& value, const std::string& fiel
 
 // `viscoelastic: {prony: [{weight: g, time: tau}, ...]}`: 1 to kMostPronyTerms terms, each weight in (0, 1) and
 // time (s) positive, the weights summing below 1 (the long-term modulus 1 - sum g_i of the law's instantaneous one).
-void SceneParser::parse_viscoelastic(const YAML::Node& node) {
+void SceneParser::parse_viscoelastic(const YAML::Node& node, const YAML::Node& bind) {
   const std::string field = "material.viscoelastic";
   remember(node, field);
   if (!check_map(node, field, {"prony"})) return;
@@ -307,13 +308,26 @@ void SceneParser::parse_viscoelastic(const YAML::Node& node) {
   for (std::size_t i = 0; i < list.size(); ++i) {
     const std::string term_field = field + ".prony[" + std::to_string(i) + "]";
     if (!check_map(list[i], term_field, {"weight", "time"})) return;
-    if (!list[i]["weight"] || !list[i]["time"]) {
+    // A weight material.bind gives (viscoelastic.prony[I].weight) is set when the scene is built (from the rules).
+    const std::string bound_key = "viscoelastic.prony[" + std::to_string(i) + "].weight";
+    const bool bound = bind && bind.IsMap() && bind[bound_key];
+    if (bound && list[i]["weight"]) {
+      error(list[i]["weight"], term_field + ".weight",
+            "also bound by material.bind." + bound_key + "; give the weight one source: remove one of the two");
+      return;
+    }
+    if ((!list[i]["weight"] && !bound) || !list[i]["time"]) {
       error(list[i], term_field, "a Prony term needs 'weight' and 'time'");
       return;
     }
-    const auto weight = number(list[i]["weight"], term_field + ".weight", "a number in (0, 1)");
     const auto time = positive(list[i]["time"], term_field + ".time", " (s)");
-    if (!weight || !time) return;
+    if (!time) return;
+    if (bound) {
+      prony.push_back({0.0, *time});
+      continue;
+    }
+    const auto weight = number(list[i]["weight"], term_field + ".weight", "a number in (0, 1)");
+    if (!weight) return;
     if (!(*weight > 0.0 && *weight < 1.0)) {
       error(list[i]["weight"], term_field + ".weight",
             format_number(*weight) + " is not in (0, 1): a weight is the fraction of the instantaneous stress that "
@@ -365,6 +379,42 @@ std::optional<RegionalValue> SceneParser::poisson_ratio(const YAML::Node& node) 
   if (!v || !in_range(node, field, *v)) return std::nullopt;
   out.value = *v;
   return out;
+}
+
+// `bind: {PARAMETER: OUTPUT, ...}`: which output gives each parameter. Whether the element law has the parameter is
+// checked when the scene is built (the law's registry row); here the map's shape, that Young's modulus is bound (the
+// rules are its source), and that no parameter is also given by its own field.
+void SceneParser::parse_bind(const YAML::Node& material) {
+  const YAML::Node node = material["bind"];
+  const std::string field = "material.bind";
+  remember(node, field);
+  if (!node.IsMap() || node.size() == 0) {
+    error(node, field, "expected a map from a material parameter to an output of the rules, e.g. "
+                       "{youngs_modulus: stiffness, poisson_ratio: compressibility}");
+    return;
+  }
+  bool youngs_modulus = false;
+  for (auto it = node.begin(); it != node.end(); ++it) {
+    ParameterBinding binding;
+    binding.parameter = it->first.Scalar();
+    const std::string key = field + "." + binding.parameter;
+    remember(it->first, key);
+    const auto output = text(it->second, key + ".output");
+    if (!output) continue;
+    binding.output = *output;
+    youngs_modulus = youngs_modulus || binding.parameter == "youngs_modulus";
+    if (binding.parameter != "youngs_modulus" && material[binding.parameter])
+      error(material[binding.parameter], "material." + binding.parameter,
+            "also bound by " + key + "; give the parameter one source: remove one of the two");
+    scene_.material.bind.push_back(std::move(binding));
+  }
+  if (!youngs_modulus)
+    error(node, field, "youngs_modulus is not bound; the rules are the material's source of Young's modulus: bind it "
+                       "to one of their outputs (bind: {youngs_modulus: OUTPUT, ...})");
+  if (material["output"])
+    error(material["output"], "material.output",
+          "not allowed with 'bind' (which names every output used); bind Young's modulus with "
+          "bind: {youngs_modulus: OUTPUT}");
 }
 
 void SceneParser::parse_inputs(const YAML::Node& node) {

@@ -79,8 +79,10 @@ class SceneParser {
   void parse_material(const YAML::Node& node);
   bool parse_regions(const YAML::Node& value, const std::string& field, std::vector<RegionValue>& out);
   std::optional<RegionalValue> poisson_ratio(const YAML::Node& node);
-  void parse_viscoelastic(const YAML::Node& node);
+  // `bind`: material.bind, whose viscoelastic.prony[I].weight keys stand for a term's weight.
+  void parse_viscoelastic(const YAML::Node& node, const YAML::Node& bind);
   void parse_inputs(const YAML::Node& node);
+  void parse_bind(const YAML::Node& material);
   void check_fem_fields(const YAML::Node& root);
   void parse_mass(const YAML::Node& node);
   void parse_damping(const YAML::Node& node);
