@@ -24,7 +24,8 @@
 #               liver-CUDA.scn) on CUDA and on the CPU; the demo's 12-patient cohort (--patients) on both,
 #               cohort.csv compared; large boxes (240^3 springs, 120^3 FEM) end to end; outputs under $OUT/scenes
 #   haptic      the carried fmpc_haptic_bench (bench/haptic, from the same CUDA build as the carried fmpc: --prepare
-#               bundles it with fmpc) runs the 1 kHz haptic loop on the 20^3 block with the sphere tool, 30 s of wall
+#               bundles it with fmpc) runs the 1 kHz haptic loop on the 20^3 block and on the meshed liver (--tissue
+#               liver: rulesets/scenes/liver_meshed.yaml, SOFA's liver-smooth.obj carried) with the sphere tool, 30 s of wall
 #               time per mode (HAPTIC_SECONDS), implicit Euler and explicit substeps, on CUDA and on the CPU: per-tick
 #               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv: each tick's mean
 #               force and its tick-end force), haptic.md; on CUDA the explicit mode again with the tick-end force only
@@ -162,7 +163,7 @@ WRAPPER
 }
 
 # The scenes section's fmpc (a CUDA build: $FMPC, e.g. -DFMPC_CUDA=ON -DCMAKE_CUDA_ARCHITECTURES=90) with its fonts,
-# and SOFA's liver mesh when ../shared/data/sofa-liver exists.
+# and SOFA's liver mesh and surface (the haptic section's meshed liver) when ../shared/data/sofa-liver exists.
 prepare_scenes() {
   local fmpc="${FMPC:-}"
   [[ -n "$fmpc" && -x "$fmpc" ]] || { echo "set FMPC=path/to/a CUDA build's fmpc for the scenes section" >&2; return 1; }
@@ -179,7 +180,7 @@ prepare_scenes() {
     "$PROGRAMS/fonts/" || { echo "no DejaVu fonts (Debian fonts-dejavu-core)" >&2; return 1; }
   if [[ -d "$ROOT/../shared/data/sofa-liver" ]]; then
     mkdir -p "$CARRY/sofa-liver"
-    cp "$ROOT/../shared/data/sofa-liver/liver.msh" "$CARRY/sofa-liver/"
+    cp "$ROOT/../shared/data/sofa-liver/liver.msh" "$ROOT/../shared/data/sofa-liver/liver-smooth.obj" "$CARRY/sofa-liver/"
   fi
   echo "bundled $fmpc as $PROGRAMS/bin/fmpc"
 }
@@ -511,27 +512,43 @@ haptic_section() {
   [[ $QUICK -eq 1 ]] && seconds=5
   mkdir -p "$OUT/haptic"
   : > "$OUT/haptic.md"
-  # Each tick reports its mean force (one step and one reading at a time); on CUDA the explicit mode also runs as one
-  # call per tick with the tick-end force only (--force end: the loop's latency without the readings) and with
+  # The meshed liver's surface sits beside the repository as ../shared/data/sofa-liver (--prepare carries it).
+  local surface="$ROOT/../shared/data/sofa-liver/liver-smooth.obj"
+  if [[ ! -f "$surface" && -f "$CARRY/sofa-liver/liver-smooth.obj" ]]; then
+    mkdir -p "$(dirname "$surface")" && cp "$CARRY/sofa-liver/liver-smooth.obj" "$surface"
+  fi
+  # Each tick reports its mean force (one step and one reading at a time); on CUDA the block's explicit mode also runs
+  # as one call per tick with the tick-end force only (--force end: the loop's latency without the readings) and with
   # contact damping (--contact-damping 1: the chatter of the undamped contact gone).
-  local run extra
-  for run in cuda cpu cuda_end cuda_damped; do
-    backend=${run%%_*}
-    case "$run" in
-      cuda_end) extra=(--modes explicit --force end) ;;
-      cuda_damped) extra=(--modes explicit --contact-damping 1) ;;
-      *) extra=() ;;
-    esac
-    mkdir -p "$OUT/haptic/$run"
-    if "$UNPACKED/bin/fmpc_haptic_bench" --backend "$backend" --seconds "$seconds" ${extra[@]+"${extra[@]}"} \
-        --out "$OUT/haptic/$run" > "$OUT/haptic/$run.log" 2>&1; then
-      grep -E '^(implicit|explicit) on |^  force change' "$OUT/haptic/$run.log" | sed "s/^/$run: /" | tee -a "$SUMMARY"
-      grep -E '^\|' "$OUT/haptic/$run.log" | awk -v first="$([[ -s "$OUT/haptic.md" ]] && echo 0 || echo 1)" \
-        'first == 1 || NR > 2' >> "$OUT/haptic.md"
-    else
-      tail -5 "$OUT/haptic/$run.log"
-      fail "fmpc_haptic_bench --backend $backend ${extra[*]} (see haptic/$run.log)"
+  local tissue run extra
+  for tissue in block liver; do
+    if [[ $tissue == liver && ! -f "$surface" ]]; then
+      fail "no $surface (nor in $CARRY/sofa-liver): the haptic loop on the liver did not run"
+      continue
     fi
+    local runs=(cuda cpu)
+    [[ $tissue == block ]] && runs+=(cuda_end cuda_damped)
+    for run in "${runs[@]}"; do
+      backend=${run%%_*}
+      case "$run" in
+        cuda_end) extra=(--modes explicit --force end) ;;
+        cuda_damped) extra=(--modes explicit --contact-damping 1) ;;
+        *) extra=() ;;
+      esac
+      mkdir -p "$OUT/haptic/$tissue/$run"
+      if "$UNPACKED/bin/fmpc_haptic_bench" --backend "$backend" --seconds "$seconds" --tissue "$tissue" \
+          --liver-scene "$ROOT/rulesets/scenes/liver_meshed.yaml" ${extra[@]+"${extra[@]}"} \
+          --out "$OUT/haptic/$tissue/$run" > "$OUT/haptic/$tissue/$run.log" 2>&1; then
+        grep -E '^(implicit|explicit) on |^  force change' "$OUT/haptic/$tissue/$run.log" | sed "s/^/$tissue $run: /" |
+          tee -a "$SUMMARY"
+        grep -E '^\|' "$OUT/haptic/$tissue/$run.log" | awk -v first="$([[ -s "$OUT/haptic.md" ]] && echo 0 || echo 1)" \
+          -v tissue="$tissue $run" 'NR <= 2 { if (first == 1) print (NR == 1 ? "| tissue, run " : "| --- ") $0; next }
+                                    { print "| " tissue " " $0 }' >> "$OUT/haptic.md"
+      else
+        tail -5 "$OUT/haptic/$tissue/$run.log"
+        fail "fmpc_haptic_bench --backend $backend --tissue $tissue ${extra[*]} (see haptic/$tissue/$run.log)"
+      fi
+    done
   done
   cat "$OUT/haptic.md" >> "$SUMMARY"
 }

@@ -48,7 +48,8 @@ fmpc_unity_group(fmpc_runtime runtime_io
   io/rule_file_input.cpp
   io/vtk_xml.cpp
   analysis/curve_similarity.cpp
-  analysis/liver_benchmark.cpp)
+  analysis/liver_benchmark.cpp
+  analysis/organ_step_response.cpp)
 fmpc_unity_group(fmpc_runtime runtime_scene_file
   scene/scene_file.cpp
   scene/scene_file_fields.cpp

@@ -13,12 +13,20 @@
 // vertex pressed by the penalty bounces between substeps); it stays in the CSV. --force end steps each tick in one
 // call (step_to) and reports only that reading: the loop without the per-substep readings, for its latency.
 //
+// --tissue liver takes the meshed liver instead (rulesets/scenes/liver_meshed.yaml: SOFA's liver-smooth.obj meshed to
+// the thesis's 8,508 vertices, co-rotational FEM, E from the liver rules for patient 3, nu 0.45, held at SOFA's three
+// points; its probe gives way to the sphere): the same sphere, pressed 4 mm straight down into the upper face where
+// the scene's probe presses, then circling 5 mm around that point (the upper face falls away by up to 4.5 mm within
+// 1 cm of it, so the block's 2 cm circle would leave the surface). The mesh is fine along the probe's old path
+// (`refine_near`), as in the scene.
+//
 // Ticks are paced at 1 kHz of wall time: a tick starts at its deadline (k ms after the first), or at once when the
 // loop is behind; each mode runs for --seconds of wall time. The real-time factor is the simulated time over the wall
 // time (1 when the loop keeps up; below 1 it falls behind); an overrun is a tick whose latency exceeds 1 ms.
 //
 //   fmpc_haptic_bench [--seconds S | --ticks N] [--modes implicit,explicit] [--backend cpu|cuda] [--cells N]
 //                     [--threads N] [--precision float|double] [--force mean|end] [--contact-damping R]
+//                     [--tissue block|liver [--liver-scene FILE]]
 //                     [--out DIR]
 //
 // --seconds     wall time per mode (default 30)
@@ -30,6 +38,9 @@
 // --precision   double (default) or float
 // --force       mean (default): the tick's mean force, one step and one reading at a time; end: the tick-end reading
 // --contact-damping  the scene's contact.damping_ratio in explicit mode (default 0: none; implicit mode takes none)
+// --tissue      block (default: the 20^3 block above) or liver (the meshed liver; --cells does not apply)
+// --liver-scene the meshed liver's scene (default: rulesets/scenes/liver_meshed.yaml of the source tree; its surface
+//               is ../shared/data/sofa-liver beside the repository)
 // --out DIR     writes haptic.csv (one row per mode) and haptic_force_MODE.csv (every tick: time, pose, the mean
 //               force, the tick-end force, contacts, latency) into DIR
 // Prints one line per mode and a Markdown table. Exit status 0, 1 when a step or a reading fails, 2 on bad arguments.
@@ -79,24 +90,75 @@ struct Options {
   std::string precision = "double";
   bool mean_force = true;  // --force mean
   double contact_damping = 0.0;
+  std::string tissue = "block";
+  std::string liver_scene = FMPC_SOURCE_DIR "/rulesets/scenes/liver_meshed.yaml";
   std::string out;
 };
 
-// The scene of a mode as YAML (docs/scenes.md).
-std::string scene_yaml(const Options& options, const std::string& mode) {
+// Where and how the sphere presses (m): the surface point under it, the unit direction it presses along, the radius
+// of its circle.
+struct Press {
+  double contact[3];
+  double down[3];
+  double circle;
+};
+
+constexpr Press kBlockPress = {{kBlock / 2, kBlock / 2, kBlock}, {0.0, 0.0, -1.0}, kCircle};
+// liver_meshed.yaml's probe: its ray from (-1.5, 8, 0.5) along -y hits the upper face at y = 5.1205 (mesh units of
+// 3.2 cm; found by intersecting the ray with liver-smooth.obj's triangles).
+constexpr double kLiverUnit = 0.032;
+constexpr Press kLiverPress = {{-1.5 * kLiverUnit, 5.1205 * kLiverUnit, 0.5 * kLiverUnit}, {0.0, -1.0, 0.0}, 0.005};
+
+const Press& press_of(const Options& options) { return options.tissue == "liver" ? kLiverPress : kBlockPress; }
+
+// The meshed liver's scene without its probe and run settings, the sphere and the mode's in their place: the scene's
+// top-level sections but loads, integrator, dt, duration, precision, threads and outputs, kept as written, with
+// `refine_near` along the probe's path (1 cm down from its hit point) so that the mesh is the scene's.
+std::string liver_yaml(const std::string& scene_text, const Press& press) {
+  std::istringstream in(scene_text);
+  std::ostringstream kept;
+  kept.precision(17);
+  bool skipping = false;
+  for (std::string line; std::getline(in, line);) {
+    const bool top = !line.empty() && line[0] != ' ' && line[0] != '#';
+    if (top) {
+      const std::string key = line.substr(0, line.find(':'));
+      skipping = key == "loads" || key == "integrator" || key == "dt" || key == "duration" || key == "precision" ||
+                 key == "threads" || key == "outputs" || key == "name";
+    }
+    if (skipping) continue;
+    kept << line << "\n";
+    if (line == "mesh:")
+      kept << "  refine_near: [[" << press.contact[0] / kLiverUnit << ", " << press.contact[1] / kLiverUnit << ", "
+           << press.contact[2] / kLiverUnit << ", " << press.contact[0] / kLiverUnit << ", "
+           << (press.contact[1] - 0.01) / kLiverUnit << ", " << press.contact[2] / kLiverUnit << "]]\n";
+  }
+  return kept.str();
+}
+
+// The scene of a mode as YAML (docs/scenes.md); `liver_text` is the meshed liver's scene (--tissue liver).
+std::string scene_yaml(const Options& options, const std::string& mode, const std::string& liver_text) {
   std::ostringstream yaml;
   yaml.precision(17);
-  const double top = kBlock + kRadius + kStartGap;
-  yaml << "name: haptic_" << mode << "\n"
-       << "mesh:\n  box: {size: [" << kBlock << ", " << kBlock << ", " << kBlock << "], cells: [" << options.cells
-       << ", " << options.cells << ", " << options.cells << "]}\n  units: m\n"
-       << "model: corotational_fem\n"
-       << "material: {youngs_modulus: 5, poisson_ratio: 0.49}\n"
-       << "mass: {density: 1060}\n"
-       << "damping: {ratio: 0.9}\n"
-       << "fixed:\n  plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n"
-       << "tools:\n  - name: tip\n    shape: sphere\n    radius: " << kRadius << "\n"
-       << "    pose: {position: [" << kBlock / 2 << ", " << kBlock / 2 << ", " << top << "]}\n"
+  const Press& press = press_of(options);
+  const double unit = options.tissue == "liver" ? kLiverUnit : 1.0;  // the tool is in mesh units
+  const double lift = kRadius + kStartGap;
+  yaml << "name: haptic_" << mode << "\n";
+  if (options.tissue == "liver") {
+    yaml << liver_yaml(liver_text, press);
+  } else {
+    yaml << "mesh:\n  box: {size: [" << kBlock << ", " << kBlock << ", " << kBlock << "], cells: [" << options.cells
+         << ", " << options.cells << ", " << options.cells << "]}\n  units: m\n"
+         << "model: corotational_fem\n"
+         << "material: {youngs_modulus: 5, poisson_ratio: 0.49}\n"
+         << "mass: {density: 1060}\n"
+         << "damping: {ratio: 0.9}\n"
+         << "fixed:\n  plane: {point: [0, 0, 0], normal: [0, 0, 1]}\n";
+  }
+  yaml << "tools:\n  - name: tip\n    shape: sphere\n    radius: " << kRadius / unit << "\n"
+       << "    pose: {position: [" << (press.contact[0] - lift * press.down[0]) / unit << ", "
+       << (press.contact[1] - lift * press.down[1]) / unit << ", " << (press.contact[2] - lift * press.down[2]) / unit
+       << "]}\n"
        << (mode == "explicit" && options.contact_damping > 0.0
                ? "contact: {damping_ratio: " + std::to_string(options.contact_damping) + "}\n"
                : std::string())
@@ -110,16 +172,22 @@ std::string scene_yaml(const Options& options, const std::string& mode) {
 }
 
 // The tool's scripted pose at simulated time t (s).
-// Straight down for kPressTime, then a spiral out to the circle over 1 s, the depth swinging as it goes.
-ToolPose tool_pose(double t) {
+// Straight down for kPressTime, then a spiral out to the circle over 1 s, the depth swinging as it goes. The circle
+// lies in the plane across `down`: along x and (-down) x x (y on the block).
+ToolPose tool_pose(const Press& press, double t) {
   const double pressed = std::min(1.0, t / kPressTime);
   const double after = std::max(0.0, t - kPressTime);
   const double circling = std::min(1.0, after);
   const double lowered = (kStartGap + kDepth) * pressed + kDepthSwing * circling * std::sin(2.0 * kPi * after);
   const double angle = 2.0 * kPi * after / kCirclePeriod;
+  const double* d = press.down;
+  const double across[3] = {0.0, -d[2], d[1]};  // (-down) x (1, 0, 0)
+  const double lift = kRadius + kStartGap - lowered;
+  const double c = press.circle * circling * std::cos(angle), s = press.circle * circling * std::sin(angle);
   ToolPose pose;
-  pose.position = {kBlock / 2 + kCircle * circling * std::cos(angle), kBlock / 2 + kCircle * circling * std::sin(angle),
-                   kBlock + kRadius + kStartGap - lowered};
+  for (int axis = 0; axis < 3; ++axis)
+    pose.position[static_cast<std::size_t>(axis)] =
+        press.contact[axis] - lift * d[axis] + (axis == 0 ? c : 0.0) + s * across[axis];
   return pose;
 }
 
@@ -163,8 +231,21 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
   SessionOptions session_options;
   session_options.backend = options.backend == "cuda" ? SessionOptions::Backend::Cuda : SessionOptions::Backend::Cpu;
   const auto setup_start = std::chrono::steady_clock::now();
-  const auto session =
-      Session::from_yaml(scene_yaml(options, mode), "haptic_" + mode + ".yaml", diagnostics, session_options);
+  std::string liver_text;
+  if (options.tissue == "liver") {
+    std::ifstream in(options.liver_scene);
+    std::stringstream text;
+    text << in.rdbuf();
+    if (!in) {
+      std::cerr << "fmpc_haptic_bench: --liver-scene: cannot read '" << options.liver_scene << "'\n";
+      return false;
+    }
+    liver_text = text.str();
+  }
+  // The liver's scene is named by its own path, so that its surface and rule file resolve as in the scene.
+  const auto session = Session::from_yaml(scene_yaml(options, mode, liver_text),
+                                          options.tissue == "liver" ? options.liver_scene : "haptic_" + mode + ".yaml",
+                                          diagnostics, session_options);
   if (!session) {
     std::cerr << fmpc::render_all(diagnostics, fmpc::SourceFiles{});
     return false;
@@ -191,7 +272,7 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
     if (options.ticks > 0 ? tick > options.ticks : fmpc::bench::seconds_since(start) >= options.seconds && tick > 1)
       break;
     const double t = static_cast<double>(tick) * kTick;
-    const ToolPose pose = tool_pose(t);
+    const ToolPose pose = tool_pose(press_of(options), t);
     const auto tick_start = std::chrono::steady_clock::now();
     std::vector<ToolReading> mean, end;
     const bool stepped = session->set_tool_pose(0, pose, diagnostics) &&
@@ -325,12 +406,21 @@ bool parse(int argc, char** argv, Options& options) {
         return false;
       }
       options.mean_force = value == "mean";
+    } else if (arg == "--tissue") {
+      if (value != "block" && value != "liver") {
+        std::cerr << "fmpc_haptic_bench: --tissue: expected block or liver, got '" << value << "'\n";
+        return false;
+      }
+      options.tissue = value;
+    } else if (arg == "--liver-scene") {
+      options.liver_scene = value;
     } else if (arg == "--out") {
       options.out = value;
     } else {
       std::cerr
           << "usage: fmpc_haptic_bench [--seconds S | --ticks N] [--modes implicit,explicit] [--backend cpu|cuda] "
              "[--cells N] [--threads N] [--precision float|double] [--force mean|end] [--contact-damping R] "
+             "[--tissue block|liver] [--liver-scene FILE] "
              "[--out DIR]\n";
       return false;
     }

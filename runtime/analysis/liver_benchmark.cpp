@@ -85,8 +85,9 @@ SimulationSetup mass_point_setup(MassPointLaw law, double stiffness, const Liver
   return setup;
 }
 
-// The sample steps: `samples` evenly spread over [0, steps], first and last included, strictly increasing.
-std::vector<std::size_t> sample_steps(std::size_t samples, std::size_t steps) {
+}  // namespace
+
+std::vector<std::size_t> evenly_spaced_steps(std::size_t samples, std::size_t steps) {
   std::vector<std::size_t> at;
   for (std::size_t i = 0; i < samples; ++i) {
     const auto step = static_cast<std::size_t>(
@@ -95,8 +96,6 @@ std::vector<std::size_t> sample_steps(std::size_t samples, std::size_t steps) {
   }
   return at;
 }
-
-}  // namespace
 
 std::optional<MassPointResponse> simulate_mass_point(MassPointLaw law, double stiffness,
                                                      const LiverBenchmarkOptions& options,
@@ -115,7 +114,7 @@ std::optional<MassPointResponse> simulate_mass_point(MassPointLaw law, double st
   const std::string name = law == MassPointLaw::BasafaFarahmand ? "Basafa-Farahmand" : "linear";
   response.displacement.name = name + " displacement (k = " + format_number(stiffness) + " N/m)";
   response.velocity.name = name + " velocity (k = " + format_number(stiffness) + " N/m)";
-  for (const std::size_t step : sample_steps(options.samples, steps)) {
+  for (const std::size_t step : evenly_spaced_steps(options.samples, steps)) {
     if (step > simulation->steps_taken() && !simulation->advance(step - simulation->steps_taken(), diagnostics))
       return std::nullopt;
     const Point3 position = simulation->positions(diagnostics)[1];
@@ -165,6 +164,13 @@ std::optional<ControllerRun> compare_modulus_with_benchmark(const std::string& c
       !compare(thesis->displacement, reference.displacement, run.thesis_displacement) ||
       !compare(thesis->velocity, reference.velocity, run.thesis_velocity))
     return std::nullopt;
+  if (options.organ) {
+    run.organ_response = options.organ(modulus, diagnostics);
+    if (!run.organ_response || !compare(run.organ_response->displacement, reference.displacement,
+                                        run.organ_displacement) ||
+        !compare(run.organ_response->velocity, reference.velocity, run.organ_velocity))
+      return std::nullopt;
+  }
   run.benchmark_response = std::move(*benchmark);
   run.thesis_response = std::move(*thesis);
   return run;
@@ -200,8 +206,8 @@ std::optional<LiverBenchmarkReport> run_liver_benchmark(const std::vector<LiverC
     const Variable& output = system.outputs.front();
     const auto pascals = pascals_per_unit(output.unit);
     if (!pascals) {
-      diagnostics.error(SourceRange{}, "controller '" + controller.name + "': output '" + output.name + "' is in '" +
-                                           output.unit + "'; the stiffness must be in kPa, Pa or MPa");
+      diagnostics.error(output.range, "controller '" + controller.name + "': output '" + output.name + "' is in '" +
+                                          output.unit + "', not a stiffness; the stiffness must be in kPa, Pa or MPa");
       return std::nullopt;
     }
     Interpreter interpreter(system);

@@ -40,6 +40,11 @@ struct BasafaFarahmandParameters {
   double gamma1 = 1000.0;  // N s/m^2
 };
 
+struct MassPointResponse {
+  Curve displacement;  // m along the force, from rest
+  Curve velocity;      // m/s along the force
+};
+
 struct LiverBenchmarkOptions {
   BasafaFarahmandParameters benchmark;
   double mass = 1.5;               // kg, the moving mass point
@@ -53,22 +58,25 @@ struct LiverBenchmarkOptions {
   SourceRange time_step_range;     // where the time step came from (a step the simulator refuses points there)
   // Called before each run with (runs done, runs in all): thousands of patients take minutes.
   std::function<void(std::size_t, std::size_t)> progress;
+  // When set, each modulus (Pa) also drives an organ under the same step force (organ_step_response.h), and its
+  // curves are compared with the reference as the mass point's are (ControllerRun::organ_*).
+  std::function<std::optional<MassPointResponse>(double modulus, DiagnosticList& diagnostics)> organ;
 };
 
 // Limits on the options (checked before anything is allocated).
 constexpr std::size_t kLiverBenchmarkStepsMax = 100'000'000;
 constexpr std::size_t kLiverBenchmarkSamplesMax = 100'000;
-// Runs x samples a report may hold: every run keeps 4 curves (64 bytes a sample), so at most 256 MiB.
+// Runs x samples a report may hold: every run keeps 4 curves (64 bytes a sample), so at most 256 MiB (6 curves with
+// an organ: 384 MiB).
 constexpr std::size_t kLiverBenchmarkRunSamplesMax = std::size_t(1) << 22;
+
+// The sample steps: `samples` (at least 2) evenly spread over [0, steps], first and last included, strictly
+// increasing (fewer than `samples` when steps < samples - 1).
+std::vector<std::size_t> evenly_spaced_steps(std::size_t samples, std::size_t steps);
 
 enum class MassPointLaw {
   BasafaFarahmand,  // F_s(X), K1 = k l0, K2 = (K2/K1 of the benchmark) K1, nodal damping gamma0 + gamma1 |x - x0|
   ThesisLinear,     // k x with a dashpot gamma = 2 zeta sqrt(k m) (Eq. 3.5 and 3.6)
-};
-
-struct MassPointResponse {
-  Curve displacement;  // m along the force, from rest
-  Curve velocity;      // m/s along the force
 };
 
 // One run of the mass point with spring constant `stiffness` (N/m; for BasafaFarahmand, K1 = stiffness x l0).
@@ -95,6 +103,9 @@ struct ControllerRun {
   CurveComparison benchmark_displacement, benchmark_velocity;  // benchmark_pairing against the reference
   CurveComparison thesis_displacement, thesis_velocity;        // thesis_pairing against the reference
   MassPointResponse benchmark_response, thesis_response;
+  // With LiverBenchmarkOptions::organ: the organ's probe curves, and their comparison with the reference.
+  std::optional<MassPointResponse> organ_response;
+  CurveComparison organ_displacement, organ_velocity;
 };
 
 struct LiverBenchmarkReport {

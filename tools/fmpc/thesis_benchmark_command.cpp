@@ -4,12 +4,15 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 
 #include "diagnostics/number_format.h"
 #include "runtime/analysis/liver_benchmark.h"
+#include "runtime/analysis/organ_step_response.h"
+#include "runtime/io/input_file.h"
 #include "tools/fmpc/commands.h"
 #include "tools/fmpc/csv_table.h"
 #include "tools/fmpc/evaluation_points.h"
@@ -28,6 +31,8 @@ struct ThesisBenchmarkOptions {
   std::string curves;
   std::string plot_directory;
   std::vector<double> moduli;  // kPa, given directly (--modulus)
+  std::string scene;           // --scene: an organ under the same step force (organ_step_response.h)
+  std::optional<double> organ_time_step;  // s, --organ-time-step: instead of the scene's dt
   sim::LiverBenchmarkOptions run;
 };
 
@@ -59,31 +64,45 @@ std::string similarity_row(const sim::ControllerRun& run) {
   const auto correlation = [](const sim::CurveComparison& c) {
     return c.correlation ? format_number(*c.correlation) : std::string("undefined");
   };
-  return format_csv_row({run.controller, run.patient, format_number(run.modulus / 1000.0),
-                         format_number(run.stiffness), format_number(run.benchmark_displacement.similarity),
-                         format_number(run.benchmark_velocity.similarity),
-                         format_number(run.thesis_displacement.similarity),
-                         format_number(run.thesis_velocity.similarity), correlation(run.benchmark_displacement),
-                         correlation(run.benchmark_velocity), correlation(run.thesis_displacement),
-                         correlation(run.thesis_velocity)});
+  std::vector<std::string> row = {run.controller, run.patient, format_number(run.modulus / 1000.0),
+                                  format_number(run.stiffness), format_number(run.benchmark_displacement.similarity),
+                                  format_number(run.benchmark_velocity.similarity),
+                                  format_number(run.thesis_displacement.similarity),
+                                  format_number(run.thesis_velocity.similarity),
+                                  correlation(run.benchmark_displacement), correlation(run.benchmark_velocity),
+                                  correlation(run.thesis_displacement), correlation(run.thesis_velocity)};
+  if (run.organ_response)
+    for (const std::string& cell :
+         {format_number(run.organ_displacement.similarity), format_number(run.organ_velocity.similarity),
+          correlation(run.organ_displacement), correlation(run.organ_velocity)})
+      row.push_back(cell);
+  return format_csv_row(row);
+}
+
+// The pairings a run has, with their responses: the benchmark law, the thesis's linear law, the organ (--scene).
+std::vector<std::pair<const char*, const sim::MassPointResponse*>> run_responses(const sim::ControllerRun& run) {
+  std::vector<std::pair<const char*, const sim::MassPointResponse*>> responses = {
+      {"benchmark_law", &run.benchmark_response}, {"thesis_msm", &run.thesis_response}};
+  if (run.organ_response) responses.emplace_back("organ", &*run.organ_response);
+  return responses;
 }
 
 // One row per sample time: the reference's curves, then each run's (benchmark law, then thesis's linear law).
 std::string curves_csv(const sim::LiverBenchmarkReport& report) {
   std::vector<std::string> header = {"time_s", "benchmark_displacement_m", "benchmark_velocity_m_per_s"};
   for (const auto& run : report.runs)
-    for (const char* pairing : {"benchmark_law", "thesis_msm"})
+    for (const auto& pairing : run_responses(run))
       for (const char* quantity : {"displacement_m", "velocity_m_per_s"})
-        header.push_back(run.controller + "_" + run.patient + "_" + pairing + "_" + quantity);
+        header.push_back(run.controller + "_" + run.patient + "_" + pairing.first + "_" + quantity);
   std::string csv = format_csv_row(header);
   const auto& time = report.reference.displacement.time;
   for (std::size_t i = 0; i < time.size(); ++i) {
     std::vector<std::string> row = {format_number(time[i]), format_number(report.reference.displacement.value[i]),
                                     format_number(report.reference.velocity.value[i])};
     for (const auto& run : report.runs)
-      for (const auto* response : {&run.benchmark_response, &run.thesis_response}) {
-        row.push_back(format_number(response->displacement.value[i]));
-        row.push_back(format_number(response->velocity.value[i]));
+      for (const auto& pairing : run_responses(run)) {
+        row.push_back(format_number(pairing.second->displacement.value[i]));
+        row.push_back(format_number(pairing.second->velocity.value[i]));
       }
     csv += format_csv_row(row);
   }
@@ -135,6 +154,7 @@ std::vector<std::pair<std::string, std::string>> plot_files(const sim::LiverBenc
         const std::string name = run.controller == "constant" ? run.patient : run.controller;
         add(name + ", benchmark law", run.benchmark_response);
         add(name + ", thesis MSM", run.thesis_response);
+        if (run.organ_response) add(name + ", organ", *run.organ_response);
       }
       figure.x.lo = 0.0;
       figure.x.hi = x_hi > 0.0 ? x_hi : 1.0;
@@ -189,6 +209,30 @@ int run_thesis_benchmark(const ThesisBenchmarkOptions& options) {
     diagnostics.append(reading);
     if (read) patients = std::move(*read);
   }
+  if (options.organ_time_step && (!(*options.organ_time_step > 0.0) || !std::isfinite(*options.organ_time_step)))
+    diagnostics.error(SourceRange{"argument --organ-time-step", 0, 0, 0, 0},
+                      "--organ-time-step " + format_number(*options.organ_time_step) +
+                          ": give a positive, finite time step in seconds");
+  if (options.organ_time_step && options.scene.empty())
+    diagnostics.error(SourceRange{"argument --organ-time-step", 0, 0, 0, 0},
+                      "--organ-time-step steps an organ: give its scene with --scene");
+  std::optional<sim::Scene> scene;
+  if (!options.scene.empty()) {
+    std::string read_error;
+    const std::optional<std::string> text =
+        read_text_file(options.scene, sim::kMaxSceneFileBytes, "scene file", read_error);
+    if (!text) {
+      diagnostics.error(SourceRange{"argument --scene", 0, 0, 0, 0}, read_error);
+    } else {
+      sources.add(options.scene, *text);
+      scene = sim::parse_scene(options.scene, *text, diagnostics);
+      if (scene && options.organ_time_step) {
+        scene->dt = *options.organ_time_step;
+        scene->ranges["dt"] = SourceRange{"argument --organ-time-step", 0, 0, 0, 0};
+      }
+      if (scene && !sim::check_organ_scene(*scene, diagnostics)) scene.reset();
+    }
+  }
   if (diagnostics.has_errors()) {
     print_diagnostics(diagnostics, sources, std::cerr);
     return kExitErrors;
@@ -198,6 +242,16 @@ int run_thesis_benchmark(const ThesisBenchmarkOptions& options) {
   ProgressLine progress("thesis-benchmark");
   sim::LiverBenchmarkOptions run_options = options.run;
   run_options.progress = [&](std::size_t done, std::size_t total) { progress.show_fraction(done, total, "run"); };
+  bool first_organ = true;
+  if (scene)
+    run_options.organ = [&](double modulus, DiagnosticList& into) {
+      // Every run builds the same mesh: its warnings are said once, a later run's only with its errors.
+      DiagnosticList run_diagnostics;
+      auto response = sim::simulate_organ_step(*scene, modulus, run_options, first_organ ? into : run_diagnostics);
+      if (!first_organ && run_diagnostics.has_errors()) into.append(run_diagnostics);
+      first_organ = false;
+      return response;
+    };
   const auto report = sim::run_liver_benchmark(controllers, patients, moduli, run_options, diagnostics);
   progress.finish();
   if (!report) {
@@ -221,11 +275,16 @@ int run_thesis_benchmark(const ThesisBenchmarkOptions& options) {
     std::cerr << "error: " << error << "\n";
     return kExitErrors;
   }
-  std::string out = format_csv_row({"controller", "patient", "modulus_kPa", "stiffness_N_per_m",
-                                    "benchmark_law_displacement_similarity", "benchmark_law_velocity_similarity",
-                                    "thesis_msm_displacement_similarity", "thesis_msm_velocity_similarity",
-                                    "benchmark_law_displacement_correlation", "benchmark_law_velocity_correlation",
-                                    "thesis_msm_displacement_correlation", "thesis_msm_velocity_correlation"});
+  std::vector<std::string> header = {"controller", "patient", "modulus_kPa", "stiffness_N_per_m",
+                                     "benchmark_law_displacement_similarity", "benchmark_law_velocity_similarity",
+                                     "thesis_msm_displacement_similarity", "thesis_msm_velocity_similarity",
+                                     "benchmark_law_displacement_correlation", "benchmark_law_velocity_correlation",
+                                     "thesis_msm_displacement_correlation", "thesis_msm_velocity_correlation"};
+  if (scene)
+    for (const char* column : {"organ_displacement_similarity", "organ_velocity_similarity",
+                               "organ_displacement_correlation", "organ_velocity_correlation"})
+      header.push_back(column);
+  std::string out = format_csv_row(header);
   for (const auto& run : report->runs) out += similarity_row(run);
   std::cout << out;
   print_diagnostics(diagnostics, sources, std::cerr);
@@ -248,6 +307,11 @@ void register_thesis_benchmark_command(CLI::App& app, int& exit_code) {
   command->add_option("--curves", options->curves, "CSV file to write every curve to");
   command->add_option("--plot", options->plot_directory,
                       "Folder for PNG plots of displacement and velocity against time, one pair per patient");
+  command->add_option("--scene", options->scene,
+                      "Also drive this scene's organ (its probe shares the step force; its mesh, model, integrator\n"
+                      "and step as it gives them) with each modulus, and compare its probe's curves");
+  command->add_option("--organ-time-step", options->organ_time_step,
+                      "The organ's time step (s) instead of the scene's dt (its integrator as the scene gives it)");
   command->add_option("--mass", options->run.mass, "Mass point (kg)")->default_val(1.5);
   command->add_option("--force", options->run.force, "Step force (N)")->default_val(1.0);
   command->add_option("--duration", options->run.duration, "Simulated time (s)")->default_val(10.0);
