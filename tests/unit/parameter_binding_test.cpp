@@ -61,6 +61,15 @@ Built parse_and_build(const Folder& folder, const std::string& yaml) {
   return {std::move(*scene), std::move(*built)};
 }
 
+// `text` written to the folder as tissue.fis (the scenes' rule file) and loaded; REQUIREs no errors.
+RuleFile written_rules(const Folder& folder, const char* text) {
+  folder.write("tissue.fis", text);
+  DiagnosticList diagnostics;
+  RuleFile file = load_rule_file("tissue.fis", text, diagnostics);
+  REQUIRE_FALSE(diagnostics.has_errors());
+  return file;
+}
+
 // The messages of the scene `yaml`, which parses but does not build.
 std::string build_errors(const Folder& folder, const std::string& yaml) {
   DiagnosticList diagnostics;
@@ -84,10 +93,7 @@ std::string two_region_scene(const std::string& law, const std::string& element,
 TEST_CASE("material.bind: E and nu per element from two outputs equal the values set directly, bit for bit",
           "[scene][bind]") {
   Folder folder("two_outputs");
-  folder.write("tissue.fis", kTwoOutputRules);
-  DiagnosticList load_diagnostics;
-  const RuleFile rules = load_rule_file("tissue.fis", kTwoOutputRules, load_diagnostics);
-  REQUIRE_FALSE(load_diagnostics.has_errors());
+  const RuleFile rules = written_rules(folder, kTwoOutputRules);
   Interpreter interpreter(rules.systems.front());
   for (const ElementLawRow& law : element_law_rows()) {
     if (law.beside_springs) continue;
@@ -215,10 +221,7 @@ TEST_CASE("strain-bound E: every law on every element kind reads E at the princi
 TEST_CASE("material.bind: Prony weights from the rules, the same at every element or one per element",
           "[scene][bind][visco]") {
   Folder folder("prony");
-  folder.write("tissue.fis", kPronyWeightRules);
-  DiagnosticList load_diagnostics;
-  const RuleFile file = load_rule_file("tissue.fis", kPronyWeightRules, load_diagnostics);
-  REQUIRE_FALSE(load_diagnostics.has_errors());
+  const RuleFile file = written_rules(folder, kPronyWeightRules);
   const auto scene_with = [](const std::string& inputs) {
     return "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [2, 2, 2]}}\nmodel: fem\nmaterial:\n  rules: tissue.fis\n"
            "  inputs: " + inputs + "\n  viscoelastic: {prony: [{time: 1.86}, {time: 51.3}]}\n  bind:\n"
@@ -301,10 +304,7 @@ TEST_CASE("material.bind: Prony weights per element from a rule output: each ele
   // (F = 8): held, each face's reaction force is G(t) of its own half's series times the instantaneous one, in closed
   // form (Simo's recursion is exact for a strain held), on the CPU engine through the scene's binding.
   Folder folder("prony_relax");
-  folder.write("tissue.fis", kPronyWeightRules);
-  DiagnosticList load_diagnostics;
-  const RuleFile file = load_rule_file("tissue.fis", kPronyWeightRules, load_diagnostics);
-  REQUIRE_FALSE(load_diagnostics.has_errors());
+  const RuleFile file = written_rules(folder, kPronyWeightRules);
   for (const double face : {0.0, 0.02}) {
     const Evaluation own = Interpreter(file.systems.front()).evaluate({face < 0.01 ? 2.0 : 8.0});
     const double fast = own.outputs[1], slow = own.outputs[2];
