@@ -41,6 +41,8 @@
 // --tissue      block (default: the 20^3 block above) or liver (the meshed liver; --cells does not apply)
 // --liver-scene the meshed liver's scene (default: rulesets/scenes/liver_meshed.yaml of the source tree; its surface
 //               is ../shared/data/sofa-liver beside the repository)
+// --tolerance, --max-iterations  implicit mode's solver (the scene's `solver: {tolerance, max_iterations}`; default:
+//               the scene's default, the CG to 1e-10): what a haptic loop trades for its 1 ms
 // --out DIR     writes haptic.csv (one row per mode) and haptic_force_MODE.csv (every tick: time, pose, the mean
 //               force, the tick-end force, contacts, latency) into DIR
 // Prints one line per mode and a Markdown table. Exit status 0, 1 when a step or a reading fails, 2 on bad arguments.
@@ -93,6 +95,9 @@ struct Options {
   std::string tissue = "block";
   std::string liver_scene = FMPC_SOURCE_DIR "/rulesets/scenes/liver_meshed.yaml";
   std::string out;
+  // Implicit Euler's solver (the scene's `solver: {tolerance, max_iterations}`; 0: the scene default).
+  double tolerance = 0.0;
+  long max_iterations = 0;
 };
 
 // Where and how the sphere presses (m): the surface point under it, the unit direction it presses along, the radius
@@ -162,8 +167,14 @@ std::string scene_yaml(const Options& options, const std::string& mode, const st
        << (mode == "explicit" && options.contact_damping > 0.0
                ? "contact: {damping_ratio: " + std::to_string(options.contact_damping) + "}\n"
                : std::string())
-       << "integrator: " << (mode == "implicit" ? "implicit_euler" : "semi_implicit_euler") << "\n"
-       << "dt: " << (mode == "implicit" ? "0.001" : "auto") << "\n"
+       << "integrator: " << (mode == "implicit" ? "implicit_euler" : "semi_implicit_euler") << "\n";
+  if (mode == "implicit" && (options.tolerance > 0.0 || options.max_iterations > 0)) {
+    yaml << "solver: {";
+    if (options.tolerance > 0.0) yaml << "tolerance: " << options.tolerance << (options.max_iterations > 0 ? ", " : "");
+    if (options.max_iterations > 0) yaml << "max_iterations: " << options.max_iterations;
+    yaml << "}\n";
+  }
+  yaml << "dt: " << (mode == "implicit" ? "0.001" : "auto") << "\n"
        << "duration: 3600\n"
        << "precision: " << options.precision << "\n"
        << "threads: " << options.threads << "\n"
@@ -412,6 +423,19 @@ bool parse(int argc, char** argv, Options& options) {
         return false;
       }
       options.tissue = value;
+    } else if (arg == "--tolerance") {
+      options.tolerance = std::strtod(value.c_str(), &end);
+      if (*end != '\0' || !(options.tolerance > 0.0 && options.tolerance < 1.0)) {
+        std::cerr << "fmpc_haptic_bench: --tolerance: expected a relative residual in (0, 1), got '" << value << "'\n";
+        return false;
+      }
+    } else if (arg == "--max-iterations") {
+      options.max_iterations = std::strtol(value.c_str(), &end, 10);
+      if (*end != '\0' || options.max_iterations < 1 || options.max_iterations > 100000) {
+        std::cerr << "fmpc_haptic_bench: --max-iterations: expected an integer from 1 to 100000, got '" << value
+                  << "'\n";
+        return false;
+      }
     } else if (arg == "--liver-scene") {
       options.liver_scene = value;
     } else if (arg == "--out") {
@@ -420,7 +444,7 @@ bool parse(int argc, char** argv, Options& options) {
       std::cerr
           << "usage: fmpc_haptic_bench [--seconds S | --ticks N] [--modes implicit,explicit] [--backend cpu|cuda] "
              "[--cells N] [--threads N] [--precision float|double] [--force mean|end] [--contact-damping R] "
-             "[--tissue block|liver] [--liver-scene FILE] "
+             "[--tissue block|liver] [--liver-scene FILE] [--tolerance T] [--max-iterations N] "
              "[--out DIR]\n";
       return false;
     }
