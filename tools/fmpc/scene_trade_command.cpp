@@ -308,12 +308,12 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
     running = std::to_string(done) + " of " + std::to_string(total) + " runs done (" + what + ")";
   };
   options->work_progress = [&](double done, double total) { progress.show_fraction(done, total, running + ", work"); };
-  // Checked before anything runs: a probe force to plot needs a displacement probe.
+  // Checked before anything runs: a probe force to plot needs a displacement probe or a tool's press.
   if (arguments.plot_error == "probe_force" &&
-      !(scene->probe && scene->probe->mode == sim::ProbeLoad::Mode::Displacement)) {
+      sim::trade_probe_force_source(*scene) == sim::TradeForceSource::None) {
     diagnostics.error(scene->range_of(scene->probe ? "loads.probe" : "loads"),
-                      "--plot-error probe_force: the scene has no displacement probe, so there is no probe force to "
-                      "plot; use --plot-error displacement");
+                      "--plot-error probe_force: the scene has no displacement probe and no tool whose path moves "
+                      "it, so there is no probe force to plot; use --plot-error displacement");
     report();
     return kExitErrors;
   }
