@@ -221,8 +221,8 @@ std::shared_ptr<SceneTradeArguments> add_scene_trade_options(CLI::App& command) 
   command.add_option("--max-error", arguments->max_error,
                      "Scenes: decide: the cheapest variant whose relative errors are at most this (0.05 is 5%)");
   command.add_option("--error", arguments->error,
-                     "Scenes: the errors --max-error bounds: displacement, probe_force (default: both, or "
-                     "displacement without a displacement probe)")
+                     "Scenes: the errors --max-error bounds: displacement, probe_force (a displacement probe's "
+                     "force, or the first tool's against its path; default: both, or displacement without either)")
       ->delimiter(',');
   command.add_option("--write-scene", arguments->write_scene,
                      "Scenes: write the chosen variant as a scene (with --max-error)");
