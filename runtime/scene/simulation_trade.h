@@ -70,7 +70,8 @@ struct TradeMeasures {
 
 // What a trade compares as the probe force (docs/trade.md, "Columns"): a displacement probe's reaction along its
 // target; without one, the first rigid tool's force against its path (from its first keyframe's position to its
-// last: a scripted press). None for a force probe (its force is given), a tool that does not travel, or neither.
+// last: a scripted press). None with neither (a force probe's force is given, and a tool that does not travel
+// presses nothing).
 enum class TradeForceSource { None, Probe, Tool };
 TradeForceSource trade_probe_force_source(const Scene& scene);
 
