@@ -34,6 +34,14 @@ std::vector<TradeModel> trade_models() {
   return models;
 }
 
+TradeForceSource trade_probe_force_source(const Scene& scene) {
+  if (scene.probe && scene.probe->mode == ProbeLoad::Mode::Displacement) return TradeForceSource::Probe;
+  if (scene.tools.empty()) return TradeForceSource::None;
+  const std::vector<ToolKeyframe>& path = scene.tools.front().path;
+  return !path.empty() && path.front().pose.position != path.back().pose.position ? TradeForceSource::Tool
+                                                                                  : TradeForceSource::None;
+}
+
 TradeModel trade_reference_model() { return TradeModel{default_fem_law().law, StiffnessMapping::VanGelder1998}; }
 
 std::string trade_model_name(const TradeModel& model) {
@@ -207,7 +215,7 @@ std::optional<TradeAxesValues> axes_values(const Scene& scene, const SimulationT
 // The measures a decision keeps: the options', or the displacement and (with a displacement probe) the probe force.
 std::optional<TradeMeasures> resolved_measures(const Scene& scene, const SimulationTradeOptions& options,
                                                DiagnosticList& diagnostics) {
-  const bool probe = scene.probe && scene.probe->mode == ProbeLoad::Mode::Displacement;
+  const bool probe = trade_probe_force_source(scene) != TradeForceSource::None;
   TradeMeasures measures;
   measures.probe_force = probe;
   if (options.measures) {
@@ -217,7 +225,7 @@ std::optional<TradeMeasures> resolved_measures(const Scene& scene, const Simulat
                         std::string(scene.probe ? "loads.probe: this probe is given a force, not a displacement"
                                                 : "loads: the scene has no probe") +
                             ", so there is no probe force to compare; --error probe_force needs loads.probe with a "
-                            "displacement: use --error displacement");
+                            "displacement or a tool whose path moves it: use --error displacement");
       return std::nullopt;
     }
     if (!measures.displacement && !measures.probe_force) {
@@ -531,7 +539,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
       return std::nullopt;
     }
     result.has_probe_force =
-        scene.probe && scene.probe->mode == ProbeLoad::Mode::Displacement && ref.row.final_probe_force != 0.0;
+        trade_probe_force_source(scene) != TradeForceSource::None && ref.row.final_probe_force != 0.0;
     const auto errors_of = [&](const RunOutcome& outcome) {
       return compare(outcome.displacement, outcome.row.final_probe_force, ref.displacement,
                      ref.row.final_probe_force, result.has_probe_force);

@@ -65,8 +65,15 @@ std::optional<TradeAxis> parse_trade_axis(const std::string& name);
 // Which relative errors a decision keeps under --max-error.
 struct TradeMeasures {
   bool displacement = true;  // the displacement's max relative error
-  bool probe_force = false;  // the probe force's relative error (a displacement probe only)
+  bool probe_force = false;  // the probe force's relative error (trade_probe_force_source)
 };
+
+// What a trade compares as the probe force (docs/trade.md, "Columns"): a displacement probe's reaction along its
+// target; without one, the first rigid tool's force against its path (from its first keyframe's position to its
+// last: a scripted press). None with neither (a force probe's force is given, and a tool that does not travel
+// presses nothing).
+enum class TradeForceSource { None, Probe, Tool };
+TradeForceSource trade_probe_force_source(const Scene& scene);
 
 // The most refinements a trade runs (each multiplies the tetrahedra by 8 and, for the explicit schemes, the steps
 // by 2): 3 turns the demo's 1,536 tetrahedra into 786,432.
@@ -133,7 +140,7 @@ struct SimulationTradeOptions {
 struct TradeErrors {
   double displacement_max = 0.0;  // max_i |u_i - u_ref,i| / max_i |u_ref,i|
   double displacement_rms = 0.0;  // sqrt(mean_i |u_i - u_ref,i|^2) / sqrt(mean_i |u_ref,i|^2)
-  std::optional<double> probe_force;  // |F - F_ref| / |F_ref| along the probe; none without a displacement probe
+  std::optional<double> probe_force;  // |F - F_ref| / |F_ref| along the probe or the tool's path; none without one
 };
 
 struct SimulationTradeRow {
@@ -154,7 +161,7 @@ struct SimulationTradeRow {
   std::string failure;  // why it did not complete (the first error), empty when it did
   std::string skipped;  // why it was not run (it cannot be the cheapest within --max-error), empty when it ran
   TradeErrors errors;   // zeros when it did not complete
-  double final_probe_force = 0.0;  // N, along the probe's target direction
+  double final_probe_force = 0.0;  // N, along the probe's target direction (or against the tool's path)
   double final_max_displacement = 0.0;  // m, over the coarse vertices
   double cpu_seconds = 0.0;   // of the stepping, the run's thread (a batch: its wall time)
   double wall_seconds = 0.0;  // of the stepping (a batch: the whole batch's)

@@ -105,6 +105,14 @@ void read_outcome(const Simulation& simulation, std::size_t s, const SimulationS
   if (setup.probe && setup.probe->mode == ProbeLoad::Mode::Displacement) {
     const double length = std::sqrt(dot3(setup.probe->target, setup.probe->target));
     if (length > 0.0) row.final_probe_force = dot3(simulation.probe_reading(s, diagnostics).force, setup.probe->target) / length;
+  } else if (!setup.tools.empty() && !setup.tools.front().path.empty()) {
+    // The first tool's force against its travel (trade_probe_force_source): the tissue pushing back on a press.
+    const std::vector<ToolKeyframe>& path = setup.tools.front().path;
+    Point3 travel{};
+    for (std::size_t a = 0; a < 3; ++a) travel[a] = path.back().pose.position[a] - path.front().pose.position[a];
+    const double length = std::sqrt(dot3(travel, travel));
+    const std::vector<ToolReading> readings = simulation.tool_readings(s, diagnostics);
+    if (length > 0.0 && !readings.empty()) row.final_probe_force = -dot3(readings.front().force, travel) / length;
   }
 }
 

@@ -377,7 +377,7 @@ TEST_CASE("the trade's measures: probe force without a probe is an error at the 
   CHECK_FALSE(run_simulation_trade(scene, options, diagnostics));
   CHECK(first_error(diagnostics) ==
         "9:8: loads: the scene has no probe, so there is no probe force to compare; --error probe_force needs "
-        "loads.probe with a displacement: use --error displacement");
+        "loads.probe with a displacement or a tool whose path moves it: use --error displacement");
   options.max_error = std::numeric_limits<double>::quiet_NaN();
   options.measures.reset();
   DiagnosticList nan_diagnostics;

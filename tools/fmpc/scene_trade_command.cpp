@@ -221,8 +221,8 @@ std::shared_ptr<SceneTradeArguments> add_scene_trade_options(CLI::App& command) 
   command.add_option("--max-error", arguments->max_error,
                      "Scenes: decide: the cheapest variant whose relative errors are at most this (0.05 is 5%)");
   command.add_option("--error", arguments->error,
-                     "Scenes: the errors --max-error bounds: displacement, probe_force (default: both, or "
-                     "displacement without a displacement probe)")
+                     "Scenes: the errors --max-error bounds: displacement, probe_force (a displacement probe's "
+                     "force, or the first tool's against its path; default: both, or displacement without either)")
       ->delimiter(',');
   command.add_option("--write-scene", arguments->write_scene,
                      "Scenes: write the chosen variant as a scene (with --max-error)");
@@ -308,12 +308,12 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
     running = std::to_string(done) + " of " + std::to_string(total) + " runs done (" + what + ")";
   };
   options->work_progress = [&](double done, double total) { progress.show_fraction(done, total, running + ", work"); };
-  // Checked before anything runs: a probe force to plot needs a displacement probe.
+  // Checked before anything runs: a probe force to plot needs a displacement probe or a tool's press.
   if (arguments.plot_error == "probe_force" &&
-      !(scene->probe && scene->probe->mode == sim::ProbeLoad::Mode::Displacement)) {
+      sim::trade_probe_force_source(*scene) == sim::TradeForceSource::None) {
     diagnostics.error(scene->range_of(scene->probe ? "loads.probe" : "loads"),
-                      "--plot-error probe_force: the scene has no displacement probe, so there is no probe force to "
-                      "plot; use --plot-error displacement");
+                      "--plot-error probe_force: the scene has no displacement probe and no tool whose path moves "
+                      "it, so there is no probe force to plot; use --plot-error displacement");
     report();
     return kExitErrors;
   }
