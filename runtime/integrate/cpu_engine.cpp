@@ -188,7 +188,7 @@ class CpuScene final : public CpuSceneBase {
       for (auto& k : rk_acceleration_) k.resize(n_);
     }
     if (scheme == Integrator::ImplicitEuler) {
-      solver_ = std::make_unique<ImplicitSolver>(setup, fixed_);
+      solver_ = std::make_unique<ImplicitSolver>(setup, fixed_, stability.time_step, pool_);
       log_ = ImplicitSolverLog(solver_->method(), setup.implicit.tolerance, implicit_iteration_limit(setup));
     }
   }
