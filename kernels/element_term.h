@@ -9,6 +9,8 @@
 // - an element kind (kernels/elements/) integrates a law over an element: its nodes, F at its points, the nodal
 //   forces, the tangent's action, energy, stress output and stiffness bound, each generic over the law.
 // Everything here is generic over both.
+#include <type_traits>
+
 #include "kernels/fmpc_hd.h"
 #include "kernels/prony_viscoelasticity.h"
 #include "kernels/spring_math.h"
@@ -78,6 +80,31 @@ template <typename Law, typename Real>
 FMPC_HD void point_first_piola(const ElementTermView<Real>& t, int e, int point, const Real* F, const Real* F_rate,
                                Real* P) {
   point_first_piola_of<Law>(Law::material(t, e), t, e, point, F, F_rate, P);
+}
+
+// Whether a law gives its tangent modulus in closed form (a static tangent_modulus(material, lin, A)).
+template <typename Law, typename = void>
+struct HasTangentModulus : std::false_type {};
+template <typename Law>
+struct HasTangentModulus<Law, std::void_t<decltype(&Law::tangent_modulus)>> : std::true_type {};
+
+// The law's tangent modulus at its linearisation, A = dP/dF as a 9 x 9 matrix: A[9 (3 i + k) + 3 j + l] =
+// dP_ik / dF_jl, so that stress_differential's dP_ik = sum_jl A[9 (3 i + k) + 3 j + l] dF_jl. The law's own
+// tangent_modulus where it has one, else its stress_differential applied to the nine unit dF (column 3 j + l of A).
+// Element kinds build their stiffness from it (kernels/elements/corner_tetrahedron.h), once per element and step.
+template <typename Law>
+FMPC_HD void law_tangent_modulus(const typename Law::template Material<double>& m,
+                                 const typename Law::Linearisation& lin, double* A) {
+  if constexpr (HasTangentModulus<Law>::value) {
+    Law::tangent_modulus(m, lin, A);
+  } else {
+    for (int column = 0; column < 9; ++column) {
+      double dF[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, dP[9];
+      dF[column] = 1.0;
+      Law::stress_differential(m, lin, dF, dP);
+      for (int row = 0; row < 9; ++row) A[9 * row + column] = dP[row];
+    }
+  }
 }
 
 // The state update of element e after an accepted step, at positions s (the step's end): each point's Prony history

@@ -69,6 +69,22 @@ struct CorotationalLinear : IsotropicModuli {
     multiply3(lin.rotation, sigma, dP);
   }
 
+  // stress_differential's dP/dF in closed form: A[(i k), (j l)] = lambda R_ik R_jl + mu (R R^T)_ij delta_kl +
+  // mu R_il R_jk (dF = e_j e_l^T in the formula above; R R^T is the identity up to round-off and kept as computed).
+  static FMPC_HD void tangent_modulus(const Material<double>& m, const Linearisation& lin, double* A) {
+    double mu, lambda, RRt[9];
+    const double* R = lin.rotation;
+    lame_parameters(lin.modulus, m.poisson_ratio, mu, lambda);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) RRt[3 * i + j] = R[3 * i] * R[3 * j] + R[3 * i + 1] * R[3 * j + 1] + R[3 * i + 2] * R[3 * j + 2];
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j)
+          for (int l = 0; l < 3; ++l)
+            A[9 * (3 * i + k) + 3 * j + l] = lambda * R[3 * i + k] * R[3 * j + l] +
+                                             (k == l ? mu * RRt[3 * i + j] : 0.0) + mu * R[3 * i + l] * R[3 * j + k];
+  }
+
   // The small-strain Lame parameters at the largest modulus the run can give the point (a strain table's largest):
   // the stable step and the element damping use the element's rest stiffness with these.
   static FMPC_HD void rest_lame(const Material<double>& m, double& mu, double& lambda) {

@@ -68,6 +68,13 @@ struct VolumePreservation {
     for (int i = 0; i < 9; ++i) dP[i] = scale * lin.cofactor[i];
   }
 
+  // stress_differential's dP/dF in closed form: A[(i k), (j l)] = kappa cof_ik cof_jl.
+  static FMPC_HD void tangent_modulus(const Material<double>& m, const Linearisation& lin, double* A) {
+    for (int row = 0; row < 9; ++row)
+      for (int column = 0; column < 9; ++column)
+        A[9 * row + column] = m.bulk_modulus * lin.cofactor[row] * lin.cofactor[column];
+  }
+
   // At rest the term is a pure lambda = kappa.
   static FMPC_HD void rest_lame(const Material<double>& m, double& mu, double& lambda) {
     mu = 0.0;

@@ -95,6 +95,13 @@ bool GpuEngine<Real>::refresh_material(std::size_t, DiagnosticList& diagnostics)
     }
   }
   const sim::SimulationSetup& setup = scenes_.front();
+  // The Prony constants travel in the views (kernel arguments): recomputed here, taken by the next launch (the graphs
+  // captured with the old ones are dropped below).
+  for (std::size_t t = 0; t < setup.elements.terms.size(); ++t)
+    if (model_.terms[t].prony.count > 0)
+      model_.terms[t].prony = sim::prony_constants_in<Real>(setup.elements.terms[t].prony,
+                                                             stability_.front().time_step,
+                                                             setup.integrator == sim::Integrator::ImplicitEuler);
   if (setup.strain_stiffness) {
     const sim::StrainStiffnessTable& table = *setup.strain_stiffness;
     FMPC_CUDA_CHECK(table_strain_.overwrite(table.strain, stream_), diagnostics, false);

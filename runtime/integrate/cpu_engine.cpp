@@ -191,7 +191,7 @@ class CpuScene final : public CpuSceneBase {
       for (auto& k : rk_acceleration_) k.resize(n_);
     }
     if (scheme == Integrator::ImplicitEuler) {
-      solver_ = std::make_unique<ImplicitSolver>(setup, fixed_);
+      solver_ = std::make_unique<ImplicitSolver>(setup, fixed_, stability.time_step, pool_);
       log_ = ImplicitSolverLog(solver_->method(), setup.implicit.tolerance, implicit_iteration_limit(setup));
     }
   }
@@ -216,7 +216,8 @@ class CpuScene final : public CpuSceneBase {
   }
 
   // The setup's material arrays were replaced with arrays of the same sizes: converted again into the buffers the
-  // views point at (their sizes, and so the views, are unchanged); the strain table's view is taken again.
+  // views point at (their sizes, and so the views, are unchanged); the strain table's view and the Prony constants
+  // are taken again.
   void refresh_material() override {
     const SpringNetwork& net = setup_.springs;
     std::transform(net.stiffness.begin(), net.stiffness.end(), stiffness_.begin(),
@@ -234,6 +235,11 @@ class CpuScene final : public CpuSceneBase {
       std::transform(term.stiffness_damping.begin(), term.stiffness_damping.end(), arrays.damping.begin(),
                      [](double beta) { return static_cast<Real>(beta); });
       if (reads_strain_table(term)) term_views_[t].strain_table = table;
+      // The Prony series' weights and times (the same count: its state keeps its width) take effect from the next
+      // step; the history held so far stays.
+      if (term_views_[t].prony.count > 0)
+        term_views_[t].prony = prony_constants_in<Real>(term.prony, stability_.time_step,
+                                                        setup_.integrator == Integrator::ImplicitEuler);
     }
   }
 

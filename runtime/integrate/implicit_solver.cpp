@@ -12,6 +12,7 @@
 #include <limits>
 
 #include "kernels/implicit_math.h"
+#include "runtime/integrate/implicit_cost.h"
 
 namespace fmpc::sim {
 
@@ -39,14 +40,12 @@ double sum_partials(const std::vector<double>& partial, std::size_t chunks, std:
 
 }  // namespace
 
-ImplicitSolver::ImplicitSolver(const SimulationSetup& setup, const std::vector<unsigned char>& held)
+ImplicitSolver::ImplicitSolver(const SimulationSetup& setup, const std::vector<unsigned char>& held, double h,
+                               WorkerPool& pool)
     : setup_(setup), system_(setup, held) {
   tolerance_ = setup.implicit.tolerance;
   limit_ = implicit_iteration_limit(setup);
   method_ = setup.implicit.method;
-  if (method_ == ImplicitMethod::Automatic)
-    method_ = system_.free_dofs() <= kDirectSolverMostUnknowns ? ImplicitMethod::Direct
-                                                               : ImplicitMethod::ConjugateGradient;
   const std::size_t dofs = system_.dofs();
   rhs_.assign(dofs, 0.0);
   r_.assign(dofs, 0.0);
@@ -55,6 +54,7 @@ ImplicitSolver::ImplicitSolver(const SimulationSetup& setup, const std::vector<u
   previous_.assign(dofs, 0.0);
   inverse_diagonal_.assign(3 * dofs, 0.0);
   partial_.assign(3 * system_.chunks(), 0.0);
+  if (method_ == ImplicitMethod::Automatic) method_ = automatic_method(h, pool);
   if (method_ == ImplicitMethod::Direct) {
     factorisation_ = std::make_unique<Factorisation>();
     Factorisation& f = *factorisation_;
@@ -94,6 +94,39 @@ ImplicitSolver::ImplicitSolver(const SimulationSetup& setup, const std::vector<u
 }
 
 ImplicitSolver::~ImplicitSolver() = default;
+
+// Automatic's choice (docs/simulator.md, "Choosing the solver"): the CG where it reaches the tolerance, from zero, on
+// the run's own matrix at its start within the iterations that cost what one direct step costs (implicit_cost.h:
+// the factorisation's and one solve's operations, weighted by kDirectOperationWeight against the CG's); else the
+// direct solver. The trial's right-hand side is a uniform acceleration along gravity (or z without it) on the free
+// axes, h M a: the smooth load that CG converges on slowest. It depends on the setup and the step alone (the same
+// choice for any thread count and on a replay), and costs at most about one direct step.
+ImplicitMethod ImplicitSolver::automatic_method(double h, WorkerPool& pool) {
+  const ImplicitCost cost = implicit_cost(system_);
+  choice_.direct_step = cost.direct_step;
+  choice_.cg_iteration = cost.cg_iteration;
+  const double budget = kDirectOperationWeight * cost.direct_step / cost.cg_iteration;
+  choice_.budget = static_cast<int>(std::min<double>(limit_, std::ceil(budget)));
+  const std::size_t n = system_.vertices();
+  std::vector<double> x(3 * n), v(3 * n, 0.0), a(3 * n, 0.0);
+  const double g = std::sqrt(setup_.gravity[0] * setup_.gravity[0] + setup_.gravity[1] * setup_.gravity[1] +
+                             setup_.gravity[2] * setup_.gravity[2]);
+  const Point3 along = g > 0.0 ? Point3{setup_.gravity[0] / g, setup_.gravity[1] / g, setup_.gravity[2] / g}
+                               : Point3{0.0, 0.0, 1.0};
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t axis = 0; axis < 3; ++axis) {
+      x[3 * i + axis] = start_position(setup_, i)[axis];
+      if (!system_.dof_held(3 * i + axis)) a[3 * i + axis] = along[axis];
+    }
+  system_.assemble(x, v, a, setup_.springs.stiffness, h, pool, rhs_);
+  std::vector<double> dv(system_.dofs(), 0.0);
+  const int limit = limit_;
+  limit_ = choice_.budget;
+  const ImplicitSolve trial = conjugate_gradient(rhs_, dv, pool);
+  limit_ = limit;
+  choice_.trial_iterations = trial.iterations;
+  return trial.converged ? ImplicitMethod::ConjugateGradient : ImplicitMethod::Direct;
+}
 
 ImplicitSolve ImplicitSolver::solve(const std::vector<double>& x, const std::vector<double>& v,
                                     const std::vector<double>& a, const std::vector<double>& spring_stiffness,

@@ -3,9 +3,9 @@
 // (ImplicitSolverOptions): a sparse direct factorisation (Eigen's SimplicialLDLT with AMD ordering, its symbolic
 // analysis done once for the fixed pattern, the numeric factorisation every step, refined with further solves while
 // the residual is above the tolerance) or a preconditioned conjugate gradient (block Jacobi: each vertex's 3 x 3
-// diagonal block inverted), started from the previous step's solution. Automatic takes the direct solver up to
-// kDirectSolverMostUnknowns free unknowns (docs/simulator.md gives the measurements behind the threshold and the
-// choice of SimplicialLDLT over CHOLMOD). Every vector loop runs over the system's fixed chunks: the same bits for
+// diagonal block inverted), started from the previous step's solution. Automatic takes whichever costs less by an
+// estimate and a trial (automatic_method; docs/simulator.md gives the measurements behind the rule and the choice of
+// SimplicialLDLT over CHOLMOD). Every vector loop runs over the system's fixed chunks: the same bits for
 // any thread count. Internal to runtime/integrate.
 #include <cstddef>
 #include <memory>
@@ -40,16 +40,31 @@ class ImplicitLinearPart {
   virtual bool changed_by(const std::vector<double>& dv) = 0;
 };
 
+// How Automatic chose (ImplicitSolver::automatic_method), for the measurements behind it.
+struct ImplicitChoice {
+  double direct_step = 0.0;   // operations of one direct step (implicit_cost.h)
+  double cg_iteration = 0.0;  // operations of one CG iteration
+  int budget = 0;             // the CG iterations the trial was allowed: a direct step's cost, at most the cap
+  int trial_iterations = 0;   // what the trial took (at the budget: it did not converge within it)
+};
+
+// A factorisation's operation against a CG iteration's (the CG's are streaming passes over the blocks, the
+// factorisation's scattered updates of the factor's columns): measured in docs/simulator.md ("Choosing the solver").
+inline constexpr double kDirectOperationWeight = 2.5;
+
 class ImplicitSolver {
  public:
-  // `held`: held_axes(setup). Reads the setup for its life.
-  ImplicitSolver(const SimulationSetup& setup, const std::vector<unsigned char>& held);
+  // `held`: held_axes(setup); `h`: the run's step (s), for Automatic's trial; `pool`: its workers. Reads the setup for
+  // its life.
+  ImplicitSolver(const SimulationSetup& setup, const std::vector<unsigned char>& held, double h, WorkerPool& pool);
   ~ImplicitSolver();
   ImplicitSolver(const ImplicitSolver&) = delete;
   ImplicitSolver& operator=(const ImplicitSolver&) = delete;
 
   // Direct or ConjugateGradient: the setup's, or Automatic's choice.
   ImplicitMethod method() const { return method_; }
+  // Automatic's estimates and trial (zeros for a method the setup named).
+  const ImplicitChoice& choice() const { return choice_; }
 
   // Assembles the system at the state (ImplicitSystem::assemble's arguments) and solves it into `dv` (3 per vertex,
   // zero on held axes). With a linear `part`, solves until the part stays (each round from the last round's dv), at
@@ -64,6 +79,7 @@ class ImplicitSolver {
 
  private:
   struct Factorisation;
+  ImplicitMethod automatic_method(double h, WorkerPool& pool);
   // One solve of the assembled system with rhs_; `first`: the step's first round (else dv holds the last round's).
   ImplicitSolve solve_assembled(std::vector<double>& dv, bool first, WorkerPool& pool, bool& at_rest);
   // The assembled diagonal blocks and right-hand side with the part's values added on the free axes.
@@ -80,6 +96,7 @@ class ImplicitSolver {
   ImplicitMethod method_ = ImplicitMethod::ConjugateGradient;
   double tolerance_ = 1e-10;
   int limit_ = 0;
+  ImplicitChoice choice_;
   std::unique_ptr<Factorisation> factorisation_;
   std::vector<double> rhs_, r_, p_, q_, inverse_diagonal_, previous_;
   std::vector<double> partial_;  // per chunk, the dot products of one pass

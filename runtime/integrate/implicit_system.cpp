@@ -231,23 +231,27 @@ void ImplicitSystem::assemble_element(std::size_t e, const std::vector<double>& 
       corners[3 * c + axis] = x[3 * static_cast<std::size_t>(node[c]) + axis];
       velocity[3 * c + axis] = v[3 * static_cast<std::size_t>(node[c]) + axis];
     }
+  const std::size_t size = 3 * N;
   for (std::size_t term = 0; term < tangents_.term_count(); ++term) {
-    double K[9 * kMost * kMost];
+    double K[9 * kMost * kMost], kv[3 * kMost];
     const double beta = tangents_.stiffness(term, e, corners, K);
     const double scale = h * h + h * beta;
+    // K v row by row, then each block's nine values (three runs of three in K's rows): the loops the compiler
+    // vectorises, where one loop doing both over scattered blocks did not.
+    for (std::size_t row = 0; row < size; ++row) {
+      double sum = 0.0;
+      for (std::size_t column = 0; column < size; ++column) sum += K[size * row + column] * velocity[column];
+      kv[row] = sum;
+    }
     for (std::size_t a = 0; a < N; ++a) {
-      double kv[3] = {0.0, 0.0, 0.0};
       for (std::size_t b = 0; b < N; ++b) {
         double* block = &values_[9 * static_cast<std::size_t>(element_block_[N * N * e + N * a + b])];
+        const double* from = &K[size * 3 * a + 3 * b];
         for (std::size_t i = 0; i < 3; ++i)
-          for (std::size_t j = 0; j < 3; ++j) {
-            const double entry = K[3 * N * (3 * a + i) + 3 * b + j];
-            block[3 * i + j] += scale * entry;
-            kv[i] += entry * velocity[3 * b + j];
-          }
+          for (std::size_t j = 0; j < 3; ++j) block[3 * i + j] += scale * from[size * i + j];
       }
       double* r = &rhs[3 * static_cast<std::size_t>(node[a])];
-      for (std::size_t i = 0; i < 3; ++i) r[i] -= h * (h * kv[i]);
+      for (std::size_t i = 0; i < 3; ++i) r[i] -= h * (h * kv[3 * a + i]);
     }
   }
 }

@@ -30,16 +30,10 @@ const char* to_string(Integrator integrator);
 
 // How implicit Euler solves its linear system (M + h D + h^2 K) dv = h (f0 - h K v0) each step.
 enum class ImplicitMethod {
-  Automatic,  // the CPU: Direct up to kDirectSolverMostUnknowns free unknowns, else ConjugateGradient; CUDA: the CG
+  Automatic,  // the CPU: whichever costs less by an estimate and a trial at the start (implicit_solver.h); CUDA: the CG
   Direct,     // a sparse LDL^T factorisation every step (CPU only), refined while above the tolerance
   ConjugateGradient,  // preconditioned CG (CPU: block Jacobi, started from the last step's solution; CUDA: Jacobi)
 };
-
-// Automatic's threshold: free unknowns (3 per vertex, less the held axes) up to which the CPU factorises. Measured
-// in docs/simulator.md ("Implicit Euler's solvers"): SOFA's liver (534 free unknowns, stiff against its masses at dt
-// 0.02) factorises faster than the CG reaches 1e-10; a box of 1,944 factorises 4.8 times slower than the CG (fill).
-// Size is half of it: a small, well-conditioned system is faster with the CG (the table there).
-inline constexpr std::size_t kDirectSolverMostUnknowns = 1000;
 
 const char* to_string(ImplicitMethod method);  // "auto", "direct", "cg": the scene's spelling
 

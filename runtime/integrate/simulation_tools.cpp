@@ -59,6 +59,10 @@ std::string material_mismatch(const SimulationSetup& current, const SimulationSe
                std::to_string(p);
     if (a.stiffness_damping.size() != b.stiffness_damping.size())
       return "its element term " + std::to_string(t) + " has damping values where there were none, or the reverse";
+    if (a.prony.size() != b.prony.size())
+      return "its element term " + std::to_string(t) + " has " + std::to_string(b.prony.size()) +
+             " Prony terms where the simulation has " + std::to_string(a.prony.size()) +
+             " (the series' length sets the state each point keeps)";
   }
   if (material.strain_stiffness.has_value() != current.strain_stiffness.has_value())
     return material.strain_stiffness ? "it has a strain-dependent modulus where the simulation has a fixed one"
@@ -195,6 +199,7 @@ bool Simulation::replace_material(std::size_t scene, const SimulationSetup& mate
     for (int p = 0; p < kernels::kMostLawParameters; ++p)
       candidate.elements.terms[t].parameter[p] = material.elements.terms[t].parameter[p];
     candidate.elements.terms[t].stiffness_damping = material.elements.terms[t].stiffness_damping;
+    candidate.elements.terms[t].prony = material.elements.terms[t].prony;
   }
   candidate.strain_stiffness = material.strain_stiffness;
   candidate.time_step = stability_[scene].time_step;
@@ -214,6 +219,7 @@ bool Simulation::replace_material(std::size_t scene, const SimulationSetup& mate
     for (int p = 0; p < kernels::kMostLawParameters; ++p)
       overwrite(current.elements.terms[t].parameter[p], candidate.elements.terms[t].parameter[p]);
     overwrite(current.elements.terms[t].stiffness_damping, candidate.elements.terms[t].stiffness_damping);
+    overwrite(current.elements.terms[t].prony, candidate.elements.terms[t].prony);
   }
   if (current.strain_stiffness) {
     overwrite(current.strain_stiffness->strain, candidate.strain_stiffness->strain);

@@ -277,7 +277,25 @@ TEST_CASE(
         const Eigen::Matrix<double, D, 1> product = local * pv;
         for (int r = 0; r < D; ++r) {
           CHECK(out[r / 3][r % 3] == Approx(product[r]).margin(1e-12 * largest_entry));
-          CHECK(diagonal[r / 3][r % 3] == local(r, r));
+          CHECK(diagonal[r / 3][r % 3] == Approx(local(r, r)).margin(1e-12 * largest_entry));
+        }
+        // Deformed, the whole matrix (a kind's closed form where it has one: kernels/elements/corner_tetrahedron.h)
+        // is the action's columns to round-off.
+        for (int n = 0; n < 10; ++n) {
+          double moved[N][3], matrix[D * D];
+          for (int a = 0; a < N; ++a)
+            for (int i = 0; i < 3; ++i) moved[a][i] = rest[a][i] * (1.0 + jitter(rng)) + 0.02;
+          typename Kind::template Linearisation<Law> there{};
+          Kind::template linearise<Law>(view, 0, at(moved), there);
+          Kind::template stiffness_matrix<Law>(view, 0, there, matrix);
+          for (int b = 0; b < N; ++b)
+            for (int j = 0; j < 3; ++j) {
+              double column[N][3];
+              Kind::template stiffness_column<Law>(view, 0, there, b, j, column);
+              for (int a = 0; a < N; ++a)
+                for (int i = 0; i < 3; ++i)
+                  CHECK(matrix[D * (3 * a + i) + 3 * b + j] == Approx(column[a][i]).margin(1e-12 * largest_entry));
+            }
         }
         const double eigenvalue =
             Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>>(K).eigenvalues().maxCoeff();

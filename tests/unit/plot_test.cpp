@@ -282,3 +282,22 @@ TEST_CASE("a rule view has one row per rule plus the aggregate", "[plot]") {
   CHECK(small.height > two.height);  // the figure grows with the rules
   CHECK(two.width >= 560);
 }
+
+TEST_CASE("trade plot: unlabelled points get no number, a required error its line and legend entry", "[plot]") {
+  // fmpc trade clears the labels of the points off the Pareto front: they are drawn, never numbered (the legend once
+  // showed an empty "1:" entry for them). --max-error E is a horizontal line named in the legend.
+  TradePlot plot;
+  plot.points = {{"fast", 1000.0, 0.5, "springs"}, {"", 100.0, 0.6, "springs"}, {"accurate", 10.0, 0.01, "FEM"},
+                 {"", 5.0, 0.02, "FEM"}};
+  plot.error_bound = 0.05;
+  plot.error_bound_label = "--max-error 0.05";
+  LabelPlacement placement;
+  render_trade_plot(plot, ImageFormat::Png, &placement);
+  CHECK_FALSE(placement.placed[1]);
+  CHECK_FALSE(placement.placed[3]);
+  CHECK(placement.legend ==
+        std::vector<std::string>{"springs", "FEM", "Pareto front", "on the front", "--max-error 0.05"});
+  plot.error_bound = 0.0;
+  render_trade_plot(plot, ImageFormat::Png, &placement);
+  CHECK(placement.legend == std::vector<std::string>{"springs", "FEM", "Pareto front", "on the front"});
+}

@@ -385,3 +385,60 @@ TEST_CASE("session: a tick's mean tool force is its impulse over its duration", 
   CHECK_FALSE(averaged->step_to_averaging(std::nan(""), now, diagnostics));
   CHECK(errors_of(diagnostics) == "the time nan s is not finite");
 }
+
+TEST_CASE("session: a swapped material's Prony weights and times take effect", "[session][prony]") {
+  // A viscoelastic block sagging under gravity from rest: swapped to other weights and times before its first step,
+  // it steps as a block built with them (to round-off: the history of the jump to the start state is the weights
+  // times a stress of order 1e-16 Pa) and not as the old one.
+  DiagnosticList diagnostics;
+  sim::BoxSpec box;
+  box.size = {0.01, 0.01, 0.01};
+  box.cells_x = box.cells_y = box.cells_z = 2;
+  const auto build = [&](std::vector<sim::PronyTerm> prony, sim::Integrator integrator) {
+    sim::FemModelSpec spec;
+    spec.youngs_modulus = {5e3};
+    spec.poisson_ratio = {0.3};
+    spec.mass.value = 1000.0;
+    spec.prony = std::move(prony);
+    auto setup = sim::build_fem_model(sim::generate_box(box, diagnostics), spec, diagnostics);
+    REQUIRE(setup);
+    for (std::size_t v = 0; v < setup->rest_positions.size(); ++v)
+      if (setup->rest_positions[v][2] == 0.0) setup->fixed_vertices.push_back(static_cast<std::int32_t>(v));
+    setup->gravity = {0.0, 0.0, -9.81};
+    setup->integrator = integrator;
+    return *setup;
+  };
+  const std::vector<sim::PronyTerm> old_series{{0.2, 0.005}, {0.1, 0.05}}, new_series{{0.6, 0.002}, {0.3, 0.02}};
+  for (const sim::Integrator integrator : {sim::Integrator::SemiImplicitEuler, sim::Integrator::ImplicitEuler}) {
+    CAPTURE(static_cast<int>(integrator));
+    const sim::SimulationSetup old_material = build(old_series, integrator);
+    const auto old_session = Session::from_setup(old_material, diagnostics);
+    const auto new_session = Session::from_setup(build(new_series, integrator), diagnostics);
+    const auto swapped = Session::from_setup(old_material, diagnostics);
+    REQUIRE((old_session && new_session && swapped));
+    REQUIRE(swapped->swap_material(build(new_series, integrator), diagnostics));
+    std::vector<std::vector<sim::Point3>> positions;
+    for (Session* session : {old_session.get(), new_session.get(), swapped.get()}) {
+      REQUIRE(session->step(200, diagnostics));
+      positions.push_back(session->positions(diagnostics));
+    }
+    // The largest distance between two sessions' vertices, over the largest sag.
+    double sag = 0.0, to_new = 0.0, old_to_new = 0.0;
+    for (std::size_t v = 0; v < old_material.rest_positions.size(); ++v) {
+      sag = std::max(sag, sim::distance(positions[1][v], old_material.rest_positions[v]));
+      to_new = std::max(to_new, sim::distance(positions[2][v], positions[1][v]));
+      old_to_new = std::max(old_to_new, sim::distance(positions[0][v], positions[1][v]));
+    }
+    CHECK(sag > 1e-4);
+    CHECK(to_new < 1e-12 * sag);
+    CHECK(old_to_new > 1e-2 * sag);
+  }
+  // Another number of terms changes the state each point keeps: refused, nothing changed.
+  const auto session = Session::from_setup(build(old_series, sim::Integrator::SemiImplicitEuler), diagnostics);
+  REQUIRE(session);
+  diagnostics = DiagnosticList{};
+  CHECK_FALSE(session->swap_material(build({{0.5, 0.01}}, sim::Integrator::SemiImplicitEuler), diagnostics));
+  CHECK(errors_of(diagnostics) ==
+        "the new material does not fit this simulation: its element term 0 has 1 Prony terms where the simulation "
+        "has 2 (the series' length sets the state each point keeps); build it from the same mesh and model");
+}

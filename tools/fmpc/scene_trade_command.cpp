@@ -356,6 +356,10 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
     plot::TradePlot figure;
     figure.error_unit = force ? "probe force, relative" : "displacement (max), relative";
     figure.speed_label = "real-time factor (simulated s per wall s)";
+    if (shown.max_error) {
+      figure.error_bound = *shown.max_error;
+      figure.error_bound_label = "--max-error " + format_number(*shown.max_error);
+    }
     figure.title = {"fmpc trade: scene " + shown.scene_name,
                     format_number(shown.duration) + " s on " + shown.backend + ", against the FEM reference"};
     for (const sim::SimulationTradeRow& row : shown.rows)

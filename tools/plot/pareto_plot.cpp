@@ -15,6 +15,7 @@ constexpr int kHeight = 600;
 constexpr double kExactStrip = 34;  // height of the "0 (exact)" strip below the log axis
 constexpr double kMarker = 5;
 const Colour kFront{0.84, 0.15, 0.16, 1};
+const Colour kBound{0.2, 0.45, 0.2, 1};  // the required error's line
 
 }  // namespace
 
@@ -68,6 +69,10 @@ std::string render_trade_plot(const TradePlot& plot, ImageFormat format, LabelPl
     }
   }
   if (!(speed_hi > 0)) speed_lo = speed_hi = 1;
+  if (plot.error_bound > 0) {
+    error_lo = std::min(error_lo, plot.error_bound);
+    error_hi = std::max(error_hi, plot.error_bound);
+  }
   if (!(error_hi > 0)) error_lo = error_hi = 1;
   // Half a decade of room around the data so that markers and labels stay inside the frame.
   const Axis x_axis = rounded(Axis{speed_lo / 3, speed_hi * 3, true, plot.speed_label});
@@ -104,6 +109,10 @@ std::string render_trade_plot(const TradePlot& plot, ImageFormat format, LabelPl
     return std::pair<double, double>{x, y};
   };
 
+  if (plot.error_bound > 0) {
+    const double y = area.py(plot.error_bound);
+    canvas.line(log_box.x, y, log_box.x + log_box.width, y, kBound, 1.5, {2, 3});
+  }
   const std::vector<std::size_t> front = pareto_front(plot.points);
   std::vector<std::pair<double, double>> front_line;
   for (std::size_t i : front) front_line.push_back(point_xy(plot.points[i]));
@@ -123,6 +132,7 @@ std::string render_trade_plot(const TradePlot& plot, ImageFormat format, LabelPl
   std::vector<Box> taken;
   const Box inside = drawn.box;
   for (std::size_t i = 0; i < plot.points.size(); ++i) {
+    if (plot.points[i].label.empty()) continue;  // unlabelled on purpose: neither placed nor numbered
     const auto [x, y] = point_xy(plot.points[i]);
     const auto [w, h] = canvas.measure(plot.points[i].label, label_font);
     const double d = kMarker + 3;
@@ -151,25 +161,36 @@ std::string render_trade_plot(const TradePlot& plot, ImageFormat format, LabelPl
     canvas.circle(x, y, kMarker, colour_of(plot.points[i]), on_front ? kFront : kBlack, on_front ? 2 : 0.8);
     if (labels.placed[i]) {
       canvas.text(labels.boxes[i].x, labels.boxes[i].y, plot.points[i].label, label_font, Align::Start, Align::Start);
-    } else {
+    } else if (!plot.points[i].label.empty()) {
       numbers.push_back({++numbered, i});
       canvas.text(x + kMarker + 1, y - kMarker - 1, std::to_string(numbered), label_font, Align::Start, Align::End);
     }
   }
 
-  // Legend: the kinds, the front, then any numbered labels.
+  // Legend: the kinds, the front, the required error, then any numbered labels.
   double ly = log_box.y;
   const double lx = kWidth - legend_width - 8;
+  labels.legend.clear();
+  const auto entry = [&](const std::string& text) {
+    labels.legend.push_back(text);
+    ly += canvas.text(lx + 20, ly + 8, text, legend_font, Align::Start, Align::Centre).height + 6;
+  };
   for (std::size_t k = 0; k < kinds.size(); ++k) {
     canvas.circle(lx + 8, ly + 8, kMarker, categorical_colour(k), kBlack, 0.8);
-    ly += canvas.text(lx + 20, ly + 8, kinds[k], legend_font, Align::Start, Align::Centre).height + 6;
+    entry(kinds[k]);
   }
   canvas.line(lx, ly + 8, lx + 16, ly + 8, kFront, 2, {6, 4});
-  ly += canvas.text(lx + 20, ly + 8, "Pareto front", legend_font, Align::Start, Align::Centre).height + 6;
+  entry("Pareto front");
   canvas.circle(lx + 8, ly + 8, kMarker, kWhite, kFront, 2);
-  ly += canvas.text(lx + 20, ly + 8, "on the front", legend_font, Align::Start, Align::Centre).height + 10;
+  entry("on the front");
+  if (plot.error_bound > 0) {
+    canvas.line(lx, ly + 8, lx + 16, ly + 8, kBound, 1.5, {2, 3});
+    entry(plot.error_bound_label);
+  }
+  ly += 4;
   for (const auto& [number, index] : numbers) {
     const std::string text = std::to_string(number) + ": " + plot.points[index].label;
+    labels.legend.push_back(text);
     Font font = label_font;
     const double w = canvas.measure(text, font).first;
     if (w > legend_width) font.size = std::max(8.0, font.size * legend_width / w);

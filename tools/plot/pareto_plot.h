@@ -22,6 +22,9 @@ struct TradePlot {
   std::string error_unit;  // for the y label
   std::vector<std::string> title;
   std::string speed_label = "evaluations per second (one core)";  // the x label
+  // A required error (fmpc trade --max-error E), drawn as a horizontal line with its legend entry; 0: none.
+  double error_bound = 0.0;
+  std::string error_bound_label = "";  // the legend's words for it
 };
 
 // Indices of the points on the Pareto front (faster or equally fast and strictly more accurate than every point
@@ -32,6 +35,7 @@ std::vector<std::size_t> pareto_front(const std::vector<TradePoint>& points);
 struct LabelPlacement {
   std::vector<Box> boxes;
   std::vector<bool> placed;
+  std::vector<std::string> legend;  // the legend's entries, top to bottom
 };
 
 // The figure, 860 x 600, as PNG or SVG bytes; `placement` (optional) receives where the labels went, for tests.
