@@ -69,6 +69,48 @@ std::vector<std::int32_t> all_vertices(std::size_t n) {
   return out;
 }
 
+// The largest difference between K (3 n square) and -df/dx at rest by central differences of internal_forces.
+double largest_difference_from_force_derivative(const SimulationSetup& setup, const Eigen::MatrixXd& K) {
+  const std::vector<Point3>& rest = setup.rest_positions;
+  const std::size_t n = rest.size();
+  const std::vector<Point3> zero(n, Point3{0.0, 0.0, 0.0});
+  const double h = 1e-8;
+  double worst = 0.0;
+  for (std::size_t column = 0; column < 3 * n; ++column) {
+    std::vector<Point3> plus = rest, minus = rest;
+    plus[column / 3][column % 3] += h;
+    minus[column / 3][column % 3] -= h;
+    const std::vector<Point3> fp = internal_forces(setup, plus, zero, {}, all_vertices(n));
+    const std::vector<Point3> fm = internal_forces(setup, minus, zero, {}, all_vertices(n));
+    for (std::size_t row = 0; row < 3 * n; ++row) {
+      const double derivative = -(fp[row / 3][row % 3] - fm[row / 3][row % 3]) / (2 * h);
+      worst = std::max(worst, std::abs(derivative - K(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(column))));
+    }
+  }
+  return worst;
+}
+
+// Implicit Euler's assembled matrix at h = 1 without damping, less the masses: the stiffness K it holds (dense, 3 n
+// square), and its right-hand side at velocities v with a = 0 (-h^2 K v).
+Eigen::MatrixXd implicit_stiffness(const SimulationSetup& setup, const std::vector<Point3>& positions,
+                                   const std::vector<double>& v, std::vector<double>& rhs) {
+  const std::size_t n = positions.size();
+  ImplicitSystem system(setup, std::vector<unsigned char>(n, 0));
+  WorkerPool pool(2, 1);  // grain 1: the parallel paths even on this small box
+  std::vector<double> x(3 * n), a(3 * n, 0.0);
+  for (std::size_t vertex = 0; vertex < n; ++vertex)
+    for (std::size_t i = 0; i < 3; ++i) x[3 * vertex + i] = positions[vertex][i];
+  system.assemble(x, v, a, {}, 1.0, pool, rhs);
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(3 * n), static_cast<Eigen::Index>(3 * n));
+  for (std::size_t row = 0; row < n; ++row)
+    for (std::size_t k = system.row_offset(row); k < system.row_offset(row + 1); ++k)
+      for (std::size_t r = 0; r < 3; ++r)
+        for (std::size_t c = 0; c < 3; ++c)
+          K(static_cast<Eigen::Index>(3 * row + r), static_cast<Eigen::Index>(3 * static_cast<std::size_t>(system.column(k)) + c)) =
+              system.value(k)[3 * r + c] - (static_cast<std::size_t>(system.column(k)) == row && r == c ? setup.mass[row] : 0.0);
+  return K;
+}
+
 }  // namespace
 
 TEST_CASE("nodal pressure tetrahedra pass the patch test", "[fem][nodal]") {
@@ -203,27 +245,6 @@ TEST_CASE("nodal pressure tetrahedra on the CPU engine: a block resting on its b
   CHECK(finals[0] == finals[1]);
 }
 
-// Implicit Euler's assembled matrix at h = 1 without damping, less the masses: the stiffness K it holds (dense, 3 n
-// square), and its right-hand side at velocities v with a = 0 (-h^2 K v).
-Eigen::MatrixXd implicit_stiffness(const SimulationSetup& setup, const std::vector<Point3>& positions,
-                                   const std::vector<double>& v, std::vector<double>& rhs) {
-  const std::size_t n = positions.size();
-  ImplicitSystem system(setup, std::vector<unsigned char>(n, 0));
-  WorkerPool pool(2, 1);  // grain 1: the parallel paths even on this small box
-  std::vector<double> x(3 * n), a(3 * n, 0.0);
-  for (std::size_t vertex = 0; vertex < n; ++vertex)
-    for (std::size_t i = 0; i < 3; ++i) x[3 * vertex + i] = positions[vertex][i];
-  system.assemble(x, v, a, {}, 1.0, pool, rhs);
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(3 * n), static_cast<Eigen::Index>(3 * n));
-  for (std::size_t row = 0; row < n; ++row)
-    for (std::size_t k = system.row_offset(row); k < system.row_offset(row + 1); ++k)
-      for (std::size_t r = 0; r < 3; ++r)
-        for (std::size_t c = 0; c < 3; ++c)
-          K(static_cast<Eigen::Index>(3 * row + r), static_cast<Eigen::Index>(3 * static_cast<std::size_t>(system.column(k)) + c)) =
-              system.value(k)[3 * r + c] - (static_cast<std::size_t>(system.column(k)) == row && r == c ? setup.mass[row] : 0.0);
-  return K;
-}
-
 TEST_CASE("nodal pressure tetrahedra: implicit Euler's block system holds the nodal term two elements apart, "
           "symmetric, the forces' derivative at rest and the static solver's tangent away from it",
           "[fem][nodal][implicit]") {
@@ -256,21 +277,7 @@ TEST_CASE("nodal pressure tetrahedra: implicit Euler's block system holds the no
     INFO(two_apart << " blocks couple vertices two elements apart");
     CHECK(two_apart > 0);
     // At rest: central differences of internal_forces.
-    const std::vector<Point3> zero(n, Point3{0.0, 0.0, 0.0});
-    const double h = 1e-8;
-    double worst = 0.0;
-    for (std::size_t column = 0; column < 3 * n; ++column) {
-      std::vector<Point3> plus = rest, minus = rest;
-      plus[column / 3][column % 3] += h;
-      minus[column / 3][column % 3] -= h;
-      const std::vector<Point3> fp = internal_forces(setup, plus, zero, {}, all_vertices(n));
-      const std::vector<Point3> fm = internal_forces(setup, minus, zero, {}, all_vertices(n));
-      for (std::size_t row = 0; row < 3 * n; ++row) {
-        const double derivative = -(fp[row / 3][row % 3] - fm[row / 3][row % 3]) / (2 * h);
-        worst = std::max(worst, std::abs(derivative - K(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(column))));
-      }
-    }
-    CHECK(worst < 1e-5 * largest);
+    CHECK(largest_difference_from_force_derivative(setup, K) < 1e-5 * largest);
     // Deformed and moving: the static solver's tangent (model_tangent, B^T D B from a sparse product) and the
     // right-hand side's -h^2 K v.
     std::vector<Point3> x = rest;
@@ -338,23 +345,7 @@ TEST_CASE("nodal pressure tetrahedra: the static solver's tangent is the forces'
   for (const char* law : {"corotational", "stable_neo_hookean"}) {
     INFO(law);
     const SimulationSetup setup = nodal_test_model(mesh, law, "linear_nodal_pressure", 0.45);
-    const std::vector<Point3>& rest = setup.rest_positions;
-    const std::size_t n = rest.size();
-    const Eigen::MatrixXd K = Eigen::MatrixXd(model_tangent(setup, rest, {}).stiffness);
-    const std::vector<Point3> zero(n, Point3{0.0, 0.0, 0.0});
-    const double h = 1e-8;
-    double largest = K.cwiseAbs().maxCoeff(), worst = 0.0;
-    for (std::size_t column = 0; column < 3 * n; ++column) {
-      std::vector<Point3> plus = rest, minus = rest;
-      plus[column / 3][column % 3] += h;
-      minus[column / 3][column % 3] -= h;
-      const std::vector<Point3> fp = internal_forces(setup, plus, zero, {}, all_vertices(n));
-      const std::vector<Point3> fm = internal_forces(setup, minus, zero, {}, all_vertices(n));
-      for (std::size_t row = 0; row < 3 * n; ++row) {
-        const double derivative = -(fp[row / 3][row % 3] - fm[row / 3][row % 3]) / (2 * h);
-        worst = std::max(worst, std::abs(derivative - K(static_cast<Eigen::Index>(row), static_cast<Eigen::Index>(column))));
-      }
-    }
-    CHECK(worst < 1e-5 * largest);
+    const Eigen::MatrixXd K = Eigen::MatrixXd(model_tangent(setup, setup.rest_positions, {}).stiffness);
+    CHECK(largest_difference_from_force_derivative(setup, K) < 1e-5 * K.cwiseAbs().maxCoeff());
   }
 }
