@@ -6,6 +6,10 @@
 #   bash bench/run_gpu.sh --prepare     # build machine: copy /usr/include/eigen3/Eigen to build-gpu-carry/eigen3
 #   bash bench/run_gpu.sh               # GPU machine, from the repository root, with build-gpu-carry/ carried
 #
+# To spare the GPU machine its build (about 140 s), build the GPU-only configuration here (build_section's cmake line,
+# plus ccache) and bundle it: GPU_PREBUILT=build-gpu-local FMPC=build-cuda/tools/fmpc bash bench/run_gpu.sh --prepare
+# (FUZZ_BUILD=none leaves the fuzz targets out when the carry would pass 64 MiB).
+#
 # The device tool brings back at most 8 files from its $OUT, two folders deep: write elsewhere and pack, e.g.
 #   D=$OUT; OUT=/tmp/gpu bash bench/run_gpu.sh --only tests,sanitizers; tar -C /tmp -czf $D/gpu.tgz gpu
 #
@@ -60,7 +64,8 @@
 #               BASELINE_REPEATS times (default 3): small (the 20^3 box end to end: each tree's fmpc simulate on its own
 #               bench/scenes/small_box_springs.yaml, steps/s), large (the 240^3 springs box, fmpc_sim_bench
 #               --spring-cells 240), fem (--fem-only --fem-cells 120) and cohort (--cohort-only --cohort 1000), us per
-#               step per fmpc_sim_bench row. BASELINE_ROWS picks rows (default small,cohort,fem,large). Medians and
+#               step per fmpc_sim_bench row (BASELINE_SIM_BENCH=<the baseline's GPU-only fmpc_sim_bench built here> at
+#               --prepare spares the GPU machine that build). BASELINE_ROWS picks rows (default small,cohort,fem,large). Medians and
 #               the ratio this/baseline in baseline.md
 # Other GPU benchmarks add their own section function below and call it from the list at the end.
 #
@@ -185,6 +190,25 @@ prepare_scenes() {
   echo "bundled $fmpc as $PROGRAMS/bin/fmpc"
 }
 
+# A GPU-only build made on the build machine (GPU_PREBUILT=DIR, configured as build_section does, with the targets
+# fmpc_gpu_tests, fmpc_sim_bench and fmpc_setup_bench built): bundled so that the GPU machine skips its own build
+# (about 140 s of device time). Its commit goes beside it; build_section says which commit ran.
+prepare_prebuilt() {
+  local build=$1 target path
+  for target in tests/gpu/fmpc_gpu_tests bench/sim/fmpc_sim_bench bench/setup/fmpc_setup_bench; do
+    path="$build/$target"
+    if [[ ! -x "$path" ]]; then
+      [[ $target == bench/setup/* ]] && { echo "no $path: the setup section will build nothing and fail" >&2; continue; }
+      echo "no $path: build it in $build first (GPU_PREBUILT)" >&2
+      return 1
+    fi
+    bundle_program "$path" || return 1
+  done
+  git -C "$ROOT" rev-parse --short HEAD > "$PROGRAMS/prebuilt-commit.txt"
+  [[ -z "$(git -C "$ROOT" status --porcelain --untracked-files=no)" ]] || echo "(with uncommitted changes)" >> "$PROGRAMS/prebuilt-commit.txt"
+  echo "bundled the GPU-only build in $build"
+}
+
 # The fuzz section's libFuzzer targets from $FUZZ_BUILD (default build-asan: CC=clang CXX=clang++ -DFMPC_FUZZ=ON
 # -DFMPC_SANITIZE=ON) and their seeds (tests/fuzz/copy_seeds.cmake, here where ../shared/data is): every target that
 # build has (fuzz_fll and fuzz_fcl were once left out of a fixed list here), so a new target needs no edit here.
@@ -216,6 +240,9 @@ if [[ "${1:-}" == "--prepare" ]]; then
   else
     echo "FMPC is not set: no fmpc bundled, the scenes section will not run (tests, sanitizers, bench will)"
   fi
+  if [[ -n "${GPU_PREBUILT:-}" ]]; then
+    prepare_prebuilt "$GPU_PREBUILT" || exit 1
+  fi
   rm -f "$CARRY/baseline-src.tar.xz"
   if [[ -n "${BASELINE:-}" ]]; then
     [[ -n "${BASELINE_FMPC:-}" && -x "${BASELINE_FMPC:-}" ]] ||
@@ -224,6 +251,10 @@ if [[ "${1:-}" == "--prepare" ]]; then
       { echo "git archive $BASELINE failed" >&2; exit 1; }
     git -C "$ROOT" rev-parse --short "$BASELINE" > "$CARRY/baseline-commit.txt"
     bundle_program "$BASELINE_FMPC" fmpc-baseline || exit 1
+    # The baseline's GPU-only fmpc_sim_bench built here (optional: without it the GPU machine builds it).
+    if [[ -n "${BASELINE_SIM_BENCH:-}" ]]; then
+      bundle_program "$BASELINE_SIM_BENCH" fmpc_sim_bench-baseline || exit 1
+    fi
     echo "carrying the source of $BASELINE and its fmpc ($BASELINE_FMPC) for the baseline section"
   fi
   prepare_fuzz || exit 1
@@ -303,7 +334,22 @@ device_info() {
   record "machine: $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1 || echo 'no nvidia-smi'), $(nproc) CPU threads, $(date -u '+%Y-%m-%d')"
 }
 
+PREBUILT=0
 build_section() {
+  # A build carried from the build machine (--prepare with GPU_PREBUILT) instead of this machine's own.
+  if unpack_programs && [[ -x "$UNPACKED/bin/fmpc_gpu_tests" ]]; then
+    section "build: carried GPU-only build (commit $(tr '\n' ' ' < "$UNPACKED/prebuilt-commit.txt"))"
+    local target
+    for target in tests/gpu/fmpc_gpu_tests bench/sim/fmpc_sim_bench bench/setup/fmpc_setup_bench; do
+      [[ -x "$UNPACKED/bin/$(basename "$target")" ]] || continue
+      mkdir -p "$BUILD/$(dirname "$target")"
+      printf '#!/bin/sh\nexec "%s" "$@"\n' "$UNPACKED/bin/$(basename "$target")" > "$BUILD/$target"
+      chmod +x "$BUILD/$target"
+    done
+    PREBUILT=1
+    record "build: carried (the gpu-labelled ctest cases other than fmpc_gpu_tests do not run)"
+    return 0
+  fi
   section "build (FMPC_GPU_ONLY, Release, sm_90)"
   if [[ ! -f "$CARRY/eigen3/Eigen/Sparse" ]]; then
     fail "no Eigen headers in $CARRY/eigen3: run 'bash bench/run_gpu.sh --prepare' on the build machine and carry build-gpu-carry"
@@ -331,9 +377,9 @@ simulator_section() {
   if wanted tests; then
   section "simulator: GPU tests"
   # GPU_TESTS="NAME ...": only the fmpc_gpu_tests cases whose names contain one of these (fmpc_gpu_tests --list).
-  if [[ -n "${GPU_TESTS:-}" ]]; then
+  if [[ -n "${GPU_TESTS:-}" || $PREBUILT -eq 1 ]]; then
     # shellcheck disable=SC2086
-    "$BUILD/tests/gpu/fmpc_gpu_tests" $GPU_TESTS > "$OUT/gpu_tests.log" 2>&1
+    "$BUILD/tests/gpu/fmpc_gpu_tests" ${GPU_TESTS:-} > "$OUT/gpu_tests.log" 2>&1
   else
     (cd "$BUILD" && ctest -L gpu --output-on-failure -V) > "$OUT/gpu_tests.log" 2>&1
   fi
@@ -490,7 +536,7 @@ scenes_section() {
       > "$OUT/scenes/cohort_$backend.log" 2>&1 || fail "cohort on $backend (see scenes/cohort_$backend.log)"
     mkdir -p "$OUT/scenes/cohort_$backend"
     cp "$BUILD/scenes/cohort_$backend"/{cohort.csv,cohort_force_displacement.png} "$OUT/scenes/cohort_$backend/" 2>/dev/null
-    record "cohort on $backend: $(grep -o 'wall time .*' "$OUT/scenes/cohort_$backend.log")"
+    record "cohort on $backend: $(grep -E '^ *(stepping|whole command)' "$OUT/scenes/cohort_$backend.log" | sed 's/^ *//' | tr '\n' ';')"
   done
   if [[ -f "$OUT/scenes/cohort_cuda/cohort.csv" ]] &&
       cmp -s <(cut -d, -f1-15 "$OUT/scenes/cohort_cuda/cohort.csv") <(cut -d, -f1-15 "$OUT/scenes/cohort_cpu/cohort.csv"); then
@@ -635,6 +681,13 @@ baseline_section() {
   fi
   local base="$BUILD/baseline" current="$BUILD/bench/sim/fmpc_sim_bench"
   [[ -x "$current" ]] || { fail "no $current (the build section builds it)"; return 1; }
+  # A baseline fmpc_sim_bench built on the build machine (BASELINE_SIM_BENCH at --prepare) spares this machine its build.
+  if [[ -x "$UNPACKED/bin/fmpc_sim_bench-baseline" && ! -x "$base/build/bench/sim/fmpc_sim_bench" ]]; then
+    rm -rf "$base" && mkdir -p "$base/build/bench/sim" && tar -C "$base" -xJf "$CARRY/baseline-src.tar.xz" ||
+      { fail "unpack baseline"; return 1; }
+    printf '#!/bin/sh\nexec "%s" "$@"\n' "$UNPACKED/bin/fmpc_sim_bench-baseline" > "$base/build/bench/sim/fmpc_sim_bench"
+    chmod +x "$base/build/bench/sim/fmpc_sim_bench"
+  fi
   if [[ ! -x "$base/build/bench/sim/fmpc_sim_bench" ]]; then
     rm -rf "$base" && mkdir -p "$base" && tar -C "$base" -xJf "$CARRY/baseline-src.tar.xz" || { fail "unpack baseline"; return 1; }
     local generator=()

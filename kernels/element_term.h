@@ -40,6 +40,8 @@ struct ElementTermView {
   // them empty: the tangent and the energy are the law's (docs/simulator.md, "Per-point state").
   PointStateView<Real> state;
   PronyConstants<Real> prony;
+  // Per term of the series, its weight per element where it varies (prony_weighted); null: the scene's, in `prony`.
+  const Real* prony_weight[kMostPronyTerms];
   // Kinds with kNodalPressure (kernels/elements/linear_nodal_pressure.h): per vertex, the nodal pass's pressure p_a
   // (Pa) and dilatation theta_a at the positions the element pass reads; null for the other kinds.
   const Real* nodal_pressure;
@@ -70,14 +72,14 @@ FMPC_HD void element_nodes(int e, const int* nodes, const StateView<StateReal>& 
 // directly; point_first_piola takes the element's own material.
 template <typename Law, typename Real>
 FMPC_HD void point_first_piola_of(const typename Law::template Material<Real>& material, const ElementTermView<Real>& t,
-                                  int point, const Real* F, const Real* F_rate, Real* P) {
+                                  int e, int point, const Real* F, const Real* F_rate, Real* P) {
   Law::first_piola(material, F, F_rate, P);
-  if (t.prony.count > 0) prony_first_piola(t.prony, t.state, point, F, P);
+  if (t.prony.count > 0) prony_first_piola(prony_weighted(t.prony, t.prony_weight, e), t.state, point, F, P);
 }
 template <typename Law, typename Real>
 FMPC_HD void point_first_piola(const ElementTermView<Real>& t, int e, int point, const Real* F, const Real* F_rate,
                                Real* P) {
-  point_first_piola_of<Law>(Law::material(t, e), t, point, F, F_rate, P);
+  point_first_piola_of<Law>(Law::material(t, e), t, e, point, F, F_rate, P);
 }
 
 // The state update of element e after an accepted step, at positions s (the step's end): each point's Prony history
@@ -89,10 +91,11 @@ FMPC_HD void element_state_update(int e, const ElementTermView<Real>& t, const S
   Real x[N][3], v[N][3], F[Q][9];
   element_nodes<N>(e, t.corners, s, false, x, v);
   Element::deformation_gradients(t, e, x, F);
+  const PronyConstants<Real> prony = prony_weighted(t.prony, t.prony_weight, e);
   for (int q = 0; q < Q; ++q) {
     Real P[9];
     Law::first_piola(Element::template point_material<Law>(t, e), F[q], static_cast<const Real*>(nullptr), P);
-    prony_update(t.prony, t.state, Q * e + q, F[q], P);
+    prony_update(prony, t.state, Q * e + q, F[q], P);
   }
 }
 

@@ -27,6 +27,11 @@
 // for the step's end, t_(n+1): b_i = a_i, d_i = c_i, gamma = g_inf + sum_i c_i make S(F_(n+1)) the stress the update
 // will record there (Simo's algorithm, backward in time). All are per-scene constants computed once on the host in
 // double (PronyConstants); exp is never evaluated in code both backends run.
+// Per-element weights (material.bind of a Prony weight to a rule output that varies over the elements): every
+// constant above is linear in its g_i (c_i = g_i k_i with k_i = (1 - a_i) / (dt / tau_i), d_i = g_i or c_i, and
+// gamma = 1 - sum_i g_i (1 - k_i) under implicit Euler), so the host computes such a term's constants per unit weight
+// and each element scales them by its own g_i (prony_weighted: two products and a sum per term, the same operations on
+// both backends; no exp).
 // The update needs S0 = F^-1 P0 = cof(F)^T P0 / det F: a collapsed point (det F = 0) makes the state, then the
 // forces, non-finite, which the run supervisor reports as a non-finite step. The law's stiffness damping (F_rate)
 // is scaled by gamma with its elastic stress (1 but under implicit Euler). State per point: S0 at the last accepted step (9 values), then h_i (9
@@ -59,7 +64,24 @@ struct PronyConstants {
   // The update after a step: a_i = exp(-dt / tau_i), c_i = g_i (1 - a_i) / (dt / tau_i).
   Real decay[kMostPronyTerms];
   Real gain[kMostPronyTerms];
+  // A term whose weight is per element has its constants above per unit weight (g_i = 1) and no part in
+  // stress_scale; its weight g_i adds g_i stress_scale_per_weight[i] there (implicit Euler: k_i - 1; else 0).
+  Real stress_scale_per_weight[kMostPronyTerms];
 };
+
+// The constants of an element whose terms' weights `weight[i]` (null: the term's weight is the scene's, already in c)
+// are per element: c with each such term's constants scaled by the element's weight g = weight[i][e].
+template <typename Real>
+FMPC_HD PronyConstants<Real> prony_weighted(PronyConstants<Real> c, const Real* const weight[kMostPronyTerms], int e) {
+  for (int i = 0; i < c.count; ++i) {
+    if (weight[i] == nullptr) continue;
+    const Real g = weight[i][e];
+    c.stress_gain[i] = g * c.stress_gain[i];
+    c.gain[i] = g * c.gain[i];
+    c.stress_scale = c.stress_scale + g * c.stress_scale_per_weight[i];
+  }
+  return c;
+}
 
 // Values per point for `count` Prony terms: S0, then h_i.
 FMPC_HD constexpr int prony_state_width(int count) { return 9 * (count + 1); }

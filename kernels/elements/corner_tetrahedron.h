@@ -64,9 +64,9 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
     if (v) {
       Real F_rate[9];
       corner_gradient(v, rest_inverse, F_rate);
-      point_first_piola_of<Law>(material, t, kPoints * e, F, F_rate, P);
+      point_first_piola_of<Law>(material, t, e, kPoints * e, F, F_rate, P);
     } else {
-      point_first_piola_of<Law>(material, t, kPoints * e, F, static_cast<const Real*>(nullptr), P);
+      point_first_piola_of<Law>(material, t, e, kPoints * e, F, static_cast<const Real*>(nullptr), P);
     }
     Kind::add_volumetric_stress(t, e, F, P);
     corner_forces_from_stress(P, g, t.rest_volume[e], out);

@@ -142,6 +142,8 @@ kernels::ElementTermView<double> element_term_view(const ElementTerms& terms, st
     view.parameter[p] = t.parameter[p].empty() ? nullptr : t.parameter[p].data();
   view.stiffness_damping = t.stiffness_damping.empty() ? nullptr : t.stiffness_damping.data();
   view.strain_table = table && reads_strain_table(t) ? *table : kernels::StrainTableView{nullptr, nullptr, 0};
+  for (std::size_t i = 0; i < t.prony.size() && i < static_cast<std::size_t>(kernels::kMostPronyTerms); ++i)
+    view.prony_weight[i] = t.prony[i].element_weight.empty() ? nullptr : t.prony[i].element_weight.data();
   return view;
 }
 
@@ -182,18 +184,23 @@ kernels::PronyConstants<double> prony_constants(const std::vector<PronyTerm>& pr
   double scale = 1.0;
   for (int i = 0; i < c.count; ++i) {
     const PronyTerm& term = prony[static_cast<std::size_t>(i)];
+    const bool per_element = !term.element_weight.empty();
+    const double weight = per_element ? 1.0 : term.weight;
     if (dt > 0.0) {
       const double ratio = dt / term.time;
       c.decay[i] = std::exp(-ratio);
       // (1 - exp(-r)) / r without the cancellation of 1 - exp(-r) at small r.
-      c.gain[i] = term.weight * (-std::expm1(-ratio) / ratio);
+      c.gain[i] = weight * (-std::expm1(-ratio) / ratio);
     } else {
       c.decay[i] = 1.0;
-      c.gain[i] = term.weight;
+      c.gain[i] = weight;
     }
-    scale += c.gain[i] - term.weight;
+    if (per_element)
+      c.stress_scale_per_weight[i] = step_end_stress ? c.gain[i] - 1.0 : 0.0;
+    else
+      scale += c.gain[i] - weight;
     c.stress_decay[i] = step_end_stress ? c.decay[i] : 1.0;
-    c.stress_gain[i] = step_end_stress ? c.gain[i] : term.weight;
+    c.stress_gain[i] = step_end_stress ? c.gain[i] : weight;
   }
   c.stress_scale = step_end_stress ? scale : 1.0;
   return c;

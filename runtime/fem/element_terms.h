@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "diagnostics/diagnostic.h"
@@ -37,11 +38,23 @@ struct ElementGeometry {
 };
 
 // One term of a Prony series (kernels/prony_viscoelasticity.h): its weight g_i, a fraction of the law's instantaneous
-// response, and its time constant tau_i (s).
+// response, and its time constant tau_i (s). A weight bound to a rule output that varies over the elements
+// (material.bind) is one per element instead: element_weight, parallel to the elements (empty: `weight` everywhere;
+// otherwise `weight` is their largest, for messages).
 struct PronyTerm {
   double weight = 0.0;
   double time = 0.0;
+  std::vector<double> element_weight;
+
+  PronyTerm() = default;
+  PronyTerm(double g, double tau, std::vector<double> per_element = {})
+      : weight(g), time(tau), element_weight(std::move(per_element)) {}
 };
+
+// Term `term`'s weight at element e.
+inline double prony_weight_at(const PronyTerm& term, std::size_t e) {
+  return term.element_weight.empty() ? term.weight : term.element_weight[e];
+}
 
 struct ElementTerm {
   int law = 0;  // index in kernels::ElementLaws
@@ -100,7 +113,8 @@ NodalField nodal_field(const ElementGeometry& geometry, const kernels::ElementTe
 // prony_viscoelasticity.h): at the step's end t_(n+1) where `step_end_stress` (implicit Euler: a_i, c_i and
 // gamma = 1 - sum g_i + sum c_i), else at its start t_n (1, g_i, 1). With dt = 0: the update of an instantaneous jump
 // (a_i = 1, c_i = g_i), which the engines apply once at the start so that a scene starting deformed starts with the
-// history of a jump to that deformation at t = 0.
+// history of a jump to that deformation at t = 0. A term with element_weight gets its constants per unit weight
+// (kernels::prony_weighted scales them by each element's).
 kernels::PronyConstants<double> prony_constants(const std::vector<PronyTerm>& prony, double dt, bool step_end_stress);
 
 // The constants in Real (each rounded once from the double above, the same on both backends).
@@ -116,6 +130,7 @@ kernels::PronyConstants<Real> prony_constants_in(const std::vector<PronyTerm>& p
     out.stress_gain[i] = static_cast<Real>(c.stress_gain[i]);
     out.decay[i] = static_cast<Real>(c.decay[i]);
     out.gain[i] = static_cast<Real>(c.gain[i]);
+    out.stress_scale_per_weight[i] = static_cast<Real>(c.stress_scale_per_weight[i]);
   }
   return out;
 }

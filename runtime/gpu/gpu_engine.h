@@ -323,6 +323,7 @@ class GpuEngine final : public sim::SteppingEngine {
     DeviceArray<double> parameter_d[kernels::kMostLawParameters];
     DeviceArray<Real> damping;
     DeviceArray<double> damping_d;
+    DeviceArray<Real> prony_weight[kernels::kMostPronyTerms];  // per element where the term's weight varies
     DeviceArray<unsigned char> linearisation;
     DeviceArray<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
     // A kind with a nodal pass: per vertex, the element pass's nodal field (view.nodal_pressure, nodal_dilatation)

@@ -232,6 +232,12 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
       FMPC_CUDA_CHECK(arrays.checkpoint_state.upload(HostArray<Real>(values, Real(0))), diagnostics, false);
       view.state = {arrays.state.data(), width, points};
       view.prony = sim::prony_constants_in<Real>(term.prony, stability_.front().time_step, implicit);
+      for (std::size_t i = 0; i < term.prony.size() && i < static_cast<std::size_t>(kernels::kMostPronyTerms); ++i) {
+        if (term.prony[i].element_weight.empty()) continue;
+        FMPC_CUDA_CHECK(arrays.prony_weight[i].upload(convert<Real>(term.prony[i].element_weight, *c.pool)),
+                        diagnostics, false);
+        view.prony_weight[i] = arrays.prony_weight[i].data();
+      }
     }
     if (nodal_pass) {
       const std::size_t vertices = static_cast<std::size_t>(n_);

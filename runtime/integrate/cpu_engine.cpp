@@ -127,6 +127,8 @@ class CpuScene final : public CpuSceneBase {
         TermArrays arrays;
         for (int p = 0; p < kernels::kMostLawParameters; ++p) arrays.parameter[p] = convert(term.parameter[p]);
         arrays.damping = convert(term.stiffness_damping);
+        for (std::size_t i = 0; i < term.prony.size() && i < static_cast<std::size_t>(kernels::kMostPronyTerms); ++i)
+          arrays.prony_weight[i] = convert(term.prony[i].element_weight);
         const int width = point_state_width(term);
         const int points = static_cast<int>(geometry.size()) * points_per_element(geometry.kind);
         arrays.state.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(points), Real(0));
@@ -149,6 +151,7 @@ class CpuScene final : public CpuSceneBase {
         view.rest_volume = rest_volume_.data();
         for (int p = 0; p < kernels::kMostLawParameters; ++p) view.parameter[p] = data_or_null(held.parameter[p]);
         view.stiffness_damping = data_or_null(held.damping);
+        for (int i = 0; i < kernels::kMostPronyTerms; ++i) view.prony_weight[i] = data_or_null(held.prony_weight[i]);
         view.nodal_pressure = data_or_null(held.nodal_pressure);
         view.nodal_dilatation = data_or_null(held.nodal_dilatation);
         view.strain_table = reads_strain_table(term) ? table : kernels::StrainTableView{nullptr, nullptr, 0};
@@ -643,6 +646,7 @@ class CpuScene final : public CpuSceneBase {
   struct TermArrays {
     std::vector<Real> parameter[kernels::kMostLawParameters];
     std::vector<Real> damping;
+    std::vector<Real> prony_weight[kernels::kMostPronyTerms];  // per element where the term's weight varies
     std::vector<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
     // Per vertex, a kind with a nodal pass (view.nodal_pressure, view.nodal_dilatation); empty for the others.
     std::vector<Real> nodal_pressure, nodal_dilatation;

@@ -12,27 +12,47 @@ namespace {
 // (a builder from runtime/fem/element_law_registry.h checks the physical ranges with the scene's names; this catches
 // setups built by hand), and the geometry's arrays parallel to the tetrahedra, its nodes existing vertices.
 // At most kMostPronyTerms terms, each weight in (0, 1) and time positive and finite, the weights summing below 1 (a
-// solid keeps a long-term modulus g_inf = 1 - sum g_i > 0).
-bool validate_prony(const std::vector<PronyTerm>& prony, const std::string& name, const SourceRange& range,
-                    DiagnosticList& diagnostics) {
+// solid keeps a long-term modulus g_inf = 1 - sum g_i > 0). A weight per element (element_weight: one per element)
+// may be 0 at an element (that term does not relax there); the sum is checked at every element.
+bool validate_prony(const std::vector<PronyTerm>& prony, std::size_t count, const std::string& name,
+                    const SourceRange& range, DiagnosticList& diagnostics) {
   if (prony.size() > static_cast<std::size_t>(kernels::kMostPronyTerms)) {
     diagnostics.error(range, name + " has " + std::to_string(prony.size()) + " Prony terms; at most " +
                                  std::to_string(kernels::kMostPronyTerms) + " are allowed");
     return false;
   }
-  double sum = 0.0;
+  bool per_element = false;
   for (std::size_t i = 0; i < prony.size(); ++i) {
     const PronyTerm& term = prony[i];
-    if (!(term.weight > 0.0 && term.weight < 1.0) || !(term.time > 0.0) || !std::isfinite(term.time)) {
+    if (!(term.time > 0.0) || !std::isfinite(term.time) ||
+        (term.element_weight.empty() && !(term.weight > 0.0 && term.weight < 1.0))) {
       diagnostics.error(range, name + ": Prony term " + std::to_string(i) + " has weight " +
                                    format_number(term.weight) + " and time " + format_number(term.time) +
                                    " s; a weight is in (0, 1) and a time positive and finite");
       return false;
     }
-    sum += term.weight;
+    if (term.element_weight.empty()) continue;
+    per_element = true;
+    if (term.element_weight.size() != count) {
+      diagnostics.error(range, name + ": Prony term " + std::to_string(i) + " has " +
+                                   std::to_string(term.element_weight.size()) + " weights for " +
+                                   std::to_string(count) + " elements; give one per element or none");
+      return false;
+    }
+    for (std::size_t e = 0; e < count; ++e) {
+      const double g = term.element_weight[e];
+      if (g >= 0.0 && g < 1.0) continue;
+      diagnostics.error(range, name + ": Prony term " + std::to_string(i) + " has weight " + format_number(g) +
+                                   " at element " + std::to_string(e) + "; a weight per element is in [0, 1)");
+      return false;
+    }
   }
-  if (!(sum < 1.0)) {
+  for (std::size_t e = 0; e < (per_element ? count : 1); ++e) {
+    double sum = 0.0;
+    for (const PronyTerm& term : prony) sum += prony_weight_at(term, e);
+    if (sum < 1.0) continue;
     diagnostics.error(range, name + ": the Prony weights sum to " + format_number(sum) +
+                                 (per_element ? " at element " + std::to_string(e) : std::string()) +
                                  "; they must sum below 1 (the long-term modulus is 1 - sum g_i of the law's)");
     return false;
   }
@@ -121,7 +141,7 @@ bool validate_element_terms(const SimulationSetup& setup, const SourceRange& ran
             range, name + " has stiffness damping " + std::to_string(beta) + "; it must be finite and non-negative");
         return false;
       }
-    if (!validate_prony(term.prony, name, range, diagnostics)) return false;
+    if (!validate_prony(term.prony, count, name, range, diagnostics)) return false;
   }
   return true;
 }

@@ -23,10 +23,11 @@ std::vector<std::string> parameter_keywords(const ElementLawRow& law) {
 
 std::string bind_field(const ParameterBinding& bound) { return "material.bind." + bound.parameter; }
 
-// A Prony term's weight (kernels/prony_viscoelasticity.h): a fraction of the law's instantaneous stress, in (0, 1).
-// Not a law's parameter: the series acts on any law, one per scene.
+// A Prony term's weight (kernels/prony_viscoelasticity.h): a fraction of the law's instantaneous stress, in [0, 1)
+// at each element (0: the term does not relax there). Not a law's parameter: the series acts on any law; its time
+// constants are the scene's, its weights one per element where a rule output gives them.
 const MaterialParameterRow kPronyWeight = {"viscoelastic.prony[I].weight", "Prony weight",
-                                           MaterialParameterRow::Quantity::Dimensionless, 0.0, 1.0, false, false,
+                                           MaterialParameterRow::Quantity::Dimensionless, 0.0, 1.0, true, false,
                                            nullptr};
 
 // The term index of "viscoelastic.prony[I].weight", or -1 for any other parameter.
@@ -177,24 +178,25 @@ bool apply_bound_parameters(const Scene& scene, const ElementLawRow& law, const 
       material.*(parameter.values) = std::move(*values);
       continue;
     }
-    // One series per scene: the weight must be the same at every element.
-    const auto [low, high] = std::minmax_element(values->begin(), values->end());
-    if (*low != *high) {
-      diagnostics.error(scene.range_of(bind_field(bound) + ".output"),
-                        bind_field(bound) + ": " + bound_output_name(binding, output) + " varies over the elements (" +
-                            format_number(*low) + " to " + format_number(*high) +
-                            "); a Prony series is one per scene, so its weights cannot vary per element: bind the "
-                            "inputs it depends on to constants");
-      return false;
-    }
+    // The same positive weight at every element is the scene's; otherwise one per element (largest in `weight`).
     PronyTerm& weighted = prony[static_cast<std::size_t>(term)];
-    weighted.weight = values->empty() ? 0.0 : values->front();
+    weighted.element_weight.clear();
+    if (!values->empty()) {
+      const auto [low, high] = std::minmax_element(values->begin(), values->end());
+      weighted.weight = *high;
+      if (*low != *high || !(*low > 0.0)) weighted.element_weight = std::move(*values);
+    }
     const auto scale = si_per_unit(parameter, output.unit);
     largest_sum += output.has_range ? output.range_max * *scale : weighted.weight;
     bound_weights += (bound_weights.empty() ? "" : ", ") + bound_output_name(binding, output);
   }
+  // The largest sum over the elements (each term's weight at the element).
   double sum = 0.0;
-  for (const PronyTerm& term : prony) sum += term.weight;
+  for (std::size_t e = 0; e < centroids.size(); ++e) {
+    double at = 0.0;
+    for (const PronyTerm& term : prony) at += prony_weight_at(term, e);
+    sum = std::max(sum, at);
+  }
   if (!bound_weights.empty() && !(largest_sum < 1.0 && sum < 1.0)) {
     diagnostics.error(scene.range_of("material.bind"),
                       "material.bind: the Prony weights can sum to " + format_number(std::max(largest_sum, sum)) +

@@ -28,8 +28,9 @@ std::optional<std::vector<int>> bound_output_indices(const Scene& scene, const s
 
 // Writes each of `binding.bound` (per element, at `centroids`, mesh units) into `material` in its parameter's SI
 // unit, and a bound Prony weight (viscoelastic.prony[I].weight) into `prony`, after checking the unit, the output's
-// declared range and every element's value (a Prony weight: the same at every element, and the weights' sum below 1
-// with each bound one at its declared largest); false after errors located at material.bind.PARAMETER naming the
+// declared range and every element's value (a Prony weight in [0, 1): the scene's where it is the same positive value
+// at every element, else PronyTerm::element_weight; the weights' sum below 1 at every element and with each bound one
+// at its declared largest); false after errors located at material.bind.PARAMETER naming the
 // output. `law` is the scene's element law's row.
 bool apply_bound_parameters(const Scene& scene, const ElementLawRow& law, const MaterialBinding& binding,
                             const std::vector<Point3>& centroids, ElementMaterial& material,

@@ -485,10 +485,16 @@ std::optional<SimulationSetup> build_fem(const Scene& scene, BuiltScene& built, 
       spec.poisson_field = "material.bind.poisson_ratio (output '" + material.bind[b].output + "')";
     }
   built.stiffness_description += ", nu = " + nu_text;
-  if (!material.prony.empty()) {
+  if (!spec.prony.empty()) {
     built.stiffness_description += "; viscoelastic, Prony series (g, tau)";
-    for (const PronyTerm& term : material.prony)
-      built.stiffness_description += " (" + format_number(term.weight) + ", " + format_number(term.time) + " s)";
+    for (const PronyTerm& term : spec.prony) {
+      std::string weight = format_number(term.weight);
+      if (!term.element_weight.empty()) {
+        const auto low = *std::min_element(term.element_weight.begin(), term.element_weight.end());
+        weight = format_number(low) + " to " + weight + " per element";
+      }
+      built.stiffness_description += " (" + weight + ", " + format_number(term.time) + " s)";
+    }
   }
   auto setup = build_fem_model(built.mesh, spec, diagnostics);
   if (!setup) return std::nullopt;

@@ -1,7 +1,8 @@
 // Per-point state on the CUDA backend: a viscoelastic FEM (kernels/prony_viscoelasticity.h) of every element kind
 // against the CPU loop, bitwise for the explicit integrators (the same FMPC_HD update after each step, --fmad=false),
-// implicit Euler to the CG tolerance; its checkpoint restores the state (the same steps again give the same bits); a
-// viscoelastic scene runs without persistent launches and alone in a batch, as stated.
+// implicit Euler to the CG tolerance; its checkpoint restores the state, with the weights one per scene or per
+// element (the same steps again give the same bits, and the CPU's); a viscoelastic scene runs without persistent
+// launches and alone in a batch, as stated.
 #include <cstdint>
 #include <sstream>
 #include <string>
@@ -23,12 +24,17 @@ namespace {
 // A 0.1 m box of 5 kPa tissue (nu 0.45, two Prony terms with times near the run's length) hanging from its top face
 // under gravity, 3 x 5 x 2 cells (odd sizes: blocks partly idle) of element kind `element`, started from a stretched
 // state so that the history of the jump at t = 0 is not zero; mass damping where the integrator is forward Euler
-// (cpu_gpu_comparison.h).
-SimulationSetup stretched_box(Precision precision, Integrator integrator, int element = 0) {
+// (cpu_gpu_comparison.h). With `weight_per_element`, the first term's weight is 0.3 and 0.1 on alternate elements
+// (kernels::prony_weighted; the scene-level path from rules is gpu_parameter_binding_test.cpp's).
+SimulationSetup stretched_box(Precision precision, Integrator integrator, int element = 0,
+                              bool weight_per_element = false) {
   DiagnosticList diagnostics;
   SimulationSetup out;
   if (auto setup = sim::viscoelastic_box(3, 5, 2, {{0.3, 0.02}, {0.25, 0.2}}, diagnostics, element)) out = *setup;
   if (diagnostics.has_errors()) note("setup: " + describe(diagnostics));
+  if (weight_per_element && !out.elements.terms.empty())
+    for (std::size_t e = 0; e < out.tetrahedra.size(); ++e)
+      out.elements.terms.front().prony.front().element_weight.push_back(e % 2 == 0 ? 0.3 : 0.1);
   out.initial_positions = out.rest_positions;
   for (Point3& p : out.initial_positions) p[1] = 0.1 - (0.1 - p[1]) * 1.05;
   out.precision = precision;
@@ -61,12 +67,15 @@ FMPC_GPU_TEST(viscoelastic_matches_cpu, "a viscoelastic FEM: every integrator ma
     }
 }
 
-FMPC_GPU_TEST(viscoelastic_checkpoint, "the GPU checkpoint restores the per-point state: the same steps, the same bits",
+FMPC_GPU_TEST(viscoelastic_checkpoint,
+              "the GPU checkpoint restores the per-point state (one weight per scene or per element): the same steps, "
+              "the same bits",
               true) {
   for (const ElementKindRow& kind : element_kind_rows())
     for (const Precision precision : {Precision::Float, Precision::Double}) {
-      for (const Integrator integrator : kGpuIntegrators) {
-        const std::vector<SimulationSetup> scenes = {stretched_box(precision, integrator, kind.kind)};
+      for (const Integrator integrator : kGpuIntegrators)
+      for (const bool per_element : {false, true}) {
+        const std::vector<SimulationSetup> scenes = {stretched_box(precision, integrator, kind.kind, per_element)};
         DiagnosticList diagnostics;
         const auto stability = check_stability(scenes.front(), diagnostics);
         FMPC_REQUIRE(stability);

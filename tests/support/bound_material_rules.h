@@ -28,4 +28,19 @@ output stiffness in [0, 30] kPa
 rule r1: if s is all then stiffness is model
 )";
 
+// E = 2 F + 1 kPa and two Prony weights, fast = 0.2 + 0.02 F and slow = 0.1 + 0.02 F (declared ranges [0.2, 0.4] and
+// [0.1, 0.3]: their sum stays below 1).
+inline constexpr const char* kPronyWeightRules = R"(system tissue
+  type sugeno
+input F in [0, 10]
+  all is gauss(mean 5, sd 1000)
+output stiffness in [0, 30] kPa
+  model is linear(F 2, offset 1)
+output fast in [0.2, 0.4]
+  model is linear(F 0.02, offset 0.2)
+output slow in [0.1, 0.3]
+  model is linear(F 0.02, offset 0.1)
+rule r1: if F is all then stiffness is model and fast is model and slow is model
+)";
+
 }  // namespace fmpc::test_rules

@@ -61,6 +61,15 @@ Built parse_and_build(const Folder& folder, const std::string& yaml) {
   return {std::move(*scene), std::move(*built)};
 }
 
+// `text` written to the folder as tissue.fis (the scenes' rule file) and loaded; REQUIREs no errors.
+RuleFile written_rules(const Folder& folder, const char* text) {
+  folder.write("tissue.fis", text);
+  DiagnosticList diagnostics;
+  RuleFile file = load_rule_file("tissue.fis", text, diagnostics);
+  REQUIRE_FALSE(diagnostics.has_errors());
+  return file;
+}
+
 // The messages of the scene `yaml`, which parses but does not build.
 std::string build_errors(const Folder& folder, const std::string& yaml) {
   DiagnosticList diagnostics;
@@ -84,10 +93,7 @@ std::string two_region_scene(const std::string& law, const std::string& element,
 TEST_CASE("material.bind: E and nu per element from two outputs equal the values set directly, bit for bit",
           "[scene][bind]") {
   Folder folder("two_outputs");
-  folder.write("tissue.fis", kTwoOutputRules);
-  DiagnosticList load_diagnostics;
-  const RuleFile rules = load_rule_file("tissue.fis", kTwoOutputRules, load_diagnostics);
-  REQUIRE_FALSE(load_diagnostics.has_errors());
+  const RuleFile rules = written_rules(folder, kTwoOutputRules);
   Interpreter interpreter(rules.systems.front());
   for (const ElementLawRow& law : element_law_rows()) {
     if (law.beside_springs) continue;
@@ -212,25 +218,10 @@ TEST_CASE("strain-bound E: every law on every element kind reads E at the princi
   }
 }
 
-TEST_CASE("material.bind: Prony weights from the rules, the same at every element", "[scene][bind]") {
-  // fast = 0.2 + 0.02 F, slow = 0.1 + 0.02 F (declared ranges [0.2, 0.4] and [0.1, 0.3]: their sum stays below 1).
-  const std::string rules = R"(system tissue
-  type sugeno
-input F in [0, 10]
-  all is gauss(mean 5, sd 1000)
-output stiffness in [0, 30] kPa
-  model is linear(F 2, offset 1)
-output fast in [0.2, 0.4]
-  model is linear(F 0.02, offset 0.2)
-output slow in [0.1, 0.3]
-  model is linear(F 0.02, offset 0.1)
-rule r1: if F is all then stiffness is model and fast is model and slow is model
-)";
+TEST_CASE("material.bind: Prony weights from the rules, the same at every element or one per element",
+          "[scene][bind][visco]") {
   Folder folder("prony");
-  folder.write("tissue.fis", rules);
-  DiagnosticList load_diagnostics;
-  const RuleFile file = load_rule_file("tissue.fis", rules, load_diagnostics);
-  REQUIRE_FALSE(load_diagnostics.has_errors());
+  const RuleFile file = written_rules(folder, kPronyWeightRules);
   const auto scene_with = [](const std::string& inputs) {
     return "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [2, 2, 2]}}\nmodel: fem\nmaterial:\n  rules: tissue.fis\n"
            "  inputs: " + inputs + "\n  viscoelastic: {prony: [{time: 1.86}, {time: 51.3}]}\n  bind:\n"
@@ -245,15 +236,107 @@ rule r1: if F is all then stiffness is model and fast is model and slow is model
     REQUIRE(prony.size() == 2);
     CHECK(prony[0].weight == evaluation.outputs[1]);
     CHECK(prony[1].weight == evaluation.outputs[2]);
+    CHECK(prony[0].element_weight.empty());
     CHECK(prony[0].weight == Approx(0.28).epsilon(1e-12));
     CHECK(prony[1].time == 51.3);
   }
-  SECTION("inputs per region: a weight that varies over the elements is refused") {
-    CHECK(build_errors(folder, scene_with("{F: {regions: [{box: {min: [0, 0, 0], max: [1, 1, 0.01]}, value: 2}], "
-                                          "default: 8}}")) ==
-          "material.bind.viscoelastic.prony[0].weight: output 'fast' of system 'tissue' varies over the elements "
-          "(0.24000000000000002 to 0.36); a Prony series is one per scene, so its weights cannot vary per element: "
-          "bind the inputs it depends on to constants\n");
+  SECTION("inputs per region: each element gets its own weights, the outputs at its centroid") {
+    const Built made = parse_and_build(
+        folder, scene_with("{F: {regions: [{box: {min: [0, 0, 0], max: [1, 1, 0.01]}, value: 2}], default: 8}}"));
+    const SimulationSetup& setup = made.built.setup;
+    const std::vector<PronyTerm>& prony = setup.elements.terms.front().prony;
+    REQUIRE(prony.size() == 2);
+    const Evaluation low = Interpreter(file.systems.front()).evaluate({2.0});
+    const Evaluation high = Interpreter(file.systems.front()).evaluate({8.0});
+    std::size_t lows = 0;
+    for (const PronyTerm& term : prony) REQUIRE(term.element_weight.size() == setup.tetrahedra.size());
+    for (std::size_t e = 0; e < setup.tetrahedra.size(); ++e) {
+      double z = 0.0;
+      for (const std::int32_t v : setup.tetrahedra[e]) z += setup.rest_positions[static_cast<std::size_t>(v)][2] / 4;
+      const Evaluation& expected = z < 0.01 ? low : high;
+      lows += z < 0.01 ? 1 : 0;
+      CHECK(prony[0].element_weight[e] == expected.outputs[1]);
+      CHECK(prony[1].element_weight[e] == expected.outputs[2]);
+    }
+    CHECK(lows == setup.tetrahedra.size() / 2);
+    CHECK(prony[0].weight == high.outputs[1]);  // the largest, for messages
+    CHECK(made.built.stiffness_description.find("viscoelastic, Prony series (g, tau) (0.24000000000000002 to 0.36 per "
+                                                "element, 1.86 s) (0.14 to 0.26 per element, 51.3 s)") !=
+          std::string::npos);
+  }
+}
+
+namespace {
+
+// A 2 cm block of 4 x 2 x 2 cells whose Prony weights follow F, 2 on its half x < 1 cm and 8 on the other, held
+// stretched 1% along x from t = 0 (every vertex held: a homogeneous deformation; dt 1 ms), its face at x = `face` the
+// probe's (held in place): its reaction force is minus the internal forces there, from the elements of that half alone.
+SimulationSetup held_stretch(const Folder& folder, double face) {
+  const std::string yaml =
+      "mesh: {box: {size: [0.02, 0.02, 0.02], cells: [4, 2, 2]}}\nmodel: fem\nmaterial:\n  rules: tissue.fis\n"
+      "  inputs: {F: {regions: [{box: {min: [-1, -1, -1], max: [0.01, 1, 1]}, value: 2}], default: 8}}\n"
+      "  viscoelastic: {prony: [{time: 0.02}, {time: 0.2}]}\n"
+      "  bind:\n    youngs_modulus: stiffness\n    viscoelastic.prony[0].weight: fast\n"
+      "    viscoelastic.prony[1].weight: slow\n";
+  SimulationSetup setup = parse_and_build(folder, yaml).built.setup;
+  setup.initial_positions = setup.rest_positions;
+  for (Point3& p : setup.initial_positions) p[0] *= 1.01;
+  setup.fixed_vertices.clear();
+  ProbeLoad probe;
+  for (std::size_t v = 0; v < setup.rest_positions.size(); ++v) {
+    const auto vertex = static_cast<std::int32_t>(v);
+    if (std::abs(setup.rest_positions[v][0] - face) < 1e-9)
+      probe.vertices.push_back(vertex);
+    else
+      setup.fixed_vertices.push_back(vertex);
+  }
+  setup.probe = probe;
+  setup.precision = Precision::Double;
+  setup.time_step = 1e-3;  // nothing moves: no stable step to derive
+  return setup;
+}
+
+}  // namespace
+
+TEST_CASE("material.bind: Prony weights per element from a rule output: each element relaxes by its own weights",
+          "[scene][bind][visco]") {
+  // The block's halves have the series (0.24, 0.02 s), (0.14, 0.2 s) (F = 2) and (0.36, 0.02 s), (0.26, 0.2 s)
+  // (F = 8): held, each face's reaction force is G(t) of its own half's series times the instantaneous one, in closed
+  // form (Simo's recursion is exact for a strain held), on the CPU engine through the scene's binding.
+  Folder folder("prony_relax");
+  const RuleFile file = written_rules(folder, kPronyWeightRules);
+  for (const double face : {0.0, 0.02}) {
+    const Evaluation own = Interpreter(file.systems.front()).evaluate({face < 0.01 ? 2.0 : 8.0});
+    const double fast = own.outputs[1], slow = own.outputs[2];
+    const auto relaxation = [&](double t) {
+      return 1.0 - fast * (1.0 - std::exp(-t / 0.02)) - slow * (1.0 - std::exp(-t / 0.2));
+    };
+    for (const Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::ImplicitEuler}) {
+      INFO("the face at x = " << face << " m, " << to_string(integrator));
+      SimulationSetup setup = held_stretch(folder, face);
+      setup.integrator = integrator;
+      DiagnosticList diagnostics;
+      const auto run = Simulation::create(setup, diagnostics);
+      INFO(all_messages(diagnostics));
+      REQUIRE(run);
+      const double dt = run->stability(0).time_step;
+      const double instantaneous = run->probe_reading(0, diagnostics).force[0];
+      REQUIRE(std::abs(instantaneous) > 0.0);
+      double worst = 0.0;
+      std::size_t steps = 0;
+      while (static_cast<double>(steps) * dt < 0.3) {
+        const auto chunk = static_cast<std::size_t>(std::ceil(0.01 / dt));
+        REQUIRE(run->advance(chunk, diagnostics));
+        steps += chunk;
+        const double force = run->probe_reading(0, diagnostics).force[0];
+        worst = std::max(worst, std::abs(force / instantaneous - relaxation(static_cast<double>(steps) * dt)));
+      }
+      INFO("largest |F(t) / F(0) - G(t)| over 0.3 s: " << worst);
+      CHECK(worst < 1e-12);
+      // The other half's series is far from this one's by then: the test tells them apart.
+      const Evaluation other = Interpreter(file.systems.front()).evaluate({face < 0.01 ? 8.0 : 2.0});
+      CHECK(std::abs(other.outputs[2] - slow) > 0.1);
+    }
   }
 }
 

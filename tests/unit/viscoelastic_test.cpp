@@ -193,19 +193,27 @@ TEST_CASE("every law with a Prony series relaxes as G(t) after a step strain, at
   }
 }
 
-TEST_CASE("every element kind with every law: each material point keeps its own Prony history (point kPoints e + q)",
+TEST_CASE("every element kind with every law: each material point keeps its own Prony history (point kPoints e + q), "
+          "and each element relaxes by its own weights where they vary per element",
           "[fem][visco]") {
   // Two elements of each kind on separate nodes, each held at its own non-uniform deformation from t = 0: every
   // point's stress is G(t) times its elastic one, so the node forces are G(t) times the elastic forces exactly, but
   // only where each point reads and updates its own state (a point reading another element's or another point's
-  // history would see a different S0).
+  // history would see a different S0). With per-element weights (the first term's 0.3 on element 0, 0.05 on element
+  // 1; kernels::prony_weighted) each element's G is its own series', at the step's start and end constants alike.
+  const std::vector<std::vector<PronyTerm>> element_series = {kTwoTerms, {{0.05, 0.05}, {0.25, 0.8}}};
   for (int kind = 0; kind < kernels::ElementKinds::count; ++kind)
-    for (const ElementLawRow& row : element_law_rows()) {
+    for (const ElementLawRow& row : element_law_rows())
+    for (const bool per_element : {false, true})
+    for (const bool step_end : {false, true}) {
+      if (!per_element && step_end) continue;  // the relaxation test above holds the step's end constants
       kernels::visit_element_term(kind, row.law, [&](auto element_kind, auto element_law) {
         using Kind = decltype(element_kind);
         using Law = decltype(element_law);
         constexpr int N = Kind::kNodes;
-        INFO("element kind " << element_kind_row(kind).keyword << ", law " << row.keyword);
+        INFO("element kind " << element_kind_row(kind).keyword << ", law " << row.keyword
+                             << (per_element ? ", weights per element" : "")
+                             << (step_end ? ", stress at the step's end" : ""));
         ElementMaterial material;
         material.youngs_modulus = {5000.0, 7000.0};
         material.poisson_ratio = {0.3, 0.3};
@@ -214,6 +222,7 @@ TEST_CASE("every element kind with every law: each material point keeps its own 
         REQUIRE(build);
         ElementTerm term = build->term;
         term.prony = kTwoTerms;
+        if (per_element) term.prony[0].element_weight = {0.3, 0.05};
         const double corners[4][3] = {{0, 0, 0}, {0.01, 0, 0}, {0, 0.01, 0}, {0, 0, 0.01}};
         double rest[N][3];
         kernels::element_rest_nodes<Kind>(corners, rest);
@@ -233,6 +242,7 @@ TEST_CASE("every element kind with every law: each material point keeps its own 
         view.rest_volume = volume;
         for (int p = 0; p < kernels::kMostLawParameters; ++p)
           view.parameter[p] = term.parameter[p].empty() ? nullptr : term.parameter[p].data();
+        view.prony_weight[0] = per_element ? term.prony[0].element_weight.data() : nullptr;
         view.state = {state.data(), point_state_width(term), points};
         // A kind with a nodal pass: its nodal pressure held at zero, so that its forces are the shear part's, which
         // carries the Prony series (the volumetric part is elastic).
@@ -272,11 +282,13 @@ TEST_CASE("every element kind with every law: each material point keeps its own 
         };
         update(0.0);
         const double dt = 0.01;
-        view.prony = prony_constants(term.prony, dt, false);
+        view.prony = prony_constants(term.prony, dt, step_end);
         double worst = 0.0;
         for (int n = 0; n <= 100; ++n) {
-          const double g = relaxation(kTwoTerms, n * dt);
           for (int e = 0; e < 2; ++e) {
+            // After n updates the state is at t_n: the stress at the step's start is G(t_n) S0, at its end G(t_(n+1)).
+            const double g = relaxation(per_element ? element_series[static_cast<std::size_t>(e)] : kTwoTerms,
+                                        (step_end ? n + 1 : n) * dt);
             double out[N][3], largest = 0.0, difference = 0.0;
             forces(e, out);
             for (int a = 0; a < N; ++a)
@@ -350,6 +362,10 @@ TEST_CASE("a viscoelastic FEM's per-point state is saved and restored with the C
     auto setup =
         viscoelastic_box(first_kind ? 3 : 2, first_kind ? 3 : 2, first_kind ? 2 : 1, kTwoTerms, diagnostics, kind.kind);
     REQUIRE(setup);
+    // The first term's weight per element (0.3 and 0.1 alternating): the weights are the run's constants, the state
+    // the checkpoint's, whichever way the weights are held.
+    std::vector<double>& weights = setup->elements.terms.front().prony.front().element_weight;
+    for (std::size_t e = 0; e < setup->tetrahedra.size(); ++e) weights.push_back(e % 2 == 0 ? 0.3 : 0.1);
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       for (const Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::VelocityVerlet,
                                           Integrator::RungeKutta4, Integrator::ImplicitEuler}) {
@@ -404,6 +420,32 @@ TEST_CASE("a Prony series with weights summing to 1 or more, or too many terms, 
   CHECK(zero_time.items().front().message ==
         "element term 0: Prony term 0 has weight 0.1 and time 0 s; a weight is in (0, 1) and a time positive and "
         "finite");
+  // Weights per element: one per element, each in [0, 1) (0 allowed: the term does not relax there), the sum below 1
+  // at every element.
+  const std::size_t count = setup->tetrahedra.size();
+  REQUIRE(count >= 2);
+  const auto refusal = [&](std::vector<double> first, double second) {
+    setup->elements.terms.front().prony = {{0.0, 1.0, std::move(first)}, {second, 2.0}};
+    DiagnosticList found;
+    const bool valid = validate_setup(*setup, found);
+    return valid ? std::string() : found.items().front().message;
+  };
+  std::vector<double> weights(count, 0.4);
+  weights.front() = 0.0;
+  CHECK(refusal(weights, 0.5).empty());
+  CHECK(refusal(std::vector<double>(count - 1, 0.4), 0.5) ==
+        "element term 0: Prony term 0 has " + std::to_string(count - 1) + " weights for " + std::to_string(count) +
+            " elements; give one per element or none");
+  weights.back() = -0.1;
+  CHECK(refusal(weights, 0.5) == "element term 0: Prony term 0 has weight -0.1 at element " +
+                                     std::to_string(count - 1) + "; a weight per element is in [0, 1)");
+  weights.back() = std::nan("");
+  CHECK(refusal(weights, 0.5) == "element term 0: Prony term 0 has weight nan at element " +
+                                     std::to_string(count - 1) + "; a weight per element is in [0, 1)");
+  weights.back() = 0.6;
+  CHECK(refusal(weights, 0.5) == "element term 0: the Prony weights sum to 1.1 at element " +
+                                     std::to_string(count - 1) +
+                                     "; they must sum below 1 (the long-term modulus is 1 - sum g_i of the law's)");
 }
 
 namespace {
