@@ -50,19 +50,21 @@ struct ElementTermView {
   const Real* nodal_dilatation;
 };
 
-// Element e's node positions and, where `velocities`, velocities [node][axis].
-template <int Nodes, typename Real>
-FMPC_HD void element_nodes(int e, const int* nodes, const StateView<Real>& s, bool velocities, Real x[Nodes][3],
+// Element e's node positions and, where `velocities`, velocities [node][axis], in Real from a state in StateReal (the
+// same type in the engines' passes; double from float where the GPU sums a float run's energy in double, exactly as
+// the host does from the downloaded positions).
+template <int Nodes, typename StateReal, typename Real>
+FMPC_HD void element_nodes(int e, const int* nodes, const StateView<StateReal>& s, bool velocities, Real x[Nodes][3],
                            Real v[Nodes][3]) {
   for (int a = 0; a < Nodes; ++a) {
     const int vertex = nodes[Nodes * e + a];
-    x[a][0] = s.x[vertex];
-    x[a][1] = s.y[vertex];
-    x[a][2] = s.z[vertex];
+    x[a][0] = static_cast<Real>(s.x[vertex]);
+    x[a][1] = static_cast<Real>(s.y[vertex]);
+    x[a][2] = static_cast<Real>(s.z[vertex]);
     if (velocities) {
-      v[a][0] = s.vx[vertex];
-      v[a][1] = s.vy[vertex];
-      v[a][2] = s.vz[vertex];
+      v[a][0] = static_cast<Real>(s.vx[vertex]);
+      v[a][1] = static_cast<Real>(s.vy[vertex]);
+      v[a][2] = static_cast<Real>(s.vz[vertex]);
     }
   }
 }
@@ -157,8 +159,10 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
 // The nodal pass of a kind with kNodalPressure (kernels/elements/linear_nodal_pressure.h): element e's shares of
 // its nodes' sums, written at its corner slots in the corner-force layout (x: volume change, y: rest volume, z:
 // modulus times rest volume), so that each vertex's gather (nodal_pressure_at) sums them in CSR order as it sums forces.
-template <typename Element, typename Law, typename Real>
-FMPC_HD void element_nodal_shares(int e, const ElementTermView<Real>& t, const StateView<Real>& s,
+// The CPU engine's nodal pass, the host's sums and the CUDA kernels (nodal_shares_kernel, kernels/explicit_step.cu)
+// all run this and nodal_pressure_at: the GPU's nodal field has the CPU's bits.
+template <typename Element, typename Law, typename Real, typename StateReal>
+FMPC_HD void element_nodal_shares(int e, const ElementTermView<Real>& t, const StateView<StateReal>& s,
                                   CornerForce<Real>* slot) {
   if constexpr (Element::kNodalPressure) {
     constexpr int N = Element::kNodes;

@@ -49,6 +49,22 @@ cudaError_t launch_term_forces(const ForceModelView<Real>& model, const kernels:
   return cudaGetLastError();
 }
 
+// The nodal pass's two kernels (launch_nodal_pass): one thread per element, then one per vertex.
+template <typename Real, typename StateReal, typename Element, typename Law>
+__global__ void nodal_shares_kernel(NodalPassArguments<Real> a, kernels::StateView<StateReal> state) {
+  const int e = vertex_index();
+  if (e >= a.term.count) return;
+  kernels::element_nodal_shares<Element, Law>(e, a.term, state, a.shares);
+}
+
+template <typename Real>
+__global__ void nodal_pressure_kernel(NodalPassArguments<Real> a) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count) return;
+  const kernels::CornerForceView<Real> shares{a.corner_offset, a.corner_index, a.shares};
+  kernels::nodal_pressure_at(v, shares, a.pressure[v], a.dilatation[v]);
+}
+
 template <typename Real, typename Element, typename Law>
 __global__ void point_state_kernel(kernels::ElementTermView<Real> term, kernels::StateView<Real> state) {
   const int e = vertex_index();
@@ -367,10 +383,40 @@ cudaError_t launch_verlet(VerletKernel which, const VerletArguments<Real>& argum
 
 }  // namespace
 
+template <typename Real, typename StateReal>
+cudaError_t launch_nodal_pass(const NodalPassArguments<Real>& arguments, const kernels::StateView<StateReal>& state,
+                              cudaStream_t stream) {
+  if (arguments.term.count <= 0 || arguments.vertex_count <= 0) return cudaSuccess;
+  const cudaError_t status =
+      kernels::visit_element_term(arguments.term.element, arguments.term.law, [&](auto kind, auto element_law) {
+        using Element = decltype(kind);
+        // Instantiated for the kinds with a nodal pass only; a view of another kind is a caller's error.
+        if constexpr (Element::kNodalPressure) {
+          nodal_shares_kernel<Real, StateReal, Element, decltype(element_law)>
+              <<<blocks_for(arguments.term.count), kThreadsPerBlock, 0, stream>>>(arguments, state);
+          return cudaGetLastError();
+        } else {
+          return cudaErrorInvalidValue;
+        }
+      });
+  if (status != cudaSuccess) return status;
+  nodal_pressure_kernel<Real><<<blocks_for(arguments.vertex_count), kThreadsPerBlock, 0, stream>>>(arguments);
+  return cudaGetLastError();
+}
+
 template <typename Real>
 cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
                                   cudaStream_t stream) {
   if (model.kind == GatherKind::Springs || model.element_count <= 0) return cudaSuccess;
+  // Every term's nodal field before any term's element pass: the shares use the corner slots those passes write.
+  for (int t = 0; t < model.term_count; ++t) {
+    if (model.nodal_pressure[t] == nullptr) continue;
+    const NodalPassArguments<Real> nodal{model.terms[t],         model.corner_force,      model.corners.offset,
+                                         model.corners.corner,   model.nodal_pressure[t], model.nodal_dilatation[t],
+                                         model.vertex_count};
+    const cudaError_t status = launch_nodal_pass(nodal, state, stream);
+    if (status != cudaSuccess) return status;
+  }
   for (int t = 0; t < model.term_count; ++t) {
     const kernels::ElementTermView<Real>& term = model.terms[t];
     const cudaError_t status = kernels::visit_element_term(term.element, term.law, [&](auto kind, auto element_law) {
@@ -500,5 +546,11 @@ cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<Real>& argume
   template cudaError_t launch_strain_stiffness<Real>(const StrainStiffnessArguments<Real>&, cudaStream_t);
 FMPC_EXPLICIT_STEP_LAUNCHERS(float)
 FMPC_EXPLICIT_STEP_LAUNCHERS(double)
+template cudaError_t launch_nodal_pass<float, float>(const NodalPassArguments<float>&, const kernels::StateView<float>&,
+                                                     cudaStream_t);
+template cudaError_t launch_nodal_pass<double, double>(const NodalPassArguments<double>&,
+                                                       const kernels::StateView<double>&, cudaStream_t);
+template cudaError_t launch_nodal_pass<double, float>(const NodalPassArguments<double>&,
+                                                      const kernels::StateView<float>&, cudaStream_t);
 
 }  // namespace fmpc::gpu

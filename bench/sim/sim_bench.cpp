@@ -749,7 +749,7 @@ int main(int argc, char** argv) {
         if (threads > 1) rows.push_back(cpu_row(base, threads, Precision::Float, options));
       }
       if (!have_device) continue;
-      if (const char* refusal = element_kind_limits(element).cuda) {
+      if (const char* refusal = cuda_refusal(element_kind_limits(element), false)) {
         std::cout << "GPU rows skipped: fem.element " << kind_row->keyword << " " << refusal << "\n";
         continue;
       }
@@ -762,8 +762,13 @@ int main(int argc, char** argv) {
                                  kCheckEvery, element_blocks));
       if (!largest && cells <= 24)
         rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Persistent, options));
-      if (!largest && cells == 24)
-        rows.push_back(gpu_row(base, Precision::Float, Integrator::ImplicitEuler, Launch::Graphs, options));
+      if (!largest && cells == 24) {
+        if (const char* refusal = cuda_refusal(element_kind_limits(element), true)) {
+          std::cout << "GPU implicit row skipped: fem.element " << kind_row->keyword << " " << refusal << "\n";
+        } else {
+          rows.push_back(gpu_row(base, Precision::Float, Integrator::ImplicitEuler, Launch::Graphs, options));
+        }
+      }
     }
   }
 

@@ -202,14 +202,19 @@ std::vector<std::string> element_kind_keywords() {
 ElementKindLimits element_kind_limits(int kind) {
   ElementKindLimits limits;
   if (kernels::element_kind_has_nodal_pass(kind)) {
-    limits.cuda = "runs on the CPU backend only for now (its nodal pass has no CUDA kernel yet)";
-    limits.implicit_euler = "runs with the explicit integrators (semi_implicit_euler, velocity_verlet, rk4) and the "
-                            "static solver, not yet with implicit_euler (its system's block pattern does not hold the nodal term's couplings)";
+    limits.cuda_implicit_euler = "runs implicit_euler on the CPU backend only for now (the CUDA engine's matrix-free "
+                                 "conjugate gradient has no nodal pressure term yet); the explicit integrators run "
+                                 "on both";
     // A modulus that follows the strain would change the split between the shear part and the nodal pressure
     // (kernels/laws/isotropic_moduli.h, shear_part).
     limits.strain_table = "takes a constant or regional Young's modulus, not a strain table";
   }
   return limits;
+}
+
+const char* cuda_refusal(const ElementKindLimits& limits, bool implicit_euler) {
+  if (limits.cuda || !implicit_euler) return limits.cuda;
+  return limits.cuda_implicit_euler ? limits.cuda_implicit_euler : limits.implicit_euler;
 }
 
 const ElementLawRow& element_law_beside_springs() {

@@ -113,15 +113,19 @@ std::vector<std::string> element_kind_keywords();
 
 // What the engines do not run yet for an element kind (docs/simulator.md, "Element kinds"): each a reason that
 // completes "fem.element KEYWORD ...", null where they run it. It follows from the kind's kernels (a kind with a
-// nodal pass, kernels::element_kind_has_nodal_pass, has no CUDA kernel for that pass and no implicit Euler system
-// yet), so that the engines' refusals, fmpc trade's skipped variants and the tests that visit every kind read one
-// answer.
+// nodal pass, kernels::element_kind_has_nodal_pass, runs every integrator on the CPU and the explicit ones on CUDA,
+// whose matrix-free conjugate gradient has no nodal term yet), so that the engines' refusals, the scene's backend
+// choice, fmpc trade's skipped variants and the tests that visit every kind read one answer.
 struct ElementKindLimits {
-  const char* cuda = nullptr;            // the CUDA backend
-  const char* implicit_euler = nullptr;  // integrator: implicit_euler
-  const char* strain_table = nullptr;    // a Young's modulus bound to strain (a strain table)
+  const char* cuda = nullptr;                 // the CUDA backend, any integrator (no kind today)
+  const char* cuda_implicit_euler = nullptr;  // integrator: implicit_euler on the CUDA backend
+  const char* implicit_euler = nullptr;       // integrator: implicit_euler on either backend (no kind today)
+  const char* strain_table = nullptr;         // a Young's modulus bound to strain (a strain table)
 };
 ElementKindLimits element_kind_limits(int kind);
+// The reason the CUDA backend does not run `limits`' kind with implicit Euler (implicit_euler true) or an explicit
+// integrator: cuda, else for implicit Euler cuda_implicit_euler or implicit_euler; null where it runs it.
+const char* cuda_refusal(const ElementKindLimits& limits, bool implicit_euler);
 
 // Springs plus the volume term reaching a Young's modulus E and Poisson ratio nu (docs/simulator.md): a central
 // spring network obeys the Cauchy relation lambda = mu, with mu = 2 E_s / 5 for the Van Gelder mapping at E_s (the

@@ -326,11 +326,16 @@ class GpuEngine final : public sim::SteppingEngine {
     DeviceArray<Real> prony_weight[kernels::kMostPronyTerms];  // per element where the term's weight varies
     DeviceArray<unsigned char> linearisation;
     DeviceArray<Real> state, checkpoint_state;  // per-point state (view.state) and its checkpoint
+    // A kind with a nodal pass: per vertex, the element pass's nodal field (view.nodal_pressure, nodal_dilatation)
+    // and the energy's in double (elements_.terms[t]'s, filled by elastic_energy).
+    DeviceArray<Real> nodal_pressure, nodal_dilatation;
+    DeviceArray<double> nodal_pressure_d, nodal_dilatation_d;
   };
   DeviceArray<Real> rest_inverse_, rest_volume_;
   DeviceArray<double> rest_inverse_d_, rest_volume_d_;
   DeviceTermArrays term_arrays_[kMostElementTerms];
   DeviceArray<kernels::CornerForce<Real>> corner_force_;
+  DeviceArray<kernels::CornerForce<double>> nodal_shares_d_;  // the energy's nodal pass's shares (a nodal kind only)
   DeviceArray<double> element_rhs_part_, element_diagonal_part_, element_product_;
   kernels::VertexLoads<Real> loads_{};
   // The tools' contact (set_contact, set_tool_shapes): loads_.contact points at these.

@@ -213,6 +213,18 @@ std::optional<double> GpuEngine<Real>::energy_sum(EnergyTerm term, int begin, in
   a.force_z = energy_force_z_.data();
   if (term == EnergyTerm::ElementPotential) {
     a.element_term = elements_.terms[element_term];
+    // A kind with a nodal pass: the term's nodal field in double at the state held (the host's nodal_field).
+    if (a.element_term.nodal_pressure != nullptr) {
+      const DeviceTermArrays& arrays = term_arrays_[element_term];
+      const NodalPassArguments<double> nodal{a.element_term,
+                                             nodal_shares_d_.data(),
+                                             corner_offset_.data(),
+                                             corner_index_.data(),
+                                             arrays.nodal_pressure_d.data(),
+                                             arrays.nodal_dilatation_d.data(),
+                                             n_};
+      FMPC_CUDA_CHECK(launch_nodal_pass(nodal, a.state, stream_), diagnostics, std::nullopt);
+    }
   }
   if (common.strain_stiffness) {
     a.table = {table_strain_.data(), table_modulus_.data(), static_cast<int>(table_strain_.size())};

@@ -166,14 +166,16 @@ bool GpuEngine<Real>::upload_spring_records(const ConcatenatedScenes& c, Diagnos
 
 template <typename Real>
 bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticList& diagnostics) {
-  // A kind the registry says CUDA does not run yet (element_kind_limits: a nodal pass, whose views' nodal pressure
-  // would be null here; runtime/scene/scene_run.cpp sends such scenes to the CPU).
-  if (const char* refusal = sim::element_kind_limits(c.element_kind).cuda) {
+  const bool implicit = scenes_.front().integrator == sim::Integrator::ImplicitEuler;
+  // A kind the registry says CUDA does not run with this integrator (element_kind_limits; runtime/scene/scene_run.cpp
+  // sends such scenes to the CPU).
+  if (const char* refusal = sim::cuda_refusal(sim::element_kind_limits(c.element_kind), implicit)) {
     diagnostics.error(scenes_.front().source_range, std::string("fem.element ") +
                                                         sim::element_kind_row(c.element_kind).keyword + " " + refusal +
                                                         "; use the CPU backend");
     return false;
   }
+  const bool nodal_pass = kernels::element_kind_has_nodal_pass(c.element_kind);
   const std::size_t count = static_cast<std::size_t>(element_count_);
   const std::size_t node_entries = c.nodes.size();
   FMPC_CUDA_CHECK(nodes_.upload(c.nodes), diagnostics, false);
@@ -185,7 +187,6 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
   FMPC_CUDA_CHECK(rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
   FMPC_CUDA_CHECK(rest_volume_d_.upload(c.rest_volume), diagnostics, false);
   FMPC_CUDA_CHECK(corner_force_.allocate(node_entries), diagnostics, false);
-  const bool implicit = scenes_.front().integrator == sim::Integrator::ImplicitEuler;
   model_.term_count = static_cast<int>(c.terms.size());
   model_.element_count = element_count_;
   elements_ = {};
@@ -238,6 +239,17 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
         view.prony_weight[i] = arrays.prony_weight[i].data();
       }
     }
+    if (nodal_pass) {
+      const std::size_t vertices = static_cast<std::size_t>(n_);
+      FMPC_CUDA_CHECK(arrays.nodal_pressure.allocate(vertices), diagnostics, false);
+      FMPC_CUDA_CHECK(arrays.nodal_dilatation.allocate(vertices), diagnostics, false);
+      FMPC_CUDA_CHECK(arrays.nodal_pressure_d.allocate(vertices), diagnostics, false);
+      FMPC_CUDA_CHECK(arrays.nodal_dilatation_d.allocate(vertices), diagnostics, false);
+      view.nodal_pressure = model_.nodal_pressure[t] = arrays.nodal_pressure.data();
+      view.nodal_dilatation = model_.nodal_dilatation[t] = arrays.nodal_dilatation.data();
+      view_d.nodal_pressure = arrays.nodal_pressure_d.data();
+      view_d.nodal_dilatation = arrays.nodal_dilatation_d.data();
+    }
     if (implicit) {
       const std::size_t bytes = kernels::visit_element_term(c.element_kind, term.law, [](auto kind, auto element_law) {
         return sizeof(typename decltype(kind)::template Linearisation<decltype(element_law)>);
@@ -248,6 +260,8 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
   }
   model_.corners = {corner_offset_.data(), corner_index_.data(), corner_force_.data()};
   model_.corner_force = corner_force_.data();
+  model_.vertex_count = n_;
+  if (nodal_pass) FMPC_CUDA_CHECK(nodal_shares_d_.allocate(node_entries), diagnostics, false);
   if (implicit) {
     for (DeviceArray<double>* array : {&element_rhs_part_, &element_diagonal_part_, &element_product_})
       FMPC_CUDA_CHECK(array->allocate(3 * node_entries), diagnostics, false);
@@ -316,6 +330,7 @@ bool GpuEngine<Real>::plan_launches(const ConcatenatedScenes& c, DiagnosticList&
   batch.implicit_scheme = scheme() == sim::Integrator::ImplicitEuler;
   batch.strain_table = scenes_.front().strain_stiffness.has_value();
   batch.point_state = sim::has_point_state(scenes_.front().elements);
+  batch.nodal_pass = element_count_ > 0 && kernels::element_kind_has_nodal_pass(c.element_kind);
   batch.probe_vertices_unique = probe_vertices_unique_;
   batch.vertex_count = n_;
   batch.element_count = element_count_;

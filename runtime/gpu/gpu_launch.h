@@ -38,7 +38,33 @@ struct ForceModelView {
   // Thread r of the kernels with one thread per vertex takes vertex vertex_order[r] (springs.sliced's order); null:
   // vertex r. A permutation within each block, so a block covers the same vertices either way.
   const int* vertex_order = nullptr;
+  // An element kind with a nodal pass (kernels::element_kind_has_nodal_pass): per term, the arrays behind
+  // terms[t].nodal_pressure and nodal_dilatation, which launch_element_forces' nodal pass writes for the batch's
+  // vertex_count vertices before the element pass reads them; null for the other kinds.
+  Real* nodal_pressure[kMostElementTerms] = {};
+  Real* nodal_dilatation[kMostElementTerms] = {};
+  int vertex_count = 0;
 };
+
+// One term's nodal pass (kernels/elements/linear_nodal_pressure.h) in Real at a state in StateReal: every element's
+// shares at its corner slots (kernels::element_nodal_shares, into `shares`: the engine's corner forces, which the
+// element pass then overwrites, or a buffer of the energy's own), then every vertex's pressure and dilatation
+// (kernels::nodal_pressure_at, summed in the corners' CSR order): the CPU engine's nodal_pass, two launches.
+template <typename Real>
+struct NodalPassArguments {
+  kernels::ElementTermView<Real> term;  // its nodal_pressure and nodal_dilatation are not read
+  kernels::CornerForce<Real>* shares;   // one per corner slot
+  const int* corner_offset;             // the corners' CSR (kernels::CornerForceView)
+  const int* corner_index;
+  Real* pressure;  // per vertex
+  Real* dilatation;
+  int vertex_count;
+};
+// Instantiated for <float, float> and <double, double> (the element pass's) and <double, float> (a float run's
+// energy, summed in double as the host sums it).
+template <typename Real, typename StateReal>
+cudaError_t launch_nodal_pass(const NodalPassArguments<Real>& arguments, const kernels::StateView<StateReal>& state,
+                              cudaStream_t stream);
 
 // The springs' incidence records (kernels::SpringIncidence) of every CSR entry, from the network's arrays; run once
 // after upload, and only where the stiffness stays fixed during the run (no strain table).
@@ -52,9 +78,10 @@ template <typename Real>
 cudaError_t launch_sliced_springs(const kernels::SpringNetworkView<Real>& network, const int* vertex_order,
                                   int vertex_count, kernels::SpringIncidence<Real>* record, cudaStream_t stream);
 
-// The element pass at `state`: every element's corner forces (kernels::element_corner_forces), one launch per term
-// with its law a template argument, the later terms' forces added to the first's; nothing without terms. Enqueued
-// before every per-vertex kernel that gathers at that state.
+// The element pass at `state`: every element's corner forces (kernels::element_node_forces), one launch per term
+// with its law a template argument, the later terms' forces added to the first's; nothing without terms. A kind with
+// a nodal pass runs it first for every term (launch_nodal_pass, as the CPU engine's accelerations). Enqueued before
+// every per-vertex kernel that gathers at that state.
 template <typename Real>
 cudaError_t launch_element_forces(const ForceModelView<Real>& model, const kernels::StateView<Real>& state,
                                   cudaStream_t stream);

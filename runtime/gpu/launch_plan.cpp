@@ -185,11 +185,12 @@ std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions
   // The checks' result slots: the first non-finite vertex, then per scene the inversion count and first.
   plan.check_slot_stride = 1 + (batch.element_count > 0 ? 2 * batch.scene_count : 0);
   // Chunks of forward or semi-implicit Euler run as one persistent launch each where no strain table is looked up
-  // between steps, each probe vertex is listed once and the batch fits the grid or clusters; otherwise one launch per
-  // kernel (steps of meshes too large for either are long enough that launches cost little).
+  // and no point state updated between steps, no nodal pass precedes the element pass (its shares and gather would
+  // be two more grid barriers per step), each probe vertex is listed once and the batch fits the grid or clusters;
+  // otherwise one launch per kernel (steps of meshes too large for either are long enough that launches cost little).
   if (options.persistent && batch.implicit_scheme && batch.vertex_count > 0 && !plan_cg_grid(batch, device, plan))
     return std::nullopt;
-  if (!options.persistent || batch.vertex_count <= 0 || batch.strain_table || batch.point_state ||
+  if (!options.persistent || batch.vertex_count <= 0 || batch.strain_table || batch.point_state || batch.nodal_pass ||
       !batch.probe_vertices_unique || !batch.fused_scheme)
     return plan;
   // GpuOptions::persistent_kind: the preferred launch first, the other where it does not fit.

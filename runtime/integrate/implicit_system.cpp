@@ -67,7 +67,7 @@ std::int32_t find_block(const std::vector<std::int32_t>& row_offset, const std::
 }  // namespace
 
 ImplicitSystem::ImplicitSystem(const SimulationSetup& setup, const std::vector<unsigned char>& held)
-    : setup_(setup), held_(held), n_(setup.rest_positions.size()), tangents_(setup) {
+    : setup_(setup), held_(held), n_(setup.rest_positions.size()), tangents_(setup), nodal_(setup) {
   const SpringNetwork& net = setup.springs;
   const bool elements = !setup.elements.empty();
   const ElementGeometry& geometry = setup.elements.geometry;
@@ -87,6 +87,13 @@ ImplicitSystem::ImplicitSystem(const SimulationSetup& setup, const std::vector<u
         const std::size_t e = static_cast<std::size_t>(geometry.corner_index[static_cast<std::size_t>(k)]) / N;
         scratch.insert(scratch.end(), geometry.nodes.begin() + static_cast<std::ptrdiff_t>(N * e),
                        geometry.nodes.begin() + static_cast<std::ptrdiff_t>(N * e + N));
+      }
+    // A nodal pass couples row i to the patch of every node in its own patch.
+    if (nodal_.active())
+      for (std::size_t k = nodal_.patch_begin(i); k < nodal_.patch_end(i); ++k) {
+        const auto node = static_cast<std::size_t>(nodal_.patch_vertex(k));
+        for (std::size_t m = nodal_.patch_begin(node); m < nodal_.patch_end(node); ++m)
+          scratch.push_back(nodal_.patch_vertex(m));
       }
     std::sort(scratch.begin(), scratch.end());
     scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
@@ -121,6 +128,14 @@ ImplicitSystem::ImplicitSystem(const SimulationSetup& setup, const std::vector<u
               find_block(row_offset_, column_, static_cast<std::size_t>(node[a]), node[b]);
     }
     colour_element_runs(geometry.nodes, N, n_, colour_order_, colour_offset_);
+  }
+  if (nodal_.active()) {
+    nodal_own_entry_.resize(nodal_.patch_end(n_ - 1));
+    for (std::size_t i = 0; i < n_; ++i)
+      for (std::size_t k = nodal_.patch_begin(i); k < nodal_.patch_end(i); ++k)
+        nodal_own_entry_[k] = static_cast<std::int32_t>(
+            nodal_.patch_entry(static_cast<std::size_t>(nodal_.patch_vertex(k)), static_cast<std::int32_t>(i)));
+    nodal_rate_.assign(n_, 0.0);
   }
   row_touches_held_.assign(n_, 0);
   for (std::size_t i = 0; i < n_; ++i) {
@@ -157,6 +172,29 @@ void ImplicitSystem::assemble(const std::vector<double>& x, const std::vector<do
             const auto run = static_cast<std::size_t>(colour_order_[first + k]);
             const std::size_t last = std::min(element_count_, (run + 1) * kElementRun);
             for (std::size_t e = run * kElementRun; e < last; ++e) assemble_element(e, x, v, h, rhs);
+          }
+        },
+        1);
+  }
+  if (nodal_.active()) {
+    nodal_.evaluate(x.data(), &pool);
+    pool.run(n_, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t node = begin; node < end; ++node) {
+        double rate = 0.0;
+        for (std::size_t k = nodal_.patch_begin(node); k < nodal_.patch_end(node); ++k) {
+          const double* g = nodal_.gradient(k);
+          const double* velocity = &v[3 * static_cast<std::size_t>(nodal_.patch_vertex(k))];
+          rate += g[0] * velocity[0] + g[1] * velocity[1] + g[2] * velocity[2];
+        }
+        nodal_rate_[node] = nodal_.modulus(node) * rate;
+      }
+    });
+    pool.run(
+        chunk_count,
+        [&](std::size_t begin, std::size_t end) {
+          for (std::size_t chunk = begin; chunk < end; ++chunk) {
+            const auto [first, last] = rows_of(chunk);
+            assemble_nodal_rows(first, last, h, rhs);
           }
         },
         1);
@@ -252,6 +290,24 @@ void ImplicitSystem::assemble_element(std::size_t e, const std::vector<double>& 
       }
       double* r = &rhs[3 * static_cast<std::size_t>(node[a])];
       for (std::size_t i = 0; i < 3; ++i) r[i] -= h * (h * kv[3 * a + i]);
+    }
+  }
+}
+
+void ImplicitSystem::assemble_nodal_rows(std::size_t begin, std::size_t end, double h, std::vector<double>& rhs) {
+  for (std::size_t i = begin; i < end; ++i) {
+    double* r = &rhs[3 * i];
+    for (std::size_t k = nodal_.patch_begin(i); k < nodal_.patch_end(i); ++k) {
+      const auto node = static_cast<std::size_t>(nodal_.patch_vertex(k));
+      const double* own = nodal_.gradient(static_cast<std::size_t>(nodal_own_entry_[k]));
+      const double weight = h * h * nodal_.modulus(node);
+      for (std::size_t m = nodal_.patch_begin(node); m < nodal_.patch_end(node); ++m) {
+        const double* other = nodal_.gradient(m);
+        double* block = &values_[9 * static_cast<std::size_t>(find_block(row_offset_, column_, i, nodal_.patch_vertex(m)))];
+        for (std::size_t a = 0; a < 3; ++a)
+          for (std::size_t b = 0; b < 3; ++b) block[3 * a + b] += weight * own[a] * other[b];
+      }
+      for (std::size_t a = 0; a < 3; ++a) r[a] -= h * (h * own[a] * nodal_rate_[node]);
     }
   }
 }

@@ -2,15 +2,17 @@
 // Implicit Euler's linear system on the CPU (Baraff & Witkin 1998, Eq. 16; kernels/implicit_math.h):
 //   (M + h D + h^2 K) dv = h (f0 - h K v0)
 // in a block-sparse pattern fixed when the simulation is created: one 3 x 3 block per pair of vertices that share a
-// spring or (with element terms) an element, both triangles stored, each row's blocks in column order. Internal
-// to runtime/integrate (cpu_engine.cpp's implicit step, implicit_solver.h).
+// spring or (with element terms) an element, or (an element kind with a nodal pass) lie in one node's patch, two
+// elements apart, both triangles stored, each row's blocks in column order. Internal to runtime/integrate
+// (cpu_engine.cpp's implicit step, implicit_solver.h).
 //
 // Every step is assembled in parallel with the same bits for any thread count: each row's vertex term and springs
 // by a gather over the row (one worker writes the row, in CSR order), then the element terms by colours (sets of
 // runs of consecutive elements that share no vertex), each colour's runs side by side and the colours in order, so
 // that every block's sum is taken in one order. The law's tangent comes from ElementTangents (model_tangent.h), the springs'
-// blocks from implicit_spring_blocks: nothing here knows a law. Held axes are identity rows and columns with a zero
-// right-hand side.
+// blocks from implicit_spring_blocks: nothing here knows a law. A nodal pass's volumetric tangent
+// (nodal_pressure_tangent.h, sum_n D_n g_n g_n^T) is added last, row by row: row i sums over the nodes n of its patch,
+// in column order. Held axes are identity rows and columns with a zero right-hand side.
 //
 // Vectors are interleaved (x y z per vertex, 3 n values). Loops run over fixed chunks of kSystemChunkVertices
 // vertices, and dot products are summed per chunk and then over the chunks in order: the thread count decides who
@@ -20,6 +22,7 @@
 #include <vector>
 
 #include "runtime/integrate/model_tangent.h"
+#include "runtime/integrate/nodal_pressure_tangent.h"
 #include "runtime/integrate/simulation.h"
 #include "runtime/integrate/worker_pool.h"
 
@@ -70,6 +73,9 @@ class ImplicitSystem {
   void assemble_element(std::size_t e, const std::vector<double>& x, const std::vector<double>& v, double h,
                         std::vector<double>& rhs);
   void apply_holds(std::size_t begin, std::size_t end, std::vector<double>& rhs);
+  // Rows [begin, end)'s nodal volumetric part at the nodal_ evaluation held: h^2 D_n g_n[i] g_n[c]^T into block
+  // (i, c) and h^2 g_n[i] D_n (g_n . v) out of the right-hand side, for every node n of row i's patch.
+  void assemble_nodal_rows(std::size_t begin, std::size_t end, double h, std::vector<double>& rhs);
 
   const SimulationSetup& setup_;
   std::vector<unsigned char> held_;
@@ -87,6 +93,10 @@ class ImplicitSystem {
   std::vector<std::int32_t> colour_offset_;  // colours + 1
   std::vector<unsigned char> row_touches_held_;  // whether row i or a column of it is held
   ElementTangents tangents_;
+  NodalPressureTangent nodal_;  // inactive without a nodal pass
+  // Per entry k of row i's patch (node n = nodal_.patch_vertex(k)): the entry of i in n's patch.
+  std::vector<std::int32_t> nodal_own_entry_;
+  std::vector<double> nodal_rate_;  // per node: D_n (g_n . v), the right-hand side's factor
 };
 
 }  // namespace fmpc::sim

@@ -2,6 +2,7 @@
 
 #include "kernels/implicit_math.h"
 #include "kernels/element_laws.h"
+#include "runtime/integrate/nodal_pressure_tangent.h"
 
 namespace fmpc::sim {
 
@@ -24,46 +25,27 @@ void add_spring_block(Triplets& out, std::size_t a, std::size_t b, const double*
   }
 }
 
-// The Gauss-Newton part of a nodal pass's volumetric energy (kernels/elements/linear_nodal_pressure.h), which
-// couples each node's patch and so is no element's block: sum_a V0_a K_a dtheta_a dtheta_a^T = B^T D B, B's row a
-// the gradient of V_a = sum over a's elements of V_e / 4, D_a = K_a / V0_a = sum lambda V0 / (sum V0)^2 from the
-// nodal shares. Like the volume term's tangent it leaves out the pressure times the volume's second derivative
-// (zero at rest), which keeps it positive semi-definite. Zero for a kind without a nodal pass.
-Eigen::SparseMatrix<double> nodal_pressure_tangent(const SimulationSetup& setup,
-                                                   const kernels::ElementTermView<double>& view,
-                                                   const std::vector<Point3>& positions) {
+// The nodal pass's volumetric tangent (nodal_pressure_tangent.h) as a matrix: B^T D B, B's row n the gradient g_n
+// of node n's volume, D = diag(D_n). Zero for a kind without a nodal pass.
+Eigen::SparseMatrix<double> nodal_pressure_tangent(const SimulationSetup& setup, const std::vector<Point3>& positions) {
   const std::size_t n = positions.size();
   Eigen::SparseMatrix<double> out(static_cast<Eigen::Index>(3 * n), static_cast<Eigen::Index>(3 * n));
-  const ElementGeometry& geometry = setup.elements.geometry;
+  NodalPressureTangent nodal(setup);
+  if (!nodal.active()) return out;
+  std::vector<double> x(3 * n);
+  for (std::size_t v = 0; v < n; ++v)
+    for (std::size_t i = 0; i < 3; ++i) x[3 * v + i] = positions[v][i];
+  nodal.evaluate(x.data(), nullptr);
   Triplets gradient;
-  std::vector<double> volume(n, 0.0), modulus_volume(n, 0.0);
-  kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
-    using Element = decltype(kind);
-    if constexpr (Element::kNodalPressure) {
-      constexpr int N = Element::kNodes;
-      for (std::size_t e = 0; e < geometry.size(); ++e) {
-        double x[N][3], dV[N][3], share[3];
-        element_node_rows<N>(geometry, e, positions, x);
-        Element::volume_gradient(view, static_cast<int>(e), x, dV);
-        Element::template nodal_shares<decltype(element_law)>(view, static_cast<int>(e), x, share);
-        for (int a = 0; a < N; ++a) {
-          const auto row = geometry.nodes[static_cast<std::size_t>(N) * e + static_cast<std::size_t>(a)];
-          volume[static_cast<std::size_t>(row)] += share[1];
-          modulus_volume[static_cast<std::size_t>(row)] += share[2];
-          for (int b = 0; b < N; ++b)
-            for (int i = 0; i < 3; ++i)
-              gradient.emplace_back(row, 3 * geometry.nodes[static_cast<std::size_t>(N) * e + static_cast<std::size_t>(b)] + i,
-                                    dV[b][i] / 4.0);
-        }
-      }
-    }
-  });
-  if (gradient.empty()) return out;
+  Eigen::VectorXd D(static_cast<Eigen::Index>(n));
+  for (std::size_t v = 0; v < n; ++v) {
+    D[static_cast<Eigen::Index>(v)] = nodal.modulus(v);
+    for (std::size_t k = nodal.patch_begin(v); k < nodal.patch_end(v); ++k)
+      for (int i = 0; i < 3; ++i)
+        gradient.emplace_back(static_cast<int>(v), 3 * nodal.patch_vertex(k) + i, nodal.gradient(k)[i]);
+  }
   Eigen::SparseMatrix<double> B(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(3 * n));
   B.setFromTriplets(gradient.begin(), gradient.end());
-  Eigen::VectorXd D(static_cast<Eigen::Index>(n));
-  for (std::size_t v = 0; v < n; ++v)
-    D[static_cast<Eigen::Index>(v)] = volume[v] > 0.0 ? modulus_volume[v] / (volume[v] * volume[v]) : 0.0;
   out = B.transpose() * D.asDiagonal() * B;
   return out;
 }
@@ -123,11 +105,8 @@ ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point
   tangent.stiffness.resize(dofs, dofs);
   tangent.damping.resize(dofs, dofs);
   tangent.stiffness.setFromTriplets(stiffness.begin(), stiffness.end());
-  if (!setup.elements.empty() && kernels::element_kind_has_nodal_pass(setup.elements.geometry.kind)) {
-    const kernels::StrainTableView no_table{nullptr, nullptr, 0};
-    for (std::size_t term = 0; term < setup.elements.terms.size(); ++term)
-      tangent.stiffness += nodal_pressure_tangent(setup, element_term_view(setup.elements, term, &no_table), positions);
-  }
+  if (!setup.elements.empty() && kernels::element_kind_has_nodal_pass(setup.elements.geometry.kind))
+    tangent.stiffness += nodal_pressure_tangent(setup, positions);
   tangent.damping.setFromTriplets(damping.begin(), damping.end());
   return tangent;
 }

@@ -86,8 +86,8 @@ bool validate_element_terms(const SimulationSetup& setup, const SourceRange& ran
                                    std::to_string(setup.rest_positions.size()) + " vertices");
       return false;
     }
-  // What the kind does not run yet (element_kind_limits: a kind with a nodal pass runs it in the CPU engine's
-  // explicit integrators, its energy and forces in the host's sums and its tangent in the static solver).
+  // What the kind does not run yet on either backend (element_kind_limits; what CUDA alone does not run, the CUDA
+  // engine refuses: runtime/gpu/gpu_engine_upload.cpp).
   const ElementKindLimits limits = element_kind_limits(geometry.kind);
   const std::string kind = std::string("fem.element ") + element_kind_row(geometry.kind).keyword;
   if (limits.implicit_euler && setup.integrator == Integrator::ImplicitEuler) {

@@ -17,18 +17,20 @@ std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& 
   device = "this fmpc was built without CUDA";
 #endif
   const bool direct = scene.integrator == Integrator::ImplicitEuler && scene.solver.method == ImplicitMethod::Direct;
-  // An element kind CUDA does not run yet (element_kind_limits).
-  const char* cuda_refusal =
-      scene.model == ForceModel::Elements ? element_kind_limits(scene.element_kind).cuda : nullptr;
+  // An element kind CUDA does not run yet with the scene's integrator (element_kind_limits).
+  const char* cuda_backend_refusal =
+      scene.model == ForceModel::Elements
+          ? cuda_refusal(element_kind_limits(scene.element_kind), scene.integrator == Integrator::ImplicitEuler)
+          : nullptr;
   switch (scene.backend) {
     case SceneBackend::Cpu:
       return BackendChoice{"cpu", ""};
     case SceneBackend::Auto:
       if (have_device && direct)
         return BackendChoice{"cpu", "backend auto: solver.method direct runs on the CPU only; running on the CPU"};
-      if (have_device && cuda_refusal)
+      if (have_device && cuda_backend_refusal)
         return BackendChoice{"cpu", std::string("backend auto: fem.element ") +
-                                        element_kind_row(scene.element_kind).keyword + " " + cuda_refusal +
+                                        element_kind_row(scene.element_kind).keyword + " " + cuda_backend_refusal +
                                         "; running on the CPU"};
       if (have_device) return BackendChoice{"cuda", "backend auto: running on CUDA (" + device + ")"};
       return BackendChoice{"cpu", "backend auto: no GPU (" + device + "); running on the CPU"};
@@ -39,10 +41,10 @@ std::optional<BackendChoice> choose_backend(const Scene& scene, DiagnosticList& 
                           "use method cg (or auto, the CG on CUDA) or backend cpu");
         return std::nullopt;
       }
-      if (cuda_refusal) {
+      if (cuda_backend_refusal) {
         diagnostics.error(scene.range_of("backend"), std::string("backend: fem.element ") +
                                                          element_kind_row(scene.element_kind).keyword + " " +
-                                                         cuda_refusal + "; use backend cpu or auto");
+                                                         cuda_backend_refusal + "; use backend cpu or auto");
         return std::nullopt;
       }
       if (have_device) return BackendChoice{"cuda", ""};

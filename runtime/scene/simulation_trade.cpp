@@ -376,7 +376,8 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   reference_build.model = trade_has_springs(own) ? trade_reference_model() : own;
   reference_build.element_kind = scene.model == ForceModel::Elements ? scene.element_kind : default_element_kind().kind;
   reference_build.refinements = reference_level;
-  if (const char* refusal = options.gpu ? element_kind_limits(reference_build.element_kind).cuda : nullptr) {
+  if (const char* refusal =
+          options.gpu ? cuda_refusal(element_kind_limits(reference_build.element_kind), false) : nullptr) {
     diagnostics.error(scene.range_of("fem"), std::string("--gpu: the reference is the scene's element kind, fem.element ") +
                                                  element_kind_row(reference_build.element_kind).keyword + ", which " +
                                                  refusal + "; run the trade on the CPU (leave out --gpu)");
@@ -437,9 +438,9 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
                                 [&](const RunKey& key) {
                                   if (key.build.element_kind < 0) return false;
                                   const ElementKindLimits limits = element_kind_limits(key.build.element_kind);
-                                  const char* refusal = options.gpu ? limits.cuda : nullptr;
-                                  if (!refusal && key.integrator == Integrator::ImplicitEuler)
-                                    refusal = limits.implicit_euler;
+                                  const bool implicit = key.integrator == Integrator::ImplicitEuler;
+                                  const char* refusal = options.gpu ? cuda_refusal(limits, implicit) : nullptr;
+                                  if (!refusal && implicit) refusal = limits.implicit_euler;
                                   if (!refusal) return false;
                                   skipped[key] = std::string("skipped: fem.element ") +
                                                  element_kind_row(key.build.element_kind).keyword + " " + refusal;

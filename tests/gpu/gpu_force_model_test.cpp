@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "kernels/element_laws.h"
 #include "runtime/fem/fem_model_builder.h"
 #include "runtime/fem/element_law_registry.h"
 #include "tests/support/volume_term.h"
@@ -30,9 +31,9 @@ using namespace fmpc::gpu_test;
 namespace {
 
 // A model under test: an element law on an element kind (indices in the registries), or springs with the volume
-// term (law < 0). Every fem law on every element kind that the CUDA engine runs (element_kind_limits; the others:
-// cuda_refused_kinds below) is covered, so that a new row of either registry is compared with the CPU and runs under
-// the sanitizers without an edit here.
+// term (law < 0). Every fem law on every element kind is covered, so that a new row of either registry is compared
+// with the CPU and runs under the sanitizers without an edit here; implicit Euler where the registry says the CUDA
+// engine runs it (element_kind_limits: runs_implicit_euler).
 struct Model {
   int law = -1;
   int element = 0;
@@ -44,11 +45,14 @@ std::vector<Model> all_models() {
   for (const ElementLawRow& law : element_law_rows()) {
     if (law.beside_springs) continue;
     for (const ElementKindRow& kind : element_kind_rows())
-      if (!element_kind_limits(kind.kind).cuda)
-        models.push_back(Model{law.law, kind.kind, std::string(law.keyword) + " FEM (" + kind.keyword + ")"});
+      models.push_back(Model{law.law, kind.kind, std::string(law.keyword) + " FEM (" + kind.keyword + ")"});
   }
   models.push_back(Model{-1, 0, "springs + volume term"});
   return models;
+}
+
+bool runs_implicit_euler(const Model& model) {
+  return model.law < 0 || !cuda_refusal(element_kind_limits(model.element), true);
 }
 
 const std::string& name_of(const Model& model) { return model.name; }
@@ -188,6 +192,7 @@ FMPC_GPU_TEST(force_models_held_axes, "a held axis stays at rest on the GPU, the
 
 FMPC_GPU_TEST(force_models_implicit, "implicit Euler on the FEM and the volume term: GPU CG agrees with Eigen's", true) {
   for (const Model& model : kModels) {
+    if (!runs_implicit_euler(model)) continue;
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       const SimulationSetup setup = hanging_box(model, precision, Integrator::ImplicitEuler);
       check_implicit_against_cpu(setup, name_of(model) + ", " + name_of(precision));
@@ -362,6 +367,7 @@ void sanitize_force_models(const std::vector<Integrator>& integrators) {
   for (const Model& model : kModels) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
       for (const Integrator integrator : integrators) {
+        if (integrator == Integrator::ImplicitEuler && !runs_implicit_euler(model)) continue;
         SimulationSetup setup = held_box(model, precision, integrator);
         setup.implicit.max_iterations = kSanitizedCgIterations;
         DiagnosticList diagnostics;
@@ -407,29 +413,36 @@ FMPC_GPU_TEST(sanitizer_implicit_force_models, "sanitizer smoke: implicit elemen
   sanitize_force_models({Integrator::ImplicitEuler});
 }
 
-// The element kinds the registry says CUDA does not run yet (element_kind_limits: a kind with a nodal pass): the
-// engine refuses each with the registry's reason rather than run its element pass without its nodal values (a scene
-// with backend auto runs them on the CPU: runtime/scene/scene_run.cpp). When a kind is ported, it leaves this test for
-// kModels' CPU-against-GPU comparisons.
-FMPC_GPU_TEST(cuda_refused_kinds, "element kinds CUDA does not run yet: the engine refuses each, naming the CPU", true) {
-  const Mesh mesh = box_mesh(2, 2, 2);
-  for (const ElementKindRow& kind : element_kind_rows()) {
-    const char* refusal = element_kind_limits(kind.kind).cuda;
-    if (!refusal) continue;
-    note(std::string(kind.keyword) + ": " + refusal);
-    DiagnosticList diagnostics;
-    FemModelSpec spec;
-    spec.element = kind.kind;
-    spec.youngs_modulus = {5000.0};
-    spec.poisson_ratio = {0.45};
-    spec.mass.value = 1060.0;
-    const auto setup = build_fem_model(mesh, spec, diagnostics);
-    FMPC_REQUIRE(setup);
-    const std::vector<SimulationSetup> scenes = {*setup};
-    const auto stability = check_stability(scenes.front(), diagnostics);
-    FMPC_REQUIRE(stability);
-    const auto device = gpu::create_engine(scenes, {*stability}, gpu::GpuOptions{}, diagnostics);
-    FMPC_EXPECT(!device);
-    FMPC_EXPECT(describe(diagnostics).find(refusal) != std::string::npos);
+// A kind with a nodal pass (kernels::element_kind_has_nodal_pass: the nodal pressure tetrahedra) in a batch of two
+// boxes of different sizes (the nodal gather over the concatenated corners' CSR, the vertex and element counts never
+// a multiple of the block size): each scene bitwise the CPU's alone, with the per-step kernels (the plan keeps a
+// nodal pass off the persistent launches, BatchShape::nodal_pass), and its energy (the nodal field in double from a
+// float state) the host's.
+FMPC_GPU_TEST(nodal_pass_batch, "nodal pressure elements in a GPU batch: each scene the CPU's alone, bitwise", true) {
+  for (const Model& model : kModels) {
+    if (model.law < 0 || !kernels::element_kind_has_nodal_pass(model.element)) continue;
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      const std::vector<SimulationSetup> scenes{
+          hanging_box(model, precision, Integrator::SemiImplicitEuler, 2, 3, 1, 3),
+          hanging_box(model, precision, Integrator::SemiImplicitEuler, 3, 5, 2, 5)};
+      DiagnosticList diagnostics;
+      const auto batch = gpu_batch(scenes, gpu::GpuOptions{}, diagnostics);
+      FMPC_REQUIRE(batch && batch->advance(500, diagnostics, 64));
+      FMPC_EXPECT(!batch->launches().persistent);
+      for (std::size_t s = 0; s < scenes.size(); ++s) {
+        const auto alone = sim::Simulation::create(scenes[s], diagnostics);
+        FMPC_REQUIRE(alone && alone->advance(500, diagnostics, 64));
+        const double difference = max_difference(batch->positions(s, diagnostics), alone->positions(diagnostics));
+        note(name_of(model) + ", " + name_of(precision) + ", scene " + std::to_string(s) +
+             " of a batch: max |GPU - CPU| after 500 steps " + std::to_string(difference) + " m");
+        FMPC_EXPECT(difference == 0.0);
+        const auto energy = batch->potential_energy(s, diagnostics);
+        const auto expected = alone->potential_energy(diagnostics);
+        FMPC_REQUIRE(energy && expected);
+        FMPC_EXPECT_WITHIN(*energy, *expected, 1e-10 * std::abs(*expected) + 1e-12);
+      }
+      if (diagnostics.has_errors()) note(describe(diagnostics));
+      FMPC_EXPECT(!diagnostics.has_errors());
+    }
   }
 }

@@ -71,9 +71,9 @@ FMPC_GPU_TEST(bound_parameters_match_cpu,
     for (const ElementKindRow& kind : element_kind_rows())
       for (const char* material : {kBoundMaterial, kPronyWeightMaterial, kStrainMaterial})
         for (const Precision precision : {Precision::Float, Precision::Double}) {
-          // What the registry says a kind does not run yet (gpu_force_model_test.cpp: cuda_refused_kinds).
+          // What the registry says a kind does not run yet (element_kind_limits).
           const ElementKindLimits limits = element_kind_limits(kind.kind);
-          if (limits.cuda || (material == kStrainMaterial && limits.strain_table)) continue;
+          if (material == kStrainMaterial && limits.strain_table) continue;
           const std::string name = std::string(law.keyword) + " on " + kind.keyword + " elements, " +
                                    (material == kBoundMaterial         ? "E and nu bound"
                                     : material == kPronyWeightMaterial ? "Prony weight per element"
@@ -92,7 +92,7 @@ FMPC_GPU_TEST(bound_parameters_match_cpu,
             FMPC_EXPECT(d.positions == 0.0);
             FMPC_EXPECT(d.velocities == 0.0);
           }
-          if (!limits.implicit_euler)
+          if (!cuda_refusal(limits, true))
             check_implicit_against_cpu(bound_block(law.keyword, kind.keyword, material, precision,
                                                    Integrator::ImplicitEuler),
                                        name + name_of(precision));

@@ -148,6 +148,9 @@ TEST_CASE("Launch plan: no persistent launch where a step needs its own launches
   shape.point_state = true;  // a viscoelastic term's update between steps
   not_persistent(shape, {});
   shape = box.shape;
+  shape.nodal_pass = true;  // the nodal pressure kind's shares and gather before each element pass
+  not_persistent(shape, {});
+  shape = box.shape;
   shape.probe_vertices_unique = false;
   not_persistent(shape, {});
   shape = box.shape;

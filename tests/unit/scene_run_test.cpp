@@ -780,3 +780,27 @@ outputs: {frames: 0, samples: 5, precision_check: off}
   CHECK(direct_summary["solver"]["warm_start"] == false);
   std::filesystem::remove_all(dir);
 }
+
+TEST_CASE("backend cuda with an element kind CUDA does not run with the scene's integrator is an error at backend, "
+          "with the registry's reason",
+          "[scene][fem][nodal]") {
+  // The nodal pressure kind: the explicit integrators on both backends, implicit Euler on the CPU only
+  // (element_kind_limits, cuda_refusal); decided before any GPU is asked for.
+  const std::string text = R"yaml(name: nodal_implicit
+mesh: {box: {size: [0.02, 0.02, 0.02], cells: [1, 1, 1]}}
+model: fem
+fem: {law: stable_neo_hookean, element: linear_nodal_pressure}
+material: {youngs_modulus: 2, poisson_ratio: 0.45}
+mass: {density: 1000}
+integrator: implicit_euler
+backend: cuda
+)yaml";
+  DiagnosticList diagnostics;
+  CHECK_FALSE(choose_backend(parse_text(text), diagnostics));
+  REQUIRE(diagnostics.items().size() == 1);
+  CHECK(diagnostics.items().front().range.line == 8);
+  CHECK(messages(diagnostics).front() ==
+        "backend: fem.element linear_nodal_pressure runs implicit_euler on the CPU backend only for now (the CUDA "
+        "engine's matrix-free conjugate gradient has no nodal pressure term yet); the explicit integrators run on "
+        "both; use backend cpu or auto");
+}

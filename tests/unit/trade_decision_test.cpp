@@ -338,7 +338,7 @@ TEST_CASE("variants elements x integrators: a kind the engines do not run with a
   }
   // The reference is the scene's kind: one that CUDA does not run makes --gpu an error before anything runs.
   for (const ElementKindRow& kind : element_kind_rows()) {
-    const char* refusal = element_kind_limits(kind.kind).cuda;
+    const char* refusal = cuda_refusal(element_kind_limits(kind.kind), false);
     if (!refusal) continue;
     std::string text = kOneCell;
     const std::string law = "fem: {law: stable_neo_hookean}";

@@ -371,8 +371,6 @@ TEST_CASE("a viscoelastic FEM's per-point state is saved and restored with the C
                                           Integrator::RungeKutta4, Integrator::ImplicitEuler}) {
         INFO(kind.keyword << " elements, " << static_cast<int>(integrator) << ", "
                           << (precision == Precision::Float ? "float" : "double"));
-        // A kind with a nodal pass does not run under implicit Euler yet (validate_setup refuses it).
-        if (integrator == Integrator::ImplicitEuler && kernels::element_kind_has_nodal_pass(kind.kind)) continue;
         SimulationSetup scene = *setup;
         scene.precision = precision;
         scene.integrator = integrator;
