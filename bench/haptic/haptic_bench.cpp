@@ -361,6 +361,15 @@ bool parse(int argc, char** argv, Options& options) {
     }
     const std::string value = argv[++i];
     char* end = nullptr;
+    // An integer option's value in [lowest, highest], or the message saying what was expected.
+    const auto integer_in = [&](long long lowest, long long highest, long long& number) {
+      number = std::strtoll(value.c_str(), &end, 10);
+      if (*end == '\0' && number >= lowest && number <= highest) return true;
+      std::cerr << "fmpc_haptic_bench: " << arg << ": expected an integer from " << lowest << " to " << highest
+                << ", got '" << value << "'\n";
+      return false;
+    };
+    long long number = 0;
     if (arg == "--seconds") {
       options.seconds = std::strtod(value.c_str(), &end);
       if (*end != '\0' || !(options.seconds > 0.0 && options.seconds <= 3600.0)) {
@@ -368,11 +377,7 @@ bool parse(int argc, char** argv, Options& options) {
         return false;
       }
     } else if (arg == "--ticks") {
-      const long long number = std::strtoll(value.c_str(), &end, 10);
-      if (*end != '\0' || number < 1 || number > 3600000) {
-        std::cerr << "fmpc_haptic_bench: --ticks: expected an integer from 1 to 3600000, got '" << value << "'\n";
-        return false;
-      }
+      if (!integer_in(1, 3600000, number)) return false;
       options.ticks = static_cast<std::size_t>(number);
     } else if (arg == "--modes") {
       options.modes.clear();
@@ -391,13 +396,7 @@ bool parse(int argc, char** argv, Options& options) {
       }
       options.backend = value;
     } else if (arg == "--cells" || arg == "--threads") {
-      const long number = std::strtol(value.c_str(), &end, 10);
-      const long lowest = arg == "--cells" ? 1 : 0, highest = arg == "--cells" ? 100 : 256;
-      if (*end != '\0' || number < lowest || number > highest) {
-        std::cerr << "fmpc_haptic_bench: " << arg << ": expected an integer from " << lowest << " to " << highest
-                  << ", got '" << value << "'\n";
-        return false;
-      }
+      if (!(arg == "--cells" ? integer_in(1, 100, number) : integer_in(0, 256, number))) return false;
       (arg == "--cells" ? options.cells : options.threads) = static_cast<int>(number);
     } else if (arg == "--precision") {
       if (value != "float" && value != "double") {
@@ -430,12 +429,8 @@ bool parse(int argc, char** argv, Options& options) {
         return false;
       }
     } else if (arg == "--max-iterations") {
-      options.max_iterations = std::strtol(value.c_str(), &end, 10);
-      if (*end != '\0' || options.max_iterations < 1 || options.max_iterations > 100000) {
-        std::cerr << "fmpc_haptic_bench: --max-iterations: expected an integer from 1 to 100000, got '" << value
-                  << "'\n";
-        return false;
-      }
+      if (!integer_in(1, 100000, number)) return false;
+      options.max_iterations = static_cast<long>(number);
     } else if (arg == "--liver-scene") {
       options.liver_scene = value;
     } else if (arg == "--out") {
