@@ -334,6 +334,13 @@ device_info() {
   record "machine: $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | head -1 || echo 'no nvidia-smi'), $(nproc) CPU threads, $(date -u '+%Y-%m-%d')"
 }
 
+# place_program PROGRAM PATH: PATH (a build's binary path) starts the carried PROGRAM (bundle_program's wrapper, which
+# finds its libraries from its own location, so it cannot be a symlink).
+place_program() {
+  mkdir -p "$(dirname "$2")"
+  printf '#!/bin/sh\nexec "%s" "$@"\n' "$UNPACKED/bin/$1" > "$2" && chmod +x "$2"
+}
+
 PREBUILT=0
 build_section() {
   # A build carried from the build machine (--prepare with GPU_PREBUILT) instead of this machine's own.
@@ -342,9 +349,7 @@ build_section() {
     local target
     for target in tests/gpu/fmpc_gpu_tests bench/sim/fmpc_sim_bench bench/setup/fmpc_setup_bench; do
       [[ -x "$UNPACKED/bin/$(basename "$target")" ]] || continue
-      mkdir -p "$BUILD/$(dirname "$target")"
-      printf '#!/bin/sh\nexec "%s" "$@"\n' "$UNPACKED/bin/$(basename "$target")" > "$BUILD/$target"
-      chmod +x "$BUILD/$target"
+      place_program "$(basename "$target")" "$BUILD/$target"
     done
     PREBUILT=1
     record "build: carried (the gpu-labelled ctest cases other than fmpc_gpu_tests do not run)"
@@ -683,10 +688,9 @@ baseline_section() {
   [[ -x "$current" ]] || { fail "no $current (the build section builds it)"; return 1; }
   # A baseline fmpc_sim_bench built on the build machine (BASELINE_SIM_BENCH at --prepare) spares this machine its build.
   if [[ -x "$UNPACKED/bin/fmpc_sim_bench-baseline" && ! -x "$base/build/bench/sim/fmpc_sim_bench" ]]; then
-    rm -rf "$base" && mkdir -p "$base/build/bench/sim" && tar -C "$base" -xJf "$CARRY/baseline-src.tar.xz" ||
+    rm -rf "$base" && mkdir -p "$base" && tar -C "$base" -xJf "$CARRY/baseline-src.tar.xz" ||
       { fail "unpack baseline"; return 1; }
-    printf '#!/bin/sh\nexec "%s" "$@"\n' "$UNPACKED/bin/fmpc_sim_bench-baseline" > "$base/build/bench/sim/fmpc_sim_bench"
-    chmod +x "$base/build/bench/sim/fmpc_sim_bench"
+    place_program fmpc_sim_bench-baseline "$base/build/bench/sim/fmpc_sim_bench"
   fi
   if [[ ! -x "$base/build/bench/sim/fmpc_sim_bench" ]]; then
     rm -rf "$base" && mkdir -p "$base" && tar -C "$base" -xJf "$CARRY/baseline-src.tar.xz" || { fail "unpack baseline"; return 1; }
