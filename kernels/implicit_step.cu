@@ -243,10 +243,17 @@ __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
 // terms(i, sum, other) for i = block kEnergyThreads + t, then a stride of kEnergyBlocks kEnergyThreads on, and the
 // block's trees sum `sum` and `other` (the second only where `pair`). A per-iteration kernel is virtual block
 // blockIdx.x; the cooperative kernel's blocks take the virtual blocks in turn. Ends with a barrier, so the cache
-// may be reused at once.
+// may be reused at once. A virtual block past the end sums nothing: its trees of +0.0 would give +0.0, so it skips
+// them (and their barriers: the whole block takes the branch) -- on a small mesh nearly every virtual block is such,
+// and each cooperative block would otherwise run a tree for a third of the kEnergyBlocks in every dot product.
 template <typename Terms>
 __device__ void virtual_block_sums(int block, int count, bool pair, double* cache, Terms&& terms, double& total,
                                    double& other_total) {
+  if (static_cast<long long>(block) * kEnergyThreads >= count) {
+    total = 0.0;
+    other_total = 0.0;
+    return;
+  }
   double sum = 0.0, other = 0.0;
   const long long stride = static_cast<long long>(kEnergyBlocks) * kEnergyThreads;
   for (long long i = static_cast<long long>(block) * kEnergyThreads + threadIdx.x; i < count; i += stride)

@@ -175,14 +175,22 @@ class GpuEngine final : public sim::SteppingEngine {
 
   ImplicitArguments<Real> implicit_arguments();
 
-  bool read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics);
+  bool read_cg_scalars(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
+                       DiagnosticList& diagnostics);
 
   // One implicit Euler step: assemble, then Eigen's preconditioned conjugate gradient (same iteration, same
   // stopping rule, same warning as the CPU backend) stopping on the device, in one cooperative launch
   // (LaunchPlan::cg_grid_blocks) or in chunks of per-iteration launches, then v += dv, x += h v; with tools, the
   // contact's linear part solved again until its active set stays, as on the CPU. The host reads the solver's
-  // scalars once per launch or chunk, so implicit steps are never captured into graphs.
+  // scalars once per launch or chunk, so implicit steps are never captured into graphs. A cooperative solve
+  // without tools decides nothing on the host: its scalars stay in their own slot of cg_scalars_ and are read with
+  // the others at the end of the run (record_deferred_solves), so the host never waits between such steps.
   bool implicit_solve(DiagnosticList& diagnostics);
+  // The solver log's record of one solve (and its warning), as the CPU backend writes it.
+  void record_solve(std::size_t step, int iterations, const ConjugateGradientScalars& scalars,
+                    DiagnosticList& diagnostics);
+  // The deferred solves' scalars read in one copy and recorded in step order; run() ends with it.
+  bool record_deferred_solves(DiagnosticList& diagnostics);
   // One solve of the assembled system (x = dv) into `scalars`.
   bool conjugate_gradient(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
                           DiagnosticList& diagnostics);
@@ -289,7 +297,11 @@ class GpuEngine final : public sim::SteppingEngine {
   DeviceArray<double> table_strain_, table_modulus_, stiffness_per_modulus_;
   DeviceArray<double> implicit_rest_, implicit_blocks_, implicit_diagonal_, implicit_jacobi_, implicit_rhs_;
   DeviceArray<double> cg_x_, cg_r_, cg_z_, cg_p_, cg_ap_, cg_partial_;
+  // A slot per solve not yet read (kDeferredSolves; the first for a solve the host reads at once).
   DeviceArray<ConjugateGradientScalars> cg_scalars_;
+  PinnedArray<ConjugateGradientScalars> cg_scalars_host_;
+  int deferred_solves_ = 0;
+  std::size_t deferred_first_step_ = 0;
   int cg_previous_iterations_ = 0;  // the last solve's iterations: the first chunk's length (per-iteration launches)
   unsigned long long step_base_host_ = 0;
   sim::ImplicitSolverLog implicit_log_;  // implicit Euler's solves (a batch of one scene)

@@ -38,7 +38,7 @@ ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments() {
   a.z = cg_z_.data();
   a.p = cg_p_.data();
   a.ap = cg_ap_.data();
-  a.scalars = cg_scalars_.data();
+  a.scalars = cg_scalars_.data() + deferred_solves_;
   a.partial = cg_partial_.data();
   a.tolerance = scenes_.front().implicit.tolerance;
   a.iteration_limit = sim::implicit_iteration_limit(scenes_.front());
@@ -46,9 +46,10 @@ ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments() {
 }
 
 template <typename Real>
-bool GpuEngine<Real>::read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics) {
-  FMPC_CUDA_CHECK(cudaMemcpyAsync(&scalars, cg_scalars_.data(), sizeof scalars, cudaMemcpyDeviceToHost, stream_),
-                  diagnostics, false);
+bool GpuEngine<Real>::read_cg_scalars(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
+                                      DiagnosticList& diagnostics) {
+  FMPC_CUDA_CHECK(cudaMemcpyAsync(&scalars, a.scalars, sizeof scalars, cudaMemcpyDeviceToHost, stream_), diagnostics,
+                  false);
   return synchronize(diagnostics);
 }
 
@@ -59,6 +60,14 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
   // The tools' contact as the system's linear part (launch_contact_part): the pairs inside at the step's start,
   // then those the solution predicts inside, solved again until the set stays, as on the CPU (a later round's CG
   // starts from zero where the CPU's starts from the last round's dv: the two agree to the solver's tolerance).
+  if (!contact && plan_.cg_grid_blocks > 0) {
+    FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_cg_persistent(a, plan_.cg_grid_blocks, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
+    if (deferred_solves_ == 0) deferred_first_step_ = steps_taken_ + 1;
+    return ++deferred_solves_ < kDeferredSolves || record_deferred_solves(diagnostics);
+  }
   FMPC_CUDA_CHECK(launch_contact_part(a, false, stream_), diagnostics, false);
   ConjugateGradientScalars scalars{};
   int iterations = 0;
@@ -82,17 +91,39 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
       break;
     }
   }
-  if (scalars.at_rest) {
-    implicit_log_.record({steps_taken_ + 1, 0, 0.0, false});
-  } else {
-    const double error = std::sqrt(scalars.rr / scalars.rhs_norm2);
-    const sim::ImplicitStepRecord record{steps_taken_ + 1, iterations, error, !(scalars.rr < scalars.threshold)};
-    if (implicit_log_.record(record))
-      diagnostics.warning(scenes_.front().source_range, "cg-not-converged",
-                          sim::cg_stopped_message(sim::ImplicitMethod::ConjugateGradient, record.step, iterations,
-                                                  error, scenes_.front().implicit.tolerance));
-  }
+  record_solve(steps_taken_ + 1, iterations, scalars, diagnostics);
   FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
+  return true;
+}
+
+template <typename Real>
+void GpuEngine<Real>::record_solve(std::size_t step, int iterations, const ConjugateGradientScalars& scalars,
+                                   DiagnosticList& diagnostics) {
+  if (scalars.at_rest) {
+    implicit_log_.record({step, 0, 0.0, false});
+    return;
+  }
+  const double error = std::sqrt(scalars.rr / scalars.rhs_norm2);
+  const sim::ImplicitStepRecord record{step, iterations, error, !(scalars.rr < scalars.threshold)};
+  if (implicit_log_.record(record))
+    diagnostics.warning(scenes_.front().source_range, "cg-not-converged",
+                        sim::cg_stopped_message(sim::ImplicitMethod::ConjugateGradient, record.step, iterations, error,
+                                                scenes_.front().implicit.tolerance));
+}
+
+template <typename Real>
+bool GpuEngine<Real>::record_deferred_solves(DiagnosticList& diagnostics) {
+  if (deferred_solves_ == 0) return true;
+  const int count = deferred_solves_;
+  deferred_solves_ = 0;
+  FMPC_CUDA_CHECK(cudaMemcpyAsync(cg_scalars_host_.data(), cg_scalars_.data(), count * sizeof(ConjugateGradientScalars),
+                                  cudaMemcpyDeviceToHost, stream_),
+                  diagnostics, false);
+  if (!synchronize(diagnostics)) return false;
+  for (int k = 0; k < count; ++k) {
+    const ConjugateGradientScalars& scalars = cg_scalars_host_.data()[k];
+    record_solve(deferred_first_step_ + static_cast<std::size_t>(k), scalars.iterations, scalars, diagnostics);
+  }
   return true;
 }
 
@@ -105,14 +136,14 @@ bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, Conju
   // cooperative launch, or after each chunk of per-iteration launches (cg_iterations_before_read).
   if (plan_.cg_grid_blocks > 0) {
     FMPC_CUDA_CHECK(launch_cg_persistent(a, plan_.cg_grid_blocks, stream_), diagnostics, false);
-    if (!read_cg_scalars(scalars, diagnostics)) return false;
+    if (!read_cg_scalars(a, scalars, diagnostics)) return false;
   } else {
     int enqueued = 0;
     for (;;) {
       const int chunk = cg_iterations_before_read(cg_previous_iterations_, enqueued, a.iteration_limit);
       FMPC_CUDA_CHECK(launch_cg_iterations(a, chunk, stream_), diagnostics, false);
       enqueued += chunk;
-      if (!read_cg_scalars(scalars, diagnostics)) return false;
+      if (!read_cg_scalars(a, scalars, diagnostics)) return false;
       if (scalars.done || chunk == 0) break;
     }
   }
@@ -122,8 +153,12 @@ bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, Conju
 
 #define FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(Real)                                                                    \
   template ImplicitArguments<Real> GpuEngine<Real>::implicit_arguments();                                         \
-  template bool GpuEngine<Real>::read_cg_scalars(ConjugateGradientScalars& scalars, DiagnosticList& diagnostics); \
+  template bool GpuEngine<Real>::read_cg_scalars(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars, \
+                                                 DiagnosticList& diagnostics);                                      \
   template bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics);                                     \
+  template void GpuEngine<Real>::record_solve(std::size_t step, int iterations,                                   \
+                                              const ConjugateGradientScalars& scalars, DiagnosticList& diagnostics); \
+  template bool GpuEngine<Real>::record_deferred_solves(DiagnosticList& diagnostics);                             \
   template bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a,                             \
                                                     ConjugateGradientScalars& scalars, DiagnosticList& diagnostics);
 FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(float)

@@ -12,8 +12,13 @@ template <typename Real>
 bool GpuEngine<Real>::run(const std::vector<std::size_t>& ends, DiagnosticList& diagnostics) {
   run_ends_ = ends;
   selected_inner_ = false;
-  return persistent_launch() ? run_persistent(ends, diagnostics)
-                             : run_steps(ends.front() - steps_taken_, options_.use_graphs, diagnostics);
+  const bool ran = persistent_launch() ? run_persistent(ends, diagnostics)
+                                       : run_steps(ends.front() - steps_taken_, options_.use_graphs, diagnostics);
+  if (!ran) {
+    deferred_solves_ = 0;
+    return false;
+  }
+  return record_deferred_solves(diagnostics);
 }
 
 template <typename Real>

@@ -422,7 +422,8 @@ bool GpuEngine<Real>::upload_single_scene_features(DiagnosticList& diagnostics) 
     FMPC_CUDA_CHECK(implicit_diagonal_.allocate(count), diagnostics, false);
     for (DeviceArray<double>* array : {&implicit_jacobi_, &implicit_rhs_, &cg_x_, &cg_r_, &cg_z_, &cg_p_, &cg_ap_})
       FMPC_CUDA_CHECK(array->allocate(3 * count), diagnostics, false);
-    FMPC_CUDA_CHECK(cg_scalars_.allocate(1), diagnostics, false);
+    FMPC_CUDA_CHECK(cg_scalars_.allocate(kDeferredSolves), diagnostics, false);
+    FMPC_CUDA_CHECK(cg_scalars_host_.allocate(kDeferredSolves), diagnostics, false);
     FMPC_CUDA_CHECK(cg_partial_.allocate(4 * kEnergyBlocks), diagnostics, false);
     implicit_log_ = sim::ImplicitSolverLog(sim::ImplicitMethod::ConjugateGradient, setup.implicit.tolerance,
                                            sim::implicit_iteration_limit(setup));

@@ -349,8 +349,8 @@ cudaError_t launch_strain_stiffness(const StrainStiffnessArguments<Real>& argume
 // iteration and stopping rule (|r|^2 < tol^2 |b|^2, x0 = 0). Dot products use the fixed summation tree of the energy
 // sums, so a run gives the same bits every time. The scalars and the stopping test stay on the device: the
 // iteration that meets the tolerance or the cap sets `done`, and every later kernel of the step returns at once, so
-// the host enqueues iterations in chunks and reads these scalars once per chunk (or once per step from the
-// cooperative kernel), never once per iteration.
+// the host enqueues iterations in chunks and reads these scalars once per chunk (or, from the cooperative kernel,
+// once per run: a slot per step), never once per iteration.
 struct ConjugateGradientScalars {
   double rhs_norm2;  // |b|^2
   double threshold;  // max(tol^2 |b|^2, DBL_MIN) (NaN stays NaN, as std::max on the host)

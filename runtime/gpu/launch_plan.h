@@ -81,6 +81,10 @@ constexpr int kCgThreads = 256;
 // The fewest conjugate gradient iterations enqueued between two reads of its scalars by the host.
 constexpr int kCgLeastIterationsPerRead = 4;
 
+// The most cooperative solves whose scalars wait on the device to be read together (GpuEngine::implicit_solve):
+// the host then waits once per this many implicit steps at most.
+constexpr int kDeferredSolves = 64;
+
 // How many iterations of the per-iteration conjugate gradient to enqueue before the host next reads whether it has
 // stopped: the previous step's count first (a step's solve is usually like the last one's; at SOFA's cap of 25, one
 // read per step), then as many as already run (doubling), at least kCgLeastIterationsPerRead, never beyond the cap.
