@@ -15,6 +15,18 @@ __global__ void find_non_finite_kernel(kernels::StateView<Real> s, int vertex_co
 }
 
 template <typename Real>
+__global__ void copy_state_kernel(MutableStateView<Real> to, kernels::StateView<Real> from, int vertex_count) {
+  const int v = vertex_index();
+  if (v >= vertex_count) return;
+  to.x[v] = from.x[v];
+  to.y[v] = from.y[v];
+  to.z[v] = from.z[v];
+  to.vx[v] = from.vx[v];
+  to.vy[v] = from.vy[v];
+  to.vz[v] = from.vz[v];
+}
+
+template <typename Real>
 __device__ double energy_term(const EnergyArguments<Real>& a, EnergyTerm term, int i) {
   const kernels::StateView<Real>& s = a.state;
   if (term == EnergyTerm::Kinetic) {
@@ -142,6 +154,14 @@ cudaError_t launch_find_non_finite(const kernels::StateView<Real>& state, int ve
 }
 
 template <typename Real>
+cudaError_t launch_copy_state(const MutableStateView<Real>& to, const kernels::StateView<Real>& from, int vertex_count,
+                              cudaStream_t stream) {
+  if (vertex_count <= 0) return cudaSuccess;
+  copy_state_kernel<Real><<<blocks_for(vertex_count), kThreadsPerBlock, 0, stream>>>(to, from, vertex_count);
+  return cudaGetLastError();
+}
+
+template <typename Real>
 cudaError_t launch_energy_sum(const EnergyArguments<Real>& arguments, EnergyTerm term, int begin, int end,
                               double* partial, double* result, cudaStream_t stream) {
   energy_partial_kernel<Real><<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(arguments, term, begin, end, partial);
@@ -157,6 +177,8 @@ cudaError_t launch_energy_sum(const EnergyArguments<Real>& arguments, EnergyTerm
   template cudaError_t launch_count_inverted<Real>(const int*, int, int, const int*, const kernels::StateView<Real>&, \
                                                    unsigned int*, int*, cudaStream_t);                                \
   template cudaError_t launch_find_non_finite<Real>(const kernels::StateView<Real>&, int, int*, cudaStream_t);        \
+  template cudaError_t launch_copy_state<Real>(const MutableStateView<Real>&, const kernels::StateView<Real>&, int,     \
+                                               cudaStream_t);                                                          \
   template cudaError_t launch_energy_sum<Real>(const EnergyArguments<Real>&, EnergyTerm, int, int, double*, double*,  \
                                                cudaStream_t);
 FMPC_REDUCTION_LAUNCHERS(float)

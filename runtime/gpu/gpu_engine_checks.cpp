@@ -110,13 +110,7 @@ MutableStateView<Real> GpuEngine<Real>::checkpoint_slot(int slot) const {
 template <typename Real>
 bool GpuEngine<Real>::copy_state(const MutableStateView<Real>& to, const kernels::StateView<Real>& from,
                                  DiagnosticList& diagnostics) {
-  Real* const targets[6] = {to.x, to.y, to.z, to.vx, to.vy, to.vz};
-  const Real* const sources[6] = {from.x, from.y, from.z, from.vx, from.vy, from.vz};
-  if (n_ == 0) return true;
-  for (int i = 0; i < 6; ++i)
-    FMPC_CUDA_CHECK(cudaMemcpyAsync(targets[i], sources[i], static_cast<std::size_t>(n_) * sizeof(Real),
-                                    cudaMemcpyDeviceToDevice, stream_),
-                    diagnostics, false);
+  FMPC_CUDA_CHECK(launch_copy_state(to, from, n_, stream_), diagnostics, false);
   return true;
 }
 

@@ -453,6 +453,12 @@ template <typename Real>
 cudaError_t launch_find_non_finite(const kernels::StateView<Real>& state, int vertex_count, int* first_vertex,
                                    cudaStream_t stream);
 
+// Copies a state's six arrays (vertex_count entries each) in one kernel: the checkpoint at every check. Six
+// device-to-device copies per check cost the copy engine's scheduling each, and a haptic loop checks every tick.
+template <typename Real>
+cudaError_t launch_copy_state(const MutableStateView<Real>& to, const kernels::StateView<Real>& from, int vertex_count,
+                              cudaStream_t stream);
+
 // Inverted elements of kind `element_kind` (kernels::element_inverted: the kind's own test on its nodes, kNodes per
 // element in `nodes`) at `state`, per scene: count[scene] += 1 (integer atomics: the count does not depend on
 // scheduling) and first[scene] = the smallest inverted element index (atomicMin). element_scene null: every element
