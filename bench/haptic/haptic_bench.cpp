@@ -223,6 +223,9 @@ struct ModeResult {
   double dt = 0.0;
   double wall = 0.0, cpu = 0.0, setup = 0.0;
   double p50 = 0.0, p99 = 0.0, max = 0.0;  // ms
+  // Where a tick's latency goes (--force end): setting the pose, stepping, reading the force (p50 and p99, ms).
+  double pose_p50 = 0.0, pose_p99 = 0.0, step_p50 = 0.0, step_p99 = 0.0, reading_p50 = 0.0, reading_p99 = 0.0;
+  double reread_p50 = 0.0, reread_p99 = 0.0;  // the reading repeated at once (--force end)
   std::size_t overruns = 0;
   double real_time_factor = 0.0;
   double final_force = 0.0, peak_force = 0.0;  // N, magnitudes of the reported force (--force)
@@ -270,7 +273,7 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
     curve << "tick,time_s,tool_x_m,tool_y_m,tool_z_m,fx_N,fy_N,fz_N,fx_end_N,fy_end_N,fz_end_N,contacts,latency_ms\n";
     curve.precision(9);
   }
-  std::vector<double> latencies;
+  std::vector<double> latencies, pose_ms, step_ms, reading_ms, reread_ms;
   std::optional<ToolReading> previous_end, previous_mean;
   std::size_t steps_compared = 0;
   const auto start = std::chrono::steady_clock::now();
@@ -286,11 +289,22 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
     const ToolPose pose = tool_pose(press_of(options), t);
     const auto tick_start = std::chrono::steady_clock::now();
     std::vector<ToolReading> mean, end;
-    const bool stepped = session->set_tool_pose(0, pose, diagnostics) &&
-                         (options.mean_force ? session->step_to_averaging(t, mean, diagnostics, &end)
+    bool stepped = session->set_tool_pose(0, pose, diagnostics);
+    const auto posed = std::chrono::steady_clock::now();
+    stepped = stepped && (options.mean_force ? session->step_to_averaging(t, mean, diagnostics, &end)
                                              : session->step_to(t, diagnostics));
+    const auto step_end = std::chrono::steady_clock::now();
     if (stepped && !options.mean_force) end = session->tool_readings(diagnostics);
     const double latency = 1e3 * fmpc::bench::seconds_since(tick_start);
+    pose_ms.push_back(1e3 * std::chrono::duration<double>(posed - tick_start).count());
+    step_ms.push_back(1e3 * std::chrono::duration<double>(step_end - posed).count());
+    reading_ms.push_back(latency - pose_ms.back() - step_ms.back());
+    if (stepped && !options.mean_force) {
+      // The same reading again, outside the latency: what the reading costs once nothing is left on the stream.
+      const auto again = std::chrono::steady_clock::now();
+      if (session->tool_readings(diagnostics).size() != 1) stepped = false;
+      reread_ms.push_back(1e3 * fmpc::bench::seconds_since(again));
+    }
     if (!stepped || end.size() != 1 || (options.mean_force && mean.size() != 1)) {
       std::cerr << session->render(diagnostics);
       return false;
@@ -329,6 +343,16 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
       static_cast<double>(session->steps_taken() - steps_before) / static_cast<double>(result.ticks);
   result.p50 = percentile(latencies, 0.50);
   result.p99 = percentile(latencies, 0.99);
+  result.pose_p50 = percentile(pose_ms, 0.50);
+  result.pose_p99 = percentile(pose_ms, 0.99);
+  result.step_p50 = percentile(step_ms, 0.50);
+  result.step_p99 = percentile(step_ms, 0.99);
+  result.reading_p50 = percentile(reading_ms, 0.50);
+  result.reading_p99 = percentile(reading_ms, 0.99);
+  if (!reread_ms.empty()) {
+    result.reread_p50 = percentile(reread_ms, 0.50);
+    result.reread_p99 = percentile(reread_ms, 0.99);
+  }
   result.max = *std::max_element(latencies.begin(), latencies.end());
   result.overruns = static_cast<std::size_t>(
       std::count_if(latencies.begin(), latencies.end(), [](double ms) { return ms > 1e3 * kTick; }));
@@ -471,6 +495,11 @@ int main(int argc, char** argv) {
         mode.c_str(), options.backend.c_str(), result.vertices, result.dt, result.steps_per_tick, result.ticks,
         result.wall, result.cpu, result.p50, result.p99, result.max, result.overruns, result.real_time_factor,
         options.mean_force ? "mean" : "tick-end", result.final_force, result.peak_force);
+    std::printf(
+        "  latency by part (p50 / p99 ms): pose %.3f / %.3f, stepping %.3f / %.3f, force reading %.3f / %.3f "
+        "(repeated at once: %.3f / %.3f)\n",
+        result.pose_p50, result.pose_p99, result.step_p50, result.step_p99, result.reading_p50, result.reading_p99,
+        result.reread_p50, result.reread_p99);
     if (options.mean_force)
       std::printf(
           "  force change from tick to tick in contact: %.4g N for the tick's mean force, %.4g N at tick ends "
