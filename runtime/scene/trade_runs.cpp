@@ -455,7 +455,6 @@ CheapestFirstRuns execute_cheapest_first(const std::vector<RunKey>& keys, const 
   result.outcomes.resize(keys.size());
   result.estimates.assign(keys.size(), std::nan(""));
   result.prefix_steps.assign(keys.size(), 0);
-  result.restarted.assign(keys.size(), false);
   result.skips.resize(keys.size());
   std::vector<StartedRun> runs(keys.size());
   CheapestFirstSchedule schedule(bound);
@@ -466,6 +465,18 @@ CheapestFirstRuns execute_cheapest_first(const std::vector<RunKey>& keys, const 
   const MemoryLimit limit = memory_limit();
   const double paused_budget = limit.bytes > 0 ? 0.25 * static_cast<double>(limit.bytes) : HUGE_VAL;
   double paused_bytes = 0.0;
+  // Starts run i on its built scene; false after appending why it cannot be built.
+  const auto start = [&](std::size_t i) {
+    DiagnosticList build_diagnostics;
+    const std::shared_ptr<const BuiltRun> built = scenes.get(keys[i].build, build_diagnostics);
+    if (!built) {
+      const std::lock_guard<std::mutex> lock(shared);
+      diagnostics.append(build_diagnostics);
+      return false;
+    }
+    start_run(keys[i], *built, scenes.scene(), execution, runs[i]);
+    return true;
+  };
   const auto ended_run = [&](std::size_t i) {
     RunOutcome outcome = finish_run(runs[i], execution);
     const bool met = outcome.row.completed && meets(outcome);
@@ -483,14 +494,7 @@ CheapestFirstRuns execute_cheapest_first(const std::vector<RunKey>& keys, const 
     for (std::size_t n = next++; n < order.size(); n = next++) {
       const std::size_t i = order[n];
       StartedRun& run = runs[i];
-      DiagnosticList build_diagnostics;
-      const std::shared_ptr<const BuiltRun> built = scenes.get(keys[i].build, build_diagnostics);
-      if (!built) {
-        const std::lock_guard<std::mutex> lock(shared);
-        diagnostics.append(build_diagnostics);
-        continue;
-      }
-      start_run(keys[i], *built, scenes.scene(), execution, run);
+      if (!start(i)) continue;
       bool cut = false;
       const bool ended = step_run(run, work[i], counter, [&](std::size_t, double cpu) {
         const std::lock_guard<std::mutex> lock(shared);
@@ -530,18 +534,8 @@ CheapestFirstRuns execute_cheapest_first(const std::vector<RunKey>& keys, const 
       if (!picked) return;
       const std::size_t i = *picked;
       StartedRun& run = runs[i];
-      if (!run.simulation) {
-        DiagnosticList build_diagnostics;
-        const std::shared_ptr<const BuiltRun> built = scenes.get(keys[i].build, build_diagnostics);
-        if (!built) {
-          const std::lock_guard<std::mutex> lock(shared);
-          diagnostics.append(build_diagnostics);
-          continue;
-        }
-        start_run(keys[i], *built, scenes.scene(), execution, run);
-        const std::lock_guard<std::mutex> lock(shared);
-        result.restarted[i] = true;
-      }
+      // Dropped while paused (memory): it starts again, and its cost is that of the whole run from its start.
+      if (!run.simulation && !start(i)) continue;
       step_run(run, work[i], counter);
       ended_run(i);
     }

@@ -116,7 +116,6 @@ struct CheapestFirstRuns {
   std::vector<std::optional<RunOutcome>> outcomes;  // nullopt: skipped (skips[i]) or not built (errors appended)
   std::vector<double> estimates;        // s of CPU, from the prefix; NaN where the run ended within it
   std::vector<std::size_t> prefix_steps;  // the steps the estimate was made from
-  std::vector<bool> restarted;          // its paused state was dropped (memory): it ran again from its start
   std::vector<std::optional<TradeSkip>> skips;
 };
 
