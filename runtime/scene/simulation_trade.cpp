@@ -498,6 +498,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
     all = unrun(all);
     TradePlan plan;
     if (!planner.check(all, variants, plan, diagnostics)) return std::nullopt;
+    plan.cheapest_first = cheapest_first;
     if (options.plan) options.plan(plan);
   }
   std::size_t runs_planned = 0;

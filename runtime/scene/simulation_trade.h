@@ -94,6 +94,7 @@ struct TradePlan {
   double largest_tetrahedra = 0.0;  // of the largest run
   double largest_steps = 0.0;       // of the run taking the most steps
   double largest_memory_bytes = 0.0;
+  bool cheapest_first = false;  // the runs are at most these: a variant that cannot win is skipped
 };
 
 struct SimulationTradeOptions {

@@ -449,6 +449,10 @@ TEST_CASE("fmpc trade SCENE --max-error: the decision, the written scene, and ex
   // error on the scene's mesh is 12.5% and its probe force 0.3%.
   const std::string quick = " --variants laws --models corotational_fem";
   REQUIRE(run("block.yaml --max-error 1" + quick + " --write-scene chosen.yaml -o report.md") == 0);
+  // The plan is an upper bound: cheapest first skips what cannot win.
+  CHECK(testing::read_text_file(dir / "err.txt").rfind("fmpc trade: at most 4 runs (cheapest first: those that cannot "
+                                                       "win are skipped), about ",
+                                                       0) == 0);
   const std::string markdown = testing::read_text_file(dir / "out.md");
   CHECK(markdown.find("\nDecision: FEM f32 SIE r0 meets --max-error 100% (displacement max 12.5%, probe force ") !=
         std::string::npos);
