@@ -456,6 +456,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   execution.threads = options.threads > 0 ? options.threads : std::max(1u, std::thread::hardware_concurrency());
   execution.duration = duration;
   execution.compared_vertices = compared_vertices;
+  execution.prefix_seconds = options.prefix_seconds;
 
   SimulationTradeResult result;
   result.scene_name = scene.name;
@@ -471,9 +472,14 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   // Rounds: the reference, its checks and the variants on the coarsest mesh; with --max-error the reference is then
   // refined (or its step halved) while an estimate is above a fifth of it. Then the variants on finer meshes, level
   // by level: with --max-error, one whose run one refinement coarser took more than an eighth of the cheapest
-  // variant's that meets it (CPU seconds) is skipped (a refinement costs 8 times the elements and at least as many steps: it
-  // cannot be faster).
+  // variant's that meets it (CPU seconds) is skipped (a refinement costs 8 times the elements and at least as many
+  // steps: it cannot be faster). With --max-error on the CPU the variants wait for the final reference and go level
+  // by level cheapest first (execute_cheapest_first), each level bounded by the cheapest run meeting E so far.
   std::map<RunKey, RunOutcome> outcomes;
+  const bool cheapest_first = options.max_error && !options.gpu && !options.batch;
+  std::map<RunKey, TradeSkip> estimated_skips;
+  std::map<RunKey, std::pair<double, std::size_t>> estimates;  // CPU seconds, from its first steps
+  double work_before = 0.0;
   double reference_factor = options.reference_dt_factor;
   ReferenceRuns current = reference_runs(reference_build, reference_factor);
   const unsigned coarsest = *std::min_element(values->refinements.begin(), values->refinements.end());
@@ -492,12 +498,14 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
     all = unrun(all);
     TradePlan plan;
     if (!planner.check(all, variants, plan, diagnostics)) return std::nullopt;
+    plan.cheapest_first = cheapest_first;
     if (options.plan) options.plan(plan);
   }
-  double work_before = 0.0;
   std::size_t runs_planned = 0;
-  // Runs `keys` (those not run yet) on the execution; false after an error.
-  const auto run_keys = [&](const std::vector<RunKey>& wanted, const std::string& what) {
+  // Runs `keys` (those not run yet) on the execution, or cheapest first within `bound` (the CPU seconds of the
+  // cheapest run known to meet E; `meets` judges a run); false after an error.
+  const auto run_keys = [&](const std::vector<RunKey>& wanted, const std::string& what,
+                            const std::function<bool(const RunOutcome&)>& meets = {}, double bound = HUGE_VAL) {
     const std::vector<RunKey> keys = unrun(wanted);
     TradePlan round_plan;
     const auto work = planner.check(keys, variants, round_plan, diagnostics);
@@ -505,14 +513,24 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
     runs_planned += keys.size();
     if (options.progress) options.progress(outcomes.size(), runs_planned, what);
     const double round_work = round_plan.element_steps;
-    auto ran = execute_trade_runs(keys, *work, scenes, execution,
-                                  [&](double done) {
-                                    if (options.work_progress)
-                                      options.work_progress(work_before + done, work_before + round_work);
-                                  },
-                                  diagnostics);
+    const auto done = [&](double work_done) {
+      if (options.work_progress) options.work_progress(work_before + work_done, work_before + round_work);
+    };
+    std::vector<std::optional<RunOutcome>> ran;
+    if (meets) {
+      CheapestFirstRuns cheapest = execute_cheapest_first(keys, *work, scenes, execution, meets, bound, done, diagnostics);
+      for (std::size_t i = 0; i < keys.size(); ++i) {
+        if (cheapest.skips[i]) estimated_skips.emplace(keys[i], *cheapest.skips[i]);
+        if (!std::isnan(cheapest.estimates[i]))
+          estimates.emplace(keys[i], std::make_pair(cheapest.estimates[i], cheapest.prefix_steps[i]));
+      }
+      ran = std::move(cheapest.outcomes);
+    } else {
+      ran = execute_trade_runs(keys, *work, scenes, execution, done, diagnostics);
+    }
     work_before += round_work;
     for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (!ran[i] && estimated_skips.count(keys[i]) > 0) continue;
       if (!ran[i]) return false;
       outcomes.emplace(keys[i], std::move(*ran[i]));
     }
@@ -521,7 +539,7 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   for (std::size_t round = 0;; ++round) {
     std::vector<RunKey> keys{current.reference, current.time_check};
     if (current.mesh_check) keys.push_back(*current.mesh_check);
-    if (round == 0)
+    if (round == 0 && !cheapest_first)
       for (const RunKey& key : variants)
         if (key.build.refinements == coarsest || !options.max_error) keys.push_back(key);
     if (!run_keys(keys, (round == 0 ? "reference " : "reference round " + std::to_string(round + 1) + ", ") +
@@ -606,16 +624,19 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   std::sort(levels.begin(), levels.end());
   levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
   for (const unsigned level : levels) {
-    if (!options.max_error || level == coarsest) continue;
+    if (!options.max_error || (level == coarsest && !cheapest_first)) continue;
     const RunOutcome& ref = outcomes.at(current.reference);
+    const auto meets = [&](const RunOutcome& outcome) {
+      return within(compare(outcome.displacement, outcome.row.final_probe_force, ref.displacement,
+                            ref.row.final_probe_force, result.has_probe_force),
+                    *measures, *options.max_error);
+    };
     double best_wall = HUGE_VAL;
     std::string best;
     for (const RunKey& key : variants) {
       const auto it = outcomes.find(key);
       if (it == outcomes.end() || !it->second.row.completed) continue;
-      const TradeErrors e = compare(it->second.displacement, it->second.row.final_probe_force, ref.displacement,
-                                    ref.row.final_probe_force, result.has_probe_force);
-      if (within(e, *measures, *options.max_error) && it->second.row.cpu_seconds < best_wall) {
+      if (meets(it->second) && it->second.row.cpu_seconds < best_wall) {
         best_wall = it->second.row.cpu_seconds;
         best = run_label(key);
       }
@@ -625,16 +646,26 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
       if (key.build.refinements != level) continue;
       RunKey coarser = key;
       coarser.build.refinements = level - 1;
-      const auto it = outcomes.find(coarser);
-      if (it != outcomes.end() && it->second.row.completed && 8.0 * it->second.row.cpu_seconds > best_wall) {
-        skipped[key] = "skipped: " + run_label(coarser) + " took " + significant_digits(it->second.row.cpu_seconds, 3) +
-                       " s, and one refinement costs at least 8 times that; " + best + ", which meets --max-error, "
-                       "took " + significant_digits(best_wall, 3) + " s";
+      // The coarser run's cost: measured, or (skipped cheapest first) its estimate or its prefix's time.
+      std::string coarser_cost;
+      if (const auto it = level > coarsest ? outcomes.find(coarser) : outcomes.end();
+          it != outcomes.end() && it->second.row.completed && 8.0 * it->second.row.cpu_seconds > best_wall)
+        coarser_cost = " took " + significant_digits(it->second.row.cpu_seconds, 3) + " s";
+      else if (const auto e = level > coarsest ? estimated_skips.find(coarser) : estimated_skips.end();
+               e != estimated_skips.end() && 8.0 * e->second.seconds > best_wall)
+        coarser_cost = std::string(e->second.prefix ? "'s first steps took " : " was estimated at ") +
+                       significant_digits(e->second.seconds, 3) + " s (skipped)";
+      if (!coarser_cost.empty()) {
+        skipped[key] = "skipped: " + run_label(coarser) + coarser_cost + ", and one refinement costs at least 8 "
+                       "times that; " + best + ", which meets --max-error, took " + significant_digits(best_wall, 3) +
+                       " s";
         continue;
       }
       wave.push_back(key);
     }
-    if (!run_keys(wave, "variants on refinement " + std::to_string(level))) return std::nullopt;
+    const std::string what = "variants on refinement " + std::to_string(level);
+    if (!(cheapest_first ? run_keys(wave, what + ", cheapest first", meets, best_wall) : run_keys(wave, what)))
+      return std::nullopt;
   }
   if (options.progress) options.progress(outcomes.size(), outcomes.size(), "done");
 
@@ -657,8 +688,11 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
   if (!result.has_probe_force) reference_row.errors.probe_force.reset();
   else reference_row.errors.probe_force = 0.0;
   result.rows.push_back(reference_row);
+  std::vector<std::pair<std::size_t, TradeSkip>> skipped_by_estimate;  // row, why: worded once the choice is made
   for (const RunKey& key : listed) {
-    if (const auto it = skipped.find(key); it != skipped.end()) {
+    const auto estimated = estimated_skips.find(key);
+    if (estimated != estimated_skips.end()) skipped_by_estimate.emplace_back(result.rows.size(), estimated->second);
+    if (const auto it = skipped.find(key); it != skipped.end() || estimated != estimated_skips.end()) {
       SimulationTradeRow row;
       row.variant = run_label(key);
       row.model = key.build.model;
@@ -667,12 +701,16 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
       row.precision = key.precision;
       row.integrator = {key.integrator, key.dt_factor};
       row.refinements = key.build.refinements;
-      row.skipped = it->second;
+      if (it != skipped.end()) row.skipped = it->second;
+      if (const auto e = estimates.find(key); e != estimates.end())
+        std::tie(row.estimated_seconds, row.estimate_steps) = e->second;
       result.rows.push_back(row);
       continue;
     }
     SimulationTradeRow row = outcomes.at(key).row;
     if (row.completed) row.errors = errors_of(outcomes.at(key));
+    if (const auto e = estimates.find(key); e != estimates.end())
+      std::tie(row.estimated_seconds, row.estimate_steps) = e->second;
     result.rows.push_back(row);
   }
   if (options.max_error) {
@@ -682,6 +720,15 @@ std::optional<SimulationTradeResult> run_simulation_trade(const Scene& scene, co
       ++result.meeting;
       if (!result.chosen || row.cpu_seconds < result.rows[*result.chosen].cpu_seconds) result.chosen = i;
     }
+    // Skipped by an estimate only while a run meeting E cost less (CheapestFirstSchedule): the chosen one cost at
+    // most that.
+    for (const auto& [index, skip] : skipped_by_estimate)
+      result.rows[index].skipped =
+          "skipped: " + std::string(skip.prefix ? "its first steps already took " : "estimated ") +
+          significant_digits(skip.seconds, 3) + " s of CPU time, above " +
+          (result.chosen ? "the chosen " + result.rows[*result.chosen].variant + "'s " +
+                               significant_digits(result.rows[*result.chosen].cpu_seconds, 3) + " s"
+                         : std::string("a run that met --max-error"));
   }
   return result;
 }

@@ -94,6 +94,7 @@ struct TradePlan {
   double largest_tetrahedra = 0.0;  // of the largest run
   double largest_steps = 0.0;       // of the run taking the most steps
   double largest_memory_bytes = 0.0;
+  bool cheapest_first = false;  // the runs are at most these: a variant that cannot win is skipped
 };
 
 struct SimulationTradeOptions {
@@ -125,6 +126,9 @@ struct SimulationTradeOptions {
   // CPU: runs side by side on this many threads (0: every hardware thread), each run on one. GPU: runs grouped into
   // batches (one Simulation per group of runs that can share a launch), one batch at a time.
   unsigned threads = 0;
+  // With max_error on the CPU (not gpu, not batch) the variants go cheapest first (docs/trade.md, "Cheapest
+  // first"): each is timed over a prefix of this many CPU seconds (at least one step) to estimate its cost.
+  double prefix_seconds = 0.02;
   bool gpu = false;    // run on CUDA (the caller checked a device is there)
   bool batch = false;  // group the runs into batches on the CPU too (what the GPU does; for tests)
   // Called before each round of runs with (runs done, runs planned, what runs next).
@@ -169,6 +173,10 @@ struct SimulationTradeRow {
   double real_time_factor = 0.0;  // simulated seconds per wall second
   double memory_bytes = 0.0;  // an estimate from the array sizes (docs/trade.md)
   std::size_t inverted_elements = 0;  // the largest count seen during the run
+  // Cheapest first (--max-error on the CPU): its CPU seconds as estimated from its first estimate_steps steps; 0
+  // when not estimated (the run ended within them, or ran without the estimate).
+  double estimated_seconds = 0.0;
+  std::size_t estimate_steps = 0;
 };
 
 struct SimulationTradeResult {

@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 
@@ -63,6 +64,43 @@ std::string path_from(const std::string& path, const std::string& out_path) {
   return relative.empty() ? absolute.generic_string() : relative.generic_string();
 }
 
+// What the estimates that ordered the runs were worth (docs/trade.md, "Cheapest first"): the measured CPU time over
+// the estimate, at its extremes, for the runs that went on past their prefix; empty when nothing was estimated.
+std::string cheapest_first_text(const SimulationTradeResult& result) {
+  std::size_t estimated = 0, ran = 0, skipped = 0;
+  double low = HUGE_VAL, high = 0.0, nearest = HUGE_VAL;
+  const double chosen = result.chosen ? result.rows[*result.chosen].cpu_seconds : HUGE_VAL;
+  std::size_t fewest_steps = 0, most_steps = 0;
+  for (const SimulationTradeRow& row : result.rows) {
+    if (!(row.estimated_seconds > 0.0)) continue;
+    ++estimated;
+    fewest_steps = estimated == 1 ? row.estimate_steps : std::min(fewest_steps, row.estimate_steps);
+    most_steps = std::max(most_steps, row.estimate_steps);
+    if (!row.skipped.empty()) {
+      ++skipped;
+      nearest = std::min(nearest, row.estimated_seconds / chosen);
+    }
+    if (!row.completed) continue;
+    ++ran;
+    const double ratio = row.cpu_seconds / row.estimated_seconds;
+    low = std::min(low, ratio);
+    high = std::max(high, ratio);
+  }
+  if (estimated == 0) return "";
+  std::ostringstream text;
+  text << "\nCheapest first: " << estimated << " variants were timed over their first " << fewest_steps;
+  if (most_steps != fewest_steps) text << " to " << most_steps;
+  text << " steps and their CPU time extrapolated; " << skipped << " estimated above the cheapest run meeting "
+          "--max-error were skipped";
+  if (ran > 0)
+    text << "; of the " << ran << " that ran on, the measured time was " << significant_digits(low, 3) << " to "
+         << significant_digits(high, 3) << " times the estimate";
+  if (skipped > 0 && std::isfinite(nearest))
+    text << "; the nearest skipped estimate is " << significant_digits(nearest, 3) << " times the chosen's time";
+  text << ".\n";
+  return text.str();
+}
+
 }  // namespace
 
 std::vector<std::string> simulation_trade_columns() {
@@ -71,7 +109,8 @@ std::vector<std::string> simulation_trade_columns() {
           "displacement_rms_rel_error",      "probe_force_rel_error",
           "steps_per_second", "memory_bytes", "mapping",   "refinements",
           "tetrahedra",       "steps",       "inverted_elements", "status",
-          "element",          "mesh",        "real_time_factor", "wall_seconds", "meets_max_error"};
+          "element",          "mesh",        "real_time_factor", "wall_seconds", "meets_max_error",
+          "cpu_seconds",      "estimated_cpu_seconds"};
 }
 
 std::string simulation_trade_csv(const SimulationTradeResult& result) {
@@ -93,7 +132,9 @@ std::string simulation_trade_csv(const SimulationTradeResult& result) {
         << (row.element_kind >= 0 ? element_kind_row(row.element_kind).keyword : "") << ','
         << (row.mesh == TradeMesh::Uniform ? "uniform" : "scene") << ',' << format_number(row.real_time_factor) << ','
         << format_number(row.wall_seconds) << ','
-        << (result.max_error ? (meets_max_error(result, row) ? "yes" : "no") : "") << '\n';
+        << (result.max_error ? (meets_max_error(result, row) ? "yes" : "no") : "") << ','
+        << (row.completed || !row.failure.empty() ? format_number(row.cpu_seconds) : "") << ','
+        << (row.estimated_seconds > 0.0 ? format_number(row.estimated_seconds) : "") << '\n';
   }
   return csv.str();
 }
@@ -168,6 +209,7 @@ std::string simulation_trade_markdown(const SimulationTradeResult& result) {
        << significant_digits(row.memory_bytes / 1024.0, 3) << " KiB | " << row.inverted_elements << " | "
        << status_text(row) << (meets_max_error(result, row) ? ", meets --max-error" : "") << " |\n";
   }
+  md << cheapest_first_text(result);
   if (result.max_error) md << "\n" << simulation_trade_decision(result) << "\n";
   return md.str();
 }

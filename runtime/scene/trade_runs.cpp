@@ -12,7 +12,9 @@
 
 #include "diagnostics/number_format.h"
 #include "runtime/fem/element_law_registry.h"
+#include "runtime/io/memory_limit.h"
 #include "runtime/mesh/mesh_refinement.h"
+#include "runtime/scene/trade_schedule.h"
 
 namespace fmpc::sim {
 
@@ -126,18 +128,25 @@ void record_failure(SimulationTradeRow& row, const DiagnosticList& run_diagnosti
   row.failure = "did not complete";
 }
 
-// Steps a created simulation to `steps` in hundredths (progress during a long run; advance resumes where it
-// stopped), timing the stepping.
-bool step_to_end(Simulation& simulation, std::size_t steps, DiagnosticList& diagnostics, double& cpu, double& wall,
-                 const std::function<void(std::size_t)>& stepped) {
-  const double cpu_start = thread_cpu_seconds(), wall_start = wall_seconds();
-  const std::size_t chunk = std::max<std::size_t>(1, steps / 100);
+// Steps a created simulation from `from` to `steps` in hundredths of the run (progress during a long run; advance
+// resumes where it stopped; the checks advance makes at its end do not change the state), adding the stepping's time to `cpu` and `wall`; `stop` (optional), asked after each
+// chunk with the steps done and the CPU time so far, ends it early. Returns whether every step completed.
+bool step_to_end(Simulation& simulation, std::size_t from, std::size_t steps, DiagnosticList& diagnostics,
+                 double& cpu, double& wall, const std::function<void(std::size_t)>& stepped,
+                 const std::function<bool(std::size_t, double)>& stop = {}) {
+  const double cpu_start = thread_cpu_seconds() - cpu, wall_start = wall_seconds() - wall;
+  const std::size_t hundredth = std::max<std::size_t>(1, steps / 100);
+  // Asked to stop early, it starts with one step and doubles up to a hundredth: a prefix of an expensive run (an
+  // implicit step on the quadratic block took 0.1 s) is cut at the first step past its time, not a hundredth later.
+  std::size_t chunk = stop ? 1 : hundredth;
   bool completed = true;
-  for (std::size_t done = 0; done < steps && completed;) {
+  for (std::size_t done = from; done < steps && completed;) {
     const std::size_t now = std::min(chunk, steps - done);
     completed = simulation.advance(now, diagnostics);
     done += now;
+    chunk = std::min(2 * chunk, hundredth);
     if (stepped) stepped(now);
+    if (stop && done < steps && stop(done, thread_cpu_seconds() - cpu_start)) break;
   }
   cpu = thread_cpu_seconds() - cpu_start;
   wall = wall_seconds() - wall_start;
@@ -168,29 +177,68 @@ class WorkCounter {
   double total_ = 0.0;
 };
 
-// One run alone on the calling thread (or the GPU).
-std::optional<RunOutcome> run_alone(const RunKey& key, const BuiltRun& built, const Scene& scene,
-                                    const TradeExecution& execution, double work, WorkCounter& counter) {
+// A run on one thread (or the GPU), started and stepped in parts: what run_alone does at once, and what the
+// cheapest-first runs pause after their prefix.
+struct StartedRun {
   RunOutcome outcome;
   SimulationSetup setup;
-  outcome.row = prepared_row(key, built, scene, execution.duration, setup);
-  outcome.extent = extent_of(setup);
-  DiagnosticList run_diagnostics;
+  DiagnosticList diagnostics;
+  std::unique_ptr<Simulation> simulation;  // null: not created (an error in diagnostics), or dropped while paused
+  std::size_t steps_done = 0;
+  double cpu = 0.0, wall = 0.0;  // s, of the stepping so far
+  bool failed = false;           // an advance returned false
+};
+
+void start_run(const RunKey& key, const BuiltRun& built, const Scene& scene, const TradeExecution& execution,
+               StartedRun& run) {
+  run.outcome = RunOutcome{};
+  run.outcome.row = prepared_row(key, built, scene, execution.duration, run.setup);
+  run.outcome.extent = extent_of(run.setup);
+  run.diagnostics = DiagnosticList{};
+  run.steps_done = 0;
+  run.cpu = run.wall = 0.0;
+  run.failed = false;
   SimulationOptions options;
   options.backend = execution.gpu ? Backend::Cuda : Backend::Cpu;
   options.batch_threads = 1;
-  auto simulation = Simulation::create(setup, run_diagnostics, options);
-  if (simulation) {
-    double cpu = 0.0, wall = 0.0;
-    const std::size_t steps = outcome.row.steps;
-    outcome.row.completed = step_to_end(*simulation, steps, run_diagnostics, cpu, wall, [&](std::size_t now) {
-      counter.add(work * static_cast<double>(now) / static_cast<double>(steps));
-    });
-    finish_timing(outcome.row, simulation->steps_taken(), cpu, wall, execution.duration);
-    read_outcome(*simulation, 0, setup, execution.compared_vertices, outcome, run_diagnostics);
+  run.simulation = Simulation::create(run.setup, run.diagnostics, options);
+}
+
+// Steps a started run on towards its end (until `stop` says so, when given); true when it has ended (every step
+// taken, or failed).
+bool step_run(StartedRun& run, double work, WorkCounter& counter,
+              const std::function<bool(std::size_t, double)>& stop = {}) {
+  if (!run.simulation) return true;
+  const std::size_t steps = run.outcome.row.steps;
+  const bool completed = step_to_end(*run.simulation, run.steps_done, steps, run.diagnostics, run.cpu, run.wall,
+                                     [&](std::size_t now) {
+                                       counter.add(work * static_cast<double>(now) / static_cast<double>(steps));
+                                     },
+                                     stop);
+  run.steps_done = run.simulation->steps_taken();
+  run.failed = !completed;
+  return run.failed || run.steps_done >= steps;
+}
+
+// The ended run's row: its timing, final state and failure.
+RunOutcome finish_run(StartedRun& run, const TradeExecution& execution) {
+  if (run.simulation) {
+    run.outcome.row.completed = !run.failed && run.steps_done >= run.outcome.row.steps;
+    finish_timing(run.outcome.row, run.simulation->steps_taken(), run.cpu, run.wall, execution.duration);
+    read_outcome(*run.simulation, 0, run.setup, execution.compared_vertices, run.outcome, run.diagnostics);
   }
-  record_failure(outcome.row, run_diagnostics);
-  return outcome;
+  record_failure(run.outcome.row, run.diagnostics);
+  run.simulation.reset();
+  return std::move(run.outcome);
+}
+
+// One run alone on the calling thread (or the GPU).
+std::optional<RunOutcome> run_alone(const RunKey& key, const BuiltRun& built, const Scene& scene,
+                                    const TradeExecution& execution, double work, WorkCounter& counter) {
+  StartedRun run;
+  start_run(key, built, scene, execution, run);
+  step_run(run, work, counter);
+  return finish_run(run, execution);
 }
 
 // Runs that can share one launch: the same model, element kind, precision and explicit integrator, and the same
@@ -227,7 +275,7 @@ void run_batch(const std::vector<std::size_t>& members, const std::vector<RunKey
   for (const std::size_t i : members) batch_work += work[i];
   const std::size_t steps = prepared.front().row.steps;
   double cpu = 0.0, wall = 0.0;
-  const bool completed = step_to_end(*simulation, steps, batch_diagnostics, cpu, wall, [&](std::size_t now) {
+  const bool completed = step_to_end(*simulation, 0, steps, batch_diagnostics, cpu, wall, [&](std::size_t now) {
     counter.add(batch_work * static_cast<double>(now) / static_cast<double>(steps));
   });
   for (std::size_t m = 0; m < members.size(); ++m) {
@@ -239,6 +287,15 @@ void run_batch(const std::vector<std::size_t>& members, const std::vector<RunKey
     record_failure(outcome.row, batch_diagnostics);
     outcomes[members[m]] = std::move(outcome);
   }
+}
+
+// Runs `worker` on min(threads, tasks) threads (at least one: the calling thread is one of them) and waits for all.
+void on_workers(unsigned threads, std::size_t tasks, const std::function<void()>& worker) {
+  const unsigned count = std::max(1u, std::min<unsigned>(threads, static_cast<unsigned>(tasks)));
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < count; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& thread : pool) thread.join();
 }
 
 }  // namespace
@@ -376,7 +433,7 @@ std::vector<std::optional<RunOutcome>> execute_trade_runs(const std::vector<RunK
   }
 
   std::atomic<std::size_t> next{0};
-  const auto worker = [&] {
+  on_workers(execution.threads, keys.size(), [&] {
     for (std::size_t n = next++; n < order.size(); n = next++) {
       const std::size_t i = order[n];
       DiagnosticList run_diagnostics;
@@ -386,13 +443,109 @@ std::vector<std::optional<RunOutcome>> execute_trade_runs(const std::vector<RunK
       const std::lock_guard<std::mutex> lock(shared);
       diagnostics.append(run_diagnostics);
     }
-  };
-  const unsigned threads = std::max(1u, std::min<unsigned>(execution.threads, static_cast<unsigned>(keys.size())));
-  std::vector<std::thread> pool;
-  for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& thread : pool) thread.join();
+  });
   return outcomes;
+}
+
+CheapestFirstRuns execute_cheapest_first(const std::vector<RunKey>& keys, const std::vector<double>& work,
+                                         TradeScenes& scenes, const TradeExecution& execution,
+                                         const std::function<bool(const RunOutcome&)>& meets, double bound,
+                                         const std::function<void(double)>& done, DiagnosticList& diagnostics) {
+  CheapestFirstRuns result;
+  result.outcomes.resize(keys.size());
+  result.estimates.assign(keys.size(), std::nan(""));
+  result.prefix_steps.assign(keys.size(), 0);
+  result.skips.resize(keys.size());
+  std::vector<StartedRun> runs(keys.size());
+  CheapestFirstSchedule schedule(bound);
+  WorkCounter counter(done);
+  std::mutex shared;  // schedule, diagnostics, result, the paused runs' memory
+  // Paused runs keep their state while it fits in a quarter of the memory this process may use (the runs that go
+  // on then resume); beyond it a paused run is dropped and starts again from its first step if it goes on.
+  const MemoryLimit limit = memory_limit();
+  const double paused_budget = limit.bytes > 0 ? 0.25 * static_cast<double>(limit.bytes) : HUGE_VAL;
+  double paused_bytes = 0.0;
+  // Starts run i on its built scene; false after appending why it cannot be built.
+  const auto start = [&](std::size_t i) {
+    DiagnosticList build_diagnostics;
+    const std::shared_ptr<const BuiltRun> built = scenes.get(keys[i].build, build_diagnostics);
+    if (!built) {
+      const std::lock_guard<std::mutex> lock(shared);
+      diagnostics.append(build_diagnostics);
+      return false;
+    }
+    start_run(keys[i], *built, scenes.scene(), execution, runs[i]);
+    return true;
+  };
+  const auto ended_run = [&](std::size_t i) {
+    RunOutcome outcome = finish_run(runs[i], execution);
+    const bool met = outcome.row.completed && meets(outcome);
+    const std::lock_guard<std::mutex> lock(shared);
+    schedule.finished(outcome.row.cpu_seconds, met);
+    result.outcomes[i] = std::move(outcome);
+  };
+
+  // The prefixes, the least planned work first (short runs end within theirs and bound the others early).
+  std::vector<std::size_t> order(keys.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return work[a] < work[b]; });
+  std::atomic<std::size_t> next{0};
+  on_workers(execution.threads, keys.size(), [&] {
+    for (std::size_t n = next++; n < order.size(); n = next++) {
+      const std::size_t i = order[n];
+      StartedRun& run = runs[i];
+      if (!start(i)) continue;
+      bool cut = false;
+      const bool ended = step_run(run, work[i], counter, [&](std::size_t, double cpu) {
+        const std::lock_guard<std::mutex> lock(shared);
+        cut = schedule.beyond_bound(cpu);
+        return cut || cpu >= execution.prefix_seconds;
+      });
+      const std::size_t steps = run.outcome.row.steps;
+      if (ended) {
+        ended_run(i);
+        continue;
+      }
+      result.prefix_steps[i] = run.steps_done;
+      const std::lock_guard<std::mutex> lock(shared);
+      if (cut) {
+        result.skips[i] = TradeSkip{run.cpu, true};
+        run.simulation.reset();
+        continue;
+      }
+      // Its CPU time per step so far, for the steps left.
+      result.estimates[i] =
+          run.cpu * static_cast<double>(steps) / static_cast<double>(std::max<std::size_t>(run.steps_done, 1));
+      schedule.add(i, result.estimates[i]);
+      const double bytes = 2.0 * run.outcome.row.memory_bytes;  // its arrays and the setup kept beside them
+      if (paused_bytes + bytes <= paused_budget) paused_bytes += bytes;
+      else run.simulation.reset();
+    }
+  });
+
+  // The rest, cheapest estimate first; one estimated above the cheapest run known to meet E is skipped.
+  on_workers(execution.threads, keys.size(), [&] {
+    for (;;) {
+      std::optional<std::size_t> picked;
+      {
+        const std::lock_guard<std::mutex> lock(shared);
+        picked = schedule.next();
+      }
+      if (!picked) return;
+      const std::size_t i = *picked;
+      StartedRun& run = runs[i];
+      // Dropped while paused (memory): it starts again, and its cost is that of the whole run from its start.
+      if (!run.simulation && !start(i)) continue;
+      step_run(run, work[i], counter);
+      ended_run(i);
+    }
+  });
+  for (const CheapestFirstSchedule::Skip& skip : schedule.skipped()) {
+    result.skips[skip.id] = TradeSkip{skip.estimate, false};
+    runs[skip.id].simulation.reset();
+  }
+  for (const RunKey& key : keys) scenes.drop(key.build);
+  return result;
 }
 
 // Bytes of the arrays the CPU stepping reads and writes, in the run's precision (indices 4 bytes): the vertex state

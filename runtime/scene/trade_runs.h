@@ -93,6 +93,7 @@ struct TradeExecution {
   unsigned threads = 1;  // CPU workers
   double duration = 0.0;
   std::size_t compared_vertices = 0;
+  double prefix_seconds = 0.02;  // cheapest first: SimulationTradeOptions::prefix_seconds
 };
 
 // Runs every key (each once), the most work first; outcome i is keys[i]'s, nullopt where it could not be built
@@ -103,6 +104,30 @@ std::vector<std::optional<RunOutcome>> execute_trade_runs(const std::vector<RunK
                                                           const TradeExecution& execution,
                                                           const std::function<void(double)>& done,
                                                           DiagnosticList& diagnostics);
+
+// Why a run was not run to its end: its estimated CPU seconds, or (prefix) the CPU seconds its prefix already took,
+// above the cheapest run known to meet --max-error.
+struct TradeSkip {
+  double seconds = 0.0;
+  bool prefix = false;
+};
+
+struct CheapestFirstRuns {
+  std::vector<std::optional<RunOutcome>> outcomes;  // nullopt: skipped (skips[i]) or not built (errors appended)
+  std::vector<double> estimates;        // s of CPU, from the prefix; NaN where the run ended within it
+  std::vector<std::size_t> prefix_steps;  // the steps the estimate was made from
+  std::vector<std::optional<TradeSkip>> skips;
+};
+
+// Runs `keys` on the CPU workers cheapest first: each is started and timed over a prefix (execution.prefix_seconds
+// of its thread's CPU time, steps in chunks of 1, 2, 4, ... up to a hundredth of the run) and paused; its full CPU time is estimated as the prefix's time per step times its steps;
+// then they go on by CheapestFirstSchedule, the bound starting at `bound` and lowered by every run that ends and
+// `meets` (E, against the reference). A prefix that passes the bound is stopped there. `work` and `done` as for
+// execute_trade_runs.
+CheapestFirstRuns execute_cheapest_first(const std::vector<RunKey>& keys, const std::vector<double>& work,
+                                         TradeScenes& scenes, const TradeExecution& execution,
+                                         const std::function<bool(const RunOutcome&)>& meets, double bound,
+                                         const std::function<void(double)>& done, DiagnosticList& diagnostics);
 
 // Whether the model has springs (alone, or with a law beside them): then it has no element kind.
 bool trade_has_springs(const TradeModel& model);

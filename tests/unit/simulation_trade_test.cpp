@@ -120,7 +120,7 @@ TEST_CASE("the simulation trade: the reference has no error, the FEM is closer t
   CHECK(header ==
         "variant,model,precision,integrator,dt_s,vertices,displacement_max_rel_error,displacement_rms_rel_error,"
         "probe_force_rel_error,steps_per_second,memory_bytes,mapping,refinements,tetrahedra,steps,inverted_elements,"
-        "status,element,mesh,real_time_factor,wall_seconds,meets_max_error");
+        "status,element,mesh,real_time_factor,wall_seconds,meets_max_error,cpu_seconds,estimated_cpu_seconds");
   CHECK(std::count(csv.begin(), csv.end(), '\n') == 1 + 7);
   CHECK(csv.find("\nreference: FEM f64 SIE x0.5 r1,corotational_fem,double,semi_implicit_euler,") != std::string::npos);
   CHECK(csv.find("\nsprings LSH f32 SIE r1,springs,float,semi_implicit_euler,") != std::string::npos);

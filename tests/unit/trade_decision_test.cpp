@@ -10,6 +10,7 @@
 #include <limits>
 #include <string>
 
+#include "diagnostics/number_format.h"
 #include "runtime/fem/element_law_registry.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/simulation_trade.h"
@@ -253,6 +254,53 @@ TEST_CASE("the trade's reference is refined until its estimates are under a fift
   }
 }
 
+TEST_CASE("cheapest first: every variant is timed over its first steps, and one estimated above the chosen is "
+          "skipped saying so",
+          "[trade][scene]") {
+  // Linear, quadratic and nodal-pressure tetrahedra on the resting block within 100%: the linear ones meet it at a
+  // tenth of the quadratic's cost. One worker, so that the order is the estimates' alone.
+  const Scene scene = parsed(kResting);
+  SimulationTradeOptions options;
+  options.axes = {TradeAxis::Elements};
+  options.max_error = 1.0;
+  options.threads = 1;
+  options.prefix_seconds = 1e-4;  // a few steps of each (20 ms by default: longer than these whole runs)
+  DiagnosticList diagnostics;
+  const auto result = run_simulation_trade(scene, options, diagnostics);
+  INFO(first_error(diagnostics));
+  REQUIRE(result);
+  REQUIRE(result->rows.size() == 1 + element_kind_rows().size());
+  REQUIRE(result->chosen);
+  const SimulationTradeRow& chosen = result->rows[*result->chosen];
+  CHECK(chosen.element_kind != element_kind_by_keyword("quadratic")->kind);
+  for (std::size_t i = 1; i < result->rows.size(); ++i) {
+    const SimulationTradeRow& row = result->rows[i];
+    INFO(row.variant << ": " << row.skipped);
+    CHECK(row.estimate_steps >= 1);
+    if (row.skipped.empty()) {
+      // It ran on past its prefix: the chosen one is the cheapest of those that meet E.
+      REQUIRE(row.completed);
+      CHECK(row.estimate_steps < row.steps);
+      if (meets_max_error(*result, row)) CHECK(chosen.cpu_seconds <= row.cpu_seconds);
+      continue;
+    }
+    // Skipped: only by an estimate above the chosen's measured time, and it says so.
+    CHECK(row.skipped == "skipped: estimated " + significant_digits(row.estimated_seconds, 3) +
+                             " s of CPU time, above the chosen " + chosen.variant + "'s " +
+                             significant_digits(chosen.cpu_seconds, 3) + " s");
+    CHECK(row.estimated_seconds > chosen.cpu_seconds);
+    CHECK_FALSE(row.completed);
+  }
+  const SimulationTradeRow& quadratic = *std::find_if(result->rows.begin(), result->rows.end(), [](const auto& row) {
+    return row.element_kind == element_kind_by_keyword("quadratic")->kind;
+  });
+  CHECK(quadratic.skipped.rfind("skipped: estimated ", 0) == 0);
+  const std::string markdown = simulation_trade_markdown(*result);
+  CHECK(markdown.find("\nCheapest first: 3 variants were timed over their first ") != std::string::npos);
+  CHECK(markdown.find(" times the estimate; the nearest skipped estimate is ") != std::string::npos);
+  CHECK(simulation_trade_csv(*result).find(",\"skipped: estimated ") != std::string::npos);
+}
+
 TEST_CASE("the trade's batches (the GPU's way) give the runs' results alone, bit for bit", "[trade][scene]") {
   const Scene scene = parsed(kBlock);
   SimulationTradeOptions options;
@@ -401,6 +449,10 @@ TEST_CASE("fmpc trade SCENE --max-error: the decision, the written scene, and ex
   // error on the scene's mesh is 12.5% and its probe force 0.3%.
   const std::string quick = " --variants laws --models corotational_fem";
   REQUIRE(run("block.yaml --max-error 1" + quick + " --write-scene chosen.yaml -o report.md") == 0);
+  // The plan is an upper bound: cheapest first skips what cannot win.
+  CHECK(testing::read_text_file(dir / "err.txt").rfind("fmpc trade: at most 4 runs (cheapest first: those that cannot "
+                                                       "win are skipped), about ",
+                                                       0) == 0);
   const std::string markdown = testing::read_text_file(dir / "out.md");
   CHECK(markdown.find("\nDecision: FEM f32 SIE r0 meets --max-error 100% (displacement max 12.5%, probe force ") !=
         std::string::npos);

@@ -298,8 +298,9 @@ int run_scene_trade(CLI::App& command, const std::string& scene_path, const std:
       std::snprintf(digits, sizeof digits, "%.3g", value);
       return std::string(digits);
     };
-    std::cerr << "fmpc trade: " << plan.runs << " runs, about " << three_digits(plan.element_steps)
-              << " element-steps in all (the largest run " << three_digits(plan.largest_tetrahedra)
+    std::cerr << "fmpc trade: " << (plan.cheapest_first ? "at most " : "") << plan.runs << " runs"
+              << (plan.cheapest_first ? " (cheapest first: those that cannot win are skipped)" : "") << ", about "
+              << three_digits(plan.element_steps) << " element-steps in all (the largest run " << three_digits(plan.largest_tetrahedra)
               << " tetrahedra, the longest " << three_digits(plan.largest_steps) << " steps, at most "
               << sim::gibibytes_text(plan.largest_memory_bytes) << " of memory)" << std::endl;
   };
