@@ -303,11 +303,8 @@ TEST_CASE("generated boxes with even cell counts have every corner at an end of 
   // the edge: on a clamped base the corner's first-layer vertex sinks through the base plane and the three-clamped
   // tetrahedron under it inverts, at 80^3 cells of bench/scenes/resting_block_snh.yaml where this phase keeps
   // J >= 0.33 (docs/validation.md, "Does the 120^3 block fold?").
-  BoxSpec spec;
-  spec.cells_x = 4;
-  spec.cells_y = 2;
-  spec.cells_z = 6;
-  spec.size = {0.4, 0.2, 0.6};
+  // Four, two and six cells (an odd count would leave the corners on its far side off the diagonal).
+  const BoxSpec spec{{0.0, 0.0, 0.0}, {0.4, 0.2, 0.6}, 4, 2, 6};
   DiagnosticList diagnostics;
   const Mesh box = generate_box(spec, diagnostics);
   REQUIRE(diagnostics.empty());
