@@ -5,12 +5,14 @@
 // thread count: the backend's results do not depend on it).
 //
 //   fmpc_implicit_bench SCENE [--steps N] [--threads 1,2] [--method auto|direct|cg] [--tolerance T]
-//                       [--max-iterations N] [--cold]
+//                       [--max-iterations N] [--cold] [--state-out PATH]
 //
 // --steps           steps timed after one untimed warm-up step (default 200)
 // --threads         the CPU worker threads of each run, comma-separated (default 1)
 // --method, --tolerance, --max-iterations: override the scene's `solver` (docs/scenes.md)
 // --cold            the conjugate gradient starts from zero instead of the last step's solution
+// --state-out PATH  the last run's final positions and velocities, one vertex a line (x y z vx vy vz, %.17g), to
+//                   compare two builds' states where their hashes differ
 //
 // Checks for NaN/Inf and inversions every 64 steps (advance's default), as fmpc simulate does; no outputs.
 #include <chrono>
@@ -61,13 +63,13 @@ void report_errors(const DiagnosticList& diagnostics) {
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::cerr << "usage: fmpc_implicit_bench SCENE [--steps N] [--threads 1,2] [--method auto|direct|cg] "
-                 "[--tolerance T] [--max-iterations N] [--cold]\n";
+                 "[--tolerance T] [--max-iterations N] [--cold] [--state-out PATH]\n";
     return 2;
   }
   const std::string path = argv[1];
   std::size_t steps = 200;
   std::vector<unsigned> threads = {1};
-  std::string method, tolerance, max_iterations;
+  std::string method, tolerance, max_iterations, state_out;
   bool cold = false;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -84,6 +86,8 @@ int main(int argc, char** argv) {
       tolerance = value();
     } else if (arg == "--max-iterations") {
       max_iterations = value();
+    } else if (arg == "--state-out") {
+      state_out = value();
     } else if (arg == "--cold") {
       cold = true;
     } else {
@@ -145,6 +149,17 @@ int main(int argc, char** argv) {
     if (!ok) {
       report_errors(run_diagnostics);
       status = 2;
+    }
+    if (!state_out.empty()) {
+      std::FILE* out = std::fopen(state_out.c_str(), "w");
+      if (out == nullptr) {
+        std::cerr << state_out << ": cannot be written\n";
+        return 2;
+      }
+      for (std::size_t v = 0; v < positions.size(); ++v)
+        std::fprintf(out, "%.17g %.17g %.17g %.17g %.17g %.17g\n", positions[v][0], positions[v][1], positions[v][2],
+                     velocities[v][0], velocities[v][1], velocities[v][2]);
+      std::fclose(out);
     }
   }
   return status;
