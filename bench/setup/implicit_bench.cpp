@@ -5,12 +5,16 @@
 // thread count: the backend's results do not depend on it).
 //
 //   fmpc_implicit_bench SCENE [--steps N] [--threads 1,2] [--method auto|direct|cg] [--tolerance T]
-//                       [--max-iterations N] [--cold]
+//                       [--max-iterations N] [--cold] [--state-out PATH] [--pool-runs N]
 //
 // --steps           steps timed after one untimed warm-up step (default 200)
 // --threads         the CPU worker threads of each run, comma-separated (default 1)
 // --method, --tolerance, --max-iterations: override the scene's `solver` (docs/scenes.md)
 // --cold            the conjugate gradient starts from zero instead of the last step's solution
+// --state-out PATH  the last run's final positions and velocities, one vertex a line (x y z vx vy vz, %.17g), to
+//                   compare two builds' states where their hashes differ
+// --pool-runs N     also times N runs of the worker pool at each thread count, each over the scene's system chunks
+//                   doing nothing but one add per chunk: the wall and CPU time one of the step's ~100 runs costs
 //
 // Checks for NaN/Inf and inversions every 64 steps (advance's default), as fmpc simulate does; no outputs.
 #include <chrono>
@@ -24,6 +28,7 @@
 #include <vector>
 
 #include "bench/setup/process_clock.h"
+#include "runtime/integrate/implicit_system.h"
 #include "runtime/io/input_file.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
@@ -61,13 +66,14 @@ void report_errors(const DiagnosticList& diagnostics) {
 int main(int argc, char** argv) {
   if (argc < 2) {
     std::cerr << "usage: fmpc_implicit_bench SCENE [--steps N] [--threads 1,2] [--method auto|direct|cg] "
-                 "[--tolerance T] [--max-iterations N] [--cold]\n";
+                 "[--tolerance T] [--max-iterations N] [--cold] [--state-out PATH] [--pool-runs N]\n";
     return 2;
   }
   const std::string path = argv[1];
   std::size_t steps = 200;
   std::vector<unsigned> threads = {1};
-  std::string method, tolerance, max_iterations;
+  std::string method, tolerance, max_iterations, state_out;
+  std::size_t pool_runs = 0;
   bool cold = false;
   for (int i = 2; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -84,6 +90,10 @@ int main(int argc, char** argv) {
       tolerance = value();
     } else if (arg == "--max-iterations") {
       max_iterations = value();
+    } else if (arg == "--pool-runs") {
+      pool_runs = static_cast<std::size_t>(std::strtoull(value().c_str(), nullptr, 10));
+    } else if (arg == "--state-out") {
+      state_out = value();
     } else if (arg == "--cold") {
       cold = true;
     } else {
@@ -146,6 +156,35 @@ int main(int argc, char** argv) {
       report_errors(run_diagnostics);
       status = 2;
     }
+    if (!state_out.empty()) {
+      std::FILE* out = std::fopen(state_out.c_str(), "w");
+      if (out == nullptr) {
+        std::cerr << state_out << ": cannot be written\n";
+        return 2;
+      }
+      for (std::size_t v = 0; v < positions.size(); ++v)
+        std::fprintf(out, "%.17g %.17g %.17g %.17g %.17g %.17g\n", positions[v][0], positions[v][1], positions[v][2],
+                     velocities[v][0], velocities[v][1], velocities[v][2]);
+      std::fclose(out);
+    }
+  }
+  const std::size_t chunks = (built->setup.rest_positions.size() + kSystemChunkVertices - 1) / kSystemChunkVertices;
+  for (const unsigned count : pool_runs > 0 ? threads : std::vector<unsigned>{}) {
+    WorkerPool pool(count);
+    std::vector<double> partial(chunks, 0.0);
+    const auto wall_start = std::chrono::steady_clock::now();
+    const double cpu_start = cpu_seconds();
+    for (std::size_t run = 0; run < pool_runs; ++run)
+      pool.run(
+          chunks,
+          [&](std::size_t begin, std::size_t end) {
+            for (std::size_t chunk = begin; chunk < end; ++chunk) partial[chunk] += 1.0;
+          },
+          1);
+    const double wall = seconds_since(wall_start), cpu = cpu_seconds() - cpu_start;
+    std::printf("pool, %u threads (%s), %zu runs over %zu chunks: %.2f us/run wall, %.2f us/run CPU (all threads)\n",
+                count, pool.spins() ? "spinning" : "sleeping", pool_runs, chunks,
+                1e6 * wall / static_cast<double>(pool_runs), 1e6 * cpu / static_cast<double>(pool_runs));
   }
   return status;
 }

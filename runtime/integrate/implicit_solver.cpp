@@ -181,8 +181,7 @@ void ImplicitSolver::add_part(ImplicitLinearPart& part) {
 }
 
 ImplicitSolve ImplicitSolver::solve_assembled(std::vector<double>& dv, bool first, WorkerPool& pool, bool& at_rest) {
-  double b2 = 0.0;
-  for (const double value : rhs_) b2 += value * value;
+  const double b2 = squared_norm(rhs_, pool);
   ImplicitSolve solve;
   // A right-hand side this small means the system is at rest to double precision: a solver on denormals would only
   // report a spurious failure.
@@ -202,6 +201,21 @@ ImplicitSolve ImplicitSolver::solve_assembled(std::vector<double>& dv, bool firs
   return solve;
 }
 
+double ImplicitSolver::squared_norm(const std::vector<double>& b, WorkerPool& pool) {
+  pool.run(
+      system_.chunks(),
+      [&](std::size_t begin, std::size_t end) {
+        for (std::size_t chunk = begin; chunk < end; ++chunk) {
+          double sum = 0.0;
+          const std::size_t last = std::min(system_.dofs(), 3 * (chunk + 1) * kSystemChunkVertices);
+          for (std::size_t d = 3 * chunk * kSystemChunkVertices; d < last; ++d) sum += b[d] * b[d];
+          partial_[chunk] = sum;
+        }
+      },
+      kSystemChunksPerThread);
+  return sum_partials(partial_, system_.chunks(), 1, 0);
+}
+
 double ImplicitSolver::residual(const std::vector<double>& b, const std::vector<double>& x, std::vector<double>& r,
                                 WorkerPool& pool) {
   pool.run(
@@ -219,7 +233,7 @@ double ImplicitSolver::residual(const std::vector<double>& b, const std::vector<
           partial_[chunk] = rr;
         }
       },
-      1);
+      kSystemChunksPerThread);
   return sum_partials(partial_, system_.chunks(), 1, 0);
 }
 
@@ -236,8 +250,7 @@ bool ImplicitSolver::direct(const std::vector<double>& b, std::vector<double>& x
   f.ldlt.factorize(f.upper);
   if (f.ldlt.info() != Eigen::Success) return false;
   const std::size_t dofs = system_.dofs();
-  double b2 = 0.0;
-  for (const double value : b) b2 += value * value;
+  const double b2 = squared_norm(b, pool);
   const double threshold = std::max(tolerance_ * tolerance_ * b2, std::numeric_limits<double>::min());
   // x += A^-1 r through the permuted factorisation (x = 0 at the start, r = b).
   const auto correct = [&](const std::vector<double>& r, bool first) {
@@ -284,7 +297,7 @@ void ImplicitSolver::invert_diagonal_blocks(WorkerPool& pool) {
           inverse[8] = s * (m[0] * m[4] - m[1] * m[3]);
         }
       },
-      1);
+      kSystemChunksPerThread);
 }
 
 // Eigen's ConjugateGradient with its stopping rule (|r|^2 < tol^2 |b|^2, r = b - A x the true residual's recurrence),
@@ -298,8 +311,7 @@ ImplicitSolve ImplicitSolver::conjugate_gradient(const std::vector<double>& b, s
     return std::pair<std::size_t, std::size_t>{3 * chunk * kSystemChunkVertices,
                                                std::min(dofs, 3 * (chunk + 1) * kSystemChunkVertices)};
   };
-  double b2 = 0.0;
-  for (const double value : b) b2 += value * value;
+  const double b2 = squared_norm(b, pool);
   const double threshold = std::max(tolerance_ * tolerance_ * b2, std::numeric_limits<double>::min());
   invert_diagonal_blocks(pool);
   double r2 = residual(b, x, r_, pool);
@@ -333,7 +345,7 @@ ImplicitSolve ImplicitSolver::conjugate_gradient(const std::vector<double>& b, s
             partial_[chunk] = sum;
           }
         },
-        1);
+        kSystemChunksPerThread);
     rz = sum_partials(partial_, chunks, 1, 0);
   }
   while (!(r2 < threshold) && solve.iterations < limit_) {
@@ -348,7 +360,7 @@ ImplicitSolve ImplicitSolver::conjugate_gradient(const std::vector<double>& b, s
             partial_[chunk] = sum;
           }
         },
-        1);
+        kSystemChunksPerThread);
     const double alpha = rz / sum_partials(partial_, chunks, 1, 0);
     pool.run(
         chunks,
@@ -370,7 +382,7 @@ ImplicitSolve ImplicitSolver::conjugate_gradient(const std::vector<double>& b, s
             partial_[2 * chunk + 1] = sum;
           }
         },
-        1);
+        kSystemChunksPerThread);
     ++solve.iterations;
     r2 = sum_partials(partial_, chunks, 2, 0);
     if (r2 < threshold) break;
@@ -389,7 +401,7 @@ ImplicitSolve ImplicitSolver::conjugate_gradient(const std::vector<double>& b, s
             }
           }
         },
-        1);
+        kSystemChunksPerThread);
   }
   solve.relative_residual = std::sqrt(r2 / b2);
   solve.converged = r2 < threshold;

@@ -86,6 +86,8 @@ class ImplicitSolver {
   void add_part(ImplicitLinearPart& part);
   ImplicitSolve conjugate_gradient(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool);
   bool direct(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool, ImplicitSolve& solve);
+  // |b|^2, summed by chunks.
+  double squared_norm(const std::vector<double>& b, WorkerPool& pool);
   // r = b - A x; returns |r|^2, summed by chunks.
   double residual(const std::vector<double>& b, const std::vector<double>& x, std::vector<double>& r,
                   WorkerPool& pool);

@@ -162,7 +162,7 @@ void ImplicitSystem::assemble(const std::vector<double>& x, const std::vector<do
           assemble_rows(first, last, x, v, a, spring_stiffness, h, rhs);
         }
       },
-      1);
+      kSystemChunksPerThread);
   for (std::size_t colour = 0; colour < colours(); ++colour) {
     const auto first = static_cast<std::size_t>(colour_offset_[colour]);
     pool.run(
@@ -197,7 +197,7 @@ void ImplicitSystem::assemble(const std::vector<double>& x, const std::vector<do
             assemble_nodal_rows(first, last, h, rhs);
           }
         },
-        1);
+        kSystemChunksPerThread);
   }
   if (free_dofs_ == dofs()) return;
   pool.run(
@@ -208,7 +208,7 @@ void ImplicitSystem::assemble(const std::vector<double>& x, const std::vector<do
           apply_holds(first, last, rhs);
         }
       },
-      1);
+      kSystemChunksPerThread);
 }
 
 void ImplicitSystem::assemble_rows(std::size_t begin, std::size_t end, const std::vector<double>& x,
@@ -345,7 +345,9 @@ void ImplicitSystem::multiply_chunks(const double* p, double* y, std::size_t beg
 }
 
 void ImplicitSystem::multiply(const double* p, double* y, WorkerPool& pool) const {
-  pool.run(chunks(), [&](std::size_t begin, std::size_t end) { multiply_chunks(p, y, begin, end); }, 1);
+  pool.run(
+      chunks(), [&](std::size_t begin, std::size_t end) { multiply_chunks(p, y, begin, end); },
+      kSystemChunksPerThread);
 }
 
 }  // namespace fmpc::sim

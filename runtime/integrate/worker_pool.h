@@ -19,11 +19,15 @@
 
 namespace fmpc::sim {
 
+// How a pool's waits wait: spinning first where the pool is large enough and has a core per thread (Automatic, see
+// kSpinMicroseconds), or always (Spin: for tests of that path on a small machine), or never (Sleep).
+enum class PoolWait { Automatic, Spin, Sleep };
+
 class WorkerPool {
  public:
   // grain > 0 replaces every call's min_per_thread (1: split even the smallest ranges, as tests of the parallel
   // paths on small inputs need).
-  explicit WorkerPool(unsigned threads, std::size_t grain = 0);
+  explicit WorkerPool(unsigned threads, std::size_t grain = 0, PoolWait wait = PoolWait::Automatic);
   ~WorkerPool();
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
@@ -39,21 +43,39 @@ class WorkerPool {
   void run_parts(std::size_t count, const std::function<void(unsigned, std::size_t, std::size_t)>& task,
                  std::size_t min_per_thread = 2048);
   unsigned size() const { return static_cast<unsigned>(workers_.size()) + 1; }
+  // Whether its waits spin before they sleep (see kSpinMicroseconds).
+  bool spins() const { return spin_; }
 
  private:
   void work(unsigned index);
+  // Returns once ready() holds: spinning for up to kSpinMicroseconds first where the pool spins, then asleep on
+  // `signal` (notified under mutex_ by whoever makes ready() true).
+  template <class Ready>
+  void wait_until(std::condition_variable& signal, const Ready& ready);
   std::vector<std::thread> workers_;
   std::mutex mutex_;
   std::condition_variable start_;
   std::condition_variable done_;
+  // Written by the caller before it publishes a generation, read by the workers after they see it.
   const std::function<void(unsigned, std::size_t, std::size_t)>* task_ = nullptr;
   std::size_t count_ = 0;
   unsigned parts_ = 1;
-  unsigned pending_ = 0;
-  std::size_t generation_ = 0;
-  bool stopping_ = false;
+  std::atomic<unsigned> pending_{0};
+  std::atomic<std::size_t> generation_{0};
+  std::atomic<bool> stopping_{false};
   std::size_t grain_ = 0;
+  bool spin_ = false;
 };
+
+// How long a wait of the pool spins before it sleeps, in a pool of at least kSpinFromThreads threads and no more
+// than the machine has hardware threads. A sleeping worker costs a futex wake, a reschedule and a turn at the mutex
+// at every run() (tens of microseconds with 16 workers), and implicit Euler's step is about a hundred short runs (its
+// CG: three an iteration); a spinning one picks the next run up within a microsecond, as OpenMP's default wait
+// policy does. Smaller pools, and pools with more threads than cores, never spin: on a machine with more runnable
+// threads than cores (2 cores shared by several processes: CI, the build machine) a spinning thread takes the core
+// from the one doing the work, and a run took 10 times as long (docs/performance.md, "Implicit Euler on the CPU").
+inline constexpr int kSpinMicroseconds = 50;
+inline constexpr unsigned kSpinFromThreads = 4;
 
 // The threads a `threads` setting asks for: the given count; for 0, every hardware thread, or 1 when the work has
 // fewer than serial_below items (starting threads would cost more than they save).
