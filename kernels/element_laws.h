@@ -128,6 +128,16 @@ inline bool element_kind_has_nodal_pass(int kind) {
   return visit_element_term(kind, 0, [](auto element_kind, auto) { return decltype(element_kind)::kNodalPressure; });
 }
 
+// Whether the CUDA persistent kernel's element pass holds kind Element: no nodal pass, at most a tetrahedron's four
+// nodes. The larger kinds' bodies cost it a 2.8 KB stack frame and spills in every instantiation (docs/performance.md,
+// sixteenth run), so they step with the per-step kernels (BatchShape::element_kind_not_persistent).
+template <typename Element>
+constexpr bool kPersistentElementKind = !Element::kNodalPressure && Element::kNodes <= 4;
+inline bool element_kind_runs_persistent(int kind) {
+  return visit_element_term(kind, 0,
+                            [](auto element_kind, auto) { return kPersistentElementKind<decltype(element_kind)>; });
+}
+
 // The kind whose nodes are a tetrahedron's four corners: inversion checks read a mesh without element terms (springs)
 // as elements of this kind.
 constexpr int kTetrahedronKind = element_kind_index<LinearTetrahedron>;

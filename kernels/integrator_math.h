@@ -142,43 +142,55 @@ FMPC_HD void verlet_velocity_update(Real& v, Real a0, Real a1, Real h) {
   v += Real(0.5) * h * (a0 + a1);
 }
 
-// A probe's share of its target at time t (s): linear from 0 at t = 0 to 1 at the ramp time, then held
-// (ramp_time 0: at once). Evaluated in double by both backends so that the prescribed path is the same bits. Once
-// t reaches the ramp time, t / ramp_time rounds to 1 or more, so the division is skipped: on the GPU it is a
-// double-precision sequence on the path of the probe vertex's thread, which its neighbours' blocks wait for.
-// With `cycles` > 0 the share is a triangle wave instead: up to 1 at the ramp time, back to 0 at twice it, `cycles`
-// times, then held at 0 (cyclic loading: a viscoelastic material's hysteresis). The period's index is a truncation
-// (exact), the rest + - * /.
+// A probe's ramp at time t (s): its share of the target, linear from 0 at t = 0 to 1 at the ramp time, then held
+// (ramp_time 0: at once), and whether it is still moving (a velocity before a step). Evaluated in double by both
+// backends so that the prescribed path is the same bits. Once t reaches the ramp time, t / ramp_time rounds to 1 or
+// more, so the division is skipped: on the GPU it is a double-precision sequence on the path of the probe vertex's
+// thread, which its neighbours' blocks wait for; for the same reason the ramp is evaluated once for a vertex's three
+// axes (and once for the prescriptions after a step and before the next, which share their time) rather than per
+// axis. With `cycles` > 0 the share is a triangle wave instead: up to 1 at the ramp time, back to 0 at twice it,
+// `cycles` times, then held at 0 (cyclic loading: a viscoelastic material's hysteresis); `falling` in a period's
+// second half. The period's index is a truncation (exact), the rest + - * /.
+struct ProbeRamp {
+  double share;
+  bool moving;
+  bool falling;
+};
 FMPC_HD double probe_cycle_phase(double t, double ramp_time) {
   const double u = t / ramp_time;
   const double whole = static_cast<double>(static_cast<long long>(u / 2.0));
   return u - 2.0 * whole;  // in [0, 2): rising below 1, falling above
 }
-FMPC_HD double probe_ramp_share(double t, double ramp_time, int cycles) {
+FMPC_HD ProbeRamp probe_ramp(double t, double ramp_time, int cycles) {
   if (cycles > 0 && ramp_time > 0.0) {
-    if (!(t < 2.0 * ramp_time * cycles)) return 0.0;
+    if (!(t < 2.0 * ramp_time * cycles)) return {0.0, false, false};
     const double phase = probe_cycle_phase(t, ramp_time);
-    return phase < 1.0 ? phase : 2.0 - phase;
+    return phase < 1.0 ? ProbeRamp{phase, true, false} : ProbeRamp{2.0 - phase, true, true};
   }
-  if (!(ramp_time > 0.0) || !(t < ramp_time)) return 1.0;
+  if (!(ramp_time > 0.0) || !(t < ramp_time)) return {1.0, false, false};
   const double share = t / ramp_time;
-  return share < 1.0 ? share : 1.0;
+  return {share < 1.0 ? share : 1.0, true, false};
+}
+FMPC_HD double probe_ramp_share(double t, double ramp_time, int cycles) {
+  return probe_ramp(t, ramp_time, cycles).share;
 }
 
-// One axis of a displacement probe's vertex at time t: position start + share target, and, before a step while
-// the ramp is rising, the ramp's velocity (which the dashpots and the implicit step see); zero otherwise.
+// One axis of a displacement probe's vertex on `ramp`: position start + share target, and the ramp's velocity
+// before a step while it moves (which the dashpots and the implicit step see); zero otherwise.
 template <typename Real>
-FMPC_HD void probe_prescribed_state(double start, double target, double t, double ramp_time, int cycles,
-                                    bool before_step, Real& position, Real& velocity) {
-  position = static_cast<Real>(start + probe_ramp_share(t, ramp_time, cycles) * target);
-  if (cycles > 0 && ramp_time > 0.0) {
-    const bool moving = t < 2.0 * ramp_time * cycles;
-    const double rate = probe_cycle_phase(t, ramp_time) < 1.0 ? target / ramp_time : -target / ramp_time;
-    velocity = static_cast<Real>(before_step && moving ? rate : 0.0);
-    return;
-  }
-  const bool ramping = ramp_time > 0.0 && t < ramp_time;
-  velocity = static_cast<Real>(before_step && ramping ? target / ramp_time : 0.0);
+FMPC_HD Real probe_ramp_position(const ProbeRamp& ramp, double start, double target) {
+  return static_cast<Real>(start + ramp.share * target);
+}
+template <typename Real>
+FMPC_HD Real probe_ramp_velocity(const ProbeRamp& ramp, double target, double ramp_time, bool before_step) {
+  if (!(before_step && ramp.moving)) return static_cast<Real>(0.0);
+  return static_cast<Real>(ramp.falling ? -target / ramp_time : target / ramp_time);
+}
+template <typename Real>
+FMPC_HD void probe_prescribed_axis(const ProbeRamp& ramp, double start, double target, double ramp_time,
+                                   bool before_step, Real& position, Real& velocity) {
+  position = probe_ramp_position<Real>(ramp, start, target);
+  velocity = probe_ramp_velocity<Real>(ramp, target, ramp_time, before_step);
 }
 
 // Classical Runge-Kutta: y1 = y0 + h/6 (k1 + 2 k2 + 2 k3 + k4).

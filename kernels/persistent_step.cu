@@ -153,10 +153,13 @@ __device__ void block_spring_terms(const kernels::SpringLawParameters<Real>& law
 // The element pass of every term over the grid, thread `thread` of `stride` on its elements: each term's pass writes or
 // adds to the corner slots of the same elements, so the terms need no barrier between them. The term index is a
 // constant in each unrolled iteration (indexing the parameter's array with a run-time index would copy it to local
-// memory); the element kind and law are visited per element pass.
+// memory); the element kind and law are visited per element pass, over the kinds it holds
+// (kernels::kPersistentElementKind; the launch plan gives the others no persistent launch, launch_persistent_euler
+// refuses them). Inlined, and without the larger kinds' bodies: called, or with them, it cost every element
+// instantiation a 2.2-3.7 KB stack frame (a copy of the kernel's parameters, then spills); now 136-176 bytes.
 template <typename Real>
-__device__ void grid_element_pass(const ForceModelView<Real>& model, const kernels::StateView<Real>& in, int thread,
-                                  int stride) {
+__device__ __forceinline__ void grid_element_pass(const ForceModelView<Real>& model, const kernels::StateView<Real>& in,
+                                                  int thread, int stride) {
   FMPC_UNROLL_ALL
   for (int t = 0; t < kMostElementTerms; ++t) {
     if (t >= model.term_count) break;
@@ -164,11 +167,13 @@ __device__ void grid_element_pass(const ForceModelView<Real>& model, const kerne
     kernels::visit_element_term_on_device(term.element, term.law, [&](auto kind, auto element_law) {
       using Element = decltype(kind);
       using Law = decltype(element_law);
-      for (int e = thread; e < term.count; e += stride) {
-        if (t == 0) {
-          kernels::element_node_forces<Element, Law, false>(e, term, in, model.corner_force);
-        } else {
-          kernels::element_node_forces<Element, Law, true>(e, term, in, model.corner_force);
+      if constexpr (kernels::kPersistentElementKind<Element>) {
+        for (int e = thread; e < term.count; e += stride) {
+          if (t == 0) {
+            kernels::element_node_forces<Element, Law, false>(e, term, in, model.corner_force);
+          } else {
+            kernels::element_node_forces<Element, Law, true>(e, term, in, model.corner_force);
+          }
         }
       }
     });
@@ -510,6 +515,15 @@ cudaError_t cluster_launch_config(int grid, int blocks, int rows, long long shar
   return status;
 }
 
+// Whether a term of `model` has an element kind the persistent kernel does not hold (kernels::kPersistentElementKind).
+template <typename Real>
+bool element_kind_not_persistent(const ForceModelView<Real>& model) {
+  if (model.kind == GatherKind::Springs) return false;
+  for (int t = 0; t < model.term_count && t < kMostElementTerms; ++t)
+    if (!kernels::element_kind_runs_persistent(model.terms[t].element)) return true;
+  return false;
+}
+
 }  // namespace
 
 template <typename Real>
@@ -542,7 +556,7 @@ cudaError_t launch_persistent_euler(const PersistentEulerArguments<Real>& argume
       static_cast<long long>(arguments.blocks) * arguments.rows < arguments.step.vertex_count ||
       arguments.block_records < 0 || arguments.most_neighbour_blocks < 0 ||
       (arguments.step.model.kind == GatherKind::Springs && arguments.neighbours.steps_done == nullptr) ||
-      !valid_checks(arguments)) {
+      !valid_checks(arguments) || element_kind_not_persistent(arguments.step.model)) {
     return cudaErrorInvalidValue;
   }
   const unsigned blocks = static_cast<unsigned>(arguments.blocks);

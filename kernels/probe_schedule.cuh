@@ -34,40 +34,60 @@ __device__ ProbeEntry probe_entry(const ProbeArguments<Real>& a, int i, unsigned
   return e;
 }
 
-// Entry e before or after the step at `offset` in the chunk: a force entry gives its vertex's external force (before
-// the step) in `force`; a displacement entry prescribes its vertex's position and velocity into `state` and returns
+// Entry e's ramp at the chunk's step `step` (t = (base + step) h): before step `step`, or after step `step` - 1.
+__device__ inline kernels::ProbeRamp probe_ramp_at(const ProbeEntry& e, int step) {
+  const ProbeScene& p = e.scene;
+  const double t = static_cast<double>(e.step_base + static_cast<unsigned long long>(step)) * p.h;
+  return kernels::probe_ramp(t, p.ramp_time, p.cycles);
+}
+
+// Entry e before or after a step, on that time's `ramp`: a force entry gives its vertex's external force (before the
+// step) in `force`; a displacement entry prescribes its vertex's position and velocity into `state` and returns
 // true.
+template <typename Real>
+__device__ bool probe_prescribe_on(const ProbeEntry& e, const kernels::ProbeRamp& ramp, bool before_step,
+                                   kernels::VertexState<Real>& state, ProbeForce<Real>& force) {
+  const ProbeScene& p = e.scene;
+  if (p.force_mode) {
+    if (!before_step) return false;
+    const double count = static_cast<double>(p.count);
+    force = {true, static_cast<Real>(e.base_force_x + ramp.share * p.target_x / count),
+             static_cast<Real>(e.base_force_y + ramp.share * p.target_y / count),
+             static_cast<Real>(e.base_force_z + ramp.share * p.target_z / count)};
+    return false;
+  }
+  kernels::probe_prescribed_axis(ramp, e.start_x, p.target_x, p.ramp_time, before_step, state.x, state.vx);
+  kernels::probe_prescribed_axis(ramp, e.start_y, p.target_y, p.ramp_time, before_step, state.y, state.vy);
+  kernels::probe_prescribed_axis(ramp, e.start_z, p.target_z, p.ramp_time, before_step, state.z, state.vz);
+  return true;
+}
+
+// Entry e before or after the step at `offset` in the chunk (probe_prescribe_on).
 template <typename Real>
 __device__ bool probe_prescribe(const ProbeEntry& e, int offset, bool before_step, kernels::VertexState<Real>& state,
                                 ProbeForce<Real>& force) {
-  const ProbeScene& p = e.scene;
-  const double t =
-      static_cast<double>(e.step_base + static_cast<unsigned long long>(offset + (before_step ? 0 : 1))) * p.h;
-  if (p.force_mode) {
-    if (!before_step) return false;
-    const double share = kernels::probe_ramp_share(t, p.ramp_time, p.cycles);
-    const double count = static_cast<double>(p.count);
-    force = {true, static_cast<Real>(e.base_force_x + share * p.target_x / count),
-             static_cast<Real>(e.base_force_y + share * p.target_y / count),
-             static_cast<Real>(e.base_force_z + share * p.target_z / count)};
-    return false;
-  }
-  kernels::probe_prescribed_state(e.start_x, p.target_x, t, p.ramp_time, p.cycles, before_step, state.x, state.vx);
-  kernels::probe_prescribed_state(e.start_y, p.target_y, t, p.ramp_time, p.cycles, before_step, state.y, state.vy);
-  kernels::probe_prescribed_state(e.start_z, p.target_z, t, p.ramp_time, p.cycles, before_step, state.z, state.vz);
-  return true;
+  return probe_prescribe_on(e, probe_ramp_at(e, offset + (before_step ? 0 : 1)), before_step, state, force);
 }
 
 // Entry e after the step at `offset`, then at_step_end(x) on the state a chunk ending there holds (a persistent
 // kernel's check stores it), then, where `next`, before the following step. Returns whether the entry prescribed x
 // (a displacement entry prescribes every value of its vertex's state; a force entry gives its force in `force`).
+// Both prescriptions are at one time, so one ramp serves them, and the position the second would write is the
+// first's: only the velocity changes (the same bits as two probe_prescribe calls, with a sixth of the ramp's
+// double-precision work on the path of the probe vertex's thread).
 template <typename Real, typename AtStepEnd>
 __device__ bool probe_between_steps(const ProbeEntry& e, int offset, bool next, kernels::VertexState<Real>& x,
                                     ProbeForce<Real>& force, AtStepEnd at_step_end) {
-  bool prescribed = probe_prescribe(e, offset, false, x, force);
+  const kernels::ProbeRamp ramp = probe_ramp_at(e, offset + 1);
+  const bool prescribed = probe_prescribe_on(e, ramp, false, x, force);
   at_step_end(x);
-  if (next) prescribed = probe_prescribe(e, offset + 1, true, x, force) || prescribed;
-  return prescribed;
+  if (!next) return prescribed;
+  if (!prescribed) return probe_prescribe_on(e, ramp, true, x, force);
+  const ProbeScene& p = e.scene;
+  x.vx = kernels::probe_ramp_velocity<Real>(ramp, p.target_x, p.ramp_time, true);
+  x.vy = kernels::probe_ramp_velocity<Real>(ramp, p.target_y, p.ramp_time, true);
+  x.vz = kernels::probe_ramp_velocity<Real>(ramp, p.target_z, p.ramp_time, true);
+  return true;
 }
 
 template <typename Real>

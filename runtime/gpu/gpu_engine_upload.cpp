@@ -331,6 +331,7 @@ bool GpuEngine<Real>::plan_launches(const ConcatenatedScenes& c, DiagnosticList&
   batch.strain_table = scenes_.front().strain_stiffness.has_value();
   batch.point_state = sim::has_point_state(scenes_.front().elements);
   batch.nodal_pass = element_count_ > 0 && kernels::element_kind_has_nodal_pass(c.element_kind);
+  batch.element_kind_not_persistent = element_count_ > 0 && !kernels::element_kind_runs_persistent(c.element_kind);
   batch.probe_vertices_unique = probe_vertices_unique_;
   batch.vertex_count = n_;
   batch.element_count = element_count_;

@@ -186,12 +186,13 @@ std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions
   plan.check_slot_stride = 1 + (batch.element_count > 0 ? 2 * batch.scene_count : 0);
   // Chunks of forward or semi-implicit Euler run as one persistent launch each where no strain table is looked up
   // and no point state updated between steps, no nodal pass precedes the element pass (its shares and gather would
-  // be two more grid barriers per step), each probe vertex is listed once and the batch fits the grid or clusters;
+  // be two more grid barriers per step), the element kind is one the persistent kernel holds
+  // (kernels::element_kind_runs_persistent), each probe vertex is listed once and the batch fits the grid or clusters;
   // otherwise one launch per kernel (steps of meshes too large for either are long enough that launches cost little).
   if (options.persistent && batch.implicit_scheme && batch.vertex_count > 0 && !plan_cg_grid(batch, device, plan))
     return std::nullopt;
   if (!options.persistent || batch.vertex_count <= 0 || batch.strain_table || batch.point_state || batch.nodal_pass ||
-      !batch.probe_vertices_unique || !batch.fused_scheme)
+      batch.element_kind_not_persistent || !batch.probe_vertices_unique || !batch.fused_scheme)
     return plan;
   // GpuOptions::persistent_kind: the preferred launch first, the other where it does not fit.
   const bool clusters_first = options.persistent_kind == sim::GpuOptions::PersistentKind::Clusters;

@@ -34,6 +34,7 @@ struct BatchShape {
   bool strain_table = false;          // a lookup between steps (no persistent launch)
   bool point_state = false;           // an element state update between steps (no persistent launch)
   bool nodal_pass = false;            // an element kind's nodal pass before each element pass (no persistent launch)
+  bool element_kind_not_persistent = false;  // one kernels::element_kind_runs_persistent refuses (no persistent launch)
   bool probe_vertices_unique = true;  // every probe vertex listed once (else the per-step probe kernel)
   int vertex_count = 0;
   int element_count = 0;

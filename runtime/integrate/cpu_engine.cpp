@@ -593,18 +593,16 @@ class CpuScene final : public CpuSceneBase {
       }
       return;
     }
+    const kernels::ProbeRamp ramp = kernels::probe_ramp(t, probe.ramp_time, probe.cycles);
     for (const auto vertex : probe.vertices) {
       const auto v = static_cast<std::size_t>(vertex);
       const Point3& start = start_position(setup_, v);
-      kernels::probe_prescribed_state(start[0], probe.target[0], t, probe.ramp_time, probe.cycles, before_step,
-                                      position_.x[v],
-                                      velocity_.x[v]);
-      kernels::probe_prescribed_state(start[1], probe.target[1], t, probe.ramp_time, probe.cycles, before_step,
-                                      position_.y[v],
-                                      velocity_.y[v]);
-      kernels::probe_prescribed_state(start[2], probe.target[2], t, probe.ramp_time, probe.cycles, before_step,
-                                      position_.z[v],
-                                      velocity_.z[v]);
+      kernels::probe_prescribed_axis(ramp, start[0], probe.target[0], probe.ramp_time, before_step, position_.x[v],
+                                     velocity_.x[v]);
+      kernels::probe_prescribed_axis(ramp, start[1], probe.target[1], probe.ramp_time, before_step, position_.y[v],
+                                     velocity_.y[v]);
+      kernels::probe_prescribed_axis(ramp, start[2], probe.target[2], probe.ramp_time, before_step, position_.z[v],
+                                     velocity_.z[v]);
     }
   }
 

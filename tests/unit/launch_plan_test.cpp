@@ -10,6 +10,8 @@
 #include <set>
 #include <vector>
 
+#include "kernels/element_laws.h"
+#include "runtime/fem/element_law_registry.h"
 #include "runtime/gpu/batch_concatenation.h"
 #include "runtime/gpu/gpu_simulation.h"
 #include "runtime/mesh/generated_mesh.h"
@@ -151,6 +153,9 @@ TEST_CASE("Launch plan: no persistent launch where a step needs its own launches
   shape.nodal_pass = true;  // the nodal pressure kind's shares and gather before each element pass
   not_persistent(shape, {});
   shape = box.shape;
+  shape.element_kind_not_persistent = true;  // the quadratic kind: its element pass outside the persistent kernel
+  not_persistent(shape, {});
+  shape = box.shape;
   shape.probe_vertices_unique = false;
   not_persistent(shape, {});
   shape = box.shape;
@@ -160,6 +165,13 @@ TEST_CASE("Launch plan: no persistent launch where a step needs its own launches
   shape.vertex_count = 0;
   not_persistent(shape, {});
   CHECK(device.queries == 0);
+}
+
+TEST_CASE("Launch plan: the persistent kernel holds the linear tetrahedron, not the quadratic or nodal kinds",
+          "[gpu][plan]") {
+  CHECK(kernels::element_kind_runs_persistent(sim::element_kind_by_keyword("linear")->kind));
+  CHECK_FALSE(kernels::element_kind_runs_persistent(sim::element_kind_by_keyword("quadratic")->kind));
+  CHECK_FALSE(kernels::element_kind_runs_persistent(sim::element_kind_by_keyword("linear_nodal_pressure")->kind));
 }
 
 TEST_CASE("Launch plan: the cooperative grid takes the fewest rows whose blocks are all resident", "[gpu][plan]") {

@@ -81,17 +81,25 @@ TEST_CASE("loads: probe ramp share and prescribed state, exact", "[sim][loads]")
   CHECK(kernels::probe_ramp_share(2.0, 2.0, 0) == 1.0);
   CHECK(kernels::probe_ramp_share(7.0, 2.0, 0) == 1.0);
   CHECK(kernels::probe_ramp_share(0.0, 0.0, 0) == 1.0);  // no ramp: at once
+  const auto prescribe = [](double start, double target, double t, double ramp_time, int cycles, bool before_step,
+                            auto& position, auto& velocity) {
+    kernels::probe_prescribed_axis(kernels::probe_ramp(t, ramp_time, cycles), start, target, ramp_time, before_step,
+                                   position, velocity);
+  };
   double position = 0.0, velocity = 0.0;
-  kernels::probe_prescribed_state(1.0, -0.5, 1.0, 2.0, 0, true, position, velocity);
+  prescribe(1.0, -0.5, 1.0, 2.0, 0, true, position, velocity);
   CHECK(position == 0.75);
   CHECK(velocity == -0.25);
-  kernels::probe_prescribed_state(1.0, -0.5, 1.0, 2.0, 0, false, position, velocity);  // after a step: at rest
+  prescribe(1.0, -0.5, 1.0, 2.0, 0, false, position, velocity);  // after a step: at rest
   CHECK(velocity == 0.0);
-  kernels::probe_prescribed_state(1.0, -0.5, 3.0, 2.0, 0, true, position, velocity);  // ramp over: held
+  prescribe(1.0, -0.5, 3.0, 2.0, 0, true, position, velocity);  // ramp over: held
+  CHECK(position == 0.5);
+  CHECK(velocity == 0.0);
+  prescribe(1.0, -0.5, 0.5, 0.0, 0, true, position, velocity);  // no ramp: at the target at once, at rest
   CHECK(position == 0.5);
   CHECK(velocity == 0.0);
   float single = 0.0f, single_velocity = 0.0f;
-  kernels::probe_prescribed_state(0.1, 0.2, 0.5, 1.0, 0, true, single, single_velocity);
+  prescribe(0.1, 0.2, 0.5, 1.0, 0, true, single, single_velocity);
   CHECK(single == static_cast<float>(0.1 + 0.5 * 0.2));
   CHECK(single_velocity == 0.2f);
   // Cyclic: a triangle wave of period 2 ramp, `cycles` times, then held at zero.
@@ -101,10 +109,15 @@ TEST_CASE("loads: probe ramp share and prescribed state, exact", "[sim][loads]")
   CHECK(kernels::probe_ramp_share(5.0, 2.0, 2) == 0.5);
   CHECK(kernels::probe_ramp_share(8.0, 2.0, 2) == 0.0);
   CHECK(kernels::probe_ramp_share(100.0, 2.0, 2) == 0.0);
-  kernels::probe_prescribed_state(1.0, -0.5, 3.0, 2.0, 2, true, position, velocity);  // falling
+  const kernels::ProbeRamp rising = kernels::probe_ramp(0.5, 2.0, 2), falling = kernels::probe_ramp(3.0, 2.0, 2),
+                           over = kernels::probe_ramp(1e300, 2.0, 2);
+  CHECK((rising.moving && !rising.falling));
+  CHECK((falling.moving && falling.falling));
+  CHECK((!over.moving && over.share == 0.0));  // past the cycles: no period index is computed (1e300 / 4 > 2^63)
+  prescribe(1.0, -0.5, 3.0, 2.0, 2, true, position, velocity);  // falling
   CHECK(position == 0.75);
   CHECK(velocity == 0.25);
-  kernels::probe_prescribed_state(1.0, -0.5, 9.0, 2.0, 2, true, position, velocity);  // cycles over: at rest
+  prescribe(1.0, -0.5, 9.0, 2.0, 2, true, position, velocity);  // cycles over: at rest
   CHECK(position == 1.0);
   CHECK(velocity == 0.0);
 }
