@@ -43,6 +43,9 @@
 //               is ../shared/data/sofa-liver beside the repository)
 // --tolerance, --max-iterations  implicit mode's solver (the scene's `solver: {tolerance, max_iterations}`; default:
 //               the scene's default, the CG to 1e-10): what a haptic loop trades for its 1 ms
+// --contact-rounds  implicit mode's solves per step with the tool's contact (the scene's `solver: {contact_rounds}`,
+//               1 to 8; default: the scene's, 8): 1 solves once with the contact found at the step's start, as SOFA
+//               does; the line of implicit solves counts the steps whose contact still changed after their last solve
 // --out DIR     writes haptic.csv (one row per mode) and haptic_force_MODE.csv (every tick: time, pose, the mean
 //               force, the tick-end force, contacts, latency) into DIR
 // Prints one line per mode and a Markdown table. Exit status 0, 1 when a step or a reading fails, 2 on bad arguments.
@@ -58,6 +61,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "bench/setup/process_clock.h"
@@ -95,9 +99,10 @@ struct Options {
   std::string tissue = "block";
   std::string liver_scene = FMPC_SOURCE_DIR "/rulesets/scenes/liver_meshed.yaml";
   std::string out;
-  // Implicit Euler's solver (the scene's `solver: {tolerance, max_iterations}`; 0: the scene default).
+  // Implicit Euler's solver (the scene's `solver: {tolerance, max_iterations, contact_rounds}`; 0: the scene default).
   double tolerance = 0.0;
   long max_iterations = 0;
+  long contact_rounds = 0;
 };
 
 // Where and how the sphere presses (m): the surface point under it, the unit direction it presses along, the radius
@@ -168,10 +173,13 @@ std::string scene_yaml(const Options& options, const std::string& mode, const st
                ? "contact: {damping_ratio: " + std::to_string(options.contact_damping) + "}\n"
                : std::string())
        << "integrator: " << (mode == "implicit" ? "implicit_euler" : "semi_implicit_euler") << "\n";
-  if (mode == "implicit" && (options.tolerance > 0.0 || options.max_iterations > 0)) {
+  if (mode == "implicit" && (options.tolerance > 0.0 || options.max_iterations > 0 || options.contact_rounds > 0)) {
+    const char* separator = "";
     yaml << "solver: {";
-    if (options.tolerance > 0.0) yaml << "tolerance: " << options.tolerance << (options.max_iterations > 0 ? ", " : "");
-    if (options.max_iterations > 0) yaml << "max_iterations: " << options.max_iterations;
+    if (options.tolerance > 0.0) yaml << std::exchange(separator, ", ") << "tolerance: " << options.tolerance;
+    if (options.max_iterations > 0)
+      yaml << std::exchange(separator, ", ") << "max_iterations: " << options.max_iterations;
+    if (options.contact_rounds > 0) yaml << separator << "contact_rounds: " << options.contact_rounds;
     yaml << "}\n";
   }
   yaml << "dt: " << (mode == "implicit" ? "0.001" : "auto") << "\n"
@@ -237,6 +245,8 @@ struct ModeResult {
   int iterations_max = 0;
   double residual_max = 0.0;
   std::size_t capped_steps = 0;
+  int contact_rounds = 0;                    // the scene's solver.contact_rounds
+  std::size_t contact_unsettled_steps = 0;   // steps whose contact set still changed after their last solve
 };
 
 bool run_mode(const Options& options, const std::string& mode, ModeResult& result) {
@@ -364,6 +374,8 @@ bool run_mode(const Options& options, const std::string& mode, ModeResult& resul
     result.iterations_max = solver.iterations_max;
     result.residual_max = solver.residual_max;
     result.capped_steps = solver.capped_steps;
+    result.contact_rounds = session->simulation().setup().implicit.contact_rounds;
+    result.contact_unsettled_steps = solver.contact_unsettled_steps;
   }
   // The sphere reaches the surface at kPressTime kStartGap / (kStartGap + kDepth): a run past twice that which felt
   // nothing is broken, not slow.
@@ -455,6 +467,9 @@ bool parse(int argc, char** argv, Options& options) {
     } else if (arg == "--max-iterations") {
       if (!integer_in(1, 100000, number)) return false;
       options.max_iterations = static_cast<long>(number);
+    } else if (arg == "--contact-rounds") {
+      if (!integer_in(1, fmpc::kernels::kMostContactRounds, number)) return false;
+      options.contact_rounds = static_cast<long>(number);
     } else if (arg == "--liver-scene") {
       options.liver_scene = value;
     } else if (arg == "--out") {
@@ -464,7 +479,7 @@ bool parse(int argc, char** argv, Options& options) {
           << "usage: fmpc_haptic_bench [--seconds S | --ticks N] [--modes implicit,explicit] [--backend cpu|cuda] "
              "[--cells N] [--threads N] [--precision float|double] [--force mean|end] [--contact-damping R] "
              "[--tissue block|liver] [--liver-scene FILE] [--tolerance T] [--max-iterations N] "
-             "[--out DIR]\n";
+             "[--contact-rounds N] [--out DIR]\n";
       return false;
     }
   }
@@ -508,8 +523,9 @@ int main(int argc, char** argv) {
     if (mode == "implicit")
       std::printf(
           "  implicit solves: %.1f iterations per step (at most %d), largest relative residual %.3g, %zu "
-          "steps at the cap\n",
-          result.iterations_mean, result.iterations_max, result.residual_max, result.capped_steps);
+          "steps at the cap; contact rounds %d, %zu steps whose contact still changed after their last solve\n",
+          result.iterations_mean, result.iterations_max, result.residual_max, result.capped_steps,
+          result.contact_rounds, result.contact_unsettled_steps);
     results.push_back(result);
   }
   std::printf(
@@ -524,7 +540,7 @@ int main(int argc, char** argv) {
     csv << "mode,backend,precision,cells,vertices,dt_s,steps_per_tick,ticks,wall_s,cpu_s,setup_s,latency_p50_ms,"
            "latency_p99_ms,latency_max_ms,overruns,real_time_factor,force,final_force_N,peak_force_N,"
            "mean_force_change_N,end_force_change_N,contact_damping_ratio,iterations_mean,iterations_max,residual_max,"
-           "capped_steps\n";
+           "capped_steps,contact_rounds,contact_unsettled_steps\n";
     for (const ModeResult& r : results)
       csv << r.mode << "," << options.backend << "," << options.precision << "," << options.cells << "," << r.vertices
           << "," << r.dt << "," << r.steps_per_tick << "," << r.ticks << "," << r.wall << "," << r.cpu << "," << r.setup
@@ -532,7 +548,8 @@ int main(int argc, char** argv) {
           << (options.mean_force ? "mean" : "end") << "," << r.final_force << "," << r.peak_force << ","
           << r.mean_step << "," << r.end_step << "," << (r.mode == "explicit" ? options.contact_damping : 0.0) << ","
           << r.iterations_mean << "," << r.iterations_max << ","
-          << r.residual_max << "," << r.capped_steps << "\n";
+          << r.residual_max << "," << r.capped_steps << "," << r.contact_rounds << ","
+          << r.contact_unsettled_steps << "\n";
   }
   return 0;
 }

@@ -356,7 +356,6 @@ class GpuEngine final : public sim::SteppingEngine {
   DeviceArray<double> contact_blocks_, contact_rhs_;  // implicit Euler's contact part: 6 and 3 per vertex
   DeviceArray<unsigned char> contact_active_;  // implicit Euler's contact set per vertex
   DeviceArray<unsigned int> contact_changes_;
-  bool contact_warning_given_ = false;
   std::vector<kernels::ToolShape<Real>> tool_shapes_;
   StepSize<Real> step_{};
   std::map<std::pair<std::size_t, int>, std::unique_ptr<GraphExecutable>> graphs_;

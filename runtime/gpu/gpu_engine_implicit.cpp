@@ -58,8 +58,9 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
   const ImplicitArguments<Real> a = implicit_arguments();
   const bool contact = a.extra_blocks != nullptr;
   // The tools' contact as the system's linear part (launch_contact_part): the pairs inside at the step's start,
-  // then those the solution predicts inside, solved again until the set stays, as on the CPU (a later round's CG
-  // starts from zero where the CPU's starts from the last round's dv: the two agree to the solver's tolerance).
+  // then those the solution predicts inside, solved again until the set stays, at most contact_rounds solves, as on
+  // the CPU (a later round's CG starts from zero where the CPU's starts from the last round's dv: the two agree to
+  // the solver's tolerance). The last solve's prediction still runs, to count a set that changed after it.
   if (!contact && plan_.cg_grid_blocks > 0) {
     FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
     FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
@@ -69,8 +70,10 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
     return ++deferred_solves_ < kDeferredSolves || record_deferred_solves(diagnostics);
   }
   FMPC_CUDA_CHECK(launch_contact_part(a, false, stream_), diagnostics, false);
+  const int most_rounds = scenes_.front().implicit.contact_rounds;
   ConjugateGradientScalars scalars{};
   int iterations = 0;
+  bool settled = true;
   for (int round = 1;; ++round) {
     if (!conjugate_gradient(a, scalars, diagnostics)) return false;
     iterations += scalars.iterations;
@@ -82,16 +85,16 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
                     diagnostics, false);
     if (!synchronize(diagnostics)) return false;
     if (changes == 0) break;
-    if (round == kernels::kMostContactRounds) {
-      if (!contact_warning_given_) {
-        contact_warning_given_ = true;
-        diagnostics.warning(scenes_.front().source_range, "contact-not-settled",
-                            sim::contact_unsettled_message(steps_taken_ + 1, kernels::kMostContactRounds));
-      }
+    if (round >= most_rounds) {
+      settled = false;
       break;
     }
   }
   record_solve(steps_taken_ + 1, iterations, scalars, diagnostics);
+  // One round (contact_rounds 1) is the user's choice, counted but not warned about.
+  if (!settled && implicit_log_.contact_unsettled(steps_taken_ + 1) && most_rounds > 1)
+    diagnostics.warning(scenes_.front().source_range, "contact-not-settled",
+                        sim::contact_unsettled_message(steps_taken_ + 1, most_rounds));
   FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
   return true;
 }

@@ -538,7 +538,7 @@ class CpuScene final : public CpuSceneBase {
     if (contact) contact_.start(implicit_x_, implicit_v_, static_cast<double>(h_));
     const ImplicitSolve solve =
         solver_->solve(implicit_x_, implicit_v_, implicit_a_, implicit_k_, static_cast<double>(h_), pool_,
-                       implicit_dv_, contact ? &contact_ : nullptr, kernels::kMostContactRounds);
+                       implicit_dv_, contact ? &contact_ : nullptr, setup_.implicit.contact_rounds);
     if (solve.direct_failed) log_.fallback();
     const ImplicitStepRecord record{steps_taken_ + 1, solve.iterations, solve.relative_residual, !solve.converged};
     if (log_.record(record)) {
@@ -548,10 +548,10 @@ class CpuScene final : public CpuSceneBase {
                                              record.step, record.iterations, record.relative_residual,
                                              setup_.implicit.tolerance));
     }
-    if (!solve.settled && !contact_warning_given_) {
-      contact_warning_given_ = true;
+    // One round (contact_rounds 1) is the user's choice, counted but not warned about.
+    if (!solve.settled && log_.contact_unsettled(steps_taken_ + 1) && setup_.implicit.contact_rounds > 1) {
       diagnostics.warning(setup_.source_range, "contact-not-settled",
-                          contact_unsettled_message(steps_taken_ + 1, kernels::kMostContactRounds));
+                          contact_unsettled_message(steps_taken_ + 1, setup_.implicit.contact_rounds));
     }
     const std::vector<double>& dv = implicit_dv_;
     for_each_vertex([&](std::size_t i) {
@@ -670,9 +670,8 @@ class CpuScene final : public CpuSceneBase {
   std::unique_ptr<ImplicitSolver> solver_;
   ImplicitSolverLog log_;
   std::vector<double> implicit_x_, implicit_v_, implicit_a_, implicit_k_, implicit_dv_, checkpoint_warm_start_;
-  // The tools' contact in the solve (read through loads_.contact), and whether contact-not-settled was given.
+  // The tools' contact in the solve (read through loads_.contact).
   ImplicitContact<Real> contact_{loads_.contact, fixed_};
-  bool contact_warning_given_ = false;
 };
 
 // The CPU engine of a batch: each scene's CpuScene, run side by side on a pool of workers over the scenes (a scene's

@@ -34,10 +34,13 @@ std::string cg_stopped_message(ImplicitMethod method, std::size_t step, int iter
 }
 
 std::string contact_unsettled_message(std::size_t step, int rounds) {
-  return "implicit Euler: the vertices the tools push still changed after " + std::to_string(rounds) +
-         " solves at step " + std::to_string(step) +
-         "; the step went on with the last set (a tool moving further than its contact's depth in one step): "
-         "move it less per step or use a smaller dt";
+  std::string message = "implicit Euler: the vertices the tools push still changed after " + std::to_string(rounds) +
+                        " solves (solver.contact_rounds) at step " + std::to_string(step) +
+                        "; the step went on with the last set (a tool moving further than its contact's depth in "
+                        "one step): move it less per step or use a smaller dt";
+  if (rounds < kernels::kMostContactRounds)
+    message += ", or raise solver.contact_rounds (at most " + std::to_string(kernels::kMostContactRounds) + ")";
+  return message;
 }
 
 ImplicitSolverLog::ImplicitSolverLog(ImplicitMethod method, double tolerance, int max_iterations) {
@@ -71,6 +74,14 @@ bool ImplicitSolverLog::record(const ImplicitStepRecord& step) {
   if (pending_.size() < kMostPendingImplicitSteps) pending_.push_back(step);
   else ++r.unlogged_steps;
   return first_capped;
+}
+
+bool ImplicitSolverLog::contact_unsettled(std::size_t step) {
+  ++report_.contact_unsettled_steps;
+  if (report_.first_contact_unsettled_step == 0) report_.first_contact_unsettled_step = step;
+  const bool first = !contact_warned_;
+  contact_warned_ = true;
+  return first;
 }
 
 std::vector<ImplicitStepRecord> ImplicitSolverLog::take() {

@@ -45,6 +45,12 @@ struct ImplicitSolverOptions {
   double tolerance = 1e-10;  // relative residual |b - A dv| / |b|
   // The CPU's CG starts from the previous step's dv (false: from zero, Eigen's start; for measuring).
   bool warm_start = true;
+  // With tools: solves per step, 1 to kernels::kMostContactRounds. The contact is an active set: the vertices inside a
+  // tool at the step's start, then after each solve those its solution predicts inside, solved again while that
+  // changes the set, at most this many solves (then a `contact-not-settled` warning). 1: the set at the step's start,
+  // solved once and never warned about, as SOFA detects its penalty contact once per step (a haptic loop's budget);
+  // either way the steps whose set still changed are counted (ImplicitSolverReport::contact_unsettled_steps).
+  int contact_rounds = kernels::kMostContactRounds;
 };
 
 // One implicit step's solve, as the run's log keeps it (Simulation::take_implicit_steps).
@@ -70,6 +76,9 @@ struct ImplicitSolverReport {
   std::size_t first_capped_step = 0;  // 0: none
   double first_capped_residual = 0.0;
   std::size_t direct_fallbacks = 0;   // direct factorisations that failed (a zero pivot): those steps used the CG
+  // With tools: steps whose contact set still changed after their last solve (ImplicitSolverOptions::contact_rounds).
+  std::size_t contact_unsettled_steps = 0;
+  std::size_t first_contact_unsettled_step = 0;  // 0: none
   ImplicitStepRecord last;            // the latest step's
   // Records take_implicit_steps never saw: more than kMostPendingImplicitSteps were waiting (the sums above count
   // them).

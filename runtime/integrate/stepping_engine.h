@@ -91,7 +91,7 @@ std::string cg_stopped_message(ImplicitMethod method, std::size_t step, int iter
                                double tolerance);
 
 // The warning (code `contact-not-settled`) of an implicit step whose tools' contact set still changed after `rounds`
-// solves (kernels/contact_math.h), the same for both backends.
+// solves (the setup's implicit.contact_rounds), the same for both backends.
 std::string contact_unsettled_message(std::size_t step, int rounds);
 
 // One scene's implicit solves as an engine keeps them: the report's sums, the records not yet taken, and their
@@ -103,6 +103,9 @@ class ImplicitSolverLog {
   // Adds a step's record; true when it is the first step of the run that stopped at the cap (the engine warns once).
   bool record(const ImplicitStepRecord& step);
   void fallback() { ++report_.direct_fallbacks; }
+  // Counts a step whose tools' contact set still changed after its last solve; true the first time in the run (the
+  // engine warns once, as for the cap).
+  bool contact_unsettled(std::size_t step);
   const ImplicitSolverReport& report() const { return report_; }
   std::vector<ImplicitStepRecord> take();
   // The checkpoint at `step` steps taken, and back to it.
@@ -113,7 +116,7 @@ class ImplicitSolverLog {
   ImplicitSolverReport report_, saved_;
   std::size_t saved_step_ = 0;
   std::vector<ImplicitStepRecord> pending_;
-  bool warned_ = false;
+  bool warned_ = false, contact_warned_ = false;  // a replay from the checkpoint does not warn again
 };
 
 // True where `scene` indexes a batch of `count` scenes; otherwise an error saying so (Simulation's per-scene calls).

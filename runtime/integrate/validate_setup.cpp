@@ -285,6 +285,11 @@ bool validate_setup(const SimulationSetup& setup, DiagnosticList& diagnostics) {
     diagnostics.error(range, "implicit Euler needs a non-negative CG iteration cap (0: twice the unknowns) and a "
                              "relative tolerance in (0, 1)");
   }
+  if (setup.implicit.contact_rounds < 1 || setup.implicit.contact_rounds > kernels::kMostContactRounds) {
+    diagnostics.error(range, "implicit Euler's contact rounds (implicit.contact_rounds) must be from 1 to " +
+                                 std::to_string(kernels::kMostContactRounds) + ", got " +
+                                 std::to_string(setup.implicit.contact_rounds));
+  }
   if (diagnostics.error_count() != errors_before) return false;
   return validate_loads(setup, diagnostics) && validate_tools(setup, diagnostics);
 }

@@ -209,10 +209,10 @@ void SceneParser::parse_outputs(const YAML::Node& node) {
     if (auto v = boolean(node["plot"], "outputs.plot")) out.plot = *v;
 }
 
-// `solver: {method, tolerance, max_iterations}` (docs/scenes.md): implicit Euler's linear solver.
+// `solver: {method, tolerance, max_iterations, contact_rounds}` (docs/scenes.md): implicit Euler's linear solver.
 void SceneParser::parse_solver(const YAML::Node& node) {
   remember(node, "solver");
-  if (!check_map(node, "solver", {"method", "tolerance", "max_iterations"})) return;
+  if (!check_map(node, "solver", {"method", "tolerance", "max_iterations", "contact_rounds"})) return;
   ImplicitSolverOptions& solver = scene_.solver;
   if (node["method"]) {
     static const std::vector<std::string> names = {"auto", "direct", "cg"};
@@ -232,6 +232,9 @@ void SceneParser::parse_solver(const YAML::Node& node) {
   if (node["max_iterations"])
     if (auto v = integer(node["max_iterations"], "solver.max_iterations", 1, 1000000))
       solver.max_iterations = static_cast<int>(*v);
+  if (node["contact_rounds"])
+    if (auto v = integer(node["contact_rounds"], "solver.contact_rounds", 1, kernels::kMostContactRounds))
+      solver.contact_rounds = static_cast<int>(*v);
 }
 
 }  // namespace fmpc::sim

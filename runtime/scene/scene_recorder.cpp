@@ -402,6 +402,11 @@ std::string SceneRecorder::summary_json(const SceneState& state, DiagnosticList&
     out["first_capped_step"] = solver.first_capped_step;
     out["first_capped_relative_residual"] = solver.first_capped_residual;
     out["direct_fallbacks"] = solver.direct_fallbacks;
+    if (!setup.tools.empty()) {
+      out["contact_rounds"] = static_cast<std::size_t>(setup.implicit.contact_rounds);
+      out["contact_unsettled_steps"] = solver.contact_unsettled_steps;
+      out["first_contact_unsettled_step"] = solver.first_contact_unsettled_step;
+    }
     // Every step's numbers, in step order, while they fit (kMostSummarySolverSteps); null past it.
     if (solver.steps <= kMostSummarySolverSteps && step_iterations_.size() == solver.steps) {
       JsonDocument iterations = JsonDocument::array(), residuals = JsonDocument::array();

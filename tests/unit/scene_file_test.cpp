@@ -281,11 +281,19 @@ TEST_CASE("solver: implicit Euler's linear solver, read and checked", "[scene][i
   CHECK(defaults.scene->solver.method == ImplicitMethod::Automatic);
   CHECK(defaults.scene->solver.tolerance == 1e-10);
   CHECK(defaults.scene->solver.max_iterations == 0);
-  const Parsed given = parse(implicit + "solver: {method: cg, tolerance: 1e-9, max_iterations: 25}\n");
+  CHECK(defaults.scene->solver.contact_rounds == 8);
+  const Parsed given =
+      parse(implicit + "solver: {method: cg, tolerance: 1e-9, max_iterations: 25, contact_rounds: 1}\n");
   REQUIRE(given.scene);
   CHECK(given.scene->solver.method == ImplicitMethod::ConjugateGradient);
   CHECK(given.scene->solver.tolerance == 1e-9);
   CHECK(given.scene->solver.max_iterations == 25);
+  CHECK(given.scene->solver.contact_rounds == 1);
+  CHECK(parse(implicit + "solver: {contact_rounds: 8}\n").scene->solver.contact_rounds == 8);
+  for (const char* bad : {"0", "9", "-1", "2.5", "two", "[1]"})
+    CHECK(error_of(implicit + "solver: {contact_rounds: " + bad + "}\n") ==
+          std::string("4:26: solver.contact_rounds: expected an integer from 1 to 8, got ") +
+              (bad[0] == '[' ? "a list of 1" : "'" + std::string(bad) + "'"));
   CHECK(parse(implicit + "solver: {method: direct}\n").scene->solver.method == ImplicitMethod::Direct);
   CHECK(error_of(implicit + "solver: {method: lu}\n") ==
         "4:18: solver.method: 'lu' is not a linear solver; use auto, direct or cg");
@@ -299,11 +307,14 @@ TEST_CASE("solver: implicit Euler's linear solver, read and checked", "[scene][i
   CHECK(error_of(implicit + "solver: {max_iterations: 0}\n") ==
         "4:26: solver.max_iterations: expected an integer from 1 to 1000000, got '0'");
   CHECK(error_of(implicit + "solver: {iterations: 25}\n") ==
-        "4:10: solver.iterations: unknown key in solver; allowed: 'method', 'tolerance' or 'max_iterations'");
-  CHECK(error_of(implicit + "solver: cg\n") == "4:9: solver: expected a map with 'method', 'tolerance' or 'max_iterations'");
-  CHECK(error_of(kMinimal + "solver: {max_iterations: 25}\n") ==
-        "3:9: solver: only implicit_euler solves a linear system each step; this scene's integrator is "
-        "semi_implicit_euler: remove 'solver' or use integrator: implicit_euler");
+        "4:10: solver.iterations: unknown key in solver; allowed: 'method', 'tolerance', 'max_iterations' or "
+        "'contact_rounds'");
+  CHECK(error_of(implicit + "solver: cg\n") ==
+        "4:9: solver: expected a map with 'method', 'tolerance', 'max_iterations' or 'contact_rounds'");
+  for (const std::string key : {"max_iterations: 25", "contact_rounds: 1"})
+    CHECK(error_of(kMinimal + "solver: {" + key + "}\n") ==
+          "3:9: solver: only implicit_euler solves a linear system each step; this scene's integrator is "
+          "semi_implicit_euler: remove 'solver' or use integrator: implicit_euler");
 }
 
 TEST_CASE("outputs.cohort: a cohort's per-patient frames and pictures only when asked", "[scene]") {

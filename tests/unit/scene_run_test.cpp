@@ -744,6 +744,7 @@ outputs: {frames: 0, samples: 5, precision_check: off}
   CHECK(solver["iterations_max"] == 3);
   CHECK(solver["capped_steps"] == 20);
   CHECK(solver["first_capped_step"] == 1);
+  CHECK_FALSE(solver.contains("contact_rounds"));  // no tools
   REQUIRE(solver["per_step"]["iterations"].size() == 20);
   REQUIRE(solver["per_step"]["relative_residual"].size() == 20);
   double largest = 0.0;

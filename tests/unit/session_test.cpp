@@ -1,7 +1,7 @@
 // fmpc::runtime::Session (runtime/session/session.h): a scene from YAML text and from a setup, stepped by steps and to
 // a time, a tool posed every tick and read back, the state read, and the material swapped for other rules between
-// two steps; bad input (other inputs, a rule file with errors, an unstable step, a session from a setup) is an
-// error and changes nothing.
+// two steps, implicit Euler's contact rounds taken from the scene; bad input (other inputs, a rule file with errors,
+// an unstable step, a session from a setup) is an error and changes nothing.
 #include "runtime/session/session.h"
 
 #include <catch2/catch.hpp>
@@ -11,6 +11,7 @@
 #include <fstream>
 
 #include "runtime/fem/fem_model_builder.h"
+#include "runtime/io/json_text.h"
 #include "runtime/mesh/generated_mesh.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
@@ -441,4 +442,45 @@ TEST_CASE("session: a swapped material's Prony weights and times take effect", "
   CHECK(errors_of(diagnostics) ==
         "the new material does not fit this simulation: its element term 0 has 1 Prony terms where the simulation "
         "has 2 (the series' length sets the state each point keeps); build it from the same mesh and model");
+}
+
+TEST_CASE("session: solver.contact_rounds comes from the scene; the summary counts the steps left unsettled",
+          "[session][tools][implicit]") {
+  // The session's setup carries the scene's bound: one solve per step, the steps whose contact then changed counted
+  // and never warned about.
+  const std::string rules = write_file("rounds.fis", rules_text("F", 5, 15));
+  std::string text = scene_text(rules, "solver: {contact_rounds: 1}\n");
+  const std::string explicit_line = "integrator: semi_implicit_euler\n";
+  text.replace(text.find(explicit_line), explicit_line.size(), "integrator: implicit_euler\ndt: 0.005\n");
+  DiagnosticList diagnostics;
+  const auto session = Session::from_yaml(text, (scratch_folder() / "rounds.yaml").string(), diagnostics);
+  REQUIRE(session);
+  CHECK(session->simulation().setup().implicit.contact_rounds == 1);
+  for (int tick = 1; tick <= 6; ++tick) {
+    runtime::ToolPose pose;
+    pose.position = {0.01 + 0.0008 * tick, 0.01, 0.0131 - 0.0015 * std::min(1.0, tick / 2.0)};
+    REQUIRE(session->set_tool_pose(0, pose, diagnostics));
+    REQUIRE(session->step(5, diagnostics));
+  }
+  const sim::ImplicitSolverReport report = session->simulation().implicit_solver();
+  CHECK(report.contact_unsettled_steps > 0);
+  for (const Diagnostic& d : diagnostics.items()) CHECK(d.code != "contact-not-settled");
+
+  // A run of the scene: summary.json's solver section gives the bound and the count; a scene without tools has
+  // neither.
+  const std::string path = (scratch_folder() / "rounds_run.yaml").string();
+  const auto scene = sim::parse_scene(path, text + "duration: 0.05\noutputs: {frames: 0, precision_check: off}\n",
+                                      diagnostics);
+  REQUIRE(scene);
+  const auto built = sim::build_scene(*scene, diagnostics);
+  REQUIRE(built);
+  sim::SceneRunOptions options;
+  options.output_directory = (scratch_folder() / "rounds_run.out").string();
+  const auto result = sim::run_scene(*scene, *built, options, diagnostics);
+  REQUIRE(result);
+  REQUIRE(result->solver);
+  const sim::JsonDocument summary = sim::JsonDocument::parse(result->summary_json);
+  CHECK(summary["solver"]["contact_rounds"] == 1);
+  CHECK(summary["solver"]["contact_unsettled_steps"] == result->solver->contact_unsettled_steps);
+  CHECK(summary["solver"]["first_contact_unsettled_step"] == result->solver->first_contact_unsettled_step);
 }

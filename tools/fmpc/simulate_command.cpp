@@ -117,6 +117,10 @@ std::string solver_summary(const sim::ImplicitSolverReport& report) {
   if (report.capped_steps > 0)
     line += "; " + std::to_string(report.capped_steps) + " of " + std::to_string(report.steps) +
             " steps stopped at the cap of " + std::to_string(report.max_iterations);
+  if (report.contact_unsettled_steps > 0)
+    line += "; " + std::to_string(report.contact_unsettled_steps) + " of " + std::to_string(report.steps) +
+            " steps' tool contact sets still changed after their last solve (the first at step " +
+            std::to_string(report.first_contact_unsettled_step) + "; solver.contact_rounds)";
   return line;
 }
 
