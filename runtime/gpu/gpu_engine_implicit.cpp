@@ -91,10 +91,8 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
     }
   }
   record_solve(steps_taken_ + 1, iterations, scalars, diagnostics);
-  // One round (contact_rounds 1) is the user's choice, counted but not warned about.
-  if (!settled && implicit_log_.contact_unsettled(steps_taken_ + 1) && most_rounds > 1)
-    diagnostics.warning(scenes_.front().source_range, "contact-not-settled",
-                        sim::contact_unsettled_message(steps_taken_ + 1, most_rounds));
+  if (!settled)
+    implicit_log_.contact_unsettled(steps_taken_ + 1, most_rounds, scenes_.front().source_range, diagnostics);
   FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
   return true;
 }

@@ -548,11 +548,8 @@ class CpuScene final : public CpuSceneBase {
                                              record.step, record.iterations, record.relative_residual,
                                              setup_.implicit.tolerance));
     }
-    // One round (contact_rounds 1) is the user's choice, counted but not warned about.
-    if (!solve.settled && log_.contact_unsettled(steps_taken_ + 1) && setup_.implicit.contact_rounds > 1) {
-      diagnostics.warning(setup_.source_range, "contact-not-settled",
-                          contact_unsettled_message(steps_taken_ + 1, setup_.implicit.contact_rounds));
-    }
+    if (!solve.settled)
+      log_.contact_unsettled(steps_taken_ + 1, setup_.implicit.contact_rounds, setup_.source_range, diagnostics);
     const std::vector<double>& dv = implicit_dv_;
     for_each_vertex([&](std::size_t i) {
       if (fixed_[i] == kernels::kAllAxesFixed) return;

@@ -76,12 +76,14 @@ bool ImplicitSolverLog::record(const ImplicitStepRecord& step) {
   return first_capped;
 }
 
-bool ImplicitSolverLog::contact_unsettled(std::size_t step) {
+void ImplicitSolverLog::contact_unsettled(std::size_t step, int rounds, const SourceRange& where,
+                                          DiagnosticList& diagnostics) {
   ++report_.contact_unsettled_steps;
   if (report_.first_contact_unsettled_step == 0) report_.first_contact_unsettled_step = step;
   const bool first = !contact_warned_;
   contact_warned_ = true;
-  return first;
+  if (first && rounds > 1)
+    diagnostics.warning(where, "contact-not-settled", contact_unsettled_message(step, rounds));
 }
 
 std::vector<ImplicitStepRecord> ImplicitSolverLog::take() {

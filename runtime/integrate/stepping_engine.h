@@ -103,9 +103,10 @@ class ImplicitSolverLog {
   // Adds a step's record; true when it is the first step of the run that stopped at the cap (the engine warns once).
   bool record(const ImplicitStepRecord& step);
   void fallback() { ++report_.direct_fallbacks; }
-  // Counts a step whose tools' contact set still changed after its last solve; true the first time in the run (the
-  // engine warns once, as for the cap).
-  bool contact_unsettled(std::size_t step);
+  // Counts a step whose tools' contact set still changed after its last solve of at most `rounds` (the setup's
+  // implicit.contact_rounds), and warns about the run's first (contact-not-settled, at `where`) unless one round
+  // was the scene's choice.
+  void contact_unsettled(std::size_t step, int rounds, const SourceRange& where, DiagnosticList& diagnostics);
   const ImplicitSolverReport& report() const { return report_; }
   std::vector<ImplicitStepRecord> take();
   // The checkpoint at `step` steps taken, and back to it.
