@@ -129,8 +129,9 @@ void record_failure(SimulationTradeRow& row, const DiagnosticList& run_diagnosti
 }
 
 // Steps a created simulation from `from` to `steps` in hundredths of the run (progress during a long run; advance
-// resumes where it stopped; the checks advance makes at its end do not change the state), adding the stepping's time to `cpu` and `wall`; `stop` (optional), asked after each
-// chunk with the steps done and the CPU time so far, ends it early. Returns whether every step completed.
+// resumes where it stopped; the checks advance makes at its end do not change the state), adding the stepping's
+// time to `cpu` and `wall`; `stop` (optional), asked after each chunk with the steps done and the CPU time so far,
+// ends it early. Returns whether every step completed.
 bool step_to_end(Simulation& simulation, std::size_t from, std::size_t steps, DiagnosticList& diagnostics,
                  double& cpu, double& wall, const std::function<void(std::size_t)>& stepped,
                  const std::function<bool(std::size_t, double)>& stop = {}) {

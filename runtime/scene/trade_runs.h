@@ -120,10 +120,10 @@ struct CheapestFirstRuns {
 };
 
 // Runs `keys` on the CPU workers cheapest first: each is started and timed over a prefix (execution.prefix_seconds
-// of its thread's CPU time, steps in chunks of 1, 2, 4, ... up to a hundredth of the run) and paused; its full CPU time is estimated as the prefix's time per step times its steps;
-// then they go on by CheapestFirstSchedule, the bound starting at `bound` and lowered by every run that ends and
-// `meets` (E, against the reference). A prefix that passes the bound is stopped there. `work` and `done` as for
-// execute_trade_runs.
+// of its thread's CPU time, steps in chunks of 1, 2, 4, ... up to a hundredth of the run) and paused; its full CPU
+// time is estimated as the prefix's time per step times its steps; then they go on by CheapestFirstSchedule, the
+// bound starting at `bound` and lowered by every run that ends and `meets` (E, against the reference). A prefix that
+// passes the bound is stopped there. `work` and `done` as for execute_trade_runs.
 CheapestFirstRuns execute_cheapest_first(const std::vector<RunKey>& keys, const std::vector<double>& work,
                                          TradeScenes& scenes, const TradeExecution& execution,
                                          const std::function<bool(const RunOutcome&)>& meets, double bound,

@@ -14,7 +14,8 @@ std::optional<std::size_t> CheapestFirstSchedule::next() {
     // NaN last: an unordered estimate compares false both ways, so it is placed by hand.
     std::stable_sort(queue_.begin() + static_cast<std::ptrdiff_t>(cursor_), queue_.end(),
                      [](const Entry& a, const Entry& b) {
-                       if (std::isnan(a.estimate) || std::isnan(b.estimate)) return !std::isnan(a.estimate) && std::isnan(b.estimate);
+                       if (std::isnan(a.estimate) || std::isnan(b.estimate))
+                         return !std::isnan(a.estimate) && std::isnan(b.estimate);
                        return a.estimate < b.estimate;
                      });
     sorted_ = true;
