@@ -45,7 +45,8 @@
 #               with the model builder's breakdown and the simulators' peak, then 120^3 on one thread (same checksum)
 #   profile     (only when asked: --only profile) Nsight Compute (ncu) on the kernels that bound the goals: the FEM
 #               120^3 element and vertex passes (fmpc_sim_bench --fem-only), the carried fmpc's 240^3 springs box
-#               and 20^3 small box; reports as text in $OUT/profile_*.txt
+#               and 20^3 small box, implicit Euler's CG kernels (the 20^3 FEM box's per-iteration kernels, SOFA's
+#               liver's cooperative launch); reports as text in $OUT/profile_*.txt
 #   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
 #               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540); the
 #               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run;
@@ -815,6 +816,21 @@ profile_section() {
       "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/small_box_springs.yaml" --backend cuda --steps 3000 \
       -o "$BUILD/scenes/profile_small" > "$OUT/profile_small_springs.txt" 2>&1 ||
       fail "ncu on small_box_springs (see profile_small_springs.txt)"
+    # Implicit Euler's conjugate gradient (docs/performance.md, seventeenth run): the 20^3 box's per-iteration
+    # kernels, and the cooperative launch on SOFA's liver at SOFA's cap of 25 iterations (its mesh from the carry).
+    "$ncu" "${sections[@]}" --kernel-name regex:'implicit_apply_kernel|implicit_element_apply_kernel' --launch-skip 20 \
+      --launch-count 2 "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/box20_fem_implicit.yaml" --backend cuda \
+      --steps 40 -o "$BUILD/scenes/profile_box20" > "$OUT/profile_implicit_box20.txt" 2>&1 ||
+      fail "ncu on box20_fem_implicit (see profile_implicit_box20.txt)"
+    if [[ -f "$CARRY/sofa-liver/liver.msh" ]]; then
+      sed -e "s#file: .*liver.msh#file: $CARRY/sofa-liver/liver.msh#" \
+        -e 's#^precision: double#precision: double\nsolver: {method: cg, max_iterations: 25}#' \
+        "$ROOT/rulesets/scenes/sofa_liver_fem.yaml" > "$BUILD/scenes/sofa_liver_cap25.yaml"
+      "$ncu" "${sections[@]}" --kernel-name regex:'cg_persistent' --launch-skip 20 --launch-count 1 \
+        "$UNPACKED/bin/fmpc" simulate "$BUILD/scenes/sofa_liver_cap25.yaml" --backend cuda --steps 60 \
+        -o "$BUILD/scenes/profile_liver" > "$OUT/profile_implicit_liver.txt" 2>&1 ||
+        fail "ncu on SOFA's liver, CG capped at 25 (see profile_implicit_liver.txt)"
+    fi
   fi
   record "profile: $(ls "$OUT"/profile_*.txt 2>/dev/null | wc -l) reports"
 }
