@@ -52,29 +52,30 @@ struct CorotationalLinear : IsotropicModuli {
   // rotation held fixed over the step, as in Mueller & Gross 2004).
   struct Linearisation {
     double rotation[9];
-    double modulus;  // a strain table's value at the step's start
+    double modulus;     // a strain table's value at the step's start
+    double mu, lambda;  // the Lame parameters of modulus and nu: computed once, not in every product (two divisions)
   };
 
   static FMPC_HD void linearise(const Material<double>& m, const double* F, Linearisation& lin) {
     lin.modulus = rotation_and_modulus(m, F, lin.rotation);
+    lame_parameters(lin.modulus, m.poisson_ratio, lin.mu, lin.lambda);
   }
 
   // dP = R sigma(sym(R^T dF)) with R held: the tangent of the co-rotated law (R K0 R^T on a linear tetrahedron).
-  static FMPC_HD void stress_differential(const Material<double>& m, const Linearisation& lin, const double* dF,
+  static FMPC_HD void stress_differential(const Material<double>&, const Linearisation& lin, const double* dF,
                                           double* dP) {
-    double e[9], sigma[9], mu, lambda;
+    double e[9], sigma[9];
     corotated_symmetric_part(lin.rotation, dF, false, e);
-    lame_parameters(lin.modulus, m.poisson_ratio, mu, lambda);
-    linear_stress(e, mu, lambda, sigma);
+    linear_stress(e, lin.mu, lin.lambda, sigma);
     multiply3(lin.rotation, sigma, dP);
   }
 
   // stress_differential's dP/dF in closed form: A[(i k), (j l)] = lambda R_ik R_jl + mu (R R^T)_ij delta_kl +
   // mu R_il R_jk (dF = e_j e_l^T in the formula above; R R^T is the identity up to round-off and kept as computed).
-  static FMPC_HD void tangent_modulus(const Material<double>& m, const Linearisation& lin, double* A) {
-    double mu, lambda, RRt[9];
+  static FMPC_HD void tangent_modulus(const Material<double>&, const Linearisation& lin, double* A) {
+    double RRt[9];
     const double* R = lin.rotation;
-    lame_parameters(lin.modulus, m.poisson_ratio, mu, lambda);
+    const double mu = lin.mu, lambda = lin.lambda;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) RRt[3 * i + j] = R[3 * i] * R[3 * j] + R[3 * i + 1] * R[3 * j + 1] + R[3 * i + 2] * R[3 * j + 2];
     for (int i = 0; i < 3; ++i)
