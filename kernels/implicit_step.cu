@@ -2,7 +2,9 @@
 // linearisation, and the Jacobi-preconditioned conjugate gradient's kernels with their fixed-shape dot products.
 #include <cooperative_groups.h>
 
+#include <algorithm>
 #include <cfloat>
+#include <type_traits>
 
 #include "kernels/implicit_contact_math.h"
 #include "kernels/step_device.cuh"
@@ -125,6 +127,36 @@ __device__ void gather_corner_values(int v, const kernels::CornerForceView<doubl
   }
 }
 
+// gather_corner_values of two arrays at once (the right-hand side's and the diagonal's parts), the corners in chunks
+// of kGatherChunk: a chunk's indices loaded first, then its values, then added in corner order (each sum's additions
+// in the same order as one corner at a time), so that a chunk costs two round trips to memory, not two per corner.
+// A vertex's gather is a chain of dependent loads (about 13 corners a vertex on a tetrahedral mesh) that nothing hides
+// in a small mesh's launch. (In the conjugate gradient's products the chunk's registers cost more than they save.)
+constexpr int kGatherChunk = 4;
+__device__ void gather_corner_pair(int v, const kernels::CornerForceView<double>& corners, const double* first,
+                                   double* first_out, const double* second, double* second_out) {
+  const int end = corners.offset[v + 1];
+  for (int k = corners.offset[v]; k < end; k += kGatherChunk) {
+    int corner[kGatherChunk];
+    double a[kGatherChunk][3], b[kGatherChunk][3];
+#pragma unroll
+    for (int j = 0; j < kGatherChunk; ++j) corner[j] = k + j < end ? corners.corner[k + j] : -1;
+#pragma unroll
+    for (int j = 0; j < kGatherChunk; ++j)
+      for (int i = 0; i < 3; ++i) {
+        a[j][i] = corner[j] >= 0 ? first[3 * corner[j] + i] : 0.0;
+        b[j][i] = corner[j] >= 0 ? second[3 * corner[j] + i] : 0.0;
+      }
+#pragma unroll
+    for (int j = 0; j < kGatherChunk; ++j)
+      if (corner[j] >= 0)
+        for (int i = 0; i < 3; ++i) {
+          first_out[i] += a[j][i];
+          second_out[i] += b[j][i];
+        }
+  }
+}
+
 template <typename Real, GatherKind K>
 __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   const int row = vertex_index();
@@ -179,8 +211,7 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   if (a.elements.count > 0) {
     const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
     double kv[3] = {0.0, 0.0, 0.0}, element_diagonal[3] = {0.0, 0.0, 0.0};
-    gather_corner_values(v, corners, a.elements.rhs_part, kv);
-    gather_corner_values(v, corners, a.elements.diagonal_part, element_diagonal);
+    gather_corner_pair(v, corners, a.elements.rhs_part, kv, a.elements.diagonal_part, element_diagonal);
     for (int c = 0; c < 3; ++c) {
       b[c] -= kv[c];
       jacobi[c] += element_diagonal[c];
@@ -320,6 +351,27 @@ __global__ void dot_partial_kernel(const double* first, const double* second, co
 
 enum class CgStage : int { Start = 0, Alpha = 1, Residual = 2 };
 
+// The scalars at the start of a solve from b.b (total) and r.z (other_total). Every field written, so that no later
+// read (the cooperative kernel's copy, the host's) meets memory never written.
+__device__ void cg_start_scalars(ConjugateGradientScalars& s, double total, double other_total, double tolerance,
+                                 int limit) {
+  s.rhs_norm2 = total;
+  s.rz = other_total;
+  s.p_ap = 0.0;
+  s.alpha = 0.0;
+  s.rr = total;
+  s.rz_next = 0.0;
+  s.beta = 0.0;
+  const double threshold = tolerance * tolerance * total;
+  s.threshold = threshold < DBL_MIN ? DBL_MIN : threshold;
+  s.iterations = 0;
+  // As the CPU backend: a right-hand side this small means the system is at rest to double precision; dv = 0 (the
+  // start's x) and the positions still move with their velocities.
+  s.at_rest = sqrt(total) < 1e-150 ? 1 : 0;
+  s.done = s.at_rest || !(total >= s.threshold) || limit <= 0 ? 1 : 0;
+  s.padding = 0;
+}
+
 // The stage's scalars from the partial sums. Every thread reads `done` before the trees' barriers and only thread
 // 0 writes after them, so the block agrees on it.
 __global__ void cg_scalars_kernel(const double* partial, ConjugateGradientScalars* scalars, CgStage stage,
@@ -331,26 +383,9 @@ __global__ void cg_scalars_kernel(const double* partial, ConjugateGradientScalar
   if (threadIdx.x != 0) return;
   ConjugateGradientScalars& s = *scalars;
   switch (stage) {
-    case CgStage::Start: {
-      // Every field written, so that no later read (the cooperative kernel's copy, the host's) meets memory never
-      // written.
-      s.rhs_norm2 = total;
-      s.rz = other_total;
-      s.p_ap = 0.0;
-      s.alpha = 0.0;
-      s.rr = total;
-      s.rz_next = 0.0;
-      s.beta = 0.0;
-      const double threshold = tolerance * tolerance * total;
-      s.threshold = threshold < DBL_MIN ? DBL_MIN : threshold;
-      s.iterations = 0;
-      // As the CPU backend: a right-hand side this small means the system is at rest to double precision; dv = 0
-      // (the start's x) and the positions still move with their velocities.
-      s.at_rest = sqrt(total) < 1e-150 ? 1 : 0;
-      s.done = s.at_rest || !(total >= s.threshold) || limit <= 0 ? 1 : 0;
-      s.padding = 0;
+    case CgStage::Start:
+      cg_start_scalars(s, total, other_total, tolerance, limit);
       break;
-    }
     case CgStage::Alpha:
       s.p_ap = total;
       s.alpha = s.rz / total;
@@ -468,10 +503,10 @@ __global__ void __launch_bounds__(kEnergyThreads) cg_persistent_kernel(ImplicitA
   if (block == 0 && threadIdx.x == 0 && s.iterations > 0) *a.scalars = s;
 }
 
+// v += dv, x += h v at vertex v (dv in a.x); fixed vertices stay.
 template <typename Real>
-__global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
-  const int v = vertex_index();
-  if (v >= a.vertex_count || a.loads.fixed[v] == kernels::kAllAxesFixed) return;
+__device__ void implicit_finish_vertex(const ImplicitArguments<Real>& a, int v) {
+  if (a.loads.fixed[v] == kernels::kAllAxesFixed) return;
   const Real h = static_cast<Real>(a.h);
   a.state.vx[v] += static_cast<Real>(a.x[3 * v]);
   a.state.vy[v] += static_cast<Real>(a.x[3 * v + 1]);
@@ -479,6 +514,194 @@ __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
   a.state.x[v] += h * a.state.vx[v];
   a.state.y[v] += h * a.state.vy[v];
   a.state.z[v] += h * a.state.vz[v];
+}
+
+template <typename Real>
+__global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
+  const int v = vertex_index();
+  if (v >= a.vertex_count) return;
+  implicit_finish_vertex(a, v);
+}
+
+// block_tree_reduce's sum of the 256 values at `values` by one warp, the same additions in the same order: lane l
+// holds values l, l + 32, ..., l + 224; the widths 128, 64 and 32 pair values within a lane, 16 to 1 across lanes.
+// Every lane returns the sum.
+__device__ double warp_tree_sum(const double* values) {
+  static_assert(kEnergyThreads == 256, "eight values per lane");
+  const int lane = static_cast<int>(threadIdx.x) % 32;
+  double v[8];
+  for (int k = 0; k < 8; ++k) v[k] = values[lane + 32 * k];
+  for (int k = 0; k < 4; ++k) v[k] = v[k] + v[k + 4];
+  for (int k = 0; k < 2; ++k) v[k] = v[k] + v[k + 2];
+  double sum = v[0] + v[1];
+  for (int width = 16; width > 0; width /= 2) sum = sum + __shfl_down_sync(0xffffffffu, sum, width);
+  return __shfl_sync(0xffffffffu, sum, 0);
+}
+
+// dot_partial_kernel's and cg_scalars_kernel's sums (virtual_block_sums over kEnergyBlocks virtual blocks, then
+// sum_partials) by one block of kCgBlockThreads threads with the terms and partial sums in shared memory: the same
+// additions in the same order, so the same bits. terms(i, sum, other) as virtual_block_sums' (count at most
+// kEnergyBlocks x kEnergyThreads, so one entry per virtual thread); `values` holds two arrays of count rounded up to
+// kEnergyThreads, `partial` kEnergyBlocks (2 x where pair). Every thread gets the sums. Begins and ends with what a
+// caller's barrier must separate: it reads what the block wrote before and writes `values` and `partial`.
+template <typename Terms>
+__device__ void block_fixed_shape_sums(int count, bool pair, double* values, double* partial, Terms&& terms,
+                                       double& total, double& other_total) {
+  const int used = (count + kEnergyThreads - 1) / kEnergyThreads;  // the virtual blocks that sum anything
+  const int padded = used * kEnergyThreads;
+  for (int i = static_cast<int>(threadIdx.x); i < padded; i += kCgBlockThreads) {
+    double sum = 0.0, other = 0.0;
+    if (i < count) terms(i, sum, other);
+    values[i] = sum;
+    if (pair) values[padded + i] = other;
+  }
+  __syncthreads();
+  const int warp = static_cast<int>(threadIdx.x) / 32, lane = static_cast<int>(threadIdx.x) % 32;
+  for (int b = warp; b < used; b += kCgBlockThreads / 32) {
+    const double sum = warp_tree_sum(values + b * kEnergyThreads);
+    const double other = pair ? warp_tree_sum(values + padded + b * kEnergyThreads) : 0.0;
+    if (lane == 0) {
+      partial[b] = sum;
+      if (pair) partial[kEnergyBlocks + b] = other;
+    }
+  }
+  __syncthreads();
+  // sum_partials: thread t of kEnergyThreads starts at 0.0 and adds partial[t] (t < kEnergyBlocks); an empty virtual
+  // block's partial is +0.0, and 0.0 + 0.0 is what its thread holds. Each warp sums them itself.
+  static_assert(kEnergyBlocks <= kEnergyThreads, "one partial sum per thread");
+  for (int round = 0; round < (pair ? 2 : 1); ++round) {
+    double v[8];
+    for (int k = 0; k < 8; ++k) {
+      const int t = lane + 32 * k;
+      v[k] = 0.0;
+      if (t < kEnergyBlocks) v[k] += t < used ? partial[round * kEnergyBlocks + t] : 0.0;
+    }
+    for (int k = 0; k < 4; ++k) v[k] = v[k] + v[k + 4];
+    for (int k = 0; k < 2; ++k) v[k] = v[k] + v[k + 2];
+    double sum = v[0] + v[1];
+    for (int width = 16; width > 0; width /= 2) sum = sum + __shfl_down_sync(0xffffffffu, sum, width);
+    (round == 0 ? total : other_total) = __shfl_sync(0xffffffffu, sum, 0);
+  }
+  if (!pair) other_total = 0.0;
+}
+
+// Which element terms a one-block solve's kernel is compiled for: none (springs alone), one term of a given element
+// kind and law (the usual run: no dispatch, and registers for that law alone), or any number of any (each term
+// visited at run time).
+struct NoElementTerms {};
+struct AnyElementTerms {};
+template <typename Element, typename Law>
+struct OneElementTerm {
+  using element = Element;
+  using law = Law;
+};
+
+// The element products of A p into s.elements.product, element e by thread e (then e + kCgBlockThreads, ...).
+template <typename Real, typename Terms>
+__device__ void block_element_products(const ImplicitArguments<Real>& s) {
+  const int t = static_cast<int>(threadIdx.x);
+  if constexpr (std::is_same_v<Terms, AnyElementTerms>) {
+    for (int term_index = 0; term_index < s.elements.term_count; ++term_index) {
+      const kernels::ElementTermView<double>& term = s.elements.terms[term_index];
+      kernels::visit_element_term_on_device(term.element, term.law, [&](auto kind, auto element_law) {
+        using Element = decltype(kind);
+        using Law = decltype(element_law);
+        using Linearisation = typename Element::template Linearisation<Law>;
+        const auto* linearisation = static_cast<const Linearisation*>(s.elements.linearisation[term_index]);
+        for (int e = t; e < s.elements.count; e += kCgBlockThreads)
+          element_apply<Real, Element, Law>(s, term, linearisation, e, term_index > 0);
+      });
+    }
+  } else if constexpr (!std::is_same_v<Terms, NoElementTerms>) {
+    using Element = typename Terms::element;
+    using Law = typename Terms::law;
+    using Linearisation = typename Element::template Linearisation<Law>;
+    const auto* linearisation = static_cast<const Linearisation*>(s.elements.linearisation[0]);
+    for (int e = t; e < s.elements.count; e += kCgBlockThreads)
+      element_apply<Real, Element, Law>(s, s.elements.terms[0], linearisation, e, false);
+  }
+}
+
+// A step's whole solve by one block (launch_cg_block), with its vectors in shared memory at `layout`: the start
+// (launch_cg_start), the iterations of cg_persistent_kernel with block barriers in place of grid barriers, and, where
+// `finish`, v += dv and x += h v (launch_implicit_finish). The same arithmetic in the same order as the per-iteration
+// kernels, so the same bits. dv is written back to a.x and the scalars to *a.scalars.
+template <typename Real, typename Terms>
+__global__ void __launch_bounds__(kCgBlockThreads) cg_block_kernel(ImplicitArguments<Real> a, CgBlockLayout layout,
+                                                                   bool finish) {
+  extern __shared__ double shared[];
+  const int n = a.vertex_count, dofs = 3 * n, t = static_cast<int>(threadIdx.x);
+  ImplicitArguments<Real> s = a;  // the same arguments with the vectors in shared memory
+  s.x = shared + layout.x;
+  s.r = shared + layout.r;
+  s.z = shared + layout.z;
+  s.p = shared + layout.p;
+  s.ap = shared + layout.ap;
+  s.inverse_jacobi = shared + layout.inverse_jacobi;
+  s.diagonal = shared + layout.diagonal;
+  s.elements.product = shared + layout.product;
+  double* const terms = shared + layout.terms;
+  double* const alpha_partial = shared + layout.alpha_partial;
+  double* const residual_partial = shared + layout.residual_partial;
+  for (int i = t; i < dofs; i += kCgBlockThreads) {
+    s.inverse_jacobi[i] = a.inverse_jacobi[i];
+    s.x[i] = 0.0;
+    s.r[i] = a.rhs[i];
+    s.z[i] = s.inverse_jacobi[i] * s.r[i];
+    s.p[i] = s.z[i];
+  }
+  for (int v = t; v < n; v += kCgBlockThreads) s.diagonal[v] = a.diagonal[v];
+  __syncthreads();
+  ConjugateGradientScalars scalars;
+  {
+    double total = 0.0, other_total = 0.0;
+    block_fixed_shape_sums(
+        dofs, true, terms, residual_partial,
+        [&](int i, double& sum, double& other) {
+          sum += a.rhs[i] * a.rhs[i];
+          other += s.r[i] * s.z[i];
+        },
+        total, other_total);
+    cg_start_scalars(scalars, total, other_total, a.tolerance, a.iteration_limit);
+  }
+  while (!scalars.done) {
+    if (a.elements.count > 0) {
+      block_element_products<Real, Terms>(s);
+      __syncthreads();
+    }
+    for (int v = t; v < n; v += kCgBlockThreads) apply_row(s, v);
+    __syncthreads();
+    {
+      double p_ap = 0.0, unused = 0.0;
+      block_fixed_shape_sums(
+          dofs, false, terms, alpha_partial, [&](int i, double& sum, double&) { sum += s.p[i] * s.ap[i]; }, p_ap,
+          unused);
+      scalars.p_ap = p_ap;
+      scalars.alpha = scalars.rz / p_ap;
+    }
+    __syncthreads();  // every warp has read the terms before they are written again
+    {
+      double rr = 0.0, rz_next = 0.0;
+      block_fixed_shape_sums(
+          dofs, true, terms, residual_partial,
+          [&](int i, double& sum, double& other) {
+            cg_update_entry(s, scalars.alpha, i);
+            sum += s.r[i] * s.r[i];
+            other += s.r[i] * s.z[i];
+          },
+          rr, rz_next);
+      cg_finish_iteration(scalars, rr, rz_next, a.iteration_limit);
+    }
+    if (scalars.done) break;
+    for (int i = t; i < dofs; i += kCgBlockThreads) s.p[i] = s.z[i] + scalars.beta * s.p[i];
+    scalars.rz = scalars.rz_next;
+    __syncthreads();
+  }
+  __syncthreads();
+  for (int i = t; i < dofs; i += kCgBlockThreads) a.x[i] = s.x[i];
+  if (finish)
+    for (int v = t; v < n; v += kCgBlockThreads) implicit_finish_vertex(s, v);
+  if (t == 0) *a.scalars = scalars;
 }
 
 // The tools' contact as the system's linear part (kernels/implicit_contact_math.h, as the CPU's ImplicitContact):
@@ -527,6 +750,12 @@ cudaError_t launch_dots(const double* first, const double* second, const double*
 
 }  // namespace
 
+// Threads per block of the linearisation (implicit_element_kernel): a thread's element is a long chain of double
+// arithmetic (a polar decomposition or an SVD, the stiffness action and diagonal), so a small mesh's few blocks of
+// kThreadsPerBlock would load a few multiprocessors' double units and leave the rest idle (SOFA's liver: 3 of 132);
+// one warp per block spreads them. Any block size gives the same bits (one element per thread).
+inline int linearisation_threads(int elements) { return elements < 64 * kThreadsPerBlock ? 32 : kThreadsPerBlock; }
+
 template <typename Real>
 cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStream_t stream) {
   if (a.spring_count > 0) {
@@ -544,12 +773,14 @@ cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStrea
       using Law = decltype(element_law);
       using Linearisation = typename Element::template Linearisation<Law>;
       auto* linearisation = static_cast<Linearisation*>(a.elements.linearisation[t]);
+      const int threads = linearisation_threads(a.elements.count);
+      const int blocks = (a.elements.count + threads - 1) / threads;
       if (t == 0) {
         implicit_element_kernel<Real, Element, Law, false>
-            <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
+            <<<blocks, threads, 0, stream>>>(a, a.elements.terms[t], linearisation);
       } else {
         implicit_element_kernel<Real, Element, Law, true>
-            <<<blocks_for(a.elements.count), kThreadsPerBlock, 0, stream>>>(a, a.elements.terms[t], linearisation);
+            <<<blocks, threads, 0, stream>>>(a, a.elements.terms[t], linearisation);
       }
     });
     if (status != cudaSuccess) return status;
@@ -636,6 +867,44 @@ cudaError_t launch_cg_persistent(const ImplicitArguments<Real>& a, int blocks, c
 }
 
 template <typename Real>
+cudaError_t cg_block_shared_limit(long long& bytes) {
+  bytes = 0;
+  int device = 0, optin = 0;
+  cudaFuncAttributes attributes{};
+  cudaError_t status = cudaGetDevice(&device);
+  if (status == cudaSuccess) status = cudaDeviceGetAttribute(&optin, cudaDevAttrMaxSharedMemoryPerBlockOptin, device);
+  // Every instantiation has no static shared memory and kCgBlockThreads as its bound; the one for any terms stands
+  // for all.
+  if (status == cudaSuccess) status = cudaFuncGetAttributes(&attributes, cg_block_kernel<Real, AnyElementTerms>);
+  if (status != cudaSuccess || attributes.maxThreadsPerBlock < kCgBlockThreads) return status;
+  bytes = std::max(0, optin - static_cast<int>(attributes.sharedSizeBytes));
+  return cudaSuccess;
+}
+
+template <typename Real>
+cudaError_t launch_cg_block(const ImplicitArguments<Real>& a, const CgBlockLayout& layout, long long bytes, bool finish,
+                            cudaStream_t stream) {
+  if (a.vertex_count <= 0) return cudaSuccess;
+  if (bytes <= 0) return cudaErrorInvalidValue;
+  const auto launch = [&](auto terms) {
+    const auto kernel = cg_block_kernel<Real, decltype(terms)>;
+    // Above 48 KiB a kernel must ask for its dynamic shared memory; the attribute is the function's, so each
+    // instantiation asks (a host call, no synchronisation).
+    cudaError_t status = cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                              static_cast<int>(bytes));
+    if (status != cudaSuccess) return status;
+    kernel<<<1, kCgBlockThreads, static_cast<std::size_t>(bytes), stream>>>(a, layout, finish);
+    return cudaGetLastError();
+  };
+  if (a.elements.count <= 0) return launch(NoElementTerms{});
+  if (a.elements.term_count != 1) return launch(AnyElementTerms{});
+  return kernels::visit_element_term(a.elements.terms[0].element, a.elements.terms[0].law,
+                                     [&](auto kind, auto element_law) {
+                                       return launch(OneElementTerm<decltype(kind), decltype(element_law)>{});
+                                     });
+}
+
+template <typename Real>
 cudaError_t launch_contact_part(const ImplicitArguments<Real>& a, bool predicted, cudaStream_t stream) {
   if (a.vertex_count <= 0 || a.extra_blocks == nullptr) return cudaSuccess;
   contact_part_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a, predicted);
@@ -655,6 +924,9 @@ cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_
   template cudaError_t launch_cg_iterations<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \
   template cudaError_t launch_cg_persistent<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \
   template cudaError_t cg_persistent_block_limit<Real>(int&);                                         \
+  template cudaError_t cg_block_shared_limit<Real>(long long&);                                       \
+  template cudaError_t launch_cg_block<Real>(const ImplicitArguments<Real>&, const CgBlockLayout&, long long, bool, \
+                                             cudaStream_t);                                           \
   template cudaError_t launch_contact_part<Real>(const ImplicitArguments<Real>&, bool, cudaStream_t); \
   template cudaError_t launch_implicit_finish<Real>(const ImplicitArguments<Real>&, cudaStream_t);
 FMPC_IMPLICIT_STEP_LAUNCHERS(float)

@@ -17,8 +17,9 @@
 // --liver PATH: SOFA's liver.msh (../shared/data/sofa-liver), for the implicit Euler rows at SOFA's settings.
 // --implicit-only: the implicit Euler rows alone (issue 27 item 3): SOFA's liver FEM scene (rulesets/scenes/
 // sofa_liver_fem.yaml: 596 tetrahedra, dt 0.02, the CG capped at 25 iterations) and the 20^3-cell FEM box at dt
-// 1 ms (bench/scenes/box20_fem_implicit.yaml), on the CPU and on CUDA (the conjugate gradient in one cooperative
-// launch per step, and in per-iteration launches), with the iterations and residuals reached in column `solver`.
+// 1 ms (bench/scenes/box20_fem_implicit.yaml), on the CPU and on CUDA (the conjugate gradient as planned: in one
+// block where the solve fits its shared memory; in one cooperative launch per step; in per-iteration launches), with
+// the iterations and residuals reached in column `solver`.
 //
 // Every run checks for NaN/Inf every 64 steps (the default of advance), and the time includes that check's
 // synchronisation. Scene creation and upload are not timed; one warm-up chunk (graph capture) is excluded.
@@ -508,9 +509,12 @@ std::string solver_text(const ImplicitSolverReport& report, std::size_t steps_be
   return text.str();
 }
 
-// One implicit Euler row: on the CPU with `threads` workers (cuda false), or on CUDA with the conjugate gradient in
-// one cooperative launch per step (persistent) or in per-iteration launches.
-Row implicit_row(const SimulationSetup& base, const std::string& model, bool cuda, bool persistent, unsigned threads,
+// How CUDA launches an implicit row's conjugate gradient: the plan's choice (one block where the solve fits its
+// shared memory, else the cooperative grid where that fits), the cooperative grid, or a launch per kernel.
+enum class CgLaunchRow { Planned, Grid, PerIteration };
+
+// One implicit Euler row: on the CPU with `threads` workers (cuda false), or on CUDA with `launch`.
+Row implicit_row(const SimulationSetup& base, const std::string& model, bool cuda, CgLaunchRow launch, unsigned threads,
                  const Options& options) {
   SimulationSetup setup = base;
   setup.threads = threads;
@@ -521,8 +525,10 @@ Row implicit_row(const SimulationSetup& base, const std::string& model, bool cud
   row.backend = cuda ? "cuda" : "cpu";
   row.precision = precision_name(setup.precision);
   row.integrator = to_string(setup.integrator);
-  // The cooperative CG runs where the launch plan finds the mesh fits (both scenes here on an H100).
-  row.graphs = cuda ? (persistent ? "cg cooperative where it fits" : "cg per iteration") : "-";
+  row.graphs = !cuda                                ? "-"
+               : launch == CgLaunchRow::Planned ? "cg one block or cooperative (planned)"
+               : launch == CgLaunchRow::Grid    ? "cg cooperative where it fits"
+                                                : "cg per iteration";
   row.threads = cuda ? 1 : threads;
   row.vertices = setup.rest_positions.size();
   row.springs = setup.springs.size();
@@ -530,7 +536,8 @@ Row implicit_row(const SimulationSetup& base, const std::string& model, bool cud
   SimulationOptions simulation_options;
   if (cuda) {
     simulation_options.backend = Backend::Cuda;
-    simulation_options.gpu.persistent = persistent;
+    simulation_options.gpu.persistent = launch != CgLaunchRow::PerIteration;
+    simulation_options.gpu.cg_single_block = launch == CgLaunchRow::Planned;
   }
   const std::unique_ptr<Simulation> simulation = Simulation::create(setup, diagnostics, simulation_options);
   constexpr std::size_t kFirst = 8;
@@ -572,13 +579,14 @@ std::vector<Row> implicit_rows(const Options& options, bool have_device, unsigne
       // SOFA's settings on one core: the CG capped at 25 iterations, and the automatic choice (the direct solver).
       SimulationSetup cg = setup;
       cg.implicit.method = ImplicitMethod::ConjugateGradient;
-      rows.push_back(implicit_row(cg, name, false, false, 1, options));
-      rows.push_back(implicit_row(setup, name, false, false, 1, options));
+      rows.push_back(implicit_row(cg, name, false, CgLaunchRow::Planned, 1, options));
+      rows.push_back(implicit_row(setup, name, false, CgLaunchRow::Planned, 1, options));
     } else {
-      rows.push_back(implicit_row(setup, name, false, false, threads, options));
+      rows.push_back(implicit_row(setup, name, false, CgLaunchRow::Planned, threads, options));
     }
     if (!have_device) continue;
-    for (const bool persistent : {true, false}) rows.push_back(implicit_row(setup, name, true, persistent, 1, options));
+    for (const CgLaunchRow launch : {CgLaunchRow::Planned, CgLaunchRow::Grid, CgLaunchRow::PerIteration})
+      rows.push_back(implicit_row(setup, name, true, launch, 1, options));
   }
   return rows;
 }

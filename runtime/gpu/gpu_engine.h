@@ -179,8 +179,9 @@ class GpuEngine final : public sim::SteppingEngine {
                        DiagnosticList& diagnostics);
 
   // One implicit Euler step: assemble, then Eigen's preconditioned conjugate gradient (same iteration, same
-  // stopping rule, same warning as the CPU backend) stopping on the device, in one cooperative launch
-  // (LaunchPlan::cg_grid_blocks) or in chunks of per-iteration launches, then v += dv, x += h v; with tools, the
+  // stopping rule, same warning as the CPU backend) stopping on the device, in one block (LaunchPlan::cg_block,
+  // small meshes: the start and the update too), one cooperative launch (LaunchPlan::cg_grid_blocks) or chunks of
+  // per-iteration launches, then v += dv, x += h v; with tools, the
   // contact's linear part solved again until its active set stays, as on the CPU. The host reads the solver's
   // scalars once per launch or chunk, so implicit steps are never captured into graphs. A cooperative solve
   // without tools decides nothing on the host: its scalars stay in their own slot of cg_scalars_ and are read with

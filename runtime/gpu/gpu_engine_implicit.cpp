@@ -61,11 +61,15 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
   // then those the solution predicts inside, solved again until the set stays, at most contact_rounds solves, as on
   // the CPU (a later round's CG starts from zero where the CPU's starts from the last round's dv: the two agree to
   // the solver's tolerance). The last solve's prediction still runs, to count a set that changed after it.
-  if (!contact && plan_.cg_grid_blocks > 0) {
+  if (!contact && (plan_.cg_block_bytes > 0 || plan_.cg_grid_blocks > 0)) {
     FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
-    FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
-    FMPC_CUDA_CHECK(launch_cg_persistent(a, plan_.cg_grid_blocks, stream_), diagnostics, false);
-    FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
+    if (plan_.cg_block_bytes > 0) {
+      FMPC_CUDA_CHECK(launch_cg_block(a, plan_.cg_block, plan_.cg_block_bytes, true, stream_), diagnostics, false);
+    } else {
+      FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(launch_cg_persistent(a, plan_.cg_grid_blocks, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
+    }
     if (deferred_solves_ == 0) deferred_first_step_ = steps_taken_ + 1;
     return ++deferred_solves_ < kDeferredSolves || record_deferred_solves(diagnostics);
   }
@@ -132,13 +136,17 @@ template <typename Real>
 bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
                                          DiagnosticList& diagnostics) {
   FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
-  FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
   // The solve stops on the device (ConjugateGradientScalars::done); the host reads the scalars once after the
-  // cooperative launch, or after each chunk of per-iteration launches (cg_iterations_before_read).
-  if (plan_.cg_grid_blocks > 0) {
+  // one-block or cooperative launch, or after each chunk of per-iteration launches (cg_iterations_before_read).
+  if (plan_.cg_block_bytes > 0) {
+    FMPC_CUDA_CHECK(launch_cg_block(a, plan_.cg_block, plan_.cg_block_bytes, false, stream_), diagnostics, false);
+    if (!read_cg_scalars(a, scalars, diagnostics)) return false;
+  } else if (plan_.cg_grid_blocks > 0) {
+    FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
     FMPC_CUDA_CHECK(launch_cg_persistent(a, plan_.cg_grid_blocks, stream_), diagnostics, false);
     if (!read_cg_scalars(a, scalars, diagnostics)) return false;
   } else {
+    FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
     int enqueued = 0;
     for (;;) {
       const int chunk = cg_iterations_before_read(cg_previous_iterations_, enqueued, a.iteration_limit);

@@ -335,6 +335,7 @@ bool GpuEngine<Real>::plan_launches(const ConcatenatedScenes& c, DiagnosticList&
   batch.probe_vertices_unique = probe_vertices_unique_;
   batch.vertex_count = n_;
   batch.element_count = element_count_;
+  batch.element_nodes = static_cast<long long>(c.nodes.size());
   batch.scene_count = scenes_.size();
   batch.offset = c.offset.data();
   batch.neighbour = c.neighbour.data();
@@ -355,6 +356,11 @@ bool GpuEngine<Real>::plan_launches(const ConcatenatedScenes& c, DiagnosticList&
     int blocks = 0;
     FMPC_CUDA_CHECK(cg_persistent_block_limit<Real>(blocks), diagnostics, std::nullopt);
     return blocks;
+  };
+  device.cg_block_shared_limit = [&]() -> std::optional<long long> {
+    long long bytes = 0;
+    FMPC_CUDA_CHECK(cg_block_shared_limit<Real>(bytes), diagnostics, std::nullopt);
+    return bytes;
   };
   std::optional<LaunchPlan> plan = gpu::plan_launches(batch, options_, device);
   if (!plan) return false;

@@ -437,6 +437,17 @@ cudaError_t launch_cg_persistent(const ImplicitArguments<Real>& arguments, int b
 // Blocks of launch_cg_persistent resident at once on the device (0: no cooperative launches).
 template <typename Real>
 cudaError_t cg_persistent_block_limit(int& blocks);
+// A step's whole solve in one block of kCgBlockThreads threads with `bytes` of shared memory at `layout`
+// (LaunchPlan::cg_block): launch_cg_start's start, launch_cg_persistent's iterations with block barriers and, where
+// `finish`, launch_implicit_finish's update; the same arithmetic in the same order, so the same bits; dv in x and
+// the scalars written as those launches leave them.
+template <typename Real>
+cudaError_t launch_cg_block(const ImplicitArguments<Real>& arguments, const CgBlockLayout& layout, long long bytes,
+                            bool finish, cudaStream_t stream);
+// The most dynamic shared memory launch_cg_block's block may have (0: it cannot run kCgBlockThreads threads); lets
+// the kernel ask for that much (once, before its first launch).
+template <typename Real>
+cudaError_t cg_block_shared_limit(long long& bytes);
 // The tools' contact as the system's linear part (kernels/implicit_contact_math.h): every vertex's active set at
 // the state (predicted false: the step's first set, every vertex's part written) or predicted from the solution in
 // x (the vertices whose set changed are counted into *contact_changes, preset by the caller, and get their new part).
@@ -468,10 +479,6 @@ cudaError_t launch_count_inverted(const int* nodes, int element_kind, int elemen
                                   const kernels::StateView<Real>& state, unsigned int* count, int* first,
                                   cudaStream_t stream);
 
-// Energies of one scene, summed in double by a fixed-shape tree (kEnergyBlocks partial sums of kEnergyThreads
-// threads each, then one block): the same bits on every run, whatever the scheduling.
-constexpr int kEnergyBlocks = 128;
-constexpr int kEnergyThreads = 256;
 
 template <typename Real>
 struct EnergyArguments {

@@ -177,6 +177,25 @@ bool plan_cg_grid(const BatchShape& batch, const DeviceLaunchLimits& device, Lau
   return true;
 }
 
+// Implicit Euler's whole solve in one block (launch_cg_block) where its vectors and element products fit the block's
+// shared memory: its phases are then separated by block barriers, not grid barriers, and its loads hit shared memory.
+// Only small meshes fit (the element products dominate: 96 bytes per linear tetrahedron), and those are the meshes
+// whose iterations are bound by latency. The dot products keep the fixed shape of kEnergyBlocks virtual blocks,
+// which asks for at most kEnergyBlocks x kEnergyThreads degrees of freedom.
+bool plan_cg_block(const BatchShape& batch, const sim::GpuOptions& options, const DeviceLaunchLimits& device,
+                   LaunchPlan& plan) {
+  if (!options.cg_single_block || 3LL * batch.vertex_count > static_cast<long long>(kEnergyBlocks) * kEnergyThreads)
+    return true;
+  const std::optional<long long> limit = device.cg_block_shared_limit();
+  if (!limit) return false;
+  const CgBlockLayout layout = cg_block_layout(batch.vertex_count, batch.element_nodes);
+  const long long bytes = layout.doubles * static_cast<long long>(sizeof(double));
+  if (bytes > *limit) return true;
+  plan.cg_block = layout;
+  plan.cg_block_bytes = bytes;
+  return true;
+}
+
 template <typename Real>
 std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions& options,
                                   const DeviceLaunchLimits& device) {
@@ -189,8 +208,10 @@ std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions
   // be two more grid barriers per step), the element kind is one the persistent kernel holds
   // (kernels::element_kind_runs_persistent), each probe vertex is listed once and the batch fits the grid or clusters;
   // otherwise one launch per kernel (steps of meshes too large for either are long enough that launches cost little).
-  if (options.persistent && batch.implicit_scheme && batch.vertex_count > 0 && !plan_cg_grid(batch, device, plan))
-    return std::nullopt;
+  if (options.persistent && batch.implicit_scheme && batch.vertex_count > 0) {
+    if (!plan_cg_block(batch, options, device, plan)) return std::nullopt;
+    if (plan.cg_block_bytes == 0 && !plan_cg_grid(batch, device, plan)) return std::nullopt;
+  }
   if (!options.persistent || batch.vertex_count <= 0 || batch.strain_table || batch.point_state || batch.nodal_pass ||
       batch.element_kind_not_persistent || !batch.probe_vertices_unique || !batch.fused_scheme)
     return plan;
@@ -210,6 +231,31 @@ std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions
 }
 
 }  // namespace
+
+CgBlockLayout cg_block_layout(int vertex_count, long long element_nodes) {
+  const int dofs = 3 * std::max(vertex_count, 0);
+  const int padded = (dofs + kEnergyThreads - 1) / kEnergyThreads * kEnergyThreads;
+  CgBlockLayout layout;
+  long long next = 0;
+  const auto take = [&next](long long count) {
+    const long long at = next;
+    next += count;
+    return static_cast<int>(at);
+  };
+  layout.x = take(dofs);
+  layout.r = take(dofs);
+  layout.z = take(dofs);
+  layout.p = take(dofs);
+  layout.ap = take(dofs);
+  layout.inverse_jacobi = take(dofs);
+  layout.diagonal = take(std::max(vertex_count, 0));
+  layout.product = take(3 * std::max(element_nodes, 0LL));
+  layout.terms = take(2LL * padded);
+  layout.alpha_partial = take(kEnergyBlocks);
+  layout.residual_partial = take(2 * kEnergyBlocks);
+  layout.doubles = next;
+  return layout;
+}
 
 int cg_iterations_before_read(int previous_step_iterations, int iterations_so_far, int limit) {
   const int remaining = std::max(0, limit - std::max(0, iterations_so_far));

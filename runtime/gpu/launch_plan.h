@@ -23,6 +23,9 @@ struct DeviceLaunchLimits {
   // How many blocks of kCgThreads threads the cooperative conjugate gradient (launch_cg_persistent) keeps resident
   // at once (0: none, or no cooperative launches). Asked only for implicit Euler.
   std::function<std::optional<int>()> cg_persistent_blocks;
+  // The most dynamic shared memory, in bytes, one block of kCgBlockThreads threads of the one-block conjugate
+  // gradient (launch_cg_block) may have (0: it cannot run that many threads). Asked only for implicit Euler.
+  std::function<std::optional<long long>()> cg_block_shared_limit;
 };
 
 // What the plan reads of the concatenated batch (runtime/gpu/batch_concatenation.h).
@@ -38,12 +41,16 @@ struct BatchShape {
   bool probe_vertices_unique = true;  // every probe vertex listed once (else the per-step probe kernel)
   int vertex_count = 0;
   int element_count = 0;
+  long long element_nodes = 0;  // nodes summed over the elements (implicit Euler: 3 products per node)
   std::size_t scene_count = 1;
   const int* offset = nullptr;     // the springs' CSR offsets, vertex_count + 1
   const int* neighbour = nullptr;  // each CSR entry's other vertex
   std::vector<int> vertex_begin;   // scene_count + 1
   std::vector<int> element_begin;  // scene_count + 1
 };
+
+// The layout for a batch of `vertex_count` vertices and `element_nodes` element nodes.
+CgBlockLayout cg_block_layout(int vertex_count, long long element_nodes);
 
 struct LaunchPlan {
   int gather_lanes = 1;  // threads per vertex of the per-step fused kernel
@@ -66,6 +73,11 @@ struct LaunchPlan {
   // Implicit Euler: the blocks of the cooperative conjugate gradient (one launch per step's solve), 0: the
   // per-iteration kernels, enqueued in chunks (cg_iterations_before_read).
   int cg_grid_blocks = 0;
+  // Implicit Euler on a batch whose solve fits one block's shared memory (GpuOptions::cg_single_block): the step's
+  // whole solve (start, iterations, v and x updated) in one launch of one block (launch_cg_block) with this layout;
+  // cg_block_bytes 0: none (then cg_grid_blocks or the per-iteration kernels).
+  CgBlockLayout cg_block;
+  long long cg_block_bytes = 0;
 
   bool persistent() const { return grid_blocks > 0 || !cluster_blocks.empty(); }
 };
@@ -78,6 +90,9 @@ constexpr std::size_t kMostPersistentChecks = 64;
 // Threads per block of the cooperative conjugate gradient (kEnergyThreads: its dot products are the fixed-shape
 // sums' virtual blocks).
 constexpr int kCgThreads = 256;
+// Threads of the one-block conjugate gradient: every entry of SOFA's liver (543 degrees of freedom, 596 tetrahedra)
+// has a thread of its own in each phase.
+constexpr int kCgBlockThreads = 1024;
 
 // The fewest conjugate gradient iterations enqueued between two reads of its scalars by the host.
 constexpr int kCgLeastIterationsPerRead = 4;

@@ -11,6 +11,21 @@ namespace fmpc::gpu {
 // launchers dispatch on it once per launch (static dispatch inside the kernels).
 enum class GatherKind : int { Springs = 0, Elements = 1, SpringsAndElements = 2 };
 
+// Energies of one scene (and implicit Euler's dot products), summed in double by a fixed-shape tree (kEnergyBlocks
+// partial sums of kEnergyThreads threads each, then one block): the same bits on every run, whatever the scheduling.
+constexpr int kEnergyBlocks = 128;
+constexpr int kEnergyThreads = 256;
+
+// Where the one-block conjugate gradient (launch_cg_block) keeps its vectors in shared memory: offsets in doubles of
+// x, r, z, p, ap, the Jacobi preconditioner (3 per vertex each), the diagonal (1 per vertex), the element products (3
+// per element node), the dot products' terms (two arrays of the degrees of freedom rounded up to kEnergyThreads)
+// and the partial sums (alpha's kEnergyBlocks, then the residual's pair); `doubles` in all.
+struct CgBlockLayout {
+  int x = 0, r = 0, z = 0, p = 0, ap = 0, inverse_jacobi = 0, diagonal = 0, product = 0, terms = 0, alpha_partial = 0,
+      residual_partial = 0;
+  long long doubles = 0;
+};
+
 // Threads per vertex the lane kernels take: a power of two up to a warp, so a vertex's lanes are one aligned part of
 // a warp (their shuffles' width).
 constexpr bool valid_lanes(int lanes) { return lanes > 0 && lanes <= 32 && (lanes & (lanes - 1)) == 0; }

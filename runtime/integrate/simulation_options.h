@@ -15,6 +15,10 @@ struct GpuOptions {
   // (launch_persistent_euler) instead of a few kernels per step. The results are bitwise the same either way;
   // use_graphs then has no effect.
   bool persistent = true;
+  // Implicit Euler on meshes whose solve fits one block's shared memory (SOFA's liver: 596 tetrahedra): each step's
+  // whole conjugate gradient in one block (launch_cg_block) instead of the cooperative grid; with `persistent` only.
+  // The results are bitwise the same either way.
+  bool cg_single_block = true;
   // Which persistent launch: the cooperative grid (launch_persistent_euler: every block resident at once, each
   // waiting between steps for the blocks its springs reach) or thread-block clusters (launch_cluster_euler: springs
   // alone, Hopper or newer, each scene within one cluster of at most 16 x 1,024 vertices whose state and records fit

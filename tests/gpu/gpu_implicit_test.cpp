@@ -171,6 +171,24 @@ gpu::GpuOptions per_iteration() {
   return options;
 }
 
+// The cooperative grid where the one-block solve would be planned.
+gpu::GpuOptions cooperative_grid() {
+  gpu::GpuOptions options;
+  options.cg_single_block = false;
+  return options;
+}
+
+// The three ways a solve launches on a small mesh: one block (the plan's choice), the cooperative grid, and a launch
+// per kernel.
+struct CgLaunch {
+  const char* name;
+  gpu::GpuOptions options;
+};
+std::array<CgLaunch, 3> cg_launches() {
+  return {CgLaunch{"one block", {}}, CgLaunch{"cooperative", cooperative_grid()},
+          CgLaunch{"per iteration", per_iteration()}};
+}
+
 }  // namespace
 
 // Odd sizes (never a multiple of a block), springs and FEM: the first step's iterations equal the host reference's,
@@ -184,13 +202,13 @@ FMPC_GPU_TEST(implicit_cg_matches_host_reference, "implicit Euler: device CG ite
         setup.implicit.tolerance = tolerance;
         setup.implicit.max_iterations = limit;
         const ReferenceSolve reference = reference_first_step(setup, tolerance, implicit_iteration_limit(setup));
-        for (const bool persistent : {true, false}) {
-          const DeviceRun run = run_on_device(setup, 1, 1, persistent ? gpu::GpuOptions{} : per_iteration());
+        for (const CgLaunch& launch : cg_launches()) {
+          const DeviceRun run = run_on_device(setup, 1, 1, launch.options);
           FMPC_REQUIRE(run.records.size() == 1);
           const ImplicitStepRecord& step = run.records.front();
           std::ostringstream line;
           line << (fem ? "FEM " : "springs ") << nx << "x" << ny << "x" << nz << ", tol " << tolerance << ", cap "
-               << implicit_iteration_limit(setup) << (persistent ? ", cooperative" : ", per iteration") << ": device "
+               << implicit_iteration_limit(setup) << ", " << launch.name << ": device "
                << step.iterations << " iterations, residual " << step.relative_residual
                << (step.capped ? " (capped)" : "") << "; host reference " << reference.iterations << ", "
                << reference.relative_residual;
@@ -247,31 +265,40 @@ FMPC_GPU_TEST(implicit_cg_tolerance_and_cap, "implicit Euler: the scene's tolera
   FMPC_EXPECT(warnings_with_code(capped.diagnostics, "cg-not-converged") >= 1);
 }
 
-// The cooperative launch and the per-iteration launches (with their chunks between reads) give the same bits, in
-// the state and in every step's record; each reruns bitwise; float and double, springs and FEM, with checks that
-// replay nothing and with a check every 7 steps.
+// The one-block solve, the cooperative launch and the per-iteration launches (with their chunks between reads) give
+// the same bits, in the state and in every step's record; each reruns bitwise; float and double, springs and FEM,
+// with checks that replay nothing and with a check every 7 steps; on 7x6x5 cells (1,008 degrees of freedom: a thread
+// each in the block) and 10x6x5 (1,386: threads take two; its FEM solve is too large for one block's shared memory
+// and runs on the grid, its springs in one block).
 FMPC_GPU_TEST(implicit_cg_persistent_equals_per_iteration,
-              "implicit Euler: one cooperative launch per solve gives the per-iteration launches' bits", true) {
+              "implicit Euler: one block or one cooperative launch per solve gives the per-iteration launches' bits",
+              true) {
   for (const bool fem : {false, true}) {
     for (const Precision precision : {Precision::Float, Precision::Double}) {
-      SimulationSetup setup = resting_box(fem, 7, 6, 5);
-      setup.precision = precision;
-      setup.implicit.tolerance = 1e-8;
-      const std::string what = std::string(fem ? "FEM" : "springs") + ", " + name_of(precision);
-      const DeviceRun cooperative = run_on_device(setup, 60, 60, {});
-      const DeviceRun again = run_on_device(setup, 60, 7, {});
-      const DeviceRun launches = run_on_device(setup, 60, 60, per_iteration());
-      FMPC_REQUIRE(cooperative.records.size() == 60);
-      FMPC_EXPECT(bitwise_equal(cooperative.positions, again.positions));
-      FMPC_EXPECT(bitwise_equal(cooperative.velocities, again.velocities));
-      FMPC_EXPECT(same_records(cooperative.records, again.records));
-      const bool same = bitwise_equal(cooperative.positions, launches.positions) &&
-                        bitwise_equal(cooperative.velocities, launches.velocities) &&
-                        same_records(cooperative.records, launches.records);
-      note("implicit Euler, " + what + ": cooperative and per-iteration launches " +
-           (same ? "bitwise equal" : "DIFFER") + ", at most " + std::to_string(cooperative.report.iterations_max) +
-           " iterations per step");
-      FMPC_EXPECT(same);
+      for (const auto& [nx, ny, nz] : {std::array<int, 3>{7, 6, 5}, std::array<int, 3>{10, 6, 5}}) {
+        SimulationSetup setup = resting_box(fem, nx, ny, nz);
+        setup.precision = precision;
+        setup.implicit.tolerance = 1e-8;
+        const std::string what = std::string(fem ? "FEM " : "springs ") + std::to_string(nx) + "x" +
+                                 std::to_string(ny) + "x" + std::to_string(nz) + ", " + name_of(precision);
+        const std::array<CgLaunch, 3> launches = cg_launches();
+        const DeviceRun block = run_on_device(setup, 60, 60, launches[0].options);
+        const DeviceRun again = run_on_device(setup, 60, 7, launches[0].options);
+        FMPC_REQUIRE(block.records.size() == 60);
+        FMPC_EXPECT(bitwise_equal(block.positions, again.positions));
+        FMPC_EXPECT(bitwise_equal(block.velocities, again.velocities));
+        FMPC_EXPECT(same_records(block.records, again.records));
+        for (std::size_t k = 1; k < launches.size(); ++k) {
+          const DeviceRun other = run_on_device(setup, 60, 60, launches[k].options);
+          const bool same = bitwise_equal(block.positions, other.positions) &&
+                            bitwise_equal(block.velocities, other.velocities) &&
+                            same_records(block.records, other.records);
+          note("implicit Euler, " + what + ": one block and " + launches[k].name + " launches " +
+               (same ? "bitwise equal" : "DIFFER") + ", at most " + std::to_string(block.report.iterations_max) +
+               " iterations per step");
+          FMPC_EXPECT(same);
+        }
+      }
     }
   }
 }

@@ -728,12 +728,13 @@ FMPC_GPU_TEST(sanitizer_scene_features, "sanitizer smoke: probe, strain table an
     implicit.strain_stiffness = strain_table_box(precision, Integrator::ImplicitEuler).strain_stiffness;
     implicit.springs.damping.clear();
     implicit.implicit.max_iterations = kSanitizedCgIterations;
-    // Implicit Euler twice: its conjugate gradient in one cooperative launch per step (the plan's choice for a mesh
-    // this small), then in per-iteration launches.
-    gpu::GpuOptions per_iteration;
+    // Implicit Euler three times: its solve in one block (the plan's choice for a mesh this small), its conjugate
+    // gradient in one cooperative launch per step, then in per-iteration launches.
+    gpu::GpuOptions grid, per_iteration;
+    grid.cg_single_block = false;
     per_iteration.persistent = false;
     const std::pair<const SimulationSetup*, gpu::GpuOptions> runs[] = {
-        {&probed, {}}, {&table, {}}, {&implicit, {}}, {&implicit, per_iteration}};
+        {&probed, {}}, {&table, {}}, {&implicit, {}}, {&implicit, grid}, {&implicit, per_iteration}};
     for (const auto& [setup, options] : runs) {
       DiagnosticList diagnostics;
       const auto run = gpu_simulation(*setup, diagnostics, options);

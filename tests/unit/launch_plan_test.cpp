@@ -67,6 +67,7 @@ struct GridBatch {
 struct FakeDevice {
   int resident = 264;
   int cg_resident = 264;
+  long long cg_block_limit = 227 * 1024;
   long long shared_limit = 227 * 1024;
   int most_cluster_blocks = 16;
   bool fail = false;
@@ -88,6 +89,11 @@ struct FakeDevice {
       ++queries;
       if (fail) return std::nullopt;
       return cg_resident;
+    };
+    limits.cg_block_shared_limit = [this]() -> std::optional<long long> {
+      ++queries;
+      if (fail) return std::nullopt;
+      return cg_block_limit;
     };
     return limits;
   }
@@ -332,13 +338,16 @@ TEST_CASE("Launch plan: checks per persistent launch, their result slots, and a 
 
 // SOFA's liver (181 vertices, 596 tetrahedra: 3 blocks) and the 20^3 FEM box (9,261 vertices, 48,000 tetrahedra:
 // 188 blocks, the elements' count) fit an H100's cooperative grid; a mesh with more entries than resident threads
-// keeps the per-iteration kernels, as do explicit schemes and the persistent option off.
+// keeps the per-iteration kernels, as do explicit schemes and the persistent option off. (The liver's solve also
+// fits one block, which the plan prefers: the cases here turn that off.)
 TEST_CASE("Launch plan: implicit Euler's conjugate gradient in one cooperative launch where it fits", "[gpu][plan]") {
   FakeDevice device;
+  device.cg_block_limit = 0;
   BatchShape shape;
   shape.implicit_scheme = true;
   shape.vertex_count = 181;
   shape.element_count = 596;
+  shape.element_nodes = 4 * 596;
   shape.vertex_begin = {0, 181};
   shape.element_begin = {0, 596};
   std::vector<int> offset(182, 0);
@@ -346,7 +355,14 @@ TEST_CASE("Launch plan: implicit Euler's conjugate gradient in one cooperative l
   auto plan = plan_launches(shape, {}, device.limits());
   REQUIRE(plan);
   CHECK(plan->cg_grid_blocks == 3);  // 596 elements against 543 degrees of freedom
+  CHECK(plan->cg_block_bytes == 0);
   CHECK_FALSE(plan->persistent());   // the explicit launches are not planned
+  sim::GpuOptions grid;
+  grid.cg_single_block = false;
+  device.cg_block_limit = 227 * 1024;
+  CHECK(plan_launches(shape, grid, device.limits())->cg_grid_blocks == 3);
+  device.cg_block_limit = 0;
+  shape.element_nodes = 0;
   shape.vertex_count = 9261;
   shape.element_count = 48000;
   CHECK(plan_launches(shape, {}, device.limits())->cg_grid_blocks == 188);
@@ -433,4 +449,62 @@ TEST_CASE("GPU batch admission: what scenes must share is named, on machines wit
   scenes.resize(1);
   CHECK(batch_accepts(scenes, 0, diagnostics));  // alone, implicit Euler is accepted
   CHECK(gather_kind(setup) == GatherKind::Springs);
+}
+
+// The whole solve in one block where its vectors and element products fit the block's shared memory: SOFA's liver
+// (181 vertices, 596 linear tetrahedra: 12,511 doubles, 100,088 bytes); not the 20^3 box; not where the device gives
+// the kernel less than it needs, nor with the option or the persistent launches off; the layout's arrays follow one
+// another without overlap.
+TEST_CASE("Launch plan: implicit Euler's solve in one block where it fits its shared memory", "[gpu][plan]") {
+  const CgBlockLayout liver = cg_block_layout(181, 4 * 596);
+  CHECK(liver.x == 0);
+  CHECK(liver.r == 543);
+  CHECK(liver.inverse_jacobi == 5 * 543);
+  CHECK(liver.diagonal == 6 * 543);
+  CHECK(liver.product == 6 * 543 + 181);
+  CHECK(liver.terms == 6 * 543 + 181 + 3 * 4 * 596);
+  CHECK(liver.alpha_partial == liver.terms + 2 * 768);  // 543 rounded up to 3 x 256
+  CHECK(liver.residual_partial == liver.alpha_partial + kEnergyBlocks);
+  CHECK(liver.doubles == 12511);
+  FakeDevice device;
+  BatchShape shape;
+  shape.implicit_scheme = true;
+  shape.vertex_count = 181;
+  shape.element_count = 596;
+  shape.element_nodes = 4 * 596;
+  shape.vertex_begin = {0, 181};
+  shape.element_begin = {0, 596};
+  std::vector<int> offset(182, 0);
+  shape.offset = offset.data();
+  auto plan = plan_launches(shape, {}, device.limits());
+  REQUIRE(plan);
+  CHECK(plan->cg_block_bytes == 100088);
+  CHECK(plan->cg_block.residual_partial == liver.residual_partial);
+  CHECK(plan->cg_grid_blocks == 0);
+  device.cg_block_limit = 100088;  // exactly enough
+  CHECK(plan_launches(shape, {}, device.limits())->cg_block_bytes == 100088);
+  device.cg_block_limit = 100087;  // one byte short: the cooperative grid
+  plan = plan_launches(shape, {}, device.limits());
+  CHECK(plan->cg_block_bytes == 0);
+  CHECK(plan->cg_grid_blocks == 3);
+  device.cg_block_limit = 227 * 1024;
+  sim::GpuOptions off;
+  off.cg_single_block = false;
+  CHECK(plan_launches(shape, off, device.limits())->cg_block_bytes == 0);
+  off = {};
+  off.persistent = false;
+  plan = plan_launches(shape, off, device.limits());
+  CHECK(plan->cg_block_bytes == 0);
+  CHECK(plan->cg_grid_blocks == 0);
+  shape.vertex_count = 9261;  // the 20^3 box
+  shape.element_count = 48000;
+  shape.element_nodes = 4 * 48000;
+  plan = plan_launches(shape, {}, device.limits());
+  CHECK(plan->cg_block_bytes == 0);
+  CHECK(plan->cg_grid_blocks == 188);
+  shape.vertex_count = 181;
+  shape.element_count = 596;
+  shape.element_nodes = 4 * 596;
+  device.fail = true;
+  CHECK_FALSE(plan_launches(shape, {}, device.limits()));
 }
