@@ -3,6 +3,7 @@
 // their concatenation into one network (scene s owns a contiguous range of vertices, springs and elements; its CSR
 // entries point at its own vertices), in double, converted to the engine's real type on upload.
 #include <cstddef>
+#include <cstring>
 #include <memory>
 #include <new>
 #include <utility>
@@ -97,6 +98,21 @@ void fill_on_pool(sim::WorkerPool& pool, HostArray<T>& out, std::size_t at, std:
       },
       1 << 16);
 }
+
+// The per-element view (kernels::PerElement) of `values`, held on the device at `device`: where every entry has the
+// same bits, that value alone, which the element pass reads from its kernel parameters instead of an array per
+// element; otherwise the array; an empty array: absent (zero).
+template <typename Real, typename Allocator>
+kernels::PerElement<Real> per_element_of(const std::vector<Real, Allocator>& values, const Real* device) {
+  if (values.empty()) return {};
+  for (const Real& value : values)
+    if (std::memcmp(&value, &values.front(), sizeof(Real)) != 0) return {device};
+  return {nullptr, values.front()};
+}
+
+// Each node's rank among its vertex's corners, corner_slot[k] - corner_offset[nodes[k]] (ElementTermView::
+// corner_rank), one byte per node; empty where some rank exceeds 255 (the element pass then reads corner_slot).
+HostArray<unsigned char> corner_ranks(const ConcatenatedScenes& c);
 
 // The values converted to Real, on the pool.
 template <typename Real, typename Allocator>

@@ -94,9 +94,8 @@ bool GpuEngine<Real>::upload(DiagnosticList& diagnostics) {
   if (!upload_probes(diagnostics) || !upload_single_scene_features(diagnostics)) return false;
 
   model_.kind = gather_kind(common);
-  model_.element_blocks = options_.element_blocks_per_sm == 2 || options_.element_blocks_per_sm == 3
-                              ? options_.element_blocks_per_sm
-                              : 0;
+  model_.element_blocks =
+      options_.element_blocks_per_sm == 2 || options_.element_blocks_per_sm == 3 ? options_.element_blocks_per_sm : 0;
   model_.springs = {offset_.data(),
                     spring_.data(),
                     neighbour_.data(),
@@ -182,8 +181,11 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
   FMPC_CUDA_CHECK(corner_offset_.upload(c.corner_offset), diagnostics, false);
   FMPC_CUDA_CHECK(corner_index_.upload(c.corner_index), diagnostics, false);
   FMPC_CUDA_CHECK(corner_slot_.upload(c.corner_slot), diagnostics, false);
+  const HostArray<unsigned char> ranks = corner_ranks(c);
+  if (!ranks.empty()) FMPC_CUDA_CHECK(corner_rank_.upload(ranks), diagnostics, false);
   FMPC_CUDA_CHECK(rest_inverse_.upload(convert<Real>(c.rest_inverse, *c.pool)), diagnostics, false);
-  FMPC_CUDA_CHECK(rest_volume_.upload(convert<Real>(c.rest_volume, *c.pool)), diagnostics, false);
+  const HostArray<Real> rest_volume = convert<Real>(c.rest_volume, *c.pool);
+  FMPC_CUDA_CHECK(rest_volume_.upload(rest_volume), diagnostics, false);
   FMPC_CUDA_CHECK(rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
   FMPC_CUDA_CHECK(rest_volume_d_.upload(c.rest_volume), diagnostics, false);
   FMPC_CUDA_CHECK(corner_force_.allocate(node_entries), diagnostics, false);
@@ -204,22 +206,29 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
     view.count = view_d.count = element_count_;
     view.corners = view_d.corners = nodes_.data();
     view.corner_slot = view_d.corner_slot = corner_slot_.data();
+    if (!ranks.empty()) {
+      view.corner_rank = view_d.corner_rank = corner_rank_.data();
+      view.corner_offset = view_d.corner_offset = corner_offset_.data();
+    }
     view.rest_inverse = rest_inverse_.data();
-    view.rest_volume = rest_volume_.data();
+    view.rest_volume = per_element_of(rest_volume, rest_volume_.data());
     view_d.rest_inverse = rest_inverse_d_.data();
-    view_d.rest_volume = rest_volume_d_.data();
+    view_d.rest_volume = per_element_of(c.rest_volume, rest_volume_d_.data());
+    // The arrays are uploaded even where the views hold one value: a replaced material (refresh_material) may vary.
     for (int p = 0; p < kernels::kMostLawParameters; ++p) {
       if (term.parameter[p].empty()) continue;
-      FMPC_CUDA_CHECK(arrays.parameter[p].upload(convert<Real>(term.parameter[p], *c.pool)), diagnostics, false);
+      const HostArray<Real> values = convert<Real>(term.parameter[p], *c.pool);
+      FMPC_CUDA_CHECK(arrays.parameter[p].upload(values), diagnostics, false);
       FMPC_CUDA_CHECK(arrays.parameter_d[p].upload(term.parameter[p]), diagnostics, false);
-      view.parameter[p] = arrays.parameter[p].data();
-      view_d.parameter[p] = arrays.parameter_d[p].data();
+      view.parameter[p] = per_element_of(values, arrays.parameter[p].data());
+      view_d.parameter[p] = per_element_of(term.parameter[p], arrays.parameter_d[p].data());
     }
     if (!term.stiffness_damping.empty()) {
-      FMPC_CUDA_CHECK(arrays.damping.upload(convert<Real>(term.stiffness_damping, *c.pool)), diagnostics, false);
+      const HostArray<Real> values = convert<Real>(term.stiffness_damping, *c.pool);
+      FMPC_CUDA_CHECK(arrays.damping.upload(values), diagnostics, false);
       FMPC_CUDA_CHECK(arrays.damping_d.upload(term.stiffness_damping), diagnostics, false);
-      view.stiffness_damping = arrays.damping.data();
-      view_d.stiffness_damping = arrays.damping_d.data();
+      view.stiffness_damping = per_element_of(values, arrays.damping.data());
+      view_d.stiffness_damping = per_element_of(term.stiffness_damping, arrays.damping_d.data());
     }
     view.strain_table = view_d.strain_table = {nullptr, nullptr, 0};
     const sim::ElementTerm& own = scenes_.front().elements.terms[t];
