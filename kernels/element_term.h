@@ -56,8 +56,11 @@ struct ElementTermView {
   // corner_offset[v] + corner_rank[kNodes e + a], v = corners[kNodes e + a], its entry's rank among v's; the offset is
   // read beside v's state, which the element pass gathers anyway. The GPU's views, where every rank fits a byte.
   const unsigned char* corner_rank;
-  const int* corner_offset;                        // the corners' CSR offsets (CornerForceView::offset)
-  const Real* rest_inverse;                        // Dm^-1, 9 per element (1/m)
+  const int* corner_offset;  // the corners' CSR offsets (CornerForceView::offset)
+  const Real* rest_inverse;  // Dm^-1, 9 per element (1/m); where rest_shape, 9 per shape (rest_inverse_of)
+  // Where not null, element e's shape (a byte): its Dm^-1 is that of rest_inverse's entry rest_shape[e], a table of
+  // the mesh's distinct ones (the GPU's views of a mesh with at most 256 shapes, a regular grid's: gpu::rest_shapes).
+  const unsigned char* rest_shape;
   PerElement<Real> rest_volume;                    // V0 (m^3)
   PerElement<Real> parameter[kMostLawParameters];  // the law's parameters in its order
   PerElement<Real> stiffness_damping;              // beta (s); absent or zero everywhere: undamped
@@ -99,6 +102,12 @@ template <int Nodes, typename Real>
 FMPC_HD int node_slot(const ElementTermView<Real>& t, int e, int a) {
   const int k = Nodes * e + a;
   return t.corner_rank ? t.corner_offset[t.corners[k]] + static_cast<int>(t.corner_rank[k]) : t.corner_slot[k];
+}
+
+// Element e's Dm^-1 (9 values, row-major): its own, or its shape's (ElementTermView::rest_shape).
+template <typename Real>
+FMPC_HD const Real* rest_inverse_of(const ElementTermView<Real>& t, int e) {
+  return t.rest_inverse + 9 * (t.rest_shape ? static_cast<int>(t.rest_shape[e]) : e);
 }
 
 // P at material point `point` (element e's, numbered kPoints e + q) of deformation gradient F: the law's stress at

@@ -94,16 +94,16 @@ bool GpuEngine<Real>::refresh_material(std::size_t, DiagnosticList& diagnostics)
       const std::vector<double> values_d = to_double(term.parameter[p]);
       FMPC_CUDA_CHECK(arrays.parameter[p].overwrite(values, stream_), diagnostics, false);
       FMPC_CUDA_CHECK(arrays.parameter_d[p].overwrite(values_d, stream_), diagnostics, false);
-      view.parameter[p] = per_element_of(values, arrays.parameter[p].data());
-      view_d.parameter[p] = per_element_of(values_d, arrays.parameter_d[p].data());
+      view.parameter[p] = per_element_of(values, arrays.parameter[p].data(), options_.compact_element_views);
+      view_d.parameter[p] = per_element_of(values_d, arrays.parameter_d[p].data(), options_.compact_element_views);
     }
     if (!term.stiffness_damping.empty()) {
       const std::vector<Real> values = to_real<Real>(term.stiffness_damping);
       const std::vector<double> values_d = to_double(term.stiffness_damping);
       FMPC_CUDA_CHECK(arrays.damping.overwrite(values, stream_), diagnostics, false);
       FMPC_CUDA_CHECK(arrays.damping_d.overwrite(values_d, stream_), diagnostics, false);
-      view.stiffness_damping = per_element_of(values, arrays.damping.data());
-      view_d.stiffness_damping = per_element_of(values_d, arrays.damping_d.data());
+      view.stiffness_damping = per_element_of(values, arrays.damping.data(), options_.compact_element_views);
+      view_d.stiffness_damping = per_element_of(values_d, arrays.damping_d.data(), options_.compact_element_views);
     }
   }
   const sim::SimulationSetup& setup = scenes_.front();

@@ -1,9 +1,11 @@
-// The GPU's element views without a GPU (runtime/gpu/batch_concatenation.h): an array whose entries all have the same
-// bits travels as that one value (per_element_of), and the corner slots as a byte per node (corner_ranks); the
-// element pass, run here on the host as the CUDA kernel runs it, writes the same bits through either view.
+// The GPU's compact element views without a GPU (runtime/gpu/batch_concatenation.h): an array whose entries all have
+// the same bits travels as that one value (per_element_of), the corner slots as a byte per node (corner_ranks) and
+// Dm^-1 as a byte per element into a table of the mesh's shapes (rest_shapes); the element pass, run here on the host
+// as the CUDA kernel runs it, writes the same bits through either view.
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <random>
+#include <type_traits>
 #include <vector>
 
 #include "kernels/element_laws.h"
@@ -82,14 +84,23 @@ void check_packed_view(const SimulationSetup& setup, const ElementTerm& term, bo
   packed.corner_slot = nullptr;  // the slots come from the ranks alone
   packed.corner_rank = ranks.data();
   packed.corner_offset = c.corner_offset.data();
-  packed.rest_volume = gpu::per_element_of(rest_volume, rest_volume.data());
+  // Dm^-1 from the table of the box's shapes (rest_inverse_of), the same bits as each element's own.
+  gpu::HostArray<Real> table;
+  gpu::HostArray<unsigned char> shape;
+  REQUIRE(gpu::rest_shapes(rest_inverse, table, shape));
+  REQUIRE(shape.size() == geometry.size());
+  // In float the box's 162 elements have 48 shapes; in double their last bits differ (a table of 162, still exact).
+  if (std::is_same_v<Real, float>) CHECK(table.size() == 9 * 48);
+  packed.rest_inverse = table.data();
+  packed.rest_shape = shape.data();
+  packed.rest_volume = gpu::per_element_of(rest_volume, rest_volume.data(), true);
   CHECK(packed.rest_volume.values == nullptr);
   for (int p = 0; p < kernels::kMostLawParameters; ++p) {
     if (parameter[p].empty()) continue;
-    packed.parameter[p] = gpu::per_element_of(parameter[p], parameter[p].data());
+    packed.parameter[p] = gpu::per_element_of(parameter[p], parameter[p].data(), true);
     CHECK(packed.parameter[p].values == nullptr);  // one material: one value
   }
-  packed.stiffness_damping = gpu::per_element_of(damping, damping.data());
+  packed.stiffness_damping = gpu::per_element_of(damping, damping.data(), true);
   CHECK((packed.stiffness_damping.values == nullptr) == expect_uniform_damping);
 
   const std::size_t vertices = setup.rest_positions.size();
@@ -132,7 +143,7 @@ void check_packed_view(const SimulationSetup& setup, const ElementTerm& term, bo
 
 }  // namespace
 
-TEST_CASE("the GPU's element views: one value for an array of equal entries, byte ranks for the slots, the same bits",
+TEST_CASE("the GPU's element views: one value for equal entries, byte ranks for the slots, shapes for Dm^-1, same bits",
           "[fem][gpu]") {
   for (const ElementKindRow& kind : element_kind_rows()) {
     const SimulationSetup setup = small_box(kind.kind);
@@ -161,25 +172,47 @@ TEST_CASE("the GPU's element views: one value for an array of equal entries, byt
   }
 }
 
-TEST_CASE("per_element_of holds one value only where every entry has the same bits; corner_ranks only within a byte",
-          "[fem][gpu]") {
+TEST_CASE(
+    "per_element_of holds one value only where every entry has the same bits; rest_shapes and corner_ranks "
+    "only within a byte",
+    "[fem][gpu]") {
   const std::vector<float> same(5, 2.5f), different = {2.5f, 2.5f, 2.5000002f}, signs = {0.0f, -0.0f}, zeros(4, 0.0f),
                                           none;
   const float held[1] = {0.0f};
   const float* device = held;  // where the values would be on the device: only handed back
-  const kernels::PerElement<float> one = gpu::per_element_of(same, device);
+  const kernels::PerElement<float> one = gpu::per_element_of(same, device, true);
   CHECK(one.values == nullptr);
   CHECK(one[3] == 2.5f);
   CHECK(static_cast<bool>(one));
-  CHECK(gpu::per_element_of(different, device).values == device);
-  CHECK(gpu::per_element_of(signs, device).values == device);  // -0 is not +0's bits
-  const kernels::PerElement<float> zero = gpu::per_element_of(zeros, device),
-                                   absent = gpu::per_element_of(none, device);
+  CHECK(gpu::per_element_of(different, device, true).values == device);
+  CHECK(gpu::per_element_of(signs, device, true).values == device);  // -0 is not +0's bits
+  CHECK(gpu::per_element_of(same, device, false).values == device);  // GpuOptions::compact_element_views off
+  const kernels::PerElement<float> zero = gpu::per_element_of(zeros, device, true),
+                                   absent = gpu::per_element_of(none, device, true);
   CHECK(zero.values == nullptr);
   CHECK_FALSE(static_cast<bool>(zero));  // zero damping everywhere: undamped, velocities not read
   CHECK(absent.values == nullptr);
   CHECK_FALSE(static_cast<bool>(absent));
   CHECK(absent[7] == 0.0f);
+
+  // 256 distinct Dm^-1 are a table; 257 are not (the views keep Dm^-1 per element).
+  for (const std::size_t count : {256u, 257u}) {
+    std::vector<double> rest_inverse(9 * count, 1.0);
+    for (std::size_t e = 0; e < count; ++e) rest_inverse[9 * e + 4] = 1.0 + static_cast<double>(e);
+    rest_inverse.insert(rest_inverse.end(), rest_inverse.begin(), rest_inverse.begin() + 9);  // element 0's again
+    gpu::HostArray<double> table;
+    gpu::HostArray<unsigned char> shape;
+    const bool shared = gpu::rest_shapes(rest_inverse, table, shape);
+    CHECK(shared == (count == 256));
+    if (shared) {
+      CHECK(table.size() == 9 * count);
+      CHECK(shape.back() == 0);
+      CHECK(shape[255] == 255);
+    } else {
+      CHECK(table.empty());
+      CHECK(shape.empty());
+    }
+  }
 
   // One vertex with `corners` entries: ranks 0 .. corners - 1.
   for (const int corners : {256, 257}) {
