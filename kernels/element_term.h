@@ -24,18 +24,46 @@ constexpr int kMostLawParameters = 4;
 // The most element terms a run holds (sim::validate_setup refuses more; the GPU's views hold this many).
 constexpr int kMostElementTerms = 4;
 
+// A value per element: an array, or, where every element has the same value, that value alone (values null; the
+// GPU's views, per_element_of in runtime/gpu): the element pass then reads it from its kernel parameters, and a
+// uniform material moves no bytes per element for it. Either way element e reads the same value, so the arithmetic,
+// and the bits, are the array's.
+template <typename Real>
+struct PerElement {
+  const Real* values = nullptr;  // one per element; null: `uniform` for every element
+  Real uniform = Real(0);
+
+  PerElement() = default;
+  FMPC_HD PerElement(const Real* per_element) : values(per_element) {}
+  FMPC_HD PerElement(const Real* per_element, Real same) : values(per_element), uniform(same) {}
+  template <typename Index>  // int in the kernels, std::size_t in the host's loops, as a pointer indexes
+  FMPC_HD Real operator[](Index e) const {
+    return values ? values[e] : uniform;
+  }
+  // Whether some element's value may be non-zero: false for an absent array (null) and for zero everywhere.
+  FMPC_HD explicit operator bool() const { return values != nullptr || uniform != Real(0); }
+};
+
 // One term's arrays; the geometry (corners, corner_slot, rest_inverse, rest_volume) is shared by the run's terms.
 template <typename Real>
 struct ElementTermView {
-  int law;                                    // the law's index in ElementLaws (kernels/element_laws.h)
-  int element;                                // the element kind's index in ElementKinds (kernels/element_laws.h)
-  int count;                                  // elements
-  const int* corners;                         // the element kind's kNodes per element
-  const int* corner_slot;                     // kNodes per element: where each node's force goes (CornerForceView)
-  const Real* rest_inverse;                   // Dm^-1, 9 per element (1/m)
-  const Real* rest_volume;                    // V0 (m^3)
-  const Real* parameter[kMostLawParameters];  // the law's parameters in its order, one per element each
-  const Real* stiffness_damping;              // beta (s) per element; null: undamped
+  int law;                 // the law's index in ElementLaws (kernels/element_laws.h)
+  int element;             // the element kind's index in ElementKinds (kernels/element_laws.h)
+  int count;               // elements
+  const int* corners;      // the element kind's kNodes per element
+  const int* corner_slot;  // kNodes per element: where each node's force goes (CornerForceView)
+  // Where not null, the same slots in a byte per node instead of four (node_slot): node a of element e writes at
+  // corner_offset[v] + corner_rank[kNodes e + a], v = corners[kNodes e + a], its entry's rank among v's; the offset is
+  // read beside v's state, which the element pass gathers anyway. The GPU's views, where every rank fits a byte.
+  const unsigned char* corner_rank;
+  const int* corner_offset;  // the corners' CSR offsets (CornerForceView::offset)
+  const Real* rest_inverse;  // Dm^-1, 9 per element (1/m); where rest_shape, 9 per shape (rest_inverse_of)
+  // Where not null, element e's shape (a byte): its Dm^-1 is that of rest_inverse's entry rest_shape[e], a table of
+  // the mesh's distinct ones (the GPU's views of a mesh with at most 256 shapes, a regular grid's: gpu::rest_shapes).
+  const unsigned char* rest_shape;
+  PerElement<Real> rest_volume;                    // V0 (m^3)
+  PerElement<Real> parameter[kMostLawParameters];  // the law's parameters in its order
+  PerElement<Real> stiffness_damping;              // beta (s); absent or zero everywhere: undamped
   StrainTableView strain_table;  // E(strain) for a law whose modulus a strain table replaces; strain null: none
   // Per-point state (kernels/prony_viscoelasticity.h) and the Prony series reading it; count 0: elastic (the state's
   // values null). The engines' Real views carry both; the double views of implicit Euler and the host's sums leave
@@ -67,6 +95,19 @@ FMPC_HD void element_nodes(int e, const int* nodes, const StateView<StateReal>& 
       v[a][2] = static_cast<Real>(s.vz[vertex]);
     }
   }
+}
+
+// The corner-force slot of node a of element e (ElementTermView::corner_slot, or its offset and rank).
+template <int Nodes, typename Real>
+FMPC_HD int node_slot(const ElementTermView<Real>& t, int e, int a) {
+  const int k = Nodes * e + a;
+  return t.corner_rank ? t.corner_offset[t.corners[k]] + static_cast<int>(t.corner_rank[k]) : t.corner_slot[k];
+}
+
+// Element e's Dm^-1 (9 values, row-major): its own, or its shape's (ElementTermView::rest_shape).
+template <typename Real>
+FMPC_HD const Real* rest_inverse_of(const ElementTermView<Real>& t, int e) {
+  return t.rest_inverse + 9 * (t.rest_shape ? static_cast<int>(t.rest_shape[e]) : e);
 }
 
 // P at material point `point` (element e's, numbered kPoints e + q) of deformation gradient F: the law's stress at
@@ -135,7 +176,7 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
                                  CornerForce<Real>* force) {
   constexpr int N = Element::kNodes;
   Real x[N][3], v[N][3], out[N][3];
-  const bool damped = t.stiffness_damping != nullptr;
+  const bool damped = static_cast<bool>(t.stiffness_damping);
   // As in LinearTetrahedron::forces: a constant pointer in each branch lets the GPU keep x and v in registers. The
   // nodes are read in each branch with a constant flag, so that the compiler sees v written where it is read (GCC 12
   // reported v as uninitialised once a law's damped stress was inlined).
@@ -146,8 +187,12 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
     element_nodes<N>(e, t.corners, s, false, x, v);
     Element::template forces<Law>(t, e, x, static_cast<const Real(*)[3]>(nullptr), out);
   }
+  // Every slot before the first store: a slot read after a store waits for it (the compiler cannot tell the arrays
+  // apart), which chained the four loads' latencies at each thread's end.
+  int slot[N];
+  for (int a = 0; a < N; ++a) slot[a] = node_slot<N>(t, e, a);
   for (int a = 0; a < N; ++a) {
-    CornerForce<Real>& to = force[t.corner_slot[N * e + a]];
+    CornerForce<Real>& to = force[slot[a]];
     if (Accumulate) {
       to = {to.x + out[a][0], to.y + out[a][1], to.z + out[a][2], Real(0)};
     } else {
@@ -158,9 +203,9 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
 
 // The nodal pass of a kind with kNodalPressure (kernels/elements/linear_nodal_pressure.h): element e's shares of
 // its nodes' sums, written at its corner slots in the corner-force layout (x: volume change, y: rest volume, z:
-// modulus times rest volume), so that each vertex's gather (nodal_pressure_at) sums them in CSR order as it sums forces.
-// The CPU engine's nodal pass, the host's sums and the CUDA kernels (nodal_shares_kernel, kernels/explicit_step.cu)
-// all run this and nodal_pressure_at: the GPU's nodal field has the CPU's bits.
+// modulus times rest volume), so that each vertex's gather (nodal_pressure_at) sums them in CSR order as it sums
+// forces. The CPU engine's nodal pass, the host's sums and the CUDA kernels (nodal_shares_kernel,
+// kernels/explicit_step.cu) all run this and nodal_pressure_at: the GPU's nodal field has the CPU's bits.
 template <typename Element, typename Law, typename Real, typename StateReal>
 FMPC_HD void element_nodal_shares(int e, const ElementTermView<Real>& t, const StateView<StateReal>& s,
                                   CornerForce<Real>* slot) {
@@ -169,7 +214,9 @@ FMPC_HD void element_nodal_shares(int e, const ElementTermView<Real>& t, const S
     Real x[N][3], v[N][3], share[3];
     element_nodes<N>(e, t.corners, s, false, x, v);
     Element::template nodal_shares<Law>(t, e, x, share);
-    for (int a = 0; a < N; ++a) slot[t.corner_slot[N * e + a]] = {share[0], share[1], share[2], Real(0)};
+    int at[N];
+    for (int a = 0; a < N; ++a) at[a] = node_slot<N>(t, e, a);
+    for (int a = 0; a < N; ++a) slot[at[a]] = {share[0], share[1], share[2], Real(0)};
   }
 }
 

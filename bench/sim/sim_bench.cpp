@@ -261,7 +261,7 @@ gpu::GpuOptions gpu_options_for(Launch launch) {
 // NaN/Inf check interval (0: at the end of each timed chunk only, to separate the checks' cost from the steps').
 Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integrator, Launch launch,
             const Options& options, int lanes = 0, std::size_t check_every = kCheckEvery, int element_blocks = 0,
-            bool sliced_springs = true, int slice_window = 0) {
+            bool sliced_springs = true, int slice_window = 0, bool compact_element_views = true) {
   SimulationSetup setup = base;
   setup.precision = precision;
   setup.integrator = integrator;
@@ -283,6 +283,7 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   gpu_options.element_blocks_per_sm = element_blocks;
   gpu_options.sliced_springs = sliced_springs;
   gpu_options.slice_window = slice_window;
+  gpu_options.compact_element_views = compact_element_views;
   const auto simulation = gpu_simulation(setup, diagnostics, gpu_options);
   row.graphs = launch_name(
       simulation && launch == Launch::Persistent && !simulation->launches().persistent ? Launch::Graphs : launch);
@@ -291,6 +292,7 @@ Row gpu_row(const SimulationSetup& base, Precision precision, Integrator integra
   if (element_blocks > 0) row.graphs += " element pass " + std::to_string(element_blocks) + " blocks/SM";
   if (!sliced_springs) row.graphs += " springs in CSR order";
   if (slice_window > 0) row.graphs += " slice window " + std::to_string(slice_window);
+  if (!compact_element_views) row.graphs += " element arrays per element";
   if (check_every != kCheckEvery)
     row.graphs += check_every == 0 ? " checks per chunk" : " checks every " + std::to_string(check_every);
   if (!simulation || !time_steps([&](std::size_t n) { return simulation->advance(n, diagnostics, check_every); }, 64,
@@ -768,6 +770,11 @@ int main(int argc, char** argv) {
         for (const int element_blocks : {2, 3})
           rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0,
                                  kCheckEvery, element_blocks));
+      // The element pass on per-element arrays and int slots (GpuOptions::compact_element_views off): the bytes the
+      // compact views save, in the same process (docs/performance.md, "Bytes per element").
+      if (largest)
+        rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Graphs, options, 0,
+                               kCheckEvery, 0, true, 0, false));
       if (!largest && cells <= 24)
         rows.push_back(gpu_row(base, Precision::Float, Integrator::SemiImplicitEuler, Launch::Persistent, options));
       if (!largest && cells == 24) {

@@ -25,7 +25,8 @@ FMPC_HD double corner_stiffness_bound(const double* rest_inverse, double volume,
       const double gg = dot3(g[a], g[b]);
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
-          const double entry = volume * (lambda * g[a][i] * g[b][j] + mu * g[b][i] * g[a][j] + (i == j ? mu * gg : 0.0));
+          const double entry =
+              volume * (lambda * g[a][i] * g[b][j] + mu * g[b][i] * g[a][j] + (i == j ? mu * gg : 0.0));
           frobenius += entry * entry;
           rows[3 * a + i] += entry < 0.0 ? -entry : entry;
         }
@@ -47,14 +48,14 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
   template <typename Real>
   static FMPC_HD void deformation_gradients(const ElementTermView<Real>& t, int e, const Real x[kNodes][3],
                                             Real F[kPoints][9]) {
-    corner_gradient(x, t.rest_inverse + 9 * e, F[0]);
+    corner_gradient(x, rest_inverse_of(t, e), F[0]);
   }
 
   // The element's forces on its nodes at positions x and, where the term is damped (v non-null), velocities v.
   template <typename Law, typename Real>
   static FMPC_HD void forces(const ElementTermView<Real>& t, int e, const Real x[kNodes][3], const Real (*v)[3],
                              Real out[kNodes][3]) {
-    const Real* rest_inverse = t.rest_inverse + 9 * e;
+    const Real* rest_inverse = rest_inverse_of(t, e);
     const typename Law::template Material<Real> material = Kind::template point_material<Law>(t, e);
     Real g[4][3], F[9], P[9];
     shape_gradients(rest_inverse, g);
@@ -82,7 +83,7 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
   static FMPC_HD void linearise(const ElementTermView<double>& t, int e, const double x[kNodes][3],
                                 Linearisation<Law>& lin) {
     double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
+    corner_gradient(x, rest_inverse_of(t, e), F);
     Law::linearise(Kind::template point_material<Law>(t, e), F, lin.point);
   }
 
@@ -91,7 +92,7 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
   template <typename Law>
   static FMPC_HD void stiffness_action(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
                                        const double p[kNodes][3], double out[kNodes][3]) {
-    const double* rest_inverse = t.rest_inverse + 9 * e;
+    const double* rest_inverse = rest_inverse_of(t, e);
     double g[4][3], dF[9], dP[9];
     shape_gradients(rest_inverse, g);
     corner_gradient(p, rest_inverse, dF);
@@ -111,7 +112,7 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
                                        double* K) {
     constexpr int S = 3 * kNodes;
     double g[4][3], A[81];
-    shape_gradients(t.rest_inverse + 9 * e, g);
+    shape_gradients(rest_inverse_of(t, e), g);
     law_tangent_modulus<Law>(Kind::template point_material<Law>(t, e), lin.point, A);
     const double volume = t.rest_volume[e];
     for (int b = 1; b < kNodes; ++b) {
@@ -137,7 +138,7 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
   template <typename Law>
   static FMPC_HD double energy(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
     double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
+    corner_gradient(x, rest_inverse_of(t, e), F);
     return t.rest_volume[e] *
            (Law::energy_density(Kind::template point_material<Law>(t, e), F) + Kind::volumetric_energy_density(t, e));
   }
@@ -146,7 +147,7 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
   template <typename Law>
   static FMPC_HD double stress_output(const ElementTermView<double>& t, int e, const double x[kNodes][3]) {
     double F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
+    corner_gradient(x, rest_inverse_of(t, e), F);
     return Law::stress_output(Kind::template point_material<Law>(t, e), F);
   }
 
@@ -162,7 +163,7 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
   static FMPC_HD double stiffness_bound(const ElementTermView<double>& t, int e) {
     double mu, lambda;
     Law::rest_lame(Law::material(t, e), mu, lambda);
-    return corner_stiffness_bound(t.rest_inverse + 9 * e, t.rest_volume[e], mu, lambda);
+    return corner_stiffness_bound(rest_inverse_of(t, e), t.rest_volume[e], mu, lambda);
   }
 };
 

@@ -45,7 +45,7 @@ struct LinearNodalPressure : CornerTetrahedron<LinearNodalPressure> {
   template <typename Law, typename Real>
   static FMPC_HD void nodal_shares(const ElementTermView<Real>& t, int e, const Real x[kNodes][3], Real share[3]) {
     Real F[9];
-    corner_gradient(x, t.rest_inverse + 9 * e, F);
+    corner_gradient(x, rest_inverse_of(t, e), F);
     const Real quarter = t.rest_volume[e] / Real(4);
     share[0] = quarter * determinant_minus_one(F);
     share[1] = quarter;
@@ -84,7 +84,7 @@ struct LinearNodalPressure : CornerTetrahedron<LinearNodalPressure> {
   // exceeds the linear element's lambda/2 sum_e V0_e (dV_e / V0_e)^2, and neither does the largest eigenvalue.
   static FMPC_HD void volume_gradient(const ElementTermView<double>& t, int e, const double x[kNodes][3],
                                       double out[kNodes][3]) {
-    const double* rest_inverse = t.rest_inverse + 9 * e;
+    const double* rest_inverse = rest_inverse_of(t, e);
     double g[4][3], F[9], C[9];
     shape_gradients(rest_inverse, g);
     corner_gradient(x, rest_inverse, F);

@@ -98,7 +98,7 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
   template <typename Real>
   static FMPC_HD void deformation_gradients(const ElementTermView<Real>& t, int e, const Real x[kNodes][3],
                                             Real F[kPoints][9]) {
-    for (int q = 0; q < kPoints; ++q) point_gradient(x, q, t.rest_inverse + 9 * e, F[q]);
+    for (int q = 0; q < kPoints; ++q) point_gradient(x, q, rest_inverse_of(t, e), F[q]);
   }
 
   // Each point's stress through point_first_piola (point kPoints e + q), so that a term's per-point state (the Prony
@@ -106,7 +106,7 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
   template <typename Law, typename Real>
   static FMPC_HD void forces(const ElementTermView<Real>& t, int e, const Real x[kNodes][3], const Real (*v)[3],
                              Real out[kNodes][3]) {
-    const Real* rest_inverse = t.rest_inverse + 9 * e;
+    const Real* rest_inverse = rest_inverse_of(t, e);
     const Real weight = t.rest_volume[e] / Real(kPoints);
     Real g[4][3];
     shape_gradients(rest_inverse, g);
@@ -139,7 +139,7 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
     const typename Law::template Material<double> material = Law::material(t, e);
     for (int q = 0; q < kPoints; ++q) {
       double F[9];
-      point_gradient(x, q, t.rest_inverse + 9 * e, F);
+      point_gradient(x, q, rest_inverse_of(t, e), F);
       Law::linearise(material, F, lin.point[q]);
     }
   }
@@ -148,7 +148,7 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
   template <typename Law>
   static FMPC_HD void stiffness_action(const ElementTermView<double>& t, int e, const Linearisation<Law>& lin,
                                        const double p[kNodes][3], double out[kNodes][3]) {
-    const double* rest_inverse = t.rest_inverse + 9 * e;
+    const double* rest_inverse = rest_inverse_of(t, e);
     const typename Law::template Material<double> material = Law::material(t, e);
     double g[4][3];
     shape_gradients(rest_inverse, g);
@@ -171,7 +171,7 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
     double sum = 0.0;
     for (int q = 0; q < kPoints; ++q) {
       double F[9];
-      point_gradient(x, q, t.rest_inverse + 9 * e, F);
+      point_gradient(x, q, rest_inverse_of(t, e), F);
       sum += value(material, F);
     }
     return sum / kPoints;
@@ -229,7 +229,7 @@ struct QuadraticTetrahedron : ElementKindTangent<QuadraticTetrahedron> {
   template <typename Law>
   static FMPC_HD double stiffness_bound(const ElementTermView<double>& t, int e) {
     double g[4][3], G[kPoints][kNodes][3], mu, lambda;
-    shape_gradients(t.rest_inverse + 9 * e, g);
+    shape_gradients(rest_inverse_of(t, e), g);
     for (int q = 0; q < kPoints; ++q) node_gradients(g, q, G[q]);
     Law::rest_lame(Law::material(t, e), mu, lambda);
     const double weight = t.rest_volume[e] / kPoints;

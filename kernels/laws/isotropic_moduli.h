@@ -27,7 +27,7 @@ struct IsotropicModuli {
     Material<Real> m;
     m.youngs_modulus = t.parameter[kYoungsModulus][e];
     m.poisson_ratio = t.parameter[kPoissonRatio][e];
-    m.stiffness_damping = t.stiffness_damping ? t.stiffness_damping[e] : Real(0);
+    m.stiffness_damping = t.stiffness_damping[e];
     m.strain_table = t.strain_table;
     return m;
   }

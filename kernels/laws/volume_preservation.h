@@ -27,7 +27,7 @@ struct VolumePreservation {
   static FMPC_HD Material<Real> material(const ElementTermView<Real>& t, int e) {
     Material<Real> m;
     m.bulk_modulus = t.parameter[kBulkModulus][e];
-    m.stiffness_damping = t.stiffness_damping ? t.stiffness_damping[e] : Real(0);
+    m.stiffness_damping = t.stiffness_damping[e];
     return m;
   }
 

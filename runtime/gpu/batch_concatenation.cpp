@@ -152,6 +152,16 @@ ConcatenatedScenes concatenate(const std::vector<sim::SimulationSetup>& scenes) 
   return c;
 }
 
+HostArray<unsigned char> corner_ranks(const ConcatenatedScenes& c) {
+  HostArray<unsigned char> ranks(c.nodes.size());
+  for (std::size_t k = 0; k < c.nodes.size(); ++k) {
+    const int rank = c.corner_slot[k] - c.corner_offset[static_cast<std::size_t>(c.nodes[k])];
+    if (rank < 0 || rank > 255) return {};
+    ranks[k] = static_cast<unsigned char>(rank);
+  }
+  return ranks;
+}
+
 GatherKind gather_kind(const sim::SimulationSetup& setup) {
   if (setup.elements.empty()) return GatherKind::Springs;
   return setup.springs.size() > 0 ? GatherKind::SpringsAndElements : GatherKind::Elements;

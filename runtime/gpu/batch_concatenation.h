@@ -3,8 +3,11 @@
 // their concatenation into one network (scene s owns a contiguous range of vertices, springs and elements; its CSR
 // entries point at its own vertices), in double, converted to the engine's real type on upload.
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <memory>
 #include <new>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -97,6 +100,58 @@ void fill_on_pool(sim::WorkerPool& pool, HostArray<T>& out, std::size_t at, std:
       },
       1 << 16);
 }
+
+// The per-element view (kernels::PerElement) of `values`, held on the device at `device`: where `one_value` and every
+// entry has the same bits, that value alone, which the element pass reads from its kernel parameters instead of an
+// array per element; otherwise the array; an empty array: absent (zero).
+template <typename Real, typename Allocator>
+kernels::PerElement<Real> per_element_of(const std::vector<Real, Allocator>& values, const Real* device,
+                                         bool one_value) {
+  if (values.empty()) return {};
+  if (!one_value) return {device};
+  for (const Real& value : values)
+    if (std::memcmp(&value, &values.front(), sizeof(Real)) != 0) return {device};
+  return {nullptr, values.front()};
+}
+
+// The distinct Dm^-1 of `rest_inverse` (9 values per element, compared bitwise in Real) into `table`, 9 per shape in
+// order of first appearance, and each element's index among them into `shape` (ElementTermView::rest_shape), where
+// there are at most 256 (a regular grid's: the 120^3 box has 48 in float); false, both empty, otherwise.
+template <typename Real, typename Allocator>
+bool rest_shapes(const std::vector<Real, Allocator>& rest_inverse, HostArray<Real>& table,
+                 HostArray<unsigned char>& shape) {
+  constexpr std::size_t kMostShapes = 256, kBytes = 9 * sizeof(Real);
+  const std::size_t elements = rest_inverse.size() / 9;
+  table.clear();
+  shape.resize(elements);
+  std::unordered_multimap<std::uint64_t, std::size_t> found;  // FNV-1a of the bytes -> shape
+  for (std::size_t e = 0; e < elements; ++e) {
+    const Real* own = rest_inverse.data() + 9 * e;
+    const auto* bytes = reinterpret_cast<const unsigned char*>(own);
+    std::uint64_t hash = 1469598103934665603ull;
+    for (std::size_t i = 0; i < kBytes; ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+    std::size_t index = kMostShapes;
+    const auto range = found.equal_range(hash);
+    for (auto it = range.first; it != range.second && index == kMostShapes; ++it)
+      if (std::memcmp(table.data() + 9 * it->second, own, kBytes) == 0) index = it->second;
+    if (index == kMostShapes) {
+      index = table.size() / 9;
+      if (index == kMostShapes) {
+        table.clear();
+        shape.clear();
+        return false;
+      }
+      table.insert(table.end(), own, own + 9);
+      found.emplace(hash, index);
+    }
+    shape[e] = static_cast<unsigned char>(index);
+  }
+  return true;
+}
+
+// Each node's rank among its vertex's corners, corner_slot[k] - corner_offset[nodes[k]] (ElementTermView::
+// corner_rank), one byte per node; empty where some rank exceeds 255 (the element pass then reads corner_slot).
+HostArray<unsigned char> corner_ranks(const ConcatenatedScenes& c);
 
 // The values converted to Real, on the pool.
 template <typename Real, typename Allocator>

@@ -318,6 +318,9 @@ class GpuEngine final : public sim::SteppingEngine {
   std::vector<int> element_begin_;
   int element_count_ = 0;
   DeviceArray<int> corners_, element_scene_, corner_offset_, corner_index_, corner_slot_, inverted_first_;
+  DeviceArray<unsigned char> corner_rank_;  // the element pass's slots as ranks (corner_ranks); empty: corner_slot_
+  // Each element's shape where rest_inverse_ (rest_inverse_d_) holds the shapes' table (rest_shapes); empty: none.
+  DeviceArray<unsigned char> rest_shape_, rest_shape_d_;
   DeviceArray<int> nodes_;  // the element kind's nodes per element (the element pass's; corners_: the tetrahedra's)
   // What the inversion counts read (kernels::element_inverted): the element kind's nodes where the batch has element
   // terms, else the tetrahedra's corners (corners_, uploaded only then) as kernels::kTetrahedronKind.
@@ -354,8 +357,8 @@ class GpuEngine final : public sim::SteppingEngine {
   // The tools' contact (set_contact, set_tool_shapes): loads_.contact points at these.
   DeviceArray<kernels::ToolShape<Real>> tools_;
   DeviceArray<Real> contact_stiffness_, contact_damping_;  // the damping allocated only where the scene has it
-  DeviceArray<double> contact_blocks_, contact_rhs_;  // implicit Euler's contact part: 6 and 3 per vertex
-  DeviceArray<unsigned char> contact_active_;  // implicit Euler's contact set per vertex
+  DeviceArray<double> contact_blocks_, contact_rhs_;       // implicit Euler's contact part: 6 and 3 per vertex
+  DeviceArray<unsigned char> contact_active_;              // implicit Euler's contact set per vertex
   DeviceArray<unsigned int> contact_changes_;
   std::vector<kernels::ToolShape<Real>> tool_shapes_;
   StepSize<Real> step_{};

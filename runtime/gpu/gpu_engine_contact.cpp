@@ -47,7 +47,8 @@ bool GpuEngine<Real>::set_contact(std::size_t, const std::vector<double>& stiffn
   }
   FMPC_CUDA_CHECK(contact_stiffness_.overwrite(to_real<Real>(stiffness), stream_), diagnostics, false);
   // The damping ratio is the setup's, fixed for the run: present from the start or never.
-  if (!damping.empty()) FMPC_CUDA_CHECK(contact_damping_.overwrite(to_real<Real>(damping), stream_), diagnostics, false);
+  if (!damping.empty())
+    FMPC_CUDA_CHECK(contact_damping_.overwrite(to_real<Real>(damping), stream_), diagnostics, false);
   return synchronize(diagnostics);
 }
 
@@ -57,16 +58,16 @@ bool GpuEngine<Real>::set_tool_shapes(std::size_t, const std::vector<kernels::To
   tool_shapes_.resize(shapes.size());
   for (std::size_t t = 0; t < shapes.size(); ++t) {
     const kernels::ToolShape<double>& s = shapes[t];
-    tool_shapes_[t] = {static_cast<Real>(s.ax), static_cast<Real>(s.ay), static_cast<Real>(s.az),
-                       static_cast<Real>(s.bx), static_cast<Real>(s.by), static_cast<Real>(s.bz),
+    tool_shapes_[t] = {static_cast<Real>(s.ax),    static_cast<Real>(s.ay), static_cast<Real>(s.az),
+                       static_cast<Real>(s.bx),    static_cast<Real>(s.by), static_cast<Real>(s.bz),
                        static_cast<Real>(s.radius)};
   }
   // From pageable memory: the copy is staged before cudaMemcpyAsync returns and runs in the stream's order, after the
   // steps enqueued before it.
-  FMPC_CUDA_CHECK(cudaMemcpyAsync(tools_.data(), tool_shapes_.data(),
-                                  tool_shapes_.size() * sizeof(kernels::ToolShape<Real>), cudaMemcpyHostToDevice,
-                                  stream_),
-                  diagnostics, false);
+  FMPC_CUDA_CHECK(
+      cudaMemcpyAsync(tools_.data(), tool_shapes_.data(), tool_shapes_.size() * sizeof(kernels::ToolShape<Real>),
+                      cudaMemcpyHostToDevice, stream_),
+      diagnostics, false);
   const int count = static_cast<int>(shapes.size());
   if (loads_.contact.tool_count != count) {
     loads_.contact.tool_count = count;
@@ -84,14 +85,25 @@ bool GpuEngine<Real>::refresh_material(std::size_t, DiagnosticList& diagnostics)
   for (std::size_t t = 0; t < c.terms.size(); ++t) {
     const ConcatenatedScenes::Term& term = c.terms[t];
     DeviceTermArrays& arrays = term_arrays_[t];
+    // The views' uniform values travel as kernel arguments: taken by the next launch (the graphs are dropped below).
+    kernels::ElementTermView<Real>& view = model_.terms[t];
+    kernels::ElementTermView<double>& view_d = elements_.terms[t];
     for (int p = 0; p < kernels::kMostLawParameters; ++p) {
       if (term.parameter[p].empty()) continue;
-      FMPC_CUDA_CHECK(arrays.parameter[p].overwrite(to_real<Real>(term.parameter[p]), stream_), diagnostics, false);
-      FMPC_CUDA_CHECK(arrays.parameter_d[p].overwrite(to_double(term.parameter[p]), stream_), diagnostics, false);
+      const std::vector<Real> values = to_real<Real>(term.parameter[p]);
+      const std::vector<double> values_d = to_double(term.parameter[p]);
+      FMPC_CUDA_CHECK(arrays.parameter[p].overwrite(values, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(arrays.parameter_d[p].overwrite(values_d, stream_), diagnostics, false);
+      view.parameter[p] = per_element_of(values, arrays.parameter[p].data(), options_.compact_element_views);
+      view_d.parameter[p] = per_element_of(values_d, arrays.parameter_d[p].data(), options_.compact_element_views);
     }
     if (!term.stiffness_damping.empty()) {
-      FMPC_CUDA_CHECK(arrays.damping.overwrite(to_real<Real>(term.stiffness_damping), stream_), diagnostics, false);
-      FMPC_CUDA_CHECK(arrays.damping_d.overwrite(to_double(term.stiffness_damping), stream_), diagnostics, false);
+      const std::vector<Real> values = to_real<Real>(term.stiffness_damping);
+      const std::vector<double> values_d = to_double(term.stiffness_damping);
+      FMPC_CUDA_CHECK(arrays.damping.overwrite(values, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(arrays.damping_d.overwrite(values_d, stream_), diagnostics, false);
+      view.stiffness_damping = per_element_of(values, arrays.damping.data(), options_.compact_element_views);
+      view_d.stiffness_damping = per_element_of(values_d, arrays.damping_d.data(), options_.compact_element_views);
     }
   }
   const sim::SimulationSetup& setup = scenes_.front();
@@ -99,9 +111,8 @@ bool GpuEngine<Real>::refresh_material(std::size_t, DiagnosticList& diagnostics)
   // captured with the old ones are dropped below).
   for (std::size_t t = 0; t < setup.elements.terms.size(); ++t)
     if (model_.terms[t].prony.count > 0)
-      model_.terms[t].prony = sim::prony_constants_in<Real>(setup.elements.terms[t].prony,
-                                                             stability_.front().time_step,
-                                                             setup.integrator == sim::Integrator::ImplicitEuler);
+      model_.terms[t].prony = sim::prony_constants_in<Real>(setup.elements.terms[t].prony, stability_.front().time_step,
+                                                            setup.integrator == sim::Integrator::ImplicitEuler);
   if (setup.strain_stiffness) {
     const sim::StrainStiffnessTable& table = *setup.strain_stiffness;
     FMPC_CUDA_CHECK(table_strain_.overwrite(table.strain, stream_), diagnostics, false);
@@ -114,8 +125,8 @@ bool GpuEngine<Real>::refresh_material(std::size_t, DiagnosticList& diagnostics)
       FMPC_CUDA_CHECK(launch_sliced_springs(model_.springs, vertex_order_.data(), n_, incidence_.data(), stream_),
                       diagnostics, false);
     } else {
-      FMPC_CUDA_CHECK(launch_spring_incidence(model_.springs, c.offset.back(), incidence_.data(), stream_),
-                      diagnostics, false);
+      FMPC_CUDA_CHECK(launch_spring_incidence(model_.springs, c.offset.back(), incidence_.data(), stream_), diagnostics,
+                      false);
     }
   }
   graphs_.clear();

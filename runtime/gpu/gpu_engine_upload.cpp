@@ -94,9 +94,8 @@ bool GpuEngine<Real>::upload(DiagnosticList& diagnostics) {
   if (!upload_probes(diagnostics) || !upload_single_scene_features(diagnostics)) return false;
 
   model_.kind = gather_kind(common);
-  model_.element_blocks = options_.element_blocks_per_sm == 2 || options_.element_blocks_per_sm == 3
-                              ? options_.element_blocks_per_sm
-                              : 0;
+  model_.element_blocks =
+      options_.element_blocks_per_sm == 2 || options_.element_blocks_per_sm == 3 ? options_.element_blocks_per_sm : 0;
   model_.springs = {offset_.data(),
                     spring_.data(),
                     neighbour_.data(),
@@ -182,9 +181,23 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
   FMPC_CUDA_CHECK(corner_offset_.upload(c.corner_offset), diagnostics, false);
   FMPC_CUDA_CHECK(corner_index_.upload(c.corner_index), diagnostics, false);
   FMPC_CUDA_CHECK(corner_slot_.upload(c.corner_slot), diagnostics, false);
-  FMPC_CUDA_CHECK(rest_inverse_.upload(convert<Real>(c.rest_inverse, *c.pool)), diagnostics, false);
-  FMPC_CUDA_CHECK(rest_volume_.upload(convert<Real>(c.rest_volume, *c.pool)), diagnostics, false);
-  FMPC_CUDA_CHECK(rest_inverse_d_.upload(c.rest_inverse), diagnostics, false);
+  // The compact views (GpuOptions::compact_element_views): slots as byte ranks, Dm^-1 per shape where the mesh has
+  // at most 256 (rest_inverse_ then holds the shapes' table), one value for arrays of equal entries.
+  const bool compact = options_.compact_element_views;
+  const HostArray<unsigned char> ranks = compact ? corner_ranks(c) : HostArray<unsigned char>{};
+  if (!ranks.empty()) FMPC_CUDA_CHECK(corner_rank_.upload(ranks), diagnostics, false);
+  const HostArray<Real> rest_inverse = convert<Real>(c.rest_inverse, *c.pool);
+  HostArray<Real> table;
+  HostArray<double> table_d;
+  HostArray<unsigned char> shape, shape_d;
+  const bool shapes = compact && rest_shapes(rest_inverse, table, shape);
+  const bool shapes_d = compact && rest_shapes(c.rest_inverse, table_d, shape_d);
+  FMPC_CUDA_CHECK(rest_inverse_.upload(shapes ? table : rest_inverse), diagnostics, false);
+  FMPC_CUDA_CHECK(rest_inverse_d_.upload(shapes_d ? table_d : c.rest_inverse), diagnostics, false);
+  if (shapes) FMPC_CUDA_CHECK(rest_shape_.upload(shape), diagnostics, false);
+  if (shapes_d) FMPC_CUDA_CHECK(rest_shape_d_.upload(shape_d), diagnostics, false);
+  const HostArray<Real> rest_volume = convert<Real>(c.rest_volume, *c.pool);
+  FMPC_CUDA_CHECK(rest_volume_.upload(rest_volume), diagnostics, false);
   FMPC_CUDA_CHECK(rest_volume_d_.upload(c.rest_volume), diagnostics, false);
   FMPC_CUDA_CHECK(corner_force_.allocate(node_entries), diagnostics, false);
   model_.term_count = static_cast<int>(c.terms.size());
@@ -204,22 +217,31 @@ bool GpuEngine<Real>::upload_elements(const ConcatenatedScenes& c, DiagnosticLis
     view.count = view_d.count = element_count_;
     view.corners = view_d.corners = nodes_.data();
     view.corner_slot = view_d.corner_slot = corner_slot_.data();
+    if (!ranks.empty()) {
+      view.corner_rank = view_d.corner_rank = corner_rank_.data();
+      view.corner_offset = view_d.corner_offset = corner_offset_.data();
+    }
     view.rest_inverse = rest_inverse_.data();
-    view.rest_volume = rest_volume_.data();
+    view.rest_shape = shapes ? rest_shape_.data() : nullptr;
+    view.rest_volume = per_element_of(rest_volume, rest_volume_.data(), compact);
     view_d.rest_inverse = rest_inverse_d_.data();
-    view_d.rest_volume = rest_volume_d_.data();
+    view_d.rest_shape = shapes_d ? rest_shape_d_.data() : nullptr;
+    view_d.rest_volume = per_element_of(c.rest_volume, rest_volume_d_.data(), compact);
+    // The arrays are uploaded even where the views hold one value: a replaced material (refresh_material) may vary.
     for (int p = 0; p < kernels::kMostLawParameters; ++p) {
       if (term.parameter[p].empty()) continue;
-      FMPC_CUDA_CHECK(arrays.parameter[p].upload(convert<Real>(term.parameter[p], *c.pool)), diagnostics, false);
+      const HostArray<Real> values = convert<Real>(term.parameter[p], *c.pool);
+      FMPC_CUDA_CHECK(arrays.parameter[p].upload(values), diagnostics, false);
       FMPC_CUDA_CHECK(arrays.parameter_d[p].upload(term.parameter[p]), diagnostics, false);
-      view.parameter[p] = arrays.parameter[p].data();
-      view_d.parameter[p] = arrays.parameter_d[p].data();
+      view.parameter[p] = per_element_of(values, arrays.parameter[p].data(), compact);
+      view_d.parameter[p] = per_element_of(term.parameter[p], arrays.parameter_d[p].data(), compact);
     }
     if (!term.stiffness_damping.empty()) {
-      FMPC_CUDA_CHECK(arrays.damping.upload(convert<Real>(term.stiffness_damping, *c.pool)), diagnostics, false);
+      const HostArray<Real> values = convert<Real>(term.stiffness_damping, *c.pool);
+      FMPC_CUDA_CHECK(arrays.damping.upload(values), diagnostics, false);
       FMPC_CUDA_CHECK(arrays.damping_d.upload(term.stiffness_damping), diagnostics, false);
-      view.stiffness_damping = arrays.damping.data();
-      view_d.stiffness_damping = arrays.damping_d.data();
+      view.stiffness_damping = per_element_of(values, arrays.damping.data(), compact);
+      view_d.stiffness_damping = per_element_of(term.stiffness_damping, arrays.damping_d.data(), compact);
     }
     view.strain_table = view_d.strain_table = {nullptr, nullptr, 0};
     const sim::ElementTerm& own = scenes_.front().elements.terms[t];

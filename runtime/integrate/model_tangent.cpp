@@ -130,7 +130,7 @@ double ElementTangents::stiffness(std::size_t term, std::size_t e, const double*
     Element::template linearise<Law>(view, static_cast<int>(e), nodes, lin);
     Element::template stiffness_matrix<Law>(view, static_cast<int>(e), lin, K);
   });
-  return view.stiffness_damping != nullptr ? view.stiffness_damping[e] : 0.0;
+  return view.stiffness_damping[e];
 }
 
 }  // namespace fmpc::sim

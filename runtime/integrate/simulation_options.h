@@ -48,6 +48,10 @@ struct GpuOptions {
   // either way; false and the window are for measuring.
   bool sliced_springs = true;
   int slice_window = 0;
+  // The element pass reads compact views (docs/performance.md, "Bytes per element"): one value for a per-element
+  // array whose entries all have the same bits, the corner slots as a byte per node, and Dm^-1 per shape where the
+  // mesh has at most 256 (a regular grid). The same values either way, so the same bits; false is for measuring.
+  bool compact_element_views = true;
   // The CUDA device the engine runs on: made current (cudaSetDevice, checked) in the thread that creates the
   // simulation, before anything is allocated; the simulation is then used from that thread (or from one that made
   // the device current). -1: the creating thread's current device, whatever it is (a program that chose it itself).

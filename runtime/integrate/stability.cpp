@@ -101,7 +101,7 @@ VertexBounds vertex_bounds(const SimulationSetup& setup) {
       constexpr auto N = static_cast<std::size_t>(Element::kNodes);
       for (std::size_t e = 0; e < geometry.size(); ++e) {
         const double bound = Element::template stiffness_bound<Law>(view, static_cast<int>(e));
-        const double beta = view.stiffness_damping ? view.stiffness_damping[e] : 0.0;
+        const double beta = view.stiffness_damping[e];
         for (std::size_t a = 0; a < N; ++a) {
           const auto v = static_cast<std::size_t>(geometry.nodes[N * e + a]);
           bounds.stiffness[v] += bound;
