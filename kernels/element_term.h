@@ -84,6 +84,28 @@ FMPC_HD void point_first_piola(const ElementTermView<Real>& t, int e, int point,
   point_first_piola_of<Law>(Law::material(t, e), t, e, point, F, F_rate, P);
 }
 
+// Whether a law gives P from its linearisation at the same F (a static first_piola_linearised(material, lin, F,
+// F_rate, P): the co-rotational law's, which reuses the linearisation's polar decomposition).
+template <typename Law, typename = void>
+struct HasFirstPiolaLinearised : std::false_type {};
+template <typename Law>
+struct HasFirstPiolaLinearised<Law, std::void_t<decltype(&Law::first_piola_linearised)>> : std::true_type {};
+
+// point_first_piola_of at F with the law's linearisation `lin` taken at the same F: the law's first_piola_linearised
+// where it has one, else its first_piola; the same bits either way.
+template <typename Law>
+FMPC_HD void point_first_piola_linearised(const typename Law::template Material<double>& material,
+                                          const ElementTermView<double>& t, int e, int point,
+                                          const typename Law::Linearisation& lin, const double* F,
+                                          const double* F_rate, double* P) {
+  if constexpr (HasFirstPiolaLinearised<Law>::value) {
+    Law::first_piola_linearised(material, lin, F, F_rate, P);
+  } else {
+    Law::first_piola(material, F, F_rate, P);
+  }
+  if (t.prony.count > 0) prony_first_piola(prony_weighted(t.prony, t.prony_weight, e), t.state, point, F, P);
+}
+
 // Whether a law gives its tangent modulus in closed form (a static tangent_modulus(material, lin, A)).
 template <typename Law, typename = void>
 struct HasTangentModulus : std::false_type {};
@@ -130,6 +152,19 @@ FMPC_HD void element_state_update(int e, const ElementTermView<Real>& t, const S
 // layout CornerForceView reads), written by the run's first term and added to by each later one (Accumulate), so
 // that a vertex's gather sums the terms in list order. Velocities are read only where the term has stiffness
 // damping: the laws read them for nothing else, and they are half the pass's gathered bytes.
+// Element e's node forces `out` into its corner slots: written (the run's first term) or added (Accumulate).
+template <int N, bool Accumulate, typename Real>
+FMPC_HD void store_corner_forces(int e, const int* corner_slot, const Real out[N][3], CornerForce<Real>* force) {
+  for (int a = 0; a < N; ++a) {
+    CornerForce<Real>& to = force[corner_slot[N * e + a]];
+    if (Accumulate) {
+      to = {to.x + out[a][0], to.y + out[a][1], to.z + out[a][2], Real(0)};
+    } else {
+      to = {out[a][0], out[a][1], out[a][2], Real(0)};
+    }
+  }
+}
+
 template <typename Element, typename Law, bool Accumulate, typename Real>
 FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const StateView<Real>& s,
                                  CornerForce<Real>* force) {
@@ -146,14 +181,29 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
     element_nodes<N>(e, t.corners, s, false, x, v);
     Element::template forces<Law>(t, e, x, static_cast<const Real(*)[3]>(nullptr), out);
   }
-  for (int a = 0; a < N; ++a) {
-    CornerForce<Real>& to = force[t.corner_slot[N * e + a]];
-    if (Accumulate) {
-      to = {to.x + out[a][0], to.y + out[a][1], to.z + out[a][2], Real(0)};
-    } else {
-      to = {out[a][0], out[a][1], out[a][2], Real(0)};
-    }
-  }
+  store_corner_forces<N, Accumulate>(e, t.corner_slot, out, force);
+}
+
+// Whether an element kind gives its forces and its linearisation in one (forces_and_linearisation<Law>).
+template <typename Element, typename Law, typename = void>
+struct HasForcesAndLinearisation : std::false_type {};
+template <typename Element, typename Law>
+struct HasForcesAndLinearisation<Element, Law,
+                                 std::void_t<decltype(&Element::template forces_and_linearisation<Law>)>>
+    : std::true_type {};
+
+// element_node_forces (double) with the element's linearisation at the same positions into `lin`, for a kind with
+// HasForcesAndLinearisation: implicit Euler's force pass on the CPU, whose step's tangent then reads lin.
+template <typename Element, typename Law, bool Accumulate>
+FMPC_HD void element_node_forces_linearised(int e, const ElementTermView<double>& t, const StateView<double>& s,
+                                            CornerForce<double>* force,
+                                            typename Element::template Linearisation<Law>& lin) {
+  constexpr int N = Element::kNodes;
+  double x[N][3], v[N][3], out[N][3];
+  const bool damped = t.stiffness_damping != nullptr;
+  element_nodes<N>(e, t.corners, s, damped, x, v);
+  Element::template forces_and_linearisation<Law>(t, e, x, damped ? v : nullptr, lin, out);
+  store_corner_forces<N, Accumulate>(e, t.corner_slot, out, force);
 }
 
 // The nodal pass of a kind with kNodalPressure (kernels/elements/linear_nodal_pressure.h): element e's shares of

@@ -131,8 +131,8 @@ ImplicitMethod ImplicitSolver::automatic_method(double h, WorkerPool& pool) {
 ImplicitSolve ImplicitSolver::solve(const std::vector<double>& x, const std::vector<double>& v,
                                     const std::vector<double>& a, const std::vector<double>& spring_stiffness,
                                     double h, WorkerPool& pool, std::vector<double>& dv, ImplicitLinearPart* part,
-                                    int most_rounds) {
-  system_.assemble(x, v, a, spring_stiffness, h, pool, rhs_);
+                                    int most_rounds, const ElementLinearisations* linearisations) {
+  system_.assemble(x, v, a, spring_stiffness, h, pool, rhs_, linearisations);
   dv.assign(system_.dofs(), 0.0);
   if (part != nullptr) {
     assembled_rhs_ = rhs_;

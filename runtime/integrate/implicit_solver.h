@@ -68,10 +68,11 @@ class ImplicitSolver {
 
   // Assembles the system at the state (ImplicitSystem::assemble's arguments) and solves it into `dv` (3 per vertex,
   // zero on held axes). With a linear `part`, solves until the part stays (each round from the last round's dv), at
-  // most `most_rounds` times.
+  // most `most_rounds` times. `linearisations`: the elements' linearisations at x, where the force pass kept them.
   ImplicitSolve solve(const std::vector<double>& x, const std::vector<double>& v, const std::vector<double>& a,
                       const std::vector<double>& spring_stiffness, double h, WorkerPool& pool,
-                      std::vector<double>& dv, ImplicitLinearPart* part = nullptr, int most_rounds = 1);
+                      std::vector<double>& dv, ImplicitLinearPart* part = nullptr, int most_rounds = 1,
+                      const ElementLinearisations* linearisations = nullptr);
 
   // The conjugate gradient's starting point, carried from step to step (a checkpoint saves and restores it).
   const std::vector<double>& warm_start() const { return previous_; }

@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -81,6 +82,36 @@ Element test_element() {
   return e;
 }
 
+// One element of kind `kind` under `row`'s law at E = 5 kPa, nu = 0.3 (the law's builder), over the test element;
+// the view points into the struct and `e`.
+struct LawTerm {
+  ElementLawBuild build;
+  std::int32_t nodes[32], slots[32];
+  kernels::ElementTermView<double> view{};
+};
+
+void make_law_term(const ElementLawRow& row, int kind, const Element& e, LawTerm& out) {
+  ElementMaterial material;
+  material.youngs_modulus = {5000.0};
+  material.poisson_ratio = {0.3};
+  DiagnosticList diagnostics;
+  auto build = row.build(material, diagnostics);
+  REQUIRE(build);
+  REQUIRE(build->term.law == row.law);
+  out.build = std::move(*build);
+  for (int a = 0; a < 32; ++a) out.nodes[a] = out.slots[a] = a;
+  out.view = {};
+  out.view.law = row.law;
+  out.view.element = kind;
+  out.view.count = 1;
+  out.view.corners = out.nodes;
+  out.view.corner_slot = out.slots;
+  out.view.rest_inverse = e.rest_inverse;
+  out.view.rest_volume = &e.volume;
+  for (int p = 0; p < kernels::kMostLawParameters; ++p)
+    out.view.parameter[p] = out.build.term.parameter[p].empty() ? nullptr : out.build.term.parameter[p].data();
+}
+
 }  // namespace
 
 TEST_CASE("every element law has its registry row, in kernels::ElementLaws' order", "[fem][law]") {
@@ -144,26 +175,9 @@ TEST_CASE(
   for (int kind = 0; kind < kernels::ElementKinds::count; ++kind)
     for (const ElementLawRow& row : element_law_rows()) {
       INFO("element kind " << kind << ", law " << row.keyword);
-      // The law's own parameters for E = 5 kPa, nu = 0.3 from its builder, one element.
-      ElementMaterial material;
-      material.youngs_modulus = {5000.0};
-      material.poisson_ratio = {0.3};
-      DiagnosticList diagnostics;
-      const auto build = row.build(material, diagnostics);
-      REQUIRE(build);
-      REQUIRE(build->term.law == row.law);
-      std::int32_t nodes[32], slots[32];
-      for (int a = 0; a < 32; ++a) nodes[a] = slots[a] = a;
-      kernels::ElementTermView<double> view{};
-      view.law = row.law;
-      view.element = kind;
-      view.count = 1;
-      view.corners = nodes;
-      view.corner_slot = slots;
-      view.rest_inverse = e.rest_inverse;
-      view.rest_volume = &e.volume;
-      for (int p = 0; p < kernels::kMostLawParameters; ++p)
-        view.parameter[p] = build->term.parameter[p].empty() ? nullptr : build->term.parameter[p].data();
+      LawTerm term;
+      make_law_term(row, kind, e, term);
+      kernels::ElementTermView<double>& view = term.view;
       kernels::visit_element_term(kind, row.law, [&](auto element_kind, auto element_law) {
         using Kind = decltype(element_kind);
         using Law = decltype(element_law);
@@ -312,6 +326,71 @@ TEST_CASE(
         CHECK(std::abs(Kind::template stress_output<Law>(view, 0, x)) < 1e-9 * 5000.0);
       });
     }
+}
+
+TEST_CASE("a kind's forces with its linearisation have forces' and linearise's bits, damped or not, inverted too",
+          "[fem][law]") {
+  // Implicit Euler's force pass keeps the linearisation it takes beside the forces for the step's tangent
+  // (kernels::element_node_forces_linearised): the step's bits are the same only if both are.
+  const Element e = test_element();
+  std::mt19937_64 rng(27);
+  std::uniform_real_distribution<double> jitter(-0.08, 0.08);
+  const double beta = 0.01;
+  int kinds_checked = 0;
+  for (int kind = 0; kind < kernels::ElementKinds::count; ++kind)
+    for (const ElementLawRow& row : element_law_rows()) {
+      INFO("element kind " << kind << ", law " << row.keyword);
+      LawTerm term;
+      make_law_term(row, kind, e, term);
+      kernels::ElementTermView<double>& view = term.view;
+      double nodal_pressure[32], nodal_dilatation[32];
+      for (int a = 0; a < 32; ++a) {
+        nodal_pressure[a] = 100.0 * std::sin(1.0 + a);
+        nodal_dilatation[a] = 0.01 * std::cos(1.0 + a);
+      }
+      view.nodal_pressure = nodal_pressure;
+      view.nodal_dilatation = nodal_dilatation;
+      kernels::visit_element_term(kind, row.law, [&](auto element_kind, auto element_law) {
+        using Kind = decltype(element_kind);
+        using Law = decltype(element_law);
+        if constexpr (kernels::HasForcesAndLinearisation<Kind, Law>::value) {
+          using Lin = typename Kind::template Linearisation<Law>;
+          constexpr int N = Kind::kNodes;
+          ++kinds_checked;
+          double rest[N][3];
+          kernels::element_rest_nodes<Kind>(e.rest, rest);
+          for (int n = 0; n < 20; ++n) {
+            // At rest, inverted (node 0 reflected through the opposite face's centre), then random deformations of
+            // up to 8 %.
+            double x[N][3], v[N][3];
+            for (int a = 0; a < N; ++a)
+              for (int i = 0; i < 3; ++i) {
+                x[a][i] = n == 0 ? rest[a][i] : rest[a][i] * (1.0 + jitter(rng)) + 0.02;
+                v[a][i] = 0.1 * jitter(rng);
+              }
+            if (n == 1) {
+              for (int i = 0; i < 3; ++i) x[0][i] = 2.0 * (x[1][i] + x[2][i] + x[3][i]) / 3.0 - x[0][i];
+              REQUIRE(Kind::inverted(x));
+            }
+            for (const bool damped : {false, true}) {
+              INFO("deformation " << n << (damped ? ", damped" : ""));
+              view.stiffness_damping = damped ? &beta : nullptr;
+              const double(*velocity)[3] = damped ? v : nullptr;
+              double f[N][3], g[N][3];
+              Lin linearised{}, kept;
+              std::memset(&kept, 0xff, sizeof kept);
+              Kind::template forces<Law>(view, 0, x, velocity, f);
+              Kind::template linearise<Law>(view, 0, x, linearised);
+              Kind::template forces_and_linearisation<Law>(view, 0, x, velocity, kept, g);
+              CHECK(std::memcmp(f, g, sizeof f) == 0);
+              CHECK(std::memcmp(&linearised, &kept, sizeof kept) == 0);
+            }
+          }
+        }
+      });
+    }
+  // Every law on the corner tetrahedra's kinds (the linear tetrahedron and the nodal pressure one).
+  CHECK(kinds_checked >= 2 * static_cast<int>(element_law_rows().size()));
 }
 
 TEST_CASE("a law or an element kind is named only in its kernels header, the lists and the registry", "[fem][law]") {
