@@ -544,17 +544,20 @@ class CpuScene final : public CpuSceneBase {
   // recorded in the log); held axes keep their velocity.
   bool implicit_euler_step(DiagnosticList& diagnostics) {
     accelerations(position_, velocity_, acceleration_, &linearisations_);
-    const auto interleave = [this](const Vector3Arrays<Real>& from, std::vector<double>& to) {
-      to.resize(3 * n_);
-      for (std::size_t i = 0; i < n_; ++i) {
-        to[3 * i] = static_cast<double>(from.x[i]);
-        to[3 * i + 1] = static_cast<double>(from.y[i]);
-        to[3 * i + 2] = static_cast<double>(from.z[i]);
-      }
+    // The solver's interleaved copies, by the workers: on one thread they were a serial part of the step.
+    implicit_x_.resize(3 * n_);
+    implicit_v_.resize(3 * n_);
+    implicit_a_.resize(3 * n_);
+    const auto interleave = [](const Vector3Arrays<Real>& from, std::vector<double>& to, std::size_t i) {
+      to[3 * i] = static_cast<double>(from.x[i]);
+      to[3 * i + 1] = static_cast<double>(from.y[i]);
+      to[3 * i + 2] = static_cast<double>(from.z[i]);
     };
-    interleave(position_, implicit_x_);
-    interleave(velocity_, implicit_v_);
-    interleave(acceleration_, implicit_a_);
+    for_each_vertex([&](std::size_t i) {
+      interleave(position_, implicit_x_, i);
+      interleave(velocity_, implicit_v_, i);
+      interleave(acceleration_, implicit_a_, i);
+    });
     implicit_k_.resize(stiffness_.size());
     for (std::size_t s = 0; s < stiffness_.size(); ++s) implicit_k_[s] = static_cast<double>(stiffness_[s]);
     const bool contact = loads_.contact.tool_count > 0;

@@ -85,7 +85,8 @@ class ImplicitSolver {
   ImplicitSolve solve_assembled(std::vector<double>& dv, bool first, WorkerPool& pool, bool& at_rest);
   // The assembled diagonal blocks and right-hand side with the part's values added on the free axes.
   void add_part(ImplicitLinearPart& part);
-  ImplicitSolve conjugate_gradient(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool);
+  // From x (the warm start); b2 = |b|^2 (squared_norm), which the caller has already summed.
+  ImplicitSolve conjugate_gradient(const std::vector<double>& b, double b2, std::vector<double>& x, WorkerPool& pool);
   bool direct(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool, ImplicitSolve& solve);
   // |b|^2, summed by chunks.
   double squared_norm(const std::vector<double>& b, WorkerPool& pool);
