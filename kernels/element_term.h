@@ -84,12 +84,18 @@ FMPC_HD void point_first_piola(const ElementTermView<Real>& t, int e, int point,
   point_first_piola_of<Law>(Law::material(t, e), t, e, point, F, F_rate, P);
 }
 
+// Whether Member<Types...> names something (a law's or a kind's optional function): the detection idiom.
+template <typename, template <typename...> class Member, typename... Types>
+struct Detected : std::false_type {};
+template <template <typename...> class Member, typename... Types>
+struct Detected<std::void_t<Member<Types...>>, Member, Types...> : std::true_type {};
+
 // Whether a law gives P from its linearisation at the same F (a static first_piola_linearised(material, lin, F,
 // F_rate, P): the co-rotational law's, which reuses the linearisation's polar decomposition).
-template <typename Law, typename = void>
-struct HasFirstPiolaLinearised : std::false_type {};
 template <typename Law>
-struct HasFirstPiolaLinearised<Law, std::void_t<decltype(&Law::first_piola_linearised)>> : std::true_type {};
+using FirstPiolaLinearisedOf = decltype(&Law::first_piola_linearised);
+template <typename Law>
+using HasFirstPiolaLinearised = Detected<void, FirstPiolaLinearisedOf, Law>;
 
 // point_first_piola_of at F with the law's linearisation `lin` taken at the same F: the law's first_piola_linearised
 // where it has one, else its first_piola; the same bits either way.
@@ -107,10 +113,10 @@ FMPC_HD void point_first_piola_linearised(const typename Law::template Material<
 }
 
 // Whether a law gives its tangent modulus in closed form (a static tangent_modulus(material, lin, A)).
-template <typename Law, typename = void>
-struct HasTangentModulus : std::false_type {};
 template <typename Law>
-struct HasTangentModulus<Law, std::void_t<decltype(&Law::tangent_modulus)>> : std::true_type {};
+using TangentModulusOf = decltype(&Law::tangent_modulus);
+template <typename Law>
+using HasTangentModulus = Detected<void, TangentModulusOf, Law>;
 
 // The law's tangent modulus at its linearisation, A = dP/dF as a 9 x 9 matrix: A[9 (3 i + k) + 3 j + l] =
 // dP_ik / dF_jl, so that stress_differential's dP_ik = sum_jl A[9 (3 i + k) + 3 j + l] dF_jl. The law's own
@@ -185,12 +191,10 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
 }
 
 // Whether an element kind gives its forces and its linearisation in one (forces_and_linearisation<Law>).
-template <typename Element, typename Law, typename = void>
-struct HasForcesAndLinearisation : std::false_type {};
 template <typename Element, typename Law>
-struct HasForcesAndLinearisation<Element, Law,
-                                 std::void_t<decltype(&Element::template forces_and_linearisation<Law>)>>
-    : std::true_type {};
+using ForcesAndLinearisationOf = decltype(&Element::template forces_and_linearisation<Law>);
+template <typename Element, typename Law>
+using HasForcesAndLinearisation = Detected<void, ForcesAndLinearisationOf, Element, Law>;
 
 // element_node_forces (double) with the element's linearisation at the same positions into `lin`, for a kind with
 // HasForcesAndLinearisation: implicit Euler's force pass on the CPU, whose step's tangent then reads lin.
