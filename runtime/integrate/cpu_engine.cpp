@@ -311,7 +311,7 @@ class CpuScene final : public CpuSceneBase {
               linearisations->hold<Lin>(term, static_cast<std::size_t>(field.count));
               pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
                 for (std::size_t e = begin; e < end; ++e) {
-                  Lin lin;
+                  Lin lin{};  // as ElementTangents::stiffness starts its own
                   if (term == 0) {
                     kernels::element_node_forces_linearised<Element, Law, false>(static_cast<int>(e), field, state,
                                                                                  corner_force_.data(), lin);

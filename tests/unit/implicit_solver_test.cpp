@@ -318,7 +318,7 @@ TEST_CASE("the system from the force pass's linearisations has the bits of one t
           double nodes[N][3], forces[N][3];
           for (int c = 0; c < N; ++c)
             for (int i = 0; i < 3; ++i) nodes[c][i] = x[3 * static_cast<std::size_t>(geometry.nodes[N * e + c]) + i];
-          Lin lin;
+          Lin lin{};
           Kind::template forces_and_linearisation<Law>(view, static_cast<int>(e), nodes, nullptr, lin, forces);
           linearisations.store(term, e, lin);
         }
