@@ -125,11 +125,39 @@ FMPC_HD void point_first_piola(const ElementTermView<Real>& t, int e, int point,
   point_first_piola_of<Law>(Law::material(t, e), t, e, point, F, F_rate, P);
 }
 
-// Whether a law gives its tangent modulus in closed form (a static tangent_modulus(material, lin, A)).
-template <typename Law, typename = void>
-struct HasTangentModulus : std::false_type {};
+// Whether Member<Types...> names something (a law's or a kind's optional function): the detection idiom.
+template <typename, template <typename...> class Member, typename... Types>
+struct Detected : std::false_type {};
+template <template <typename...> class Member, typename... Types>
+struct Detected<std::void_t<Member<Types...>>, Member, Types...> : std::true_type {};
+
+// Whether a law gives P from its linearisation at the same F (a static first_piola_linearised(material, lin, F,
+// F_rate, P): the co-rotational law's, which reuses the linearisation's polar decomposition).
 template <typename Law>
-struct HasTangentModulus<Law, std::void_t<decltype(&Law::tangent_modulus)>> : std::true_type {};
+using FirstPiolaLinearisedOf = decltype(&Law::first_piola_linearised);
+template <typename Law>
+using HasFirstPiolaLinearised = Detected<void, FirstPiolaLinearisedOf, Law>;
+
+// point_first_piola_of at F with the law's linearisation `lin` taken at the same F: the law's first_piola_linearised
+// where it has one, else its first_piola; the same bits either way.
+template <typename Law>
+FMPC_HD void point_first_piola_linearised(const typename Law::template Material<double>& material,
+                                          const ElementTermView<double>& t, int e, int point,
+                                          const typename Law::Linearisation& lin, const double* F,
+                                          const double* F_rate, double* P) {
+  if constexpr (HasFirstPiolaLinearised<Law>::value) {
+    Law::first_piola_linearised(material, lin, F, F_rate, P);
+  } else {
+    Law::first_piola(material, F, F_rate, P);
+  }
+  if (t.prony.count > 0) prony_first_piola(prony_weighted(t.prony, t.prony_weight, e), t.state, point, F, P);
+}
+
+// Whether a law gives its tangent modulus in closed form (a static tangent_modulus(material, lin, A)).
+template <typename Law>
+using TangentModulusOf = decltype(&Law::tangent_modulus);
+template <typename Law>
+using HasTangentModulus = Detected<void, TangentModulusOf, Law>;
 
 // The law's tangent modulus at its linearisation, A = dP/dF as a 9 x 9 matrix: A[9 (3 i + k) + 3 j + l] =
 // dP_ik / dF_jl, so that stress_differential's dP_ik = sum_jl A[9 (3 i + k) + 3 j + l] dF_jl. The law's own
@@ -167,6 +195,24 @@ FMPC_HD void element_state_update(int e, const ElementTermView<Real>& t, const S
   }
 }
 
+// Element e's node forces `out` into its corner slots (node_slot): written (the run's first term) or added
+// (Accumulate). Every slot is read before the first store: a slot read after a store waits for it (the compiler
+// cannot tell the arrays apart), which chained the loads' latencies at each thread's end.
+template <int N, bool Accumulate, typename Real>
+FMPC_HD void store_corner_forces(int e, const ElementTermView<Real>& t, const Real out[N][3],
+                                 CornerForce<Real>* force) {
+  int slot[N];
+  for (int a = 0; a < N; ++a) slot[a] = node_slot<N>(t, e, a);
+  for (int a = 0; a < N; ++a) {
+    CornerForce<Real>& to = force[slot[a]];
+    if (Accumulate) {
+      to = {to.x + out[a][0], to.y + out[a][1], to.z + out[a][2], Real(0)};
+    } else {
+      to = {out[a][0], out[a][1], out[a][2], Real(0)};
+    }
+  }
+}
+
 // The element pass of one term: element e's node forces into force[corner_slot[kNodes e + a]] (the vertex-major
 // layout CornerForceView reads), written by the run's first term and added to by each later one (Accumulate), so
 // that a vertex's gather sums the terms in list order. Velocities are read only where the term has stiffness
@@ -187,18 +233,27 @@ FMPC_HD void element_node_forces(int e, const ElementTermView<Real>& t, const St
     element_nodes<N>(e, t.corners, s, false, x, v);
     Element::template forces<Law>(t, e, x, static_cast<const Real(*)[3]>(nullptr), out);
   }
-  // Every slot before the first store: a slot read after a store waits for it (the compiler cannot tell the arrays
-  // apart), which chained the four loads' latencies at each thread's end.
-  int slot[N];
-  for (int a = 0; a < N; ++a) slot[a] = node_slot<N>(t, e, a);
-  for (int a = 0; a < N; ++a) {
-    CornerForce<Real>& to = force[slot[a]];
-    if (Accumulate) {
-      to = {to.x + out[a][0], to.y + out[a][1], to.z + out[a][2], Real(0)};
-    } else {
-      to = {out[a][0], out[a][1], out[a][2], Real(0)};
-    }
-  }
+  store_corner_forces<N, Accumulate>(e, t, out, force);
+}
+
+// Whether an element kind gives its forces and its linearisation in one (forces_and_linearisation<Law>).
+template <typename Element, typename Law>
+using ForcesAndLinearisationOf = decltype(&Element::template forces_and_linearisation<Law>);
+template <typename Element, typename Law>
+using HasForcesAndLinearisation = Detected<void, ForcesAndLinearisationOf, Element, Law>;
+
+// element_node_forces (double) with the element's linearisation at the same positions into `lin`, for a kind with
+// HasForcesAndLinearisation: implicit Euler's force pass on the CPU, whose step's tangent then reads lin.
+template <typename Element, typename Law, bool Accumulate>
+FMPC_HD void element_node_forces_linearised(int e, const ElementTermView<double>& t, const StateView<double>& s,
+                                            CornerForce<double>* force,
+                                            typename Element::template Linearisation<Law>& lin) {
+  constexpr int N = Element::kNodes;
+  double x[N][3], v[N][3], out[N][3];
+  const bool damped = static_cast<bool>(t.stiffness_damping);
+  element_nodes<N>(e, t.corners, s, damped, x, v);
+  Element::template forces_and_linearisation<Law>(t, e, x, damped ? v : nullptr, lin, out);
+  store_corner_forces<N, Accumulate>(e, t, out, force);
 }
 
 // The nodal pass of a kind with kNodalPressure (kernels/elements/linear_nodal_pressure.h): element e's shares of

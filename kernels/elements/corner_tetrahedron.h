@@ -87,6 +87,24 @@ struct CornerTetrahedron : ElementKindTangent<Kind> {
     Law::linearise(Kind::template point_material<Law>(t, e), F, lin.point);
   }
 
+  // forces() and linearise() at the same x in one: the linearisation into lin, and the forces with the law's stress
+  // from it (point_first_piola_linearised: forces()'s bits, the law's decomposition taken once).
+  template <typename Law>
+  static FMPC_HD void forces_and_linearisation(const ElementTermView<double>& t, int e, const double x[kNodes][3],
+                                               const double (*v)[3], Linearisation<Law>& lin,
+                                               double out[kNodes][3]) {
+    const double* rest_inverse = rest_inverse_of(t, e);
+    const typename Law::template Material<double> material = Kind::template point_material<Law>(t, e);
+    double g[4][3], F[9], F_rate[9], P[9];
+    shape_gradients(rest_inverse, g);
+    corner_gradient(x, rest_inverse, F);
+    Law::linearise(material, F, lin.point);
+    if (v) corner_gradient(v, rest_inverse, F_rate);
+    point_first_piola_linearised<Law>(material, t, e, kPoints * e, lin.point, F, v ? F_rate : nullptr, P);
+    Kind::add_volumetric_stress(t, e, F, P);
+    corner_forces_from_stress(P, g, t.rest_volume[e], out);
+  }
+
   // The tangent stiffness applied to a nodal field p [node][axis]: out_a = sum_b K_ab p_b = V0 dP(dF) g_a with
   // dF = sum_b p_b g_b^T (the element's own part: a kind's nodal coupling is its assembler's).
   template <typename Law>

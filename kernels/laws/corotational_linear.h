@@ -34,6 +34,13 @@ struct CorotationalLinear : IsotropicModuli {
   static FMPC_HD void first_piola(const Material<Real>& m, const Real* F, const Real* F_rate, Real* P) {
     Real R[9];
     const Real modulus = rotation_and_modulus(m, F, R);
+    rotated_first_piola(m, R, modulus, F, F_rate, P);
+  }
+
+  // P(F) from R and the modulus that rotation_and_modulus gives at F: first_piola after its decomposition.
+  template <typename Real>
+  static FMPC_HD void rotated_first_piola(const Material<Real>& m, const Real* R, Real modulus, const Real* F,
+                                          const Real* F_rate, Real* P) {
     Real mu, lambda;
     lame_parameters(modulus, m.poisson_ratio, mu, lambda);
     Real e[9];
@@ -59,6 +66,13 @@ struct CorotationalLinear : IsotropicModuli {
   static FMPC_HD void linearise(const Material<double>& m, const double* F, Linearisation& lin) {
     lin.modulus = rotation_and_modulus(m, F, lin.rotation);
     lame_parameters(lin.modulus, m.poisson_ratio, lin.mu, lin.lambda);
+  }
+
+  // first_piola at the F that `lin` was linearised at, from its rotation and modulus: first_piola's bits without a
+  // second polar decomposition (implicit Euler's force pass, which keeps lin for the step's tangent).
+  static FMPC_HD void first_piola_linearised(const Material<double>& m, const Linearisation& lin, const double* F,
+                                             const double* F_rate, double* P) {
+    rotated_first_piola(m, lin.rotation, lin.modulus, F, F_rate, P);
   }
 
   // dP = R sigma(sym(R^T dF)) with R held: the tangent of the co-rotated law (R K0 R^T on a linear tetrahedron).

@@ -1,6 +1,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "kernels/element_laws.h"
 #include "kernels/implicit_math.h"
@@ -291,8 +292,10 @@ class CpuScene final : public CpuSceneBase {
   }
 
   // a(x, v) for every vertex: the element pass first (when the model has elements), then one gather per vertex with
-  // the model's forces, dispatched once per call.
-  void accelerations(const Vector3Arrays<Real>& p, const Vector3Arrays<Real>& v, Vector3Arrays<Real>& a) {
+  // the model's forces, dispatched once per call. With `linearisations` (implicit Euler in double), each term whose
+  // kind gives them keeps its elements' linearisations at p there (ElementLinearisations), the forces' bits unchanged.
+  void accelerations(const Vector3Arrays<Real>& p, const Vector3Arrays<Real>& v, Vector3Arrays<Real>& a,
+                     ElementLinearisations* linearisations = nullptr) {
     const kernels::StateView<Real> state = view(p, v);
     if (!term_views_.empty()) {
       nodal_pass(state);
@@ -302,6 +305,26 @@ class CpuScene final : public CpuSceneBase {
         kernels::visit_element_term(field.element, field.law, [&](auto kind, auto element_law) {
           using Element = decltype(kind);
           using Law = decltype(element_law);
+          if constexpr (std::is_same_v<Real, double> && kernels::HasForcesAndLinearisation<Element, Law>::value) {
+            if (linearisations != nullptr) {
+              using Lin = typename Element::template Linearisation<Law>;
+              linearisations->hold<Lin>(term, static_cast<std::size_t>(field.count));
+              pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
+                for (std::size_t e = begin; e < end; ++e) {
+                  Lin lin{};  // as ElementTangents::stiffness starts its own
+                  if (term == 0) {
+                    kernels::element_node_forces_linearised<Element, Law, false>(static_cast<int>(e), field, state,
+                                                                                 corner_force_.data(), lin);
+                  } else {
+                    kernels::element_node_forces_linearised<Element, Law, true>(static_cast<int>(e), field, state,
+                                                                                corner_force_.data(), lin);
+                  }
+                  linearisations->store(term, e, lin);
+                }
+              });
+              return;
+            }
+          }
           pool_.run(static_cast<std::size_t>(field.count), [&](std::size_t begin, std::size_t end) {
             for (std::size_t e = begin; e < end; ++e) {
               const int element = static_cast<int>(e);
@@ -520,25 +543,29 @@ class CpuScene final : public CpuSceneBase {
   // with the model's tangent, solved by implicit_solver.h (a direct factorisation or a preconditioned CG, each step
   // recorded in the log); held axes keep their velocity.
   bool implicit_euler_step(DiagnosticList& diagnostics) {
-    accelerations(position_, velocity_, acceleration_);
-    const auto interleave = [this](const Vector3Arrays<Real>& from, std::vector<double>& to) {
-      to.resize(3 * n_);
-      for (std::size_t i = 0; i < n_; ++i) {
-        to[3 * i] = static_cast<double>(from.x[i]);
-        to[3 * i + 1] = static_cast<double>(from.y[i]);
-        to[3 * i + 2] = static_cast<double>(from.z[i]);
-      }
+    accelerations(position_, velocity_, acceleration_, &linearisations_);
+    // The solver's interleaved copies, by the workers: on one thread they were a serial part of the step.
+    implicit_x_.resize(3 * n_);
+    implicit_v_.resize(3 * n_);
+    implicit_a_.resize(3 * n_);
+    const auto interleave = [](const Vector3Arrays<Real>& from, std::vector<double>& to, std::size_t i) {
+      to[3 * i] = static_cast<double>(from.x[i]);
+      to[3 * i + 1] = static_cast<double>(from.y[i]);
+      to[3 * i + 2] = static_cast<double>(from.z[i]);
     };
-    interleave(position_, implicit_x_);
-    interleave(velocity_, implicit_v_);
-    interleave(acceleration_, implicit_a_);
+    for_each_vertex([&](std::size_t i) {
+      interleave(position_, implicit_x_, i);
+      interleave(velocity_, implicit_v_, i);
+      interleave(acceleration_, implicit_a_, i);
+    });
     implicit_k_.resize(stiffness_.size());
     for (std::size_t s = 0; s < stiffness_.size(); ++s) implicit_k_[s] = static_cast<double>(stiffness_[s]);
     const bool contact = loads_.contact.tool_count > 0;
     if (contact) contact_.start(implicit_x_, implicit_v_, static_cast<double>(h_));
     const ImplicitSolve solve =
         solver_->solve(implicit_x_, implicit_v_, implicit_a_, implicit_k_, static_cast<double>(h_), pool_,
-                       implicit_dv_, contact ? &contact_ : nullptr, setup_.implicit.contact_rounds);
+                       implicit_dv_, contact ? &contact_ : nullptr, setup_.implicit.contact_rounds, &linearisations_);
+    linearisations_.release();
     if (solve.direct_failed) log_.fallback();
     const ImplicitStepRecord record{steps_taken_ + 1, solve.iterations, solve.relative_residual, !solve.converged};
     if (log_.record(record)) {
@@ -667,6 +694,8 @@ class CpuScene final : public CpuSceneBase {
   std::unique_ptr<ImplicitSolver> solver_;
   ImplicitSolverLog log_;
   std::vector<double> implicit_x_, implicit_v_, implicit_a_, implicit_k_, implicit_dv_, checkpoint_warm_start_;
+  // The elements' linearisations from the step's force pass, for its tangent.
+  ElementLinearisations linearisations_;
   // The tools' contact in the solve (read through loads_.contact).
   ImplicitContact<Real> contact_{loads_.contact, fixed_};
 };

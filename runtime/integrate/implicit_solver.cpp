@@ -122,7 +122,7 @@ ImplicitMethod ImplicitSolver::automatic_method(double h, WorkerPool& pool) {
   std::vector<double> dv(system_.dofs(), 0.0);
   const int limit = limit_;
   limit_ = choice_.budget;
-  const ImplicitSolve trial = conjugate_gradient(rhs_, dv, pool);
+  const ImplicitSolve trial = conjugate_gradient(rhs_, squared_norm(rhs_, pool), dv, pool);
   limit_ = limit;
   choice_.trial_iterations = trial.iterations;
   return trial.converged ? ImplicitMethod::ConjugateGradient : ImplicitMethod::Direct;
@@ -131,8 +131,8 @@ ImplicitMethod ImplicitSolver::automatic_method(double h, WorkerPool& pool) {
 ImplicitSolve ImplicitSolver::solve(const std::vector<double>& x, const std::vector<double>& v,
                                     const std::vector<double>& a, const std::vector<double>& spring_stiffness,
                                     double h, WorkerPool& pool, std::vector<double>& dv, ImplicitLinearPart* part,
-                                    int most_rounds) {
-  system_.assemble(x, v, a, spring_stiffness, h, pool, rhs_);
+                                    int most_rounds, const ElementLinearisations* linearisations) {
+  system_.assemble(x, v, a, spring_stiffness, h, pool, rhs_, linearisations);
   dv.assign(system_.dofs(), 0.0);
   if (part != nullptr) {
     assembled_rhs_ = rhs_;
@@ -195,7 +195,7 @@ ImplicitSolve ImplicitSolver::solve_assembled(std::vector<double>& dv, bool firs
   const bool fell_back = method_ == ImplicitMethod::Direct;
   // A later round starts from the last round's dv.
   if (first) dv = setup_.implicit.warm_start && !fell_back ? previous_ : std::vector<double>(system_.dofs(), 0.0);
-  solve = conjugate_gradient(rhs_, dv, pool);
+  solve = conjugate_gradient(rhs_, b2, dv, pool);
   solve.direct_failed = fell_back;
   previous_ = dv;
   return solve;
@@ -304,14 +304,13 @@ void ImplicitSolver::invert_diagonal_blocks(WorkerPool& pool) {
 // preconditioned by the inverse diagonal blocks, from x as given (the warm start; restarted from zero where that
 // starts further from b than zero does). Three chunked passes per iteration: q = A p with p.q; x, r and the dot
 // products |r|^2 and r.z (z = P r, not stored); p = P r + beta p.
-ImplicitSolve ImplicitSolver::conjugate_gradient(const std::vector<double>& b, std::vector<double>& x,
+ImplicitSolve ImplicitSolver::conjugate_gradient(const std::vector<double>& b, double b2, std::vector<double>& x,
                                                  WorkerPool& pool) {
   const std::size_t chunks = system_.chunks(), dofs = system_.dofs();
   const auto dof_range = [&](std::size_t chunk) {
     return std::pair<std::size_t, std::size_t>{3 * chunk * kSystemChunkVertices,
                                                std::min(dofs, 3 * (chunk + 1) * kSystemChunkVertices)};
   };
-  const double b2 = squared_norm(b, pool);
   const double threshold = std::max(tolerance_ * tolerance_ * b2, std::numeric_limits<double>::min());
   invert_diagonal_blocks(pool);
   double r2 = residual(b, x, r_, pool);

@@ -68,10 +68,11 @@ class ImplicitSolver {
 
   // Assembles the system at the state (ImplicitSystem::assemble's arguments) and solves it into `dv` (3 per vertex,
   // zero on held axes). With a linear `part`, solves until the part stays (each round from the last round's dv), at
-  // most `most_rounds` times.
+  // most `most_rounds` times. `linearisations`: the elements' linearisations at x, where the force pass kept them.
   ImplicitSolve solve(const std::vector<double>& x, const std::vector<double>& v, const std::vector<double>& a,
                       const std::vector<double>& spring_stiffness, double h, WorkerPool& pool,
-                      std::vector<double>& dv, ImplicitLinearPart* part = nullptr, int most_rounds = 1);
+                      std::vector<double>& dv, ImplicitLinearPart* part = nullptr, int most_rounds = 1,
+                      const ElementLinearisations* linearisations = nullptr);
 
   // The conjugate gradient's starting point, carried from step to step (a checkpoint saves and restores it).
   const std::vector<double>& warm_start() const { return previous_; }
@@ -84,7 +85,8 @@ class ImplicitSolver {
   ImplicitSolve solve_assembled(std::vector<double>& dv, bool first, WorkerPool& pool, bool& at_rest);
   // The assembled diagonal blocks and right-hand side with the part's values added on the free axes.
   void add_part(ImplicitLinearPart& part);
-  ImplicitSolve conjugate_gradient(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool);
+  // From x (the warm start); b2 = |b|^2 (squared_norm), which the caller has already summed.
+  ImplicitSolve conjugate_gradient(const std::vector<double>& b, double b2, std::vector<double>& x, WorkerPool& pool);
   bool direct(const std::vector<double>& b, std::vector<double>& x, WorkerPool& pool, ImplicitSolve& solve);
   // |b|^2, summed by chunks.
   double squared_norm(const std::vector<double>& b, WorkerPool& pool);

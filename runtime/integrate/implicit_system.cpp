@@ -147,7 +147,7 @@ ImplicitSystem::ImplicitSystem(const SimulationSetup& setup, const std::vector<u
 
 void ImplicitSystem::assemble(const std::vector<double>& x, const std::vector<double>& v, const std::vector<double>& a,
                               const std::vector<double>& spring_stiffness, double h, WorkerPool& pool,
-                              std::vector<double>& rhs) {
+                              std::vector<double>& rhs, const ElementLinearisations* linearisations) {
   rhs.resize(dofs());
   const std::size_t chunk_count = chunks();
   const auto rows_of = [this](std::size_t chunk) {
@@ -171,7 +171,7 @@ void ImplicitSystem::assemble(const std::vector<double>& x, const std::vector<do
           for (std::size_t k = begin; k < end; ++k) {
             const auto run = static_cast<std::size_t>(colour_order_[first + k]);
             const std::size_t last = std::min(element_count_, (run + 1) * kElementRun);
-            for (std::size_t e = run * kElementRun; e < last; ++e) assemble_element(e, x, v, h, rhs);
+            for (std::size_t e = run * kElementRun; e < last; ++e) assemble_element(e, x, v, h, rhs, linearisations);
           }
         },
         1);
@@ -259,7 +259,8 @@ void ImplicitSystem::assemble_rows(std::size_t begin, std::size_t end, const std
 }
 
 void ImplicitSystem::assemble_element(std::size_t e, const std::vector<double>& x, const std::vector<double>& v,
-                                      double h, std::vector<double>& rhs) {
+                                      double h, std::vector<double>& rhs,
+                                      const ElementLinearisations* linearisations) {
   constexpr std::size_t kMost = static_cast<std::size_t>(kMostElementNodes);
   const auto N = static_cast<std::size_t>(tangents_.nodes());
   const std::int32_t* node = tangents_.element_nodes(e);
@@ -272,7 +273,7 @@ void ImplicitSystem::assemble_element(std::size_t e, const std::vector<double>& 
   const std::size_t size = 3 * N;
   for (std::size_t term = 0; term < tangents_.term_count(); ++term) {
     double K[9 * kMost * kMost], kv[3 * kMost];
-    const double beta = tangents_.stiffness(term, e, corners, K);
+    const double beta = tangents_.stiffness(term, e, corners, K, linearisations);
     const double scale = h * h + h * beta;
     // K v row by row, then each block's nine values (three runs of three in K's rows): the loops the compiler
     // vectorises, where one loop doing both over scattered blocks did not.

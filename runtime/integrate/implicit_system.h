@@ -52,9 +52,11 @@ class ImplicitSystem {
 
   // The system and its right-hand side at the state: positions `x` and velocities `v` (m, m/s), accelerations `a`
   // (m/s^2, the model's and the loads' a(x, v) with held axes 0), the springs' current stiffness (N/m, one per
-  // spring) and the step h (s). rhs = h (m a - h K v), zero on held axes.
+  // spring) and the step h (s). rhs = h (m a - h K v), zero on held axes. `linearisations`: the elements' linearisations
+  // at x where the force pass kept them (ElementLinearisations), else null.
   void assemble(const std::vector<double>& x, const std::vector<double>& v, const std::vector<double>& a,
-                const std::vector<double>& spring_stiffness, double h, WorkerPool& pool, std::vector<double>& rhs);
+                const std::vector<double>& spring_stiffness, double h, WorkerPool& pool, std::vector<double>& rhs,
+                const ElementLinearisations* linearisations = nullptr);
 
   // y = A p over vertex chunks [begin, end) (what a worker of a chunked loop calls).
   void multiply_chunks(const double* p, double* y, std::size_t begin, std::size_t end) const;
@@ -76,7 +78,7 @@ class ImplicitSystem {
                      const std::vector<double>& a, const std::vector<double>& spring_stiffness, double h,
                      std::vector<double>& rhs);
   void assemble_element(std::size_t e, const std::vector<double>& x, const std::vector<double>& v, double h,
-                        std::vector<double>& rhs);
+                        std::vector<double>& rhs, const ElementLinearisations* linearisations);
   void apply_holds(std::size_t begin, std::size_t end, std::vector<double>& rhs);
   // Rows [begin, end)'s nodal volumetric part at the nodal_ evaluation held: h^2 D_n g_n[i] g_n[c]^T into block
   // (i, c) and h^2 g_n[i] D_n (g_n . v) out of the right-hand side, for every node n of row i's patch.

@@ -117,17 +117,23 @@ ElementTangents::ElementTangents(const SimulationSetup& setup) : geometry_(setup
     views_.push_back(element_term_view(setup.elements, term, &table_));
 }
 
-double ElementTangents::stiffness(std::size_t term, std::size_t e, const double* x, double* K) const {
+double ElementTangents::stiffness(std::size_t term, std::size_t e, const double* x, double* K,
+                                  const ElementLinearisations* held) const {
   const kernels::ElementTermView<double>& view = views_[term];
   kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
     using Element = decltype(kind);
     using Law = decltype(element_law);
+    using Lin = typename Element::template Linearisation<Law>;
     constexpr int N = Element::kNodes;
-    double nodes[N][3];
-    for (int a = 0; a < N; ++a)
-      for (int i = 0; i < 3; ++i) nodes[a][i] = x[3 * a + i];
-    typename Element::template Linearisation<Law> lin{};
-    Element::template linearise<Law>(view, static_cast<int>(e), nodes, lin);
+    Lin lin{};
+    if (held != nullptr && held->holds<Lin>(term)) {
+      held->load(term, e, lin);
+    } else {
+      double nodes[N][3];
+      for (int a = 0; a < N; ++a)
+        for (int i = 0; i < 3; ++i) nodes[a][i] = x[3 * a + i];
+      Element::template linearise<Law>(view, static_cast<int>(e), nodes, lin);
+    }
     Element::template stiffness_matrix<Law>(view, static_cast<int>(e), lin, K);
   });
   return view.stiffness_damping[e];

@@ -10,6 +10,8 @@
 #include <Eigen/Sparse>
 #pragma GCC diagnostic pop
 #include <cstdint>
+#include <cstring>
+#include <type_traits>
 #include <vector>
 
 #include "kernels/element_laws.h"
@@ -26,6 +28,50 @@ struct ModelTangent {
 // last lookup, or springs.stiffness) and, with a strain table, each element's modulus at its current strain.
 ModelTangent model_tangent(const SimulationSetup& setup, const std::vector<Point3>& positions,
                            const std::vector<double>& spring_stiffness);
+
+// Each element's linearisation, per term, as implicit Euler's force pass takes it beside the forces at the step's
+// start (kernels::element_node_forces_linearised), for the step's tangent to read (ElementTangents::stiffness)
+// instead of taking it again at the same positions: the co-rotational law's polar decomposition, once per element
+// and step instead of twice (docs/performance.md, "The polar decomposition once a step"). A term's values are read
+// only while held: from hold() to release(). The force pass writes element e's from one worker, the assembly reads
+// them after it.
+class ElementLinearisations {
+ public:
+  // Term `term`'s room for `count` linearisations of the trivially copyable type Lin, marked held.
+  template <typename Lin>
+  void hold(std::size_t term, std::size_t count) {
+    static_assert(std::is_trivially_copyable_v<Lin>, "a linearisation is copied as bytes");
+    if (terms_.size() <= term) terms_.resize(term + 1);
+    Term& held = terms_[term];
+    held.size = sizeof(Lin);
+    held.bytes.resize(sizeof(Lin) * count);
+    held.held = true;
+  }
+  void release() {
+    for (Term& term : terms_) term.held = false;
+  }
+  // Whether term `term` holds linearisations of type Lin.
+  template <typename Lin>
+  bool holds(std::size_t term) const {
+    return term < terms_.size() && terms_[term].held && terms_[term].size == sizeof(Lin);
+  }
+  template <typename Lin>
+  void store(std::size_t term, std::size_t e, const Lin& lin) {
+    std::memcpy(terms_[term].bytes.data() + sizeof(Lin) * e, &lin, sizeof(Lin));
+  }
+  template <typename Lin>
+  void load(std::size_t term, std::size_t e, Lin& lin) const {
+    std::memcpy(&lin, terms_[term].bytes.data() + sizeof(Lin) * e, sizeof(Lin));
+  }
+
+ private:
+  struct Term {
+    std::vector<unsigned char> bytes;
+    std::size_t size = 0;  // sizeof the type held
+    bool held = false;
+  };
+  std::vector<Term> terms_;
+};
 
 // The element terms' tangent one element at a time, for an assembler that places the blocks itself (implicit Euler's
 // fixed pattern, implicit_system.h): the one place that asks an element kind and its law for the stiffness
@@ -46,8 +92,10 @@ class ElementTangents {
   }
   // Term `term`'s (3N x 3N) stiffness of element e with its N = nodes() nodes at `x` (3 N values, node-major),
   // row-major: K[3N (3 a + i) + 3 b + j] couples node a's axis i to node b's axis j, linearised there by the term's
-  // element kind and law; returns the element's stiffness damping beta_e (s), 0 when undamped.
-  double stiffness(std::size_t term, std::size_t e, const double* x, double* K) const;
+  // element kind and law; returns the element's stiffness damping beta_e (s), 0 when undamped. Where `held` holds the
+  // term's linearisations (taken at x), the law's linearisation is read from it rather than taken from x.
+  double stiffness(std::size_t term, std::size_t e, const double* x, double* K,
+                   const ElementLinearisations* held = nullptr) const;
 
  private:
   const ElementGeometry& geometry_;

@@ -8,6 +8,7 @@
 
 #include "kernels/implicit_math.h"
 #include "kernels/integrator_math.h"
+#include "runtime/fem/element_terms.h"
 #include "runtime/fem/fem_model_builder.h"
 #include "runtime/integrate/implicit_system.h"
 #include "runtime/integrate/model_tangent.h"
@@ -283,6 +284,60 @@ TEST_CASE("a pool whose waits spin assembles and multiplies the system to a slee
     REQUIRE(std::memcmp(rhs_one.data(), rhs_other.data(), x.size() * sizeof(double)) == 0);
     REQUIRE(std::memcmp(y_one.data(), y_other.data(), x.size() * sizeof(double)) == 0);
   }
+}
+
+TEST_CASE("the system from the force pass's linearisations has the bits of one that linearises itself",
+          "[sim][implicit]") {
+  // cpu_engine.cpp's implicit step keeps each element's linearisation from its force pass
+  // (kernels::element_node_forces_linearised; law_unit_test checks those bits) and the assembly reads it.
+  const SimulationSetup setup = implicit_setup(implicit_box(6, 5, 4, 0.005), true, 4000.0, 0.002);
+  const std::vector<unsigned char> held = held_axes(setup);
+  WorkerPool pool(2);
+  ImplicitSystem own(setup, held), kept(setup, held);
+  std::vector<double> x = interleaved(setup.rest_positions), v(x.size(), 0.0), a(x.size(), 0.0), rhs_own, rhs_kept;
+  std::mt19937 random(28);
+  std::uniform_real_distribution<double> jitter(-1e-3, 1e-3);
+  for (std::size_t d = 0; d < x.size(); ++d) {
+    x[d] += jitter(random);
+    v[d] = 100.0 * jitter(random);
+    a[d] = kernels::axis_fixed(held[d / 3], static_cast<int>(d % 3)) ? 0.0 : 1e4 * jitter(random);
+  }
+  ElementLinearisations linearisations;
+  const ElementGeometry& geometry = setup.elements.geometry;
+  REQUIRE(!setup.elements.terms.empty());
+  for (std::size_t term = 0; term < setup.elements.terms.size(); ++term) {
+    const kernels::ElementTermView<double> view = element_term_view(setup.elements, term, nullptr);
+    kernels::visit_element_term(view.element, view.law, [&](auto kind, auto element_law) {
+      using Kind = decltype(kind);
+      using Law = decltype(element_law);
+      if constexpr (kernels::HasForcesAndLinearisation<Kind, Law>::value) {
+        using Lin = typename Kind::template Linearisation<Law>;
+        constexpr int N = Kind::kNodes;
+        linearisations.hold<Lin>(term, geometry.size());
+        for (std::size_t e = 0; e < geometry.size(); ++e) {
+          double nodes[N][3], forces[N][3];
+          for (int c = 0; c < N; ++c)
+            for (int i = 0; i < 3; ++i) nodes[c][i] = x[3 * static_cast<std::size_t>(geometry.nodes[N * e + c]) + i];
+          Lin lin{};
+          Kind::template forces_and_linearisation<Law>(view, static_cast<int>(e), nodes, nullptr, lin, forces);
+          linearisations.store(term, e, lin);
+        }
+        CHECK(linearisations.holds<Lin>(term));
+      } else {
+        FAIL("the co-rotational FEM's kind and law give their linearisation with the forces");
+      }
+    });
+  }
+  own.assemble(x, v, a, setup.springs.stiffness, 0.002, pool, rhs_own);
+  kept.assemble(x, v, a, setup.springs.stiffness, 0.002, pool, rhs_kept, &linearisations);
+  CHECK(std::memcmp(own.value(0), kept.value(0), 9 * own.blocks() * sizeof(double)) == 0);
+  CHECK(std::memcmp(rhs_own.data(), rhs_kept.data(), x.size() * sizeof(double)) == 0);
+  // Released, the values are not read: a system assembled elsewhere linearises itself again.
+  linearisations.release();
+  for (std::size_t d = 0; d < x.size(); ++d) x[d] += jitter(random);
+  own.assemble(x, v, a, setup.springs.stiffness, 0.002, pool, rhs_own);
+  kept.assemble(x, v, a, setup.springs.stiffness, 0.002, pool, rhs_kept, &linearisations);
+  CHECK(std::memcmp(own.value(0), kept.value(0), 9 * own.blocks() * sizeof(double)) == 0);
 }
 
 TEST_CASE("implicit steps at the cap are recorded, counted and warned about once", "[sim][implicit]") {

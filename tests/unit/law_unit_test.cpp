@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -81,6 +82,48 @@ Element test_element() {
   return e;
 }
 
+// One element of kind `kind` under `row`'s law at E = 5 kPa, nu = 0.3 (the law's builder), over the test element;
+// the view points into the struct and `e`.
+struct LawTerm {
+  ElementLawBuild build;
+  std::int32_t nodes[32], slots[32];
+  kernels::ElementTermView<double> view{};
+};
+
+void make_law_term(const ElementLawRow& row, int kind, const Element& e, LawTerm& out) {
+  ElementMaterial material;
+  material.youngs_modulus = {5000.0};
+  material.poisson_ratio = {0.3};
+  DiagnosticList diagnostics;
+  auto build = row.build(material, diagnostics);
+  REQUIRE(build);
+  REQUIRE(build->term.law == row.law);
+  out.build = std::move(*build);
+  for (int a = 0; a < 32; ++a) out.nodes[a] = out.slots[a] = a;
+  out.view = {};
+  out.view.law = row.law;
+  out.view.element = kind;
+  out.view.count = 1;
+  out.view.corners = out.nodes;
+  out.view.corner_slot = out.slots;
+  out.view.rest_inverse = e.rest_inverse;
+  out.view.rest_volume = &e.volume;
+  for (int p = 0; p < kernels::kMostLawParameters; ++p)
+    out.view.parameter[p] = out.build.term.parameter[p].empty() ? nullptr : out.build.term.parameter[p].data();
+}
+
+// check(row, kind, view) for every element kind with every law, on make_law_term's element.
+template <typename Check>
+void for_every_kind_and_law(const Element& e, Check check) {
+  for (int kind = 0; kind < kernels::ElementKinds::count; ++kind)
+    for (const ElementLawRow& row : element_law_rows()) {
+      INFO("element kind " << kind << ", law " << row.keyword);
+      LawTerm term;
+      make_law_term(row, kind, e, term);
+      check(row, kind, term.view);
+    }
+}
+
 }  // namespace
 
 TEST_CASE("every element law has its registry row, in kernels::ElementLaws' order", "[fem][law]") {
@@ -141,177 +184,215 @@ TEST_CASE(
   const Element e = test_element();
   std::mt19937_64 rng(25);
   std::uniform_real_distribution<double> jitter(-0.08, 0.08);
-  for (int kind = 0; kind < kernels::ElementKinds::count; ++kind)
-    for (const ElementLawRow& row : element_law_rows()) {
-      INFO("element kind " << kind << ", law " << row.keyword);
-      // The law's own parameters for E = 5 kPa, nu = 0.3 from its builder, one element.
-      ElementMaterial material;
-      material.youngs_modulus = {5000.0};
-      material.poisson_ratio = {0.3};
-      DiagnosticList diagnostics;
-      const auto build = row.build(material, diagnostics);
-      REQUIRE(build);
-      REQUIRE(build->term.law == row.law);
-      std::int32_t nodes[32], slots[32];
-      for (int a = 0; a < 32; ++a) nodes[a] = slots[a] = a;
-      kernels::ElementTermView<double> view{};
-      view.law = row.law;
-      view.element = kind;
-      view.count = 1;
-      view.corners = nodes;
-      view.corner_slot = slots;
-      view.rest_inverse = e.rest_inverse;
-      view.rest_volume = &e.volume;
-      for (int p = 0; p < kernels::kMostLawParameters; ++p)
-        view.parameter[p] = build->term.parameter[p].empty() ? nullptr : build->term.parameter[p].data();
-      kernels::visit_element_term(kind, row.law, [&](auto element_kind, auto element_law) {
-        using Kind = decltype(element_kind);
-        using Law = decltype(element_law);
-        constexpr int N = Kind::kNodes, D = 3 * N;
-        REQUIRE(N <= 32);
-        // The kind's test element: the tetrahedron's corners and the kind's further rest nodes.
-        double rest[N][3];
-        kernels::element_rest_nodes<Kind>(e.rest, rest);
-        // A kind with a nodal pass reads its nodes' pressure: for the lone element each node's patch is the element
-        // itself (theta_a = J - 1, p_a = lambda (J - 1)), refreshed at every position the checks evaluate.
-        double nodal_pressure[32] = {}, nodal_dilatation[32] = {};
-        view.nodal_pressure = nodal_pressure;
-        view.nodal_dilatation = nodal_dilatation;
-        const auto at = [&](const double(&positions)[N][3]) -> const double(&)[N][3] {
-          if constexpr (Kind::kNodalPressure) {
-            double share[3];
-            Kind::template nodal_shares<Law>(view, 0, positions, share);
-            for (int a = 0; a < N; ++a) {
-              nodal_dilatation[a] = share[0] / share[1];
-              nodal_pressure[a] = share[2] / share[1] * nodal_dilatation[a];
-            }
-          }
-          return positions;
-        };
-        // An affine motion x = A X + b gives F = A at every point of every kind: the energy is V0 W(A).
-        {
-          const double A[9] = {1.05, 0.02, -0.03, 0.01, 0.97, 0.04, -0.02, 0.03, 1.02};
-          double x[N][3];
-          for (int a = 0; a < N; ++a)
-            for (int i = 0; i < 3; ++i)
-              x[a][i] = A[3 * i] * rest[a][0] + A[3 * i + 1] * rest[a][1] + A[3 * i + 2] * rest[a][2] + 0.01 * i;
-          // A kind with a nodal pass: the law's shear part plus lambda/2 (J - 1)^2.
-          double volumetric = 0.0;
-          if constexpr (Kind::kNodalPressure) {
-            const double change = kernels::determinant_minus_one(A);
-            volumetric = Law::volumetric_modulus(Law::material(view, 0)) * change * change / 2;
-          }
-          const double expected =
-              e.volume * (Law::energy_density(Kind::template point_material<Law>(view, 0), A) + volumetric);
-          CHECK(Kind::template energy<Law>(view, 0, at(x)) == Approx(expected).epsilon(1e-9));
-        }
-        const double(*undamped)[3] = nullptr;
-        for (int n = 0; n < 50; ++n) {
-          // A random deformation of up to 8 % per coordinate, rigidly shifted.
-          double x[N][3], f[N][3];
-          for (int a = 0; a < N; ++a)
-            for (int i = 0; i < 3; ++i) x[a][i] = rest[a][i] * (1.0 + jitter(rng)) + 0.02;
-          Kind::template forces<Law>(view, 0, at(x), undamped, f);
-          const double scale = 5000.0 * 1e-4;  // N: E l^2 for l = 1 cm
-          const double h = 1e-9;
-          for (int a = 0; a < N; ++a)
-            for (int i = 0; i < 3; ++i) {
-              double plus[N][3], minus[N][3];
-              std::copy(&x[0][0], &x[0][0] + D, &plus[0][0]);
-              std::copy(&x[0][0], &x[0][0] + D, &minus[0][0]);
-              plus[a][i] += h;
-              minus[a][i] -= h;
-              const double gradient =
-                  (Kind::template energy<Law>(view, 0, at(plus)) - Kind::template energy<Law>(view, 0, at(minus))) /
-                  (2 * h);
-              CHECK(std::abs(f[a][i] + gradient) < 1e-5 * scale);
-            }
-          double sum[3] = {0, 0, 0};
-          for (int a = 0; a < N; ++a)
-            for (int i = 0; i < 3; ++i) sum[i] += f[a][i];
-          for (int i = 0; i < 3; ++i) CHECK(std::abs(sum[i]) < 1e-12 * scale);
-        }
-        // At rest the tangent is the forces' derivative; the action, the diagonal and the bound agree with it.
-        double x[N][3];
-        std::copy(&rest[0][0], &rest[0][0] + D, &x[0][0]);
-        typename Kind::template Linearisation<Law> lin{};
-        Kind::template linearise<Law>(view, 0, x, lin);
-        double whole[D * D];
-        Kind::template stiffness_matrix<Law>(view, 0, lin, whole);
-        Eigen::Matrix<double, D, D> K;
-        for (int r = 0; r < D; ++r)
-          for (int c = 0; c < D; ++c) K(r, c) = whole[D * r + c];
-        const Eigen::Matrix<double, D, D> local = K;  // what the kind's action and diagonal give
-        // A kind with a nodal pass: its element-local tangent plus the nodal Gauss-Newton term, for the lone element
-        // lambda / V0 dV dV^T (model_tangent's B^T D B with B = dV/4 per node, D = lambda / (V0/4)).
+  for_every_kind_and_law(e, [&](const ElementLawRow& row, int kind, kernels::ElementTermView<double>& view) {
+    kernels::visit_element_term(kind, row.law, [&](auto element_kind, auto element_law) {
+      using Kind = decltype(element_kind);
+      using Law = decltype(element_law);
+      constexpr int N = Kind::kNodes, D = 3 * N;
+      REQUIRE(N <= 32);
+      // The kind's test element: the tetrahedron's corners and the kind's further rest nodes.
+      double rest[N][3];
+      kernels::element_rest_nodes<Kind>(e.rest, rest);
+      // A kind with a nodal pass reads its nodes' pressure: for the lone element each node's patch is the element
+      // itself (theta_a = J - 1, p_a = lambda (J - 1)), refreshed at every position the checks evaluate.
+      double nodal_pressure[32] = {}, nodal_dilatation[32] = {};
+      view.nodal_pressure = nodal_pressure;
+      view.nodal_dilatation = nodal_dilatation;
+      const auto at = [&](const double(&positions)[N][3]) -> const double(&)[N][3] {
         if constexpr (Kind::kNodalPressure) {
-          double dV[N][3];
-          Kind::volume_gradient(view, 0, x, dV);
-          const double lambda = Law::volumetric_modulus(Law::material(view, 0));
-          for (int r = 0; r < D; ++r)
-            for (int c = 0; c < D; ++c) K(r, c) += lambda / e.volume * dV[r / 3][r % 3] * dV[c / 3][c % 3];
+          double share[3];
+          Kind::template nodal_shares<Law>(view, 0, positions, share);
+          for (int a = 0; a < N; ++a) {
+            nodal_dilatation[a] = share[0] / share[1];
+            nodal_pressure[a] = share[2] / share[1] * nodal_dilatation[a];
+          }
         }
-        const double largest_entry = K.cwiseAbs().maxCoeff();
-        REQUIRE(largest_entry > 0.0);
-        CHECK((K - K.transpose()).cwiseAbs().maxCoeff() < 1e-12 * largest_entry);
-        const double h = 1e-8;
-        for (int b = 0; b < N; ++b)
-          for (int j = 0; j < 3; ++j) {
-            double plus[N][3], minus[N][3], fp[N][3], fm[N][3];
+        return positions;
+      };
+      // An affine motion x = A X + b gives F = A at every point of every kind: the energy is V0 W(A).
+      {
+        const double A[9] = {1.05, 0.02, -0.03, 0.01, 0.97, 0.04, -0.02, 0.03, 1.02};
+        double x[N][3];
+        for (int a = 0; a < N; ++a)
+          for (int i = 0; i < 3; ++i)
+            x[a][i] = A[3 * i] * rest[a][0] + A[3 * i + 1] * rest[a][1] + A[3 * i + 2] * rest[a][2] + 0.01 * i;
+        // A kind with a nodal pass: the law's shear part plus lambda/2 (J - 1)^2.
+        double volumetric = 0.0;
+        if constexpr (Kind::kNodalPressure) {
+          const double change = kernels::determinant_minus_one(A);
+          volumetric = Law::volumetric_modulus(Law::material(view, 0)) * change * change / 2;
+        }
+        const double expected =
+            e.volume * (Law::energy_density(Kind::template point_material<Law>(view, 0), A) + volumetric);
+        CHECK(Kind::template energy<Law>(view, 0, at(x)) == Approx(expected).epsilon(1e-9));
+      }
+      const double(*undamped)[3] = nullptr;
+      for (int n = 0; n < 50; ++n) {
+        // A random deformation of up to 8 % per coordinate, rigidly shifted.
+        double x[N][3], f[N][3];
+        for (int a = 0; a < N; ++a)
+          for (int i = 0; i < 3; ++i) x[a][i] = rest[a][i] * (1.0 + jitter(rng)) + 0.02;
+        Kind::template forces<Law>(view, 0, at(x), undamped, f);
+        const double scale = 5000.0 * 1e-4;  // N: E l^2 for l = 1 cm
+        const double h = 1e-9;
+        for (int a = 0; a < N; ++a)
+          for (int i = 0; i < 3; ++i) {
+            double plus[N][3], minus[N][3];
             std::copy(&x[0][0], &x[0][0] + D, &plus[0][0]);
             std::copy(&x[0][0], &x[0][0] + D, &minus[0][0]);
-            plus[b][j] += h;
-            minus[b][j] -= h;
-            Kind::template forces<Law>(view, 0, at(plus), undamped, fp);
-            Kind::template forces<Law>(view, 0, at(minus), undamped, fm);
+            plus[a][i] += h;
+            minus[a][i] -= h;
+            const double gradient =
+                (Kind::template energy<Law>(view, 0, at(plus)) - Kind::template energy<Law>(view, 0, at(minus))) /
+                (2 * h);
+            CHECK(std::abs(f[a][i] + gradient) < 1e-5 * scale);
+          }
+        double sum[3] = {0, 0, 0};
+        for (int a = 0; a < N; ++a)
+          for (int i = 0; i < 3; ++i) sum[i] += f[a][i];
+        for (int i = 0; i < 3; ++i) CHECK(std::abs(sum[i]) < 1e-12 * scale);
+      }
+      // At rest the tangent is the forces' derivative; the action, the diagonal and the bound agree with it.
+      double x[N][3];
+      std::copy(&rest[0][0], &rest[0][0] + D, &x[0][0]);
+      typename Kind::template Linearisation<Law> lin{};
+      Kind::template linearise<Law>(view, 0, x, lin);
+      double whole[D * D];
+      Kind::template stiffness_matrix<Law>(view, 0, lin, whole);
+      Eigen::Matrix<double, D, D> K;
+      for (int r = 0; r < D; ++r)
+        for (int c = 0; c < D; ++c) K(r, c) = whole[D * r + c];
+      const Eigen::Matrix<double, D, D> local = K;  // what the kind's action and diagonal give
+      // A kind with a nodal pass: its element-local tangent plus the nodal Gauss-Newton term, for the lone element
+      // lambda / V0 dV dV^T (model_tangent's B^T D B with B = dV/4 per node, D = lambda / (V0/4)).
+      if constexpr (Kind::kNodalPressure) {
+        double dV[N][3];
+        Kind::volume_gradient(view, 0, x, dV);
+        const double lambda = Law::volumetric_modulus(Law::material(view, 0));
+        for (int r = 0; r < D; ++r)
+          for (int c = 0; c < D; ++c) K(r, c) += lambda / e.volume * dV[r / 3][r % 3] * dV[c / 3][c % 3];
+      }
+      const double largest_entry = K.cwiseAbs().maxCoeff();
+      REQUIRE(largest_entry > 0.0);
+      CHECK((K - K.transpose()).cwiseAbs().maxCoeff() < 1e-12 * largest_entry);
+      const double h = 1e-8;
+      for (int b = 0; b < N; ++b)
+        for (int j = 0; j < 3; ++j) {
+          double plus[N][3], minus[N][3], fp[N][3], fm[N][3];
+          std::copy(&x[0][0], &x[0][0] + D, &plus[0][0]);
+          std::copy(&x[0][0], &x[0][0] + D, &minus[0][0]);
+          plus[b][j] += h;
+          minus[b][j] -= h;
+          Kind::template forces<Law>(view, 0, at(plus), undamped, fp);
+          Kind::template forces<Law>(view, 0, at(minus), undamped, fm);
+          for (int a = 0; a < N; ++a)
+            for (int i = 0; i < 3; ++i)
+              CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * largest_entry);
+        }
+      double p[N][3], out[N][3], diagonal[N][3];
+      Eigen::Matrix<double, D, 1> pv;
+      for (int a = 0; a < N; ++a)
+        for (int i = 0; i < 3; ++i) p[a][i] = pv[3 * a + i] = std::sin(1.0 + 3 * a + i);
+      Kind::template stiffness_action<Law>(view, 0, lin, p, out);
+      Kind::template stiffness_diagonal<Law>(view, 0, lin, diagonal);
+      const Eigen::Matrix<double, D, 1> product = local * pv;
+      for (int r = 0; r < D; ++r) {
+        CHECK(out[r / 3][r % 3] == Approx(product[r]).margin(1e-12 * largest_entry));
+        CHECK(diagonal[r / 3][r % 3] == Approx(local(r, r)).margin(1e-12 * largest_entry));
+      }
+      // Deformed, the whole matrix (a kind's closed form where it has one: kernels/elements/corner_tetrahedron.h)
+      // is the action's columns to round-off.
+      for (int n = 0; n < 10; ++n) {
+        double moved[N][3], matrix[D * D];
+        for (int a = 0; a < N; ++a)
+          for (int i = 0; i < 3; ++i) moved[a][i] = rest[a][i] * (1.0 + jitter(rng)) + 0.02;
+        typename Kind::template Linearisation<Law> there{};
+        Kind::template linearise<Law>(view, 0, at(moved), there);
+        Kind::template stiffness_matrix<Law>(view, 0, there, matrix);
+        for (int b = 0; b < N; ++b)
+          for (int j = 0; j < 3; ++j) {
+            double column[N][3];
+            Kind::template stiffness_column<Law>(view, 0, there, b, j, column);
             for (int a = 0; a < N; ++a)
               for (int i = 0; i < 3; ++i)
-                CHECK(std::abs(-(fp[a][i] - fm[a][i]) / (2 * h) - K(3 * a + i, 3 * b + j)) < 1e-5 * largest_entry);
+                CHECK(matrix[D * (3 * a + i) + 3 * b + j] == Approx(column[a][i]).margin(1e-12 * largest_entry));
           }
-        double p[N][3], out[N][3], diagonal[N][3];
-        Eigen::Matrix<double, D, 1> pv;
-        for (int a = 0; a < N; ++a)
-          for (int i = 0; i < 3; ++i) p[a][i] = pv[3 * a + i] = std::sin(1.0 + 3 * a + i);
-        Kind::template stiffness_action<Law>(view, 0, lin, p, out);
-        Kind::template stiffness_diagonal<Law>(view, 0, lin, diagonal);
-        const Eigen::Matrix<double, D, 1> product = local * pv;
-        for (int r = 0; r < D; ++r) {
-          CHECK(out[r / 3][r % 3] == Approx(product[r]).margin(1e-12 * largest_entry));
-          CHECK(diagonal[r / 3][r % 3] == Approx(local(r, r)).margin(1e-12 * largest_entry));
-        }
-        // Deformed, the whole matrix (a kind's closed form where it has one: kernels/elements/corner_tetrahedron.h)
-        // is the action's columns to round-off.
-        for (int n = 0; n < 10; ++n) {
-          double moved[N][3], matrix[D * D];
-          for (int a = 0; a < N; ++a)
-            for (int i = 0; i < 3; ++i) moved[a][i] = rest[a][i] * (1.0 + jitter(rng)) + 0.02;
-          typename Kind::template Linearisation<Law> there{};
-          Kind::template linearise<Law>(view, 0, at(moved), there);
-          Kind::template stiffness_matrix<Law>(view, 0, there, matrix);
-          for (int b = 0; b < N; ++b)
-            for (int j = 0; j < 3; ++j) {
-              double column[N][3];
-              Kind::template stiffness_column<Law>(view, 0, there, b, j, column);
-              for (int a = 0; a < N; ++a)
-                for (int i = 0; i < 3; ++i)
-                  CHECK(matrix[D * (3 * a + i) + 3 * b + j] == Approx(column[a][i]).margin(1e-12 * largest_entry));
-            }
-        }
-        const double eigenvalue =
-            Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>>(K).eigenvalues().maxCoeff();
-        const double bound = Kind::template stiffness_bound<Law>(view, 0);
-        INFO("bound / largest eigenvalue " << bound / eigenvalue);
-        CHECK(bound >= eigenvalue * (1 - 1e-12));
-        CHECK(bound <= 4 * eigenvalue);  // a bound, not a guess: within the norms' known slack
-        // At rest: no force, no energy, no stress output.
-        double f[N][3];
-        Kind::template forces<Law>(view, 0, at(x), undamped, f);
-        for (int a = 0; a < N; ++a)
-          for (int i = 0; i < 3; ++i) CHECK(std::abs(f[a][i]) < 1e-12 * 5000.0 * 1e-4);
-        CHECK(std::abs(Kind::template energy<Law>(view, 0, x)) < 1e-18);
-        CHECK(std::abs(Kind::template stress_output<Law>(view, 0, x)) < 1e-9 * 5000.0);
-      });
+      }
+      const double eigenvalue =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, D, D>>(K).eigenvalues().maxCoeff();
+      const double bound = Kind::template stiffness_bound<Law>(view, 0);
+      INFO("bound / largest eigenvalue " << bound / eigenvalue);
+      CHECK(bound >= eigenvalue * (1 - 1e-12));
+      CHECK(bound <= 4 * eigenvalue);  // a bound, not a guess: within the norms' known slack
+      // At rest: no force, no energy, no stress output.
+      double f[N][3];
+      Kind::template forces<Law>(view, 0, at(x), undamped, f);
+      for (int a = 0; a < N; ++a)
+        for (int i = 0; i < 3; ++i) CHECK(std::abs(f[a][i]) < 1e-12 * 5000.0 * 1e-4);
+      CHECK(std::abs(Kind::template energy<Law>(view, 0, x)) < 1e-18);
+      CHECK(std::abs(Kind::template stress_output<Law>(view, 0, x)) < 1e-9 * 5000.0);
+    });
+  });
+}
+
+TEST_CASE("a kind's forces with its linearisation have forces' and linearise's bits, damped or not, inverted too",
+          "[fem][law]") {
+  // Implicit Euler's force pass keeps the linearisation it takes beside the forces for the step's tangent
+  // (kernels::element_node_forces_linearised): the step's bits are the same only if both are.
+  const Element e = test_element();
+  std::mt19937_64 rng(27);
+  std::uniform_real_distribution<double> jitter(-0.08, 0.08);
+  const double beta = 0.01;
+  int kinds_checked = 0;
+  for_every_kind_and_law(e, [&](const ElementLawRow& row, int kind, kernels::ElementTermView<double>& view) {
+    double nodal_pressure[32], nodal_dilatation[32];
+    for (int a = 0; a < 32; ++a) {
+      nodal_pressure[a] = 100.0 * std::sin(1.0 + a);
+      nodal_dilatation[a] = 0.01 * std::cos(1.0 + a);
     }
+    view.nodal_pressure = nodal_pressure;
+    view.nodal_dilatation = nodal_dilatation;
+    kernels::visit_element_term(kind, row.law, [&](auto element_kind, auto element_law) {
+      using Kind = decltype(element_kind);
+      using Law = decltype(element_law);
+      if constexpr (kernels::HasForcesAndLinearisation<Kind, Law>::value) {
+        using Lin = typename Kind::template Linearisation<Law>;
+        constexpr int N = Kind::kNodes;
+        ++kinds_checked;
+        double rest[N][3];
+        kernels::element_rest_nodes<Kind>(e.rest, rest);
+        for (int n = 0; n < 20; ++n) {
+          // At rest, inverted (node 0 reflected through the opposite face's centre), then random deformations of
+          // up to 8 %.
+          double x[N][3], v[N][3];
+          for (int a = 0; a < N; ++a)
+            for (int i = 0; i < 3; ++i) {
+              x[a][i] = n == 0 ? rest[a][i] : rest[a][i] * (1.0 + jitter(rng)) + 0.02;
+              v[a][i] = 0.1 * jitter(rng);
+            }
+          if (n == 1) {
+            for (int i = 0; i < 3; ++i) x[0][i] = 2.0 * (x[1][i] + x[2][i] + x[3][i]) / 3.0 - x[0][i];
+            REQUIRE(Kind::inverted(x));
+          }
+          for (const bool damped : {false, true}) {
+            INFO("deformation " << n << (damped ? ", damped" : ""));
+            view.stiffness_damping = damped ? &beta : nullptr;
+            const double(*velocity)[3] = damped ? v : nullptr;
+            double f[N][3], g[N][3];
+            Lin linearised{}, kept;
+            std::memset(&kept, 0xff, sizeof kept);
+            Kind::template forces<Law>(view, 0, x, velocity, f);
+            Kind::template linearise<Law>(view, 0, x, linearised);
+            Kind::template forces_and_linearisation<Law>(view, 0, x, velocity, kept, g);
+            CHECK(std::memcmp(f, g, sizeof f) == 0);
+            CHECK(std::memcmp(&linearised, &kept, sizeof kept) == 0);
+          }
+        }
+      }
+    });
+  });
+  // Every law on the corner tetrahedra's kinds (the linear tetrahedron and the nodal pressure one).
+  CHECK(kinds_checked >= 2 * static_cast<int>(element_law_rows().size()));
 }
 
 TEST_CASE("a law or an element kind is named only in its kernels header, the lists and the registry", "[fem][law]") {
