@@ -95,6 +95,23 @@ __device__ void element_apply(const ImplicitArguments<Real>& a, const kernels::E
     }
 }
 
+// Every term's element products (element_apply) of elements first, first + stride, ...: the cooperative kernel's
+// grid-stride loop and the one-block kernel's, each term's law found at run time.
+template <typename Real>
+__device__ void element_products_strided(const ImplicitArguments<Real>& a, int first, int stride) {
+  for (int t = 0; t < a.elements.term_count; ++t) {
+    const kernels::ElementTermView<double>& term = a.elements.terms[t];
+    kernels::visit_element_term_on_device(term.element, term.law, [&](auto kind, auto element_law) {
+      using Element = decltype(kind);
+      using Law = decltype(element_law);
+      using Linearisation = typename Element::template Linearisation<Law>;
+      const auto* linearisation = static_cast<const Linearisation*>(a.elements.linearisation[t]);
+      for (int e = first; e < a.elements.count; e += stride)
+        element_apply<Real, Element, Law>(a, term, linearisation, e, t > 0);
+    });
+  }
+}
+
 template <typename Real, typename Element, typename Law, bool Accumulate>
 __global__ void implicit_element_apply_kernel(ImplicitArguments<Real> a, kernels::ElementTermView<double> term,
                                               const typename Element::template Linearisation<Law>* linearisation) {
@@ -443,17 +460,7 @@ __global__ void __launch_bounds__(kEnergyThreads) cg_persistent_kernel(ImplicitA
   const int block = static_cast<int>(blockIdx.x), blocks = static_cast<int>(gridDim.x);
   while (!s.done) {
     if (a.elements.count > 0) {
-      for (int t = 0; t < a.elements.term_count; ++t) {
-        const kernels::ElementTermView<double>& term = a.elements.terms[t];
-        kernels::visit_element_term_on_device(term.element, term.law, [&](auto kind, auto element_law) {
-          using Element = decltype(kind);
-          using Law = decltype(element_law);
-          using Linearisation = typename Element::template Linearisation<Law>;
-          const auto* linearisation = static_cast<const Linearisation*>(a.elements.linearisation[t]);
-          for (int e = thread; e < a.elements.count; e += threads)
-            element_apply<Real, Element, Law>(a, term, linearisation, e, t > 0);
-        });
-      }
+      element_products_strided(a, thread, threads);
       grid.sync();
     }
     for (int v = thread; v < a.vertex_count; v += threads) apply_row(a, v);
@@ -601,17 +608,7 @@ template <typename Real, typename Terms>
 __device__ void block_element_products(const ImplicitArguments<Real>& s) {
   const int t = static_cast<int>(threadIdx.x);
   if constexpr (std::is_same_v<Terms, AnyElementTerms>) {
-    for (int term_index = 0; term_index < s.elements.term_count; ++term_index) {
-      const kernels::ElementTermView<double>& term = s.elements.terms[term_index];
-      kernels::visit_element_term_on_device(term.element, term.law, [&](auto kind, auto element_law) {
-        using Element = decltype(kind);
-        using Law = decltype(element_law);
-        using Linearisation = typename Element::template Linearisation<Law>;
-        const auto* linearisation = static_cast<const Linearisation*>(s.elements.linearisation[term_index]);
-        for (int e = t; e < s.elements.count; e += kCgBlockThreads)
-          element_apply<Real, Element, Law>(s, term, linearisation, e, term_index > 0);
-      });
-    }
+    element_products_strided(s, t, kCgBlockThreads);
   } else if constexpr (!std::is_same_v<Terms, NoElementTerms>) {
     using Element = typename Terms::element;
     using Law = typename Terms::law;

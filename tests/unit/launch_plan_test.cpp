@@ -99,6 +99,20 @@ struct FakeDevice {
   }
 };
 
+// SOFA's liver under implicit Euler (181 vertices, 596 linear tetrahedra), no springs (offsets: 182 zeros).
+BatchShape sofa_liver_implicit(std::vector<int>& offset) {
+  BatchShape shape;
+  shape.implicit_scheme = true;
+  shape.vertex_count = 181;
+  shape.element_count = 596;
+  shape.element_nodes = 4 * 596;
+  shape.vertex_begin = {0, 181};
+  shape.element_begin = {0, 596};
+  offset.assign(182, 0);
+  shape.offset = offset.data();
+  return shape;
+}
+
 sim::GpuOptions options_with(sim::GpuOptions::PersistentKind kind) {
   sim::GpuOptions options;
   options.persistent_kind = kind;
@@ -343,15 +357,8 @@ TEST_CASE("Launch plan: checks per persistent launch, their result slots, and a 
 TEST_CASE("Launch plan: implicit Euler's conjugate gradient in one cooperative launch where it fits", "[gpu][plan]") {
   FakeDevice device;
   device.cg_block_limit = 0;
-  BatchShape shape;
-  shape.implicit_scheme = true;
-  shape.vertex_count = 181;
-  shape.element_count = 596;
-  shape.element_nodes = 4 * 596;
-  shape.vertex_begin = {0, 181};
-  shape.element_begin = {0, 596};
-  std::vector<int> offset(182, 0);
-  shape.offset = offset.data();
+  std::vector<int> offset;
+  BatchShape shape = sofa_liver_implicit(offset);
   auto plan = plan_launches(shape, {}, device.limits());
   REQUIRE(plan);
   CHECK(plan->cg_grid_blocks == 3);  // 596 elements against 543 degrees of freedom
@@ -467,15 +474,8 @@ TEST_CASE("Launch plan: implicit Euler's solve in one block where it fits its sh
   CHECK(liver.residual_partial == liver.alpha_partial + kEnergyBlocks);
   CHECK(liver.doubles == 12511);
   FakeDevice device;
-  BatchShape shape;
-  shape.implicit_scheme = true;
-  shape.vertex_count = 181;
-  shape.element_count = 596;
-  shape.element_nodes = 4 * 596;
-  shape.vertex_begin = {0, 181};
-  shape.element_begin = {0, 596};
-  std::vector<int> offset(182, 0);
-  shape.offset = offset.data();
+  std::vector<int> offset;
+  BatchShape shape = sofa_liver_implicit(offset);
   auto plan = plan_launches(shape, {}, device.limits());
   REQUIRE(plan);
   CHECK(plan->cg_block_bytes == 100088);
