@@ -188,6 +188,8 @@ bool plan_cg_block(const BatchShape& batch, const sim::GpuOptions& options, cons
     return true;
   const std::optional<long long> limit = device.cg_block_shared_limit();
   if (!limit) return false;
+  // The element products alone past the limit: no layout (whose offsets are ints) is computed for such a mesh.
+  if (batch.element_nodes > *limit / static_cast<long long>(3 * sizeof(double))) return true;
   const CgBlockLayout layout = cg_block_layout(batch.vertex_count, batch.element_nodes);
   const long long bytes = layout.doubles * static_cast<long long>(sizeof(double));
   if (bytes > *limit) return true;

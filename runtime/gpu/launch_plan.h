@@ -90,9 +90,10 @@ constexpr std::size_t kMostPersistentChecks = 64;
 // Threads per block of the cooperative conjugate gradient (kEnergyThreads: its dot products are the fixed-shape
 // sums' virtual blocks).
 constexpr int kCgThreads = 256;
-// Threads of the one-block conjugate gradient: every entry of SOFA's liver (543 degrees of freedom, 596 tetrahedra)
-// has a thread of its own in each phase.
-constexpr int kCgBlockThreads = 1024;
+// Threads of the one-block conjugate gradient: the fastest of 256, 512 and 1,024 on SOFA's liver (docs/
+// performance.md, eighteenth run). At 1,024 a thread has 64 registers and spills, and most warps wait at the
+// barriers; at 256 each phase takes more rounds.
+constexpr int kCgBlockThreads = 512;
 
 // The fewest conjugate gradient iterations enqueued between two reads of its scalars by the host.
 constexpr int kCgLeastIterationsPerRead = 4;

@@ -267,8 +267,8 @@ FMPC_GPU_TEST(implicit_cg_tolerance_and_cap, "implicit Euler: the scene's tolera
 
 // The one-block solve, the cooperative launch and the per-iteration launches (with their chunks between reads) give
 // the same bits, in the state and in every step's record; each reruns bitwise; float and double, springs and FEM,
-// with checks that replay nothing and with a check every 7 steps; on 7x6x5 cells (1,008 degrees of freedom: a thread
-// each in the block) and 10x6x5 (1,386: threads take two; its FEM solve is too large for one block's shared memory
+// with checks that replay nothing and with a check every 7 steps; on 7x6x5 cells (1,008 degrees of freedom: the
+// block's threads take two each) and 10x6x5 (1,386: three; its FEM solve is too large for one block's shared memory
 // and runs on the grid, its springs in one block).
 FMPC_GPU_TEST(implicit_cg_persistent_equals_per_iteration,
               "implicit Euler: one block or one cooperative launch per solve gives the per-iteration launches' bits",
