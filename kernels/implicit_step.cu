@@ -530,19 +530,24 @@ __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
   implicit_finish_vertex(a, v);
 }
 
-// block_tree_reduce's sum of the 256 values at `values` by one warp, the same additions in the same order: lane l
-// holds values l, l + 32, ..., l + 224; the widths 128, 64 and 32 pair values within a lane, 16 to 1 across lanes.
-// Every lane returns the sum.
-__device__ double warp_tree_sum(const double* values) {
+// block_tree_reduce's sum of 256 values by one warp, the same additions in the same order: lane l holds values
+// l, l + 32, ..., l + 224 in v; the widths 128, 64 and 32 pair values within a lane, 16 to 1 across lanes. Every lane
+// returns the sum.
+__device__ double warp_tree_sum(double (&v)[8]) {
   static_assert(kEnergyThreads == 256, "eight values per lane");
-  const int lane = static_cast<int>(threadIdx.x) % 32;
-  double v[8];
-  for (int k = 0; k < 8; ++k) v[k] = values[lane + 32 * k];
   for (int k = 0; k < 4; ++k) v[k] = v[k] + v[k + 4];
   for (int k = 0; k < 2; ++k) v[k] = v[k] + v[k + 2];
   double sum = v[0] + v[1];
   for (int width = 16; width > 0; width /= 2) sum = sum + __shfl_down_sync(0xffffffffu, sum, width);
   return __shfl_sync(0xffffffffu, sum, 0);
+}
+
+// warp_tree_sum of the 256 values at `values`.
+__device__ double warp_tree_sum(const double* values) {
+  const int lane = static_cast<int>(threadIdx.x) % 32;
+  double v[8];
+  for (int k = 0; k < 8; ++k) v[k] = values[lane + 32 * k];
+  return warp_tree_sum(v);
 }
 
 // dot_partial_kernel's and cg_scalars_kernel's sums (virtual_block_sums over kEnergyBlocks virtual blocks, then
@@ -583,11 +588,7 @@ __device__ void block_fixed_shape_sums(int count, bool pair, double* values, dou
       v[k] = 0.0;
       if (t < kEnergyBlocks) v[k] += t < used ? partial[round * kEnergyBlocks + t] : 0.0;
     }
-    for (int k = 0; k < 4; ++k) v[k] = v[k] + v[k + 4];
-    for (int k = 0; k < 2; ++k) v[k] = v[k] + v[k + 2];
-    double sum = v[0] + v[1];
-    for (int width = 16; width > 0; width /= 2) sum = sum + __shfl_down_sync(0xffffffffu, sum, width);
-    (round == 0 ? total : other_total) = __shfl_sync(0xffffffffu, sum, 0);
+    (round == 0 ? total : other_total) = warp_tree_sum(v);
   }
   if (!pair) other_total = 0.0;
 }
