@@ -326,6 +326,27 @@ __device__ void sum_partials(const double* partial, bool pair, double* cache, do
   __syncthreads();
 }
 
+// One degree of freedom at the start of a solve: x = 0, r = b, z = p = M^-1 r.
+template <typename Real>
+__device__ void cg_start_entry(const ImplicitArguments<Real>& a, int i) {
+  a.x[i] = 0.0;
+  a.r[i] = a.rhs[i];
+  a.z[i] = a.inverse_jacobi[i] * a.r[i];
+  a.p[i] = a.z[i];
+}
+
+// One degree of freedom's next direction: p = z + beta p.
+template <typename Real>
+__device__ void cg_direction_entry(const ImplicitArguments<Real>& a, double beta, int i) {
+  a.p[i] = a.z[i] + beta * a.p[i];
+}
+
+// The scalars after p.Ap: alpha = rz / p.Ap.
+__device__ void cg_set_alpha(ConjugateGradientScalars& s, double p_ap) {
+  s.p_ap = p_ap;
+  s.alpha = s.rz / p_ap;
+}
+
 // One degree of freedom's update after alpha: x += alpha p, r -= alpha ap, z = M^-1 r.
 template <typename Real>
 __device__ void cg_update_entry(const ImplicitArguments<Real>& a, double alpha, int i) {
@@ -404,8 +425,7 @@ __global__ void cg_scalars_kernel(const double* partial, ConjugateGradientScalar
       cg_start_scalars(s, total, other_total, tolerance, limit);
       break;
     case CgStage::Alpha:
-      s.p_ap = total;
-      s.alpha = s.rz / total;
+      cg_set_alpha(s, total);
       break;
     case CgStage::Residual:
       cg_finish_iteration(s, total, other_total, limit);
@@ -418,10 +438,7 @@ template <typename Real>
 __global__ void cg_start_kernel(ImplicitArguments<Real> a) {
   const int i = vertex_index();
   if (i >= 3 * a.vertex_count) return;
-  a.x[i] = 0.0;
-  a.r[i] = a.rhs[i];
-  a.z[i] = a.inverse_jacobi[i] * a.r[i];
-  a.p[i] = a.z[i];
+  cg_start_entry(a, i);
 }
 
 template <typename Real>
@@ -437,7 +454,7 @@ template <typename Real>
 __global__ void cg_direction_kernel(ImplicitArguments<Real> a) {
   const int i = vertex_index();
   if (i >= 3 * a.vertex_count || a.scalars->done) return;
-  a.p[i] = a.z[i] + a.scalars->beta * a.p[i];
+  cg_direction_entry(a, a.scalars->beta, i);
   if (i == 0) a.scalars->rz = a.scalars->rz_next;
 }
 
@@ -475,8 +492,7 @@ __global__ void __launch_bounds__(kEnergyThreads) cg_persistent_kernel(ImplicitA
     {
       double p_ap = 0.0, unused = 0.0;
       sum_partials(alpha_partial, false, cache, p_ap, unused);
-      s.p_ap = p_ap;
-      s.alpha = s.rz / p_ap;
+      cg_set_alpha(s, p_ap);
     }
     // The update of an entry and its residual terms by the one thread that sums them: the values are those the
     // per-iteration dot kernel would load after the update kernel.
@@ -502,7 +518,7 @@ __global__ void __launch_bounds__(kEnergyThreads) cg_persistent_kernel(ImplicitA
       cg_finish_iteration(s, rr, rz_next, a.iteration_limit);
     }
     if (s.done) break;
-    for (int i = thread; i < dofs; i += threads) a.p[i] = a.z[i] + s.beta * a.p[i];
+    for (int i = thread; i < dofs; i += threads) cg_direction_entry(a, s.beta, i);
     s.rz = s.rz_next;
     grid.sync();
   }
@@ -643,10 +659,7 @@ __global__ void __launch_bounds__(kCgBlockThreads) cg_block_kernel(ImplicitArgum
   double* const residual_partial = shared + layout.residual_partial;
   for (int i = t; i < dofs; i += kCgBlockThreads) {
     s.inverse_jacobi[i] = a.inverse_jacobi[i];
-    s.x[i] = 0.0;
-    s.r[i] = a.rhs[i];
-    s.z[i] = s.inverse_jacobi[i] * s.r[i];
-    s.p[i] = s.z[i];
+    cg_start_entry(s, i);
   }
   for (int v = t; v < n; v += kCgBlockThreads) s.diagonal[v] = a.diagonal[v];
   __syncthreads();
@@ -674,10 +687,8 @@ __global__ void __launch_bounds__(kCgBlockThreads) cg_block_kernel(ImplicitArgum
       block_fixed_shape_sums(
           dofs, false, terms, alpha_partial, [&](int i, double& sum, double&) { sum += s.p[i] * s.ap[i]; }, p_ap,
           unused);
-      scalars.p_ap = p_ap;
-      scalars.alpha = scalars.rz / p_ap;
+      cg_set_alpha(scalars, p_ap);
     }
-    __syncthreads();  // every warp has read the terms before they are written again
     {
       double rr = 0.0, rz_next = 0.0;
       block_fixed_shape_sums(
@@ -691,7 +702,7 @@ __global__ void __launch_bounds__(kCgBlockThreads) cg_block_kernel(ImplicitArgum
       cg_finish_iteration(scalars, rr, rz_next, a.iteration_limit);
     }
     if (scalars.done) break;
-    for (int i = t; i < dofs; i += kCgBlockThreads) s.p[i] = s.z[i] + scalars.beta * s.p[i];
+    for (int i = t; i < dofs; i += kCgBlockThreads) cg_direction_entry(s, scalars.beta, i);
     scalars.rz = scalars.rz_next;
     __syncthreads();
   }
@@ -864,6 +875,19 @@ cudaError_t launch_cg_persistent(const ImplicitArguments<Real>& a, int blocks, c
                                      dim3(kEnergyThreads), parameters, 0, stream);
 }
 
+// Calls with(Terms{}) for every element-terms choice cg_block_kernel is compiled for; the first error stops.
+template <typename With>
+cudaError_t for_each_block_terms(With&& with) {
+  cudaError_t status = with(NoElementTerms{});
+  if (status == cudaSuccess) status = with(AnyElementTerms{});
+  for (int pair = 0; status == cudaSuccess && pair < kernels::ElementTermTypes::count; ++pair)
+    status = kernels::visit_element_term(pair / kernels::ElementLaws::count, pair % kernels::ElementLaws::count,
+                                         [&](auto kind, auto element_law) {
+                                           return with(OneElementTerm<decltype(kind), decltype(element_law)>{});
+                                         });
+  return status;
+}
+
 template <typename Real>
 cudaError_t cg_block_shared_limit(long long& bytes) {
   bytes = 0;
@@ -875,8 +899,15 @@ cudaError_t cg_block_shared_limit(long long& bytes) {
   // for all.
   if (status == cudaSuccess) status = cudaFuncGetAttributes(&attributes, cg_block_kernel<Real, AnyElementTerms>);
   if (status != cudaSuccess || attributes.maxThreadsPerBlock < kCgBlockThreads) return status;
-  bytes = std::max(0, optin - static_cast<int>(attributes.sharedSizeBytes));
-  return cudaSuccess;
+  const int dynamic = std::max(0, optin - static_cast<int>(attributes.sharedSizeBytes));
+  // Above 48 KiB a kernel must ask for its dynamic shared memory, and the attribute is each function's: every
+  // instantiation asks here, once, for what a launch may then take, so that no launch asks again.
+  status = for_each_block_terms([&](auto terms) {
+    return cudaFuncSetAttribute(cg_block_kernel<Real, decltype(terms)>, cudaFuncAttributeMaxDynamicSharedMemorySize,
+                                dynamic);
+  });
+  if (status == cudaSuccess) bytes = dynamic;
+  return status;
 }
 
 template <typename Real>
@@ -885,13 +916,8 @@ cudaError_t launch_cg_block(const ImplicitArguments<Real>& a, const CgBlockLayou
   if (a.vertex_count <= 0) return cudaSuccess;
   if (bytes <= 0) return cudaErrorInvalidValue;
   const auto launch = [&](auto terms) {
-    const auto kernel = cg_block_kernel<Real, decltype(terms)>;
-    // Above 48 KiB a kernel must ask for its dynamic shared memory; the attribute is the function's, so each
-    // instantiation asks (a host call, no synchronisation).
-    cudaError_t status = cudaFuncSetAttribute(kernel, cudaFuncAttributeMaxDynamicSharedMemorySize,
-                                              static_cast<int>(bytes));
-    if (status != cudaSuccess) return status;
-    kernel<<<1, kCgBlockThreads, static_cast<std::size_t>(bytes), stream>>>(a, layout, finish);
+    cg_block_kernel<Real, decltype(terms)>
+        <<<1, kCgBlockThreads, static_cast<std::size_t>(bytes), stream>>>(a, layout, finish);
     return cudaGetLastError();
   };
   if (a.elements.count <= 0) return launch(NoElementTerms{});
