@@ -816,8 +816,9 @@ profile_section() {
       "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/small_box_springs.yaml" --backend cuda --steps 3000 \
       -o "$BUILD/scenes/profile_small" > "$OUT/profile_small_springs.txt" 2>&1 ||
       fail "ncu on small_box_springs (see profile_small_springs.txt)"
-    # Implicit Euler's conjugate gradient (docs/performance.md, seventeenth run): the 20^3 box's per-iteration
-    # kernels, and the cooperative launch on SOFA's liver at SOFA's cap of 25 iterations (its mesh from the carry).
+    # Implicit Euler's conjugate gradient (docs/performance.md, seventeenth and eighteenth runs): the 20^3 box's
+    # per-iteration kernels, and SOFA's liver at SOFA's cap of 25 iterations (its mesh from the carry): the one-block
+    # solve's sections and stall reasons, and every kernel's duration over 60 launches of a run.
     "$ncu" "${sections[@]}" --kernel-name regex:'implicit_apply_kernel|implicit_element_apply_kernel' --launch-skip 20 \
       --launch-count 2 "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/box20_fem_implicit.yaml" --backend cuda \
       --steps 40 -o "$BUILD/scenes/profile_box20" > "$OUT/profile_implicit_box20.txt" 2>&1 ||
@@ -826,10 +827,15 @@ profile_section() {
       sed -e "s#file: .*liver.msh#file: $CARRY/sofa-liver/liver.msh#" \
         -e 's#^precision: double#precision: double\nsolver: {method: cg, max_iterations: 25}#' \
         "$ROOT/rulesets/scenes/sofa_liver_fem.yaml" > "$BUILD/scenes/sofa_liver_cap25.yaml"
-      "$ncu" "${sections[@]}" --kernel-name regex:'cg_persistent' --launch-skip 20 --launch-count 1 \
+      "$ncu" "${sections[@]}" --kernel-name regex:'cg_block_kernel|cg_persistent' --launch-skip 20 --launch-count 1 \
+        --metrics 'regex:smsp__average_warps_issue_stalled_.*_per_issue_active\.ratio,smsp__inst_executed.sum' \
         "$UNPACKED/bin/fmpc" simulate "$BUILD/scenes/sofa_liver_cap25.yaml" --backend cuda --steps 60 \
         -o "$BUILD/scenes/profile_liver" > "$OUT/profile_implicit_liver.txt" 2>&1 ||
         fail "ncu on SOFA's liver, CG capped at 25 (see profile_implicit_liver.txt)"
+      "$ncu" --metrics gpu__time_duration.sum --launch-skip 60 --launch-count 60 \
+        "$UNPACKED/bin/fmpc" simulate "$BUILD/scenes/sofa_liver_cap25.yaml" --backend cuda --steps 120 \
+        -o "$BUILD/scenes/profile_liver_durations" > "$OUT/profile_implicit_liver_durations.txt" 2>&1 ||
+        fail "ncu durations on SOFA's liver (see profile_implicit_liver_durations.txt)"
     fi
   fi
   record "profile: $(ls "$OUT"/profile_*.txt 2>/dev/null | wc -l) reports"
