@@ -17,13 +17,16 @@ FMPC_HD int symmetric_index(int row, int column) {
   return r == 0 ? c : r == 1 ? 2 + c : 5;
 }
 
+// Row r of block v, summed in column order.
+FMPC_HD double symmetric_row(const double* block, int r, const double* v) {
+  double sum = 0.0;
+  for (int c = 0; c < 3; ++c) sum += block[symmetric_index(r, c)] * v[c];
+  return sum;
+}
+
 // out = block v, each row summed in column order.
 FMPC_HD void symmetric_multiply(const double* block, const double* v, double* out) {
-  for (int r = 0; r < 3; ++r) {
-    double sum = 0.0;
-    for (int c = 0; c < 3; ++c) sum += block[symmetric_index(r, c)] * v[c];
-    out[r] = sum;
-  }
+  for (int r = 0; r < 3; ++r) out[r] = symmetric_row(block, r, v);
 }
 
 // The blocks of one spring: `stiffness` is K_s and `system` is its share h^2 K_s + h c u u^T of the system

@@ -6,6 +6,7 @@
 #include <cfloat>
 #include <type_traits>
 
+#include "kernels/conjugate_gradient_steps.cuh"
 #include "kernels/implicit_contact_math.h"
 #include "kernels/step_device.cuh"
 #include "runtime/gpu/launch_plan.h"
@@ -34,8 +35,9 @@ __global__ void implicit_spring_blocks_kernel(ImplicitArguments<Real> a) {
 
 // Element e's share of one term of the implicit system: its linearisation at the step's start (into
 // `linearisation`), h^2 K v0 for the right-hand side and the diagonal of (h^2 + h beta) K_aa for the preconditioner;
-// the first term writes them, each later one adds (Accumulate). Arrays of 3 values per node are indexed 3 (N e + a),
-// N nodes per element, as the node CSR's entries.
+// the first term writes them, each later one adds (Accumulate). Arrays of 3 values per node are indexed by the node's
+// corner slot (kernels::node_slot: its entry in its vertex's run of the corner CSR), so that a vertex's gather reads
+// its run contiguously, with no index to load before each value.
 template <typename Real, typename Element, typename Law, bool Accumulate>
 __global__ void implicit_element_kernel(ImplicitArguments<Real> a, kernels::ElementTermView<double> term,
                                         typename Element::template Linearisation<Law>* linearisation) {
@@ -61,9 +63,10 @@ __global__ void implicit_element_kernel(ImplicitArguments<Real> a, kernels::Elem
   const double beta = term.stiffness_damping ? term.stiffness_damping[e] : 0.0;
   const double scale = a.h * a.h + a.h * beta;
   for (int c = 0; c < N; ++c) {
+    const int slot = kernels::node_slot<N>(term, e, c);
     for (int i = 0; i < 3; ++i) {
-      double& rhs = f.rhs_part[3 * (N * e + c) + i];
-      double& out = f.diagonal_part[3 * (N * e + c) + i];
+      double& rhs = f.rhs_part[3 * slot + i];
+      double& out = f.diagonal_part[3 * slot + i];
       rhs = Accumulate ? rhs + a.h * a.h * kv[c][i] : a.h * a.h * kv[c][i];
       out = Accumulate ? out + scale * diagonal[c][i] : scale * diagonal[c][i];
     }
@@ -88,11 +91,10 @@ __device__ void element_apply(const ImplicitArguments<Real>& a, const kernels::E
   Element::template stiffness_action<Law>(term, e, linearisation[e], p, kp);
   const double beta = term.stiffness_damping ? term.stiffness_damping[e] : 0.0;
   const double scale = a.h * a.h + a.h * beta;
-  for (int c = 0; c < N; ++c)
-    for (int i = 0; i < 3; ++i) {
-      double& product = f.product[3 * (N * e + c) + i];
-      product = accumulate ? product + scale * kp[c][i] : scale * kp[c][i];
-    }
+  for (int c = 0; c < N; ++c) {
+    double* product = f.product + 3 * kernels::node_slot<N>(term, e, c);
+    for (int i = 0; i < 3; ++i) product[i] = accumulate ? product[i] + scale * kp[c][i] : scale * kp[c][i];
+  }
 }
 
 // Every term's element products (element_apply) of elements first, first + stride, ...: the cooperative kernel's
@@ -133,45 +135,6 @@ cudaError_t for_each_term(const ImplicitElements& elements, Launch&& launch) {
     if (status != cudaSuccess) return status;
   }
   return cudaSuccess;
-}
-
-// Sum over the corners at v of an element-major array of 3 values per corner (double).
-__device__ void gather_corner_values(int v, const kernels::CornerForceView<double>& corners, const double* values,
-                                     double* out) {
-  for (int k = corners.offset[v]; k < corners.offset[v + 1]; ++k) {
-    const double* value = values + 3 * corners.corner[k];
-    for (int i = 0; i < 3; ++i) out[i] += value[i];
-  }
-}
-
-// gather_corner_values of two arrays at once (the right-hand side's and the diagonal's parts), the corners in chunks
-// of kGatherChunk: a chunk's indices loaded first, then its values, then added in corner order (each sum's additions
-// in the same order as one corner at a time), so that a chunk costs two round trips to memory, not two per corner.
-// A vertex's gather is a chain of dependent loads (about 13 corners a vertex on a tetrahedral mesh) that nothing hides
-// in a small mesh's launch. (In the conjugate gradient's products the chunk's registers cost more than they save.)
-constexpr int kGatherChunk = 4;
-__device__ void gather_corner_pair(int v, const kernels::CornerForceView<double>& corners, const double* first,
-                                   double* first_out, const double* second, double* second_out) {
-  const int end = corners.offset[v + 1];
-  for (int k = corners.offset[v]; k < end; k += kGatherChunk) {
-    int corner[kGatherChunk];
-    double a[kGatherChunk][3], b[kGatherChunk][3];
-#pragma unroll
-    for (int j = 0; j < kGatherChunk; ++j) corner[j] = k + j < end ? corners.corner[k + j] : -1;
-#pragma unroll
-    for (int j = 0; j < kGatherChunk; ++j)
-      for (int i = 0; i < 3; ++i) {
-        a[j][i] = corner[j] >= 0 ? first[3 * corner[j] + i] : 0.0;
-        b[j][i] = corner[j] >= 0 ? second[3 * corner[j] + i] : 0.0;
-      }
-#pragma unroll
-    for (int j = 0; j < kGatherChunk; ++j)
-      if (corner[j] >= 0)
-        for (int i = 0; i < 3; ++i) {
-          first_out[i] += a[j][i];
-          second_out[i] += b[j][i];
-        }
-  }
 }
 
 template <typename Real, GatherKind K>
@@ -226,9 +189,10 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
     }
   }
   if (a.elements.count > 0) {
-    const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
+    const int begin = a.model.corners.offset[v], end = a.model.corners.offset[v + 1];
     double kv[3] = {0.0, 0.0, 0.0}, element_diagonal[3] = {0.0, 0.0, 0.0};
-    gather_corner_pair(v, corners, a.elements.rhs_part, kv, a.elements.diagonal_part, element_diagonal);
+    gather_corner_run(begin, end, a.elements.rhs_part, 0, kv);
+    gather_corner_run(begin, end, a.elements.diagonal_part, 0, element_diagonal);
     for (int c = 0; c < 3; ++c) {
       b[c] -= kv[c];
       jacobi[c] += element_diagonal[c];
@@ -245,124 +209,11 @@ __global__ void implicit_vertex_kernel(ImplicitArguments<Real> a) {
   }
 }
 
-// Row v of A p (fixed vertices and axes: identity rows), after the elements' product.
-template <typename Real>
-__device__ void apply_row(const ImplicitArguments<Real>& a, int v) {
-  const double* own = a.p + 3 * v;
-  double* out = a.ap + 3 * v;
-  const unsigned char held = a.loads.fixed[v];
-  if (held == kernels::kAllAxesFixed) {
-    for (int c = 0; c < 3; ++c) out[c] = own[c];
-    return;
-  }
-  double sum[3] = {a.diagonal[v] * own[0], a.diagonal[v] * own[1], a.diagonal[v] * own[2]};
-  const kernels::SpringNetworkView<Real>& springs = a.model.springs;
-  for (int e = springs.adjacency_offset[v]; e < springs.adjacency_offset[v + 1]; ++e) {
-    const int s = springs.adjacency_spring[e], o = springs.adjacency_neighbour[e];
-    const unsigned char other = a.loads.fixed[o];
-    double relative[3];
-    for (int c = 0; c < 3; ++c) relative[c] = own[c] - (kernels::axis_fixed(other, c) ? 0.0 : a.p[3 * o + c]);
-    double product[3];
-    kernels::symmetric_multiply(a.blocks + 12 * s + 6, relative, product);
-    for (int c = 0; c < 3; ++c) sum[c] += product[c];
-  }
-  if (a.extra_blocks != nullptr) {
-    double free_own[3], product[3];
-    for (int c = 0; c < 3; ++c) free_own[c] = kernels::axis_fixed(held, c) ? 0.0 : own[c];
-    kernels::symmetric_multiply(a.extra_blocks + 6 * v, free_own, product);
-    for (int c = 0; c < 3; ++c) sum[c] += product[c];
-  }
-  if (a.elements.count > 0) {
-    const kernels::CornerForceView<double> corners{a.model.corners.offset, a.model.corners.corner, nullptr};
-    gather_corner_values(v, corners, a.elements.product, sum);
-  }
-  for (int c = 0; c < 3; ++c) out[c] = kernels::axis_fixed(held, c) ? own[c] : sum[c];
-}
-
 template <typename Real>
 __global__ void implicit_apply_kernel(ImplicitArguments<Real> a) {
   const int v = vertex_index();
   if (v >= a.vertex_count || a.scalars->done) return;
   apply_row(a, v);
-}
-
-// The partial sums of virtual block `block` of the fixed dot-product shape (kEnergyBlocks blocks of kEnergyThreads
-// threads striding over [0, count)): thread t of the calling block (blockDim.x == kEnergyThreads) visits
-// terms(i, sum, other) for i = block kEnergyThreads + t, then a stride of kEnergyBlocks kEnergyThreads on, and the
-// block's trees sum `sum` and `other` (the second only where `pair`). A per-iteration kernel is virtual block
-// blockIdx.x; the cooperative kernel's blocks take the virtual blocks in turn. Ends with a barrier, so the cache
-// may be reused at once. A virtual block past the end sums nothing: its trees of +0.0 would give +0.0, so it skips
-// them (and their barriers: the whole block takes the branch) -- on a small mesh nearly every virtual block is such,
-// and each cooperative block would otherwise run a tree for a third of the kEnergyBlocks in every dot product.
-template <typename Terms>
-__device__ void virtual_block_sums(int block, int count, bool pair, double* cache, Terms&& terms, double& total,
-                                   double& other_total) {
-  if (static_cast<long long>(block) * kEnergyThreads >= count) {
-    total = 0.0;
-    other_total = 0.0;
-    return;
-  }
-  double sum = 0.0, other = 0.0;
-  const long long stride = static_cast<long long>(kEnergyBlocks) * kEnergyThreads;
-  for (long long i = static_cast<long long>(block) * kEnergyThreads + threadIdx.x; i < count; i += stride)
-    terms(static_cast<int>(i), sum, other);
-  total = block_tree_sum(sum, cache);
-  __syncthreads();  // every thread has read cache[0] before the next tree overwrites it
-  other_total = pair ? block_tree_sum(other, cache) : 0.0;
-  __syncthreads();
-}
-
-// The sums of the kEnergyBlocks partial sums in `partial` (and of the next kEnergyBlocks where `pair`), by one
-// block of kEnergyThreads threads in a fixed tree; every thread gets them. Ends with a barrier.
-__device__ void sum_partials(const double* partial, bool pair, double* cache, double& total, double& other_total) {
-  double sum = 0.0, other = 0.0;
-  for (int i = static_cast<int>(threadIdx.x); i < kEnergyBlocks; i += kEnergyThreads) {
-    sum += partial[i];
-    if (pair) other += partial[kEnergyBlocks + i];
-  }
-  total = block_tree_sum(sum, cache);
-  __syncthreads();
-  other_total = pair ? block_tree_sum(other, cache) : 0.0;
-  __syncthreads();
-}
-
-// One degree of freedom at the start of a solve: x = 0, r = b, z = p = M^-1 r.
-template <typename Real>
-__device__ void cg_start_entry(const ImplicitArguments<Real>& a, int i) {
-  a.x[i] = 0.0;
-  a.r[i] = a.rhs[i];
-  a.z[i] = a.inverse_jacobi[i] * a.r[i];
-  a.p[i] = a.z[i];
-}
-
-// One degree of freedom's next direction: p = z + beta p.
-template <typename Real>
-__device__ void cg_direction_entry(const ImplicitArguments<Real>& a, double beta, int i) {
-  a.p[i] = a.z[i] + beta * a.p[i];
-}
-
-// The scalars after p.Ap: alpha = rz / p.Ap.
-__device__ void cg_set_alpha(ConjugateGradientScalars& s, double p_ap) {
-  s.p_ap = p_ap;
-  s.alpha = s.rz / p_ap;
-}
-
-// One degree of freedom's update after alpha: x += alpha p, r -= alpha ap, z = M^-1 r.
-template <typename Real>
-__device__ void cg_update_entry(const ImplicitArguments<Real>& a, double alpha, int i) {
-  a.x[i] += alpha * a.p[i];
-  a.r[i] -= alpha * a.ap[i];
-  a.z[i] = a.inverse_jacobi[i] * a.r[i];
-}
-
-// The scalars after an iteration's residual sums, and the stopping test of the host loop it replaces
-// (while |r|^2 >= threshold and iterations < cap): a NaN residual stops, as there.
-__device__ void cg_finish_iteration(ConjugateGradientScalars& s, double rr, double rz_next, int limit) {
-  s.rr = rr;
-  s.rz_next = rz_next;
-  s.beta = rz_next / s.rz;
-  ++s.iterations;
-  s.done = !(rr >= s.threshold) || s.iterations >= limit ? 1 : 0;
 }
 
 // Partial sums of first . second (and of third . fourth when third is not null) over [0, count), in the fixed
@@ -387,29 +238,6 @@ __global__ void dot_partial_kernel(const double* first, const double* second, co
   }
 }
 
-enum class CgStage : int { Start = 0, Alpha = 1, Residual = 2 };
-
-// The scalars at the start of a solve from b.b (total) and r.z (other_total). Every field written, so that no later
-// read (the cooperative kernel's copy, the host's) meets memory never written.
-__device__ void cg_start_scalars(ConjugateGradientScalars& s, double total, double other_total, double tolerance,
-                                 int limit) {
-  s.rhs_norm2 = total;
-  s.rz = other_total;
-  s.p_ap = 0.0;
-  s.alpha = 0.0;
-  s.rr = total;
-  s.rz_next = 0.0;
-  s.beta = 0.0;
-  const double threshold = tolerance * tolerance * total;
-  s.threshold = threshold < DBL_MIN ? DBL_MIN : threshold;
-  s.iterations = 0;
-  // As the CPU backend: a right-hand side this small means the system is at rest to double precision; dv = 0 (the
-  // start's x) and the positions still move with their velocities.
-  s.at_rest = sqrt(total) < 1e-150 ? 1 : 0;
-  s.done = s.at_rest || !(total >= s.threshold) || limit <= 0 ? 1 : 0;
-  s.padding = 0;
-}
-
 // The stage's scalars from the partial sums. Every thread reads `done` before the trees' barriers and only thread
 // 0 writes after them, so the block agrees on it.
 __global__ void cg_scalars_kernel(const double* partial, ConjugateGradientScalars* scalars, CgStage stage,
@@ -418,19 +246,7 @@ __global__ void cg_scalars_kernel(const double* partial, ConjugateGradientScalar
   if (stage != CgStage::Start && scalars->done) return;
   double total = 0.0, other_total = 0.0;
   sum_partials(partial, stage != CgStage::Alpha, cache, total, other_total);
-  if (threadIdx.x != 0) return;
-  ConjugateGradientScalars& s = *scalars;
-  switch (stage) {
-    case CgStage::Start:
-      cg_start_scalars(s, total, other_total, tolerance, limit);
-      break;
-    case CgStage::Alpha:
-      cg_set_alpha(s, total);
-      break;
-    case CgStage::Residual:
-      cg_finish_iteration(s, total, other_total, limit);
-      break;
-  }
+  if (threadIdx.x == 0) set_stage_scalars(*scalars, stage, total, other_total, tolerance, limit);
 }
 
 // Per degree of freedom: x = 0, r = b, z = p = M^-1 r.
@@ -456,6 +272,76 @@ __global__ void cg_direction_kernel(ImplicitArguments<Real> a) {
   if (i >= 3 * a.vertex_count || a.scalars->done) return;
   cg_direction_entry(a, a.scalars->beta, i);
   if (i == 0) a.scalars->rz = a.scalars->rz_next;
+}
+
+// A stage of the conjugate gradient in one launch where every degree of freedom has a thread of the dot products'
+// first stride (3 n <= kFusedStageDofs; LaunchPlan::cg_fused_stages): block b is virtual block b, and thread i (from 0) does entry i's part of the
+// stage and its dot terms -- the start (cg_start_entry; b.b, r.z), the matrix product (a row entry, apply_row_part;
+// p.Ap) or the update (cg_update_entry; r.r, r.z) -- with the values the separate launches (the entry kernel, then
+// dot_partial_kernel, then cg_scalars_kernel) would load, and the same trees. The last block to store its partial
+// sums (counted in the scalars' `arrivals`, which it resets) sums them all and sets the scalars, so the iteration
+// takes two launches for these five and gives their bits. Launched as kEnergyBlocks blocks (empty ones store +0.0).
+template <typename Real, CgStage Stage>
+__global__ void __launch_bounds__(kEnergyThreads) cg_fused_stage_kernel(ImplicitArguments<Real> a) {
+  __shared__ double values[2 * kEnergyThreads];
+  __shared__ bool last;
+  ConjugateGradientScalars* const scalars = a.scalars;
+  if (Stage != CgStage::Start && scalars->done) return;
+  const double alpha = Stage == CgStage::Residual ? scalars->alpha : 0.0;
+  constexpr bool pair = Stage != CgStage::Alpha;
+  const int t = static_cast<int>(threadIdx.x), warp = t / 32, lane = t % 32;
+  // virtual_block_sums' terms (a thread's entries in turn from 0.0: one where 3 n <= kFusedStageDofs), then its trees
+  // by a warp each (warp_tree_sum: the same additions), so that one barrier, not one per level, stands before them.
+  double sum = 0.0, other = 0.0;
+  const long long stride = static_cast<long long>(kEnergyBlocks) * kEnergyThreads;
+  for (long long i = static_cast<long long>(blockIdx.x) * kEnergyThreads + t; i < 3LL * a.vertex_count; i += stride) {
+    const int entry = static_cast<int>(i);
+    if constexpr (Stage == CgStage::Start) {
+      cg_start_entry(a, entry);
+      sum += a.rhs[entry] * a.rhs[entry];
+      other += a.r[entry] * a.z[entry];
+    } else if constexpr (Stage == CgStage::Alpha) {
+      double row[1];
+      apply_row_part(a, entry / 3, entry % 3, row);
+      a.ap[entry] = row[0];
+      sum += a.p[entry] * row[0];
+    } else {
+      cg_update_entry(a, alpha, entry);
+      sum += a.r[entry] * a.r[entry];
+      other += a.r[entry] * a.z[entry];
+    }
+  }
+  values[t] = sum;
+  values[kEnergyThreads + t] = other;
+  __syncthreads();
+  double* const partial = a.partial;
+  if (warp < (pair ? 2 : 1)) {
+    const double total = warp_tree_sum(values + warp * kEnergyThreads);
+    if (lane == 0) {
+      partial[warp * kEnergyBlocks + blockIdx.x] = total;
+      __threadfence();  // the sum is visible before the arrival that counts it
+    }
+  }
+  __syncthreads();
+  if (t == 0) last = atomicAdd(&scalars->arrivals, 1u) == gridDim.x - 1;
+  __syncthreads();
+  if (!last) return;
+  __threadfence();  // every other block's sums, counted before this arrival, are read after it
+  if (warp < (pair ? 2 : 1)) {
+    const double total = partials_warp_sum(partial + warp * kEnergyBlocks, kEnergyBlocks);
+    if (lane == 0) values[warp] = total;
+  }
+  __syncthreads();
+  if (t == 0) {
+    scalars->arrivals = 0;
+    set_stage_scalars(*scalars, Stage, values[0], pair ? values[1] : 0.0, a.tolerance, a.iteration_limit);
+  }
+}
+
+template <typename Real, CgStage Stage>
+cudaError_t launch_fused_stage(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+  cg_fused_stage_kernel<Real, Stage><<<kEnergyBlocks, kEnergyThreads, 0, stream>>>(a);
+  return cudaGetLastError();
 }
 
 // The cooperative conjugate gradient (launch_cg_persistent): launch_cg_iterations' kernels as phases between grid
@@ -546,26 +432,6 @@ __global__ void implicit_finish_kernel(ImplicitArguments<Real> a) {
   implicit_finish_vertex(a, v);
 }
 
-// block_tree_reduce's sum of 256 values by one warp, the same additions in the same order: lane l holds values
-// l, l + 32, ..., l + 224 in v; the widths 128, 64 and 32 pair values within a lane, 16 to 1 across lanes. Every lane
-// returns the sum.
-__device__ double warp_tree_sum(double (&v)[8]) {
-  static_assert(kEnergyThreads == 256, "eight values per lane");
-  for (int k = 0; k < 4; ++k) v[k] = v[k] + v[k + 4];
-  for (int k = 0; k < 2; ++k) v[k] = v[k] + v[k + 2];
-  double sum = v[0] + v[1];
-  for (int width = 16; width > 0; width /= 2) sum = sum + __shfl_down_sync(0xffffffffu, sum, width);
-  return __shfl_sync(0xffffffffu, sum, 0);
-}
-
-// warp_tree_sum of the 256 values at `values`.
-__device__ double warp_tree_sum(const double* values) {
-  const int lane = static_cast<int>(threadIdx.x) % 32;
-  double v[8];
-  for (int k = 0; k < 8; ++k) v[k] = values[lane + 32 * k];
-  return warp_tree_sum(v);
-}
-
 // dot_partial_kernel's and cg_scalars_kernel's sums (virtual_block_sums over kEnergyBlocks virtual blocks, then
 // sum_partials) by one block of kCgBlockThreads threads with the terms and partial sums in shared memory: the same
 // additions in the same order, so the same bits. terms(i, sum, other) as virtual_block_sums' (count at most
@@ -594,19 +460,10 @@ __device__ void block_fixed_shape_sums(int count, bool pair, double* values, dou
     }
   }
   __syncthreads();
-  // sum_partials: thread t of kEnergyThreads starts at 0.0 and adds partial[t] (t < kEnergyBlocks); an empty virtual
-  // block's partial is +0.0, and 0.0 + 0.0 is what its thread holds. Each warp sums them itself.
-  static_assert(kEnergyBlocks <= kEnergyThreads, "one partial sum per thread");
-  for (int round = 0; round < (pair ? 2 : 1); ++round) {
-    double v[8];
-    for (int k = 0; k < 8; ++k) {
-      const int t = lane + 32 * k;
-      v[k] = 0.0;
-      if (t < kEnergyBlocks) v[k] += t < used ? partial[round * kEnergyBlocks + t] : 0.0;
-    }
-    (round == 0 ? total : other_total) = warp_tree_sum(v);
-  }
-  if (!pair) other_total = 0.0;
+  // Each warp sums the partials itself; an empty virtual block's partial is +0.0, and 0.0 + 0.0 is what its thread of
+  // sum_partials holds.
+  total = partials_warp_sum(partial, used);
+  other_total = pair ? partials_warp_sum(partial + kEnergyBlocks, used) : 0.0;
 }
 
 // Which element terms a one-block solve's kernel is compiled for: none (springs alone), one term of a given element
@@ -802,8 +659,9 @@ cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStrea
 }
 
 template <typename Real>
-cudaError_t launch_cg_start(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+cudaError_t launch_cg_start(const ImplicitArguments<Real>& a, bool fused, cudaStream_t stream) {
   if (a.vertex_count <= 0) return cudaSuccess;
+  if (fused) return launch_fused_stage<Real, CgStage::Start>(a, stream);
   cg_start_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
   const cudaError_t status = cudaGetLastError();
   if (status != cudaSuccess) return status;
@@ -811,10 +669,42 @@ cudaError_t launch_cg_start(const ImplicitArguments<Real>& a, cudaStream_t strea
                      a.iteration_limit, stream);
 }
 
+// An iteration after the element products, a launch per step: the rows of A p, p.Ap and alpha, the update, r.r and
+// r.z and the stopping test, the direction.
 template <typename Real>
-cudaError_t launch_cg_iterations(const ImplicitArguments<Real>& a, int count, cudaStream_t stream) {
-  if (a.vertex_count <= 0) return cudaSuccess;
+cudaError_t launch_separate_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
   const int dofs = 3 * a.vertex_count;
+  implicit_apply_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+  cudaError_t status = cudaGetLastError();
+  if (status == cudaSuccess)
+    status = launch_dots(a.p, a.ap, nullptr, nullptr, dofs, a.partial, a.scalars, CgStage::Alpha, a.tolerance,
+                         a.iteration_limit, stream);
+  if (status == cudaSuccess) {
+    cg_update_kernel<Real><<<blocks_for(dofs), kThreadsPerBlock, 0, stream>>>(a);
+    status = cudaGetLastError();
+  }
+  if (status == cudaSuccess)
+    status = launch_dots(a.r, a.r, a.r, a.z, dofs, a.partial, a.scalars, CgStage::Residual, a.tolerance,
+                         a.iteration_limit, stream);
+  if (status != cudaSuccess) return status;
+  cg_direction_kernel<Real><<<blocks_for(dofs), kThreadsPerBlock, 0, stream>>>(a);
+  return cudaGetLastError();
+}
+
+// The same iteration with the rows, p.Ap and alpha in one launch and the update, its sums and the test in another
+// (cg_fused_stage_kernel): the same bits in three launches for seven.
+template <typename Real>
+cudaError_t launch_fused_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+  cudaError_t status = launch_fused_stage<Real, CgStage::Alpha>(a, stream);
+  if (status == cudaSuccess) status = launch_fused_stage<Real, CgStage::Residual>(a, stream);
+  if (status != cudaSuccess) return status;
+  cg_direction_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+  return cudaGetLastError();
+}
+
+template <typename Real>
+cudaError_t launch_cg_iterations(const ImplicitArguments<Real>& a, int count, bool fused, cudaStream_t stream) {
+  if (a.vertex_count <= 0) return cudaSuccess;
   for (int iteration = 0; iteration < count; ++iteration) {
     if (a.elements.count > 0) {
       const cudaError_t status = for_each_term(a.elements, [&](auto kind, auto element_law, int t) {
@@ -832,20 +722,7 @@ cudaError_t launch_cg_iterations(const ImplicitArguments<Real>& a, int count, cu
       });
       if (status != cudaSuccess) return status;
     }
-    implicit_apply_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
-    cudaError_t status = cudaGetLastError();
-    if (status != cudaSuccess) return status;
-    status = launch_dots(a.p, a.ap, nullptr, nullptr, dofs, a.partial, a.scalars, CgStage::Alpha, a.tolerance,
-                         a.iteration_limit, stream);
-    if (status != cudaSuccess) return status;
-    cg_update_kernel<Real><<<blocks_for(dofs), kThreadsPerBlock, 0, stream>>>(a);
-    status = cudaGetLastError();
-    if (status != cudaSuccess) return status;
-    status = launch_dots(a.r, a.r, a.r, a.z, dofs, a.partial, a.scalars, CgStage::Residual, a.tolerance,
-                         a.iteration_limit, stream);
-    if (status != cudaSuccess) return status;
-    cg_direction_kernel<Real><<<blocks_for(dofs), kThreadsPerBlock, 0, stream>>>(a);
-    status = cudaGetLastError();
+    const cudaError_t status = fused ? launch_fused_iteration(a, stream) : launch_separate_iteration(a, stream);
     if (status != cudaSuccess) return status;
   }
   return cudaSuccess;
@@ -944,8 +821,8 @@ cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_
 
 #define FMPC_IMPLICIT_STEP_LAUNCHERS(Real)                                                            \
   template cudaError_t launch_implicit_assemble<Real>(const ImplicitArguments<Real>&, cudaStream_t);  \
-  template cudaError_t launch_cg_start<Real>(const ImplicitArguments<Real>&, cudaStream_t);           \
-  template cudaError_t launch_cg_iterations<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \
+  template cudaError_t launch_cg_start<Real>(const ImplicitArguments<Real>&, bool, cudaStream_t);     \
+  template cudaError_t launch_cg_iterations<Real>(const ImplicitArguments<Real>&, int, bool, cudaStream_t); \
   template cudaError_t launch_cg_persistent<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \
   template cudaError_t cg_persistent_block_limit<Real>(int&);                                         \
   template cudaError_t cg_block_shared_limit<Real>(long long&);                                       \

@@ -66,7 +66,7 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
     if (plan_.cg_block_bytes > 0) {
       FMPC_CUDA_CHECK(launch_cg_block(a, plan_.cg_block, plan_.cg_block_bytes, true, stream_), diagnostics, false);
     } else {
-      FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(launch_cg_start(a, plan_.cg_fused_stages, stream_), diagnostics, false);
       FMPC_CUDA_CHECK(launch_cg_persistent(a, plan_.cg_grid_blocks, stream_), diagnostics, false);
       FMPC_CUDA_CHECK(launch_implicit_finish(a, stream_), diagnostics, false);
     }
@@ -142,15 +142,15 @@ bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, Conju
     FMPC_CUDA_CHECK(launch_cg_block(a, plan_.cg_block, plan_.cg_block_bytes, false, stream_), diagnostics, false);
     if (!read_cg_scalars(a, scalars, diagnostics)) return false;
   } else if (plan_.cg_grid_blocks > 0) {
-    FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_cg_start(a, plan_.cg_fused_stages, stream_), diagnostics, false);
     FMPC_CUDA_CHECK(launch_cg_persistent(a, plan_.cg_grid_blocks, stream_), diagnostics, false);
     if (!read_cg_scalars(a, scalars, diagnostics)) return false;
   } else {
-    FMPC_CUDA_CHECK(launch_cg_start(a, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_cg_start(a, plan_.cg_fused_stages, stream_), diagnostics, false);
     int enqueued = 0;
     for (;;) {
       const int chunk = cg_iterations_before_read(cg_previous_iterations_, enqueued, a.iteration_limit);
-      FMPC_CUDA_CHECK(launch_cg_iterations(a, chunk, stream_), diagnostics, false);
+      FMPC_CUDA_CHECK(launch_cg_iterations(a, chunk, plan_.cg_fused_stages, stream_), diagnostics, false);
       enqueued += chunk;
       if (!read_cg_scalars(a, scalars, diagnostics)) return false;
       if (scalars.done || chunk == 0) break;

@@ -363,7 +363,8 @@ struct ConjugateGradientScalars {
   int iterations;    // matrix products so far, the converging one included (the CPU's count)
   int done;          // 1: at rest, converged, or at the cap; nothing more runs this step
   int at_rest;       // 1: |b| < 1e-150, dv = 0 (the CPU backend's rule)
-  int padding;
+  // Blocks of a fused stage launch (launch_cg_iterations) that have stored their partial sums; the last resets it.
+  unsigned int arrivals;
 };
 
 // The element part of implicit Euler, in double: each term's linearisation of each element at the step's start (its
@@ -422,13 +423,15 @@ template <typename Real>
 cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
 // x = 0, r = b, z = p = M^-1 r, scalars: rhs_norm2 = b.b, rz = r.z, the threshold, iterations 0, and done where
 // the system is at rest, |b|^2 is not above the threshold (or NaN) or the cap is 0.
+// fused: as one stage launch (LaunchPlan::cg_fused_stages).
 template <typename Real>
-cudaError_t launch_cg_start(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
+cudaError_t launch_cg_start(const ImplicitArguments<Real>& arguments, bool fused, cudaStream_t stream);
 // `count` iterations enqueued one launch per kernel, each a no-op once `done` is set: ap = A p (the elements'
 // product first, then per vertex), alpha = rz / p.ap, x += alpha p, r -= alpha ap, z = M^-1 r, rr = r.r,
-// rz_next = r.z, beta, the stopping test; then, unless done, p = z + beta p, rz = rz_next.
+// rz_next = r.z, beta, the stopping test; then, unless done, p = z + beta p, rz = rz_next. fused: the rows with p.Ap
+// and alpha, and the update with its sums and the test, each one launch (LaunchPlan::cg_fused_stages).
 template <typename Real>
-cudaError_t launch_cg_iterations(const ImplicitArguments<Real>& arguments, int count, cudaStream_t stream);
+cudaError_t launch_cg_iterations(const ImplicitArguments<Real>& arguments, int count, bool fused, cudaStream_t stream);
 // The whole conjugate gradient of a step (after launch_cg_start) in one cooperative launch of `blocks` blocks of
 // kEnergyThreads threads with grid barriers: the same arithmetic in the same order as launch_cg_iterations, so the
 // same bits. blocks: 1 to cg_persistent_block_limit's.

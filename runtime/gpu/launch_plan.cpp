@@ -210,6 +210,8 @@ std::optional<LaunchPlan> plan_in(const BatchShape& batch, const sim::GpuOptions
   // be two more grid barriers per step), the element kind is one the persistent kernel holds
   // (kernels::element_kind_runs_persistent), each probe vertex is listed once and the batch fits the grid or clusters;
   // otherwise one launch per kernel (steps of meshes too large for either are long enough that launches cost little).
+  plan.cg_fused_stages = options.cg_fused_stages && batch.implicit_scheme && batch.vertex_count > 0 &&
+                         3LL * batch.vertex_count <= kFusedStageDofs;
   if (options.persistent && batch.implicit_scheme && batch.vertex_count > 0) {
     if (!plan_cg_block(batch, options, device, plan)) return std::nullopt;
     if (plan.cg_block_bytes == 0 && !plan_cg_grid(batch, device, plan)) return std::nullopt;

@@ -78,6 +78,10 @@ struct LaunchPlan {
   // cg_block_bytes 0: none (then cg_grid_blocks or the per-iteration kernels).
   CgBlockLayout cg_block;
   long long cg_block_bytes = 0;
+  // Implicit Euler's start and per-iteration launches as fused stages (GpuOptions::cg_fused_stages; at most
+  // kFusedStageDofs degrees of freedom): the rows of A p with p.Ap and alpha in one launch, the update with r.r, r.z
+  // and the stopping test in another (cg_fused_stage_kernel) instead of five.
+  bool cg_fused_stages = false;
 
   bool persistent() const { return grid_blocks > 0 || !cluster_blocks.empty(); }
 };

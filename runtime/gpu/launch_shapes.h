@@ -15,6 +15,9 @@ enum class GatherKind : int { Springs = 0, Elements = 1, SpringsAndElements = 2 
 // partial sums of kEnergyThreads threads each, then one block): the same bits on every run, whatever the scheduling.
 constexpr int kEnergyBlocks = 128;
 constexpr int kEnergyThreads = 256;
+// Degrees of freedom up to which implicit Euler's conjugate gradient may run a stage's entries, dot products and
+// scalars in one launch (LaunchPlan::cg_fused_stages): one stride of the dot products' virtual blocks, a thread each.
+constexpr int kFusedStageDofs = kEnergyBlocks * kEnergyThreads;
 
 // Where the one-block conjugate gradient (launch_cg_block) keeps its vectors in shared memory: offsets in doubles of
 // x, r, z, p, ap, the Jacobi preconditioner (3 per vertex each), the diagonal (1 per vertex), the element products (3

@@ -19,6 +19,10 @@ struct GpuOptions {
   // whole conjugate gradient in one block (launch_cg_block) instead of the cooperative grid; with `persistent` only.
   // The results are bitwise the same either way.
   bool cg_single_block = true;
+  // Implicit Euler's per-iteration launches on meshes of at most 32,768 degrees of freedom: a stage's entries, its
+  // dot products and its scalars in one launch (two per iteration and the direction) instead of a launch for each
+  // (five and the direction). The results are bitwise the same either way.
+  bool cg_fused_stages = true;
   // Which persistent launch: the cooperative grid (launch_persistent_euler: every block resident at once, each
   // waiting between steps for the blocks its springs reach) or thread-block clusters (launch_cluster_euler: springs
   // alone, Hopper or newer, each scene within one cluster of at most 16 x 1,024 vertices whose state and records fit

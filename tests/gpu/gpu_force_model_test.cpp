@@ -370,11 +370,19 @@ void sanitize_force_models(const std::vector<Integrator>& integrators) {
         if (integrator == Integrator::ImplicitEuler && !runs_implicit_euler(model)) continue;
         SimulationSetup setup = held_box(model, precision, integrator);
         setup.implicit.max_iterations = kSanitizedCgIterations;
-        // Implicit Euler's solve in one block (the plan's choice at this size) and, in float, on the cooperative grid.
-        gpu::GpuOptions grid;
+        // Implicit Euler's solve in one block (the plan's choice at this size) and also, in float, on the cooperative
+        // grid, in double with the per-iteration launches (fused stages, then a launch per kernel).
+        gpu::GpuOptions grid, fused, separate;
         grid.cg_single_block = false;
-        const bool both = integrator == Integrator::ImplicitEuler && precision == Precision::Float;
-        for (const gpu::GpuOptions& options : {gpu::GpuOptions{}, grid}) {
+        fused.persistent = false;
+        separate.persistent = false;
+        separate.cg_fused_stages = false;
+        std::vector<gpu::GpuOptions> launches{gpu::GpuOptions{}};
+        if (integrator == Integrator::ImplicitEuler) {
+          if (precision == Precision::Float) launches.push_back(grid);
+          if (precision == Precision::Double) launches.insert(launches.end(), {fused, separate});
+        }
+        for (const gpu::GpuOptions& options : launches) {
           DiagnosticList diagnostics;
           const auto run = gpu_simulation(setup, diagnostics, options);
           FMPC_REQUIRE(run && run->advance(9, diagnostics, 4));
@@ -382,7 +390,6 @@ void sanitize_force_models(const std::vector<Integrator>& integrators) {
           FMPC_EXPECT(run->kinetic_energy(diagnostics).has_value());
           if (diagnostics.has_errors()) note(name_of(model) + ": " + describe(diagnostics));
           FMPC_EXPECT(!diagnostics.has_errors());
-          if (!both) break;
         }
       }
     }

@@ -178,15 +178,23 @@ gpu::GpuOptions cooperative_grid() {
   return options;
 }
 
-// The three ways a solve launches on a small mesh: one block (the plan's choice), the cooperative grid, and a launch
-// per kernel.
+// A launch per kernel, not the fused stages (the plan's choice above kFusedStageDofs degrees of freedom).
+gpu::GpuOptions separate_stages() {
+  gpu::GpuOptions options = per_iteration();
+  options.cg_fused_stages = false;
+  return options;
+}
+
+// The four ways a solve launches on a small mesh: one block (the plan's choice), the cooperative grid, the
+// per-iteration launches with fused stages, and a launch per kernel.
 struct CgLaunch {
   const char* name;
   gpu::GpuOptions options;
 };
-std::array<CgLaunch, 3> cg_launches() {
+std::array<CgLaunch, 4> cg_launches() {
   return {CgLaunch{"one block", {}}, CgLaunch{"cooperative", cooperative_grid()},
-          CgLaunch{"per iteration", per_iteration()}};
+          CgLaunch{"fused per-iteration", per_iteration()},
+          CgLaunch{"separate per-iteration", separate_stages()}};
 }
 
 }  // namespace
@@ -281,7 +289,7 @@ FMPC_GPU_TEST(implicit_cg_persistent_equals_per_iteration,
         setup.implicit.tolerance = 1e-8;
         const std::string what = std::string(fem ? "FEM " : "springs ") + std::to_string(nx) + "x" +
                                  std::to_string(ny) + "x" + std::to_string(nz) + ", " + name_of(precision);
-        const std::array<CgLaunch, 3> launches = cg_launches();
+        const std::array<CgLaunch, 4> launches = cg_launches();
         const DeviceRun block = run_on_device(setup, 60, 60, launches[0].options);
         const DeviceRun again = run_on_device(setup, 60, 7, launches[0].options);
         FMPC_REQUIRE(block.records.size() == 60);

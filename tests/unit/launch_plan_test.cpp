@@ -402,6 +402,31 @@ TEST_CASE("Launch plan: implicit Euler's conjugate gradient in one cooperative l
   CHECK_FALSE(plan_launches(shape, {}, device.limits()));
 }
 
+TEST_CASE("Launch plan: implicit Euler's stages fused up to one stride of the dot products", "[gpu][plan]") {
+  FakeDevice device;
+  std::vector<int> offset;
+  BatchShape shape = sofa_liver_implicit(offset);
+  CHECK(plan_launches(shape, {}, device.limits())->cg_fused_stages);
+  shape.element_nodes = 0;
+  shape.element_count = 48000;
+  shape.vertex_count = 10922;  // 32,766 degrees of freedom
+  CHECK(plan_launches(shape, {}, device.limits())->cg_fused_stages);
+  shape.vertex_count = 10923;  // 32,769: a thread would take two entries
+  CHECK_FALSE(plan_launches(shape, {}, device.limits())->cg_fused_stages);
+  shape.vertex_count = 9261;
+  sim::GpuOptions off;
+  off.cg_fused_stages = false;
+  CHECK_FALSE(plan_launches(shape, off, device.limits())->cg_fused_stages);
+  sim::GpuOptions per_iteration;
+  per_iteration.persistent = false;
+  CHECK(plan_launches(shape, per_iteration, device.limits())->cg_fused_stages);
+  shape.implicit_scheme = false;
+  CHECK_FALSE(plan_launches(shape, {}, device.limits())->cg_fused_stages);
+  shape.implicit_scheme = true;
+  shape.vertex_count = 0;
+  CHECK_FALSE(plan_launches(shape, {}, device.limits())->cg_fused_stages);
+}
+
 TEST_CASE("Launch plan: conjugate gradient iterations between two reads of its scalars", "[gpu][plan]") {
   // The previous step's count first, then doubling, at least 4, never beyond the cap.
   CHECK(cg_iterations_before_read(25, 0, 25) == 25);
