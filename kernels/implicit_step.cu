@@ -616,11 +616,14 @@ cudaError_t launch_dots(const double* first, const double* second, const double*
 
 }  // namespace
 
-// Threads per block of the linearisation (implicit_element_kernel): a thread's element is a long chain of double
-// arithmetic (a polar decomposition or an SVD, the stiffness action and diagonal), so a small mesh's few blocks of
-// kThreadsPerBlock would load a few multiprocessors' double units and leave the rest idle (SOFA's liver: 3 of 132);
-// one warp per block spreads them. Any block size gives the same bits (one element per thread).
-inline int linearisation_threads(int elements) { return elements < 64 * kThreadsPerBlock ? 32 : kThreadsPerBlock; }
+// Threads per block of the assembly's per-element and per-vertex kernels (implicit_element_kernel,
+// implicit_vertex_kernel): a thread's element or vertex is a long chain of double arithmetic (a polar decomposition
+// or an SVD, the stiffness action and diagonal) or of loads, which a few warps per multiprocessor hide as well as
+// many; small blocks spread a mesh's blocks over every multiprocessor where blocks of 256 would load a few (SOFA's
+// liver: 3 of 132 for its elements; the 20^3 box: 37 for its vertices). Any block size gives the same bits (one
+// element or vertex per thread).
+constexpr int kLinearisationThreads = 32;
+constexpr int kAssemblyVertexThreads = 64;
 
 template <typename Real>
 cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStream_t stream) {
@@ -639,7 +642,7 @@ cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStrea
       using Law = decltype(element_law);
       using Linearisation = typename Element::template Linearisation<Law>;
       auto* linearisation = static_cast<Linearisation*>(a.elements.linearisation[t]);
-      const int threads = linearisation_threads(a.elements.count);
+      const int threads = kLinearisationThreads;
       const int blocks = (a.elements.count + threads - 1) / threads;
       if (t == 0) {
         implicit_element_kernel<Real, Element, Law, false>
@@ -653,7 +656,8 @@ cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStrea
   }
   if (a.vertex_count <= 0) return cudaSuccess;
   return with_kind(a.model.kind, [&](auto kind) {
-    implicit_vertex_kernel<Real, decltype(kind)::value><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+    const int blocks = (a.vertex_count + kAssemblyVertexThreads - 1) / kAssemblyVertexThreads;
+    implicit_vertex_kernel<Real, decltype(kind)::value><<<blocks, kAssemblyVertexThreads, 0, stream>>>(a);
     return cudaGetLastError();
   });
 }
