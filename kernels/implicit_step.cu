@@ -626,13 +626,13 @@ constexpr int kLinearisationThreads = 32;
 constexpr int kAssemblyVertexThreads = 64;
 
 template <typename Real>
-cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, cudaStream_t stream) {
-  if (a.spring_count > 0) {
+cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& a, bool linearise, cudaStream_t stream) {
+  if (linearise && a.spring_count > 0) {
     implicit_spring_blocks_kernel<Real><<<blocks_for(a.spring_count), kThreadsPerBlock, 0, stream>>>(a);
     const cudaError_t status = cudaGetLastError();
     if (status != cudaSuccess) return status;
   }
-  if (a.elements.count > 0) {
+  if (linearise && a.elements.count > 0) {
     // The element pass at the state (f0 in b) and the elements' linearisation, before the per-vertex kernel.
     cudaError_t status = launch_element_forces(
         a.model, kernels::StateView<Real>{a.state.x, a.state.y, a.state.z, a.state.vx, a.state.vy, a.state.vz}, stream);
@@ -824,7 +824,7 @@ cudaError_t launch_implicit_finish(const ImplicitArguments<Real>& a, cudaStream_
 }
 
 #define FMPC_IMPLICIT_STEP_LAUNCHERS(Real)                                                            \
-  template cudaError_t launch_implicit_assemble<Real>(const ImplicitArguments<Real>&, cudaStream_t);  \
+  template cudaError_t launch_implicit_assemble<Real>(const ImplicitArguments<Real>&, bool, cudaStream_t); \
   template cudaError_t launch_cg_start<Real>(const ImplicitArguments<Real>&, bool, cudaStream_t);     \
   template cudaError_t launch_cg_iterations<Real>(const ImplicitArguments<Real>&, int, bool, cudaStream_t); \
   template cudaError_t launch_cg_persistent<Real>(const ImplicitArguments<Real>&, int, cudaStream_t); \

@@ -512,8 +512,9 @@ std::string solver_text(const ImplicitSolverReport& report, std::size_t steps_be
 }
 
 // How CUDA launches an implicit row's conjugate gradient: the plan's choice (one block where the solve fits its
-// shared memory, else the cooperative grid where that fits), the cooperative grid, or a launch per kernel.
-enum class CgLaunchRow { Planned, Grid, PerIteration };
+// shared memory, else the cooperative grid where that fits), the cooperative grid, the per-iteration launches (fused
+// stages where the mesh allows), or a launch per kernel (the fused stages off).
+enum class CgLaunchRow { Planned, Grid, PerIteration, Separate };
 
 // One implicit Euler row: on the CPU with `threads` workers (cuda false), or on CUDA with `launch`.
 Row implicit_row(const SimulationSetup& base, const std::string& model, bool cuda, CgLaunchRow launch, unsigned threads,
@@ -529,8 +530,9 @@ Row implicit_row(const SimulationSetup& base, const std::string& model, bool cud
   row.integrator = to_string(setup.integrator);
   row.graphs = !cuda                                ? "-"
                : launch == CgLaunchRow::Planned ? "cg one block or cooperative (planned)"
-               : launch == CgLaunchRow::Grid    ? "cg cooperative where it fits"
-                                                : "cg per iteration";
+               : launch == CgLaunchRow::Grid         ? "cg cooperative where it fits"
+               : launch == CgLaunchRow::PerIteration ? "cg per iteration"
+                                                     : "cg per iteration, a launch per kernel";
   row.threads = cuda ? 1 : threads;
   row.vertices = setup.rest_positions.size();
   row.springs = setup.springs.size();
@@ -538,8 +540,9 @@ Row implicit_row(const SimulationSetup& base, const std::string& model, bool cud
   SimulationOptions simulation_options;
   if (cuda) {
     simulation_options.backend = Backend::Cuda;
-    simulation_options.gpu.persistent = launch != CgLaunchRow::PerIteration;
+    simulation_options.gpu.persistent = launch == CgLaunchRow::Planned || launch == CgLaunchRow::Grid;
     simulation_options.gpu.cg_single_block = launch == CgLaunchRow::Planned;
+    simulation_options.gpu.cg_fused_stages = launch != CgLaunchRow::Separate;
   }
   const std::unique_ptr<Simulation> simulation = Simulation::create(setup, diagnostics, simulation_options);
   constexpr std::size_t kFirst = 8;
@@ -587,7 +590,8 @@ std::vector<Row> implicit_rows(const Options& options, bool have_device, unsigne
       rows.push_back(implicit_row(setup, name, false, CgLaunchRow::Planned, threads, options));
     }
     if (!have_device) continue;
-    for (const CgLaunchRow launch : {CgLaunchRow::Planned, CgLaunchRow::Grid, CgLaunchRow::PerIteration})
+    for (const CgLaunchRow launch :
+         {CgLaunchRow::Planned, CgLaunchRow::Grid, CgLaunchRow::PerIteration, CgLaunchRow::Separate})
       rows.push_back(implicit_row(setup, name, true, launch, 1, options));
   }
   return rows;

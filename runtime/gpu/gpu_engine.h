@@ -192,8 +192,9 @@ class GpuEngine final : public sim::SteppingEngine {
                     DiagnosticList& diagnostics);
   // The deferred solves' scalars read in one copy and recorded in step order; run() ends with it.
   bool record_deferred_solves(DiagnosticList& diagnostics);
-  // One solve of the assembled system (x = dv) into `scalars`.
-  bool conjugate_gradient(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
+  // One solve of the system (x = dv) into `scalars`, assembled first (linearise: the step's first solve; a later
+  // contact round's redoes only the vertices' part, launch_implicit_assemble).
+  bool conjugate_gradient(const ImplicitArguments<Real>& a, bool linearise, ConjugateGradientScalars& scalars,
                           DiagnosticList& diagnostics);
 
   VerletArguments<Real> verlet_arguments() const;

@@ -62,7 +62,7 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
   // the CPU (a later round's CG starts from zero where the CPU's starts from the last round's dv: the two agree to
   // the solver's tolerance). The last solve's prediction still runs, to count a set that changed after it.
   if (!contact && (plan_.cg_block_bytes > 0 || plan_.cg_grid_blocks > 0)) {
-    FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
+    FMPC_CUDA_CHECK(launch_implicit_assemble(a, true, stream_), diagnostics, false);
     if (plan_.cg_block_bytes > 0) {
       FMPC_CUDA_CHECK(launch_cg_block(a, plan_.cg_block, plan_.cg_block_bytes, true, stream_), diagnostics, false);
     } else {
@@ -79,7 +79,7 @@ bool GpuEngine<Real>::implicit_solve(DiagnosticList& diagnostics) {
   int iterations = 0;
   bool settled = true;
   for (int round = 1;; ++round) {
-    if (!conjugate_gradient(a, scalars, diagnostics)) return false;
+    if (!conjugate_gradient(a, round == 1, scalars, diagnostics)) return false;
     iterations += scalars.iterations;
     if (!contact || scalars.at_rest) break;
     unsigned int changes = 0;
@@ -133,9 +133,9 @@ bool GpuEngine<Real>::record_deferred_solves(DiagnosticList& diagnostics) {
 }
 
 template <typename Real>
-bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, ConjugateGradientScalars& scalars,
-                                         DiagnosticList& diagnostics) {
-  FMPC_CUDA_CHECK(launch_implicit_assemble(a, stream_), diagnostics, false);
+bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, bool linearise,
+                                         ConjugateGradientScalars& scalars, DiagnosticList& diagnostics) {
+  FMPC_CUDA_CHECK(launch_implicit_assemble(a, linearise, stream_), diagnostics, false);
   // The solve stops on the device (ConjugateGradientScalars::done); the host reads the scalars once after the
   // one-block or cooperative launch, or after each chunk of per-iteration launches (cg_iterations_before_read).
   if (plan_.cg_block_bytes > 0) {
@@ -168,7 +168,7 @@ bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, Conju
   template void GpuEngine<Real>::record_solve(std::size_t step, int iterations,                                   \
                                               const ConjugateGradientScalars& scalars, DiagnosticList& diagnostics); \
   template bool GpuEngine<Real>::record_deferred_solves(DiagnosticList& diagnostics);                             \
-  template bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a,                             \
+  template bool GpuEngine<Real>::conjugate_gradient(const ImplicitArguments<Real>& a, bool linearise,             \
                                                     ConjugateGradientScalars& scalars, DiagnosticList& diagnostics);
 FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(float)
 FMPC_GPU_ENGINE_IMPLICIT_MEMBERS(double)

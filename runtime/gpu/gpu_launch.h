@@ -417,10 +417,11 @@ struct ImplicitArguments {
   double tolerance;     // relative residual |r| / |b| to reach
   int iteration_limit;  // the cap (sim::implicit_iteration_limit)
 };
-// Blocks of every spring and the linearisation of every element, then b, the diagonal and the Jacobi preconditioner
-// of every vertex.
+// Blocks of every spring and the linearisation of every element (where `linearise`), then b, the diagonal and the
+// Jacobi preconditioner of every vertex. Without `linearise` the step's blocks and linearisation, which depend on its
+// state alone, are kept and only the vertices' part is redone: after the tools' contact changed the linear part.
 template <typename Real>
-cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& arguments, cudaStream_t stream);
+cudaError_t launch_implicit_assemble(const ImplicitArguments<Real>& arguments, bool linearise, cudaStream_t stream);
 // x = 0, r = b, z = p = M^-1 r, scalars: rhs_norm2 = b.b, rz = r.z, the threshold, iterations 0, and done where
 // the system is at rest, |b|^2 is not above the threshold (or NaN) or the cap is 0.
 // fused: as one stage launch (LaunchPlan::cg_fused_stages).
