@@ -45,8 +45,9 @@
 #               with the model builder's breakdown and the simulators' peak, then 120^3 on one thread (same checksum)
 #   profile     (only when asked: --only profile) Nsight Compute (ncu) on the kernels that bound the goals: the FEM
 #               120^3 element and vertex passes (fmpc_sim_bench --fem-only), the carried fmpc's 240^3 springs box
-#               and 20^3 small box, implicit Euler's CG kernels (the 20^3 FEM box's per-iteration kernels, SOFA's
-#               liver's cooperative launch); reports as text in $OUT/profile_*.txt
+#               and 20^3 small box, implicit Euler's CG kernels (the 20^3 FEM box's element products and fused
+#               stages, SOFA's liver's one-block solve, each run's kernel durations); reports as text in
+#               $OUT/profile_*.txt
 #   fuzz        (only when asked: --only fuzz) the libFuzzer targets of the build machine's build-asan, bundled by
 #               --prepare, FUZZ_JOBS processes each on the GPU machine's cores for FUZZ_SECONDS (default 540); the
 #               corpora come back as $OUT/fuzz-corpus.tar.xz, which FUZZ_CORPUS=... --prepare carries to a next run;
@@ -816,13 +817,18 @@ profile_section() {
       "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/small_box_springs.yaml" --backend cuda --steps 3000 \
       -o "$BUILD/scenes/profile_small" > "$OUT/profile_small_springs.txt" 2>&1 ||
       fail "ncu on small_box_springs (see profile_small_springs.txt)"
-    # Implicit Euler's conjugate gradient (docs/performance.md, seventeenth and eighteenth runs): the 20^3 box's
-    # per-iteration kernels, and SOFA's liver at SOFA's cap of 25 iterations (its mesh from the carry): the one-block
-    # solve's sections and stall reasons, and every kernel's duration over 60 launches of a run.
-    "$ncu" "${sections[@]}" --kernel-name regex:'implicit_apply_kernel|implicit_element_apply_kernel' --launch-skip 20 \
-      --launch-count 2 "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/box20_fem_implicit.yaml" --backend cuda \
-      --steps 40 -o "$BUILD/scenes/profile_box20" > "$OUT/profile_implicit_box20.txt" 2>&1 ||
+    # Implicit Euler's conjugate gradient (docs/performance.md, seventeenth to nineteenth runs): the 20^3 box's
+    # per-iteration kernels (the element products and the fused stages) and every kernel's duration over 400
+    # launches, and SOFA's liver at SOFA's cap of 25 iterations (its mesh from the carry): the one-block solve's
+    # sections and stall reasons, and every kernel's duration over 60 launches of a run.
+    "$ncu" "${sections[@]}" --kernel-name regex:'cg_fused_stage_kernel|implicit_element_apply_kernel' \
+      --launch-skip 20 --launch-count 3 "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/box20_fem_implicit.yaml" \
+      --backend cuda --steps 40 -o "$BUILD/scenes/profile_box20" > "$OUT/profile_implicit_box20.txt" 2>&1 ||
       fail "ncu on box20_fem_implicit (see profile_implicit_box20.txt)"
+    "$ncu" --metrics gpu__time_duration.sum --launch-skip 400 --launch-count 400 \
+      "$UNPACKED/bin/fmpc" simulate "$ROOT/bench/scenes/box20_fem_implicit.yaml" --backend cuda --steps 30 \
+      -o "$BUILD/scenes/profile_box20_durations" > "$OUT/profile_implicit_box20_durations.txt" 2>&1 ||
+      fail "ncu durations on box20_fem_implicit (see profile_implicit_box20_durations.txt)"
     if [[ -f "$CARRY/sofa-liver/liver.msh" ]]; then
       sed -e "s#file: .*liver.msh#file: $CARRY/sofa-liver/liver.msh#" \
         -e 's#^precision: double#precision: double\nsolver: {method: cg, max_iterations: 25}#' \
