@@ -73,8 +73,8 @@ __device__ inline void apply_row(const ImplicitArguments<Real>& a, int v) {
 // them (and their barriers: the whole block takes the branch) -- on a small mesh nearly every virtual block is such,
 // and each cooperative block would otherwise run a tree for a third of the kEnergyBlocks in every dot product.
 template <typename Terms>
-__device__ inline void virtual_block_sums(int block, int count, bool pair, double* cache, Terms&& terms, double& total,
-                                   double& other_total) {
+__device__ inline void virtual_block_sums(int block, int count, bool pair, double* cache, Terms&& terms,
+                                          double& total, double& other_total) {
   if (static_cast<long long>(block) * kEnergyThreads >= count) {
     total = 0.0;
     other_total = 0.0;
@@ -92,7 +92,8 @@ __device__ inline void virtual_block_sums(int block, int count, bool pair, doubl
 
 // The sums of the kEnergyBlocks partial sums in `partial` (and of the next kEnergyBlocks where `pair`), by one
 // block of kEnergyThreads threads in a fixed tree; every thread gets them. Ends with a barrier.
-__device__ inline void sum_partials(const double* partial, bool pair, double* cache, double& total, double& other_total) {
+__device__ inline void sum_partials(const double* partial, bool pair, double* cache, double& total,
+                                    double& other_total) {
   double sum = 0.0, other = 0.0;
   for (int i = static_cast<int>(threadIdx.x); i < kEnergyBlocks; i += kEnergyThreads) {
     sum += partial[i];
@@ -147,8 +148,8 @@ enum class CgStage : int { Start = 0, Alpha = 1, Residual = 2 };
 
 // The scalars at the start of a solve from b.b (total) and r.z (other_total). Every field written, so that no later
 // read (the cooperative kernel's copy, the host's) meets memory never written.
-__device__ inline void cg_start_scalars(ConjugateGradientScalars& s, double total, double other_total, double tolerance,
-                                 int limit) {
+__device__ inline void cg_start_scalars(ConjugateGradientScalars& s, double total, double other_total,
+                                        double tolerance, int limit) {
   s.rhs_norm2 = total;
   s.rz = other_total;
   s.p_ap = 0.0;
@@ -167,8 +168,8 @@ __device__ inline void cg_start_scalars(ConjugateGradientScalars& s, double tota
 }
 
 // The scalars a stage's sums set: the start's, alpha, or the iteration's end and its stopping test.
-__device__ inline void set_stage_scalars(ConjugateGradientScalars& s, CgStage stage, double total, double other_total,
-                                  double tolerance, int limit) {
+__device__ inline void set_stage_scalars(ConjugateGradientScalars& s, CgStage stage, double total,
+                                         double other_total, double tolerance, int limit) {
   switch (stage) {
     case CgStage::Start:
       cg_start_scalars(s, total, other_total, tolerance, limit);

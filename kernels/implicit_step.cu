@@ -275,12 +275,13 @@ __global__ void cg_direction_kernel(ImplicitArguments<Real> a) {
 }
 
 // A stage of the conjugate gradient in one launch where every degree of freedom has a thread of the dot products'
-// first stride (3 n <= kFusedStageDofs; LaunchPlan::cg_fused_stages): block b is virtual block b, and thread i (from 0) does entry i's part of the
-// stage and its dot terms -- the start (cg_start_entry; b.b, r.z), the matrix product (a row entry, apply_row_part;
-// p.Ap) or the update (cg_update_entry; r.r, r.z) -- with the values the separate launches (the entry kernel, then
-// dot_partial_kernel, then cg_scalars_kernel) would load, and the same trees. The last block to store its partial
-// sums (counted in the scalars' `arrivals`, which it resets) sums them all and sets the scalars, so the iteration
-// takes two launches for these five and gives their bits. Launched as kEnergyBlocks blocks (empty ones store +0.0).
+// first stride (3 n <= kFusedStageDofs; LaunchPlan::cg_fused_stages): block b is virtual block b, and thread i (from
+// 0) does entry i's part of the stage and its dot terms -- the start (cg_start_entry; b.b, r.z), the matrix product (a
+// row entry, apply_row_part; p.Ap) or the update (cg_update_entry; r.r, r.z) -- with the values the separate launches
+// (the entry kernel, then dot_partial_kernel, then cg_scalars_kernel) would load, and the same trees. The last block
+// to store its partial sums (counted in the scalars' `arrivals`, which it resets) sums them all and sets the scalars,
+// so the iteration takes two launches for these five and gives their bits. Launched as kEnergyBlocks blocks (empty
+// ones store +0.0). No block reads the scalars after the last one writes them: it arrives only after its reads.
 template <typename Real, CgStage Stage>
 __global__ void __launch_bounds__(kEnergyThreads) cg_fused_stage_kernel(ImplicitArguments<Real> a) {
   __shared__ double values[2 * kEnergyThreads];
