@@ -280,7 +280,7 @@ __global__ void cg_direction_kernel(ImplicitArguments<Real> a) {
 // row entry, apply_row_part; p.Ap) or the update (cg_update_entry; r.r, r.z) -- with the values the separate launches
 // (the entry kernel, then dot_partial_kernel, then cg_scalars_kernel) would load, and the same trees. The last block
 // to store its partial sums (counted in the scalars' `arrivals`, which it resets) sums them all and sets the scalars,
-// so the iteration takes two launches for these five and gives their bits. Launched as kEnergyBlocks blocks (empty
+// so the iteration takes two launches for these six and gives their bits. Launched as kEnergyBlocks blocks (empty
 // ones store +0.0). No block reads the scalars after the last one writes them: it arrives only after its reads.
 template <typename Real, CgStage Stage>
 __global__ void __launch_bounds__(kEnergyThreads) cg_fused_stage_kernel(ImplicitArguments<Real> a) {
@@ -674,10 +674,10 @@ cudaError_t launch_cg_start(const ImplicitArguments<Real>& a, bool fused, cudaSt
                      a.iteration_limit, stream);
 }
 
-// An iteration after the element products, a launch per step: the rows of A p, p.Ap and alpha, the update, r.r and
-// r.z and the stopping test, the direction.
+// An iteration's steps between the element products and the direction, a launch per step: the rows of A p, p.Ap and
+// alpha, the update, r.r and r.z and the stopping test.
 template <typename Real>
-cudaError_t launch_separate_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+cudaError_t launch_separate_stages(const ImplicitArguments<Real>& a, cudaStream_t stream) {
   const int dofs = 3 * a.vertex_count;
   implicit_apply_kernel<Real><<<blocks_for(a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
   cudaError_t status = cudaGetLastError();
@@ -691,20 +691,15 @@ cudaError_t launch_separate_iteration(const ImplicitArguments<Real>& a, cudaStre
   if (status == cudaSuccess)
     status = launch_dots(a.r, a.r, a.r, a.z, dofs, a.partial, a.scalars, CgStage::Residual, a.tolerance,
                          a.iteration_limit, stream);
-  if (status != cudaSuccess) return status;
-  cg_direction_kernel<Real><<<blocks_for(dofs), kThreadsPerBlock, 0, stream>>>(a);
-  return cudaGetLastError();
+  return status;
 }
 
-// The same iteration with the rows, p.Ap and alpha in one launch and the update, its sums and the test in another
-// (cg_fused_stage_kernel): the same bits in three launches for seven.
+// The same steps with the rows, p.Ap and alpha in one launch and the update, its sums and the test in another
+// (cg_fused_stage_kernel): the same bits in two launches for six.
 template <typename Real>
-cudaError_t launch_fused_iteration(const ImplicitArguments<Real>& a, cudaStream_t stream) {
-  cudaError_t status = launch_fused_stage<Real, CgStage::Alpha>(a, stream);
-  if (status == cudaSuccess) status = launch_fused_stage<Real, CgStage::Residual>(a, stream);
-  if (status != cudaSuccess) return status;
-  cg_direction_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
-  return cudaGetLastError();
+cudaError_t launch_fused_stages(const ImplicitArguments<Real>& a, cudaStream_t stream) {
+  const cudaError_t status = launch_fused_stage<Real, CgStage::Alpha>(a, stream);
+  return status == cudaSuccess ? launch_fused_stage<Real, CgStage::Residual>(a, stream) : status;
 }
 
 template <typename Real>
@@ -727,7 +722,10 @@ cudaError_t launch_cg_iterations(const ImplicitArguments<Real>& a, int count, bo
       });
       if (status != cudaSuccess) return status;
     }
-    const cudaError_t status = fused ? launch_fused_iteration(a, stream) : launch_separate_iteration(a, stream);
+    cudaError_t status = fused ? launch_fused_stages(a, stream) : launch_separate_stages(a, stream);
+    if (status != cudaSuccess) return status;
+    cg_direction_kernel<Real><<<blocks_for(3 * a.vertex_count), kThreadsPerBlock, 0, stream>>>(a);
+    status = cudaGetLastError();
     if (status != cudaSuccess) return status;
   }
   return cudaSuccess;
