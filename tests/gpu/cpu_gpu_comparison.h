@@ -4,6 +4,7 @@
 // evaluate the same FMPC_HD functions in the same order and the device code is compiled with --fmad=false, so the
 // expected difference of an explicit integrator is 0; the tests print the measured one.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -33,9 +34,24 @@ inline std::unique_ptr<sim::Simulation> gpu_batch(std::vector<sim::SimulationSet
   return sim::Simulation::create(std::move(scenes), cuda, diagnostics);
 }
 
-inline const char* name_of(sim::Precision precision) {
-  return precision == sim::Precision::Float ? "float" : "double";
+// The four ways an implicit solve launches on a small mesh: one block (the plan's choice), the cooperative grid
+// where the one-block solve would be planned, the per-iteration launches with fused stages, and a launch per kernel
+// (the plan's choice above kFusedStageDofs degrees of freedom). All give the same bits.
+struct CgLaunch {
+  const char* name;
+  sim::GpuOptions options;
+};
+inline std::array<CgLaunch, 4> cg_launches() {
+  sim::GpuOptions cooperative, fused, separate;
+  cooperative.cg_single_block = false;
+  fused.persistent = false;
+  separate.persistent = false;
+  separate.cg_fused_stages = false;
+  return {CgLaunch{"one block", {}}, CgLaunch{"cooperative", cooperative}, CgLaunch{"fused per-iteration", fused},
+          CgLaunch{"separate per-iteration", separate}};
 }
+
+inline const char* name_of(sim::Precision precision) { return precision == sim::Precision::Float ? "float" : "double"; }
 
 // The conjugate-gradient cap of the sanitizer smokes' implicit runs: every CG kernel (and every phase of the
 // cooperative one) runs in each iteration, so a few iterations check them all, while racecheck, which instruments
@@ -105,9 +121,7 @@ inline Difference cpu_gpu_difference(const sim::SimulationSetup& setup, std::siz
 }
 
 // Velocities are compared at 100 x the position tolerance per second (the scenes move at most ~0.1 m/s).
-inline double position_tolerance(sim::Precision precision) {
-  return precision == sim::Precision::Float ? 1e-5 : 1e-12;
-}
+inline double position_tolerance(sim::Precision precision) { return precision == sim::Precision::Float ? 1e-5 : 1e-12; }
 inline double velocity_tolerance(sim::Precision precision) { return 100.0 * position_tolerance(precision); }
 
 inline constexpr sim::Integrator kGpuIntegrators[] = {sim::Integrator::ForwardEuler, sim::Integrator::SemiImplicitEuler,

@@ -165,38 +165,6 @@ std::size_t warnings_with_code(const DiagnosticList& diagnostics, const std::str
   return count;
 }
 
-gpu::GpuOptions per_iteration() {
-  gpu::GpuOptions options;
-  options.persistent = false;
-  return options;
-}
-
-// The cooperative grid where the one-block solve would be planned.
-gpu::GpuOptions cooperative_grid() {
-  gpu::GpuOptions options;
-  options.cg_single_block = false;
-  return options;
-}
-
-// A launch per kernel, not the fused stages (the plan's choice above kFusedStageDofs degrees of freedom).
-gpu::GpuOptions separate_stages() {
-  gpu::GpuOptions options = per_iteration();
-  options.cg_fused_stages = false;
-  return options;
-}
-
-// The four ways a solve launches on a small mesh: one block (the plan's choice), the cooperative grid, the
-// per-iteration launches with fused stages, and a launch per kernel.
-struct CgLaunch {
-  const char* name;
-  gpu::GpuOptions options;
-};
-std::array<CgLaunch, 4> cg_launches() {
-  return {CgLaunch{"one block", {}}, CgLaunch{"cooperative", cooperative_grid()},
-          CgLaunch{"fused per-iteration", per_iteration()},
-          CgLaunch{"separate per-iteration", separate_stages()}};
-}
-
 }  // namespace
 
 // Odd sizes (never a multiple of a block), springs and FEM: the first step's iterations equal the host reference's,
@@ -216,10 +184,9 @@ FMPC_GPU_TEST(implicit_cg_matches_host_reference, "implicit Euler: device CG ite
           const ImplicitStepRecord& step = run.records.front();
           std::ostringstream line;
           line << (fem ? "FEM " : "springs ") << nx << "x" << ny << "x" << nz << ", tol " << tolerance << ", cap "
-               << implicit_iteration_limit(setup) << ", " << launch.name << ": device "
-               << step.iterations << " iterations, residual " << step.relative_residual
-               << (step.capped ? " (capped)" : "") << "; host reference " << reference.iterations << ", "
-               << reference.relative_residual;
+               << implicit_iteration_limit(setup) << ", " << launch.name << ": device " << step.iterations
+               << " iterations, residual " << step.relative_residual << (step.capped ? " (capped)" : "")
+               << "; host reference " << reference.iterations << ", " << reference.relative_residual;
           note(line.str());
           FMPC_EXPECT(step.step == 1);
           FMPC_EXPECT(step.iterations == reference.iterations);

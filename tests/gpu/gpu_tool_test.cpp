@@ -5,6 +5,7 @@
 // material swapped between two steps and the device pointer to the positions give the same bits as the CPU.
 #include <cuda_runtime_api.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -25,14 +26,15 @@ using namespace fmpc::gpu_test;
 namespace {
 
 // A 2 x 2 x 1 cm block (FEM, or springs), fixed at its base, and a sphere tip and a capsule shaft above the middle of
-// its top face; 9 x 7 x 5 cells, so that no launch's blocks are full.
-SimulationSetup block_with_tools(bool fem, Precision precision, Integrator integrator) {
+// its top face; 9 x 7 x 5 cells (or `cells`), so that no launch's blocks are full.
+SimulationSetup block_with_tools(bool fem, Precision precision, Integrator integrator,
+                                 std::array<int, 3> cells = {9, 7, 5}) {
   DiagnosticList diagnostics;
   BoxSpec box;
   box.size = {0.02, 0.02, 0.01};
-  box.cells_x = 9;
-  box.cells_y = 7;
-  box.cells_z = 5;
+  box.cells_x = cells[0];
+  box.cells_y = cells[1];
+  box.cells_z = cells[2];
   const Mesh mesh = generate_box(box, diagnostics);
   SimulationSetup setup;
   if (fem) {
@@ -207,8 +209,7 @@ FMPC_GPU_TEST(tools_implicit, "implicit Euler with tools: the contact set and th
   for (const Precision precision : {Precision::Float, Precision::Double}) {
     DiagnosticList diagnostics;
     ImplicitPair pair;
-    FMPC_REQUIRE(implicit_against_cpu(block_with_tools(true, precision, Integrator::ImplicitEuler), pair,
-                                      diagnostics));
+    FMPC_REQUIRE(implicit_against_cpu(block_with_tools(true, precision, Integrator::ImplicitEuler), pair, diagnostics));
   }
 }
 
@@ -227,6 +228,76 @@ FMPC_GPU_TEST(tools_implicit_one_round,
     FMPC_EXPECT(cpu.contact_unsettled_steps > 0 && device.contact_unsettled_steps > 0);
     FMPC_EXPECT(device.steps == cpu.steps);
     FMPC_EXPECT(diagnostics.warning_count() == 0);
+  }
+}
+
+// Implicit Euler with tools (the contact rounds: the set predicted from each solve, the vertices re-assembled, the CG
+// solved again) in every launch of the solve: the one block (springs on either mesh, FEM on the smaller), the
+// cooperative grid, the fused and the separate per-iteration launches give the same bits, in the state, every step's
+// record and the tools' readings; every step reaches the tolerance; and later rounds run (the one-round run of the
+// same drive leaves steps unsettled; the note gives their iterations per step that needed them).
+FMPC_GPU_TEST(tools_implicit_launches_bitwise,
+              "implicit Euler with tools: every CG launch gives the same bits through the contact rounds", true) {
+  for (const bool fem : {true, false}) {
+    for (const Precision precision : {Precision::Float, Precision::Double}) {
+      for (const std::array<int, 3> cells : {std::array<int, 3>{9, 7, 5}, std::array<int, 3>{6, 5, 3}}) {
+        SimulationSetup setup = block_with_tools(fem, precision, Integrator::ImplicitEuler, cells);
+        setup.time_step = 1e-3;
+        setup.implicit.tolerance = 1e-8;
+        struct Run {
+          std::vector<Point3> positions, velocities;
+          std::vector<ImplicitStepRecord> records;
+          ImplicitSolverReport report;
+          std::vector<ToolReading> readings;
+        };
+        const auto run = [&](const SimulationSetup& scene, const GpuOptions& options, Run& out) {
+          DiagnosticList diagnostics;
+          const auto device = gpu_simulation(scene, diagnostics, options);
+          if (!device || !drive(*device, 5, diagnostics)) return false;
+          out = {device->positions(diagnostics), device->velocities(diagnostics), device->take_implicit_steps(),
+                 device->implicit_solver(), device->tool_readings(0, diagnostics)};
+          if (diagnostics.has_errors()) note(describe(diagnostics));
+          return !diagnostics.has_errors();
+        };
+        const std::array<CgLaunch, 4> launches = cg_launches();
+        Run first;
+        FMPC_REQUIRE(run(setup, launches[0].options, first));
+        const std::string what = std::string(fem ? "FEM " : "springs ") + std::to_string(cells[0]) + "x" +
+                                 std::to_string(cells[1]) + "x" + std::to_string(cells[2]) + ", " + name_of(precision);
+        for (std::size_t k = 1; k < launches.size(); ++k) {
+          Run other;
+          FMPC_REQUIRE(run(setup, launches[k].options, other));
+          bool same = bitwise_equal(first.positions, other.positions) &&
+                      bitwise_equal(first.velocities, other.velocities) &&
+                      first.records.size() == other.records.size() && first.readings.size() == other.readings.size();
+          for (std::size_t i = 0; same && i < first.records.size(); ++i)
+            same = first.records[i].iterations == other.records[i].iterations &&
+                   std::memcmp(&first.records[i].relative_residual, &other.records[i].relative_residual,
+                               sizeof(double)) == 0;
+          same = same && reading_difference(first.readings, other.readings) == 0.0;
+          note("implicit Euler with tools, " + what + ": " + launches[0].name + " and " + launches[k].name + " " +
+               (same ? "bitwise equal" : "DIFFER"));
+          FMPC_EXPECT(same);
+        }
+        SimulationSetup one_round = setup;
+        one_round.implicit.contact_rounds = 1;
+        Run single;
+        FMPC_REQUIRE(run(one_round, launches[0].options, single));
+        const double later =
+            static_cast<double>(first.report.iterations_total) - static_cast<double>(single.report.iterations_total);
+        std::ostringstream line;
+        line << "implicit Euler with tools, " << what << ": a first solve "
+             << static_cast<double>(single.report.iterations_total) / static_cast<double>(single.report.steps)
+             << " iterations a step; later rounds "
+             << later / static_cast<double>(std::max<std::size_t>(1, single.report.contact_unsettled_steps))
+             << " a step that needed them (" << single.report.contact_unsettled_steps << " of " << single.report.steps
+             << ")";
+        note(line.str());
+        FMPC_EXPECT(single.report.contact_unsettled_steps > 0);
+        FMPC_EXPECT(later > 0.0);
+        for (const ImplicitStepRecord& step : first.records) FMPC_EXPECT(step.relative_residual < 1e-8 && !step.capped);
+      }
+    }
   }
 }
 
@@ -306,8 +377,11 @@ FMPC_GPU_TEST(tools_batch_refused, "a GPU batch of scenes with tools is refused 
 }
 
 // The contact kernels (tool readings, the implicit contact set) under compute-sanitizer: a few poses on each kind of
-// tissue, explicit and implicit (CG capped: racecheck instruments every shared access of the cooperative CG).
+// tissue, explicit and implicit (CG capped: racecheck instruments every shared access of the cooperative CG); the
+// implicit runs also with the per-iteration launches, fused and separate, which the plan (one block for the springs,
+// the cooperative grid for FEM) does not take on this mesh.
 FMPC_GPU_TEST(sanitizer_tools, "sanitizer smoke: rigid tool contact, explicit and implicit", true) {
+  const std::array<CgLaunch, 4> launches = cg_launches();
   for (const bool fem : {true, false}) {
     for (const Integrator integrator : {Integrator::SemiImplicitEuler, Integrator::ImplicitEuler}) {
       SimulationSetup setup = block_with_tools(fem, Precision::Float, integrator);
@@ -315,12 +389,15 @@ FMPC_GPU_TEST(sanitizer_tools, "sanitizer smoke: rigid tool contact, explicit an
         setup.time_step = 1e-3;
         setup.implicit.max_iterations = kSanitizedCgIterations;
       }
-      DiagnosticList diagnostics;
-      const auto run = gpu_simulation(setup, diagnostics);
-      FMPC_REQUIRE(run && drive(*run, 2, diagnostics));
-      FMPC_EXPECT(run->tool_readings(0, diagnostics).size() == 2);
-      if (diagnostics.has_errors()) note(describe(diagnostics));
-      FMPC_EXPECT(!diagnostics.has_errors());
+      for (std::size_t k : {0, 2, 3}) {
+        if (k > 0 && integrator != Integrator::ImplicitEuler) break;
+        DiagnosticList diagnostics;
+        const auto run = gpu_simulation(setup, diagnostics, launches[k].options);
+        FMPC_REQUIRE(run && drive(*run, 2, diagnostics));
+        FMPC_EXPECT(run->tool_readings(0, diagnostics).size() == 2);
+        if (diagnostics.has_errors()) note(describe(diagnostics));
+        FMPC_EXPECT(!diagnostics.has_errors());
+      }
     }
   }
 }
