@@ -19,6 +19,7 @@ fmpc_unity_group(fmpc_runtime runtime_meshing
   meshing/mesh_quality.cpp
   meshing/size_field.cpp
   meshing/surface_check.cpp
+  meshing/surface_split.cpp
   meshing/surface_untangle.cpp
   meshing/volume_mesher.cpp)
 fmpc_unity_group(fmpc_runtime runtime_models

@@ -92,6 +92,10 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
                             std::to_string(result.untangling->rounds) +
                             (result.untangling->rounds == 1 ? " round" : " rounds") + " (smooth_intersections)");
   }
+  if (options.keep_surface && options.split_surface) {
+    result.split = split_surface_to_size(surface, options.size, kMaxSurfaceTriangles, diagnostics);
+    if (!result.split) return std::nullopt;
+  }
   result.estimate = estimate_tetrahedra(surface, options.size);
   if (result.estimate.tetrahedra > static_cast<double>(options.max_tetrahedra)) {
     diagnostics.error(file_range, "the size field asks for about " + count_text(result.estimate.tetrahedra) +
@@ -130,6 +134,7 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
   // Positive orientation (mesh.h) whatever TetGen's convention: a negative element has two vertices swapped.
   for (Tetrahedron& t : mesh->tetrahedra)
     if (signed_volume(*mesh, t) < 0.0) std::swap(t[2], t[3]);
+  if (options.keep_surface) result.flat_removed = remove_flat_surface_tetrahedra(*mesh, surface.triangles);
   mesh->triangles.clear();
   result.mesh = std::move(*mesh);
   result.quality = measure_quality(result.mesh, options.max_radius_edge_ratio, options.min_dihedral_degrees);
@@ -171,7 +176,15 @@ std::string quality_text(const VolumeMesh& mesh, const VolumeMeshOptions& option
           format_number(options.size.near_distance) + " of " + std::to_string(options.size.sources.size()) +
           (options.size.sources.size() == 1 ? " source" : " sources") + ", graded at " +
           format_number(options.size.grading) + " to size_far " + format_number(options.size.size_far) +
-          " (mesh units); surface " + (options.keep_surface ? "kept" : "refined") + "\n";
+          " (mesh units); surface " + (options.keep_surface ? "kept" : "refined") +
+          (mesh.split ? ", its triangles split to the field first (" + std::to_string(mesh.split->triangles_before) +
+                            " -> " + std::to_string(mesh.split->triangles_after) + " triangles, " +
+                            std::to_string(mesh.split->parents.size()) + " vertices added)"
+                      : std::string()) +
+          (mesh.flat_removed > 0 ? "; " + std::to_string(mesh.flat_removed) +
+                                       " flat elements on the surface removed (coplanar corners)"
+                                 : std::string()) +
+          "\n";
   text += row("longest edge (" + std::to_string(mesh.above_size) + " above 1.5 x the size field)", q.longest_edge);
   text += row("radius-edge ratio (bound " + format_number(options.max_radius_edge_ratio) + ", " +
                   std::to_string(q.above_ratio_bound) + " above, " + std::to_string(q.above_ratio_bound_inside) +

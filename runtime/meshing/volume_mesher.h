@@ -16,6 +16,7 @@
 #include "runtime/meshing/mesh_quality.h"
 #include "runtime/meshing/size_field.h"
 #include "runtime/meshing/surface_check.h"
+#include "runtime/meshing/surface_split.h"
 #include "runtime/meshing/surface_untangle.h"
 
 namespace fmpc::sim {
@@ -48,12 +49,17 @@ struct VolumeMeshOptions {
   // them (the liver: 5,200 vertices at size_far 0.4). Elements left larger than the field are counted and warned
   // about (docs/meshing.md).
   bool keep_surface = false;
+  // With keep_surface: the surface's triangles coarser than the size field are split first (surface_split.h), so
+  // the kept boundary is as fine as the field where the tools act, and stays the input's polyhedron elsewhere.
+  bool split_surface = false;
 };
 
 struct VolumeMesh {
   Mesh mesh;  // the surface's vertices first, in their order, then the inserted ones; every tetrahedron positive
   SurfaceCheck surface;
   std::optional<SurfaceUntangling> untangling;  // when the surface intersected itself and was smoothed
+  std::optional<SurfaceSplit> split;            // split_surface: what the split added (its vertices follow the input's)
+  std::size_t flat_removed = 0;                 // remove_flat_surface_tetrahedra's count (a kept surface's)
   std::size_t surface_vertices = 0;
   std::size_t surface_triangles = 0;
   VolumeEstimate estimate;

@@ -134,10 +134,12 @@ bool inside(const SceneBox& box, const Point3& p) {
 }
 
 // The vertices a selection (of `fixed` or a `hold` entry) names; errors name `prefix`.box or .plane when one holds
-// no vertex.
+// no vertex. Indices name the surface's vertices; where the meshing split the surface (mesh.split_surface), a
+// midpoint of an edge whose ends are both named is named too (split_selection).
 std::optional<std::vector<std::int32_t>> selected_vertices(const Scene& scene, const SceneFixed& selection,
                                                            const std::string& prefix, const Mesh& mesh,
                                                            const std::vector<std::int32_t>& new_index,
+                                                           const std::optional<MeshingRun>& meshing,
                                                            DiagnosticList& diagnostics) {
   std::vector<unsigned char> fixed(mesh.points.size(), 0);
   bool ok = true;
@@ -145,6 +147,13 @@ std::optional<std::vector<std::int32_t>> selected_vertices(const Scene& scene, c
     const auto mapped = remap(index, new_index, scene, prefix + ".indices", diagnostics);
     if (mapped) fixed[static_cast<std::size_t>(*mapped)] = 1;
     ok = ok && mapped;
+  }
+  if (ok && meshing && meshing->result.split && !selection.indices.empty()) {
+    std::vector<unsigned char> named(new_index.size(), 0);
+    for (const auto index : selection.indices) named[static_cast<std::size_t>(index)] = 1;
+    split_selection(*meshing->result.split, meshing->result.surface_vertices, named);
+    for (std::size_t v = meshing->result.surface_vertices; v < named.size(); ++v)
+      if (named[v] && new_index[v] >= 0) fixed[static_cast<std::size_t>(new_index[v])] = 1;
   }
   for (const SceneBox& box : selection.boxes) {
     std::size_t count = 0;
@@ -654,10 +663,12 @@ std::optional<SimulationSetup> build_springs(const Scene& scene, BuiltScene& bui
 std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResult& repair, BuiltScene built,
                                        SimulationSetup setup_value, std::size_t errors, DiagnosticList& diagnostics) {
   std::optional<SimulationSetup> setup = std::move(setup_value);
-  const auto fixed = selected_vertices(scene, scene.fixed, "fixed", built.mesh, repair.new_vertex_index, diagnostics);
+  const auto fixed =
+      selected_vertices(scene, scene.fixed, "fixed", built.mesh, repair.new_vertex_index, built.meshing, diagnostics);
   if (fixed) setup->fixed_vertices = *fixed;
   for (const SceneHold& hold : scene.holds) {
-    const auto held = selected_vertices(scene, hold.selection, hold.field, built.mesh, repair.new_vertex_index, diagnostics);
+    const auto held = selected_vertices(scene, hold.selection, hold.field, built.mesh, repair.new_vertex_index,
+                                        built.meshing, diagnostics);
     if (!held) continue;
     if (setup->fixed_axes.empty()) setup->fixed_axes.assign(built.mesh.points.size(), 0);
     for (const auto v : *held)

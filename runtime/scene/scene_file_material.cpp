@@ -12,7 +12,7 @@ void SceneParser::parse_mesh(const YAML::Node& node) {
   remember(node, "mesh");
   const std::vector<std::string> meshing_keys = {"size_far", "size_near", "near_distance", "grading",
                                                  "radius_edge_ratio", "min_dihedral", "keep_surface",
-                                                 "smooth_intersections", "refine_near"};
+                                                 "split_surface", "smooth_intersections", "refine_near"};
   std::vector<std::string> allowed = {"file", "box", "ellipsoid", "surface", "units", "refinements"};
   allowed.insert(allowed.end(), meshing_keys.begin(), meshing_keys.end());
   if (!check_map(node, "mesh", allowed)) return;
@@ -148,6 +148,14 @@ void SceneParser::parse_surface_meshing(const YAML::Node& node) {
     }
   if (node["keep_surface"])
     if (auto v = boolean(node["keep_surface"], "mesh.keep_surface")) options.keep_surface = *v;
+  if (node["split_surface"])
+    if (auto v = boolean(node["split_surface"], "mesh.split_surface")) {
+      options.split_surface = *v;
+      if (*v && !options.keep_surface)
+        error(node["split_surface"], "mesh.split_surface",
+              "splits a kept surface; without keep_surface: true the mesher splits the surface itself: set "
+              "keep_surface: true or leave split_surface out");
+    }
   if (node["smooth_intersections"])
     if (auto v = boolean(node["smooth_intersections"], "mesh.smooth_intersections")) options.smooth_intersections = *v;
   if (const YAML::Node near = node["refine_near"]) {

@@ -236,6 +236,12 @@ void add_meshing(JsonDocument& out, const MeshingRun& run) {
   out["grading"] = size.grading;
   out["size_sources"] = size.sources.size();
   out["keep_surface"] = run.options.keep_surface;
+  out["split_surface"] = run.options.split_surface;
+  if (meshed.split) {
+    out["split_surface_triangles"] = meshed.split->triangles_after;
+    out["split_surface_vertices_added"] = meshed.split->parents.size();
+    out["flat_surface_elements_removed"] = meshed.flat_removed;
+  }
   out["seconds"] = run.seconds;
   out["above_size_field"] = meshed.above_size;
   if (meshed.untangling) {

@@ -34,6 +34,7 @@ struct MeshOptions {
   double min_dihedral = sim::kDefaultMinDihedralDegrees;
   bool smooth_intersections = false;
   bool keep_surface = false;
+  bool split_surface = false;
 };
 
 bool ends_with(const std::string& text, const std::string& suffix) {
@@ -95,6 +96,10 @@ int run_mesh(const MeshOptions& options) {
   mesh_options.min_dihedral_degrees = options.min_dihedral;
   mesh_options.smooth_intersections = options.smooth_intersections;
   mesh_options.keep_surface = options.keep_surface;
+  mesh_options.split_surface = options.split_surface;
+  if (options.split_surface && !options.keep_surface)
+    diagnostics.error(kCommandLine, "--split-surface splits a kept surface: add --keep-surface (without it the mesher "
+                                    "splits the surface itself)");
   if (!(options.radius_edge_ratio >= 1.0))
     diagnostics.error(kCommandLine,
                       "--radius-edge: " + format_number(options.radius_edge_ratio) +
@@ -175,6 +180,9 @@ void register_mesh_command(CLI::App& app, int& exit_code) {
   command->add_flag("--keep-surface", options->keep_surface,
                     "Keep the surface's triangles as the boundary faces, refining only the interior (default: the "
                     "mesher splits them where the size field asks)");
+  command->add_flag("--split-surface", options->split_surface,
+                    "With --keep-surface: split the surface's triangles coarser than the size field first (at their "
+                    "edges' midpoints: the same polyhedron)");
   command->callback([options, &exit_code] { exit_code = run_mesh(*options); });
 }
 
