@@ -2,9 +2,12 @@
 // the scene built with its mesh, law and element changed by the arguments, the tool lowered from its path's first
 // pose to its last over `lowering` implicit Euler steps of 1 s (Newton steps of the static problem: h^2 K dominates
 // the mass, as tests/support/hertz_contact.h does) and held until its force changes by less than `tolerance` of
-// itself. Prints one line: the mesh, the force, and the CPU time of the build (meshing included) and of the press.
+// itself. Prints one line: the mesh, the force, the CPU time of the build (meshing included) and of the press, and the
+// press's wall time (the figure for backend=cuda, whose host thread waits on the device).
 //   fmpc_graded_press_bench SCENE.yaml [size_near=H] [size_far=H] [near_distance=D] [grading=G] [law=KEYWORD]
 //       [element=KEYWORD] [refinements=N] [solver=direct|cg] [lowering=4] [tolerance=1e-6] [most_steps=30] [label=TEXT]
+//       [keep_surface=0|1] [split_surface=0|1] [backend=cpu|cuda]
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -48,6 +51,7 @@ int main(int argc, char** argv) {
   int lowering = 4, most_steps = 30;
   double tolerance = 1e-6;
   std::string label = "scene";
+  sim::Backend backend = sim::Backend::Cpu;
   sim::VolumeMeshOptions& meshing = scene->mesh.surface.options;
   for (int i = 2; i < argc; ++i) {
     const std::string argument = argv[i];
@@ -85,6 +89,13 @@ int main(int argc, char** argv) {
     } else if (key == "solver") {
       if (value != "direct" && value != "cg") return std::fprintf(stderr, "solver: direct or cg\n"), 2;
       scene->solver.method = value == "direct" ? sim::ImplicitMethod::Direct : sim::ImplicitMethod::ConjugateGradient;
+    } else if (key == "keep_surface") {
+      meshing.keep_surface = value == "1";
+    } else if (key == "split_surface") {
+      meshing.split_surface = value == "1";
+    } else if (key == "backend") {
+      if (value != "cpu" && value != "cuda") return std::fprintf(stderr, "backend: cpu or cuda\n"), 2;
+      backend = value == "cuda" ? sim::Backend::Cuda : sim::Backend::Cpu;
     } else if (key == "label") {
       label = value;
     } else {
@@ -109,10 +120,11 @@ int main(int argc, char** argv) {
   setup.tools.front().path = {sim::ToolKeyframe{0.0, first}};
   const std::size_t vertices = setup.rest_positions.size(), tetrahedra = setup.tetrahedra.size();
   sim::SimulationOptions options;
-  options.backend = sim::Backend::Cpu;
+  options.backend = backend;
   std::vector<sim::SimulationSetup> scenes;
   scenes.push_back(std::move(setup));
   const double press_start = bench::cpu_seconds();
+  const auto wall_start = std::chrono::steady_clock::now();
   const auto simulation = sim::Simulation::create(std::move(scenes), options, diagnostics);
   if (!simulation) return fail("cannot create the simulation", diagnostics);
   sim::Point3 direction{};
@@ -136,8 +148,11 @@ int main(int argc, char** argv) {
     previous = force;
   }
   const double press_cpu = bench::cpu_seconds() - press_start;
+  const double press_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  const sim::ImplicitSolverReport solver = simulation->implicit_solver();
   std::printf("%-28s vertices %7zu tetrahedra %8zu force_N %.6g contacts %4zu steps %2d last_change %.1e "
-              "build_cpu_s %7.2f press_cpu_s %8.2f\n",
-              label.c_str(), vertices, tetrahedra, force, contacts, steps, change, build_cpu, press_cpu);
+              "build_cpu_s %7.2f press_cpu_s %8.2f press_wall_s %8.2f cg_iterations %llu capped_steps %zu\n",
+              label.c_str(), vertices, tetrahedra, force, contacts, steps, change, build_cpu, press_cpu, press_wall,
+              static_cast<unsigned long long>(solver.iterations_total), solver.capped_steps);
   return change <= tolerance ? 0 : 1;
 }
