@@ -9,26 +9,20 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
-#include <sstream>
 
 #include "runtime/meshing/surface_check.h"
 #include "runtime/meshing/volume_mesher.h"
 #include "runtime/scene/scene_builder.h"
 #include "runtime/scene/scene_file.h"
+#include "tests/support/fmpc_process.h"
+#include "tests/support/surface_meshes.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
+using fmpc::testing::sorted_faces;
+using fmpc::testing::unit_cube_surface;
 
 namespace {
-
-Mesh unit_cube_surface() {
-  Mesh cube;
-  cube.source = "cube";
-  cube.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  cube.triangles = {{0, 3, 2}, {0, 2, 1}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                    {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
-  return cube;
-}
 
 // Fine (0.15) within 0.1 of the top face's centre, graded at 4 to 2 (no split) from about half a side away.
 SizeField top_centre_field() {
@@ -55,22 +49,6 @@ Point3 centroid(const Mesh& m, const Triangle& t) {
   return c;
 }
 
-std::set<Triangle> sorted_faces(const std::vector<Triangle>& faces) {
-  std::set<Triangle> out;
-  for (Triangle f : faces) {
-    std::sort(f.begin(), f.end());
-    out.insert(f);
-  }
-  return out;
-}
-
-std::string read_whole(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 }  // namespace
 
 TEST_CASE("a surface split to the field: every triangle meets it, closed, outward, the same polyhedron",
@@ -95,8 +73,9 @@ TEST_CASE("a surface split to the field: every triangle meets it, closed, outwar
     REQUIRE(static_cast<std::size_t>(std::max(a, b)) < 8 + k);
     const Point3& p = surface.points[8 + k];
     for (std::size_t axis = 0; axis < 3; ++axis)
-      CHECK(p[axis] == (surface.points[static_cast<std::size_t>(a)][axis] +
-                        surface.points[static_cast<std::size_t>(b)][axis]) / 2.0);
+      CHECK(p[axis] ==
+            (surface.points[static_cast<std::size_t>(a)][axis] + surface.points[static_cast<std::size_t>(b)][axis]) /
+                2.0);
   }
   // Closed (every edge in two triangles, once each way), outward, and the cube's volume and area.
   DiagnosticList check;
@@ -119,8 +98,7 @@ TEST_CASE("a surface split to the field: every triangle meets it, closed, outwar
   CHECK(again.triangles == surface.triangles);
 }
 
-TEST_CASE("a selection of surface vertices extends to the midpoints of its edges, and only those",
-          "[mesher][split]") {
+TEST_CASE("a selection of surface vertices extends to the midpoints of its edges, and only those", "[mesher][split]") {
   Mesh surface = unit_cube_surface();
   SizeField field;
   field.size_far = field.size_near = 0.3;  // every triangle split
@@ -186,8 +164,9 @@ TEST_CASE("mesh_volume with split_surface: the split surface is the boundary, it
   CHECK(sorted_faces(boundary_triangles(meshed->mesh)) == sorted_faces(split.triangles));
   for (std::size_t v = 0; v < split.points.size(); ++v) CHECK(meshed->mesh.points[v] == split.points[v]);
   CHECK(meshed->quality.volume == Approx(1.0).epsilon(1e-12));
-  CHECK(quality_text(*meshed, options).find("its triangles split to the field first (12 -> " +
-                                            std::to_string(split.triangles.size()) + " triangles") != std::string::npos);
+  CHECK(quality_text(*meshed, options)
+            .find("its triangles split to the field first (12 -> " + std::to_string(split.triangles.size()) +
+                  " triangles") != std::string::npos);
 }
 
 TEST_CASE("a scene's split surface keeps its fixed face fixed along its length; split_surface needs keep_surface",
@@ -205,7 +184,7 @@ TEST_CASE("a scene's split surface keeps its fixed face fixed along its length; 
   const std::string path = (dir / "scene.yaml").string();
   std::ofstream(path) << scene_text("  keep_surface: true\n");
   DiagnosticList diagnostics;
-  const auto scene = parse_scene(path, read_whole(path), diagnostics);
+  const auto scene = parse_scene(path, fmpc::testing::read_file_text(path), diagnostics);
   REQUIRE(scene);
   const auto built = build_scene(*scene, diagnostics);
   REQUIRE(built);
@@ -223,7 +202,7 @@ TEST_CASE("a scene's split surface keeps its fixed face fixed along its length; 
 
   std::ofstream(path) << scene_text("");
   DiagnosticList refused;
-  parse_scene(path, read_whole(path), refused);
+  parse_scene(path, fmpc::testing::read_file_text(path), refused);
   REQUIRE(refused.has_errors());
   CHECK(refused.items().front().message ==
         "mesh.split_surface: splits a kept surface; without keep_surface: true the mesher splits the surface itself: "

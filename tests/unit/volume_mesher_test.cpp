@@ -1,7 +1,6 @@
 // Volume meshes from surfaces (runtime/meshing): the meshed volume against the enclosed one, positive elements,
 // quality bounds, boundary faces against the surface, the size field measured, determinism, limits, and the
 // surface checks' located errors (the command's exact output is in tests/golden/mesh_*).
-#include "runtime/meshing/tetgen_mesher.h"
 #include "runtime/meshing/volume_mesher.h"
 
 #include <algorithm>
@@ -13,20 +12,15 @@
 
 #include "runtime/mesh/mesh_reader.h"
 #include "runtime/mesh/mesh_writer.h"
+#include "runtime/meshing/tetgen_mesher.h"
+#include "tests/support/surface_meshes.h"
 
 using namespace fmpc;
 using namespace fmpc::sim;
+using fmpc::testing::sorted_faces;
+using fmpc::testing::unit_cube_surface;
 
 namespace {
-
-Mesh unit_cube_surface() {
-  Mesh cube;
-  cube.source = "cube";
-  cube.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-  cube.triangles = {{0, 3, 2}, {0, 2, 1}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                    {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
-  return cube;
-}
 
 // An icosahedron subdivided `levels` times onto the unit sphere (10 * 4^levels + 2 vertices), faces outward.
 Mesh sphere_surface(int levels) {
@@ -75,15 +69,6 @@ std::string messages(const DiagnosticList& diagnostics) {
   std::string text;
   for (const Diagnostic& d : diagnostics.items()) text += d.message + "\n";
   return text;
-}
-
-std::set<Triangle> sorted_faces(const std::vector<Triangle>& faces) {
-  std::set<Triangle> out;
-  for (Triangle f : faces) {
-    std::sort(f.begin(), f.end());
-    out.insert(f);
-  }
-  return out;
 }
 
 double boundary_area(const Mesh& mesh) {
