@@ -133,6 +133,20 @@ bool inside(const SceneBox& box, const Point3& p) {
   return true;
 }
 
+// The vertices a split surface (mesh.split_surface) added on edges whose two ends `indices` name (split_selection),
+// as file indices; none without a split. The indices are in range (the caller checked them).
+std::vector<std::int32_t> split_midpoints_of(const std::optional<MeshingRun>& meshing,
+                                             const std::vector<std::int32_t>& indices, std::size_t vertex_count) {
+  std::vector<std::int32_t> added;
+  if (!meshing || !meshing->result.split || indices.empty()) return added;
+  std::vector<unsigned char> named(vertex_count, 0);
+  for (const auto index : indices) named[static_cast<std::size_t>(index)] = 1;
+  split_selection(*meshing->result.split, meshing->result.surface_vertices, named);
+  for (std::size_t v = meshing->result.surface_vertices; v < named.size(); ++v)
+    if (named[v]) added.push_back(static_cast<std::int32_t>(v));
+  return added;
+}
+
 // The vertices a selection (of `fixed` or a `hold` entry) names; errors name `prefix`.box or .plane when one holds
 // no vertex. Indices name the surface's vertices; where the meshing split the surface (mesh.split_surface), a
 // midpoint of an edge whose ends are both named is named too (split_selection).
@@ -148,13 +162,11 @@ std::optional<std::vector<std::int32_t>> selected_vertices(const Scene& scene, c
     if (mapped) fixed[static_cast<std::size_t>(*mapped)] = 1;
     ok = ok && mapped;
   }
-  if (ok && meshing && meshing->result.split && !selection.indices.empty()) {
-    std::vector<unsigned char> named(new_index.size(), 0);
-    for (const auto index : selection.indices) named[static_cast<std::size_t>(index)] = 1;
-    split_selection(*meshing->result.split, meshing->result.surface_vertices, named);
-    for (std::size_t v = meshing->result.surface_vertices; v < named.size(); ++v)
-      if (named[v] && new_index[v] >= 0) fixed[static_cast<std::size_t>(new_index[v])] = 1;
-  }
+  if (ok)
+    for (const auto v : split_midpoints_of(meshing, selection.indices, new_index.size())) {
+      const std::int32_t mapped = new_index[static_cast<std::size_t>(v)];
+      if (mapped >= 0) fixed[static_cast<std::size_t>(mapped)] = 1;
+    }
   for (const SceneBox& box : selection.boxes) {
     std::size_t count = 0;
     for (std::size_t v = 0; v < mesh.points.size(); ++v) {
@@ -696,6 +708,12 @@ std::optional<BuiltScene> finish_scene(const Scene& scene, const MeshRepairResul
         }
         picked->push_back(*mapped);
       }
+      // A split surface's midpoints between picked vertices move with them (as fixed ones stay, above).
+      if (picked)
+        for (const auto v : split_midpoints_of(built.meshing, probe.indices, repair.new_vertex_index.size())) {
+          const std::int32_t mapped = repair.new_vertex_index[static_cast<std::size_t>(v)];
+          if (mapped >= 0) picked->push_back(mapped);
+        }
     }
     if (picked && fixed) {
       for (const auto v : *picked) {

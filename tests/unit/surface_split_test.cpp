@@ -1,7 +1,8 @@
 // A kept surface split to the size field (runtime/meshing/surface_split.h): every triangle meets the field, the
 // surface stays closed, outward and the same polyhedron (volume and area), the far triangles are untouched, the split
 // is deterministic, a selection of surface vertices extends along its edges, the limit is held, and a scene with
-// `split_surface` meshes the split surface as its boundary with its fixed face still fixed along its length.
+// `split_surface` meshes the split surface as its boundary, its fixed face fixed and its probed face picked along
+// their length.
 #include "runtime/meshing/surface_split.h"
 
 #include <algorithm>
@@ -169,7 +170,7 @@ TEST_CASE("mesh_volume with split_surface: the split surface is the boundary, it
                   " triangles") != std::string::npos);
 }
 
-TEST_CASE("a scene's split surface keeps its fixed face fixed along its length; split_surface needs keep_surface",
+TEST_CASE("a split surface: the fixed face stays fixed and the probed face moves along its length; needs keep_surface",
           "[mesher][split][scene]") {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / "fmpc_surface_split";
   std::filesystem::create_directories(dir);
@@ -179,7 +180,8 @@ TEST_CASE("a scene's split surface keeps its fixed face fixed along its length; 
   const auto scene_text = [](const std::string& keep) {
     return "mesh:\n  surface: box.obj\n  units: cm\n  size_far: 1.5\n  size_near: 1.5\n" + keep +
            "  split_surface: true\nmodel: corotational_fem\nmaterial: {youngs_modulus: 10}\n"
-           "fixed: {indices: [0, 1, 2, 3]}\nloads: {gravity: [0, 0, -9.81]}\ndt: 0.001\nduration: 0.01\n";
+           "fixed: {indices: [0, 1, 2, 3]}\nloads: {gravity: [0, 0, -9.81], probe: {indices: [4, 5, 6, 7], "
+           "displacement: [0, 0, -0.001], ramp: 1}}\ndt: 0.001\nduration: 0.01\n";
   };
   const std::string path = (dir / "scene.yaml").string();
   std::ofstream(path) << scene_text("  keep_surface: true\n");
@@ -199,6 +201,16 @@ TEST_CASE("a scene's split surface keeps its fixed face fixed along its length; 
     CHECK(fixed.count(static_cast<std::int32_t>(v)) == (bottom ? 1u : 0u));
   }
   CHECK(on_bottom > 4);
+  // The probe's picked top face moves along its length too.
+  REQUIRE(built->setup.probe);
+  const std::set<std::int32_t> picked(built->setup.probe->vertices.begin(), built->setup.probe->vertices.end());
+  std::size_t on_top = 0;
+  for (std::size_t v = 0; v < built->mesh.points.size(); ++v) {
+    const bool top = built->mesh.points[v][2] == 2.0;
+    on_top += top ? 1 : 0;
+    CHECK(picked.count(static_cast<std::int32_t>(v)) == (top ? 1u : 0u));
+  }
+  CHECK(on_top > 4);
 
   std::ofstream(path) << scene_text("");
   DiagnosticList refused;
