@@ -144,12 +144,19 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
       for (std::size_t a = 0; a < 3; ++a) centroid[a] += result.mesh.points[static_cast<std::size_t>(v)][a] / 4.0;
     result.above_size += element_shape(result.mesh, t).longest_edge > kSizeFieldSlack * size_at(options.size, centroid);
   }
-  if (result.above_size > 0 && options.keep_surface)
+  if (result.above_size > 0 && options.keep_surface && !result.split)
     diagnostics.warning(file_range, "mesh-size-field",
                         std::to_string(result.above_size) + " of the " + std::to_string(result.mesh.tetrahedra.size()) +
                             " tetrahedra have edges longer than 1.5 times the size field at their centroid: the "
                             "kept surface's triangles are coarser than the field near them",
-                        {"set keep_surface: false (fmpc mesh: leave out --keep-surface) to let the mesher split them"});
+                        {"set keep_surface: false (fmpc mesh: leave out --keep-surface) to let the mesher split them, "
+                         "or split_surface: true (--split-surface) to split them to the field first"});
+  else if (result.above_size > 0 && result.split)
+    diagnostics.warning(file_range, "mesh-size-field",
+                        std::to_string(result.above_size) + " of the " + std::to_string(result.mesh.tetrahedra.size()) +
+                            " tetrahedra have edges longer than 1.5 times the size field at their centroid: the "
+                            "surface was split to the field, but TetGen inserts no point that would crowd a kept "
+                            "surface triangle, so elements at and near the surface may stay coarser");
   if (result.quality.non_positive > 0) {
     diagnostics.error(file_range, "internal error: the mesher produced " + std::to_string(result.quality.non_positive) +
                                       " tetrahedra of zero volume; report it with the surface");
