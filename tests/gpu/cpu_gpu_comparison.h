@@ -34,6 +34,17 @@ inline std::unique_ptr<sim::Simulation> gpu_batch(std::vector<sim::SimulationSet
   return sim::Simulation::create(std::move(scenes), cuda, diagnostics);
 }
 
+// Every step's record the same, its residual to the bit.
+inline bool same_records(const std::vector<sim::ImplicitStepRecord>& a, const std::vector<sim::ImplicitStepRecord>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    if (a[k].step != b[k].step || a[k].iterations != b[k].iterations || a[k].capped != b[k].capped ||
+        std::memcmp(&a[k].relative_residual, &b[k].relative_residual, sizeof(double)) != 0)
+      return false;
+  }
+  return true;
+}
+
 // The four ways an implicit solve launches on a small mesh: one block (the plan's choice), the cooperative grid
 // where the one-block solve would be planned, the per-iteration launches with fused stages, and a launch per kernel
 // (the plan's choice above kFusedStageDofs degrees of freedom). All give the same bits.

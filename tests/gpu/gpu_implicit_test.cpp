@@ -8,7 +8,6 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -147,16 +146,6 @@ DeviceRun run_on_device(const SimulationSetup& setup, std::size_t steps, std::si
   run.records = simulation->take_implicit_steps();
   run.report = simulation->implicit_solver();
   return run;
-}
-
-bool same_records(const std::vector<ImplicitStepRecord>& a, const std::vector<ImplicitStepRecord>& b) {
-  if (a.size() != b.size()) return false;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    if (a[k].step != b[k].step || a[k].iterations != b[k].iterations || a[k].capped != b[k].capped ||
-        std::memcmp(&a[k].relative_residual, &b[k].relative_residual, sizeof(double)) != 0)
-      return false;
-  }
-  return true;
 }
 
 std::size_t warnings_with_code(const DiagnosticList& diagnostics, const std::string& code) {

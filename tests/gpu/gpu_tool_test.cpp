@@ -267,14 +267,9 @@ FMPC_GPU_TEST(tools_implicit_launches_bitwise,
         for (std::size_t k = 1; k < launches.size(); ++k) {
           Run other;
           FMPC_REQUIRE(run(setup, launches[k].options, other));
-          bool same = bitwise_equal(first.positions, other.positions) &&
-                      bitwise_equal(first.velocities, other.velocities) &&
-                      first.records.size() == other.records.size() && first.readings.size() == other.readings.size();
-          for (std::size_t i = 0; same && i < first.records.size(); ++i)
-            same = first.records[i].iterations == other.records[i].iterations &&
-                   std::memcmp(&first.records[i].relative_residual, &other.records[i].relative_residual,
-                               sizeof(double)) == 0;
-          same = same && reading_difference(first.readings, other.readings) == 0.0;
+          const bool same =
+              bitwise_equal(first.positions, other.positions) && bitwise_equal(first.velocities, other.velocities) &&
+              same_records(first.records, other.records) && reading_difference(first.readings, other.readings) == 0.0;
           note("implicit Euler with tools, " + what + ": " + launches[0].name + " and " + launches[k].name + " " +
                (same ? "bitwise equal" : "DIFFER"));
           FMPC_EXPECT(same);
