@@ -89,10 +89,9 @@ int main(int argc, char** argv) {
     } else if (key == "solver") {
       if (value != "direct" && value != "cg") return std::fprintf(stderr, "solver: direct or cg\n"), 2;
       scene->solver.method = value == "direct" ? sim::ImplicitMethod::Direct : sim::ImplicitMethod::ConjugateGradient;
-    } else if (key == "keep_surface") {
-      meshing.keep_surface = value == "1";
-    } else if (key == "split_surface") {
-      meshing.split_surface = value == "1";
+    } else if (key == "keep_surface" || key == "split_surface") {
+      if (value != "0" && value != "1") return std::fprintf(stderr, "%s: 0 or 1\n", key.c_str()), 2;
+      (key == "keep_surface" ? meshing.keep_surface : meshing.split_surface) = value == "1";
     } else if (key == "backend") {
       if (value != "cpu" && value != "cuda") return std::fprintf(stderr, "backend: cpu or cuda\n"), 2;
       backend = value == "cuda" ? sim::Backend::Cuda : sim::Backend::Cpu;

@@ -14,6 +14,16 @@ using Edge = std::pair<std::int32_t, std::int32_t>;
 
 Edge edge_of(std::int32_t a, std::int32_t b) { return a < b ? Edge{a, b} : Edge{b, a}; }
 
+// Edge k of a triangle: from corner k to the next.
+Edge side(const Triangle& t, int k) { return edge_of(t[k], t[(k + 1) % 3]); }
+
+// How many of triangle t's edges are marked.
+int marked_sides(const Triangle& t, const std::map<Edge, std::int32_t>& marked) {
+  int count = 0;
+  for (int k = 0; k < 3; ++k) count += marked.count(side(t, k)) > 0 ? 1 : 0;
+  return count;
+}
+
 // Whether triangle t is coarser than the field: its longest edge against the field at its centroid.
 bool too_coarse(const Mesh& surface, const Triangle& t, const SizeField& field) {
   const Point3& a = surface.points[static_cast<std::size_t>(t[0])];
@@ -30,14 +40,12 @@ std::map<Edge, std::int32_t> edges_to_split(const Mesh& surface, const SizeField
   std::map<Edge, std::int32_t> marked;
   for (const Triangle& t : surface.triangles)
     if (too_coarse(surface, t, field))
-      for (int k = 0; k < 3; ++k) marked.emplace(edge_of(t[k], t[(k + 1) % 3]), -1);
+      for (int k = 0; k < 3; ++k) marked.emplace(side(t, k), -1);
   for (bool changed = !marked.empty(); changed;) {
     changed = false;
     for (const Triangle& t : surface.triangles) {
-      int count = 0;
-      for (int k = 0; k < 3; ++k) count += marked.count(edge_of(t[k], t[(k + 1) % 3])) > 0 ? 1 : 0;
-      if (count != 2) continue;
-      for (int k = 0; k < 3; ++k) changed = marked.emplace(edge_of(t[k], t[(k + 1) % 3]), -1).second || changed;
+      if (marked_sides(t, marked) != 2) continue;
+      for (int k = 0; k < 3; ++k) changed = marked.emplace(side(t, k), -1).second || changed;
     }
   }
   return marked;
@@ -54,8 +62,7 @@ std::optional<SurfaceSplit> split_surface_to_size(Mesh& surface, const SizeField
     if (marked.empty()) break;
     std::size_t red = 0, green = 0;
     for (const Triangle& t : surface.triangles) {
-      int count = 0;
-      for (int k = 0; k < 3; ++k) count += marked.count(edge_of(t[k], t[(k + 1) % 3])) > 0 ? 1 : 0;
+      const int count = marked_sides(t, marked);
       red += count == 3 ? 1 : 0;
       green += count == 1 ? 1 : 0;
     }
@@ -84,7 +91,7 @@ std::optional<SurfaceSplit> split_surface_to_size(Mesh& surface, const SizeField
       std::int32_t middle[3];  // of edge k (t[k], t[k + 1]); -1 where it stays whole
       int count = 0, only = 0;
       for (int k = 0; k < 3; ++k) {
-        const auto it = marked.find(edge_of(t[k], t[(k + 1) % 3]));
+        const auto it = marked.find(side(t, k));
         middle[k] = it == marked.end() ? -1 : it->second;
         if (middle[k] >= 0) ++count, only = k;
       }
@@ -115,6 +122,8 @@ std::optional<SurfaceSplit> split_surface_to_size(Mesh& surface, const SizeField
 }
 
 std::size_t remove_flat_surface_tetrahedra(Mesh& mesh, const std::vector<Triangle>& surface) {
+  const auto flat = [&](const Tetrahedron& t) { return signed_volume(mesh, t) == 0.0; };
+  if (std::none_of(mesh.tetrahedra.begin(), mesh.tetrahedra.end(), flat)) return 0;
   std::set<Triangle> faces;
   for (Triangle t : surface) {
     std::sort(t.begin(), t.end());
@@ -136,7 +145,7 @@ std::size_t remove_flat_surface_tetrahedra(Mesh& mesh, const std::vector<Triangl
   kept.reserve(before);
   for (std::size_t i = 0; i < before; ++i) {
     const Tetrahedron& t = mesh.tetrahedra[i];
-    if (signed_volume(mesh, t) == 0.0 && on_surface(t)) continue;
+    if (flat(t) && on_surface(t)) continue;
     kept.push_back(t);
     if (i < mesh.tetrahedron_lines.size()) lines.push_back(mesh.tetrahedron_lines[i]);
   }

@@ -134,7 +134,7 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
   // Positive orientation (mesh.h) whatever TetGen's convention: a negative element has two vertices swapped.
   for (Tetrahedron& t : mesh->tetrahedra)
     if (signed_volume(*mesh, t) < 0.0) std::swap(t[2], t[3]);
-  if (options.keep_surface) result.flat_removed = remove_flat_surface_tetrahedra(*mesh, surface.triangles);
+  if (result.split) result.flat_removed = remove_flat_surface_tetrahedra(*mesh, surface.triangles);
   mesh->triangles.clear();
   result.mesh = std::move(*mesh);
   result.quality = measure_quality(result.mesh, options.max_radius_edge_ratio, options.min_dihedral_degrees);
@@ -144,19 +144,21 @@ std::optional<VolumeMesh> mesh_volume(Mesh surface, const VolumeMeshOptions& opt
       for (std::size_t a = 0; a < 3; ++a) centroid[a] += result.mesh.points[static_cast<std::size_t>(v)][a] / 4.0;
     result.above_size += element_shape(result.mesh, t).longest_edge > kSizeFieldSlack * size_at(options.size, centroid);
   }
-  if (result.above_size > 0 && options.keep_surface && !result.split)
-    diagnostics.warning(file_range, "mesh-size-field",
-                        std::to_string(result.above_size) + " of the " + std::to_string(result.mesh.tetrahedra.size()) +
-                            " tetrahedra have edges longer than 1.5 times the size field at their centroid: the "
-                            "kept surface's triangles are coarser than the field near them",
-                        {"set keep_surface: false (fmpc mesh: leave out --keep-surface) to let the mesher split them, "
-                         "or split_surface: true (--split-surface) to split them to the field first"});
-  else if (result.above_size > 0 && result.split)
-    diagnostics.warning(file_range, "mesh-size-field",
-                        std::to_string(result.above_size) + " of the " + std::to_string(result.mesh.tetrahedra.size()) +
-                            " tetrahedra have edges longer than 1.5 times the size field at their centroid: the "
-                            "surface was split to the field, but TetGen inserts no point that would crowd a kept "
-                            "surface triangle, so elements at and near the surface may stay coarser");
+  if (result.above_size > 0 && options.keep_surface) {
+    const std::string counted = std::to_string(result.above_size) + " of the " +
+                                std::to_string(result.mesh.tetrahedra.size()) +
+                                " tetrahedra have edges longer than 1.5 times the size field at their centroid: the ";
+    if (result.split)
+      diagnostics.warning(file_range, "mesh-size-field",
+                          counted +
+                              "surface was split to the field, but TetGen inserts no point that would crowd a "
+                              "kept surface triangle, so elements at and near the surface may stay coarser");
+    else
+      diagnostics.warning(
+          file_range, "mesh-size-field", counted + "kept surface's triangles are coarser than the field near them",
+          {"set keep_surface: false (fmpc mesh: leave out --keep-surface) to let the mesher split them, or "
+           "split_surface: true (--split-surface) to split them to the field first"});
+  }
   if (result.quality.non_positive > 0) {
     diagnostics.error(file_range, "internal error: the mesher produced " + std::to_string(result.quality.non_positive) +
                                       " tetrahedra of zero volume; report it with the surface");
@@ -188,9 +190,9 @@ std::string quality_text(const VolumeMesh& mesh, const VolumeMeshOptions& option
                             " -> " + std::to_string(mesh.split->triangles_after) + " triangles, " +
                             std::to_string(mesh.split->parents.size()) + " vertices added)"
                       : std::string()) +
-          (mesh.flat_removed > 0 ? "; " + std::to_string(mesh.flat_removed) +
-                                       " flat elements on the surface removed (coplanar corners)"
-                                 : std::string()) +
+          (mesh.flat_removed > 0
+               ? "; " + std::to_string(mesh.flat_removed) + " flat elements on the surface removed (coplanar corners)"
+               : std::string()) +
           "\n";
   text += row("longest edge (" + std::to_string(mesh.above_size) + " above 1.5 x the size field)", q.longest_edge);
   text += row("radius-edge ratio (bound " + format_number(options.max_radius_edge_ratio) + ", " +

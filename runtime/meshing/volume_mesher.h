@@ -59,7 +59,7 @@ struct VolumeMesh {
   SurfaceCheck surface;
   std::optional<SurfaceUntangling> untangling;  // when the surface intersected itself and was smoothed
   std::optional<SurfaceSplit> split;            // split_surface: what the split added (its vertices follow the input's)
-  std::size_t flat_removed = 0;                 // remove_flat_surface_tetrahedra's count (a kept surface's)
+  std::size_t flat_removed = 0;                 // remove_flat_surface_tetrahedra's count (a split surface's)
   std::size_t surface_vertices = 0;
   std::size_t surface_triangles = 0;
   VolumeEstimate estimate;
