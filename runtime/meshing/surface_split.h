@@ -2,10 +2,12 @@
 // A kept surface (VolumeMeshOptions::keep_surface) is the mesh's boundary as it comes: where its triangles are
 // coarser than the size field -- under a tool, where the contact is resolved by the surface's vertices alone -- no
 // interior refinement makes the contact finer. On request the surface is split first: every triangle whose longest
-// edge exceeds the field at its centroid is split into four at its edges' midpoints (red), a neighbour with one split
-// edge into two (green), a neighbour with two into four as well (closure), in rounds until every triangle meets the
-// field. Midpoints of flat triangles: the surface stays the same polyhedron, so meshes of different sizes bound the
-// same domain. The same surface and field give the same split (edges are numbered in sorted order).
+// edge exceeds the field at its centroid is bisected by the longest-edge propagation path (M.-C. Rivara,
+// "New longest-edge algorithms for the refinement and/or improvement of unstructured triangulations", IJNME 40,
+// 1997): always across a longest edge, its neighbour's first where that edge is not the neighbour's longest, so the
+// surface stays conforming and no angle falls below half the input's smallest (I. G. Rosenberg and F. Stenger, Math.
+// Comp. 29, 1975). Midpoints of flat triangles: the surface stays the same polyhedron, so meshes of different sizes
+// bound the same domain. The same surface and field give the same split (triangles in order, ties by vertex index).
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -18,12 +20,7 @@
 
 namespace fmpc::sim {
 
-// Each round halves the split triangles' edges: 16 rounds take an edge 65,536 times down, past any field a scene's
-// limits allow.
-inline constexpr std::size_t kMaxSurfaceSplitRounds = 16;
-
 struct SurfaceSplit {
-  std::size_t rounds = 0;              // rounds that split anything
   std::size_t triangles_before = 0;
   std::size_t triangles_after = 0;
   // Per vertex added (the surface's vertices first, then these, in order): the two ends of the edge it halves, both
@@ -33,7 +30,8 @@ struct SurfaceSplit {
 };
 
 // Splits `surface` (closed triangles) until every triangle's longest edge is at most size_at(field, its centroid).
-// nullopt, with an error naming the limit, when the split would pass `max_triangles` (the mesher's surface limit).
+// nullopt, with an error naming the limit, when the split would pass `max_triangles` (the mesher's surface limit):
+// it stops there.
 std::optional<SurfaceSplit> split_surface_to_size(Mesh& surface, const SizeField& field, std::size_t max_triangles,
                                                   DiagnosticList& diagnostics);
 

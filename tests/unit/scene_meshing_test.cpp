@@ -207,7 +207,7 @@ TEST_CASE("the liver press's chosen scene builds the mesh trade.md measured", "[
   CHECK_FALSE(diagnostics.has_errors());
   REQUIRE(built->meshing);
   REQUIRE(built->meshing->result.split);
-  CHECK(built->setup.tetrahedra.size() == 59857);
-  CHECK(built->setup.rest_positions.size() == 88155);
+  CHECK(built->setup.tetrahedra.size() == 48857);
+  CHECK(built->setup.rest_positions.size() == 71255);
   CHECK(built->setup.tools.size() == 1);
 }

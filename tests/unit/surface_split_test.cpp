@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -25,13 +26,13 @@ using fmpc::testing::unit_cube_surface;
 
 namespace {
 
-// Fine (0.15) within 0.1 of the top face's centre, graded at 4 to 2 (no split) from about half a side away.
+// Fine (0.05) within 0.1 of the top face's centre, graded at 2 to 2 (no split) from the bottom face.
 SizeField top_centre_field() {
   SizeField field;
   field.size_far = 2.0;
-  field.size_near = 0.15;
+  field.size_near = 0.05;
   field.near_distance = 0.1;
-  field.grading = 4.0;
+  field.grading = 2.0;
   field.sources.push_back({{0.5, 0.5, 1.0}, {0.5, 0.5, 1.0}});
   return field;
 }
@@ -62,12 +63,27 @@ TEST_CASE("a surface split to the field: every triangle meets it, closed, outwar
   CHECK(diagnostics.empty());
   CHECK(split->triangles_before == 12);
   CHECK(split->triangles_after == surface.triangles.size());
-  CHECK(split->rounds >= 3);  // the top's diagonal (1.41) down to 0.15 or less near its centre
+  // A disc of radius 0.1 on the top (area 0.031) in triangles of edges 0.05 (area at most 0.0011) or less.
+  CHECK(split->parents.size() >= 30);
   CHECK(surface.points.size() == 8 + split->parents.size());
+  CHECK(split->triangles_after == 12 + 2 * split->parents.size());  // each bisection: two triangles for four
   for (const Triangle& t : surface.triangles) {
     CAPTURE(longest_edge(surface, t), size_at(field, centroid(surface, t)));
     CHECK(longest_edge(surface, t) <= size_at(field, centroid(surface, t)));
   }
+  // Longest-edge bisection keeps every angle at least half the input's smallest (45 degrees on the cube).
+  double smallest = 180.0;
+  for (const Triangle& t : surface.triangles)
+    for (int k = 0; k < 3; ++k) {
+      const Point3& p = surface.points[static_cast<std::size_t>(t[k])];
+      const Point3& q = surface.points[static_cast<std::size_t>(t[(k + 1) % 3])];
+      const Point3& r = surface.points[static_cast<std::size_t>(t[(k + 2) % 3])];
+      const double u[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]}, w[3] = {r[0] - p[0], r[1] - p[1], r[2] - p[2]};
+      const double cosine = (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (distance(p, q) * distance(p, r));
+      smallest = std::min(smallest, std::acos(std::max(-1.0, std::min(1.0, cosine))) * 180.0 / M_PI);
+    }
+  CAPTURE(smallest);
+  CHECK(smallest >= 22.5 - 1e-9);
   // Each added vertex halves its parents' edge, both earlier vertices.
   for (std::size_t k = 0; k < split->parents.size(); ++k) {
     const auto [a, b] = split->parents[k];
@@ -126,8 +142,9 @@ TEST_CASE("a split past the surface limit is refused before it is made", "[meshe
   DiagnosticList diagnostics;
   CHECK_FALSE(split_surface_to_size(surface, field, 5000, diagnostics));
   REQUIRE(diagnostics.items().size() == 1);
-  CHECK(diagnostics.items().front().message.rfind("splitting the kept surface to the size field would give ", 0) == 0);
-  CHECK(diagnostics.items().front().message.find("the mesher takes at most 5000") != std::string::npos);
+  CHECK(diagnostics.items().front().message ==
+        "splitting the kept surface to the size field needs more than 5000 triangles, the mesher's limit: raise "
+        "size_near or size_far, or shrink near_distance");
 }
 
 // A unit square ab cd (z = 0) on a pyramid's two tetrahedra (apex below, diagonal bd) and a flat element over it
