@@ -34,6 +34,10 @@
 #               latency p50/p99/max, real-time factor, the force curves (haptic/haptic_force_*.csv: each tick's mean
 #               force and its tick-end force), haptic.md; on CUDA the explicit mode again with the tick-end force only
 #               (--force end, one call per tick) and with contact damping (--contact-damping 1)
+#   press       (only when asked: --only press) the carried fmpc_graded_press_bench (bench/graded, bundled with fmpc by
+#               --prepare) presses SOFA's liver with the sphere of bench/scenes/liver_sphere_press.yaml on CUDA,
+#               quadratic, the surface split to the field: graded and uniform meshes (PRESS_ROWS, PRESS_TIMEOUT), one
+#               line each with the mesh, the force and the press's wall time (issue 28 item 3); logs in $OUT/press
 #   multigpu    (only when asked: --only multigpu) the carried fmpc runs the demo's cohort of 1,000 patients (inputs
 #               drawn uniformly within the ranges of liver_indentation_patients.csv, awk seed 13) on CUDA on one GPU
 #               (--devices 0) and on every GPU of the machine (--devices all), checks the two cohort.csv equal in every
@@ -73,7 +77,7 @@
 #
 # Results: $OUT (default ./out/gpu): configure/build logs, gpu_tests.log, sanitizer_*.log, sim_bench.{csv,md,log},
 # device.txt, summary.md. Options: --skip-sanitizers, --quick (shorter benchmark), --evaluator-only (that section
-# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, laws, scenes, haptic, multigpu,
+# alone: no CMake build), --only LIST (comma-separated parts: tests, sanitizers, bench, laws, scenes, haptic, press, multigpu,
 # evaluator, fuzz; the build runs when tests, sanitizers or bench are asked for; a second call on a warm machine reuses
 # it). Exit status: 0 when every step passed.
 set -u -o pipefail
@@ -181,6 +185,13 @@ prepare_scenes() {
     bundle_program "$haptic" fmpc_haptic_bench || return 1
   else
     echo "no $haptic (build the target fmpc_haptic_bench): the haptic section will not run" >&2
+  fi
+  # The press section's benchmark, likewise (PRESS_BENCH=... names another).
+  local press="${PRESS_BENCH:-$(dirname "$fmpc")/../bench/graded/fmpc_graded_press_bench}"
+  if [[ -x "$press" ]]; then
+    bundle_program "$press" fmpc_graded_press_bench || return 1
+  else
+    echo "no $press (build the target fmpc_graded_press_bench): the press section will not run" >&2
   fi
   mkdir -p "$PROGRAMS/fonts"
   cp /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf /usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf \
@@ -290,8 +301,8 @@ while [[ $# -gt 0 ]]; do
       shift
       for part in ${ONLY//,/ }; do
         case "$part" in
-          tests | sanitizers | bench | laws | scenes | haptic | multigpu | evaluator | fuzz | setup | profile | baseline) ;;
-          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, laws, scenes, haptic, multigpu, evaluator, fuzz, setup, profile, baseline)" >&2
+          tests | sanitizers | bench | laws | scenes | haptic | press | multigpu | evaluator | fuzz | setup | profile | baseline) ;;
+          *) echo "--only: unknown part '$part' (tests, sanitizers, bench, laws, scenes, haptic, press, multigpu, evaluator, fuzz, setup, profile, baseline)" >&2
              exit 2 ;;
         esac
       done
@@ -553,6 +564,16 @@ scenes_section() {
   fi
 }
 
+# liver_surface: the path the scenes name for SOFA's liver surface, ../shared/data/sofa-liver/liver-smooth.obj beside the
+# repository, put there from the carry (--prepare carries it) when this machine has no ../shared.
+liver_surface() {
+  local surface="$ROOT/../shared/data/sofa-liver/liver-smooth.obj"
+  if [[ ! -f "$surface" && -f "$CARRY/sofa-liver/liver-smooth.obj" ]]; then
+    mkdir -p "$(dirname "$surface")" && cp "$CARRY/sofa-liver/liver-smooth.obj" "$surface"
+  fi
+  echo "$surface"
+}
+
 # The haptic loop (issue 27 item 4): fmpc_haptic_bench, built on the build machine with CUDA and carried, on CUDA and
 # on this machine's CPU, both modes each; the goal is p99 <= 1 ms on an H100.
 haptic_section() {
@@ -565,11 +586,8 @@ haptic_section() {
   [[ $QUICK -eq 1 ]] && seconds=5
   mkdir -p "$OUT/haptic"
   : > "$OUT/haptic.md"
-  # The meshed liver's surface sits beside the repository as ../shared/data/sofa-liver (--prepare carries it).
-  local surface="$ROOT/../shared/data/sofa-liver/liver-smooth.obj"
-  if [[ ! -f "$surface" && -f "$CARRY/sofa-liver/liver-smooth.obj" ]]; then
-    mkdir -p "$(dirname "$surface")" && cp "$CARRY/sofa-liver/liver-smooth.obj" "$surface"
-  fi
+  local surface
+  surface=$(liver_surface)
   # Each tick reports its mean force (one step and one reading at a time); on CUDA the block's explicit mode also runs
   # as one call per tick with the tick-end force only (--force end: the loop's latency without the readings) and with
   # contact damping (--contact-damping 1: the chatter of the undamped contact gone).
@@ -604,6 +622,46 @@ haptic_section() {
     done
   done
   cat "$OUT/haptic.md" >> "$SUMMARY"
+}
+
+# The liver pressed by the sphere (issue 28 item 3; docs/trade.md, "The surface split under the tool"): the carried
+# fmpc_graded_press_bench on bench/scenes/liver_sphere_press.yaml, quadratic tetrahedra, the surface split to the size
+# field, pressed on CUDA. PRESS_ROWS picks the meshes: gH is H near and 0.72 far within 1.2 units of the sphere's
+# centre (gH@D within D units), uH is H everywhere (default: the table's rows); PRESS_ARGS adds the bench's arguments
+# to every row (e.g. stiffness_ratio=64). Each row is cut off after PRESS_TIMEOUT seconds (default 600) and runs
+# alone, so that its wall time is the press's own.
+press_section() {
+  section "press: the liver pressed by the sphere, graded and uniform (bench/graded)"
+  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc_graded_press_bench" ]]; then
+    fail "no fmpc_graded_press_bench in $CARRY/programs.tar.xz: build it in the CUDA build and run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare'"
+    return 1
+  fi
+  local surface
+  surface=$(liver_surface)
+  [[ -f "$surface" ]] || { fail "no $surface (nor in $CARRY/sofa-liver): the press did not run"; return 1; }
+  mkdir -p "$OUT/press"
+  local row size distance sizes status
+  for row in ${PRESS_ROWS:-g0.12 g0.09 g0.06 g0.045 g0.035 g0.03 u0.36 u0.27 u0.2 u0.16}; do
+    size=${row#?}
+    distance=1.2
+    [[ $size == *@* ]] && distance=${size#*@} && size=${size%@*}
+    case "$row" in
+      g*) sizes=(size_near="$size" size_far=0.72 near_distance="$distance") ;;
+      u*) sizes=(size_near="$size" size_far="$size") ;;
+      *) fail "PRESS_ROWS: '$row' is neither gSIZE nor uSIZE"; continue ;;
+    esac
+    timeout "${PRESS_TIMEOUT:-600}" "$UNPACKED/bin/fmpc_graded_press_bench" "$ROOT/bench/scenes/liver_sphere_press.yaml" \
+      solver=cg lowering=2 tolerance=1e-4 "${sizes[@]}" element=quadratic split_surface=1 backend=cuda label="$row" \
+      ${PRESS_ARGS:-} \
+      > "$OUT/press/$row.log" 2>&1
+    status=$?
+    case $status in
+      0) record "press $(tail -1 "$OUT/press/$row.log")" ;;
+      1) record "press $(tail -1 "$OUT/press/$row.log") (not settled within the bench's steps)" ;;
+      124) record "press $row: cut off after ${PRESS_TIMEOUT:-600} s" ;;
+      *) tail -5 "$OUT/press/$row.log"; fail "press $row (see press/$row.log)" ;;
+    esac
+  done
 }
 
 # A cohort over every GPU of the machine (issue 27 item 6; docs/cohorts.md, "Every GPU of a node"): the demo's 1,000
@@ -957,6 +1015,7 @@ if wanted tests || wanted sanitizers || wanted bench || wanted laws || wanted se
 fi
 wanted scenes && scenes_section
 wanted haptic && haptic_section
+wanted press && press_section
 wanted multigpu && multigpu_section
 wanted evaluator && evaluator_section
 wanted fuzz && fuzz_section

@@ -6,7 +6,7 @@
 // press's wall time (the figure for backend=cuda, whose host thread waits on the device).
 //   fmpc_graded_press_bench SCENE.yaml [size_near=H] [size_far=H] [near_distance=D] [grading=G] [law=KEYWORD]
 //       [element=KEYWORD] [refinements=N] [solver=direct|cg] [lowering=4] [tolerance=1e-6] [most_steps=30] [label=TEXT]
-//       [keep_surface=0|1] [split_surface=0|1] [backend=cpu|cuda]
+//       [keep_surface=0|1] [split_surface=0|1] [stiffness_ratio=R] [backend=cpu|cuda]
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -95,6 +95,8 @@ int main(int argc, char** argv) {
     } else if (key == "backend") {
       if (value != "cpu" && value != "cuda") return std::fprintf(stderr, "backend: cpu or cuda\n"), 2;
       backend = value == "cuda" ? sim::Backend::Cuda : sim::Backend::Cpu;
+    } else if (key == "stiffness_ratio") {
+      scene->contact_stiffness_ratio = std::atof(value.c_str());
     } else if (key == "label") {
       label = value;
     } else {
