@@ -1,7 +1,7 @@
 // The contact of a rigid sphere with a thick block against Hertz (tests/support/hertz_contact.h), mesh by mesh: the
 // cells at the contact from a/2 down to a/8 and the penalty's stiffness ratio, each with its force, Hertz's, the
 // relative error, the mesh's size and the time it took (one CPU thread, implicit Euler steps of 1 s as Newton steps).
-//   fmpc_hertz_bench [depth=D] [extent=E] [growth=G] [ratios=R,R,...] [first_cell ...]
+//   fmpc_hertz_bench [depth=D] [extent=E] [growth=G] [ratios=R,R,...] [element=KEYWORD] [first_cell ...]
 // (first cells in contact radii, default 0.5 0.35 0.25 0.18 0.125; the depth D in m; the block's side E contact radii,
 // default HertzCase's; cells growing by G away from the contact; penalty stiffness ratios, default 2, 8, 32).
 #include <cstdio>
@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/fem/element_law_registry.h"
 #include "tests/support/hertz_contact.h"
 
 int main(int argc, char** argv) {
@@ -24,6 +25,10 @@ int main(int argc, char** argv) {
       base.extent = std::atof(e);
     } else if (const char* d = value("depth=")) {
       base.depth = std::atof(d);
+    } else if (const char* k = value("element=")) {
+      const auto kind = fmpc::sim::element_kind_by_keyword(k);
+      if (!kind) return std::fprintf(stderr, "element=%s: no such element kind\n", k), 2;
+      base.element = kind->kind;
     } else if (const char* g = value("growth=")) {
       base.growth = std::atof(g);
     } else if (const char* r = value("ratios=")) {
@@ -35,8 +40,9 @@ int main(int argc, char** argv) {
     }
   }
   if (cells.empty()) cells = {0.5, 0.35, 0.25, 0.18, 0.125};
-  std::printf("R %g mm, d %g mm (d/R %g), E 10 kPa, nu 0.3, block %g a, growth %g\n", 1e3 * base.radius,
-              1e3 * base.depth, base.depth / base.radius, base.extent, base.growth);
+  std::printf("R %g mm, d %g mm (d/R %g), E 10 kPa, nu 0.3, block %g a, growth %g, element %s\n", 1e3 * base.radius,
+              1e3 * base.depth, base.depth / base.radius, base.extent, base.growth,
+              fmpc::sim::element_kind_rows()[static_cast<std::size_t>(base.element)].keyword);
   std::printf("%-10s %-6s %-6s %-9s %-9s %-12s %-12s %-9s %-6s %-8s\n", "cell/a", "ratio", "cells", "vertices",
               "contacts", "force_N", "hertz_N", "error", "steps", "seconds");
   for (const double cell : cells) {

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
+#include <utility>
 
 #include "diagnostics/number_format.h"
 #include "runtime/integrate/simulation.h"
@@ -87,8 +89,20 @@ std::vector<unsigned char> surface_vertices(const SimulationSetup& setup) {
   Mesh mesh;
   mesh.points = setup.rest_positions;
   mesh.tetrahedra = setup.tetrahedra;
-  for (const Triangle& face : boundary_triangles(mesh))
+  const std::vector<Triangle> faces = boundary_triangles(mesh);
+  for (const Triangle& face : faces)
     for (const auto v : face) surface[static_cast<std::size_t>(v)] = 1;
+  // A quadratic element's edge nodes (added after the mesh's vertices) on a boundary face's edge are on the surface
+  // too: they carry two thirds of a pressure's consistent load on a 6-node face, where its corners carry none, so a
+  // tool touching only the corners presses the surface at points and sinks between them.
+  const auto& ends = setup.elements.geometry.added_vertex_ends;
+  if (ends.empty()) return surface;
+  std::set<std::pair<std::int32_t, std::int32_t>> edges;
+  for (const Triangle& face : faces)
+    for (int k = 0; k < 3; ++k) edges.insert(std::minmax(face[k], face[(k + 1) % 3]));
+  const std::size_t first_added = n - ends.size();
+  for (std::size_t i = 0; i < ends.size(); ++i)
+    if (edges.count(std::minmax(ends[i][0], ends[i][1])) > 0) surface[first_added + i] = 1;
   return surface;
 }
 

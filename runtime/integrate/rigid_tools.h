@@ -54,8 +54,8 @@ bool normalise_orientation(std::array<double, 4>& orientation);
 // The tool's shape in world coordinates at `pose`: the segment's ends and the radius.
 kernels::ToolShape<double> tool_shape(const RigidTool& tool, const ToolPose& pose);
 
-// Vertices a tool can touch: those of the boundary faces of the tetrahedra, or every vertex of a mesh without
-// tetrahedra (a membrane). One flag per vertex.
+// Vertices a tool can touch: those of the boundary faces of the tetrahedra (with a quadratic element's edge nodes on
+// their edges), or every vertex of a mesh without tetrahedra (a membrane). One flag per vertex.
 std::vector<unsigned char> surface_vertices(const SimulationSetup& setup);
 
 // Every vertex's contact stiffness (N/m): contact_stiffness_ratio x its stiffness bound on surface vertices, zero

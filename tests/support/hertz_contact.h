@@ -31,6 +31,7 @@ struct HertzCase {
   double first_cell = 0.25;       // the cells' size at the contact, in contact radii
   double growth = 1.3;            // each cell this many times the one before it, away from the contact
   double contact_stiffness_ratio = sim::kDefaultContactStiffnessRatio;
+  int element = sim::default_element_kind().kind;  // the element kind (its index in element_kind_rows())
   int lowering_steps = 4;
   int most_steps = 60;
 };
@@ -90,6 +91,7 @@ inline HertzResult run_hertz(const HertzCase& c, sim::Backend backend = sim::Bac
   spec.poisson_ratio = {c.poisson_ratio};
   spec.mass.value = 1000.0;
   spec.damping_ratio = 0.0;
+  spec.element = c.element;
   auto built = sim::build_fem_model(mesh, spec, diagnostics);
   if (!built) {
     result.error = diagnostics.items().empty() ? "build failed" : diagnostics.items().front().message;

@@ -366,6 +366,61 @@ TEST_CASE("tools: a sphere on a thick block against Hertz (a small mesh, converg
   CHECK(std::abs(result.relative_error) < 0.05);
 }
 
+TEST_CASE("tools: a quadratic element's edge nodes on the surface are contact vertices, those inside are not",
+          "[tools]") {
+  // On a 6-node face a pressure's consistent load sits on the edge nodes (a third each, none at the corners): a tool
+  // touching the corners alone presses the surface at points (Hertz below: -30% before edge nodes could touch).
+  DiagnosticList diagnostics;
+  BoxSpec box;
+  box.size = {0.02, 0.02, 0.01};
+  box.cells_x = 5;
+  box.cells_y = 4;
+  box.cells_z = 3;
+  const Mesh mesh = generate_box(box, diagnostics);
+  FemModelSpec spec;
+  spec.youngs_modulus = {10e3};
+  spec.poisson_ratio = {0.3};
+  spec.mass.value = 1000.0;
+  spec.element = element_kind_by_keyword("quadratic")->kind;
+  const auto setup = build_fem_model(mesh, spec, diagnostics);
+  REQUIRE(setup);
+  const std::size_t corners = mesh.points.size();
+  REQUIRE(setup->rest_positions.size() > corners);
+  const std::vector<unsigned char> surface = surface_vertices(*setup);
+  REQUIRE(surface.size() == setup->rest_positions.size());
+  const auto on_boundary = [&](const Point3& p) {
+    for (int axis = 0; axis < 3; ++axis)
+      if (p[axis] == 0.0 || p[axis] == box.size[axis]) return true;
+    return false;
+  };
+  std::size_t edge_nodes_on_surface = 0;
+  for (std::size_t v = 0; v < surface.size(); ++v) {
+    CAPTURE(v, setup->rest_positions[v]);
+    CHECK(static_cast<bool>(surface[v]) == on_boundary(setup->rest_positions[v]));
+    edge_nodes_on_surface += v >= corners && surface[v] ? 1 : 0;
+  }
+  // The box's surface: 2 (5 x 4 + 5 x 3 + 4 x 3) = 94 squares of two triangles, 188 triangles of three edges, each
+  // edge shared by two: 282 edge nodes.
+  CHECK(edge_nodes_on_surface == 282);
+}
+
+TEST_CASE("tools: a sphere on a thick block of quadratic tetrahedra against Hertz", "[tools][heavy]") {
+  // The small mesh of the test above in 10-node elements: 24,389 vertices, about 45 s in Release. The edge nodes under
+  // the sphere touch it too (14 vertices in contact against 6 corners before they could: then -30.3%).
+  test_support::HertzCase hertz;
+  hertz.first_cell = 0.5;
+  hertz.growth = 1.25;
+  hertz.element = element_kind_by_keyword("quadratic")->kind;
+  const test_support::HertzResult result = test_support::run_hertz(hertz);
+  REQUIRE(result.ok);
+  std::printf("Hertz, quadratic: %d cells per axis, %zu vertices, %zu in contact: F = %.6g N against %.6g N (error "
+              "%+.2f%%)\n",
+              result.cells, result.vertices, result.contacts, result.force, result.hertz,
+              100.0 * result.relative_error);
+  CHECK(result.contacts > 6);
+  CHECK(std::abs(result.relative_error) < 0.05);
+}
+
 TEST_CASE("tools: no jump in the force as the sphere slides across elements", "[tools]") {
   // The sphere (radius 3 mm) pressed 0.8 mm into a block of 1.67 mm cells (a contact radius of about one cell) and
   // slid one cell (the ripple's period) along x in steps of 1/10 of a cell, one implicit step of 1 s (a Newton step of
