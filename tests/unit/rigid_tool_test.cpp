@@ -25,7 +25,8 @@ using fmpc::testing::errors_of;
 
 // A 2 x 2 x 1 cm block of 10 kPa FEM tissue (cells of 2.5 mm), fixed at its base, and a sphere of 3 mm above the
 // middle of its top face.
-SimulationSetup block_with_sphere(Integrator integrator = Integrator::SemiImplicitEuler, int cells = 8) {
+SimulationSetup block_with_sphere(Integrator integrator = Integrator::SemiImplicitEuler, int cells = 8,
+                                  const char* element = "linear") {
   DiagnosticList diagnostics;
   BoxSpec box;
   box.size = {0.02, 0.02, 0.01};
@@ -37,6 +38,7 @@ SimulationSetup block_with_sphere(Integrator integrator = Integrator::SemiImplic
   spec.poisson_ratio = {0.3};
   spec.mass.value = 1000.0;
   spec.damping_ratio = 0.5;
+  spec.element = element_kind_by_keyword(element)->kind;
   auto setup = build_fem_model(mesh, spec, diagnostics);
   REQUIRE(setup);
   for (std::size_t v = 0; v < setup->rest_positions.size(); ++v)
@@ -370,38 +372,26 @@ TEST_CASE("tools: a quadratic element's edge nodes on the surface are contact ve
           "[tools]") {
   // On a 6-node face a pressure's consistent load sits on the edge nodes (a third each, none at the corners): a tool
   // touching the corners alone presses the surface at points (Hertz below: -30% before edge nodes could touch).
-  DiagnosticList diagnostics;
-  BoxSpec box;
-  box.size = {0.02, 0.02, 0.01};
-  box.cells_x = 5;
-  box.cells_y = 4;
-  box.cells_z = 3;
-  const Mesh mesh = generate_box(box, diagnostics);
-  FemModelSpec spec;
-  spec.youngs_modulus = {10e3};
-  spec.poisson_ratio = {0.3};
-  spec.mass.value = 1000.0;
-  spec.element = element_kind_by_keyword("quadratic")->kind;
-  const auto setup = build_fem_model(mesh, spec, diagnostics);
-  REQUIRE(setup);
-  const std::size_t corners = mesh.points.size();
-  REQUIRE(setup->rest_positions.size() > corners);
-  const std::vector<unsigned char> surface = surface_vertices(*setup);
-  REQUIRE(surface.size() == setup->rest_positions.size());
+  const SimulationSetup quadratic = block_with_sphere(Integrator::SemiImplicitEuler, 8, "quadratic");
+  const std::size_t corners = 9 * 9 * 5;
+  REQUIRE(quadratic.rest_positions.size() > corners);
+  const std::vector<unsigned char> surface = surface_vertices(quadratic);
+  REQUIRE(surface.size() == quadratic.rest_positions.size());
+  const Point3 size{0.02, 0.02, 0.01};
   const auto on_boundary = [&](const Point3& p) {
     for (int axis = 0; axis < 3; ++axis)
-      if (p[axis] == 0.0 || p[axis] == box.size[axis]) return true;
+      if (p[axis] == 0.0 || p[axis] == size[axis]) return true;
     return false;
   };
   std::size_t edge_nodes_on_surface = 0;
   for (std::size_t v = 0; v < surface.size(); ++v) {
-    CAPTURE(v, setup->rest_positions[v]);
-    CHECK(static_cast<bool>(surface[v]) == on_boundary(setup->rest_positions[v]));
+    CAPTURE(v, quadratic.rest_positions[v]);
+    CHECK(static_cast<bool>(surface[v]) == on_boundary(quadratic.rest_positions[v]));
     edge_nodes_on_surface += v >= corners && surface[v] ? 1 : 0;
   }
-  // The box's surface: 2 (5 x 4 + 5 x 3 + 4 x 3) = 94 squares of two triangles, 188 triangles of three edges, each
-  // edge shared by two: 282 edge nodes.
-  CHECK(edge_nodes_on_surface == 282);
+  // The box's surface: 2 (8 x 8 + 8 x 4 + 8 x 4) = 256 squares of two triangles, 512 triangles of three edges, each
+  // edge shared by two: 768 edge nodes.
+  CHECK(edge_nodes_on_surface == 768);
 }
 
 TEST_CASE("tools: a sphere on a thick block of quadratic tetrahedra against Hertz", "[tools][heavy]") {
