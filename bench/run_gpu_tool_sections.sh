@@ -66,7 +66,8 @@ haptic_section() {
 # fmpc_graded_press_bench on bench/scenes/liver_sphere_press.yaml, quadratic tetrahedra, the surface split to the size
 # field, pressed on CUDA. PRESS_ROWS picks the meshes: gH is H near and 0.72 far within 1.2 units of the sphere's
 # centre (gH@D within D units), uH is H everywhere (default: the table's rows); PRESS_ARGS adds the bench's arguments
-# to every row (e.g. stiffness_ratio=64). Each row is cut off after PRESS_TIMEOUT seconds (default 600) and runs
+# to every row (e.g. stiffness_ratio=64), PRESS_SCENE another scene of the repository (bench/scenes/liver_tip_press.yaml:
+# a 5 mm tip). Each row is cut off after PRESS_TIMEOUT seconds (default 600) and runs
 # alone, so that its wall time is the press's own.
 press_section() {
   section "press: the liver pressed by the sphere, graded and uniform (bench/graded)"
@@ -78,7 +79,7 @@ press_section() {
   surface=$(liver_surface)
   [[ -f "$surface" ]] || { fail "no $surface (nor in $CARRY/sofa-liver): the press did not run"; return 1; }
   mkdir -p "$OUT/press"
-  local row size distance sizes status
+  local row size distance sizes status scene="$ROOT/${PRESS_SCENE:-bench/scenes/liver_sphere_press.yaml}"
   for row in ${PRESS_ROWS:-g0.12 g0.09 g0.06 g0.045 g0.035 g0.03 u0.36 u0.27 u0.2 u0.16}; do
     size=${row#?}
     distance=1.2
@@ -88,7 +89,7 @@ press_section() {
       u*) sizes=(size_near="$size" size_far="$size") ;;
       *) fail "PRESS_ROWS: '$row' is neither gSIZE nor uSIZE"; continue ;;
     esac
-    timeout "${PRESS_TIMEOUT:-600}" "$UNPACKED/bin/fmpc_graded_press_bench" "$ROOT/bench/scenes/liver_sphere_press.yaml" \
+    timeout "${PRESS_TIMEOUT:-600}" "$UNPACKED/bin/fmpc_graded_press_bench" "$scene" \
       solver=cg lowering=2 tolerance=1e-4 "${sizes[@]}" element=quadratic split_surface=1 backend=cuda label="$row" \
       ${PRESS_ARGS:-} \
       > "$OUT/press/$row.log" 2>&1

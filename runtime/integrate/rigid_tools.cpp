@@ -93,8 +93,8 @@ std::vector<unsigned char> surface_vertices(const SimulationSetup& setup) {
   for (const Triangle& face : faces)
     for (const auto v : face) surface[static_cast<std::size_t>(v)] = 1;
   // A quadratic element's edge nodes (added after the mesh's vertices) on a boundary face's edge are on the surface
-  // too: they carry two thirds of a pressure's consistent load on a 6-node face, where its corners carry none, so a
-  // tool touching only the corners presses the surface at points and sinks between them.
+  // too: they carry all of a pressure's consistent load on a 6-node face (a third each), its corners none, so a tool
+  // touching only the corners presses the surface at points and sinks between them.
   const auto& ends = setup.elements.geometry.added_vertex_ends;
   if (ends.empty()) return surface;
   std::set<std::pair<std::int32_t, std::int32_t>> edges;
