@@ -108,9 +108,8 @@ class Bisection {
     for (const int t : sides) {
       if (t < 0) continue;
       const Triangle tri = surface_.triangles[static_cast<std::size_t>(t)];
-      const int line = static_cast<std::size_t>(t) < surface_.triangle_lines.size()
-                           ? surface_.triangle_lines[static_cast<std::size_t>(t)]
-                           : 0;
+      // triangle_lines is empty or parallel to the triangles (split_surface_to_size makes it so).
+      const int line = surface_.triangle_lines.empty() ? 0 : surface_.triangle_lines[static_cast<std::size_t>(t)];
       int k = 0;
       while (side(tri, k) != e) ++k;
       const std::int32_t p = tri[k], q = tri[(k + 1) % 3], r = tri[(k + 2) % 3];
