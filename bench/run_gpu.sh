@@ -460,8 +460,8 @@ simulator_section() {
   local args=(--out "$OUT")
   [[ $QUICK -eq 1 ]] && args+=(--quick)
   # Implicit Euler's rows (issue 27 item 3) at SOFA's liver settings need its mesh: beside the repository, or carried.
-  local liver="$ROOT/../shared/data/sofa-liver/liver.msh"
-  [[ -f "$liver" ]] || liver="$CARRY/sofa-liver/liver.msh"
+  local liver
+  liver=$(sofa_liver_file liver.msh)
   if [[ -f "$liver" ]]; then
     args+=(--liver "$liver")
   else
@@ -493,22 +493,17 @@ json_field() { grep -o "\"$2\": *[^,}]*" "$1" | head -1 | sed -E 's/.*: *//; s/"
 
 scenes_section() {
   section "scenes: fmpc simulate on CUDA and on the CPU"
-  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc" ]]; then
-    fail "no fmpc in $CARRY/programs.tar.xz: run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare' on the build machine"
-    return 1
-  fi
+  need_program fmpc || return 1
   mkdir -p "$OUT/scenes" "$BUILD/scenes"
   local demo="$ROOT/rulesets/scenes/liver_indentation.yaml"
   run_scene "$demo" auto demo_auto || fail "demo with backend auto (see scenes/demo_auto.log)"
   grep -q "backend auto: running on CUDA" "$OUT/scenes/demo_auto.log" || fail "backend auto did not pick CUDA"
   run_scene "$demo" cpu demo_cpu || fail "demo on the CPU (see scenes/demo_cpu.log)"
   # SOFA's liver (implicit Euler): its mesh sits beside the repository as ../shared/data/sofa-liver.
-  if [[ ! -f "$ROOT/../shared/data/sofa-liver/liver.msh" && -f "$CARRY/sofa-liver/liver.msh" ]]; then
-    mkdir -p "$ROOT/../shared/data/sofa-liver" && cp "$CARRY/sofa-liver/liver.msh" "$ROOT/../shared/data/sofa-liver/"
-  fi
-  local sofa
+  local sofa liver
+  liver=$(sofa_liver_file liver.msh)
   for sofa in sofa_liver_springs sofa_liver_fuzzy sofa_liver_fem; do
-    if [[ -f "$ROOT/../shared/data/sofa-liver/liver.msh" ]]; then
+    if [[ -f "$liver" ]]; then
       run_scene "$ROOT/rulesets/scenes/$sofa.yaml" cuda "${sofa}_cuda" || fail "$sofa on CUDA (see scenes/${sofa}_cuda.log)"
       run_scene "$ROOT/rulesets/scenes/$sofa.yaml" cpu "${sofa}_cpu" || fail "$sofa on the CPU (see scenes/${sofa}_cpu.log)"
     else
@@ -564,17 +559,14 @@ scenes_section() {
   fi
 }
 
-# The haptic and press sections (liver_surface, haptic_section, press_section).
+# The haptic and press sections (haptic_section, press_section).
 source "$ROOT/bench/run_gpu_tool_sections.sh"
 
 # A cohort over every GPU of the machine (issue 27 item 6; docs/cohorts.md, "Every GPU of a node"): the demo's 1,000
 # patients on one GPU and on all of them, one process each time (fmpc simulate --devices).
 multigpu_section() {
   section "multigpu: the demo's 1,000-patient cohort on one GPU and on every GPU (fmpc simulate --devices)"
-  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc" ]]; then
-    fail "no fmpc in $CARRY/programs.tar.xz: run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare' on the build machine"
-    return 1
-  fi
+  need_program fmpc || return 1
   local gpus
   gpus=$(nvidia-smi -L 2>/dev/null | grep -c '^GPU ')
   record "GPUs: $gpus ($(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | sort | uniq -c | sed -E 's/^ +//' | paste -sd ';' -))"
@@ -721,6 +713,24 @@ unpack_programs() {
     rm -rf "$UNPACKED" && mkdir -p "$BUILD" && tar -C "$BUILD" -xJf "$CARRY/programs.tar.xz" || return 1
     touch "$UNPACKED"
   fi
+}
+
+# need_program NAME: the carried programs unpacked with NAME among them; otherwise the section fails saying how to
+# carry it.
+need_program() {
+  unpack_programs && [[ -x "$UNPACKED/bin/$1" ]] && return 0
+  fail "no $1 in $CARRY/programs.tar.xz: build it in a CUDA build and run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare' on the build machine"
+  return 1
+}
+
+# sofa_liver_file NAME: the path the scenes name for SOFA's liver files, ../shared/data/sofa-liver/NAME beside the
+# repository, put there from the carry (--prepare carries liver.msh and liver-smooth.obj) when this machine has none.
+sofa_liver_file() {
+  local path="$ROOT/../shared/data/sofa-liver/$1"
+  if [[ ! -f "$path" && -f "$CARRY/sofa-liver/$1" ]]; then
+    mkdir -p "$(dirname "$path")" && cp "$CARRY/sofa-liver/$1" "$path"
+  fi
+  echo "$path"
 }
 
 # Host setup of large boxes on this machine's cores (bench/setup; docs/performance.md "Host setup and frames").

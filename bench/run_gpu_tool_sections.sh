@@ -1,31 +1,18 @@
 # The sections of bench/run_gpu.sh that press a rigid tool into tissue: haptic (issue 27 item 4) and press (issue 28
-# item 3). Sourced by run_gpu.sh, whose helpers (section, record, fail, unpack_programs) and variables (ROOT, CARRY,
-# OUT, UNPACKED, SUMMARY, QUICK) they use; run_gpu.sh's header says what each section measures.
-
-# liver_surface: the path the scenes name for SOFA's liver surface, ../shared/data/sofa-liver/liver-smooth.obj beside the
-# repository, put there from the carry (--prepare carries it) when this machine has no ../shared.
-liver_surface() {
-  local surface="$ROOT/../shared/data/sofa-liver/liver-smooth.obj"
-  if [[ ! -f "$surface" && -f "$CARRY/sofa-liver/liver-smooth.obj" ]]; then
-    mkdir -p "$(dirname "$surface")" && cp "$CARRY/sofa-liver/liver-smooth.obj" "$surface"
-  fi
-  echo "$surface"
-}
+# item 3). Sourced by run_gpu.sh, whose helpers (section, record, fail, need_program, sofa_liver_file) and variables
+# (ROOT, CARRY, OUT, UNPACKED, SUMMARY, QUICK) they use; run_gpu.sh's header says what each section measures.
 
 # The haptic loop (issue 27 item 4): fmpc_haptic_bench, built on the build machine with CUDA and carried, on CUDA and
 # on this machine's CPU, both modes each; the goal is p99 <= 1 ms on an H100.
 haptic_section() {
   section "haptic: 1 kHz loop through fmpc::runtime's Session (bench/haptic)"
-  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc_haptic_bench" ]]; then
-    fail "no fmpc_haptic_bench in $CARRY/programs.tar.xz: build it in the CUDA build and run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare'"
-    return 1
-  fi
+  need_program fmpc_haptic_bench || return 1
   local seconds="${HAPTIC_SECONDS:-30}" backend
   [[ $QUICK -eq 1 ]] && seconds=5
   mkdir -p "$OUT/haptic"
   : > "$OUT/haptic.md"
   local surface
-  surface=$(liver_surface)
+  surface=$(sofa_liver_file liver-smooth.obj)
   # Each tick reports its mean force (one step and one reading at a time); on CUDA the block's explicit mode also runs
   # as one call per tick with the tick-end force only (--force end: the loop's latency without the readings) and with
   # contact damping (--contact-damping 1: the chatter of the undamped contact gone).
@@ -71,12 +58,9 @@ haptic_section() {
 # alone, so that its wall time is the press's own.
 press_section() {
   section "press: the liver pressed by the sphere, graded and uniform (bench/graded)"
-  if ! unpack_programs || [[ ! -x "$UNPACKED/bin/fmpc_graded_press_bench" ]]; then
-    fail "no fmpc_graded_press_bench in $CARRY/programs.tar.xz: build it in the CUDA build and run 'FMPC=<CUDA build>/tools/fmpc bash bench/run_gpu.sh --prepare'"
-    return 1
-  fi
+  need_program fmpc_graded_press_bench || return 1
   local surface
-  surface=$(liver_surface)
+  surface=$(sofa_liver_file liver-smooth.obj)
   [[ -f "$surface" ]] || { fail "no $surface (nor in $CARRY/sofa-liver): the press did not run"; return 1; }
   mkdir -p "$OUT/press"
   local row size distance sizes status scene="$ROOT/${PRESS_SCENE:-bench/scenes/liver_sphere_press.yaml}"
