@@ -17,7 +17,8 @@
 #   build       configure + build, Release, sm_90, FMPC_GPU_ONLY=ON
 #   simulator   gpu-labelled tests (CPU vs CUDA after 10,000 steps, bitwise reruns, batches, NaN location; GPU_TESTS="NAME
 #               ..." runs only fmpc_gpu_tests' cases whose names contain one of these),
-#               compute-sanitizer memcheck/racecheck/initcheck/synccheck on the small GPU test,
+#               compute-sanitizer memcheck/racecheck/initcheck/synccheck on fmpc_gpu_tests' sanitizer_ smoke tests
+#               (SANITIZER_SMOKES="NAME ...": those whose names contain one of these),
 #               bench/sim (CPU threads vs CUDA float/double, graphs on/off, 1k..1M springs, batch of scenes,
 #               a cohort of 1,000 demo-scene patients with their probes in one launch: row cuda-cohort)
 #   laws        fmpc_sim_bench --fem-only at 120^3 cells for each law on each element kind (LAW_ELEMENTS, law:element
@@ -422,9 +423,11 @@ simulator_section() {
       # Each smoke test (fmpc_gpu_tests --list: the names that start with sanitizer_) under each of the four tools in
       # a process of its own, all at once (racecheck alone takes minutes on the cooperative CG), each under
       # SANITIZER_SECONDS (default 480): a pair cut off is reported as such. Logs: sanitizer_TOOL_TEST.log.
-      local tool smoke
+      # SANITIZER_SMOKES="NAME ...": only the smoke tests whose names contain one of these.
+      local tool smoke filter="${SANITIZER_SMOKES:-}"
       local -a smokes
-      mapfile -t smokes < <("$BUILD/tests/gpu/fmpc_gpu_tests" --list | grep -E '^sanitizer_')
+      mapfile -t smokes < <("$BUILD/tests/gpu/fmpc_gpu_tests" --list | grep -E '^sanitizer_' \
+        | grep -E "${filter// /|}")
       [[ ${#smokes[@]} -gt 0 ]] || fail "no sanitizer smoke tests in fmpc_gpu_tests --list"
       local -A pids=()
       for tool in memcheck racecheck initcheck synccheck; do

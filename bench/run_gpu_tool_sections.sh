@@ -63,7 +63,7 @@ press_section() {
   surface=$(sofa_liver_file liver-smooth.obj)
   [[ -f "$surface" ]] || { fail "no $surface (nor in $CARRY/sofa-liver): the press did not run"; return 1; }
   mkdir -p "$OUT/press"
-  local row size distance sizes status scene="$ROOT/${PRESS_SCENE:-bench/scenes/liver_sphere_press.yaml}"
+  local row size distance sizes status log scene="$ROOT/${PRESS_SCENE:-bench/scenes/liver_sphere_press.yaml}"
   for row in ${PRESS_ROWS:-g0.12 g0.09 g0.06 g0.045 g0.035 g0.03 u0.36 u0.27 u0.2 u0.16}; do
     size=${row#?}
     distance=1.2
@@ -73,16 +73,18 @@ press_section() {
       u*) sizes=(size_near="$size" size_far="$size") ;;
       *) fail "PRESS_ROWS: '$row' is neither gSIZE nor uSIZE"; continue ;;
     esac
+    # The device tool brings back no file whose name holds an '@'.
+    log="$OUT/press/${row//@/_at_}.log"
     timeout "${PRESS_TIMEOUT:-600}" "$UNPACKED/bin/fmpc_graded_press_bench" "$scene" \
       solver=cg lowering=2 tolerance=1e-4 "${sizes[@]}" element=quadratic split_surface=1 backend=cuda label="$row" \
       ${PRESS_ARGS:-} \
-      > "$OUT/press/$row.log" 2>&1
+      > "$log" 2>&1
     status=$?
     case $status in
-      0) record "press $(tail -1 "$OUT/press/$row.log")" ;;
-      1) record "press $(tail -1 "$OUT/press/$row.log") (not settled within the bench's steps)" ;;
+      0) record "press $(tail -1 "$log")" ;;
+      1) record "press $(tail -1 "$log") (not settled within the bench's steps)" ;;
       124) record "press $row: cut off after ${PRESS_TIMEOUT:-600} s" ;;
-      *) tail -5 "$OUT/press/$row.log"; fail "press $row (see press/$row.log)" ;;
+      *) tail -5 "$log"; fail "press $row (see press/${log##*/})" ;;
     esac
   done
 }
