@@ -1,9 +1,11 @@
 // The contact of a rigid sphere with a thick block against Hertz (tests/support/hertz_contact.h), mesh by mesh: the
 // cells at the contact from a/2 down to a/8 and the penalty's stiffness ratio, each with its force, Hertz's, the
 // relative error, the mesh's size and the time it took (one CPU thread, implicit Euler steps of 1 s as Newton steps).
-//   fmpc_hertz_bench [depth=D] [extent=E] [growth=G] [ratios=R,R,...] [element=KEYWORD] [first_cell ...]
+//   fmpc_hertz_bench [depth=D] [extent=E] [growth=G] [ratios=R,R,...] [element=KEYWORD] [solver=auto|direct|cg]
+//                    [first_cell ...]
 // (first cells in contact radii, default 0.5 0.35 0.25 0.18 0.125; the depth D in m; the block's side E contact radii,
-// default HertzCase's; cells growing by G away from the contact; penalty stiffness ratios, default 2, 8, 32).
+// default HertzCase's; cells growing by G away from the contact; penalty stiffness ratios, default 2, 8, 32; the
+// implicit step's linear solve, default auto).
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -29,6 +31,17 @@ int main(int argc, char** argv) {
       const auto kind = fmpc::sim::element_kind_by_keyword(k);
       if (!kind) return std::fprintf(stderr, "element=%s: no such element kind\n", k), 2;
       base.element = kind->kind;
+    } else if (const char* m = value("solver=")) {
+      const std::string method = m;
+      if (method == "auto") {
+        base.method = fmpc::sim::ImplicitMethod::Automatic;
+      } else if (method == "direct") {
+        base.method = fmpc::sim::ImplicitMethod::Direct;
+      } else if (method == "cg") {
+        base.method = fmpc::sim::ImplicitMethod::ConjugateGradient;
+      } else {
+        return std::fprintf(stderr, "solver=%s: use auto, direct or cg\n", m), 2;
+      }
     } else if (const char* g = value("growth=")) {
       base.growth = std::atof(g);
     } else if (const char* r = value("ratios=")) {

@@ -133,7 +133,7 @@ TEST_CASE("round trip: MATLAB file -> IR -> MATLAB -> IR keeps the IR and the ou
   }
 }
 
-TEST_CASE("round trip: random system -> MATLAB -> IR keeps the IR and the outputs", "[round-trip]") {
+TEST_CASE("round trip: random system -> MATLAB -> IR keeps the IR and the outputs", "[heavy][round-trip]") {
   const testing::RandomSystemOptions options = testing::RandomSystemOptions::matlab_fis();
   for (std::uint64_t seed = 1; seed <= kRandomSystems; ++seed) {
     INFO("random_system(" << seed << ", matlab_fis())");
@@ -160,7 +160,7 @@ TEST_CASE("round trip: fmpc -> MATLAB -> fmpc keeps the IR and the outputs", "[h
   }
 }
 
-TEST_CASE("round trip: MATLAB -> fmpc -> MATLAB keeps the IR and the outputs", "[round-trip]") {
+TEST_CASE("round trip: MATLAB -> fmpc -> MATLAB keeps the IR and the outputs", "[heavy][round-trip]") {
   std::uint64_t seed = 100;
   for (const std::filesystem::path& path : shared_fis_files()) {
     ++seed;

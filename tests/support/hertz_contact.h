@@ -32,6 +32,8 @@ struct HertzCase {
   double growth = 1.3;            // each cell this many times the one before it, away from the contact
   double contact_stiffness_ratio = sim::kDefaultContactStiffnessRatio;
   int element = sim::default_element_kind().kind;  // the element kind (its index in element_kind_rows())
+  // The linear solve of each implicit step.
+  sim::ImplicitMethod method = sim::ImplicitMethod::Automatic;
   int lowering_steps = 4;
   int most_steps = 60;
 };
@@ -109,6 +111,7 @@ inline HertzResult run_hertz(const HertzCase& c, sim::Backend backend = sim::Bac
   setup.precision = sim::Precision::Double;
   setup.time_step = 1.0;
   setup.contact_stiffness_ratio = c.contact_stiffness_ratio;
+  setup.implicit.method = c.method;
   sim::RigidTool sphere;
   sphere.name = "sphere";
   sphere.radius = c.radius;

@@ -141,10 +141,10 @@ TEST_CASE("a patient's scene replaces the constant bindings it names and nothing
 }
 
 TEST_CASE("a CPU cohort gives every patient its single run's bits, at the smallest automatic step", "[cohort]") {
-  // Five patients of the demo with different fibrosis inputs (hence different E and automatic steps), 300 steps.
+  // Five patients of the demo with different fibrosis inputs (hence different E and automatic steps), 100 steps.
   const std::vector<std::vector<double>> values = {
       {9.7, 9.5, 12, 11, 11.2}, {5, 5, 5, 5, 5}, {20, 18, 25, 22, 19}, {7.2, 6.1, 8.8, 9.4, 5.5}, {14, 3, 17, 6, 21}};
-  Scene scene = demo_scene(300);
+  Scene scene = demo_scene(100);
   scene.outputs.cohort_frames = true;  // the frames are compared too
   std::vector<Scene> scenes;
   std::vector<BuiltScene> built;
@@ -216,9 +216,9 @@ TEST_CASE("a CPU cohort gives every patient its single run's bits, at the smalle
     CHECK_FALSE(diagnostics.has_errors());
     CHECK(calls > 1);
     CHECK(last_done == last_total);
-    CHECK(last_total == 300);
+    CHECK(last_total == 100);
     REQUIRE(run->patients.size() == patients.size());
-    CHECK(run->spring_steps == Approx(300.0 * static_cast<double>(built[0].setup.springs.size()) * 5));
+    CHECK(run->spring_steps == Approx(100.0 * static_cast<double>(built[0].setup.springs.size()) * 5));
     for (std::size_t p = 0; p < patients.size(); ++p) {
       INFO("patient " << p << ", " << threads << " threads, " << spread.devices.size() << " devices");
       REQUIRE(run->patients[p]);
@@ -228,7 +228,7 @@ TEST_CASE("a CPU cohort gives every patient its single run's bits, at the smalle
       const auto alone = run_scene(scenes[p], built[p], alone_options, diagnostics);
       REQUIRE(alone);
       CHECK(cohort.completed);
-      CHECK(cohort.steps_taken == 300);
+      CHECK(cohort.steps_taken == 100);
       REQUIRE(cohort.probe_curve.size() == alone->probe_curve.size());
       for (std::size_t i = 0; i < cohort.probe_curve.size(); ++i) {
         CHECK(cohort.probe_curve[i].force == alone->probe_curve[i].force);

@@ -84,7 +84,7 @@ std::string percent(double value) {
 }  // namespace
 
 TEST_CASE("Cook's membrane: every law and element kind converges towards CalculiX's refined answer",
-          "[validation][cook]") {
+          "[validation][cook][heavy]") {
   std::ostringstream table;
   for (const double nu : kPoissonRatios) {
     const double reference = calculix_reference(nu);

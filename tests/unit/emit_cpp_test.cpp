@@ -358,7 +358,7 @@ EmitOptions default_options() {
 
 }  // namespace
 
-TEST_CASE("emitted headers agree with the interpreter on every golden rule file", "[emit]") {
+TEST_CASE("emitted headers agree with the interpreter on every golden rule file", "[emit][heavy]") {
   std::vector<Case> cases;
   std::size_t skipped = 0;
   std::uint64_t seed = 1;

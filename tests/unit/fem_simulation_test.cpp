@@ -325,7 +325,7 @@ TEST_CASE("every integrator runs every force model and converges at its order", 
   }
 }
 
-TEST_CASE("the force models are bitwise independent of the thread count", "[fem][sim]") {
+TEST_CASE("the force models are bitwise independent of the thread count", "[fem][sim][heavy]") {
   const Mesh mesh = box_mesh({0.05, 0.05, 0.05}, 12, 12, 12);  // 10,368 tetrahedra: enough for 4 workers
   for (const bool fem : {true, false}) {
     SimulationSetup setup = fem ? fem_setup(mesh, 4000.0, 0.45, 0.5) : volume_term_setup(mesh, 4000.0, 0.45, 0.5);

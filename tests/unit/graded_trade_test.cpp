@@ -70,7 +70,7 @@ const SimulationTradeRow* row_of(const SimulationTradeResult& result, TradeMesh 
 }  // namespace
 
 TEST_CASE("a rigid tool's press is the trade's probe force, on graded and uniform meshes from the surface",
-          "[trade][scene][mesher]") {
+          "[trade][scene][mesher][heavy]") {
   const std::string path = write_press_scene("decide");
   const std::string text = read_whole(path);
   DiagnosticList diagnostics;

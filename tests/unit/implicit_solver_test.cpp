@@ -232,7 +232,7 @@ TEST_CASE("Automatic takes the cheaper solver by its cost estimate and trial, wh
   CHECK(run_implicit(stiff, 1).report.iterations_max > 100);
 }
 
-TEST_CASE("the CPU implicit step gives the same bits for 1, 2 and 3 threads", "[sim][implicit]") {
+TEST_CASE("the CPU implicit step gives the same bits for 1, 2 and 3 threads", "[sim][implicit][heavy]") {
   // 10 x 10 x 8 cells: 1,089 vertices in 18 chunks of the system, 4,800 tetrahedra in 75 runs over several colours.
   const Mesh mesh = implicit_box(10, 10, 8, 0.005);
   for (const bool fem : {true, false}) {

@@ -163,7 +163,7 @@ std::string fixed(double value, int digits) {
 }  // namespace
 
 TEST_CASE("SOFA's liver at nu 0.49: every law and element kind against CalculiX C3D10 on the refined mesh",
-          "[validation][liver]") {
+          "[validation][liver][heavy]") {
   const auto mesh = read_liver();
   if (!mesh) {
     WARN("skipped: " << kLiver << " is absent (../shared/data holds SOFA's liver mesh)");

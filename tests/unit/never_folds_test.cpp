@@ -65,7 +65,8 @@ std::string model(const std::string& law) { return "model: fem\nfem: {law: " + l
 
 }  // namespace
 
-TEST_CASE("it never folds: a cube compressed to 50 % by a plate keeps every element positive", "[fem][snh][scene]") {
+TEST_CASE("it never folds: a cube compressed to 50 % by a plate keeps every element positive",
+          "[fem][snh][scene][heavy]") {
   // A 1 cm cube of 4^3 cells (384 tetrahedra) on a fixed base; its whole top face (25 vertices, picked by index) is
   // pushed down by 5 mm over 0.5 s, then held; implicit Euler.
   BoxSpec box;
@@ -109,7 +110,7 @@ TEST_CASE("it never folds: a cube compressed to 50 % by a plate keeps every elem
   CHECK(corotational.inversion_warnings == (corotational.largest_inverted > 0 ? 1 : 0));
 }
 
-TEST_CASE("it never folds: a probe pushed 40 % of a block's length into its end", "[fem][snh][scene]") {
+TEST_CASE("it never folds: a probe pushed 40 % of a block's length into its end", "[fem][snh][scene][heavy]") {
   // A 1 x 1 x 2 cm block of 4 x 4 x 8 cells (768 tetrahedra) on a fixed base; a probe picked by a ray at the centre of
   // its top end (the hit vertex and its 4 neighbours) travels 8 mm down over 1 s, then holds.
   const std::string scene =
@@ -132,7 +133,7 @@ TEST_CASE("it never folds: a probe pushed 40 % of a block's length into its end"
 }
 
 TEST_CASE("the resting block of bench/scenes/resting_block_snh.yaml runs on the CPU at 8^3 cells, none inverted",
-          "[fem][snh][scene]") {
+          "[fem][snh][scene][heavy]") {
   const std::string path = std::string(FMPC_SOURCE_DIR) + "/bench/scenes/resting_block_snh.yaml";
   std::ifstream in(path);
   std::stringstream text;

@@ -202,7 +202,7 @@ TEST_CASE("nodal pressure tetrahedra: energy and forces against the linear eleme
 
 TEST_CASE("nodal pressure tetrahedra on the CPU engine: a block resting on its base keeps every element positive, "
           "the same bits for any thread count",
-          "[fem][nodal]") {
+          "[fem][nodal][heavy]") {
   // A 2 cm cube of 4^3 cells (E = 1 kPa, nu = 0.4999, stable neo-Hookean) dropped under gravity onto its fixed
   // base, semi-implicit Euler at the automatic step for 0.1 s, float, lightly damped.
   BoxSpec box;

@@ -566,7 +566,7 @@ double stored_energy(const Mesh& mesh, const std::vector<Point3>& x, Energy ener
 }  // namespace
 
 TEST_CASE("stable neo-Hookean against CalculiX's NEO HOOKE with NLGEOM: a 20 % indentation",
-          "[fem][snh][validation]") {
+          "[fem][snh][validation][heavy]") {
   if (calculix_missing()) return;
   // A 2 x 2 x 1 cm block of 6 x 6 x 3 cells (648 linear tetrahedra, C3D4 in CalculiX), its base clamped; the 3 x 3
   // top vertices of its middle third (a 6.7 mm square punch) pushed down by 2 mm, 20 % of the height, free to slide

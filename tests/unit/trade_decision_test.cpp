@@ -194,7 +194,7 @@ TEST_CASE("write-scene: the chosen variant is written as a scene that reads back
 }
 
 TEST_CASE("the trade's reference is refined until its estimates are under a fifth of --max-error, or says why not",
-          "[trade][scene]") {
+          "[trade][scene][heavy]") {
   const Scene scene = parsed(kOneCell);
   SimulationTradeOptions options;
   options.axes = {TradeAxis::Laws, TradeAxis::Refinements};

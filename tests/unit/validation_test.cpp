@@ -313,7 +313,7 @@ TEST_CASE("validation: quadratic tetrahedra equal CalculiX C3D10 on the same mes
   WARN("quadratic tetrahedra against CalculiX C3D10 on the same 2 x 2 x 3-cell mesh:" << table.str());
 }
 
-TEST_CASE("validation: self-weight column, rho g L^2 / 2E, converging at second order", "[validation]") {
+TEST_CASE("validation: self-weight column, rho g L^2 / 2E, converging at second order", "[validation][heavy]") {
   // A quarter column (symmetry planes x = 0 and y = 0 slide) standing on a sliding base: uniaxial stress
   // rho g (L - z), and the top face sinks by rho g L^2 / (2 E). With nu = 0 this is the exact 3-D solution; with
   // nu > 0 the exact field has a term nu rho g (x^2 + y^2) / 2E in u_z that a flat base does not allow, and a
@@ -351,7 +351,8 @@ TEST_CASE("validation: self-weight column, rho g L^2 / 2E, converging at second 
   CHECK(errors[2] < 1e-4);
 }
 
-TEST_CASE("validation: slender cantilever under gravity against Euler-Bernoulli and converged C3D10", "[validation]") {
+TEST_CASE("validation: slender cantilever under gravity against Euler-Bernoulli and converged C3D10",
+          "[validation][heavy]") {
   // L = 0.1 m, 1 cm square section, clamped at x = 0, rho g downward. Euler-Bernoulli: tip deflection
   // q L^4 / (8 E I) = 3 rho g L^4 / (2 E h^2); Timoshenko's shear term adds q L^2 / (2 k G A) (k = 5/6), 0.9% here.
   const double E = 1e6, nu = 0.45, rho = 1060.0, g = 9.81, L = 0.1, h = 0.01;
@@ -397,7 +398,7 @@ TEST_CASE("validation: slender cantilever under gravity against Euler-Bernoulli 
   WARN("cantilever tip deflection, error against the converged answer:" << table.str());
 }
 
-TEST_CASE("validation: hanging and compressed cubes against converged C3D10", "[validation]") {
+TEST_CASE("validation: hanging and compressed cubes against converged C3D10", "[validation][heavy]") {
   if (!calculix_available()) {
     warn_skip();
     return;

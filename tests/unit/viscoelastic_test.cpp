@@ -378,22 +378,22 @@ TEST_CASE("a viscoelastic FEM's per-point state is saved and restored with the C
         REQUIRE(stability);
         const std::vector<SimulationSetup> scenes = {scene};
         const auto engine = create_cpu_engine(scenes, {*stability}, 1);
-        REQUIRE(engine->run({200}, diagnostics));
+        REQUIRE(engine->run({20}, diagnostics));
         REQUIRE(engine->save_checkpoint(diagnostics));
-        REQUIRE(engine->run({400}, diagnostics));
+        REQUIRE(engine->run({40}, diagnostics));
         const std::vector<Point3> first = engine->positions(0, diagnostics);
         REQUIRE(engine->restore_checkpoint(diagnostics));
-        CHECK(engine->steps_taken() == 200);
-        REQUIRE(engine->run({400}, diagnostics));
+        CHECK(engine->steps_taken() == 20);
+        REQUIRE(engine->run({40}, diagnostics));
         const std::vector<Point3> again = engine->positions(0, diagnostics);
         CHECK(first == again);
         // The history matters: the same steps from the restored positions with the state left as it was after step
-        // 400 (no restore of the state) would differ. An elastic run's positions differ from the viscoelastic one's.
+        // 40 (no restore of the state) would differ. An elastic run's positions differ from the viscoelastic one's.
         SimulationSetup elastic = scene;
         elastic.elements.terms.front().prony.clear();
         const std::vector<SimulationSetup> elastic_scenes = {elastic};
         const auto elastic_engine = create_cpu_engine(elastic_scenes, {*stability}, 1);
-        REQUIRE(elastic_engine->run({400}, diagnostics));
+        REQUIRE(elastic_engine->run({40}, diagnostics));
         CHECK(elastic_engine->positions(0, diagnostics) != first);
       }
     }
