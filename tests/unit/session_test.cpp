@@ -125,7 +125,7 @@ TEST_CASE("session: the material swapped between two steps, keeping the state", 
   runtime::ToolPose pressed;
   pressed.position = {0.01, 0.01, 0.0121};
   REQUIRE(session->set_tool_pose(0, pressed, diagnostics));
-  REQUIRE(session->step_to(0.05, diagnostics));
+  REQUIRE(session->step_to(0.03, diagnostics));
   const std::vector<double> before = session->simulation().setup().elements.terms.at(0).parameter[0];
   const std::vector<runtime::Point3> positions = session->positions(diagnostics);
   const std::size_t steps = session->steps_taken();
@@ -158,7 +158,7 @@ TEST_CASE("session: the material swapped between two steps, keeping the state", 
     CHECK(session->steps_taken() == steps);
     const std::vector<runtime::Point3> now = session->positions(diagnostics);
     CHECK(std::memcmp(now.data(), positions.data(), now.size() * sizeof(runtime::Point3)) == 0);
-    REQUIRE(session->step_to(0.1, diagnostics));
+    REQUIRE(session->step_to(0.06, diagnostics));
     CHECK(session->tool_readings(diagnostics).at(0).force[2] > 1.5 * force_before);
   }
   SECTION("a material too stiff for the time step in use: an error, and nothing changes") {
