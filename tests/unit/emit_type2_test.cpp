@@ -377,7 +377,7 @@ TEST_CASE("type-2 headers agree with the interpreter on every type-2 rule file",
                              << " of the range");
 }
 
-TEST_CASE("type-2 headers agree with the interpreter on seeded random type-2 systems", "[emit][type2]") {
+TEST_CASE("type-2 headers agree with the interpreter on seeded random type-2 systems", "[emit][type2][heavy]") {
   fmpc::testing::RandomSystemOptions options;
   options.interval_type2 = true;
   options.exact_samples = false;

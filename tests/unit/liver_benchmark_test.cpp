@@ -208,7 +208,7 @@ TEST_CASE("thesis benchmark: refusals", "[thesis]") {
              Catch::Contains("patient 'high': HCV = 80 is outside [0, 75]"));
 }
 
-TEST_CASE("thesis benchmark: the numbers of docs/liver_fibrosis.md", "[thesis]") {
+TEST_CASE("thesis benchmark: the numbers of docs/liver_fibrosis.md", "[thesis][heavy]") {
   const fmpc::RuleFile mamdani = load_shipped("mamdani.fis"), sugeno = load_shipped("sugeno.fis"),
                        it2 = load_shipped("it2.fis");
   const std::vector<fmpc::sim::LiverController> controllers = {{"mamdani", &mamdani.systems.front()},

@@ -305,7 +305,7 @@ TEST_CASE("session: tools in a scene file: a path, the CSV's columns and the sum
   CHECK(damped_built->setup.contact_stiffness_ratio == sim::kDefaultContactStiffnessRatio);
 }
 
-TEST_CASE("session: a tick's mean tool force is its impulse over its duration", "[session][tools]") {
+TEST_CASE("session: a tick's mean tool force is its impulse over its duration", "[session][tools][heavy]") {
   const std::string rules = write_file("mean.fis", rules_text("F", 5, 15));
   const auto open = [&](bool implicit) {
     std::string text = scene_text(rules);
