@@ -32,16 +32,15 @@ int main(int argc, char** argv) {
       if (!kind) return std::fprintf(stderr, "element=%s: no such element kind\n", k), 2;
       base.element = kind->kind;
     } else if (const char* m = value("solver=")) {
-      const std::string method = m;
-      if (method == "auto") {
-        base.method = fmpc::sim::ImplicitMethod::Automatic;
-      } else if (method == "direct") {
-        base.method = fmpc::sim::ImplicitMethod::Direct;
-      } else if (method == "cg") {
-        base.method = fmpc::sim::ImplicitMethod::ConjugateGradient;
-      } else {
-        return std::fprintf(stderr, "solver=%s: use auto, direct or cg\n", m), 2;
-      }
+      // The scene's spellings (fmpc::sim::to_string).
+      bool known = false;
+      for (const auto method : {fmpc::sim::ImplicitMethod::Automatic, fmpc::sim::ImplicitMethod::Direct,
+                                fmpc::sim::ImplicitMethod::ConjugateGradient})
+        if (std::strcmp(fmpc::sim::to_string(method), m) == 0) {
+          base.method = method;
+          known = true;
+        }
+      if (!known) return std::fprintf(stderr, "solver=%s: use auto, direct or cg\n", m), 2;
     } else if (const char* g = value("growth=")) {
       base.growth = std::atof(g);
     } else if (const char* r = value("ratios=")) {

@@ -1,6 +1,7 @@
 // The host's sums over a state (double), which both backends' readers and the run summaries share, and simulate(),
 // the driver of a setup's step_count with samples.
 #include <algorithm>
+#include <cmath>
 
 #include "kernels/strain_table_math.h"
 #include "runtime/integrate/simulation.h"
@@ -35,6 +36,8 @@ double kinetic_energy(const SimulationSetup& setup, const std::vector<Point3>& v
   }
   return energy;
 }
+
+double steps_covering(double span, double dt) { return std::ceil(span / dt * (1.0 - 1e-12)); }
 
 SimulationResult simulate(const SimulationSetup& setup, DiagnosticList& diagnostics) {
   SimulationResult result;

@@ -499,4 +499,9 @@ class Simulation {
 // create + advance(step_count) with samples every record_every steps.
 SimulationResult simulate(const SimulationSetup& setup, DiagnosticList& diagnostics);
 
+// The steps of `dt` that cover `span` seconds, ceil(span / dt), as a double to be checked against a limit before it
+// becomes a count: the division's result is shrunk by 1e-12 of itself first, so that a span that is an exact
+// multiple of dt does not gain a step to rounding.
+double steps_covering(double span, double dt);
+
 }  // namespace fmpc::sim

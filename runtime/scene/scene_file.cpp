@@ -2,7 +2,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <cmath>
 #include <filesystem>
 
 #include "diagnostics/number_format.h"
@@ -63,8 +62,7 @@ std::optional<std::size_t> planned_step_count(const Scene& scene, double dt, Dia
                                                    format_number(kMaxSimulationSteps) + " steps");
     return std::nullopt;
   }
-  // The factor keeps a duration that is an exact multiple of dt from gaining a step to rounding.
-  const double steps = std::ceil(scene.duration / dt * (1.0 - 1e-12));
+  const double steps = steps_covering(scene.duration, dt);
   if (dt > 0.0 && steps <= kMaxSimulationSteps) return static_cast<std::size_t>(steps);
   diagnostics.error(scene.range_of(scene.ranges.count("duration") ? "duration" : "dt"),
                     "duration " + format_number(scene.duration) + " s at dt " + format_number(dt) + " s" +

@@ -257,7 +257,7 @@ class TradePlanner {
       const double scale = std::pow(8.0, key.build.refinements);
       const double tetrahedra = static_cast<double>(built->scene.mesh.tetrahedra.size()) * scale;
       const double step = key.dt_factor * built->automatic_step / std::pow(2.0, key.build.refinements);
-      const double steps = std::max(1.0, std::ceil(duration_ / step * (1.0 - 1e-12)));
+      const double steps = std::max(1.0, steps_covering(duration_, step));
       SimulationSetup setup = built->scene.setup;
       setup.precision = key.precision;
       setup.integrator = key.integrator;

@@ -75,7 +75,7 @@ SimulationTradeRow prepared_row(const RunKey& key, const BuiltRun& built, const 
   setup.integrator = key.integrator;
   setup.threads = 1;
   const double step = key.dt_factor * built.automatic_step;
-  row.steps = static_cast<std::size_t>(std::max(1.0, std::ceil(duration / step * (1.0 - 1e-12))));
+  row.steps = static_cast<std::size_t>(std::max(1.0, steps_covering(duration, step)));
   row.dt = duration / static_cast<double>(row.steps);
   setup.time_step = row.dt;
   setup.step_count = row.steps;

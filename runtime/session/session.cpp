@@ -151,8 +151,7 @@ bool Session::step_to(double time, DiagnosticList& diagnostics) {
     return false;
   }
   if (!(time > this->time())) return true;
-  // The factor keeps a time that is an exact multiple of dt from gaining a step to rounding (planned_step_count's).
-  const double steps = std::ceil((time - this->time()) / dt * (1.0 - 1e-12));
+  const double steps = sim::steps_covering(time - this->time(), dt);
   if (!(steps <= sim::kMaxSimulationSteps)) {
     diagnostics.error(argument("time"), "reaching " + format_number(time) + " s from " + format_number(this->time()) +
                                             " s takes " + format_number(steps) + " steps of " + format_number(dt) +
@@ -170,7 +169,7 @@ bool Session::step_to_averaging(double time, std::vector<ToolReading>& mean, Dia
     diagnostics.error(argument("time"), "the time " + format_number(time) + " s is not finite");
     return false;
   }
-  const double ahead = time > this->time() ? std::ceil((time - this->time()) / dt * (1.0 - 1e-12)) : 0.0;
+  const double ahead = time > this->time() ? sim::steps_covering(time - this->time(), dt) : 0.0;
   if (!(ahead <= sim::kMaxSimulationSteps)) return step_to(time, diagnostics);  // step_to's error
   const auto steps = static_cast<std::size_t>(ahead);
   // The weight of the readings at a step's start and at its end in the force the step applies.

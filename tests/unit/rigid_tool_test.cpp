@@ -55,6 +55,12 @@ SimulationSetup block_with_sphere(Integrator integrator = Integrator::SemiImplic
 
 ToolPose at(double x, double y, double z) { return ToolPose{{x, y, z}, {1.0, 0.0, 0.0, 0.0}}; }
 
+// Steps `simulation` to the end of haptic tick `tick` (ticks of 1 ms) at its automatic step.
+bool advance_to_tick(Simulation& simulation, int tick, DiagnosticList& diagnostics) {
+  const double steps = steps_covering(tick * 1e-3 - simulation.time(), simulation.stability().time_step);
+  return simulation.advance(static_cast<std::size_t>(steps), diagnostics);
+}
+
 }  // namespace
 
 TEST_CASE("tools: a sphere's and a capsule's penetration and force, exact", "[tools]") {
@@ -258,12 +264,10 @@ TEST_CASE("tools: contact damping: its force, its reading, its stability bound, 
     REQUIRE(simulation);
     // Ten ticks of 1 ms, the pose reached over the first: the pressed vertices bounce off and come back within them
     // (a wave crosses the 1 cm block in about 3 ms).
-    const double dt = simulation->stability().time_step;
     double largest = 0.0;
     for (int tick = 1; tick <= 10; ++tick) {
       REQUIRE(simulation->set_tool_pose(0, 0, pressed, messages));
-      const auto steps = static_cast<std::size_t>(std::ceil((tick * 1e-3 - simulation->time()) / dt * (1.0 - 1e-12)));
-      REQUIRE(simulation->advance(steps, messages));
+      REQUIRE(advance_to_tick(*simulation, tick, messages));
       const double force = simulation->tool_readings(0, messages).at(0).force[2];
       REQUIRE(std::isfinite(force));
       largest = std::max(largest, force);
@@ -294,13 +298,11 @@ TEST_CASE("tools: contact damping removes the chatter of a held tool's tick-end 
     DiagnosticList messages;
     auto simulation = Simulation::create(run, messages);
     REQUIRE(simulation);
-    const double dt = simulation->stability().time_step;
     double jumps = 0.0, previous = 0.0;
     int counted = 0;
     for (int tick = 1; tick <= 80; ++tick) {
       REQUIRE(simulation->set_tool_pose(0, 0, at(0.01, 0.01, 0.0131 - 0.0011 * std::min(1.0, tick / 40.0)), messages));
-      const auto steps = static_cast<std::size_t>(std::ceil((tick * 1e-3 - simulation->time()) / dt * (1.0 - 1e-12)));
-      REQUIRE(simulation->advance(steps, messages));
+      REQUIRE(advance_to_tick(*simulation, tick, messages));
       const double force = simulation->tool_readings(0, messages).at(0).force[2];
       if (tick > 45) {  // held still, in contact
         jumps += std::abs(force - previous);
